@@ -1,0 +1,71 @@
+# refrender build. `make` builds build/refrender; `make demo` installs missing
+# Debian packages, builds and renders the default scene; `make test` runs the
+# C unit tests and the pytest suite. `make SAN=1 test` does the same with
+# AddressSanitizer and UBSan in build-san/.
+
+CC      ?= cc
+CXX     ?= c++
+PYTHON  := /usr/bin/python3
+SAN     ?= 0
+
+ifeq ($(SAN),1)
+BUILD   := build-san
+OPT     := -O1 -g -fno-omit-frame-pointer -fsanitize=address,undefined -fno-sanitize-recover=undefined
+SANLD   := -fsanitize=address,undefined
+else
+BUILD   := build
+OPT     := -O2 -g
+SANLD   :=
+endif
+
+INCLUDES := -I/usr/include/embree3 -I/usr/include/OpenEXR -I/usr/include/libxml2
+CFLAGS   += -std=c11 -D_GNU_SOURCE $(OPT) -Wall -Wextra $(INCLUDES) \
+            -DRR_SOURCE_SCENE='"$(CURDIR)/scenes/default.xml"'
+CXXFLAGS += -std=c++17 $(OPT) -Wall -Wextra
+LDLIBS   := -lembree3 -lOpenEXRCore -lxml2 -lOpenImageIO -lOpenImageIO_Util -lpthread -lm -lstdc++
+
+LIB_SRCS := common splat pointmodel ply shapes animation camera shutter sampler scene \
+            scene_xml accel shade render exr cli
+LIB_OBJS := $(LIB_SRCS:%=$(BUILD)/%.o) $(BUILD)/preview.o
+APP_OBJS := $(BUILD)/main.o $(BUILD)/gen_cmd.o
+TEST_SRCS := $(wildcard tests/test_*.c)
+TEST_OBJS := $(TEST_SRCS:tests/%.c=$(BUILD)/tests/%.o) $(BUILD)/tests/harness.o
+
+BIN      := $(BUILD)/refrender
+TESTBIN  := $(BUILD)/unit_tests
+
+.PHONY: all deps demo test test-c test-py clean
+all: $(BIN)
+
+$(BUILD)/%.o: src/%.c src/*.h | $(BUILD)
+	$(CC) $(CFLAGS) -c $< -o $@
+$(BUILD)/preview.o: src/preview.cpp src/preview.h | $(BUILD)
+	$(CXX) $(CXXFLAGS) -c $< -o $@
+$(BUILD)/tests/%.o: tests/%.c tests/harness.h src/*.h | $(BUILD)
+	$(CC) $(CFLAGS) -Isrc -c $< -o $@
+$(BUILD):
+	mkdir -p $(BUILD)/tests
+
+$(BIN): $(APP_OBJS) $(LIB_OBJS)
+	$(CC) $(SANLD) -o $@ $^ $(LDLIBS)
+$(TESTBIN): $(TEST_OBJS) $(LIB_OBJS)
+	$(CC) $(SANLD) -o $@ $^ $(LDLIBS)
+
+deps:
+	scripts/install-deps.sh
+
+demo: deps
+	$(MAKE) $(BIN)
+	mkdir -p out
+	$(BIN) scenes/default.xml -o out/demo.exr --preview out/demo.png
+
+test-c: $(TESTBIN)
+	cd tests && ../$(TESTBIN)
+
+test-py: $(BIN)
+	REFRENDER=$(CURDIR)/$(BIN) $(PYTHON) -m pytest -q tests
+
+test: test-c test-py
+
+clean:
+	rm -rf build build-san out

@@ -1,0 +1,304 @@
+#include "accel.h"
+
+#include <embree3/rtcore.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+struct accel {
+    RTCDevice device;
+    RTCScene top;
+    RTCScene *object_scenes;
+    aabb *swept; /* world bounds of each object over the shutter */
+    const scene *sc;
+    float epsilon;
+    double sigma;
+    rr_error build_error; /* filled by Embree's error callback */
+};
+
+/* Per-ray state. The RTCIntersectContext must come first: Embree hands the
+ * same pointer to every callback, also through the nested rtcIntersect1. */
+typedef struct {
+    struct RTCIntersectContext rtc;
+    const accel *acc;
+    double time;
+    unsigned obj;
+    xform xf; /* current object's transform at `time` */
+    kbuffer *kb;
+} trace_context;
+
+/* ---- k-buffer ---------------------------------------------------------- */
+
+void kbuffer_reset(kbuffer *kb, float epsilon)
+{
+    kb->count = 0;
+    kb->dropped = 0;
+    kb->closest = INFINITY;
+    kb->epsilon = epsilon;
+}
+
+static int hit_before(const surface_hit *a, const surface_hit *b)
+{
+    if (a->t != b->t)
+        return a->t < b->t;
+    if (a->obj != b->obj)
+        return a->obj < b->obj;
+    return a->prim < b->prim;
+}
+
+void kbuffer_insert(kbuffer *kb, const surface_hit *h)
+{
+    if (!(h->t <= kb->closest + kb->epsilon))
+        return;
+    int pos = kb->count;
+    while (pos > 0 && hit_before(h, &kb->hits[pos - 1]))
+        pos--;
+    if (kb->count == KBUFFER_MAX) {
+        kb->dropped++;
+        if (pos == KBUFFER_MAX)
+            return;
+        kb->count--; /* the farthest entry makes room */
+    }
+    memmove(&kb->hits[pos + 1], &kb->hits[pos], (size_t)(kb->count - pos) * sizeof *h);
+    kb->hits[pos] = *h;
+    kb->count++;
+    if (h->t < kb->closest) {
+        kb->closest = h->t;
+        /* entries are sorted by t: drop the tail now beyond the window */
+        while (kb->count > 0 && kb->hits[kb->count - 1].t > kb->closest + kb->epsilon)
+            kb->count--;
+    }
+}
+
+static float kbuffer_cutoff(const kbuffer *kb)
+{
+    return nextafterf(kb->closest + kb->epsilon, INFINITY);
+}
+
+/* ---- object-level callbacks (object space) ----------------------------- */
+
+static void accept_hit(trace_context *c, struct RTCRayHit *rh, const struct RTCIntersectFunctionNArguments *args,
+                       float t, float weight, vec3 normal, const float color[3])
+{
+    vec3 d = v3(rh->ray.dir_x, rh->ray.dir_y, rh->ray.dir_z);
+    if (v3_dot(normal, d) > 0) /* two-sided surfaces: shade the side facing the eye */
+        normal = v3_scale(normal, -1.0);
+    vec3 wn = xform_vector(&c->xf, normal);
+    surface_hit h = {t, c->obj, args->primID, weight, {color[0], color[1], color[2]},
+                     {(float)wn.x, (float)wn.y, (float)wn.z}};
+    kbuffer_insert(c->kb, &h);
+    rh->ray.tfar = kbuffer_cutoff(c->kb);
+    rh->hit.geomID = args->geomID;
+    rh->hit.primID = args->primID;
+}
+
+static void splats_intersect(const struct RTCIntersectFunctionNArguments *args)
+{
+    if (!args->valid[0])
+        return;
+    trace_context *c = (trace_context *)args->context;
+    struct RTCRayHit *rh = (struct RTCRayHit *)args->rayhit;
+    const scene_object *o = args->geometryUserPtr;
+    const float org[3] = {rh->ray.org_x, rh->ray.org_y, rh->ray.org_z};
+    const float dir[3] = {rh->ray.dir_x, rh->ray.dir_y, rh->ray.dir_z};
+    float t, r2;
+    if (!splat_intersect(&o->model.geom[args->primID], org, dir, rh->ray.tnear, rh->ray.tfar, &t, &r2))
+        return;
+    const float *n = &o->model.normal[3 * args->primID];
+    float w = (float)splat_kernel_weight(r2, c->acc->sigma);
+    accept_hit(c, rh, args, t, w, v3(n[0], n[1], n[2]), &o->model.color[3 * args->primID]);
+}
+
+static void sphere_intersect(const struct RTCIntersectFunctionNArguments *args)
+{
+    if (!args->valid[0])
+        return;
+    trace_context *c = (trace_context *)args->context;
+    struct RTCRayHit *rh = (struct RTCRayHit *)args->rayhit;
+    const scene_object *o = args->geometryUserPtr;
+    vec3 org = v3(rh->ray.org_x, rh->ray.org_y, rh->ray.org_z);
+    vec3 dir = v3(rh->ray.dir_x, rh->ray.dir_y, rh->ray.dir_z);
+    vec3 oc = v3_sub(org, o->sphere_center);
+    double a = v3_dot(dir, dir), b = v3_dot(oc, dir), cc = v3_dot(oc, oc) - o->sphere_radius * o->sphere_radius;
+    double disc = b * b - a * cc;
+    if (disc < 0)
+        return;
+    double sq = sqrt(disc);
+    /* The visible crossing of the opaque surface: the nearer root in range. */
+    double roots[2] = {(-b - sq) / a, (-b + sq) / a};
+    for (int i = 0; i < 2; i++) {
+        float t = (float)roots[i];
+        if (t >= rh->ray.tnear && t <= rh->ray.tfar) {
+            vec3 p = v3_add(oc, v3_scale(dir, roots[i]));
+            const float col[3] = {(float)o->sphere_color.x, (float)o->sphere_color.y, (float)o->sphere_color.z};
+            accept_hit(c, rh, args, t, 1.0f, v3_scale(p, 1.0 / o->sphere_radius), col);
+            return;
+        }
+    }
+}
+
+static void splat_bounds_cb(const struct RTCBoundsFunctionArguments *args)
+{
+    const scene_object *o = args->geometryUserPtr;
+    const float *c = o->model.geom[args->primID].center;
+    const float *e = &o->model.extent[3 * args->primID];
+    /* pad by a few ulps so float rounding never clips a splat */
+    float pad[3];
+    for (int k = 0; k < 3; k++)
+        pad[k] = e[k] * 1.00001f + 1e-6f * fabsf(c[k]) + 1e-30f;
+    struct RTCBounds *b = args->bounds_o;
+    b->lower_x = c[0] - pad[0], b->lower_y = c[1] - pad[1], b->lower_z = c[2] - pad[2];
+    b->upper_x = c[0] + pad[0], b->upper_y = c[1] + pad[1], b->upper_z = c[2] + pad[2];
+}
+
+static void sphere_bounds_cb(const struct RTCBoundsFunctionArguments *args)
+{
+    const scene_object *o = args->geometryUserPtr;
+    aabb b = scene_object_bounds(o);
+    double pad = 1e-5 * o->sphere_radius;
+    struct RTCBounds *r = args->bounds_o;
+    r->lower_x = (float)(b.lo.x - pad), r->lower_y = (float)(b.lo.y - pad), r->lower_z = (float)(b.lo.z - pad);
+    r->upper_x = (float)(b.hi.x + pad), r->upper_y = (float)(b.hi.y + pad), r->upper_z = (float)(b.hi.z + pad);
+}
+
+/* We never call rtcOccluded; the callback exists so the geometry is complete. */
+static void no_occluded(const struct RTCOccludedFunctionNArguments *args) { (void)args; }
+
+/* ---- top level (world space) ------------------------------------------- */
+
+static void object_intersect(const struct RTCIntersectFunctionNArguments *args)
+{
+    if (!args->valid[0])
+        return;
+    trace_context *c = (trace_context *)args->context;
+    struct RTCRayHit *rh = (struct RTCRayHit *)args->rayhit;
+    unsigned obj = args->primID;
+    const scene_object *o = &c->acc->sc->objects[obj];
+    float saved[6] = {rh->ray.org_x, rh->ray.org_y, rh->ray.org_z,
+                      rh->ray.dir_x, rh->ray.dir_y, rh->ray.dir_z};
+    c->xf = animation_at(&o->anim, c->time);
+    c->obj = obj;
+    vec3 org = xform_inverse_point(&c->xf, v3(saved[0], saved[1], saved[2]));
+    vec3 dir = xform_inverse_vector(&c->xf, v3(saved[3], saved[4], saved[5]));
+    rh->ray.org_x = (float)org.x, rh->ray.org_y = (float)org.y, rh->ray.org_z = (float)org.z;
+    rh->ray.dir_x = (float)dir.x, rh->ray.dir_y = (float)dir.y, rh->ray.dir_z = (float)dir.z;
+    c->rtc.instID[0] = obj;
+    rtcIntersect1(c->acc->object_scenes[obj], &c->rtc, rh);
+    c->rtc.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    rh->ray.org_x = saved[0], rh->ray.org_y = saved[1], rh->ray.org_z = saved[2];
+    rh->ray.dir_x = saved[3], rh->ray.dir_y = saved[4], rh->ray.dir_z = saved[5];
+}
+
+static void object_bounds_cb(const struct RTCBoundsFunctionArguments *args)
+{
+    const accel *a = args->geometryUserPtr;
+    aabb b = a->swept[args->primID];
+    struct RTCBounds *r = args->bounds_o;
+    r->lower_x = nextafterf((float)b.lo.x, -INFINITY), r->lower_y = nextafterf((float)b.lo.y, -INFINITY);
+    r->lower_z = nextafterf((float)b.lo.z, -INFINITY);
+    r->upper_x = nextafterf((float)b.hi.x, INFINITY), r->upper_y = nextafterf((float)b.hi.y, INFINITY);
+    r->upper_z = nextafterf((float)b.hi.z, INFINITY);
+}
+
+/* ---- building ------------------------------------------------------------ */
+
+static RTCScene user_scene(RTCDevice dev, unsigned nprims, void *user, RTCBoundsFunction bounds,
+                           RTCIntersectFunctionN intersect)
+{
+    RTCScene scene = rtcNewScene(dev);
+    RTCGeometry g = rtcNewGeometry(dev, RTC_GEOMETRY_TYPE_USER);
+    rtcSetGeometryUserPrimitiveCount(g, nprims);
+    rtcSetGeometryUserData(g, user);
+    rtcSetGeometryBoundsFunction(g, bounds, user);
+    rtcSetGeometryIntersectFunction(g, intersect);
+    rtcSetGeometryOccludedFunction(g, no_occluded);
+    rtcCommitGeometry(g);
+    rtcAttachGeometry(scene, g);
+    rtcReleaseGeometry(g);
+    rtcCommitScene(scene);
+    return scene;
+}
+
+static void embree_error(void *user, enum RTCError code, const char *str)
+{
+    rr_error *e = user;
+    if (!e->msg[0])
+        snprintf(e->msg, sizeof e->msg, "Embree error %d: %s", (int)code, str ? str : "");
+}
+
+int accel_build(const scene *s, double epsilon, double sigma, accel **out, rr_error *err)
+{
+    accel *a = calloc(1, sizeof *a);
+    if (!a)
+        return rr_fail(err, "out of memory");
+    a->sc = s;
+    a->epsilon = (float)epsilon;
+    a->sigma = sigma;
+    a->device = rtcNewDevice(NULL);
+    if (!a->device) {
+        free(a);
+        return rr_fail(err, "cannot create Embree device (error %d)", (int)rtcGetDeviceError(NULL));
+    }
+    rtcSetDeviceErrorFunction(a->device, embree_error, &a->build_error);
+    a->object_scenes = calloc((size_t)s->nobjects, sizeof *a->object_scenes);
+    a->swept = calloc((size_t)s->nobjects, sizeof *a->swept);
+    if (!a->object_scenes || !a->swept) {
+        accel_free(a);
+        return rr_fail(err, "out of memory");
+    }
+    for (int i = 0; i < s->nobjects; i++) {
+        scene_object *o = &s->objects[i];
+        int points = o->kind == OBJECT_POINTS;
+        a->object_scenes[i] = user_scene(a->device, points ? (unsigned)o->model.count : 1u, o,
+                                         points ? splat_bounds_cb : sphere_bounds_cb,
+                                         points ? splats_intersect : sphere_intersect);
+        a->swept[i] = animation_swept_bounds(&o->anim, scene_object_bounds(o), s->shut.open, s->shut.close);
+    }
+    a->top = user_scene(a->device, (unsigned)s->nobjects, a, object_bounds_cb, object_intersect);
+    if (a->build_error.msg[0]) {
+        rr_fail(err, "%s", a->build_error.msg);
+        accel_free(a);
+        return -1;
+    }
+    *out = a;
+    return 0;
+}
+
+void accel_free(accel *a)
+{
+    if (!a)
+        return;
+    for (int i = 0; a->object_scenes && i < a->sc->nobjects; i++)
+        if (a->object_scenes[i])
+            rtcReleaseScene(a->object_scenes[i]);
+    if (a->top)
+        rtcReleaseScene(a->top);
+    free(a->object_scenes);
+    free(a->swept);
+    rtcReleaseDevice(a->device);
+    free(a);
+}
+
+void accel_trace(const accel *a, vec3 org, vec3 dir, double time, kbuffer *kb)
+{
+    trace_context c;
+    rtcInitIntersectContext(&c.rtc);
+    c.acc = a;
+    c.time = time;
+    c.obj = 0;
+    c.kb = kb;
+    kbuffer_reset(kb, a->epsilon);
+    struct RTCRayHit rh;
+    rh.ray.org_x = (float)org.x, rh.ray.org_y = (float)org.y, rh.ray.org_z = (float)org.z;
+    rh.ray.dir_x = (float)dir.x, rh.ray.dir_y = (float)dir.y, rh.ray.dir_z = (float)dir.z;
+    rh.ray.tnear = 0.0f;
+    rh.ray.tfar = INFINITY;
+    rh.ray.time = 0.0f;
+    rh.ray.mask = 0xFFFFFFFFu;
+    rh.ray.id = 0;
+    rh.ray.flags = 0;
+    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    rtcIntersect1(a->top, &c.rtc, &rh);
+}

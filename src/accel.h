@@ -1,0 +1,52 @@
+/* Ray queries against the scene through Embree 3 (thesis sec. 4.5 step c).
+ *
+ * Each object is one Embree user geometry in its own scene (own BVH), in
+ * object space. A top-level scene holds one user primitive per object whose
+ * bounds are the object's bounds swept over the shutter; its intersect
+ * callback transforms the ray by the exact inverse of the object's
+ * transform at the ray's time (thesis B.2.3 TransformRay) and traverses the
+ * object's BVH with the same context. Rigid transforms keep the ray
+ * parameter equal to world distance.
+ *
+ * Epsilon-blending happens in the same single traversal: every accepted hit
+ * goes into a small k-buffer kept in the per-ray context, and the ray's tfar
+ * shrinks to closest + epsilon, so the final buffer holds exactly the hits
+ * with t <= t_closest + epsilon, independent of traversal order. */
+#ifndef RR_ACCEL_H
+#define RR_ACCEL_H
+
+#include "scene.h"
+
+#define KBUFFER_MAX 64
+
+typedef struct {
+    float t;
+    unsigned obj, prim;
+    float weight;    /* kernel weight (1 for analytic spheres) */
+    float color[3];
+    float normal[3]; /* world space, facing the ray origin */
+} surface_hit;
+
+typedef struct {
+    int count;
+    int dropped;     /* hits beyond KBUFFER_MAX within epsilon (farthest dropped) */
+    float closest, epsilon;
+    surface_hit hits[KBUFFER_MAX]; /* sorted by (t, obj, prim) */
+} kbuffer;
+
+void kbuffer_reset(kbuffer *kb, float epsilon);
+/* Inserts a hit if it lies within epsilon of the closest so far. */
+void kbuffer_insert(kbuffer *kb, const surface_hit *h);
+
+typedef struct accel accel;
+
+/* Builds the BVHs for the scene (which must outlive the accel). epsilon and
+ * sigma are the blending distance and kernel sigma in use. */
+int accel_build(const scene *s, double epsilon, double sigma, accel **out, rr_error *err);
+void accel_free(accel *a);
+
+/* World ray org + t*dir (dir unit) at scene time `time`: fills kb with the
+ * epsilon-blended hit set. */
+void accel_trace(const accel *a, vec3 org, vec3 dir, double time, kbuffer *kb);
+
+#endif

@@ -1,0 +1,29 @@
+#include "camera.h"
+
+int camera_prepare(camera *c, rr_error *err)
+{
+    vec3 f = v3_sub(c->lookat, c->position);
+    if (!(v3_len(f) > 0))
+        return rr_fail(err, "camera lookat equals position");
+    if (!(c->fov_degrees > 0 && c->fov_degrees < 180))
+        return rr_fail(err, "camera fov must be in (0, 180) degrees, got %g", c->fov_degrees);
+    if (c->width < 1 || c->height < 1)
+        return rr_fail(err, "image size must be at least 1x1, got %dx%d", c->width, c->height);
+    c->forward = v3_normalize(f);
+    vec3 r = v3_cross(c->forward, c->up);
+    if (!(v3_len(r) > 1e-9 * v3_len(c->up)))
+        return rr_fail(err, "camera up is zero or parallel to the view direction");
+    c->right = v3_normalize(r);
+    c->image_up = v3_cross(c->right, c->forward);
+    c->tan_half_fov = tan(c->fov_degrees * M_PI / 360.0);
+    return 0;
+}
+
+vec3 camera_ray_direction(const camera *c, double x, double y)
+{
+    double aspect = (double)c->width / (double)c->height;
+    double sx = (2.0 * x / c->width - 1.0) * c->tan_half_fov * aspect;
+    double sy = (1.0 - 2.0 * y / c->height) * c->tan_half_fov;
+    vec3 d = v3_add(c->forward, v3_add(v3_scale(c->right, sx), v3_scale(c->image_up, sy)));
+    return v3_normalize(d);
+}

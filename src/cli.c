@@ -1,0 +1,72 @@
+#include "cli.h"
+
+#include <errno.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+int cli_int(const char *opt, const char *text, long lo, long hi, int *out, rr_error *err)
+{
+    char *end;
+    errno = 0;
+    long v = strtol(text, &end, 10);
+    if (errno || end == text || *end || v < lo || v > hi)
+        return rr_fail(err, "%s: expected an integer in [%ld, %ld], got '%s'", opt, lo, hi, text);
+    *out = (int)v;
+    return 0;
+}
+
+int cli_u64(const char *opt, const char *text, uint64_t *out, rr_error *err)
+{
+    char *end;
+    errno = 0;
+    unsigned long long v = strtoull(text, &end, 10);
+    if (errno || end == text || *end || text[0] == '-')
+        return rr_fail(err, "%s: expected a non-negative integer, got '%s'", opt, text);
+    *out = (uint64_t)v;
+    return 0;
+}
+
+int cli_double(const char *opt, const char *text, double lo, double *out, rr_error *err)
+{
+    char *end;
+    double v = strtod(text, &end);
+    if (end == text || *end || !isfinite(v) || v < lo)
+        return rr_fail(err, "%s: expected a finite number >= %g, got '%s'", opt, lo, text);
+    *out = v;
+    return 0;
+}
+
+int cli_resolution(const char *opt, const char *text, int *w, int *h, rr_error *err)
+{
+    int a, b;
+    char extra;
+    if (sscanf(text, "%dx%d%c", &a, &b, &extra) != 2 || a < 1 || b < 1 || a > 65536 || b > 65536)
+        return rr_fail(err, "%s: expected WIDTHxHEIGHT (e.g. 640x480), got '%s'", opt, text);
+    *w = a;
+    *h = b;
+    return 0;
+}
+
+int cli_vec3(const char *opt, const char *text, vec3 *out, rr_error *err)
+{
+    double a, b, c;
+    char extra;
+    if (sscanf(text, "%lf %lf %lf %c", &a, &b, &c, &extra) != 3 || !isfinite(a + b + c))
+        return rr_fail(err, "%s: expected three numbers like \"0.8 0.2 0.1\", got '%s'", opt, text);
+    *out = v3(a, b, c);
+    return 0;
+}
+
+int cli_check_writable(const char *path, rr_error *err)
+{
+    char probe[4200];
+    snprintf(probe, sizeof probe, "%s.probe-XXXXXX", path);
+    int fd = mkstemp(probe);
+    if (fd < 0)
+        return rr_fail(err, "%s: cannot create files there: %s", path, strerror(errno));
+    close(fd);
+    unlink(probe);
+    return 0;
+}

@@ -1,0 +1,23 @@
+/* Command-line parsing helpers shared by the refrender subcommands. */
+#ifndef RR_CLI_H
+#define RR_CLI_H
+
+#include <stdint.h>
+
+#include "common.h"
+
+/* Each returns 0, or -1 with "OPTION: expected ..., got 'TEXT'" in err. */
+int cli_int(const char *opt, const char *text, long lo, long hi, int *out, rr_error *err);
+int cli_u64(const char *opt, const char *text, uint64_t *out, rr_error *err);
+int cli_double(const char *opt, const char *text, double lo, double *out, rr_error *err);
+int cli_resolution(const char *opt, const char *text, int *w, int *h, rr_error *err);
+int cli_vec3(const char *opt, const char *text, vec3 *out, rr_error *err);
+
+/* Fails early, before a long render, if no file can be created in the
+ * directory of path. */
+int cli_check_writable(const char *path, rr_error *err);
+
+int cmd_render(int argc, char **argv);
+int cmd_gen(int argc, char **argv);
+
+#endif

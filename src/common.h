@@ -1,0 +1,62 @@
+/* Shared small types: error values and double-precision 3-vectors.
+ * Errors are values (STYLE.md): a function that can fail returns 0 on
+ * success or -1 after filling an rr_error with "file:line: reason". */
+#ifndef RR_COMMON_H
+#define RR_COMMON_H
+
+#include <math.h>
+#include <stddef.h>
+
+#define RR_VERSION "0.1.0"
+
+typedef struct {
+    char msg[1024];
+} rr_error;
+
+/* Formats msg into err (if err is non-NULL) and returns -1. */
+int rr_fail(rr_error *err, const char *fmt, ...)
+    __attribute__((format(printf, 2, 3)));
+
+typedef struct {
+    double x, y, z;
+} vec3;
+
+static inline vec3 v3(double x, double y, double z) { vec3 r = {x, y, z}; return r; }
+static inline vec3 v3_add(vec3 a, vec3 b) { return v3(a.x + b.x, a.y + b.y, a.z + b.z); }
+static inline vec3 v3_sub(vec3 a, vec3 b) { return v3(a.x - b.x, a.y - b.y, a.z - b.z); }
+static inline vec3 v3_scale(vec3 a, double s) { return v3(a.x * s, a.y * s, a.z * s); }
+static inline double v3_dot(vec3 a, vec3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+static inline vec3 v3_cross(vec3 a, vec3 b)
+{
+    return v3(a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x);
+}
+static inline double v3_len(vec3 a) { return sqrt(v3_dot(a, a)); }
+static inline vec3 v3_normalize(vec3 a)
+{
+    double l = v3_len(a);
+    return l > 0 ? v3_scale(a, 1.0 / l) : a;
+}
+static inline int v3_finite(vec3 a) { return isfinite(a.x) && isfinite(a.y) && isfinite(a.z); }
+
+/* Axis-aligned box; empty when lo > hi. */
+typedef struct {
+    vec3 lo, hi;
+} aabb;
+
+static inline aabb aabb_empty(void)
+{
+    aabb b = {v3(INFINITY, INFINITY, INFINITY), v3(-INFINITY, -INFINITY, -INFINITY)};
+    return b;
+}
+static inline void aabb_add_point(aabb *b, vec3 p)
+{
+    b->lo = v3(fmin(b->lo.x, p.x), fmin(b->lo.y, p.y), fmin(b->lo.z, p.z));
+    b->hi = v3(fmax(b->hi.x, p.x), fmax(b->hi.y, p.y), fmax(b->hi.z, p.z));
+}
+static inline void aabb_add_box(aabb *b, aabb o)
+{
+    aabb_add_point(b, o.lo);
+    aabb_add_point(b, o.hi);
+}
+
+#endif

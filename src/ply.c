@@ -1,0 +1,460 @@
+#include "ply.h"
+
+#include <errno.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+enum ply_format { PLY_ASCII, PLY_LE, PLY_BE };
+enum { SLOT_X, SLOT_Y, SLOT_Z, SLOT_NX, SLOT_NY, SLOT_NZ, SLOT_RADIUS, SLOT_UX, SLOT_UY,
+       SLOT_UZ, SLOT_VX, SLOT_VY, SLOT_VZ, SLOT_R, SLOT_G, SLOT_B, SLOT_COUNT };
+static const char *const slot_names[SLOT_COUNT] = {
+    "x", "y", "z", "nx", "ny", "nz", "radius", "ux", "uy", "uz", "vx", "vy", "vz",
+    "red", "green", "blue"};
+
+typedef struct {
+    int type;       /* scalar type index into type_table */
+    int list_count; /* for list properties: type of the count, else -1 */
+    int slot;       /* SLOT_* or -1 when ignored */
+} ply_property;
+
+typedef struct {
+    char name[64];
+    size_t count;
+    int nprops;
+    ply_property props[64];
+} ply_element;
+
+typedef struct {
+    const char *path;
+    FILE *f;
+    enum ply_format format;
+    int nelements;
+    ply_element elements[16];
+    long line; /* current line (header and ascii body) */
+    rr_error *err;
+} ply_reader;
+
+static const struct {
+    const char *name, *alias;
+    int size, is_int, is_signed;
+    double max;
+} type_table[] = {
+    {"char", "int8", 1, 1, 1, 127.0},        {"uchar", "uint8", 1, 1, 0, 255.0},
+    {"short", "int16", 2, 1, 1, 32767.0},    {"ushort", "uint16", 2, 1, 0, 65535.0},
+    {"int", "int32", 4, 1, 1, 2147483647.0}, {"uint", "uint32", 4, 1, 0, 4294967295.0},
+    {"float", "float32", 4, 0, 1, 1.0},      {"double", "float64", 8, 0, 1, 1.0},
+};
+#define NTYPES ((int)(sizeof type_table / sizeof type_table[0]))
+
+static int type_index(const char *name)
+{
+    for (int i = 0; i < NTYPES; i++)
+        if (!strcmp(name, type_table[i].name) || !strcmp(name, type_table[i].alias))
+            return i;
+    return -1;
+}
+
+static int slot_index(const char *name)
+{
+    for (int i = 0; i < SLOT_COUNT; i++)
+        if (!strcmp(name, slot_names[i]))
+            return i;
+    return -1;
+}
+
+/* ---- header ---------------------------------------------------------- */
+
+static int header_fail(ply_reader *r, const char *what)
+{
+    return rr_fail(r->err, "%s:%ld: %s", r->path, r->line, what);
+}
+
+static int parse_property(ply_reader *r, ply_element *e, char *rest)
+{
+    char a[64] = "", b[64] = "", c[64] = "";
+    int n = sscanf(rest, "%63s %63s %63s", a, b, c);
+    (void)c;
+    if (e->nprops == 64)
+        return header_fail(r, "too many properties (at most 64)");
+    ply_property *p = &e->props[e->nprops];
+    if (n >= 1 && !strcmp(a, "list")) {
+        char item[64] = "", name[64] = "";
+        if (sscanf(rest, "%*s %63s %63s %63s", a, item, name) != 3)
+            return header_fail(r, "malformed 'property list <count type> <item type> <name>'");
+        p->list_count = type_index(a);
+        p->type = type_index(item);
+        if (p->list_count < 0 || !type_table[p->list_count].is_int || p->type < 0)
+            return header_fail(r, "unknown or non-integer list count type");
+        p->slot = -1;
+    } else {
+        if (n != 2)
+            return header_fail(r, "malformed 'property <type> <name>'");
+        p->type = type_index(a);
+        p->list_count = -1;
+        if (p->type < 0)
+            return header_fail(r, "unknown property type");
+        p->slot = strcmp(e->name, "vertex") ? -1 : slot_index(b);
+        for (int i = 0; p->slot >= 0 && i < e->nprops; i++)
+            if (e->props[i].slot == p->slot)
+                return header_fail(r, "duplicate vertex property");
+    }
+    e->nprops++;
+    return 0;
+}
+
+static int parse_header_line(ply_reader *r, char *line, int *done)
+{
+    char word[64] = "";
+    int off = 0;
+    if (sscanf(line, "%63s %n", word, &off) < 1)
+        return 0; /* blank line */
+    char *rest = line + off;
+    if (!strcmp(word, "comment") || !strcmp(word, "obj_info"))
+        return 0;
+    if (!strcmp(word, "end_header")) {
+        *done = 1;
+        return 0;
+    }
+    if (!strcmp(word, "format")) {
+        char fmt[64] = "", ver[64] = "";
+        if (sscanf(rest, "%63s %63s", fmt, ver) != 2 || strcmp(ver, "1.0"))
+            return header_fail(r, "expected 'format <ascii|binary_little_endian|binary_big_endian> 1.0'");
+        if (!strcmp(fmt, "ascii")) r->format = PLY_ASCII;
+        else if (!strcmp(fmt, "binary_little_endian")) r->format = PLY_LE;
+        else if (!strcmp(fmt, "binary_big_endian")) r->format = PLY_BE;
+        else return header_fail(r, "unknown PLY format");
+        return 0;
+    }
+    if (!strcmp(word, "element")) {
+        if (r->nelements == 16)
+            return header_fail(r, "too many elements (at most 16)");
+        ply_element *e = &r->elements[r->nelements];
+        unsigned long long count;
+        char extra;
+        if (sscanf(rest, "%63s %llu %c", e->name, &count, &extra) != 2 || rest[0] == '-')
+            return header_fail(r, "malformed 'element <name> <count>'");
+        e->count = (size_t)count;
+        e->nprops = 0;
+        r->nelements++;
+        return 0;
+    }
+    if (!strcmp(word, "property")) {
+        if (r->nelements == 0)
+            return header_fail(r, "'property' before any 'element'");
+        return parse_property(r, &r->elements[r->nelements - 1], rest);
+    }
+    return header_fail(r, "unknown header keyword");
+}
+
+static int read_header(ply_reader *r)
+{
+    char line[1024];
+    r->line = 1;
+    if (!fgets(line, sizeof line, r->f) || strncmp(line, "ply", 3) || (line[3] != '\n' && line[3] != '\r'))
+        return header_fail(r, "not a PLY file (first line must be 'ply')");
+    int format_seen = 0, done = 0;
+    while (!done) {
+        r->line++;
+        if (!fgets(line, sizeof line, r->f))
+            return header_fail(r, "file ends inside the header (no 'end_header')");
+        if (!strchr(line, '\n'))
+            return header_fail(r, "header line too long");
+        if (!strncmp(line, "format", 6))
+            format_seen = 1;
+        if (parse_header_line(r, line, &done))
+            return -1;
+    }
+    if (!format_seen)
+        return header_fail(r, "missing 'format' line");
+    return 0;
+}
+
+/* ---- body ------------------------------------------------------------ */
+
+static int host_is_little_endian(void)
+{
+    const uint16_t one = 1;
+    return *(const uint8_t *)&one == 1;
+}
+
+static double decode_binary(const unsigned char *bytes, int type, int swap)
+{
+    unsigned char b[8];
+    int size = type_table[type].size;
+    for (int i = 0; i < size; i++)
+        b[i] = swap ? bytes[size - 1 - i] : bytes[i];
+    switch (type) {
+    case 0: { int8_t v; memcpy(&v, b, 1); return v; }
+    case 1: { uint8_t v; memcpy(&v, b, 1); return v; }
+    case 2: { int16_t v; memcpy(&v, b, 2); return v; }
+    case 3: { uint16_t v; memcpy(&v, b, 2); return v; }
+    case 4: { int32_t v; memcpy(&v, b, 4); return v; }
+    case 5: { uint32_t v; memcpy(&v, b, 4); return v; }
+    case 6: { float v; memcpy(&v, b, 4); return v; }
+    default: { double v; memcpy(&v, b, 8); return v; }
+    }
+}
+
+/* Reads one binary scalar; returns -1 at end of file. */
+static int read_binary_value(ply_reader *r, int type, double *out)
+{
+    unsigned char bytes[8];
+    if (fread(bytes, (size_t)type_table[type].size, 1, r->f) != 1)
+        return -1;
+    int swap = (r->format == PLY_LE) != host_is_little_endian();
+    *out = decode_binary(bytes, type, swap);
+    return 0;
+}
+
+/* Reads one ascii token as a number; returns -1 at end of file, -2 if the
+ * token is not a number. Tracks line numbers. */
+static int read_ascii_value(ply_reader *r, double *out)
+{
+    int c;
+    while ((c = fgetc(r->f)) != EOF && (c == ' ' || c == '\t' || c == '\r' || c == '\n'))
+        if (c == '\n')
+            r->line++;
+    if (c == EOF)
+        return -1;
+    char tok[128];
+    size_t n = 0;
+    while (c != EOF && c != ' ' && c != '\t' && c != '\r' && c != '\n') {
+        if (n + 1 < sizeof tok)
+            tok[n++] = (char)c;
+        c = fgetc(r->f);
+    }
+    if (c != EOF)
+        ungetc(c, r->f);
+    tok[n] = 0;
+    char *end;
+    errno = 0;
+    *out = strtod(tok, &end);
+    return (*end || end == tok) ? -2 : 0;
+}
+
+static int element_fail(ply_reader *r, const ply_element *e, size_t index, const char *what)
+{
+    if (r->format == PLY_ASCII)
+        return rr_fail(r->err, "%s:%ld: %s %zu: %s", r->path, r->line, e->name, index, what);
+    return rr_fail(r->err, "%s: %s %zu (byte offset %ld): %s", r->path, e->name, index,
+                   ftell(r->f), what);
+}
+
+static int read_value(ply_reader *r, const ply_element *e, size_t index, int type, double *out)
+{
+    int rc = r->format == PLY_ASCII ? read_ascii_value(r, out) : read_binary_value(r, type, out);
+    if (rc == -1)
+        return element_fail(r, e, index, "file is truncated (ends before all declared data)");
+    if (rc == -2)
+        return element_fail(r, e, index, "value is not a number");
+    return 0;
+}
+
+/* Reads the properties of one element instance; slot values land in vals. */
+static int read_instance(ply_reader *r, const ply_element *e, size_t index, double *vals)
+{
+    for (int i = 0; i < e->nprops; i++) {
+        const ply_property *p = &e->props[i];
+        double v;
+        if (p->list_count >= 0) {
+            if (read_value(r, e, index, p->list_count, &v))
+                return -1;
+            if (v < 0 || v > 1e6)
+                return element_fail(r, e, index, "list length out of range");
+            for (long k = 0; k < (long)v; k++) {
+                double item;
+                if (read_value(r, e, index, p->type, &item))
+                    return -1;
+            }
+            continue;
+        }
+        if (read_value(r, e, index, p->type, &v))
+            return -1;
+        if (p->slot >= 0) {
+            if (type_table[p->type].is_int && p->slot >= SLOT_R)
+                v /= type_table[p->type].max;
+            vals[p->slot] = v;
+        }
+    }
+    return 0;
+}
+
+static int has_slot(const ply_element *e, int slot)
+{
+    for (int i = 0; i < e->nprops; i++)
+        if (e->props[i].slot == slot)
+            return 1;
+    return 0;
+}
+
+static int has_slots(const ply_element *e, int first, int n)
+{
+    for (int s = first; s < first + n; s++)
+        if (!has_slot(e, s))
+            return 0;
+    return 1;
+}
+
+/* Checks the vertex element declares what a splat needs. */
+static int check_vertex_properties(ply_reader *r, const ply_element *e)
+{
+    const char *p = r->path;
+    if (!has_slots(e, SLOT_X, 3))
+        return rr_fail(r->err, "%s: vertex element lacks one of the required properties x y z", p);
+    int any_color = has_slot(e, SLOT_R) || has_slot(e, SLOT_G) || has_slot(e, SLOT_B);
+    if (any_color && !has_slots(e, SLOT_R, 3))
+        return rr_fail(r->err, "%s: vertex color needs all of red green blue", p);
+    int any_axis = 0;
+    for (int s = SLOT_UX; s <= SLOT_VZ; s++)
+        any_axis |= has_slot(e, s);
+    if (any_axis && !has_slots(e, SLOT_UX, 6))
+        return rr_fail(r->err, "%s: elliptical splats need all of ux uy uz vx vy vz", p);
+    if (any_axis)
+        return 0;
+    if (!has_slot(e, SLOT_RADIUS))
+        return rr_fail(r->err, "%s: vertices have no splat size: add a 'radius' property "
+                               "(with nx ny nz) or tangent axes 'ux uy uz vx vy vz'", p);
+    if (!has_slots(e, SLOT_NX, 3))
+        return rr_fail(r->err, "%s: circular splats ('radius') need normals nx ny nz", p);
+    return 0;
+}
+
+static size_t element_stride(const ply_element *e)
+{
+    size_t s = 0;
+    for (int i = 0; i < e->nprops; i++) {
+        if (e->props[i].list_count >= 0)
+            return 0; /* variable size */
+        s += (size_t)type_table[e->props[i].type].size;
+    }
+    return s;
+}
+
+/* Rejects a binary vertex count that cannot fit the rest of the file before
+ * allocating anything for it. */
+static int check_binary_size(ply_reader *r, const ply_element *e)
+{
+    size_t stride = element_stride(e);
+    long here = ftell(r->f);
+    if (r->format == PLY_ASCII || stride == 0 || here < 0 || fseek(r->f, 0, SEEK_END))
+        return 0;
+    long end = ftell(r->f);
+    fseek(r->f, here, SEEK_SET);
+    size_t remaining = (size_t)(end - here);
+    if (e->count > remaining / stride)
+        return rr_fail(r->err, "%s: header declares %zu vertices (%zu bytes) but only %zu "
+                               "bytes follow the header: file truncated or count wrong",
+                       r->path, e->count, e->count * stride, remaining);
+    return 0;
+}
+
+static int add_vertex(ply_reader *r, const ply_element *e, size_t i, const double *v,
+                      int has_color, vec3 default_color, pointmodel *m)
+{
+    for (int s = 0; s < SLOT_COUNT; s++)
+        if (has_slot(e, s) && !isfinite(v[s]))
+            return element_fail(r, e, i, "NaN or infinite value");
+    vec3 c = v3(v[SLOT_X], v[SLOT_Y], v[SLOT_Z]);
+    vec3 n = has_slot(e, SLOT_NX) ? v3(v[SLOT_NX], v[SLOT_NY], v[SLOT_NZ]) : v3(0, 0, 0);
+    if (has_slot(e, SLOT_NX) && v3_len(n) == 0)
+        return element_fail(r, e, i, "zero-length normal");
+    vec3 col = has_color ? v3(v[SLOT_R], v[SLOT_G], v[SLOT_B]) : default_color;
+    rr_error sub;
+    int rc;
+    if (has_slot(e, SLOT_UX)) {
+        rc = pointmodel_add(m, c, v3(v[SLOT_UX], v[SLOT_UY], v[SLOT_UZ]),
+                            v3(v[SLOT_VX], v[SLOT_VY], v[SLOT_VZ]), n, col, &sub);
+    } else {
+        if (!(v[SLOT_RADIUS] > 0))
+            return element_fail(r, e, i, v[SLOT_RADIUS] < 0 ? "negative radius" : "zero radius");
+        rc = pointmodel_add_circle(m, c, n, v[SLOT_RADIUS], col, &sub);
+    }
+    return rc ? element_fail(r, e, i, sub.msg) : 0;
+}
+
+static int read_elements(ply_reader *r, vec3 default_color, pointmodel *m)
+{
+    for (int k = 0; k < r->nelements; k++) {
+        const ply_element *e = &r->elements[k];
+        int is_vertex = !strcmp(e->name, "vertex");
+        if (is_vertex && (check_vertex_properties(r, e) || check_binary_size(r, e)))
+            return -1;
+        int has_color = is_vertex && has_slot(e, SLOT_R);
+        for (size_t i = 0; i < e->count; i++) {
+            double vals[SLOT_COUNT] = {0};
+            if (read_instance(r, e, i, vals))
+                return -1;
+            if (is_vertex && add_vertex(r, e, i, vals, has_color, default_color, m))
+                return -1;
+        }
+        if (is_vertex)
+            return 0; /* later elements (faces, ...) are not needed */
+    }
+    return rr_fail(r->err, "%s: no 'vertex' element", r->path);
+}
+
+int ply_read(const char *path, vec3 default_color, pointmodel *m, rr_error *err)
+{
+    ply_reader r;
+    memset(&r, 0, sizeof r);
+    r.path = path;
+    r.err = err;
+    r.format = PLY_ASCII;
+    r.f = fopen(path, "rb");
+    if (!r.f)
+        return rr_fail(err, "%s: cannot open: %s", path, strerror(errno));
+    int rc = read_header(&r);
+    if (!rc) {
+        r.line++; /* ascii body starts on the line after end_header */
+        rc = read_elements(&r, default_color, m);
+    }
+    fclose(r.f);
+    return rc;
+}
+
+/* ---- writer ---------------------------------------------------------- */
+
+static void put_f32le(FILE *f, double v)
+{
+    float x = (float)v;
+    unsigned char b[4];
+    memcpy(b, &x, 4);
+    if (!host_is_little_endian()) {
+        unsigned char t = b[0]; b[0] = b[3]; b[3] = t;
+        t = b[1]; b[1] = b[2]; b[2] = t;
+    }
+    fwrite(b, 4, 1, f);
+}
+
+static unsigned char to_u8(double c)
+{
+    c = c < 0 ? 0 : (c > 1 ? 1 : c);
+    return (unsigned char)lrint(c * 255.0);
+}
+
+int ply_write_surfels(const char *path, const surfel *s, size_t n, rr_error *err)
+{
+    FILE *f = fopen(path, "wb");
+    if (!f)
+        return rr_fail(err, "%s: cannot write: %s", path, strerror(errno));
+    fprintf(f, "ply\nformat binary_little_endian 1.0\ncomment written by refrender %s\n"
+               "element vertex %zu\n", RR_VERSION, n);
+    fputs("property float x\nproperty float y\nproperty float z\nproperty float nx\n"
+          "property float ny\nproperty float nz\nproperty float radius\n"
+          "property uchar red\nproperty uchar green\nproperty uchar blue\nend_header\n", f);
+    for (size_t i = 0; i < n; i++) {
+        const surfel *p = &s[i];
+        double vals[7] = {p->center.x, p->center.y, p->center.z, p->normal.x, p->normal.y,
+                          p->normal.z, p->radius};
+        for (int k = 0; k < 7; k++)
+            put_f32le(f, vals[k]);
+        unsigned char rgb[3] = {to_u8(p->color.x), to_u8(p->color.y), to_u8(p->color.z)};
+        fwrite(rgb, 3, 1, f);
+    }
+    int bad = ferror(f);
+    if (fclose(f) || bad)
+        return rr_fail(err, "%s: write failed", path);
+    return 0;
+}

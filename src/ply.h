@@ -1,0 +1,33 @@
+/* Surfel PLY files (ascii, binary_little_endian, binary_big_endian).
+ *
+ * Vertex properties read (any scalar type; others are ignored):
+ *   x y z                    position, required
+ *   nx ny nz                 shading normal
+ *   radius                   circular splat radius (needs nx ny nz)
+ *   ux uy uz vx vy vz        elliptical splat: tangent axes scaled to the
+ *                            principal radii (take precedence over radius)
+ *   red green blue           color; integer types are divided by their
+ *                            maximum (255 for uchar), float types taken as is
+ * A vertex without a splat size is an error: ray tracing needs a surface
+ * extent, and guessing one would silently change the reference image. */
+#ifndef RR_PLY_H
+#define RR_PLY_H
+
+#include "pointmodel.h"
+
+/* Appends every vertex of the PLY file to m. default_color is used when the
+ * file has no colors. Errors name the file and the header line, ascii line,
+ * or binary vertex index. */
+int ply_read(const char *path, vec3 default_color, pointmodel *m, rr_error *err);
+
+typedef struct {
+    vec3 center, normal;
+    double radius;
+    vec3 color;
+} surfel;
+
+/* Writes circular surfels as binary little-endian PLY with float x y z nx ny
+ * nz radius and uchar red green blue (the generator's output format). */
+int ply_write_surfels(const char *path, const surfel *s, size_t n, rr_error *err);
+
+#endif

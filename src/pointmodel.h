@@ -1,0 +1,29 @@
+/* A point model: an array of elliptical surfel splats with per-splat
+ * shading normal and color, in the object's own coordinate system. */
+#ifndef RR_POINTMODEL_H
+#define RR_POINTMODEL_H
+
+#include "common.h"
+#include "splat.h"
+
+typedef struct {
+    size_t count, capacity;
+    splat_geom *geom; /* intersection form, one per splat */
+    float *normal;    /* 3 per splat: unit shading normal */
+    float *color;     /* 3 per splat: linear RGB */
+    float *extent;    /* 3 per splat: half size of the tight box about the center */
+    aabb bounds;      /* union of the tight splat bounds */
+} pointmodel;
+
+void pointmodel_init(pointmodel *m);
+void pointmodel_free(pointmodel *m);
+
+/* Appends the splat c + a*u + b*v (a^2+b^2 <= 1) with shading normal n (made
+ * unit; if zero, u x v is used) and color. Returns -1 with a reason for a
+ * degenerate ellipse, non-finite input or out-of-memory. */
+int pointmodel_add(pointmodel *m, vec3 c, vec3 u, vec3 v, vec3 n, vec3 color, rr_error *err);
+
+/* Appends a circular splat of the given radius perpendicular to n. */
+int pointmodel_add_circle(pointmodel *m, vec3 c, vec3 n, double radius, vec3 color, rr_error *err);
+
+#endif

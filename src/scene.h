@@ -1,0 +1,61 @@
+/* In-memory scene description: camera, shutter, lights, objects. Built by
+ * scene_xml.c, consumed by accel.c and render.c; knows nothing of either. */
+#ifndef RR_SCENE_H
+#define RR_SCENE_H
+
+#include "animation.h"
+#include "camera.h"
+#include "pointmodel.h"
+#include "shutter.h"
+
+typedef enum { SHADING_PHONG, SHADING_UNLIT } shading_kind;
+
+typedef struct {
+    shading_kind shading;
+    double diffuse;   /* scale of the splat color for ambient and diffuse terms */
+    double specular;  /* white specular coefficient */
+    double shininess; /* Phong exponent */
+} material;
+
+typedef enum { OBJECT_POINTS, OBJECT_SPHERE } object_kind;
+
+typedef struct {
+    object_kind kind;
+    char name[64];
+    int line;          /* line of <object> in the scene file */
+    pointmodel model;  /* OBJECT_POINTS */
+    vec3 sphere_center;/* OBJECT_SPHERE, object space */
+    double sphere_radius;
+    vec3 sphere_color;
+    material mat;
+    animation anim;
+} scene_object;
+
+typedef enum { LIGHT_POINT, LIGHT_DIRECTIONAL } light_kind;
+
+typedef struct {
+    light_kind kind;
+    vec3 position;  /* point light */
+    vec3 direction; /* directional: the direction light travels (unit) */
+    vec3 color;
+} light;
+
+typedef struct {
+    char path[4096]; /* scene file, for messages and EXR metadata */
+    camera cam;
+    shutter shut;
+    vec3 background, ambient;
+    double epsilon, kernel_sigma;
+    int time_factor;
+    int nlights, nobjects;
+    light *lights;
+    scene_object *objects;
+} scene;
+
+void scene_init(scene *s);
+void scene_free(scene *s);
+
+/* Object-space bounds of an object (before its animation). */
+aabb scene_object_bounds(const scene_object *o);
+
+#endif

@@ -1,0 +1,585 @@
+#include "scene_xml.h"
+
+#include <libxml/parser.h>
+#include <libxml/xmlerror.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "ply.h"
+#include "shapes.h"
+
+typedef struct {
+    const char *name;     /* file name for messages */
+    const char *base_dir; /* directory relative paths resolve against */
+    rr_error *err;
+} xml_ctx;
+
+static const char *elname(xmlNodePtr n) { return (const char *)n->name; }
+
+static int node_fail(xml_ctx *c, xmlNodePtr n, const char *fmt, const char *a, const char *b)
+{
+    char what[2048];
+    snprintf(what, sizeof what, fmt, a ? a : "", b ? b : "");
+    return rr_fail(c->err, "%s:%ld: <%s>: %s", c->name, xmlGetLineNo(n), elname(n), what);
+}
+
+/* Rejects attributes not in the NULL-terminated list (catches typos). */
+static int check_attributes(xml_ctx *c, xmlNodePtr n, const char *const *allowed)
+{
+    for (xmlAttrPtr a = n->properties; a; a = a->next) {
+        int ok = 0;
+        for (const char *const *p = allowed; *p && !ok; p++)
+            ok = !strcmp(*p, (const char *)a->name);
+        if (!ok)
+            return node_fail(c, n, "unknown attribute '%s'%s", (const char *)a->name, "");
+    }
+    return 0;
+}
+
+/* Copies attribute text into buf; returns 1 if present, 0 if absent. */
+static int attr_text(xmlNodePtr n, const char *name, char *buf, size_t size)
+{
+    xmlChar *v = xmlGetProp(n, (const xmlChar *)name);
+    if (!v)
+        return 0;
+    snprintf(buf, size, "%s", (const char *)v);
+    xmlFree(v);
+    return 1;
+}
+
+/* Parses up to max whitespace-separated finite numbers; returns the count,
+ * or -1 if a token is not a finite number. */
+static int parse_numbers(const char *text, double *out, int max)
+{
+    int n = 0;
+    const char *p = text;
+    for (;;) {
+        while (*p == ' ' || *p == '\t' || *p == '\n' || *p == '\r' || *p == ',')
+            p++;
+        if (!*p)
+            return n;
+        char *end;
+        double v = strtod(p, &end);
+        if (end == p || !isfinite(v) || n == max)
+            return -1;
+        out[n++] = v;
+        p = end;
+    }
+}
+
+static int attr_numbers(xml_ctx *c, xmlNodePtr n, const char *name, double *out, int count,
+                        int required)
+{
+    char buf[4096];
+    if (!attr_text(n, name, buf, sizeof buf))
+        return required ? node_fail(c, n, "missing required attribute '%s'%s", name, "") : 0;
+    if (parse_numbers(buf, out, count) != count) {
+        char want[64];
+        snprintf(want, sizeof want, "%d finite number%s", count, count > 1 ? "s" : "");
+        char msg[256];
+        snprintf(msg, sizeof msg, "attribute '%s' must be %s, got '%%s'", name, want);
+        return node_fail(c, n, msg, buf, NULL);
+    }
+    return 0;
+}
+
+static int attr_double(xml_ctx *c, xmlNodePtr n, const char *name, double *v, int required)
+{
+    return attr_numbers(c, n, name, v, 1, required);
+}
+
+static int attr_vec3(xml_ctx *c, xmlNodePtr n, const char *name, vec3 *v, int required)
+{
+    double a[3] = {v->x, v->y, v->z};
+    if (attr_numbers(c, n, name, a, 3, required))
+        return -1;
+    *v = v3(a[0], a[1], a[2]);
+    return 0;
+}
+
+static int attr_positive(xml_ctx *c, xmlNodePtr n, const char *name, double *v, int required)
+{
+    if (attr_double(c, n, name, v, required))
+        return -1;
+    if (!(*v > 0))
+        return node_fail(c, n, "attribute '%s' must be positive%s", name, "");
+    return 0;
+}
+
+static int attr_int(xml_ctx *c, xmlNodePtr n, const char *name, int *v, int lo, int hi)
+{
+    double d = *v;
+    if (attr_double(c, n, name, &d, 0))
+        return -1;
+    if (d != floor(d) || d < lo || d > hi) {
+        char msg[128];
+        snprintf(msg, sizeof msg, "attribute '%%s' must be an integer in [%d, %d]%%s", lo, hi);
+        return node_fail(c, n, msg, name, "");
+    }
+    *v = (int)d;
+    return 0;
+}
+
+static int is_element(xmlNodePtr n) { return n->type == XML_ELEMENT_NODE; }
+
+/* Text children must be whitespace only, except where an element takes a
+ * path as its content. */
+static int check_no_text(xml_ctx *c, xmlNodePtr parent)
+{
+    for (xmlNodePtr n = parent->children; n; n = n->next)
+        if (n->type == XML_TEXT_NODE && !xmlIsBlankNode(n))
+            return node_fail(c, parent, "unexpected text inside this element%s%s", "", "");
+    return 0;
+}
+
+/* ---- scene-level elements -------------------------------------------- */
+
+static int parse_camera(xml_ctx *c, xmlNodePtr n, camera *cam)
+{
+    static const char *const ok[] = {"position", "lookat", "up", "fov", "width", "height", NULL};
+    if (check_attributes(c, n, ok) || attr_vec3(c, n, "position", &cam->position, 0) ||
+        attr_vec3(c, n, "lookat", &cam->lookat, 0) || attr_vec3(c, n, "up", &cam->up, 0) ||
+        attr_double(c, n, "fov", &cam->fov_degrees, 0) ||
+        attr_int(c, n, "width", &cam->width, 1, 65536) ||
+        attr_int(c, n, "height", &cam->height, 1, 65536))
+        return -1;
+    rr_error sub;
+    if (camera_prepare(cam, &sub))
+        return node_fail(c, n, "%s%s", sub.msg, "");
+    return 0;
+}
+
+static int parse_weight_kind(xml_ctx *c, xmlNodePtr n, shutter *s)
+{
+    char kind[64];
+    if (!attr_text(n, "weight", kind, sizeof kind))
+        return 0;
+    for (int k = WEIGHT_BOX; k <= WEIGHT_TABLE; k++)
+        if (!strcmp(kind, shutter_weight_name((weight_kind)k))) {
+            s->kind = (weight_kind)k;
+            return 0;
+        }
+    return node_fail(c, n, "unknown weight '%s' (expected box, linear, exp or table)%s", kind, "");
+}
+
+static int parse_weight_table(xml_ctx *c, xmlNodePtr n, shutter *s)
+{
+    char buf[16384];
+    if (!attr_text(n, "table", buf, sizeof buf)) {
+        if (s->kind == WEIGHT_TABLE)
+            return node_fail(c, n, "weight 'table' needs a 'table' attribute of 't w' pairs%s%s", "", "");
+        return 0;
+    }
+    double v[2 * SHUTTER_TABLE_MAX];
+    int count = parse_numbers(buf, v, 2 * SHUTTER_TABLE_MAX);
+    if (count < 2 || count % 2)
+        return node_fail(c, n, "attribute 'table' must hold 1 to 256 't w' number pairs%s%s", "", "");
+    s->table_size = count / 2;
+    for (int i = 0; i < s->table_size; i++) {
+        s->table_t[i] = v[2 * i];
+        s->table_w[i] = v[2 * i + 1];
+    }
+    return 0;
+}
+
+static int parse_shutter(xml_ctx *c, xmlNodePtr n, shutter *s)
+{
+    static const char *const ok[] = {"open", "close", "weight", "center", "rate", "table", NULL};
+    if (check_attributes(c, n, ok) || attr_double(c, n, "open", &s->open, 0) ||
+        attr_double(c, n, "close", &s->close, 0))
+        return -1;
+    s->center = s->close; /* thesis Figure 3.1: weighting center t_c = t1 */
+    if (attr_double(c, n, "center", &s->center, 0) || attr_double(c, n, "rate", &s->rate, 0) ||
+        parse_weight_kind(c, n, s) || parse_weight_table(c, n, s))
+        return -1;
+    rr_error sub;
+    if (shutter_check(s, &sub))
+        return node_fail(c, n, "%s%s", sub.msg, "");
+    return 0;
+}
+
+static int parse_color_element(xml_ctx *c, xmlNodePtr n, vec3 *color)
+{
+    static const char *const ok[] = {"color", NULL};
+    return check_attributes(c, n, ok) || attr_vec3(c, n, "color", color, 1) ? -1 : 0;
+}
+
+static int parse_render(xml_ctx *c, xmlNodePtr n, scene *s)
+{
+    static const char *const ok[] = {"epsilon", "kernel_sigma", "time_factor", NULL};
+    if (check_attributes(c, n, ok) || attr_double(c, n, "epsilon", &s->epsilon, 0) ||
+        attr_positive(c, n, "kernel_sigma", &s->kernel_sigma, 0) ||
+        attr_int(c, n, "time_factor", &s->time_factor, 1, 1024))
+        return -1;
+    if (s->epsilon < 0)
+        return node_fail(c, n, "attribute 'epsilon' must be >= 0%s%s", "", "");
+    return 0;
+}
+
+static int parse_light(xml_ctx *c, xmlNodePtr n, scene *s)
+{
+    static const char *const ok[] = {"type", "position", "direction", "color", NULL};
+    light l = {LIGHT_POINT, v3(0, 0, 0), v3(0, 0, -1), v3(1, 1, 1)};
+    char type[64] = "point";
+    attr_text(n, "type", type, sizeof type);
+    if (check_attributes(c, n, ok) || attr_vec3(c, n, "color", &l.color, 0))
+        return -1;
+    if (!strcmp(type, "point")) {
+        if (attr_vec3(c, n, "position", &l.position, 1))
+            return -1;
+    } else if (!strcmp(type, "directional")) {
+        l.kind = LIGHT_DIRECTIONAL;
+        if (attr_vec3(c, n, "direction", &l.direction, 1))
+            return -1;
+        if (!(v3_len(l.direction) > 0))
+            return node_fail(c, n, "light direction must be non-zero%s%s", "", "");
+        l.direction = v3_normalize(l.direction);
+    } else {
+        return node_fail(c, n, "unknown light type '%s' (expected point or directional)%s", type, "");
+    }
+    light *grown = realloc(s->lights, (size_t)(s->nlights + 1) * sizeof *grown);
+    if (!grown)
+        return node_fail(c, n, "out of memory%s%s", "", "");
+    s->lights = grown;
+    s->lights[s->nlights++] = l;
+    return 0;
+}
+
+/* ---- objects ---------------------------------------------------------- */
+
+static int parse_material(xml_ctx *c, xmlNodePtr n, material *m)
+{
+    static const char *const ok[] = {"shading", "diffuse", "specular", "shininess", NULL};
+    char shading[64];
+    if (check_attributes(c, n, ok))
+        return -1;
+    if (attr_text(n, "shading", shading, sizeof shading)) {
+        if (!strcmp(shading, "phong")) m->shading = SHADING_PHONG;
+        else if (!strcmp(shading, "unlit")) m->shading = SHADING_UNLIT;
+        else return node_fail(c, n, "unknown shading '%s' (expected phong or unlit)%s", shading, "");
+    }
+    if (attr_double(c, n, "diffuse", &m->diffuse, 0) || attr_double(c, n, "specular", &m->specular, 0) ||
+        attr_double(c, n, "shininess", &m->shininess, 0))
+        return -1;
+    if (m->diffuse < 0 || m->specular < 0 || m->shininess < 0)
+        return node_fail(c, n, "diffuse, specular and shininess must be >= 0%s%s", "", "");
+    return 0;
+}
+
+static int parse_linear(xml_ctx *c, xmlNodePtr n, animation *a)
+{
+    static const char *const ok[] = {"velocity", NULL};
+    return check_attributes(c, n, ok) || attr_vec3(c, n, "velocity", &a->velocity, 1) ? -1 : 0;
+}
+
+static int parse_rotation(xml_ctx *c, xmlNodePtr n, animation *a)
+{
+    static const char *const ok[] = {"axis", "center", "degrees_per_unit_time", NULL};
+    if (check_attributes(c, n, ok) || attr_vec3(c, n, "axis", &a->axis, 1) ||
+        attr_vec3(c, n, "center", &a->center, 0) ||
+        attr_double(c, n, "degrees_per_unit_time", &a->degrees_per_time, 1))
+        return -1;
+    if (!(v3_len(a->axis) > 0))
+        return node_fail(c, n, "rotation axis must be non-zero%s%s", "", "");
+    a->axis = v3_normalize(a->axis);
+    a->has_rotation = 1;
+    return 0;
+}
+
+static int parse_animation(xml_ctx *c, xmlNodePtr n, animation *a)
+{
+    static const char *const ok[] = {NULL};
+    if (check_attributes(c, n, ok))
+        return -1;
+    for (xmlNodePtr k = n->children; k; k = k->next) {
+        if (k->type == XML_TEXT_NODE && !xmlIsBlankNode(k))
+            return node_fail(c, n, "keyframe animation files (.anim) are not supported yet; "
+                                   "use <linear> and <rotation>%s%s", "", "");
+        if (!is_element(k))
+            continue;
+        if (!strcmp(elname(k), "linear")) {
+            if (parse_linear(c, k, a))
+                return -1;
+        } else if (!strcmp(elname(k), "rotation")) {
+            if (parse_rotation(c, k, a))
+                return -1;
+        } else {
+            return node_fail(c, k, "unknown animation element (expected linear or rotation)%s%s", "", "");
+        }
+    }
+    return 0;
+}
+
+static int parse_sphere(xml_ctx *c, xmlNodePtr n, scene_object *o)
+{
+    static const char *const ok[] = {"center", "radius", "color", NULL};
+    o->kind = OBJECT_SPHERE;
+    o->sphere_center = v3(0, 0, 0);
+    o->sphere_color = v3(0.8, 0.8, 0.8);
+    return check_attributes(c, n, ok) || attr_vec3(c, n, "center", &o->sphere_center, 0) ||
+                   attr_positive(c, n, "radius", &o->sphere_radius, 1) ||
+                   attr_vec3(c, n, "color", &o->sphere_color, 0)
+               ? -1
+               : 0;
+}
+
+static int parse_splat(xml_ctx *c, xmlNodePtr n, pointmodel *m, vec3 default_color)
+{
+    static const char *const ok[] = {"center", "normal", "radius", "u", "v", "color", NULL};
+    vec3 center = v3(0, 0, 0), normal = v3(0, 0, 0), u = v3(0, 0, 0), v = v3(0, 0, 0);
+    vec3 color = default_color;
+    double radius = 0;
+    if (check_attributes(c, n, ok) || attr_vec3(c, n, "center", &center, 1) ||
+        attr_vec3(c, n, "normal", &normal, 0) || attr_vec3(c, n, "color", &color, 0) ||
+        attr_double(c, n, "radius", &radius, 0) || attr_vec3(c, n, "u", &u, 0) ||
+        attr_vec3(c, n, "v", &v, 0))
+        return -1;
+    rr_error sub;
+    int has_axes = xmlHasProp(n, (const xmlChar *)"u") || xmlHasProp(n, (const xmlChar *)"v");
+    int rc = has_axes ? pointmodel_add(m, center, u, v, normal, color, &sub)
+                      : pointmodel_add_circle(m, center, normal, radius, color, &sub);
+    return rc ? node_fail(c, n, "%s (give 'normal' and 'radius', or axes 'u' and 'v')%s", sub.msg, "") : 0;
+}
+
+static void resolve_path(xml_ctx *c, const char *rel, char *out, size_t size)
+{
+    char clean[4096];
+    snprintf(clean, sizeof clean, "%s", rel);
+    for (char *p = clean; *p; p++)
+        if (*p == '\\')
+            *p = '/'; /* thesis Figure 4.11 writes Windows paths */
+    if (clean[0] == '/' || !c->base_dir || !c->base_dir[0])
+        snprintf(out, size, "%s", clean);
+    else
+        snprintf(out, size, "%s/%s", c->base_dir, clean);
+}
+
+/* Path from the 'file' attribute or, as in thesis Figure 4.11, the text. */
+static int point_model_path(xmlNodePtr n, char *buf, size_t size)
+{
+    if (attr_text(n, "file", buf, size))
+        return 1;
+    xmlChar *text = xmlNodeGetContent(n);
+    int found = 0;
+    if (text) {
+        const char *s = (const char *)text;
+        while (*s == ' ' || *s == '\n' || *s == '\t' || *s == '\r')
+            s++;
+        size_t len = strlen(s);
+        while (len && (s[len - 1] == ' ' || s[len - 1] == '\n' || s[len - 1] == '\t' || s[len - 1] == '\r'))
+            len--;
+        if (len && len < size) {
+            memcpy(buf, s, len);
+            buf[len] = 0;
+            found = 1;
+        }
+        xmlFree(text);
+    }
+    return found;
+}
+
+static int generate_shape(xml_ctx *c, xmlNodePtr n, const char *kind, pointmodel *m)
+{
+    shape_params p;
+    shape_params_default(&p);
+    snprintf(p.kind, sizeof p.kind, "%s", kind);
+    double count = (double)p.count;
+    if (attr_double(c, n, "count", &count, 0) || attr_positive(c, n, "radius", &p.radius, 0) ||
+        attr_positive(c, n, "minor_radius", &p.minor_radius, 0) ||
+        attr_vec3(c, n, "color", &p.color, 0) || attr_vec3(c, n, "color2", &p.color2, 0) ||
+        attr_int(c, n, "checker", &p.checker, 0, 100000) ||
+        attr_positive(c, n, "overlap", &p.overlap, 0))
+        return -1;
+    if (count < 1 || count > 1e8 || count != floor(count))
+        return node_fail(c, n, "attribute 'count' must be an integer in [1, 1e8]%s%s", "", "");
+    p.count = (size_t)count;
+    surfel *s;
+    size_t ns;
+    rr_error sub;
+    if (shape_generate(&p, &s, &ns, &sub))
+        return node_fail(c, n, "%s%s", sub.msg, "");
+    int rc = 0;
+    for (size_t i = 0; i < ns && !rc; i++)
+        rc = pointmodel_add_circle(m, s[i].center, s[i].normal, s[i].radius, s[i].color, &sub);
+    free(s);
+    return rc ? node_fail(c, n, "%s%s", sub.msg, "") : 0;
+}
+
+static int parse_point_model(xml_ctx *c, xmlNodePtr n, scene_object *o)
+{
+    static const char *const ok[] = {"file", "generate", "count", "radius", "minor_radius",
+                                     "color", "color2", "checker", "overlap", NULL};
+    o->kind = OBJECT_POINTS;
+    if (check_attributes(c, n, ok))
+        return -1;
+    vec3 default_color = v3(0.8, 0.8, 0.8);
+    if (attr_vec3(c, n, "color", &default_color, 0))
+        return -1;
+    char rel[4096], path[8192], kind[sizeof ((shape_params *)0)->kind];
+    if (point_model_path(n, rel, sizeof rel)) {
+        resolve_path(c, rel, path, sizeof path);
+        rr_error sub;
+        if (ply_read(path, default_color, &o->model, &sub))
+            return rr_fail(c->err, "%s (point model of %s:%ld)", sub.msg, c->name, xmlGetLineNo(n));
+    }
+    if (attr_text(n, "generate", kind, sizeof kind) && generate_shape(c, n, kind, &o->model))
+        return -1;
+    for (xmlNodePtr k = n->children; k; k = k->next) {
+        if (!is_element(k))
+            continue;
+        if (strcmp(elname(k), "splat"))
+            return node_fail(c, k, "unknown element inside <pointModel> (expected splat)%s%s", "", "");
+        if (parse_splat(c, k, &o->model, default_color))
+            return -1;
+    }
+    if (o->model.count == 0)
+        return node_fail(c, n, "point model has no splats: give a PLY path, 'generate', or "
+                               "<splat> children%s%s", "", "");
+    return 0;
+}
+
+static int parse_object_child(xml_ctx *c, xmlNodePtr k, scene_object *o, int *shapes)
+{
+    const char *name = elname(k);
+    if (!strcmp(name, "pointModel") || !strcmp(name, "sphere")) {
+        if (++*shapes > 1)
+            return node_fail(c, k, "an object holds exactly one pointModel or sphere%s%s", "", "");
+        return !strcmp(name, "sphere") ? parse_sphere(c, k, o) : parse_point_model(c, k, o);
+    }
+    if (!strcmp(name, "material"))
+        return parse_material(c, k, &o->mat);
+    if (!strcmp(name, "animation"))
+        return parse_animation(c, k, &o->anim);
+    return node_fail(c, k, "unknown element inside <object> (expected pointModel, sphere, "
+                           "material or animation)%s%s", "", "");
+}
+
+static int parse_object(xml_ctx *c, xmlNodePtr n, scene *s)
+{
+    static const char *const ok[] = {"name", "position", NULL};
+    scene_object *grown = realloc(s->objects, (size_t)(s->nobjects + 1) * sizeof *grown);
+    if (!grown)
+        return node_fail(c, n, "out of memory%s%s", "", "");
+    s->objects = grown;
+    scene_object *o = &s->objects[s->nobjects++];
+    memset(o, 0, sizeof *o);
+    pointmodel_init(&o->model);
+    o->line = (int)xmlGetLineNo(n);
+    o->mat = (material){SHADING_PHONG, 1.0, 0.0, 32.0};
+    animation_init_static(&o->anim);
+    snprintf(o->name, sizeof o->name, "object%d", s->nobjects);
+    attr_text(n, "name", o->name, sizeof o->name);
+    if (check_attributes(c, n, ok) || attr_vec3(c, n, "position", &o->anim.offset, 0) ||
+        check_no_text(c, n))
+        return -1;
+    int shapes = 0;
+    for (xmlNodePtr k = n->children; k; k = k->next)
+        if (is_element(k) && parse_object_child(c, k, o, &shapes))
+            return -1;
+    if (!shapes)
+        return node_fail(c, n, "object has no geometry: add <pointModel> or <sphere>%s%s", "", "");
+    return 0;
+}
+
+static int parse_scene_child(xml_ctx *c, xmlNodePtr k, scene *s)
+{
+    const char *name = elname(k);
+    if (!strcmp(name, "camera")) return parse_camera(c, k, &s->cam);
+    if (!strcmp(name, "shutter")) return parse_shutter(c, k, &s->shut);
+    if (!strcmp(name, "background")) return parse_color_element(c, k, &s->background);
+    if (!strcmp(name, "ambient")) return parse_color_element(c, k, &s->ambient);
+    if (!strcmp(name, "light")) return parse_light(c, k, s);
+    if (!strcmp(name, "render")) return parse_render(c, k, s);
+    if (!strcmp(name, "object")) return parse_object(c, k, s);
+    return node_fail(c, k, "unknown element (expected camera, shutter, background, ambient, "
+                           "light, render or object)%s%s", "", "");
+}
+
+static int parse_scene(xml_ctx *c, xmlDocPtr doc, scene *s)
+{
+    xmlNodePtr root = xmlDocGetRootElement(doc);
+    if (!root || strcmp(elname(root), "scene"))
+        return rr_fail(c->err, "%s:%ld: root element must be <scene>", c->name,
+                       root ? xmlGetLineNo(root) : 1L);
+    static const char *const ok[] = {NULL};
+    if (check_attributes(c, root, ok) || check_no_text(c, root))
+        return -1;
+    if (camera_prepare(&s->cam, c->err))
+        return -1;
+    for (xmlNodePtr k = root->children; k; k = k->next)
+        if (is_element(k) && parse_scene_child(c, k, s))
+            return -1;
+    if (s->nobjects == 0)
+        return rr_fail(c->err, "%s: scene has no <object>", c->name);
+    return 0;
+}
+
+/* libxml2 reports through a callback; keep the first error with its line. */
+static void record_xml_error(void *user, xmlErrorPtr e)
+{
+    rr_error *first = user;
+    if (first->msg[0] || !e)
+        return;
+    char msg[512];
+    snprintf(msg, sizeof msg, "%s", e->message ? e->message : "XML error");
+    size_t len = strlen(msg);
+    while (len && msg[len - 1] == '\n')
+        msg[--len] = 0;
+    snprintf(first->msg, sizeof first->msg, "%s:%d: XML syntax error: %s",
+             e->file ? e->file : "(scene)", e->line, msg);
+}
+
+static int load(xmlDocPtr (*read)(const void *, size_t, const char *), const void *src,
+                size_t len, const char *name, const char *base_dir, scene *s, rr_error *err)
+{
+    rr_error xml_err = {{0}};
+    scene_init(s); /* on any error s is left empty, safe to scene_free */
+    xmlSetStructuredErrorFunc(&xml_err, record_xml_error);
+    xmlDocPtr doc = read(src, len, name);
+    xmlSetStructuredErrorFunc(NULL, NULL);
+    if (!doc)
+        return rr_fail(err, "%s", xml_err.msg[0] ? xml_err.msg : "cannot parse scene");
+    snprintf(s->path, sizeof s->path, "%s", name);
+    xml_ctx c = {name, base_dir, err};
+    int rc = parse_scene(&c, doc, s);
+    xmlFreeDoc(doc);
+    if (rc)
+        scene_free(s);
+    return rc;
+}
+
+static xmlDocPtr read_file(const void *path, size_t len, const char *name)
+{
+    (void)len;
+    (void)name;
+    return xmlReadFile(path, NULL, XML_PARSE_NONET);
+}
+
+static xmlDocPtr read_memory(const void *xml, size_t len, const char *name)
+{
+    return xmlReadMemory(xml, (int)len, name, NULL, XML_PARSE_NONET);
+}
+
+int scene_load_file(const char *path, scene *s, rr_error *err)
+{
+    scene_init(s);
+    FILE *f = fopen(path, "rb");
+    if (!f)
+        return rr_fail(err, "%s: cannot open scene file", path);
+    fclose(f);
+    char dir[4096];
+    snprintf(dir, sizeof dir, "%s", path);
+    char *slash = strrchr(dir, '/');
+    if (slash)
+        *slash = 0;
+    else
+        strcpy(dir, ".");
+    return load(read_file, path, 0, path, dir, s, err);
+}
+
+int scene_load_memory(const char *xml, size_t len, const char *name, const char *base_dir,
+                      scene *s, rr_error *err)
+{
+    return load(read_memory, xml, len, name, base_dir, s, err);
+}

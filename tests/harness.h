@@ -1,0 +1,27 @@
+/* Minimal C test harness: each test_*.c file registers its tests with
+ * TEST(name); main in harness.c runs them all and ends with the line
+ * "N passed, N failed". A test fails when any CHECK fails. */
+#ifndef RR_HARNESS_H
+#define RR_HARNESS_H
+
+#include <math.h>
+#include <stdio.h>
+
+typedef void (*test_fn)(void);
+void harness_register(const char *name, test_fn fn);
+void harness_check(int ok, const char *expr, const char *file, int line);
+
+#define TEST(name)                                                         \
+    static void name(void);                                                \
+    __attribute__((constructor)) static void register_##name(void)         \
+    {                                                                      \
+        harness_register(#name, name);                                     \
+    }                                                                      \
+    static void name(void)
+
+#define CHECK(expr) harness_check(!!(expr), #expr, __FILE__, __LINE__)
+#define CHECK_NEAR(a, b, tol)                                              \
+    harness_check(fabs((double)(a) - (double)(b)) <= (tol), #a " ~= " #b,  \
+                  __FILE__, __LINE__)
+
+#endif
