@@ -1,0 +1,66 @@
+/* Temporal weights a(t) (thesis eq. 3.1, Figure 3.1). */
+#include "harness.h"
+#include "shutter.h"
+
+TEST(box_weight_is_constant)
+{
+    shutter s;
+    shutter_default(&s);
+    CHECK(shutter_weight(&s, 0.0) == 1.0 && shutter_weight(&s, 0.7) == 1.0);
+}
+
+TEST(linear_weight_falls_to_zero_at_shutter_length_from_center)
+{
+    shutter s;
+    shutter_default(&s);
+    s.open = 1, s.close = 3, s.kind = WEIGHT_LINEAR, s.center = 3;
+    CHECK_NEAR(shutter_weight(&s, 3), 1.0, 1e-15);
+    CHECK_NEAR(shutter_weight(&s, 2), 0.5, 1e-15);
+    CHECK_NEAR(shutter_weight(&s, 1), 0.0, 1e-15);
+    s.center = 2; /* centered: 1 - |t-2|/2 */
+    CHECK_NEAR(shutter_weight(&s, 1), 0.5, 1e-15);
+}
+
+TEST(exp_weight_decreases_from_center)
+{
+    shutter s;
+    shutter_default(&s);
+    s.kind = WEIGHT_EXP, s.center = 1, s.rate = 2;
+    CHECK_NEAR(shutter_weight(&s, 1), 1.0, 1e-15);
+    CHECK_NEAR(shutter_weight(&s, 0.25), exp(-1.5), 1e-15);
+    CHECK(shutter_weight(&s, 0.2) < shutter_weight(&s, 0.4));
+}
+
+TEST(table_weight_interpolates_linearly_and_clamps)
+{
+    shutter s;
+    shutter_default(&s);
+    s.kind = WEIGHT_TABLE;
+    s.table_size = 3;
+    double t[3] = {0.2, 0.4, 0.8}, w[3] = {1, 3, 0};
+    for (int i = 0; i < 3; i++)
+        s.table_t[i] = t[i], s.table_w[i] = w[i];
+    CHECK_NEAR(shutter_weight(&s, 0.0), 1.0, 1e-15);
+    CHECK_NEAR(shutter_weight(&s, 0.3), 2.0, 1e-12);
+    CHECK_NEAR(shutter_weight(&s, 0.6), 1.5, 1e-12);
+    CHECK_NEAR(shutter_weight(&s, 0.9), 0.0, 1e-15);
+    CHECK(shutter_check(&s, NULL) == 0);
+}
+
+TEST(shutter_check_rejects_bad_settings)
+{
+    shutter s;
+    rr_error e;
+    shutter_default(&s);
+    s.close = s.open;
+    CHECK(shutter_check(&s, &e) != 0);
+    shutter_default(&s);
+    s.kind = WEIGHT_TABLE;
+    s.table_size = 2;
+    s.table_t[0] = 0.5, s.table_t[1] = 0.5, s.table_w[0] = s.table_w[1] = 1;
+    CHECK(shutter_check(&s, &e) != 0); /* times not increasing */
+    s.table_t[1] = 0.7, s.table_w[0] = s.table_w[1] = 0;
+    CHECK(shutter_check(&s, &e) != 0); /* zero everywhere */
+    s.table_w[0] = -1;
+    CHECK(shutter_check(&s, &e) != 0); /* negative */
+}
