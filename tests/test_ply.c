@@ -1,0 +1,198 @@
+/* PLY reader on good files in all three encodings and on each bad-input
+ * case; every error must name the problem. */
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "harness.h"
+#include "ply.h"
+
+static const char *tmp_path(const char *name)
+{
+    static char buf[256];
+    snprintf(buf, sizeof buf, "/tmp/refrender-test-%d-%s", (int)getpid(), name);
+    return buf;
+}
+
+static const char *write_text(const char *name, const char *text)
+{
+    const char *p = tmp_path(name);
+    FILE *f = fopen(p, "wb");
+    fputs(text, f);
+    fclose(f);
+    return p;
+}
+
+/* Reads path; returns the error message ("" on success). */
+static const char *read_result(const char *path, pointmodel *m)
+{
+    static rr_error e;
+    e.msg[0] = 0;
+    pointmodel_init(m);
+    if (ply_read(path, v3(0.5, 0.5, 0.5), m, &e) == 0)
+        e.msg[0] = 0;
+    unlink(path);
+    return e.msg;
+}
+
+static int reads_ok(const char *path, size_t expect_count)
+{
+    pointmodel m;
+    const char *msg = read_result(path, &m);
+    int ok = msg[0] == 0 && m.count == expect_count;
+    if (!ok)
+        printf("    got: '%s', count %zu\n", msg, m.count);
+    pointmodel_free(&m);
+    return ok;
+}
+
+static int fails_with(const char *path, const char *needle)
+{
+    pointmodel m;
+    const char *msg = read_result(path, &m);
+    int ok = msg[0] && strstr(msg, needle) != NULL;
+    if (!ok)
+        printf("    expected error containing '%s', got '%s'\n", needle, msg);
+    pointmodel_free(&m);
+    return ok;
+}
+
+#define HEADER_XYZNR "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\n" \
+                     "property float z\nproperty float nx\nproperty float ny\nproperty float nz\n"    \
+                     "property float radius\n"
+
+TEST(ply_ascii_circular_with_uchar_colors)
+{
+    const char *p = write_text("a.ply", HEADER_XYZNR
+        "property uchar red\nproperty uchar green\nproperty uchar blue\nend_header\n"
+        "0 0 0 0 0 1 0.5 255 0 51\n1 0 0 0 0 2 0.25 0 255 0\n");
+    pointmodel m;
+    const char *msg = read_result(p, &m);
+    CHECK(msg[0] == 0);
+    CHECK(m.count == 2);
+    CHECK_NEAR(m.color[2], 0.2, 1e-6); /* 51 / 255 */
+    CHECK_NEAR(m.normal[5], 1.0, 1e-6); /* normalised */
+    CHECK_NEAR(m.bounds.hi.x, 1.25, 1e-6);
+    pointmodel_free(&m);
+}
+
+TEST(ply_elliptical_axes_and_faces_element_are_accepted)
+{
+    const char *p = write_text("e.ply",
+        "ply\nformat ascii 1.0\ncomment axes\nelement vertex 1\nproperty double x\nproperty double y\n"
+        "property double z\nproperty float ux\nproperty float uy\nproperty float uz\nproperty float vx\n"
+        "property float vy\nproperty float vz\nelement face 1\nproperty list uchar int vertex_indices\n"
+        "end_header\n0 0 0 2 0 0 0 0.5 0\n3 0 0 0\n");
+    CHECK(reads_ok(p, 1));
+}
+
+static void put32(unsigned char *b, float v, int big)
+{
+    uint32_t u;
+    memcpy(&u, &v, 4);
+    for (int i = 0; i < 4; i++)
+        b[i] = (unsigned char)(big ? u >> (24 - 8 * i) : u >> (8 * i));
+}
+
+static const char *write_binary(const char *name, int big, int count_declared, int count_written)
+{
+    const char *p = tmp_path(name);
+    FILE *f = fopen(p, "wb");
+    fprintf(f, "ply\nformat %s 1.0\nelement vertex %d\nproperty float x\nproperty float y\n"
+               "property float z\nproperty float nx\nproperty float ny\nproperty float nz\n"
+               "property float radius\nend_header\n",
+            big ? "binary_big_endian" : "binary_little_endian", count_declared);
+    for (int i = 0; i < count_written; i++) {
+        float v[7] = {(float)i, 2, 3, 0, 0, 1, 0.5f};
+        unsigned char b[28];
+        for (int k = 0; k < 7; k++)
+            put32(b + 4 * k, v[k], big);
+        fwrite(b, 28, 1, f);
+    }
+    fclose(f);
+    return p;
+}
+
+TEST(ply_binary_both_endians_decode_the_same_values)
+{
+    for (int big = 0; big <= 1; big++) {
+        pointmodel m;
+        const char *msg = read_result(write_binary("b.ply", big, 3, 3), &m);
+        CHECK(msg[0] == 0 && m.count == 3);
+        if (m.count == 3) {
+            CHECK_NEAR(m.geom[2].center[0], 2.0, 0);
+            CHECK_NEAR(m.geom[2].center[2], 3.0, 0);
+            CHECK_NEAR(m.extent[0], 0.5, 1e-6);
+        }
+        pointmodel_free(&m);
+    }
+}
+
+TEST(ply_binary_count_that_cannot_fit_is_rejected)
+{
+    CHECK(fails_with(write_binary("c.ply", 0, 1000000, 3), "only 84 bytes follow"));
+}
+
+TEST(ply_truncated_ascii_data)
+{
+    CHECK(fails_with(write_text("t.ply", HEADER_XYZNR "end_header\n0 0 0 0 0 1 0.5\n1 0 0\n"), "truncated"));
+}
+
+TEST(ply_missing_position_property)
+{
+    CHECK(fails_with(write_text("m.ply", "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\n"
+        "property float y\nproperty float radius\nend_header\n0 0 1\n"), "x y z"));
+}
+
+TEST(ply_missing_splat_size)
+{
+    CHECK(fails_with(write_text("s.ply", "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\n"
+        "property float y\nproperty float z\nend_header\n0 0 1\n"), "no splat size"));
+}
+
+TEST(ply_nan_value)
+{
+    CHECK(fails_with(write_text("n.ply", HEADER_XYZNR "end_header\n0 nan 0 0 0 1 0.5\n1 0 0 0 0 1 1\n"), "NaN"));
+}
+
+TEST(ply_zero_normal)
+{
+    CHECK(fails_with(write_text("z.ply", HEADER_XYZNR "end_header\n0 0 0 0 0 1 0.5\n1 0 0 0 0 0 1\n"),
+                     "zero-length normal"));
+}
+
+TEST(ply_negative_radius_names_the_line)
+{
+    /* 11 header lines, so the second vertex is on line 13 */
+    CHECK(fails_with(write_text("r.ply", HEADER_XYZNR "end_header\n0 0 0 0 0 1 0.5\n1 0 0 0 0 1 -1\n"),
+                     ":13: vertex 1: negative radius"));
+}
+
+TEST(ply_not_a_ply_file_and_bad_header)
+{
+    CHECK(fails_with(write_text("x.ply", "hello\n"), "not a PLY file"));
+    CHECK(fails_with(write_text("f.ply", "ply\nformat binary_middle_endian 1.0\nend_header\n"),
+                     ":2: unknown PLY format"));
+    CHECK(fails_with(write_text("h.ply", "ply\nformat ascii 1.0\nelement vertex 1\n"), "inside the header"));
+    CHECK(fails_with(tmp_path("does-not-exist.ply"), "cannot open"));
+}
+
+TEST(ply_writer_output_reads_back)
+{
+    surfel s[2] = {{v3(1, 2, 3), v3(0, 1, 0), 0.25, v3(1, 0, 0)},
+                   {v3(-1, 0, 0), v3(1, 0, 0), 0.5, v3(0, 0, 1)}};
+    rr_error e;
+    const char *p = tmp_path("w.ply");
+    CHECK(ply_write_surfels(p, s, 2, &e) == 0);
+    pointmodel m;
+    const char *msg = read_result(p, &m);
+    CHECK(msg[0] == 0 && m.count == 2);
+    if (m.count == 2) {
+        CHECK_NEAR(m.geom[0].center[1], 2.0, 0);
+        CHECK_NEAR(m.normal[1], 1.0, 1e-6);
+        CHECK_NEAR(m.color[5], 1.0, 1e-6);
+        CHECK_NEAR(m.extent[3], 0.0, 1e-6); /* normal +x: no extent along x */
+    }
+    pointmodel_free(&m);
+}
