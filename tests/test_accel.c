@@ -1,0 +1,129 @@
+/* Epsilon-blending k-buffer and the two-level Embree traversal with the
+ * exact per-time inverse ray transform. */
+#include <stdlib.h>
+#include <string.h>
+
+#include "accel.h"
+#include "harness.h"
+#include "scene_xml.h"
+
+static surface_hit hit_at(float t, unsigned prim)
+{
+    surface_hit h;
+    memset(&h, 0, sizeof h);
+    h.t = t;
+    h.prim = prim;
+    h.weight = 1;
+    return h;
+}
+
+TEST(kbuffer_result_is_independent_of_insertion_order)
+{
+    enum { N = 40 };
+    float ts[N];
+    for (int i = 0; i < N; i++)
+        ts[i] = 1.0f + 0.5f * (float)((i * 7919) % N) / N; /* distinct in [1, 1.5) */
+    kbuffer ref, kb;
+    static const int stride[6] = {1, 39, 3, 7, 11, 13}; /* coprime to N: permutations */
+    for (int round = 0; round < 6; round++) {
+        kbuffer_reset(&kb, 0.1f);
+        for (int i = 0; i < N; i++) {
+            int j = (i * stride[round]) % N;
+            surface_hit h = hit_at(ts[j], (unsigned)j);
+            kbuffer_insert(&kb, &h);
+        }
+        if (round == 0)
+            ref = kb;
+        CHECK(kb.count == ref.count);
+        for (int k = 0; k < kb.count && k < ref.count; k++)
+            CHECK(kb.hits[k].t == ref.hits[k].t && kb.hits[k].prim == ref.hits[k].prim);
+    }
+    /* exactly the hits within epsilon of the closest (t = 1.0): 1.0 .. 1.1 */
+    int expect = 0;
+    for (int i = 0; i < N; i++)
+        expect += ts[i] <= 1.0f + 0.1f;
+    CHECK(ref.count == expect);
+    CHECK(ref.closest == 1.0f);
+}
+
+TEST(kbuffer_overflow_keeps_the_closest_hits)
+{
+    kbuffer kb;
+    kbuffer_reset(&kb, 1.0f);
+    for (int i = 99; i >= 0; i--) {
+        surface_hit h = hit_at(2.0f + 0.001f * (float)i, (unsigned)i);
+        kbuffer_insert(&kb, &h);
+    }
+    CHECK(kb.count == KBUFFER_MAX);
+    CHECK(kb.dropped > 0);
+    for (int k = 0; k < kb.count; k++)
+        CHECK(kb.hits[k].prim == (unsigned)k);
+}
+
+static int trace_scene(const char *xml, vec3 org, vec3 dir, double time, kbuffer *kb)
+{
+    scene s;
+    rr_error e;
+    if (scene_load_memory(xml, strlen(xml), "mem.xml", ".", &s, &e)) {
+        printf("    %s\n", e.msg);
+        return -1;
+    }
+    accel *a;
+    if (accel_build(&s, s.epsilon, s.kernel_sigma, &a, &e)) {
+        scene_free(&s);
+        return -1;
+    }
+    accel_trace(a, org, dir, time, kb);
+    accel_free(a);
+    scene_free(&s);
+    return 0;
+}
+
+#define TWO_SPLATS(eps) "<scene><render epsilon='" eps "'/><object><pointModel>" \
+    "<splat center='0 0 -5' normal='0 0 1' radius='1' color='1 0 0'/>"            \
+    "<splat center='0.2 0 -5.05' normal='0 0 -1' radius='1' color='0 0 1'/>"      \
+    "</pointModel></object></scene>"
+
+TEST(trace_collects_hits_within_epsilon_only)
+{
+    kbuffer kb;
+    CHECK(trace_scene(TWO_SPLATS("0.1"), v3(0, 0, 0), v3(0, 0, -1), 0, &kb) == 0);
+    CHECK(kb.count == 2);
+    CHECK_NEAR(kb.hits[0].t, 5.0, 1e-5);
+    CHECK_NEAR(kb.hits[1].t, 5.05, 1e-5);
+    /* the back-facing splat's normal is flipped towards the eye */
+    CHECK_NEAR(kb.hits[1].normal[2], 1.0, 1e-6);
+    /* r2 of the second hit: (0.2)^2 -> weight exp(-0.04 / 0.5) */
+    CHECK_NEAR(kb.hits[1].weight, exp(-0.04 / 0.5), 1e-5);
+    CHECK(trace_scene(TWO_SPLATS("0.01"), v3(0, 0, 0), v3(0, 0, -1), 0, &kb) == 0);
+    CHECK(kb.count == 1 && kb.hits[0].color[0] == 1.0f);
+}
+
+#define MOVING(anim) "<scene><shutter open='0' close='10'/><object><pointModel>"   \
+    "<splat center='2 0 -5' normal='0 0 1' radius='0.5'/></pointModel>"             \
+    "<animation>" anim "</animation></object></scene>"
+
+TEST(trace_applies_the_object_transform_at_the_ray_time)
+{
+    kbuffer kb;
+    const char *lin = MOVING("<linear velocity='1 0 0'/>");
+    CHECK(trace_scene(lin, v3(2, 0, 0), v3(0, 0, -1), 0, &kb) == 0 && kb.count == 1);
+    CHECK(trace_scene(lin, v3(2, 0, 0), v3(0, 0, -1), 5, &kb) == 0 && kb.count == 0);
+    CHECK(trace_scene(lin, v3(7, 0, 0), v3(0, 0, -1), 5, &kb) == 0 && kb.count == 1);
+    /* 180 degrees about +y through (0,0,-5) at t = 1 takes (2,0,-5) to (-2,0,-5) */
+    const char *rot = MOVING("<rotation axis='0 1 0' center='0 0 -5' degrees_per_unit_time='180'/>");
+    CHECK(trace_scene(rot, v3(-2, 0, 0), v3(0, 0, -1), 1, &kb) == 0 && kb.count == 1);
+    CHECK_NEAR(kb.hits[0].t, 5.0, 1e-4);
+    CHECK(trace_scene(rot, v3(2, 0, 0), v3(0, 0, -1), 1, &kb) == 0 && kb.count == 0);
+}
+
+TEST(trace_hits_analytic_sphere_front_surface)
+{
+    kbuffer kb;
+    const char *xml = "<scene><object><sphere center='0 0 -10' radius='2' color='0 1 0'/></object></scene>";
+    CHECK(trace_scene(xml, v3(0, 0, 0), v3(0, 0, -1), 0, &kb) == 0);
+    CHECK(kb.count == 1);
+    CHECK_NEAR(kb.hits[0].t, 8.0, 1e-5);
+    CHECK_NEAR(kb.hits[0].normal[2], 1.0, 1e-6);
+    CHECK(trace_scene(xml, v3(0, 2.01, 0), v3(0, 0, -1), 0, &kb) == 0 && kb.count == 0);
+}

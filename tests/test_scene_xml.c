@@ -1,0 +1,102 @@
+/* Scene XML: a good scene parses to the documented values; every error
+ * names the file and the line. */
+#include <string.h>
+
+#include "harness.h"
+#include "scene_xml.h"
+
+static int load_text(const char *xml, scene *s, rr_error *e)
+{
+    return scene_load_memory(xml, strlen(xml), "mem.xml", ".", s, e);
+}
+
+static int fails_with(const char *xml, const char *needle)
+{
+    scene s;
+    rr_error e = {{0}};
+    int rc = load_text(xml, &s, &e);
+    int ok = rc != 0 && strstr(e.msg, needle) != NULL;
+    if (!ok)
+        printf("    expected error containing '%s', got '%s'\n", needle, rc ? e.msg : "(success)");
+    if (rc == 0)
+        scene_free(&s);
+    return ok;
+}
+
+TEST(scene_parses_documented_elements)
+{
+    const char *xml =
+        "<scene>\n"
+        " <camera position='0 0 10' lookat='0 0 0' up='0 1 0' fov='30' width='64' height='32'/>\n"
+        " <shutter open='0.5' close='1.5' weight='linear'/>\n"
+        " <background color='0.1 0.2 0.3'/>\n"
+        " <light type='directional' direction='0 0 -2' color='1 1 1'/>\n"
+        " <render epsilon='0.05' kernel_sigma='0.4' time_factor='8'/>\n"
+        " <object name='a' position='1 0 0'>\n"
+        "  <pointModel><splat center='0 0 0' normal='0 0 1' radius='1' color='1 0 0'/>"
+        "<splat center='0 0 0' u='1 0 0' v='0 2 0'/></pointModel>\n"
+        "  <material shading='unlit'/>\n"
+        "  <animation><linear velocity='1 2 3'/><rotation axis='0 0 2' degrees_per_unit_time='90'/></animation>\n"
+        " </object>\n"
+        " <object><sphere center='0 0 -1' radius='2'/></object>\n"
+        "</scene>\n";
+    scene s;
+    rr_error e;
+    CHECK(load_text(xml, &s, &e) == 0);
+    CHECK(s.cam.width == 64 && s.cam.height == 32);
+    CHECK(s.shut.kind == WEIGHT_LINEAR);
+    CHECK_NEAR(s.shut.center, 1.5, 0); /* default center: shutter close */
+    CHECK_NEAR(s.epsilon, 0.05, 0);
+    CHECK(s.time_factor == 8);
+    CHECK(s.nlights == 1 && fabs(s.lights[0].direction.z + 1) < 1e-12);
+    CHECK(s.nobjects == 2);
+    CHECK(s.objects[0].model.count == 2);
+    CHECK(s.objects[0].mat.shading == SHADING_UNLIT);
+    CHECK(s.objects[0].anim.has_rotation && fabs(s.objects[0].anim.axis.z - 1) < 1e-12);
+    CHECK_NEAR(s.objects[0].anim.offset.x, 1, 0);
+    CHECK(s.objects[1].kind == OBJECT_SPHERE && s.objects[1].sphere_radius == 2);
+    scene_free(&s);
+}
+
+TEST(scene_generated_model_and_thesis_style_path)
+{
+    scene s;
+    rr_error e;
+    CHECK(load_text("<scene><object><pointModel generate='plane' count='100'/></object></scene>", &s, &e) == 0);
+    CHECK(s.objects[0].model.count == 100);
+    scene_free(&s);
+    CHECK(fails_with("<scene><object><pointModel>models\\missing.ply</pointModel></object></scene>",
+                     "./models/missing.ply: cannot open"));
+}
+
+TEST(scene_errors_name_file_and_line)
+{
+    CHECK(fails_with("<scene>\n<camera fov='abc'/>\n</scene>", "mem.xml:2: <camera>: attribute 'fov'"));
+    CHECK(fails_with("<scene>\n\n<camera fov='190'/></scene>", "mem.xml:3: <camera>: camera fov"));
+    CHECK(fails_with("<scene>\n<bogus/>\n</scene>", "mem.xml:2: <bogus>: unknown element"));
+    CHECK(fails_with("<scene>\n<object>\n<sphere radius='1' colour='1 0 0'/></object></scene>",
+                     "mem.xml:3: <sphere>: unknown attribute 'colour'"));
+    CHECK(fails_with("<scene>\n<object>\n<sphere radius='-1'/></object></scene>", "mem.xml:3: <sphere>"));
+    CHECK(fails_with("<scene>\n<shutter open='1' close='0'/>\n</scene>", "mem.xml:2: <shutter>"));
+    CHECK(fails_with("<scene>\n<shutter weight='gauss'/>\n</scene>", "unknown weight 'gauss'"));
+    CHECK(fails_with("<scene>\n<object>\n</object>\n</scene>", "mem.xml:2: <object>: object has no geometry"));
+    CHECK(fails_with("<scene><object><pointModel>\n<splat center='0 0 0' normal='0 0 0' radius='1'/>"
+                     "</pointModel></object></scene>", "mem.xml:2: <splat>"));
+    CHECK(fails_with("<scene></scene>", "no <object>"));
+    CHECK(fails_with("<world/>", "root element must be <scene>"));
+    CHECK(fails_with("<scene><object><animation>a.anim</animation><sphere radius='1'/></object></scene>",
+                     "not supported yet"));
+}
+
+TEST(scene_xml_syntax_error_reports_line)
+{
+    CHECK(fails_with("<scene>\n<camera>\n</scene>\n", "mem.xml:3: XML syntax error"));
+}
+
+TEST(scene_file_errors_name_the_file)
+{
+    scene s;
+    rr_error e;
+    CHECK(scene_load_file("/nonexistent/scene.xml", &s, &e) != 0);
+    CHECK(strstr(e.msg, "/nonexistent/scene.xml") != NULL);
+}
