@@ -1,0 +1,53 @@
+"""Shared helpers for the end-to-end tests: run build/refrender on a scene
+given as XML text and read the EXR back with OpenImageIO."""
+import os
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import OpenImageIO as oiio
+import pytest
+
+ROOT = Path(__file__).resolve().parent.parent
+BIN = os.environ.get("REFRENDER", str(ROOT / "build" / "refrender"))
+
+
+def run(args, **kw):
+    return subprocess.run([BIN, *map(str, args)], capture_output=True, text=True, **kw)
+
+
+def read_exr(path):
+    """Returns (H x W x 4 float32 array in R, G, B, A order, header dict)."""
+    inp = oiio.ImageInput.open(str(path))
+    assert inp, oiio.geterror()
+    spec = inp.spec()
+    pixels = inp.read_image(oiio.FLOAT)
+    inp.close()
+    names = list(spec.channelnames)
+    rgba = np.stack([pixels[:, :, names.index(c)] for c in "RGBA"], axis=-1)
+    header = {a.name: a.value for a in spec.extra_attribs}
+    return rgba, header
+
+
+@pytest.fixture
+def render(tmp_path):
+    """render(xml, *args) writes the scene, renders it and returns the image."""
+    counter = [0]
+
+    def _render(xml, *args, check=True):
+        counter[0] += 1
+        scene = tmp_path / f"scene{counter[0]}.xml"
+        scene.write_text(xml)
+        out = tmp_path / f"out{counter[0]}.exr"
+        proc = run([scene, "-o", out, "--quiet", *args])
+        if check:
+            assert proc.returncode == 0, proc.stderr
+            return read_exr(out)[0]
+        return proc
+
+    return _render
+
+
+def focal_pixels(height, fov_degrees):
+    """Pixels per unit of image-plane distance at depth 1 (square pixels)."""
+    return (height / 2) / np.tan(np.radians(fov_degrees) / 2)
