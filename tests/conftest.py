@@ -9,7 +9,7 @@ import OpenImageIO as oiio
 import pytest
 
 ROOT = Path(__file__).resolve().parent.parent
-BIN = os.environ.get("REFRENDER", str(ROOT / "build" / "refrender"))
+BIN = str(Path(os.environ.get("REFRENDER", ROOT / "build" / "refrender")).resolve())
 
 
 def run(args, **kw):

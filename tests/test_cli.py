@@ -1,0 +1,136 @@
+"""The command line as a user meets it: help, errors naming file and line,
+atomic output, metadata, preview, generator, default scene, interruption."""
+import signal
+import subprocess
+import time
+
+import numpy as np
+import OpenImageIO as oiio
+
+from conftest import BIN, ROOT, read_exr, run
+
+TINY = """<scene><camera width="24" height="16"/>
+<object><sphere radius="1" color="0.5 0.6 0.7"/><material shading="unlit"/></object></scene>"""
+
+
+def test_help_documents_every_option():
+    proc = run(["--help"])
+    assert proc.returncode == 0
+    for opt in ["--spp", "--tspp", "-o", "--res", "--threads", "--seed", "--eps", "--sigma",
+                "--time-factor", "--preview", "--quiet", "--version", "gen"]:
+        assert opt in proc.stdout, opt
+    gen = run(["gen", "--help"])
+    assert gen.returncode == 0 and "--count" in gen.stdout
+
+
+def test_version_and_usage_errors():
+    assert run(["--version"]).stdout.startswith("refrender ")
+    bad = run(["--spp", "lots"])
+    assert bad.returncode == 2 and "--spp" in bad.stderr and "lots" in bad.stderr
+    assert run(["--no-such-option"]).returncode == 2
+    assert run(["a.xml", "b.xml"]).returncode == 2
+
+
+def test_bad_scene_names_file_and_line_and_leaves_output_alone(tmp_path):
+    scene = tmp_path / "bad.xml"
+    scene.write_text("<scene>\n<camera width='64'/>\n<object>\n<sphere radius='oops'/>\n</object>\n</scene>\n")
+    out = tmp_path / "out.exr"
+    out.write_bytes(b"previous good image")
+    proc = run([scene, "-o", out])
+    assert proc.returncode == 1
+    assert f"{scene}:4:" in proc.stderr and "radius" in proc.stderr
+    assert out.read_bytes() == b"previous good image"
+    assert list(tmp_path.iterdir()) == [scene, out] or set(tmp_path.iterdir()) == {scene, out}
+
+
+def test_bad_point_model_error_names_the_ply(tmp_path):
+    ply = tmp_path / "broken.ply"
+    ply.write_text("ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\n"
+                   "property float z\nproperty float nx\nproperty float ny\nproperty float nz\n"
+                   "property float radius\nend_header\n0 0 0 0 0 1 0.1\n")
+    scene = tmp_path / "s.xml"
+    scene.write_text("<scene><object>\n<pointModel>broken.ply</pointModel></object></scene>")
+    proc = run([scene, "-o", tmp_path / "o.exr"])
+    assert proc.returncode == 1
+    assert "broken.ply" in proc.stderr and "truncated" in proc.stderr and "s.xml:2" in proc.stderr
+    assert not (tmp_path / "o.exr").exists()
+
+
+def test_unwritable_output_fails_before_rendering(tmp_path):
+    scene = tmp_path / "s.xml"
+    scene.write_text(TINY)
+    proc = run([scene, "-o", tmp_path / "missing-dir" / "o.exr"])
+    assert proc.returncode == 1 and "missing-dir" in proc.stderr
+
+
+def test_metadata_records_the_settings(tmp_path):
+    scene = tmp_path / "s.xml"
+    scene.write_text(TINY)
+    out = tmp_path / "o.exr"
+    proc = run([scene, "-o", out, "--spp", 5, "--tspp", 3, "--seed", 99, "--eps", 0.25])
+    assert proc.returncode == 0
+    assert "rounded to a 2x2" in proc.stderr            # 5 -> nearest square 4
+    assert "Mrays/s" in proc.stderr                      # summary line when not a terminal
+    img, header = read_exr(out)
+    assert img.shape == (16, 24, 4)
+    assert header["refrender:spp"] == "4" and header["refrender:tspp"] == "3"
+    assert header["refrender:seed"] == "99" and float(header["refrender:epsilon"]) == 0.25
+    assert header["refrender:sampler"] == "thesis" and header["refrender:weightFunction"] == "box"
+    assert header["refrender:scene"] == str(scene) and header["refrender:shutter"] == "0 1"
+    assert int(header["refrender:rays"]) == 24 * 16 * 4 * 3
+
+
+def test_quiet_prints_nothing(tmp_path):
+    scene = tmp_path / "s.xml"
+    scene.write_text(TINY)
+    proc = run([scene, "-o", tmp_path / "o.exr", "--quiet", "--spp", 3])
+    assert proc.returncode == 0 and proc.stderr == ""
+
+
+def test_preview_is_srgb_encoding_of_the_exr(tmp_path):
+    scene = tmp_path / "s.xml"
+    scene.write_text(TINY)
+    out, png = tmp_path / "o.exr", tmp_path / "p.png"
+    assert run([scene, "-o", out, "--preview", png, "--quiet"]).returncode == 0
+    img, _ = read_exr(out)
+    inp = oiio.ImageInput.open(str(png))
+    preview = inp.read_image(oiio.UINT8)
+    inp.close()
+    lin = np.clip(img[:, :, :3], 0, 1)
+    srgb = np.where(lin <= 0.0031308, 12.92 * lin, 1.055 * lin ** (1 / 2.4) - 0.055)
+    assert preview.shape == (16, 24, 3)
+    assert np.max(np.abs(preview.astype(float) - srgb * 255)) <= 0.5 + 1e-3
+
+
+def test_gen_writes_a_model_that_renders(tmp_path):
+    ply = tmp_path / "torus.ply"
+    proc = run(["gen", "torus", "--count", 2000, "--radius", 1, "--minor-radius", 0.3, "--checker", 4, "-o", ply])
+    assert proc.returncode == 0, proc.stderr
+    assert ply.read_bytes().startswith(b"ply\nformat binary_little_endian 1.0")
+    scene = tmp_path / "s.xml"
+    scene.write_text("<scene><camera position='0 0 4' width='32' height='32'/>"
+                     "<object><pointModel file='torus.ply'/><material shading='unlit'/></object></scene>")
+    out = tmp_path / "o.exr"
+    assert run([scene, "-o", out, "--quiet", "--tspp", 1]).returncode == 0
+    alpha = read_exr(out)[0][:, :, 3]
+    assert alpha[16, 16] == 0.0 and alpha.max() == 1.0  # the hole of the torus, and its ring
+    assert run(["gen", "cube", "-o", ply]).returncode == 1
+
+
+def test_no_scene_renders_the_bundled_default(tmp_path):
+    proc = subprocess.run([BIN, "--res", "24x24", "--spp", "1", "--tspp", "2", "-o", "x.exr", "--quiet"],
+                          cwd=tmp_path, capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stderr
+    _, header = read_exr(tmp_path / "x.exr")
+    assert header["refrender:scene"].endswith("scenes/default.xml")
+
+
+def test_interrupt_writes_nothing(tmp_path):
+    out = tmp_path / "o.exr"
+    proc = subprocess.Popen([BIN, ROOT / "scenes" / "default.xml", "--spp", "64", "--tspp", "400", "-o", out],
+                            stderr=subprocess.PIPE, text=True)
+    time.sleep(1.0)
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 130 and "interrupted" in err
+    assert list(tmp_path.iterdir()) == []
