@@ -2,6 +2,7 @@
 
 #include <libxml/parser.h>
 #include <libxml/xmlerror.h>
+#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -17,10 +18,16 @@ typedef struct {
 
 static const char *elname(xmlNodePtr n) { return (const char *)n->name; }
 
-static int node_fail(xml_ctx *c, xmlNodePtr n, const char *fmt, const char *a, const char *b)
+static int node_fail(xml_ctx *c, xmlNodePtr n, const char *fmt, ...)
+    __attribute__((format(printf, 3, 4)));
+
+static int node_fail(xml_ctx *c, xmlNodePtr n, const char *fmt, ...)
 {
     char what[2048];
-    snprintf(what, sizeof what, fmt, a ? a : "", b ? b : "");
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(what, sizeof what, fmt, ap);
+    va_end(ap);
     return rr_fail(c->err, "%s:%ld: <%s>: %s", c->name, xmlGetLineNo(n), elname(n), what);
 }
 
@@ -32,7 +39,7 @@ static int check_attributes(xml_ctx *c, xmlNodePtr n, const char *const *allowed
         for (const char *const *p = allowed; *p && !ok; p++)
             ok = !strcmp(*p, (const char *)a->name);
         if (!ok)
-            return node_fail(c, n, "unknown attribute '%s'%s", (const char *)a->name, "");
+            return node_fail(c, n, "unknown attribute '%s'", (const char *)a->name);
     }
     return 0;
 }
@@ -73,14 +80,10 @@ static int attr_numbers(xml_ctx *c, xmlNodePtr n, const char *name, double *out,
 {
     char buf[4096];
     if (!attr_text(n, name, buf, sizeof buf))
-        return required ? node_fail(c, n, "missing required attribute '%s'%s", name, "") : 0;
-    if (parse_numbers(buf, out, count) != count) {
-        char want[64];
-        snprintf(want, sizeof want, "%d finite number%s", count, count > 1 ? "s" : "");
-        char msg[256];
-        snprintf(msg, sizeof msg, "attribute '%s' must be %s, got '%%s'", name, want);
-        return node_fail(c, n, msg, buf, NULL);
-    }
+        return required ? node_fail(c, n, "missing required attribute '%s'", name) : 0;
+    if (parse_numbers(buf, out, count) != count)
+        return node_fail(c, n, "attribute '%s' must be %d finite number%s, got '%s'", name, count,
+                         count > 1 ? "s" : "", buf);
     return 0;
 }
 
@@ -103,7 +106,7 @@ static int attr_positive(xml_ctx *c, xmlNodePtr n, const char *name, double *v, 
     if (attr_double(c, n, name, v, required))
         return -1;
     if (!(*v > 0))
-        return node_fail(c, n, "attribute '%s' must be positive%s", name, "");
+        return node_fail(c, n, "attribute '%s' must be positive", name);
     return 0;
 }
 
@@ -112,11 +115,8 @@ static int attr_int(xml_ctx *c, xmlNodePtr n, const char *name, int *v, int lo, 
     double d = *v;
     if (attr_double(c, n, name, &d, 0))
         return -1;
-    if (d != floor(d) || d < lo || d > hi) {
-        char msg[128];
-        snprintf(msg, sizeof msg, "attribute '%%s' must be an integer in [%d, %d]%%s", lo, hi);
-        return node_fail(c, n, msg, name, "");
-    }
+    if (d != floor(d) || d < lo || d > hi)
+        return node_fail(c, n, "attribute '%s' must be an integer in [%d, %d]", name, lo, hi);
     *v = (int)d;
     return 0;
 }
@@ -129,7 +129,7 @@ static int check_no_text(xml_ctx *c, xmlNodePtr parent)
 {
     for (xmlNodePtr n = parent->children; n; n = n->next)
         if (n->type == XML_TEXT_NODE && !xmlIsBlankNode(n))
-            return node_fail(c, parent, "unexpected text inside this element%s%s", "", "");
+            return node_fail(c, parent, "unexpected text inside this element");
     return 0;
 }
 
@@ -146,7 +146,7 @@ static int parse_camera(xml_ctx *c, xmlNodePtr n, camera *cam)
         return -1;
     rr_error sub;
     if (camera_prepare(cam, &sub))
-        return node_fail(c, n, "%s%s", sub.msg, "");
+        return node_fail(c, n, "%s", sub.msg);
     return 0;
 }
 
@@ -160,7 +160,7 @@ static int parse_weight_kind(xml_ctx *c, xmlNodePtr n, shutter *s)
             s->kind = (weight_kind)k;
             return 0;
         }
-    return node_fail(c, n, "unknown weight '%s' (expected box, linear, exp or table)%s", kind, "");
+    return node_fail(c, n, "unknown weight '%s' (expected box, linear, exp or table)", kind);
 }
 
 static int parse_weight_table(xml_ctx *c, xmlNodePtr n, shutter *s)
@@ -168,13 +168,13 @@ static int parse_weight_table(xml_ctx *c, xmlNodePtr n, shutter *s)
     char buf[16384];
     if (!attr_text(n, "table", buf, sizeof buf)) {
         if (s->kind == WEIGHT_TABLE)
-            return node_fail(c, n, "weight 'table' needs a 'table' attribute of 't w' pairs%s%s", "", "");
+            return node_fail(c, n, "weight 'table' needs a 'table' attribute of 't w' pairs");
         return 0;
     }
     double v[2 * SHUTTER_TABLE_MAX];
     int count = parse_numbers(buf, v, 2 * SHUTTER_TABLE_MAX);
     if (count < 2 || count % 2)
-        return node_fail(c, n, "attribute 'table' must hold 1 to 256 't w' number pairs%s%s", "", "");
+        return node_fail(c, n, "attribute 'table' must hold 1 to 256 't w' number pairs");
     s->table_size = count / 2;
     for (int i = 0; i < s->table_size; i++) {
         s->table_t[i] = v[2 * i];
@@ -195,7 +195,7 @@ static int parse_shutter(xml_ctx *c, xmlNodePtr n, shutter *s)
         return -1;
     rr_error sub;
     if (shutter_check(s, &sub))
-        return node_fail(c, n, "%s%s", sub.msg, "");
+        return node_fail(c, n, "%s", sub.msg);
     return 0;
 }
 
@@ -213,7 +213,7 @@ static int parse_render(xml_ctx *c, xmlNodePtr n, scene *s)
         attr_int(c, n, "time_factor", &s->time_factor, 1, 1024))
         return -1;
     if (s->epsilon < 0)
-        return node_fail(c, n, "attribute 'epsilon' must be >= 0%s%s", "", "");
+        return node_fail(c, n, "attribute 'epsilon' must be >= 0");
     return 0;
 }
 
@@ -233,14 +233,14 @@ static int parse_light(xml_ctx *c, xmlNodePtr n, scene *s)
         if (attr_vec3(c, n, "direction", &l.direction, 1))
             return -1;
         if (!(v3_len(l.direction) > 0))
-            return node_fail(c, n, "light direction must be non-zero%s%s", "", "");
+            return node_fail(c, n, "light direction must be non-zero");
         l.direction = v3_normalize(l.direction);
     } else {
-        return node_fail(c, n, "unknown light type '%s' (expected point or directional)%s", type, "");
+        return node_fail(c, n, "unknown light type '%s' (expected point or directional)", type);
     }
     light *grown = realloc(s->lights, (size_t)(s->nlights + 1) * sizeof *grown);
     if (!grown)
-        return node_fail(c, n, "out of memory%s%s", "", "");
+        return node_fail(c, n, "out of memory");
     s->lights = grown;
     s->lights[s->nlights++] = l;
     return 0;
@@ -257,13 +257,13 @@ static int parse_material(xml_ctx *c, xmlNodePtr n, material *m)
     if (attr_text(n, "shading", shading, sizeof shading)) {
         if (!strcmp(shading, "phong")) m->shading = SHADING_PHONG;
         else if (!strcmp(shading, "unlit")) m->shading = SHADING_UNLIT;
-        else return node_fail(c, n, "unknown shading '%s' (expected phong or unlit)%s", shading, "");
+        else return node_fail(c, n, "unknown shading '%s' (expected phong or unlit)", shading);
     }
     if (attr_double(c, n, "diffuse", &m->diffuse, 0) || attr_double(c, n, "specular", &m->specular, 0) ||
         attr_double(c, n, "shininess", &m->shininess, 0))
         return -1;
     if (m->diffuse < 0 || m->specular < 0 || m->shininess < 0)
-        return node_fail(c, n, "diffuse, specular and shininess must be >= 0%s%s", "", "");
+        return node_fail(c, n, "diffuse, specular and shininess must be >= 0");
     return 0;
 }
 
@@ -281,7 +281,7 @@ static int parse_rotation(xml_ctx *c, xmlNodePtr n, animation *a)
         attr_double(c, n, "degrees_per_unit_time", &a->degrees_per_time, 1))
         return -1;
     if (!(v3_len(a->axis) > 0))
-        return node_fail(c, n, "rotation axis must be non-zero%s%s", "", "");
+        return node_fail(c, n, "rotation axis must be non-zero");
     a->axis = v3_normalize(a->axis);
     a->has_rotation = 1;
     return 0;
@@ -295,7 +295,7 @@ static int parse_animation(xml_ctx *c, xmlNodePtr n, animation *a)
     for (xmlNodePtr k = n->children; k; k = k->next) {
         if (k->type == XML_TEXT_NODE && !xmlIsBlankNode(k))
             return node_fail(c, n, "keyframe animation files (.anim) are not supported yet; "
-                                   "use <linear> and <rotation>%s%s", "", "");
+                                   "use <linear> and <rotation>");
         if (!is_element(k))
             continue;
         if (!strcmp(elname(k), "linear")) {
@@ -305,7 +305,7 @@ static int parse_animation(xml_ctx *c, xmlNodePtr n, animation *a)
             if (parse_rotation(c, k, a))
                 return -1;
         } else {
-            return node_fail(c, k, "unknown animation element (expected linear or rotation)%s%s", "", "");
+            return node_fail(c, k, "unknown animation element (expected linear or rotation)");
         }
     }
     return 0;
@@ -339,7 +339,7 @@ static int parse_splat(xml_ctx *c, xmlNodePtr n, pointmodel *m, vec3 default_col
     int has_axes = xmlHasProp(n, (const xmlChar *)"u") || xmlHasProp(n, (const xmlChar *)"v");
     int rc = has_axes ? pointmodel_add(m, center, u, v, normal, color, &sub)
                       : pointmodel_add_circle(m, center, normal, radius, color, &sub);
-    return rc ? node_fail(c, n, "%s (give 'normal' and 'radius', or axes 'u' and 'v')%s", sub.msg, "") : 0;
+    return rc ? node_fail(c, n, "%s (give 'normal' and 'radius', or axes 'u' and 'v')", sub.msg) : 0;
 }
 
 static void resolve_path(xml_ctx *c, const char *rel, char *out, size_t size)
@@ -392,18 +392,18 @@ static int generate_shape(xml_ctx *c, xmlNodePtr n, const char *kind, pointmodel
         attr_positive(c, n, "overlap", &p.overlap, 0))
         return -1;
     if (count < 1 || count > 1e8 || count != floor(count))
-        return node_fail(c, n, "attribute 'count' must be an integer in [1, 1e8]%s%s", "", "");
+        return node_fail(c, n, "attribute 'count' must be an integer in [1, 1e8]");
     p.count = (size_t)count;
     surfel *s;
     size_t ns;
     rr_error sub;
     if (shape_generate(&p, &s, &ns, &sub))
-        return node_fail(c, n, "%s%s", sub.msg, "");
+        return node_fail(c, n, "%s", sub.msg);
     int rc = 0;
     for (size_t i = 0; i < ns && !rc; i++)
         rc = pointmodel_add_circle(m, s[i].center, s[i].normal, s[i].radius, s[i].color, &sub);
     free(s);
-    return rc ? node_fail(c, n, "%s%s", sub.msg, "") : 0;
+    return rc ? node_fail(c, n, "%s", sub.msg) : 0;
 }
 
 static int parse_point_model(xml_ctx *c, xmlNodePtr n, scene_object *o)
@@ -429,13 +429,13 @@ static int parse_point_model(xml_ctx *c, xmlNodePtr n, scene_object *o)
         if (!is_element(k))
             continue;
         if (strcmp(elname(k), "splat"))
-            return node_fail(c, k, "unknown element inside <pointModel> (expected splat)%s%s", "", "");
+            return node_fail(c, k, "unknown element inside <pointModel> (expected splat)");
         if (parse_splat(c, k, &o->model, default_color))
             return -1;
     }
     if (o->model.count == 0)
         return node_fail(c, n, "point model has no splats: give a PLY path, 'generate', or "
-                               "<splat> children%s%s", "", "");
+                               "<splat> children");
     return 0;
 }
 
@@ -444,7 +444,7 @@ static int parse_object_child(xml_ctx *c, xmlNodePtr k, scene_object *o, int *sh
     const char *name = elname(k);
     if (!strcmp(name, "pointModel") || !strcmp(name, "sphere")) {
         if (++*shapes > 1)
-            return node_fail(c, k, "an object holds exactly one pointModel or sphere%s%s", "", "");
+            return node_fail(c, k, "an object holds exactly one pointModel or sphere");
         return !strcmp(name, "sphere") ? parse_sphere(c, k, o) : parse_point_model(c, k, o);
     }
     if (!strcmp(name, "material"))
@@ -452,7 +452,7 @@ static int parse_object_child(xml_ctx *c, xmlNodePtr k, scene_object *o, int *sh
     if (!strcmp(name, "animation"))
         return parse_animation(c, k, &o->anim);
     return node_fail(c, k, "unknown element inside <object> (expected pointModel, sphere, "
-                           "material or animation)%s%s", "", "");
+                           "material or animation)");
 }
 
 static int parse_object(xml_ctx *c, xmlNodePtr n, scene *s)
@@ -460,7 +460,7 @@ static int parse_object(xml_ctx *c, xmlNodePtr n, scene *s)
     static const char *const ok[] = {"name", "position", NULL};
     scene_object *grown = realloc(s->objects, (size_t)(s->nobjects + 1) * sizeof *grown);
     if (!grown)
-        return node_fail(c, n, "out of memory%s%s", "", "");
+        return node_fail(c, n, "out of memory");
     s->objects = grown;
     scene_object *o = &s->objects[s->nobjects++];
     memset(o, 0, sizeof *o);
@@ -478,7 +478,7 @@ static int parse_object(xml_ctx *c, xmlNodePtr n, scene *s)
         if (is_element(k) && parse_object_child(c, k, o, &shapes))
             return -1;
     if (!shapes)
-        return node_fail(c, n, "object has no geometry: add <pointModel> or <sphere>%s%s", "", "");
+        return node_fail(c, n, "object has no geometry: add <pointModel> or <sphere>");
     return 0;
 }
 
@@ -493,7 +493,7 @@ static int parse_scene_child(xml_ctx *c, xmlNodePtr k, scene *s)
     if (!strcmp(name, "render")) return parse_render(c, k, s);
     if (!strcmp(name, "object")) return parse_object(c, k, s);
     return node_fail(c, k, "unknown element (expected camera, shutter, background, ambient, "
-                           "light, render or object)%s%s", "", "");
+                           "light, render or object)");
 }
 
 static int parse_scene(xml_ctx *c, xmlDocPtr doc, scene *s)
