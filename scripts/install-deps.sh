@@ -3,7 +3,8 @@
 # Idempotent: does nothing when everything is present. Uses sudo when not root.
 set -eu
 PACKAGES="build-essential libembree-dev libtbb-dev libopenexr-dev libopenimageio-dev
-openimageio-tools python3 python3-openimageio libxml2-dev python3-numpy python3-pytest"
+openimageio-tools python3 python3-openimageio libxml2-dev python3-numpy python3-pytest
+python3-scipy python3-skimage python3-matplotlib"
 
 missing=""
 for p in $PACKAGES; do

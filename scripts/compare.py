@@ -1,0 +1,198 @@
+#!/usr/bin/python3
+"""Compare images against a refrender ground truth.
+
+usage: compare.py REFERENCE TEST [TEST ...] [options]
+
+Reads any format OpenImageIO reads, converts to linear RGB, and reports MAE,
+MSE, RMSE, PSNR, relMSE, SSIM, LDR-FLIP and HDR-FLIP for the whole image and
+for each --crop. Formulas and references: scripts/imagecompare.py, flip.py and
+README.md. Exit status: 0 success, 2 bad input (message names the file).
+"""
+import argparse
+import csv
+import html
+import json
+import math
+import os
+import sys
+
+import numpy as np
+
+import flip
+from imagecompare import (CompareError, basic_metrics, composite, read_image, ssim_map,
+                          stderr_fraction)
+
+COLUMNS = ["MAE", "MSE", "RMSE", "PSNR", "relMSE", "SSIM", "FLIP", "HDR-FLIP"]
+
+
+def parse_args(argv):
+    p = argparse.ArgumentParser(prog="compare.py", description=__doc__.split("\n\n")[1],
+                                formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("reference")
+    p.add_argument("tests", nargs="+", metavar="TEST")
+    p.add_argument("--ref-colorspace", choices=["auto", "srgb", "linear"], default="auto",
+                   help="transfer function of the reference (auto: file metadata, else sRGB for "
+                        "integer and linear for float formats)")
+    p.add_argument("--test-colorspace", choices=["auto", "srgb", "linear"], default="auto",
+                   help="transfer function of the test images (same rule)")
+    p.add_argument("--alpha", choices=["ignore", "composite"], default="ignore",
+                   help="ignore alpha (default) or composite over --background")
+    p.add_argument("--background", default="0 0 0", help="background color for --alpha composite")
+    p.add_argument("--exposure", type=float, default=0.0,
+                   help="exposure in stops applied to both images before all metrics")
+    p.add_argument("--crop", action="append", default=[], metavar="X,Y,W,H",
+                   help="also report this pixel window (may be repeated)")
+    p.add_argument("--mask", help="image whose first channel > 0.5 marks the pixels to evaluate")
+    p.add_argument("--psnr-peak", type=float, default=1.0, help="peak value for PSNR and SSIM (default 1)")
+    p.add_argument("--ppd", type=float, default=flip.DEFAULT_PPD, help="FLIP pixels per degree (67.02)")
+    p.add_argument("--hdr-exposures", metavar="START,STOP",
+                   help="HDR-FLIP exposure range in stops (default: from the reference's luminance)")
+    p.add_argument("--k-sigma", type=float, default=3.0,
+                   help="report pixels differing by more than K reference standard errors (default 3)")
+    p.add_argument("--json", metavar="FILE", help="write results as JSON ('-' for stdout)")
+    p.add_argument("--csv", metavar="FILE", help="write results as CSV ('-' for stdout)")
+    p.add_argument("--heatmaps", metavar="DIR", help="write error maps and contact sheets as PNG")
+    p.add_argument("--report", metavar="DIR", help="write an offline HTML report with the images")
+    return p.parse_args(argv)
+
+
+def parse_crop(text, width, height):
+    try:
+        x, y, w, h = (int(v) for v in text.split(","))
+    except ValueError:
+        raise CompareError(f"--crop {text}: expected X,Y,W,H as four integers")
+    if w <= 0 or h <= 0 or x < 0 or y < 0 or x + w > width or y + h > height:
+        raise CompareError(f"--crop {text}: window outside the {width}x{height} image")
+    return x, y, w, h
+
+
+def parse_floats(text, n, what):
+    try:
+        vals = [float(v) for v in text.replace(",", " ").split()]
+    except ValueError:
+        vals = []
+    if len(vals) != n or not all(math.isfinite(v) for v in vals):
+        raise CompareError(f"{what}: expected {n} numbers, got '{text}'")
+    return vals
+
+
+def load(path, colorspace, args, expect_shape=None):
+    if not os.path.exists(path):
+        raise CompareError(f"{path}: no such file")
+    img = read_image(path, colorspace)
+    if expect_shape and img.rgb.shape != expect_shape:
+        h, w = expect_shape[:2]
+        raise CompareError(f"{path}: size {img.rgb.shape[1]}x{img.rgb.shape[0]} differs from the "
+                           f"reference's {w}x{h}")
+    rgb = composite(img, parse_floats(args.background, 3, "--background")) if args.alpha == "composite" else img.rgb
+    return img, rgb * 2.0 ** args.exposure
+
+
+def evaluate(ref_img, ref, test, valid, window, args):
+    """Metrics of one window (x, y, w, h) of the full-image arrays."""
+    x, y, w, h = window
+    sl = (slice(y, y + h), slice(x, x + w))
+    r, t, v = ref[sl], test[sl], valid[sl]
+    if not v.any():
+        raise CompareError("no valid pixels to compare (mask empty, or all pixels NaN/Inf)")
+    r0, t0 = np.where(np.isfinite(r), r, 0.0), np.where(np.isfinite(t), t, 0.0)
+    v3 = np.repeat(v[..., None], 3, axis=-1)
+    res = basic_metrics(r0, t0, v3, args.psnr_peak)
+    res["SSIM"] = float(ssim_map(r0, t0, args.psnr_peak)[v].mean())
+    flip_map = flip.ldr_flip(r0, t0, args.ppd)
+    res["FLIP"] = float(flip_map[v].mean())
+    res["FLIP p50w"] = flip.weighted_percentile(flip_map[v], 50)
+    res["FLIP p95w"] = flip.weighted_percentile(flip_map[v], 95)
+    try:
+        exposures = parse_floats(args.hdr_exposures, 2, "--hdr-exposures") if args.hdr_exposures else None
+        res["HDR-FLIP"] = float(flip.hdr_flip(r0, t0, args.ppd, exposures)[v].mean())
+    except ValueError as e:
+        res["HDR-FLIP"], res["HDR-FLIP note"] = None, str(e)
+    res["pixels"] = int(v.sum())
+    if ref_img.stderr is not None:
+        res[f">{args.k_sigma:g}SE"] = stderr_fraction(ref_img.stderr[sl], r0, t0, v, args.k_sigma)
+    return res, flip_map
+
+
+def format_value(v):
+    if v is None:
+        return "n/a"
+    if isinstance(v, float):
+        return "inf" if math.isinf(v) else f"{v:.6g}"
+    return str(v)
+
+
+def print_table(rows, out=sys.stdout):
+    extra = sorted({k for r in rows for k in r if k.startswith(">")})
+    cols = ["image", "window", "pixels", "nonfinite"] + COLUMNS + extra
+    cells = [cols] + [[format_value(r.get(c)) for c in cols] for r in rows]
+    widths = [max(len(row[i]) for row in cells) for i in range(len(cols))]
+    for row in cells:
+        print("  ".join(c.rjust(w) if i > 1 else c.ljust(w) for i, (c, w) in enumerate(zip(row, widths))), file=out)
+    for r in rows:
+        if r.get("HDR-FLIP note"):
+            print(f"note: {r['image']} [{r['window']}]: HDR-FLIP n/a: {r['HDR-FLIP note']}", file=out)
+            break
+
+
+def write_machine_readable(rows, json_path, csv_path):
+    if json_path:
+        text = json.dumps(rows, indent=2, default=lambda v: None)
+        if json_path == "-":
+            print(text)
+        else:
+            with open(json_path, "w") as f:
+                f.write(text + "\n")
+    if csv_path:
+        keys = list(dict.fromkeys(k for r in rows for k in r))
+        f = sys.stdout if csv_path == "-" else open(csv_path, "w", newline="")
+        w = csv.DictWriter(f, fieldnames=keys)
+        w.writeheader()
+        w.writerows(rows)
+        if f is not sys.stdout:
+            f.close()
+
+
+def compare(args):
+    ref_img, ref = load(args.reference, args.ref_colorspace, args)
+    height, width = ref.shape[:2]
+    windows = [("full", (0, 0, width, height))] + [(c, parse_crop(c, width, height)) for c in args.crop]
+    mask = np.ones((height, width), bool)
+    if args.mask:
+        _, m = load(args.mask, "linear", argparse.Namespace(alpha="ignore", exposure=0.0, background="0 0 0"),
+                    ref.shape)
+        mask = m[..., 0] > 0.5
+    rows, maps = [], []
+    for path in args.tests:
+        _, test = load(path, args.test_colorspace, args, ref.shape)
+        finite = np.isfinite(ref).all(axis=-1) & np.isfinite(test).all(axis=-1)
+        for name, win in windows:
+            x, y, w, h = win
+            res, flip_map = evaluate(ref_img, ref, test, finite & mask, win, args)
+            res = {"image": path, "window": name,
+                   "nonfinite": int((~finite[y:y + h, x:x + w]).sum()), **res}
+            rows.append(res)
+            maps.append((path, name, win, ref, test, flip_map))
+    return rows, maps
+
+
+def main(argv=None):
+    args = parse_args(argv if argv is not None else sys.argv[1:])
+    try:
+        rows, maps = compare(args)
+    except CompareError as e:
+        print(f"compare.py: {e}", file=sys.stderr)
+        return 2
+    print_table(rows)
+    write_machine_readable(rows, args.json, args.csv)
+    if args.heatmaps or args.report:
+        import heatmaps  # matplotlib only when pictures are asked for
+        out_dir = args.heatmaps or args.report
+        pictures = heatmaps.write_all(maps, out_dir)
+        if args.report:
+            heatmaps.write_report(rows, pictures, args.report, args.reference)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

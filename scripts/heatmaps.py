@@ -1,0 +1,95 @@
+"""Error pictures for compare.py: FLIP maps (magma, as in the FLIP paper),
+signed difference maps (diverging), contact sheets and an offline HTML report."""
+import html
+import os
+import re
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+import flip  # noqa: E402
+
+
+def _name(path, window):
+    stem = os.path.splitext(os.path.basename(path))[0]
+    return re.sub(r"[^A-Za-z0-9_.-]+", "_", f"{stem}_{window}")
+
+
+def _save_map(values, cmap, vmin, vmax, title, label, path):
+    h, w = values.shape
+    fig, ax = plt.subplots(figsize=(max(3.0, 5.0 * w / max(w, h)) + 1.2, max(3.0, 5.0 * h / max(w, h))))
+    im = ax.imshow(values, cmap=cmap, vmin=vmin, vmax=vmax, interpolation="nearest")
+    ax.set_title(title, fontsize=9)
+    ax.axis("off")
+    fig.colorbar(im, ax=ax, fraction=0.046, pad=0.04, label=label)
+    fig.savefig(path, dpi=100, bbox_inches="tight")
+    plt.close(fig)
+
+
+def _contact_sheet(ref, test, flip_map, title, path):
+    fig, axes = plt.subplots(1, 3, figsize=(12, 4.4))
+    panels = [(flip.linear_to_srgb(ref), "reference"), (flip.linear_to_srgb(test), "test"),
+              (flip_map, "LDR-FLIP error")]
+    for ax, (img, name) in zip(axes, panels):
+        kw = {"cmap": "magma", "vmin": 0, "vmax": 1} if img.ndim == 2 else {}
+        ax.imshow(img, interpolation="nearest", **kw)
+        ax.set_title(name, fontsize=9)
+        ax.axis("off")
+    fig.suptitle(title, fontsize=10)
+    fig.savefig(path, dpi=100, bbox_inches="tight")
+    plt.close(fig)
+
+
+def write_all(maps, out_dir):
+    """maps: (test path, window name, (x, y, w, h), ref, test, flip map of the
+    window). Returns one dict of written file names per entry."""
+    os.makedirs(out_dir, exist_ok=True)
+    written = []
+    for path, window, (x, y, w, h), ref, test, flip_map in maps:
+        r, t = ref[y:y + h, x:x + w], test[y:y + h, x:x + w]
+        r, t = np.where(np.isfinite(r), r, 0), np.where(np.isfinite(t), t, 0)
+        base = _name(path, window)
+        files = {"flip": f"{base}_flip.png", "diff": f"{base}_diff.png", "sheet": f"{base}_sheet.png"}
+        title = f"{os.path.basename(path)} [{window}]"
+        _save_map(flip_map, "magma", 0.0, 1.0, f"LDR-FLIP, {title}", "FLIP", os.path.join(out_dir, files["flip"]))
+        diff = (t - r).mean(axis=-1)
+        lim = float(np.max(np.abs(diff))) or 1.0
+        _save_map(diff, "RdBu_r", -lim, lim, f"test - reference (mean of RGB), {title}", "signed difference",
+                  os.path.join(out_dir, files["diff"]))
+        _contact_sheet(r, t, flip_map, title, os.path.join(out_dir, files["sheet"]))
+        written.append(files)
+    return written
+
+
+def write_report(rows, pictures, out_dir, reference):
+    cols = [k for k in dict.fromkeys(k for r in rows for k in r) if not k.endswith("note")]
+    head = "".join(f"<th>{html.escape(c)}</th>" for c in cols)
+    body = ""
+    for r in rows:
+        cells = "".join(f"<td>{html.escape(_fmt(r.get(c)))}</td>" for c in cols)
+        body += f"<tr>{cells}</tr>\n"
+    figures = ""
+    for r, files in zip(rows, pictures):
+        figures += f"<h3>{html.escape(r['image'])} [{html.escape(r['window'])}]</h3>\n"
+        figures += "".join(f'<img src="{html.escape(f)}" alt="{k}">\n' for k, f in files.items())
+    page = f"""<!DOCTYPE html>
+<html><head><meta charset="utf-8"><title>refrender comparison</title>
+<style>body{{font-family:sans-serif}} table{{border-collapse:collapse}}
+td,th{{border:1px solid #999;padding:2px 6px;text-align:right}} img{{max-width:48%;margin:4px}}</style>
+</head><body><h1>Comparison against {html.escape(reference)}</h1>
+<table><tr>{head}</tr>
+{body}</table>
+<p>Metric definitions: see refrender's README (scripts section).</p>
+{figures}</body></html>
+"""
+    with open(os.path.join(out_dir, "index.html"), "w") as f:
+        f.write(page)
+
+
+def _fmt(v):
+    if v is None:
+        return "n/a"
+    return f"{v:.6g}" if isinstance(v, float) else str(v)
