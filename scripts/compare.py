@@ -137,7 +137,9 @@ def print_table(rows, out=sys.stdout):
 
 def write_machine_readable(rows, json_path, csv_path):
     if json_path:
-        text = json.dumps(rows, indent=2, default=lambda v: None)
+        # strict JSON has no Infinity: an infinite PSNR (identical images) is "inf"
+        clean = [{k: ("inf" if isinstance(v, float) and math.isinf(v) else v) for k, v in r.items()} for r in rows]
+        text = json.dumps(clean, indent=2, allow_nan=False)
         if json_path == "-":
             print(text)
         else:
@@ -187,10 +189,10 @@ def main(argv=None):
     write_machine_readable(rows, args.json, args.csv)
     if args.heatmaps or args.report:
         import heatmaps  # matplotlib only when pictures are asked for
-        out_dir = args.heatmaps or args.report
-        pictures = heatmaps.write_all(maps, out_dir)
-        if args.report:
-            heatmaps.write_report(rows, pictures, args.report, args.reference)
+        if args.heatmaps:
+            heatmaps.write_all(maps, args.heatmaps)
+        if args.report:  # the report folder holds its own pictures, viewable offline
+            heatmaps.write_report(rows, heatmaps.write_all(maps, args.report), args.report, args.reference)
     return 0
 
 
