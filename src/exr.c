@@ -7,18 +7,6 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-/* Channel names sorted as EXR stores them, and their offset within RGBA. */
-static const char *const channel_names[4] = {"A", "B", "G", "R"};
-static const int channel_offset[4] = {3, 2, 1, 0};
-
-static int rgba_offset(const char *name)
-{
-    for (int c = 0; c < 4; c++)
-        if (!strcmp(name, channel_names[c]))
-            return channel_offset[c];
-    return 0;
-}
-
 static int exr_fail(rr_error *err, const char *path, const char *what, exr_result_t rc)
 {
     return rr_fail(err, "%s: %s: %s", path, what, exr_get_default_error_message(rc));
@@ -29,14 +17,25 @@ static void silent_handler(exr_const_context_t ctxt, exr_result_t code, const ch
     (void)ctxt, (void)code, (void)msg; /* errors are reported through return codes */
 }
 
-static exr_result_t write_header(exr_context_t ctx, int w, int h, const exr_string_attr *attrs, int nattrs)
+static exr_pixel_type_t pixel_type(exr_channel_type t) { return t == EXR_CHANNEL_UINT ? EXR_PIXEL_UINT : EXR_PIXEL_FLOAT; }
+
+static const exr_channel *find_channel(const exr_channel *chs, int n, const char *name)
+{
+    for (int i = 0; i < n; i++)
+        if (!strcmp(chs[i].name, name))
+            return &chs[i];
+    return NULL;
+}
+
+static exr_result_t write_header(exr_context_t ctx, int w, int h, const exr_channel *chs, int nch,
+                                 const exr_string_attr *attrs, int nattrs)
 {
     int part;
-    exr_result_t rc = exr_add_part(ctx, "rgba", EXR_STORAGE_SCANLINE, &part);
+    exr_result_t rc = exr_add_part(ctx, "image", EXR_STORAGE_SCANLINE, &part);
     if (!rc)
         rc = exr_initialize_required_attr_simple(ctx, part, w, h, EXR_COMPRESSION_ZIP);
-    for (int c = 0; c < 4 && !rc; c++)
-        rc = exr_add_channel(ctx, part, channel_names[c], EXR_PIXEL_FLOAT, EXR_PERCEPTUALLY_LINEAR, 1, 1);
+    for (int c = 0; c < nch && !rc; c++)
+        rc = exr_add_channel(ctx, part, chs[c].name, pixel_type(chs[c].type), EXR_PERCEPTUALLY_LINEAR, 1, 1);
     for (int i = 0; i < nattrs && !rc; i++)
         rc = exr_attr_set_string(ctx, part, attrs[i].key, attrs[i].value);
     if (!rc)
@@ -44,7 +43,7 @@ static exr_result_t write_header(exr_context_t ctx, int w, int h, const exr_stri
     return rc;
 }
 
-static exr_result_t write_chunks(exr_context_t ctx, int w, int h, const float *rgba)
+static exr_result_t write_chunks(exr_context_t ctx, int w, int h, const exr_channel *chs, int nch)
 {
     int32_t lines_per_chunk;
     exr_result_t rc = exr_get_scanlines_per_chunk(ctx, 0, &lines_per_chunk);
@@ -59,12 +58,13 @@ static exr_result_t write_chunks(exr_context_t ctx, int w, int h, const float *r
         if (rc)
             break;
         for (int c = 0; c < enc.channel_count; c++) {
-            exr_coding_channel_info_t *ch = &enc.channels[c];
-            ch->user_bytes_per_element = 4;
-            ch->user_data_type = EXR_PIXEL_FLOAT;
-            ch->user_pixel_stride = 16;
-            ch->user_line_stride = 16 * w;
-            ch->encode_from_ptr = (const uint8_t *)(rgba + (size_t)y * w * 4 + rgba_offset(ch->channel_name));
+            exr_coding_channel_info_t *info = &enc.channels[c];
+            const exr_channel *src = find_channel(chs, nch, info->channel_name);
+            info->user_bytes_per_element = 4;
+            info->user_data_type = (uint16_t)pixel_type(src->type);
+            info->user_pixel_stride = src->stride;
+            info->user_line_stride = src->stride * w;
+            info->encode_from_ptr = (const uint8_t *)src->base + (size_t)y * w * src->stride;
         }
         if (!initialized)
             rc = exr_encoding_choose_default_routines(ctx, 0, &enc);
@@ -77,19 +77,27 @@ static exr_result_t write_chunks(exr_context_t ctx, int w, int h, const float *r
     return rc;
 }
 
-int exr_write_rgba(const char *path, int w, int h, const float *rgba, const exr_string_attr *attrs,
-                   int nattrs, rr_error *err)
+/* A temporary file beside path, with the permissions a plain create would
+ * give (mkstemp makes it private). */
+static int make_temp(const char *path, char *tmp, size_t size)
 {
-    char tmp[4200];
-    snprintf(tmp, sizeof tmp, "%s.tmp-XXXXXX", path);
+    snprintf(tmp, size, "%s.tmp-XXXXXX", path);
     int fd = mkstemp(tmp);
     if (fd < 0)
-        return rr_fail(err, "%s: cannot create a temporary file beside the output", path);
-    /* mkstemp makes the file private; give it the usual umask permissions */
+        return -1;
     mode_t mask = umask(0);
     umask(mask);
     fchmod(fd, 0666 & ~mask);
     close(fd);
+    return 0;
+}
+
+int exr_write(const char *path, int w, int h, const exr_channel *channels, int nchannels,
+              const exr_string_attr *attrs, int nattrs, rr_error *err)
+{
+    char tmp[4200];
+    if (make_temp(path, tmp, sizeof tmp))
+        return rr_fail(err, "%s: cannot create a temporary file beside the output", path);
     exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
     init.error_handler_fn = silent_handler;
     exr_context_t ctx;
@@ -98,9 +106,9 @@ int exr_write_rgba(const char *path, int w, int h, const float *rgba, const exr_
         unlink(tmp);
         return exr_fail(err, path, "cannot start writing", rc);
     }
-    rc = write_header(ctx, w, h, attrs, nattrs);
+    rc = write_header(ctx, w, h, channels, nchannels, attrs, nattrs);
     if (!rc)
-        rc = write_chunks(ctx, w, h, rgba);
+        rc = write_chunks(ctx, w, h, channels, nchannels);
     exr_result_t fin = exr_finish(&ctx);
     if (!rc)
         rc = fin;
@@ -115,47 +123,16 @@ int exr_write_rgba(const char *path, int w, int h, const float *rgba, const exr_
     return 0;
 }
 
-/* ---- reading ------------------------------------------------------------ */
-
-static exr_result_t decode_channel(exr_context_t ctx, const exr_attr_box2i_t *dw, int chan,
-                                   float *plane, int *found)
+int exr_write_rgba(const char *path, int w, int h, const float *rgba, const exr_string_attr *attrs,
+                   int nattrs, rr_error *err)
 {
-    int w = dw->max.x - dw->min.x + 1, h = dw->max.y - dw->min.y + 1;
-    int32_t lines;
-    exr_result_t rc = exr_get_scanlines_per_chunk(ctx, 0, &lines);
-    exr_decode_pipeline_t dec = EXR_DECODE_PIPELINE_INITIALIZER;
-    int initialized = 0;
-    *found = 0;
-    for (int y = dw->min.y; y <= dw->max.y && !rc; y += lines) {
-        exr_chunk_info_t cinfo;
-        rc = exr_read_scanline_chunk_info(ctx, 0, y, &cinfo);
-        if (!rc)
-            rc = initialized ? exr_decoding_update(ctx, 0, &cinfo, &dec)
-                             : exr_decoding_initialize(ctx, 0, &cinfo, &dec);
-        if (rc)
-            break;
-        int row = cinfo.start_y - dw->min.y;
-        for (int c = 0; c < dec.channel_count; c++) {
-            exr_coding_channel_info_t *ch = &dec.channels[c];
-            int wanted = !strcmp(ch->channel_name, channel_names[chan]);
-            *found |= wanted;
-            ch->decode_to_ptr = wanted ? (uint8_t *)(plane + (size_t)row * w) : NULL;
-            ch->user_pixel_stride = 4;
-            ch->user_line_stride = 4 * w;
-            ch->user_bytes_per_element = 4;
-            ch->user_data_type = EXR_PIXEL_FLOAT;
-        }
-        if (!initialized)
-            rc = exr_decoding_choose_default_routines(ctx, 0, &dec);
-        initialized = 1;
-        if (!rc)
-            rc = exr_decoding_run(ctx, 0, &dec);
-    }
-    (void)h;
-    if (initialized)
-        exr_decoding_destroy(ctx, &dec);
-    return rc;
+    float *p = (float *)rgba;
+    exr_channel chs[4] = {{"R", EXR_CHANNEL_FLOAT, p, 16}, {"G", EXR_CHANNEL_FLOAT, p + 1, 16},
+                          {"B", EXR_CHANNEL_FLOAT, p + 2, 16}, {"A", EXR_CHANNEL_FLOAT, p + 3, 16}};
+    return exr_write(path, w, h, chs, 4, attrs, nattrs, err);
 }
+
+/* ---- reading ------------------------------------------------------------ */
 
 static exr_context_t open_for_read(const char *path, exr_result_t *rc)
 {
@@ -166,7 +143,50 @@ static exr_context_t open_for_read(const char *path, exr_result_t *rc)
     return ctx;
 }
 
-int exr_read_rgba(const char *path, int *w, int *h, float **rgba, rr_error *err)
+/* Decodes one channel of every chunk into ch; *found tells whether the file has it. */
+static exr_result_t decode_channel(exr_context_t ctx, const exr_attr_box2i_t *dw, const exr_channel *ch,
+                                   int *found)
+{
+    int w = dw->max.x - dw->min.x + 1;
+    int32_t lines;
+    exr_result_t rc = exr_get_scanlines_per_chunk(ctx, 0, &lines);
+    exr_decode_pipeline_t dec = EXR_DECODE_PIPELINE_INITIALIZER;
+    int initialized = 0, routines = 0;
+    *found = 0;
+    for (int y = dw->min.y; y <= dw->max.y && !rc; y += lines) {
+        exr_chunk_info_t cinfo;
+        rc = exr_read_scanline_chunk_info(ctx, 0, y, &cinfo);
+        if (!rc)
+            rc = initialized ? exr_decoding_update(ctx, 0, &cinfo, &dec)
+                             : exr_decoding_initialize(ctx, 0, &cinfo, &dec);
+        if (rc)
+            break;
+        initialized = 1;
+        int row = cinfo.start_y - dw->min.y;
+        for (int c = 0; c < dec.channel_count; c++) {
+            exr_coding_channel_info_t *info = &dec.channels[c];
+            int wanted = !strcmp(info->channel_name, ch->name);
+            *found |= wanted;
+            info->decode_to_ptr = wanted ? (uint8_t *)ch->base + (size_t)row * w * ch->stride : NULL;
+            info->user_pixel_stride = ch->stride;
+            info->user_line_stride = ch->stride * w;
+            info->user_bytes_per_element = 4;
+            info->user_data_type = (uint16_t)pixel_type(ch->type);
+        }
+        if (!*found)
+            break;
+        if (!routines)
+            rc = exr_decoding_choose_default_routines(ctx, 0, &dec);
+        routines = 1;
+        if (!rc)
+            rc = exr_decoding_run(ctx, 0, &dec);
+    }
+    if (initialized)
+        exr_decoding_destroy(ctx, &dec);
+    return rc;
+}
+
+int exr_read_size(const char *path, int *w, int *h, rr_error *err)
 {
     exr_result_t rc;
     exr_context_t ctx = open_for_read(path, &rc);
@@ -174,24 +194,53 @@ int exr_read_rgba(const char *path, int *w, int *h, float **rgba, rr_error *err)
         return exr_fail(err, path, "cannot read", rc);
     exr_attr_box2i_t dw;
     rc = exr_get_data_window(ctx, 0, &dw);
-    int width = dw.max.x - dw.min.x + 1, height = dw.max.y - dw.min.y + 1;
-    size_t n = (size_t)width * (size_t)height;
-    float *plane = rc ? NULL : malloc(n * sizeof *plane);
-    float *out = rc ? NULL : malloc(n * 4 * sizeof *out);
-    for (int c = 0; c < 4 && !rc && plane && out; c++) {
-        int found;
-        rc = decode_channel(ctx, &dw, c, plane, &found);
-        for (size_t i = 0; i < n && !rc; i++)
-            out[4 * i + channel_offset[c]] = found ? plane[i] : (c == 0 ? 1.0f : 0.0f);
-    }
     exr_finish(&ctx);
-    free(plane);
-    if (rc || !out) {
-        free(out);
-        return rc ? exr_fail(err, path, "cannot decode", rc) : rr_fail(err, "%s: out of memory", path);
+    if (rc)
+        return exr_fail(err, path, "cannot read the data window", rc);
+    *w = dw.max.x - dw.min.x + 1;
+    *h = dw.max.y - dw.min.y + 1;
+    return 0;
+}
+
+int exr_read_channel(const char *path, const exr_channel *ch, int optional, int *found, rr_error *err)
+{
+    exr_result_t rc;
+    exr_context_t ctx = open_for_read(path, &rc);
+    if (rc)
+        return exr_fail(err, path, "cannot read", rc);
+    exr_attr_box2i_t dw;
+    int have = 0;
+    rc = exr_get_data_window(ctx, 0, &dw);
+    if (!rc)
+        rc = decode_channel(ctx, &dw, ch, &have);
+    exr_finish(&ctx);
+    if (rc)
+        return exr_fail(err, path, "cannot decode", rc);
+    if (found)
+        *found = have;
+    if (!have && !optional)
+        return rr_fail(err, "%s: no channel '%s'", path, ch->name);
+    return 0;
+}
+
+int exr_read_rgba(const char *path, int *w, int *h, float **rgba, rr_error *err)
+{
+    if (exr_read_size(path, w, h, err))
+        return -1;
+    size_t n = (size_t)*w * (size_t)*h;
+    float *out = malloc(n * 4 * sizeof *out);
+    if (!out)
+        return rr_fail(err, "%s: out of memory", path);
+    for (size_t i = 0; i < n; i++)
+        out[4 * i + 3] = 1.0f; /* alpha defaults to opaque */
+    static const char *const names[4] = {"R", "G", "B", "A"};
+    for (int c = 0; c < 4; c++) {
+        exr_channel ch = {names[c], EXR_CHANNEL_FLOAT, out + c, 16};
+        if (exr_read_channel(path, &ch, c == 3, NULL, err)) {
+            free(out);
+            return -1;
+        }
     }
-    *w = width;
-    *h = height;
     *rgba = out;
     return 0;
 }

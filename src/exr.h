@@ -2,23 +2,49 @@
 #ifndef RR_EXR_H
 #define RR_EXR_H
 
+#include <stdint.h>
+
 #include "common.h"
 
 typedef struct {
     const char *key, *value;
 } exr_string_attr;
 
-/* Writes interleaved float RGBA (w*h*4) as a 32-bit float, ZIP-compressed
- * scanline EXR with the given string attributes. Atomic: the image goes to a
- * temporary file beside `path` that is renamed over it only when complete,
- * so a failure never leaves a partial file or clobbers a good one. */
+typedef enum { EXR_CHANNEL_FLOAT, EXR_CHANNEL_UINT } exr_channel_type;
+
+/* One channel of an image in memory: element (x, y) is at
+ * base + (y * width + x) * stride bytes, a float or a uint32_t. */
+typedef struct {
+    const char *name;
+    exr_channel_type type;
+    void *base;
+    int stride;
+} exr_channel;
+
+/* Writes the channels as a ZIP-compressed scanline EXR with string
+ * attributes. Atomic: the image goes to a temporary file beside `path` that
+ * is renamed over it only when complete, so a failure never leaves a partial
+ * file or clobbers a good one. */
+int exr_write(const char *path, int w, int h, const exr_channel *channels, int nchannels,
+              const exr_string_attr *attrs, int nattrs, rr_error *err);
+
+/* Interleaved float RGBA (w*h*4) as channels R, G, B, A. */
 int exr_write_rgba(const char *path, int w, int h, const float *rgba, const exr_string_attr *attrs,
                    int nattrs, rr_error *err);
 
-/* Reads R, G, B (and A, 1 if absent) of any scanline EXR as interleaved
- * float RGBA; *rgba is malloc'ed. Channels are decoded planar (one channel
- * per pass), which avoids OpenEXRCore 3.1.5's channel swap when decoding
- * half data interleaved. */
+/* Size of part 0's data window. */
+int exr_read_size(const char *path, int *w, int *h, rr_error *err);
+
+/* Reads the named channels into the given buffers (sized by exr_read_size),
+ * converting to each channel's type. A channel missing from the file is an
+ * error unless `optional` is set, in which case its buffer is untouched and
+ * *found (if given) is cleared. Channels are decoded one at a time (planar),
+ * which avoids OpenEXRCore 3.1.5's channel swap when decoding half data
+ * interleaved. */
+int exr_read_channel(const char *path, const exr_channel *ch, int optional, int *found, rr_error *err);
+
+/* Reads R, G, B (and A, 1 if absent) as interleaved float RGBA; *rgba is
+ * malloc'ed. */
 int exr_read_rgba(const char *path, int *w, int *h, float **rgba, rr_error *err);
 
 /* Reads a string attribute of part 0 into buf. */
