@@ -25,9 +25,9 @@ CXXFLAGS += -std=c++17 $(OPT) -Wall -Wextra
 LDLIBS   := -lembree3 -lOpenEXRCore -lxml2 -lOpenImageIO -lOpenImageIO_Util -lpthread -lm -lstdc++
 
 LIB_SRCS := common splat pointmodel ply shapes animation camera shutter sampler scene \
-            scene_xml accel shade render exr cli
+            scene_xml accel shade film render exr output cli
 LIB_OBJS := $(LIB_SRCS:%=$(BUILD)/%.o) $(BUILD)/preview.o
-APP_OBJS := $(BUILD)/main.o $(BUILD)/gen_cmd.o
+APP_OBJS := $(BUILD)/main.o $(BUILD)/gen_cmd.o $(BUILD)/merge_cmd.o
 TEST_SRCS := $(wildcard tests/test_*.c)
 TEST_OBJS := $(TEST_SRCS:tests/%.c=$(BUILD)/tests/%.o) $(BUILD)/tests/harness.o
 

@@ -19,5 +19,6 @@ int cli_check_writable(const char *path, rr_error *err);
 
 int cmd_render(int argc, char **argv);
 int cmd_gen(int argc, char **argv);
+int cmd_merge(int argc, char **argv);
 
 #endif

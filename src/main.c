@@ -8,10 +8,8 @@
 #include <unistd.h>
 
 #include "cli.h"
-#include "exr.h"
+#include "output.h"
 #include "preview.h"
-#include "render.h"
-#include "sampler.h"
 #include "scene_xml.h"
 
 #ifndef RR_SOURCE_SCENE
@@ -25,27 +23,38 @@ static void usage(FILE *f)
 {
     fputs(
 "usage: refrender [options] [SCENE.xml]\n"
-"       refrender gen SHAPE [options] -o FILE.ply   (see 'refrender gen --help')\n"
+"       refrender merge STATE.exr [STATE.exr ...] -o OUT.exr   (see 'refrender merge --help')\n"
+"       refrender gen SHAPE [options] -o FILE.ply              (see 'refrender gen --help')\n"
 "\n"
 "Renders a ground-truth motion-blurred image of a point-based scene by Monte\n"
-"Carlo ray tracing (Wolf 2008, sec. 4.5) and writes a 32-bit float RGBA EXR.\n"
+"Carlo ray tracing (Wolf 2008, sec. 4.5) and writes a 32-bit float EXR.\n"
 "Without SCENE the bundled default scene (scenes/default.xml) is rendered.\n"
 "\n"
-"Sampling:\n"
-"  --spp N          spatial samples per pixel on a jittered KxK grid; N is\n"
-"                   rounded to the nearest square K*K, K = max(1, round(sqrt(N)))\n"
-"                   (default 4)\n"
+"Sampling (per batch):\n"
+"  --spp N          spatial samples per pixel: a KxK grid, N rounded to the\n"
+"                   nearest square K*K, K = max(1, round(sqrt(N))) (default 4)\n"
 "  --tspp N         temporal samples per spatial sample (default 100)\n"
-"  --time-factor F  the time grid has tspp*F jittered strata; each spatial\n"
-"                   sample takes a random subset of tspp of them (thesis 4.5;\n"
-"                   default: scene <render time_factor>, else 4)\n"
+"  --sampler S      thesis (default; Wolf 2008 sec. 4.5), jittered3d (x, y, t\n"
+"                   stratified together) or sobol (Owen-scrambled Sobol')\n"
+"  --time-factor F  thesis sampler: tspp*F jittered time strata, each spatial\n"
+"                   sample takes a random subset of tspp (default: scene, else 4)\n"
 "  --seed N         random seed; same seed, same image, any thread count (default 1)\n"
+"Error estimates:\n"
+"  --batches B      average B independent batches of spp*tspp samples; with\n"
+"                   B >= 2 the EXR gets variance.* and stderr.* channels (default 1)\n"
+"  --target-error X after the B batches, keep adding batches to pixels whose\n"
+"                   largest RGB standard error exceeds X (absolute), up to\n"
+"  --max-batches N  batches per pixel (default 8*B)\n"
+"Splitting and resuming:\n"
+"  --pass K/N       render only batches [K*B/N, (K+1)*B/N) and write a render\n"
+"                   state; 'refrender merge' combines the N states bit-exactly\n"
+"  --checkpoint F   write the render state to F every --checkpoint-every\n"
+"                   seconds (default 60) and when interrupted (SIGINT/SIGTERM)\n"
+"  --resume F       continue from the render state F (same scene and settings)\n"
 "Scene overrides:\n"
 "  --res WxH        image size (default: scene <camera width height>)\n"
-"  --eps X          epsilon-blending distance in world units (default: scene\n"
-"                   <render epsilon>, else 0.01)\n"
-"  --sigma X        Gaussian kernel sigma in splat radii (default: scene\n"
-"                   <render kernel_sigma>, else 0.5)\n"
+"  --eps X          epsilon-blending distance in world units (default: scene, else 0.01)\n"
+"  --sigma X        Gaussian kernel sigma in splat radii (default: scene, else 0.5)\n"
 "Output:\n"
 "  -o, --output F   output EXR (default render.exr); written atomically\n"
 "  --preview F      also write an sRGB 8-bit preview (PNG, by extension)\n"
@@ -57,18 +66,30 @@ static void usage(FILE *f)
 "\n"
 "Progress is shown on stderr when it is a terminal; otherwise one summary line\n"
 "is printed at the end. Exit status: 0 success, 1 bad input or render error,\n"
-"2 usage error, 130 interrupted (no output is written).\n", f);
+"2 usage error, 130 interrupted (no output is written; a checkpoint is, if asked).\n", f);
 }
 
 typedef struct {
-    int spp, tspp, time_factor, threads, quiet, width, height;
-    double eps, sigma; /* < 0: from the scene */
+    int spp, tspp, time_factor, threads, quiet, width, height, batches, max_batches;
+    int pass, passes; /* passes > 0: --pass pass/passes */
+    sampler_kind sampler;
+    double eps, sigma, target_error, checkpoint_every; /* eps, sigma < 0: from the scene */
     uint64_t seed;
-    const char *scene, *output, *preview;
+    const char *scene, *output, *preview, *checkpoint, *resume;
 } render_options;
 
 enum { OPT_SPP = 256, OPT_TSPP, OPT_RES, OPT_THREADS, OPT_SEED, OPT_EPS, OPT_SIGMA, OPT_TFACTOR,
-       OPT_PREVIEW, OPT_QUIET, OPT_VERSION };
+       OPT_PREVIEW, OPT_QUIET, OPT_VERSION, OPT_SAMPLER, OPT_BATCHES, OPT_TARGET, OPT_MAXB, OPT_PASS,
+       OPT_CKPT, OPT_CKPT_EVERY, OPT_RESUME };
+
+static int parse_pass(const char *arg, render_options *o, rr_error *err)
+{
+    char extra;
+    if (sscanf(arg, "%d/%d%c", &o->pass, &o->passes, &extra) != 2 || o->passes < 1 || o->pass < 0 ||
+        o->pass >= o->passes)
+        return rr_fail(err, "--pass: expected K/N with 0 <= K < N, got '%s'", arg);
+    return 0;
+}
 
 static int parse_option(int c, const char *arg, render_options *o, rr_error *err)
 {
@@ -81,11 +102,37 @@ static int parse_option(int c, const char *arg, render_options *o, rr_error *err
     case OPT_SEED: return cli_u64("--seed", arg, &o->seed, err);
     case OPT_EPS: return cli_double("--eps", arg, 0.0, &o->eps, err);
     case OPT_SIGMA: return cli_double("--sigma", arg, 1e-6, &o->sigma, err);
+    case OPT_BATCHES: return cli_int("--batches", arg, 1, 1000000, &o->batches, err);
+    case OPT_MAXB: return cli_int("--max-batches", arg, 1, 1000000, &o->max_batches, err);
+    case OPT_TARGET: return cli_double("--target-error", arg, 1e-12, &o->target_error, err);
+    case OPT_CKPT_EVERY: return cli_double("--checkpoint-every", arg, 0.0, &o->checkpoint_every, err);
+    case OPT_PASS: return parse_pass(arg, o, err);
+    case OPT_SAMPLER:
+        return sampler_from_name(arg, &o->sampler)
+                   ? rr_fail(err, "--sampler: expected thesis, jittered3d or sobol, got '%s'", arg) : 0;
     case 'o': o->output = arg; return 0;
     case OPT_PREVIEW: o->preview = arg; return 0;
+    case OPT_CKPT: o->checkpoint = arg; return 0;
+    case OPT_RESUME: o->resume = arg; return 0;
     case OPT_QUIET: o->quiet = 1; return 0;
     }
     return rr_fail(err, "unknown option");
+}
+
+static int check_combinations(const render_options *o, rr_error *err)
+{
+    if (o->passes && o->batches < o->passes)
+        return rr_fail(err, "--pass %d/%d needs --batches >= %d (each pass renders whole batches)",
+                       o->pass, o->passes, o->passes);
+    if (o->passes && o->target_error > 0)
+        return rr_fail(err, "--pass and --target-error cannot be combined");
+    if (o->target_error > 0 && o->batches < 2)
+        return rr_fail(err, "--target-error needs --batches >= 2 to estimate the error");
+    if (o->max_batches && o->max_batches < o->batches)
+        return rr_fail(err, "--max-batches must be at least --batches");
+    if (o->passes && o->preview)
+        return rr_fail(err, "--preview is not available for --pass renders (merge first)");
+    return 0;
 }
 
 /* Returns 0 to go on, 1 for a clean exit (help, version), 2 on usage error. */
@@ -96,12 +143,16 @@ static int parse_args(int argc, char **argv, render_options *o)
         {"time-factor", required_argument, 0, OPT_TFACTOR}, {"res", required_argument, 0, OPT_RES},
         {"threads", required_argument, 0, OPT_THREADS}, {"seed", required_argument, 0, OPT_SEED},
         {"eps", required_argument, 0, OPT_EPS}, {"sigma", required_argument, 0, OPT_SIGMA},
+        {"sampler", required_argument, 0, OPT_SAMPLER}, {"batches", required_argument, 0, OPT_BATCHES},
+        {"target-error", required_argument, 0, OPT_TARGET}, {"max-batches", required_argument, 0, OPT_MAXB},
+        {"pass", required_argument, 0, OPT_PASS}, {"checkpoint", required_argument, 0, OPT_CKPT},
+        {"checkpoint-every", required_argument, 0, OPT_CKPT_EVERY}, {"resume", required_argument, 0, OPT_RESUME},
         {"output", required_argument, 0, 'o'}, {"preview", required_argument, 0, OPT_PREVIEW},
         {"quiet", no_argument, 0, OPT_QUIET}, {"version", no_argument, 0, OPT_VERSION},
         {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
     int c;
+    rr_error err;
     while ((c = getopt_long(argc, argv, "ho:", longopts, NULL)) != -1) {
-        rr_error err;
         if (c == 'h') { usage(stdout); return 1; }
         if (c == OPT_VERSION) { printf("refrender %s\n", RR_VERSION); return 1; }
         if (c == '?') { fputs("Try 'refrender --help'.\n", stderr); return 2; }
@@ -116,6 +167,10 @@ static int parse_args(int argc, char **argv, render_options *o)
     }
     if (optind == argc - 1)
         o->scene = argv[optind];
+    if (check_combinations(o, &err)) {
+        fprintf(stderr, "refrender: %s\n", err.msg);
+        return 2;
+    }
     return 0;
 }
 
@@ -169,56 +224,6 @@ static int apply_overrides(scene *s, const render_options *o, rr_error *err)
     return camera_prepare(&s->cam, err);
 }
 
-static void describe_weight(const shutter *sh, char *buf, size_t size)
-{
-    const char *name = shutter_weight_name(sh->kind);
-    if (sh->kind == WEIGHT_LINEAR)
-        snprintf(buf, size, "linear center=%.17g", sh->center);
-    else if (sh->kind == WEIGHT_EXP)
-        snprintf(buf, size, "exp center=%.17g rate=%.17g", sh->center, sh->rate);
-    else if (sh->kind == WEIGHT_TABLE) {
-        size_t len = (size_t)snprintf(buf, size, "table");
-        for (int i = 0; i < sh->table_size && len < size; i++)
-            len += (size_t)snprintf(buf + len, size - len, " %.17g %.17g", sh->table_t[i], sh->table_w[i]);
-    } else
-        snprintf(buf, size, "%s", name);
-}
-
-enum { ATTR_COUNT = 14 };
-
-static int write_output(const scene *s, const render_settings *rs, const render_options *o,
-                        const image *img, const char *cmdline, rr_error *err)
-{
-    char vals[ATTR_COUNT][4200];
-    snprintf(vals[0], 4200, "%s", s->path);
-    snprintf(vals[1], 4200, "%d", rs->spp_grid * rs->spp_grid);
-    snprintf(vals[2], 4200, "%d", rs->tspp);
-    snprintf(vals[3], 4200, "thesis");
-    snprintf(vals[4], 4200, "%llu", (unsigned long long)rs->seed);
-    snprintf(vals[5], 4200, "%.17g", s->epsilon);
-    snprintf(vals[6], 4200, "%.17g", s->kernel_sigma);
-    snprintf(vals[7], 4200, "%.17g %.17g", s->shut.open, s->shut.close);
-    describe_weight(&s->shut, vals[8], sizeof vals[8]);
-    snprintf(vals[9], 4200, "%d", rs->time_factor);
-    snprintf(vals[10], 4200, "%.3f", img->seconds);
-    snprintf(vals[11], 4200, "refrender %s", RR_VERSION);
-    snprintf(vals[12], 4200, "%s", cmdline);
-    snprintf(vals[13], 4200, "%llu", (unsigned long long)img->rays);
-    static const char *const keys[ATTR_COUNT] = {
-        "refrender:scene", "refrender:spp", "refrender:tspp", "refrender:sampler", "refrender:seed",
-        "refrender:epsilon", "refrender:kernelSigma", "refrender:shutter", "refrender:weightFunction",
-        "refrender:timeFactor", "refrender:renderSeconds", "software", "refrender:command", "refrender:rays"};
-    exr_string_attr attrs[ATTR_COUNT];
-    for (int i = 0; i < ATTR_COUNT; i++)
-        attrs[i] = (exr_string_attr){keys[i], vals[i]};
-    if (exr_write_rgba(o->output, img->width, img->height, img->rgba, attrs, ATTR_COUNT, err))
-        return -1;
-    if (o->preview &&
-        preview_write_srgb(o->preview, img->width, img->height, img->rgba, err->msg, (int)sizeof err->msg))
-        return -1;
-    return 0;
-}
-
 static void join_args(int argc, char **argv, char *buf, size_t size)
 {
     size_t len = 0;
@@ -236,30 +241,126 @@ static void install_signal_handlers(void)
     sigaction(SIGTERM, &sa, NULL);
 }
 
+typedef struct {
+    const render_options *o;
+    render_settings rs;
+    attr_list attrs;
+    uint32_t total_batches;
+} render_run;
+
+static int write_checkpoint(void *user, const image *img, rr_error *err)
+{
+    render_run *run = user;
+    return output_write_state(run->o->checkpoint, img, run->rs.batch_begin,
+                              run->rs.batch_begin + run->rs.batches, &run->attrs, err);
+}
+
+/* Loads --resume into img after checking it is this very render. */
+static int resume_state(render_run *run, image *img, rr_error *err)
+{
+    attr_list saved;
+    uint32_t begin, end;
+    if (output_read_state(run->o->resume, img, &saved, &begin, &end, err))
+        return -1;
+    if (attrs_check_identity(&saved, run->o->resume, &run->attrs, "this render", err)) {
+        image_free(img);
+        return -1;
+    }
+    if (begin != run->rs.batch_begin || end != run->rs.batch_begin + run->rs.batches) {
+        image_free(img);
+        return rr_fail(err, "%s holds batches %u-%u, this render %u-%u", run->o->resume, begin, end,
+                       run->rs.batch_begin, run->rs.batch_begin + run->rs.batches);
+    }
+    return 0;
+}
+
+static void setup_run(render_run *run, const scene *s, const render_options *o, const char *cmdline)
+{
+    uint32_t total = (uint32_t)o->batches;
+    uint32_t begin = o->passes ? (uint32_t)((uint64_t)o->pass * total / o->passes) : 0;
+    uint32_t end = o->passes ? (uint32_t)((uint64_t)(o->pass + 1) * total / o->passes) : total;
+    run->o = o;
+    run->total_batches = total;
+    run->rs = (render_settings){
+        {o->sampler, o->seed, sampler_grid_for_spp(o->spp), o->tspp, s->time_factor, s->shut.open, s->shut.close},
+        o->threads, begin, end - begin, o->max_batches ? (uint32_t)o->max_batches : 8 * total, o->target_error};
+    char hash[17];
+    file_hash(s->path, hash);
+    run->attrs.n = 0;
+    attrs_for_render(&run->attrs, s, &run->rs, total, hash, cmdline);
+}
+
+static int write_preview(const char *path, const image *img, rr_error *err)
+{
+    size_t n = (size_t)img->width * img->height;
+    float *rgba = malloc(n * 4 * sizeof *rgba), *var = malloc(n * 4 * sizeof *var);
+    float *se = malloc(n * 4 * sizeof *se), *samples = malloc(n * sizeof *samples);
+    int rc = rgba && var && se && samples ? 0 : rr_fail(err, "out of memory");
+    if (!rc) {
+        image_resolve(img, 1, rgba, var, se, samples);
+        rc = preview_write_srgb(path, img->width, img->height, rgba, err->msg, (int)sizeof err->msg);
+    }
+    free(rgba), free(var), free(se), free(samples);
+    return rc;
+}
+
+static void report(const render_options *o, const scene *s, const image *img, int tty)
+{
+    if (o->quiet)
+        return;
+    if (!tty)
+        fprintf(stderr, "refrender: %s: %dx%d, %llu rays in %.2fs (%.2f Mrays/s)\n", s->path, img->width,
+                img->height, (unsigned long long)img->rays, img->seconds,
+                img->seconds > 0 ? img->rays / img->seconds * 1e-6 : 0.0);
+    if (img->kbuffer_overflows)
+        fprintf(stderr, "refrender: warning: %llu samples had more than %d hits within epsilon; "
+                        "the farthest were dropped\n", (unsigned long long)img->kbuffer_overflows, KBUFFER_MAX);
+    if (img->clamped)
+        fprintf(stderr, "refrender: warning: %llu batch estimates exceeded +-%g and were clamped\n",
+                (unsigned long long)img->clamped, FILM_LIMIT);
+}
+
+static void warn_about_settings(const render_options *o, const render_settings *rs)
+{
+    int k = rs->smp.grid, n = sampler_count(&rs->smp);
+    if (o->quiet)
+        return;
+    if (k * k != o->spp)
+        fprintf(stderr, "refrender: --spp %d rounded to a %dx%d grid (%d samples)\n", o->spp, k, k, k * k);
+    if (rs->smp.kind == SAMPLER_SOBOL && (n & (n - 1)))
+        fprintf(stderr, "refrender: note: sobol works best with a power-of-two spp*tspp (now %d)\n", n);
+}
+
 static int render_and_write(scene *s, const render_options *o, const char *cmdline, rr_error *err)
 {
-    render_settings rs = {sampler_grid_for_spp(o->spp), o->tspp, s->time_factor, o->seed, o->threads};
-    if (rs.spp_grid * rs.spp_grid != o->spp && !o->quiet)
-        fprintf(stderr, "refrender: --spp %d rounded to a %dx%d jittered grid (%d samples)\n", o->spp,
-                rs.spp_grid, rs.spp_grid, rs.spp_grid * rs.spp_grid);
+    render_run run;
+    setup_run(&run, s, o, cmdline);
+    warn_about_settings(o, &run.rs);
     accel *acc;
+    image img;
     if (accel_build(s, s->epsilon, s->kernel_sigma, &acc, err))
         return -1;
-    image img;
-    int progress = !o->quiet && isatty(STDERR_FILENO);
-    install_signal_handlers();
-    int rc = render_image(s, acc, &rs, &img, progress ? print_progress : NULL, NULL, &interrupted, err);
-    accel_free(acc);
-    if (rc)
+    if (o->resume ? resume_state(&run, &img, err) : (image_alloc(&img, s->cam.width, s->cam.height)
+                                                         ? rr_fail(err, "out of memory for the image") : 0)) {
+        accel_free(acc);
         return -1;
-    if (!o->quiet && !progress)
-        fprintf(stderr, "refrender: %s: %dx%d, %llu rays in %.2fs (%.2f Mrays/s)\n", s->path, img.width,
-                img.height, (unsigned long long)img.rays, img.seconds,
-                img.seconds > 0 ? img.rays / img.seconds * 1e-6 : 0.0);
-    if (img.kbuffer_overflows && !o->quiet)
-        fprintf(stderr, "refrender: warning: %llu samples had more than %d hits within epsilon; "
-                        "the farthest were dropped\n", (unsigned long long)img.kbuffer_overflows, KBUFFER_MAX);
-    rc = write_output(s, &rs, o, &img, cmdline, err);
+    }
+    int tty = !o->quiet && isatty(STDERR_FILENO);
+    render_hooks hooks = {tty ? print_progress : NULL, o->checkpoint ? write_checkpoint : NULL,
+                          o->checkpoint_every > 0 ? o->checkpoint_every : 60.0, &run};
+    install_signal_handlers();
+    int rc = render_image(s, acc, &run.rs, &img, &hooks, &interrupted, err);
+    accel_free(acc);
+    if (!rc) {
+        report(o, s, &img, tty);
+        attrs_set(&run.attrs, "refrender:renderSeconds", "%.3f", img.seconds);
+        attrs_set(&run.attrs, "refrender:rays", "%llu", (unsigned long long)img.rays);
+        rc = o->passes ? output_write_state(o->output, &img, run.rs.batch_begin,
+                                            run.rs.batch_begin + run.rs.batches, &run.attrs, err)
+                       : output_write_final(o->output, &img, sampler_count(&run.rs.smp), &run.attrs, err);
+    }
+    if (!rc && o->preview)
+        rc = write_preview(o->preview, &img, err);
     image_free(&img);
     return rc;
 }
@@ -267,20 +368,22 @@ static int render_and_write(scene *s, const render_options *o, const char *cmdli
 int cmd_render(int argc, char **argv)
 {
     long cores = sysconf(_SC_NPROCESSORS_ONLN);
-    render_options o = {4, 100, 0, cores > 0 ? (int)cores : 1, 0, 0, 0, -1.0, -1.0, 1, NULL,
-                        "render.exr", NULL};
+    render_options o;
+    memset(&o, 0, sizeof o);
+    o.spp = 4, o.tspp = 100, o.threads = cores > 0 ? (int)cores : 1, o.batches = 1;
+    o.eps = o.sigma = -1.0, o.seed = 1, o.output = "render.exr", o.sampler = SAMPLER_THESIS;
     int rc = parse_args(argc, argv, &o);
     if (rc)
         return rc == 1 ? 0 : 2;
     char scene_buf[PATH_MAX + 64];
     if (!o.scene)
         o.scene = default_scene(scene_buf, sizeof scene_buf);
-    rr_error err;
+    rr_error err = {{0}};
     scene s;
     char cmdline[2048];
     join_args(argc, argv, cmdline, sizeof cmdline);
     if (cli_check_writable(o.output, &err) || (o.preview && cli_check_writable(o.preview, &err)) ||
-        scene_load_file(o.scene, &s, &err)) {
+        (o.checkpoint && cli_check_writable(o.checkpoint, &err)) || scene_load_file(o.scene, &s, &err)) {
         fprintf(stderr, "refrender: %s\n", err.msg);
         return 1;
     }
@@ -297,5 +400,7 @@ int main(int argc, char **argv)
 {
     if (argc > 1 && !strcmp(argv[1], "gen"))
         return cmd_gen(argc - 1, argv + 1);
+    if (argc > 1 && !strcmp(argv[1], "merge"))
+        return cmd_merge(argc - 1, argv + 1);
     return cmd_render(argc, argv);
 }

@@ -7,7 +7,6 @@
 #include <time.h>
 #include <unistd.h>
 
-#include "sampler.h"
 #include "shade.h"
 
 #define TILE 16
@@ -16,18 +15,21 @@ typedef struct {
     const scene *sc;
     const accel *acc;
     const render_settings *rs;
-    sampler smp;
     image *img;
-    int tiles_x, tiles_y;
-    atomic_int next_tile, tiles_done, workers_left;
-    atomic_uint_fast64_t rays, overflows;
+    int tiles_x, tiles_y, ntiles;
+    uint32_t round; /* pixels holding `round` batches render batch batch_begin + round */
+    atomic_int next_tile, workers_left;
+    atomic_uint_fast64_t rays, overflows, clamped, pixel_batches;
+    pthread_mutex_t lock;
+    pthread_cond_t cond;
+    int paused, active; /* under lock: pause requested; workers inside a tile */
     volatile sig_atomic_t *cancel;
 } render_job;
 
-typedef struct { /* per-thread scratch for one pixel */
-    double *jitter, *times;
-    int *perm;
-} pixel_scratch;
+typedef struct { /* per-thread scratch */
+    sampler_scratch ss;
+    double *x, *y, *t;
+} thread_scratch;
 
 static double now_seconds(void)
 {
@@ -45,140 +47,270 @@ static void trace_sample(const render_job *job, vec3 dir, double t, kbuffer *kb,
     rgba[0] = c.x, rgba[1] = c.y, rgba[2] = c.z, rgba[3] = kb->count ? 1.0 : 0.0;
 }
 
-/* Thesis sec. 4.5: s_s spatial samples, each with s_t times; colors
- * accumulate with weight a(t) and the pixel is divided by the weight sum. */
-static void render_pixel(render_job *job, int px, int py, pixel_scratch *scr, uint64_t *rays,
-                         uint64_t *overflows)
+/* One batch of a pixel (thesis sec. 4.5): each sample's color is weighted
+ * by a(t) and the batch estimate is divided by the sum of the weights. */
+static void render_pixel_batch(render_job *job, int px, int py, uint32_t batch, thread_scratch *scr,
+                               double est[4], uint64_t *rays, uint64_t *overflows)
 {
-    const sampler *smp = &job->smp;
+    const sampler *smp = &job->rs->smp;
     uint64_t pixel = (uint64_t)py * (uint64_t)job->img->width + (uint64_t)px;
-    double acc[4] = {0, 0, 0, 0}, wsum = 0;
+    sampler_batch(smp, pixel, px, py, batch, &scr->ss, scr->x, scr->y, scr->t);
+    double acc[4] = {0, 0, 0, 0}, wsum = 0, last_x = NAN, last_y = NAN;
+    vec3 dir = v3(0, 0, 0);
     kbuffer kb;
-    sampler_time_jitter(smp, pixel, scr->jitter);
-    for (int i = 0; i < smp->grid * smp->grid; i++) {
-        double x, y;
-        sampler_position(smp, pixel, px, py, i, &x, &y);
-        vec3 dir = camera_ray_direction(&job->sc->cam, x, y);
-        sampler_times(smp, pixel, i, scr->jitter, scr->perm, scr->times);
-        for (int j = 0; j < smp->tspp; j++) {
-            double w = shutter_weight(&job->sc->shut, scr->times[j]);
-            if (w == 0)
-                continue; /* contributes nothing to either sum */
-            double rgba[4];
-            trace_sample(job, dir, scr->times[j], &kb, rgba);
-            (*rays)++;
-            *overflows += kb.dropped > 0;
-            for (int c = 0; c < 4; c++)
-                acc[c] += w * rgba[c];
-            wsum += w;
+    for (int i = 0; i < sampler_count(smp); i++) {
+        double w = shutter_weight(&job->sc->shut, scr->t[i]);
+        if (w == 0)
+            continue; /* contributes nothing to either sum */
+        if (scr->x[i] != last_x || scr->y[i] != last_y) {
+            dir = camera_ray_direction(&job->sc->cam, scr->x[i], scr->y[i]);
+            last_x = scr->x[i], last_y = scr->y[i];
         }
+        double rgba[4];
+        trace_sample(job, dir, scr->t[i], &kb, rgba);
+        (*rays)++;
+        *overflows += kb.dropped > 0;
+        for (int c = 0; c < 4; c++)
+            acc[c] += w * rgba[c];
+        wsum += w;
     }
-    float *out = &job->img->rgba[4 * pixel];
     for (int c = 0; c < 4; c++)
-        out[c] = wsum > 0 ? (float)(acc[c] / wsum) : 0.0f;
+        est[c] = wsum > 0 ? acc[c] / wsum : 0.0;
 }
 
-static void render_tile(render_job *job, int tile, pixel_scratch *scr)
+/* Does this pixel take a batch in the current round? */
+static int pixel_wants_batch(const render_job *job, const pixel_state *p)
 {
+    const render_settings *rs = job->rs;
+    if (p->batches != job->round)
+        return 0;
+    if (job->round < rs->batches)
+        return 1;
+    return rs->target_error > 0 && job->round < rs->max_batches && film_max_stderr(p) > rs->target_error;
+}
+
+static void render_tile(render_job *job, int tile, thread_scratch *scr)
+{
+    image *img = job->img;
     int tx = tile % job->tiles_x, ty = tile / job->tiles_x;
-    int x1 = (tx + 1) * TILE, y1 = (ty + 1) * TILE;
-    if (x1 > job->img->width) x1 = job->img->width;
-    if (y1 > job->img->height) y1 = job->img->height;
-    uint64_t rays = 0, overflows = 0;
+    int x1 = (tx + 1) * TILE < img->width ? (tx + 1) * TILE : img->width;
+    int y1 = (ty + 1) * TILE < img->height ? (ty + 1) * TILE : img->height;
+    uint64_t rays = 0, overflows = 0, clamped = 0, done = 0;
     for (int y = ty * TILE; y < y1; y++)
-        for (int x = tx * TILE; x < x1; x++)
-            render_pixel(job, x, y, scr, &rays, &overflows);
+        for (int x = tx * TILE; x < x1; x++) {
+            pixel_state *p = &img->px[(size_t)y * img->width + x];
+            if (!pixel_wants_batch(job, p))
+                continue;
+            double est[4];
+            render_pixel_batch(job, x, y, job->rs->batch_begin + job->round, scr, est, &rays, &overflows);
+            clamped += (uint64_t)film_add_batch(p, est);
+            done++;
+        }
     atomic_fetch_add(&job->rays, rays);
     atomic_fetch_add(&job->overflows, overflows);
+    atomic_fetch_add(&job->clamped, clamped);
+    atomic_fetch_add(&job->pixel_batches, done);
+}
+
+/* Blocks while a checkpoint is being written; returns 1 when cancelled. */
+static int enter_work(render_job *job)
+{
+    pthread_mutex_lock(&job->lock);
+    while (job->paused && !*job->cancel)
+        pthread_cond_wait(&job->cond, &job->lock);
+    int stop = *job->cancel != 0;
+    if (!stop)
+        job->active++;
+    pthread_mutex_unlock(&job->lock);
+    return stop;
+}
+
+static void leave_work(render_job *job)
+{
+    pthread_mutex_lock(&job->lock);
+    job->active--;
+    pthread_cond_broadcast(&job->cond);
+    pthread_mutex_unlock(&job->lock);
+}
+
+static int scratch_init(thread_scratch *scr, const sampler *s)
+{
+    size_t n = (size_t)sampler_count(s);
+    scr->x = malloc(n * sizeof(double));
+    scr->y = malloc(n * sizeof(double));
+    scr->t = malloc(n * sizeof(double));
+    return sampler_scratch_init(&scr->ss, s) || !scr->x || !scr->y || !scr->t ? -1 : 0;
+}
+
+static void scratch_free(thread_scratch *scr)
+{
+    sampler_scratch_free(&scr->ss);
+    free(scr->x);
+    free(scr->y);
+    free(scr->t);
 }
 
 static void *worker(void *arg)
 {
     render_job *job = arg;
-    int m = job->smp.tspp * job->smp.time_factor;
-    pixel_scratch scr = {malloc((size_t)m * sizeof(double)), malloc((size_t)job->smp.tspp * sizeof(double)),
-                         malloc((size_t)m * sizeof(int))};
-    int ntiles = job->tiles_x * job->tiles_y;
-    while (scr.jitter && scr.times && scr.perm && !*job->cancel) {
-        int tile = atomic_fetch_add(&job->next_tile, 1);
-        if (tile >= ntiles)
-            break;
-        render_tile(job, tile, &scr);
-        atomic_fetch_add(&job->tiles_done, 1);
-    }
-    free(scr.jitter);
-    free(scr.times);
-    free(scr.perm);
+    thread_scratch scr;
+    if (scratch_init(&scr, &job->rs->smp) == 0)
+        while (!enter_work(job)) {
+            int tile = atomic_fetch_add(&job->next_tile, 1);
+            if (tile < job->ntiles)
+                render_tile(job, tile, &scr);
+            leave_work(job);
+            if (tile >= job->ntiles)
+                break;
+        }
+    scratch_free(&scr);
     atomic_fetch_sub(&job->workers_left, 1);
     return NULL;
 }
 
-static void init_job(render_job *job, const scene *s, const accel *a, const render_settings *rs, image *img)
+static int checkpoint_paused(render_job *job, const render_hooks *hooks, rr_error *err)
 {
-    memset(job, 0, sizeof *job);
-    job->sc = s;
-    job->acc = a;
-    job->rs = rs;
-    job->img = img;
-    job->smp = (sampler){rs->seed, rs->spp_grid, rs->tspp, rs->time_factor, s->shut.open, s->shut.close};
-    job->tiles_x = (img->width + TILE - 1) / TILE;
-    job->tiles_y = (img->height + TILE - 1) / TILE;
+    pthread_mutex_lock(&job->lock);
+    job->paused = 1;
+    while (job->active > 0)
+        pthread_cond_wait(&job->cond, &job->lock);
+    pthread_mutex_unlock(&job->lock);
+    int rc = hooks->checkpoint(hooks->user, job->img, err);
+    pthread_mutex_lock(&job->lock);
+    job->paused = 0;
+    pthread_cond_broadcast(&job->cond);
+    pthread_mutex_unlock(&job->lock);
+    return rc;
 }
 
-static void wait_with_progress(render_job *job, double start, render_progress_fn progress, void *user)
+static void report_progress(render_job *job, const render_hooks *hooks, double start)
 {
-    double ntiles = job->tiles_x * job->tiles_y;
-    while (atomic_load(&job->workers_left) > 0) {
-        usleep(200000);
-        if (progress)
-            progress(user, atomic_load(&job->tiles_done) / ntiles, atomic_load(&job->rays),
-                     now_seconds() - start);
-    }
+    if (!hooks || !hooks->progress)
+        return;
+    double planned = (double)job->img->width * job->img->height * job->rs->batches;
+    double fraction = fmin(0.999, atomic_load(&job->pixel_batches) / fmax(planned, 1.0));
+    hooks->progress(hooks->user, fraction, atomic_load(&job->rays), now_seconds() - start);
 }
 
-int render_image(const scene *s, const accel *a, const render_settings *rs, image *out,
-                 render_progress_fn progress, void *user, volatile sig_atomic_t *cancel,
-                 rr_error *err)
+/* Runs one round over all tiles with the worker threads, writing periodic
+ * checkpoints while they are paused. */
+static int run_round(render_job *job, const render_hooks *hooks, double start, double *last_checkpoint,
+                     rr_error *err)
 {
-    if (rs->spp_grid < 1 || rs->tspp < 1 || rs->time_factor < 1 || rs->threads < 1)
-        return rr_fail(err, "sample counts and thread count must be positive");
-    if ((int64_t)rs->tspp * rs->time_factor > SAMPLER_MAX_TIME_STRATA)
-        return rr_fail(err, "tspp * time factor must be at most %d", SAMPLER_MAX_TIME_STRATA);
-    out->width = s->cam.width;
-    out->height = s->cam.height;
-    out->rgba = calloc((size_t)out->width * (size_t)out->height * 4, sizeof(float));
-    if (!out->rgba)
-        return rr_fail(err, "out of memory for a %dx%d image", out->width, out->height);
-    render_job job;
-    init_job(&job, s, a, rs, out);
-    job.cancel = cancel;
-    double start = now_seconds();
-    pthread_t *threads = calloc((size_t)rs->threads, sizeof *threads);
-    int started = 0;
-    atomic_store(&job.workers_left, rs->threads);
-    for (int i = 0; threads && i < rs->threads; i++, started++)
-        if (pthread_create(&threads[i], NULL, worker, &job))
+    int threads = job->rs->threads, started = 0, rc = 0;
+    pthread_t *tids = calloc((size_t)threads, sizeof *tids);
+    atomic_store(&job->next_tile, 0);
+    atomic_store(&job->workers_left, threads);
+    for (int i = 0; tids && i < threads; i++, started++)
+        if (pthread_create(&tids[i], NULL, worker, job))
             break;
-    atomic_fetch_sub(&job.workers_left, rs->threads - started);
-    wait_with_progress(&job, start, progress, user);
-    for (int i = 0; i < started; i++)
-        pthread_join(threads[i], NULL);
-    free(threads);
-    out->seconds = now_seconds() - start;
-    out->rays = atomic_load(&job.rays);
-    out->kbuffer_overflows = atomic_load(&job.overflows);
-    int complete = atomic_load(&job.tiles_done) == job.tiles_x * job.tiles_y;
-    if (progress && complete)
-        progress(user, 1.0, out->rays, out->seconds);
-    if (!complete) {
-        image_free(out);
-        return rr_fail(err, *cancel ? "render interrupted" : "could not start render threads");
+    atomic_fetch_sub(&job->workers_left, threads - started);
+    if (!started)
+        rc = rr_fail(err, "could not start render threads");
+    while (atomic_load(&job->workers_left) > 0) {
+        usleep(100000);
+        report_progress(job, hooks, start);
+        int due = hooks && hooks->checkpoint && hooks->checkpoint_every > 0 &&
+                  now_seconds() - *last_checkpoint >= hooks->checkpoint_every;
+        if (due && !*job->cancel && !rc) {
+            rc = checkpoint_paused(job, hooks, err);
+            *last_checkpoint = now_seconds();
+        }
     }
+    for (int i = 0; i < started; i++)
+        pthread_join(tids[i], NULL);
+    free(tids);
+    return rc;
+}
+
+static int any_pixel_wants_batch(const render_job *job)
+{
+    size_t n = (size_t)job->img->width * job->img->height;
+    for (size_t i = 0; i < n; i++)
+        if (pixel_wants_batch(job, &job->img->px[i]))
+            return 1;
     return 0;
+}
+
+static int check_settings(const render_settings *rs, rr_error *err)
+{
+    const sampler *s = &rs->smp;
+    if (s->grid < 1 || s->tspp < 1 || s->time_factor < 1 || rs->threads < 1 || rs->batches < 1)
+        return rr_fail(err, "sample, batch and thread counts must be positive");
+    if ((int64_t)s->tspp * s->time_factor > SAMPLER_MAX_TIME_STRATA ||
+        (int64_t)sampler_count(s) > SAMPLER_MAX_TIME_STRATA)
+        return rr_fail(err, "at most %d samples per batch and time strata", SAMPLER_MAX_TIME_STRATA);
+    if (rs->target_error > 0 && rs->max_batches < rs->batches)
+        return rr_fail(err, "the batch cap must be at least the batch count");
+    return 0;
+}
+
+int render_image(const scene *s, const accel *a, const render_settings *rs, image *img,
+                 const render_hooks *hooks, volatile sig_atomic_t *cancel, rr_error *err)
+{
+    if (check_settings(rs, err))
+        return -1;
+    render_job job;
+    memset(&job, 0, sizeof job);
+    job.sc = s, job.acc = a, job.rs = rs, job.img = img, job.cancel = cancel;
+    job.tiles_x = (img->width + TILE - 1) / TILE;
+    job.tiles_y = (img->height + TILE - 1) / TILE;
+    job.ntiles = job.tiles_x * job.tiles_y;
+    pthread_mutex_init(&job.lock, NULL);
+    pthread_cond_init(&job.cond, NULL);
+    double start = now_seconds(), last_checkpoint = start;
+    uint32_t rounds = rs->target_error > 0 ? rs->max_batches : rs->batches;
+    int rc = 0;
+    for (job.round = 0; job.round < rounds && !rc && !*cancel; job.round++) {
+        if (job.round >= rs->batches && !any_pixel_wants_batch(&job))
+            break;
+        rc = run_round(&job, hooks, start, &last_checkpoint, err);
+    }
+    pthread_mutex_destroy(&job.lock);
+    pthread_cond_destroy(&job.cond);
+    img->seconds += now_seconds() - start;
+    img->rays += atomic_load(&job.rays);
+    img->kbuffer_overflows += atomic_load(&job.overflows);
+    img->clamped += atomic_load(&job.clamped);
+    if (rc)
+        return -1;
+    if (*cancel) {
+        if (hooks && hooks->checkpoint && hooks->checkpoint(hooks->user, img, err))
+            return -1;
+        return rr_fail(err, "render interrupted");
+    }
+    if (hooks && hooks->progress)
+        hooks->progress(hooks->user, 1.0, img->rays, img->seconds);
+    return 0;
+}
+
+int image_alloc(image *img, int width, int height)
+{
+    memset(img, 0, sizeof *img);
+    img->width = width;
+    img->height = height;
+    img->px = calloc((size_t)width * (size_t)height, sizeof *img->px);
+    return img->px ? 0 : -1;
 }
 
 void image_free(image *img)
 {
-    free(img->rgba);
-    img->rgba = NULL;
+    free(img->px);
+    img->px = NULL;
+}
+
+void image_resolve(const image *img, int samples_per_batch, float *rgba, float *variance,
+                   float *stderr_rgba, float *samples)
+{
+    size_t n = (size_t)img->width * img->height;
+    for (size_t i = 0; i < n; i++) {
+        double mean[4], var[4];
+        film_resolve(&img->px[i], mean, var);
+        for (int c = 0; c < 4; c++) {
+            rgba[4 * i + c] = (float)mean[c];
+            variance[4 * i + c] = (float)var[c];
+            stderr_rgba[4 * i + c] = (float)sqrt(var[c]);
+        }
+        samples[i] = (float)img->px[i].batches * (float)samples_per_batch;
+    }
 }

@@ -1,5 +1,5 @@
 /* The tile loop and threads: ties sampler, accel, shading and the a(t)
- * weighted accumulation of thesis sec. 4.5 together. */
+ * weighted accumulation of thesis sec. 4.5 together, batch by batch. */
 #ifndef RR_RENDER_H
 #define RR_RENDER_H
 
@@ -7,33 +7,47 @@
 #include <stdint.h>
 
 #include "accel.h"
+#include "film.h"
+#include "sampler.h"
 
 typedef struct {
-    int spp_grid;    /* k: k*k spatial samples per pixel */
-    int tspp;        /* temporal samples per spatial sample */
-    int time_factor; /* fine time grid factor */
-    uint64_t seed;
+    sampler smp;            /* kind, seed, counts, shutter */
     int threads;
+    uint32_t batch_begin;   /* index of this render's first batch (passes) */
+    uint32_t batches;       /* batches every pixel gets */
+    uint32_t max_batches;   /* with target_error: cap per pixel (>= batches) */
+    double target_error;    /* > 0: pixels whose RGB standard error is above it get more batches */
 } render_settings;
 
 typedef struct {
     int width, height;
-    float *rgba;     /* interleaved, width*height*4 */
-    uint64_t rays;   /* rays traced */
-    uint64_t kbuffer_overflows;
+    pixel_state *px;        /* width * height; may hold batches from a checkpoint */
+    uint64_t rays, kbuffer_overflows, clamped;
     double seconds;
 } image;
 
-/* Called from the coordinating thread about 5 times a second and once at
- * the end with fraction 1. */
-typedef void (*render_progress_fn)(void *user, double fraction, uint64_t rays, double seconds);
-
-/* Renders the scene. Output depends only on the scene, settings and seed,
- * not on the thread count. Returns -1 if *cancel became non-zero. */
-int render_image(const scene *s, const accel *a, const render_settings *rs, image *out,
-                 render_progress_fn progress, void *user, volatile sig_atomic_t *cancel,
-                 rr_error *err);
-
+int image_alloc(image *img, int width, int height);
 void image_free(image *img);
+
+typedef struct {
+    /* about 5 times a second, and once at the end with fraction 1 */
+    void (*progress)(void *user, double fraction, uint64_t rays, double seconds);
+    /* writes a checkpoint of a consistent state (workers are paused) */
+    int (*checkpoint)(void *user, const image *img, rr_error *err);
+    double checkpoint_every; /* seconds; 0: only when interrupted */
+    void *user;
+} render_hooks;
+
+/* Renders into img (pixels continue from the batches they already have).
+ * The result depends only on the scene, the settings and the seed, not on
+ * the thread count. Returns -1 if *cancel became non-zero (after a final
+ * checkpoint, if there is a hook) or on error. */
+int render_image(const scene *s, const accel *a, const render_settings *rs, image *img,
+                 const render_hooks *hooks, volatile sig_atomic_t *cancel, rr_error *err);
+
+/* Final values per pixel: mean RGBA, variance of the mean and standard
+ * error (NaN with fewer than 2 batches), and the number of samples. */
+void image_resolve(const image *img, int samples_per_batch, float *rgba, float *variance,
+                   float *stderr_rgba, float *samples);
 
 #endif

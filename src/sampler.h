@@ -1,47 +1,69 @@
-/* The thesis sampler (sec. 4.5). Every number is a pure function of
- * (seed, pixel, sample index, dimension) through a counter-based hash, so
- * the image does not depend on the thread count or the tile order.
+/* Samplers: where in the pixel and when in the shutter each sample goes.
+ * Every number is a pure function of (seed, pixel, batch, sample index,
+ * dimension) through counter-based hashing, so the image does not depend on
+ * the thread count, the tile order, or on how batches are split into passes.
  *
- * Spatial: s_s = k*k positions on a jittered k x k grid over the pixel
- *   (the requested --spp is rounded to the nearest square, at least 1).
- * Temporal: a finer 1D jittered grid of M = s_t * time_factor strata over
- *   [t0, t1], jittered once per pixel; each spatial sample takes a random
- *   subset of s_t distinct strata (partial Fisher-Yates). Every stratum is
- *   equally likely to be chosen and its jitter is uniform, so each time is
- *   uniform on [t0, t1]: the estimator of eq. 3.1 is unbiased. */
+ * A batch is one complete set of n = K*K*tspp samples of a pixel; batches
+ * of one pixel are statistically independent (film.h).
+ *
+ * thesis (Wolf 2008, sec. 4.5): K x K jittered positions; for each, tspp
+ *   times taken as a random subset of a finer jittered grid of
+ *   tspp * time_factor strata over [t0, t1] (jittered once per pixel and
+ *   batch, subset by partial Fisher-Yates). Each stratum is equally likely
+ *   and its jitter uniform, so each time is uniform on [t0, t1].
+ * jittered3d: one sample in each cell of a K x K x tspp grid over
+ *   (x, y, t): position and time stratified jointly.
+ * sobol: the 3D Sobol' sequence (dimensions: van der Corput, x+1, x^2+x+1
+ *   with Joe-Kuo direction numbers) with hash-based Owen scrambling (Burley
+ *   2020, Laine-Karras permutation) seeded per pixel and dimension; batch b
+ *   uses indices [b n, (b+1) n), so power-of-two n keeps every batch a
+ *   scrambled (0, m, 2)-net in (x, y). */
 #ifndef RR_SAMPLER_H
 #define RR_SAMPLER_H
 
 #include <stdint.h>
 
+typedef enum { SAMPLER_THESIS, SAMPLER_JITTERED3D, SAMPLER_SOBOL } sampler_kind;
+
 typedef struct {
+    sampler_kind kind;
     uint64_t seed;
-    int grid;        /* k: spatial samples per pixel = k*k */
-    int tspp;        /* s_t: temporal samples per spatial sample */
-    int time_factor; /* fine time grid has tspp * time_factor strata */
+    int grid;        /* K: spatial strata per axis (thesis, jittered3d); n = K*K*tspp */
+    int tspp;        /* temporal samples per spatial sample */
+    int time_factor; /* thesis: fine time grid factor */
     double t0, t1;
 } sampler;
 
 /* Largest accepted values (keep per-pixel scratch small and counts sane). */
-#define SAMPLER_MAX_GRID 64
 #define SAMPLER_MAX_TIME_STRATA (1 << 20)
 
 /* k = max(1, round(sqrt(spp))). */
 int sampler_grid_for_spp(int spp);
 
-/* Uniform double in [0, 1) from (seed, a, b, dim). */
+const char *sampler_name(sampler_kind k);
+/* Returns -1 for an unknown name. */
+int sampler_from_name(const char *name, sampler_kind *k);
+
+static inline int sampler_count(const sampler *s) { return s->grid * s->grid * s->tspp; }
+
+/* Scratch for one thread: thesis needs tspp * time_factor doubles and ints. */
+typedef struct {
+    double *jitter;
+    int *perm;
+} sampler_scratch;
+
+int sampler_scratch_init(sampler_scratch *sc, const sampler *s);
+void sampler_scratch_free(sampler_scratch *sc);
+
+/* The n samples of batch `batch` of pixel (px, py) (pixel = py * width + px):
+ * raster positions x, y and times t. For the thesis sampler, samples
+ * k*tspp .. k*tspp + tspp - 1 share spatial position k. */
+void sampler_batch(const sampler *s, uint64_t pixel, int px, int py, uint32_t batch,
+                   sampler_scratch *sc, double *x, double *y, double *t);
+
+/* Building blocks, exposed for tests. */
 double sampler_uniform(uint64_t seed, uint64_t a, uint64_t b, uint32_t dim);
-
-/* Position of spatial sample i of pixel (px, py) in raster space. */
-void sampler_position(const sampler *s, uint64_t pixel, int px, int py, int i,
-                      double *x, double *y);
-
-/* Per pixel: the jitter of each fine time stratum (M values). */
-void sampler_time_jitter(const sampler *s, uint64_t pixel, double *jitter);
-
-/* The s_t times of spatial sample i, using the pixel's jitter; perm is
- * scratch of M ints. */
-void sampler_times(const sampler *s, uint64_t pixel, int i, const double *jitter,
-                   int *perm, double *times);
+uint32_t sobol_u32(uint32_t index, int dim);
+uint32_t owen_scramble_u32(uint32_t x, uint32_t seed);
 
 #endif

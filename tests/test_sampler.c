@@ -1,16 +1,30 @@
-/* The thesis sampler (sec. 4.5): stratification, range, determinism and
- * unbiasedness of the time distribution. */
+/* Samplers: the defining property of each (stratification, net property),
+ * range, determinism, and unbiasedness of a known integral. */
 #include <stdlib.h>
 #include <string.h>
 
 #include "harness.h"
 #include "sampler.h"
 
-static sampler make(int grid, int tspp, int factor)
+typedef struct {
+    double x[4096], y[4096], t[4096];
+} batch_buf;
+
+static sampler make(sampler_kind kind, int grid, int tspp, int factor)
 {
-    sampler s = {12345, grid, tspp, factor, 2.0, 3.5};
+    sampler s = {kind, 12345, grid, tspp, factor, 2.0, 3.5};
     return s;
 }
+
+static void run_batch(const sampler *s, uint64_t pixel, uint32_t batch, batch_buf *b)
+{
+    sampler_scratch sc;
+    CHECK(sampler_scratch_init(&sc, s) == 0);
+    sampler_batch(s, pixel, 7, 9, batch, &sc, b->x, b->y, b->t);
+    sampler_scratch_free(&sc);
+}
+
+static batch_buf buf, buf2;
 
 TEST(spp_rounds_to_nearest_square_grid)
 {
@@ -22,86 +36,162 @@ TEST(spp_rounds_to_nearest_square_grid)
     CHECK(sampler_grid_for_spp(0) == 1);
 }
 
-TEST(spatial_samples_hit_every_stratum_exactly_once)
+TEST(thesis_spatial_samples_hit_every_stratum_once_and_share_their_position)
 {
-    sampler s = make(5, 4, 4);
-    for (uint64_t pixel = 0; pixel < 50; pixel++) {
+    sampler s = make(SAMPLER_THESIS, 5, 3, 4);
+    for (uint64_t pixel = 0; pixel < 30; pixel++) {
+        run_batch(&s, pixel, (uint32_t)pixel % 3, &buf);
         int seen[25] = {0};
         for (int i = 0; i < 25; i++) {
-            double x, y;
-            sampler_position(&s, pixel, 7, 9, i, &x, &y);
+            double x = buf.x[3 * i], y = buf.y[3 * i];
             CHECK(x >= 7 && x < 8 && y >= 9 && y < 10);
-            int cx = (int)((x - 7) * 5), cy = (int)((y - 9) * 5);
-            seen[cy * 5 + cx]++;
+            seen[(int)((y - 9) * 5) * 5 + (int)((x - 7) * 5)]++;
+            CHECK(buf.x[3 * i + 2] == x && buf.y[3 * i + 1] == y);
         }
         for (int c = 0; c < 25; c++)
             CHECK(seen[c] == 1);
     }
 }
 
-TEST(time_samples_are_distinct_fine_strata_inside_shutter)
+TEST(thesis_times_are_distinct_fine_strata_inside_shutter)
 {
-    sampler s = make(2, 10, 4);
-    int m = 40;
-    double jitter[40], times[10];
-    int perm[40];
-    sampler_time_jitter(&s, 3, jitter);
+    sampler s = make(SAMPLER_THESIS, 2, 10, 4);
+    run_batch(&s, 3, 0, &buf);
     for (int i = 0; i < 4; i++) {
-        sampler_times(&s, 3, i, jitter, perm, times);
         int used[40] = {0};
         for (int k = 0; k < 10; k++) {
-            CHECK(times[k] >= 2.0 && times[k] < 3.5);
-            int stratum = (int)((times[k] - 2.0) / 1.5 * m);
+            double t = buf.t[10 * i + k];
+            CHECK(t >= 2.0 && t < 3.5);
+            int stratum = (int)((t - 2.0) / 1.5 * 40);
             CHECK(used[stratum] == 0);
             used[stratum] = 1;
-            /* the time sits at its stratum's per-pixel jitter */
-            CHECK_NEAR(times[k], 2.0 + 1.5 * (stratum + jitter[stratum]) / m, 1e-12);
         }
     }
 }
 
-TEST(sampler_is_deterministic_and_pixels_differ)
+TEST(jittered3d_hits_every_xyt_cell_exactly_once)
 {
-    sampler s = make(2, 8, 4);
-    double j1[32], j2[32], t1[8], t2[8];
-    int perm[32];
-    sampler_time_jitter(&s, 77, j1);
-    sampler_time_jitter(&s, 77, j2);
-    CHECK(memcmp(j1, j2, sizeof j1) == 0);
-    sampler_times(&s, 77, 1, j1, perm, t1);
-    sampler_times(&s, 77, 1, j2, perm, t2);
-    CHECK(memcmp(t1, t2, sizeof t1) == 0);
-    sampler_time_jitter(&s, 78, j2);
-    CHECK(memcmp(j1, j2, sizeof j1) != 0);
-    s.seed++;
-    sampler_time_jitter(&s, 77, j2);
-    CHECK(memcmp(j1, j2, sizeof j1) != 0);
+    sampler s = make(SAMPLER_JITTERED3D, 3, 8, 1);
+    for (uint32_t batch = 0; batch < 5; batch++) {
+        run_batch(&s, 11, batch, &buf);
+        int seen[3 * 3 * 8] = {0};
+        for (int i = 0; i < 72; i++) {
+            int cx = (int)((buf.x[i] - 7) * 3), cy = (int)((buf.y[i] - 9) * 3);
+            int ct = (int)((buf.t[i] - 2.0) / 1.5 * 8);
+            CHECK(cx >= 0 && cx < 3 && cy >= 0 && cy < 3 && ct >= 0 && ct < 8);
+            seen[(cy * 3 + cx) * 8 + ct]++;
+        }
+        for (int c = 0; c < 72; c++)
+            CHECK(seen[c] == 1);
+    }
 }
 
-TEST(time_samples_are_uniform_on_the_shutter)
+TEST(sobol_directions_follow_their_recurrences)
 {
-    /* Each time is uniform on [t0, t1]: the mean of N times is within 5
-       standard errors (sd of U[2,3.5] = 1.5/sqrt 12) of 2.75, and every fine
-       stratum is picked about equally often (each count within 5 sd of its
-       binomial mean). */
-    sampler s = make(2, 5, 4);
+    /* the classic second dimension: 1/2, 3/4, 1/4 at indices 1, 2, 3 */
+    CHECK(sobol_u32(1, 1) == 0x80000000u && sobol_u32(2, 1) == 0xc0000000u && sobol_u32(3, 1) == 0x40000000u);
+    /* recompute the third dimension's direction numbers from m1 = 1, m2 = 3 */
+    uint32_t m[32] = {1, 3};
+    for (int k = 2; k < 32; k++)
+        m[k] = (2u * m[k - 1]) ^ (4u * m[k - 2]) ^ m[k - 2];
+    for (int j = 0; j < 32; j++)
+        CHECK(sobol_u32(1u << j, 2) == m[j] << (31 - j));
+    CHECK(sobol_u32(1u << 5, 0) == 1u << 26); /* van der Corput */
+}
+
+/* Every elementary interval [a/2^i, (a+1)/2^i) x [b/2^j, (b+1)/2^j) with
+ * i + j = m holds exactly one of 2^m points. */
+static int is_net(const double *x, const double *y, int m)
+{
+    int n = 1 << m;
+    for (int i = 0; i <= m; i++) {
+        int j = m - i, *count = calloc((size_t)n, sizeof *count), ok = 1;
+        for (int k = 0; k < n; k++)
+            count[(int)(x[k] * (1 << i)) * (1 << j) + (int)(y[k] * (1 << j))]++;
+        for (int c = 0; c < n; c++)
+            ok &= count[c] == 1;
+        free(count);
+        if (!ok)
+            return 0;
+    }
+    return 1;
+}
+
+TEST(sobol_first_dimensions_form_scrambled_0m2_nets)
+{
+    sampler s = make(SAMPLER_SOBOL, 4, 16, 1); /* 256 samples per batch */
+    double x[256], y[256];
+    for (uint64_t pixel = 0; pixel < 20; pixel++)
+        for (uint32_t batch = 0; batch < 3; batch++) {
+            run_batch(&s, pixel, batch, &buf);
+            for (int k = 0; k < 256; k++)
+                x[k] = buf.x[k] - 7, y[k] = buf.y[k] - 9;
+            CHECK(is_net(x, y, 8));
+            for (int k = 0; k < 64; k++) /* and so is every aligned power-of-2 block */
+                x[k] = buf.x[64 + k] - 7, y[k] = buf.y[64 + k] - 9;
+            CHECK(is_net(x, y, 6));
+        }
+    /* scrambling differs between pixels */
+    run_batch(&s, 1, 0, &buf);
+    run_batch(&s, 2, 0, &buf2);
+    CHECK(memcmp(buf.x, buf2.x, 256 * sizeof(double)) != 0);
+}
+
+TEST(samplers_are_deterministic_and_batches_differ)
+{
+    for (int kind = 0; kind < 3; kind++) {
+        sampler s = make((sampler_kind)kind, 2, 8, 4);
+        run_batch(&s, 77, 1, &buf);
+        run_batch(&s, 77, 1, &buf2);
+        size_t used = 32 * sizeof(double); /* n = 2*2*8 samples */
+        CHECK(memcmp(buf.x, buf2.x, used) == 0 && memcmp(buf.y, buf2.y, used) == 0 &&
+              memcmp(buf.t, buf2.t, used) == 0);
+        run_batch(&s, 77, 2, &buf2);
+        CHECK(memcmp(buf.t, buf2.t, 32 * sizeof(double)) != 0);
+    }
+}
+
+TEST(samplers_are_unbiased_for_a_known_integral)
+{
+    /* f(x, y, t) = x' y' + t' (primes: positions in pixel and shutter in
+       [0,1)) has mean 1/4 + 1/2 = 0.75. The mean over 400 pixels x 2 batches
+       of each batch's estimate must be within 5 standard errors of 0.75,
+       the standard error estimated from the spread of the estimates. */
+    for (int kind = 0; kind < 3; kind++) {
+        sampler s = make((sampler_kind)kind, 2, 4, 4);
+        double sum = 0, sumsq = 0;
+        int n = 0;
+        for (uint64_t pixel = 0; pixel < 400; pixel++)
+            for (uint32_t batch = 0; batch < 2; batch++, n++) {
+                run_batch(&s, pixel, batch, &buf);
+                double est = 0;
+                for (int i = 0; i < 16; i++)
+                    est += (buf.x[i] - 7) * (buf.y[i] - 9) + (buf.t[i] - 2.0) / 1.5;
+                est /= 16;
+                sum += est, sumsq += est * est;
+            }
+        double mean = sum / n, sd = sqrt(fmax(sumsq / n - mean * mean, 0) * n / (n - 1));
+        CHECK_NEAR(mean, 0.75, 5 * sd / sqrt(n) + 1e-12);
+    }
+}
+
+TEST(thesis_times_are_uniform_on_the_shutter)
+{
+    /* mean within 5 standard errors (sd of U[2,3.5] = 1.5/sqrt 12) and each
+       fine stratum picked about equally often (within 5 binomial sd) */
+    sampler s = make(SAMPLER_THESIS, 2, 5, 4);
     enum { M = 20 };
-    double jitter[M], times[5];
-    int perm[M], counts[M] = {0};
+    int counts[M] = {0};
     double sum = 0;
     long n = 0;
     for (uint64_t pixel = 0; pixel < 20000; pixel++) {
-        sampler_time_jitter(&s, pixel, jitter);
-        for (int i = 0; i < 4; i++) {
-            sampler_times(&s, pixel, i, jitter, perm, times);
-            for (int k = 0; k < 5; k++, n++) {
-                sum += times[k];
-                counts[(int)((times[k] - 2.0) / 1.5 * M)]++;
-            }
+        run_batch(&s, pixel, 0, &buf);
+        for (int k = 0; k < 20; k++, n++) {
+            sum += buf.t[k];
+            counts[(int)((buf.t[k] - 2.0) / 1.5 * M)]++;
         }
     }
-    double se = 1.5 / sqrt(12.0) / sqrt((double)n);
-    CHECK_NEAR(sum / n, 2.75, 5 * se);
+    CHECK_NEAR(sum / n, 2.75, 5 * 1.5 / sqrt(12.0) / sqrt((double)n));
     double p = 1.0 / M, sd = sqrt(n * p * (1 - p));
     for (int j = 0; j < M; j++)
         CHECK_NEAR(counts[j], n * p, 5 * sd);

@@ -1,0 +1,54 @@
+#include "film.h"
+
+#include <math.h>
+
+int film_add_batch(pixel_state *p, const double estimate[4])
+{
+    int clamped = 0;
+    for (int c = 0; c < 4; c++) {
+        double x = estimate[c];
+        if (!(fabs(x) <= FILM_LIMIT)) { /* also catches NaN */
+            x = isnan(x) ? 0.0 : copysign(FILM_LIMIT, x);
+            clamped = 1;
+        }
+        int64_t q = llround(x * FILM_SCALE);
+        p->sum[c] += q;
+        p->sumsq[c] += (__int128)q * q;
+    }
+    p->batches++;
+    return clamped;
+}
+
+void film_merge(pixel_state *into, const pixel_state *from)
+{
+    into->batches += from->batches;
+    for (int c = 0; c < 4; c++) {
+        into->sum[c] += from->sum[c];
+        into->sumsq[c] += from->sumsq[c];
+    }
+}
+
+void film_resolve(const pixel_state *p, double mean[4], double var_of_mean[4])
+{
+    double b = p->batches;
+    for (int c = 0; c < 4; c++) {
+        mean[c] = b > 0 ? (double)p->sum[c] / b / FILM_SCALE : 0.0;
+        if (p->batches < 2) {
+            var_of_mean[c] = NAN;
+            continue;
+        }
+        /* B * sum q^2 - (sum q)^2 is exact in 128 bits: no cancellation */
+        __int128 centered = (__int128)p->batches * p->sumsq[c] - (__int128)p->sum[c] * p->sum[c];
+        double s2 = (double)centered / (b * (b - 1)) / (FILM_SCALE * FILM_SCALE);
+        var_of_mean[c] = s2 / b;
+    }
+}
+
+double film_max_stderr(const pixel_state *p)
+{
+    double mean[4], var[4];
+    if (p->batches < 2)
+        return INFINITY;
+    film_resolve(p, mean, var);
+    return sqrt(fmax(var[0], fmax(var[1], var[2])));
+}

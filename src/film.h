@@ -1,0 +1,40 @@
+/* Per-pixel accumulation of independent batch estimates.
+ *
+ * A pixel's value is the mean of B independent batch estimates X_1..X_B
+ * (each batch is a full run of the sampler with its own random stream), so
+ * the sample variance s^2 = sum (X_b - mean)^2 / (B - 1) is an unbiased
+ * estimate of Var(X_b), and s^2 / B of the variance of the pixel value.
+ *
+ * Sums are kept exactly in fixed point: each batch estimate is rounded to a
+ * multiple of 2^-24 (FILM_SCALE) and added as an integer (sum in 64 bits,
+ * sum of squares in 128 bits). Integer sums do not depend on the order of
+ * addition, so renders split into passes and merged, or checkpointed and
+ * resumed, give bit-identical images. Estimates beyond +-2^20 are clamped
+ * (and counted) to keep the sums exact. */
+#ifndef RR_FILM_H
+#define RR_FILM_H
+
+#include <stdint.h>
+
+#define FILM_SCALE 16777216.0 /* 2^24 */
+#define FILM_LIMIT 1048576.0  /* 2^20 */
+
+typedef struct {
+    uint32_t batches;
+    int64_t sum[4];     /* RGBA */
+    __int128 sumsq[4];
+} pixel_state;
+
+/* Adds one batch estimate; returns 1 if a value had to be clamped. */
+int film_add_batch(pixel_state *p, const double estimate[4]);
+
+/* Adds the sums of another partial state of the same pixel. */
+void film_merge(pixel_state *into, const pixel_state *from);
+
+/* Mean, variance of the mean (s^2 / B; NaN for B < 2) per channel. */
+void film_resolve(const pixel_state *p, double mean[4], double var_of_mean[4]);
+
+/* Largest standard error of the pixel's RGB mean (INFINITY for B < 2). */
+double film_max_stderr(const pixel_state *p);
+
+#endif

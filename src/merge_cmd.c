@@ -1,0 +1,132 @@
+/* 'refrender merge': combines render states of one render (from --pass)
+ * into the final image. Sums are exact integers (film.h), so the result is
+ * bit-identical to rendering all batches in one run. */
+#include <getopt.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "cli.h"
+#include "output.h"
+
+static void merge_usage(FILE *f)
+{
+    fputs(
+"usage: refrender merge STATE.exr [STATE.exr ...] -o OUT.exr\n"
+"\n"
+"Combines the render states written by 'refrender --pass K/N' (all N of them)\n"
+"into the final EXR, identical to a single render with all batches. Refuses\n"
+"states of different renders (scene file hash, resolution, sampler, counts,\n"
+"seed, epsilon, sigma, shutter, weight, time factor, batches), overlapping\n"
+"or missing batch ranges, and incomplete states.\n"
+"  -o, --output F   output EXR (required); written atomically\n"
+"  --quiet          no summary line\n", f);
+}
+
+typedef struct {
+    uint32_t begin, end;
+    const char *path;
+} batch_range;
+
+static int by_begin(const void *a, const void *b)
+{
+    const batch_range *x = a, *y = b;
+    return (x->begin > y->begin) - (x->begin < y->begin);
+}
+
+static int check_ranges(batch_range *r, int n, uint32_t total, rr_error *err)
+{
+    qsort(r, (size_t)n, sizeof *r, by_begin);
+    uint32_t next = 0;
+    for (int i = 0; i < n; i++) {
+        if (r[i].begin < next)
+            return rr_fail(err, "%s (batches %u-%u) overlaps another state", r[i].path, r[i].begin, r[i].end);
+        if (r[i].begin > next)
+            return rr_fail(err, "batches %u-%u are missing: no state holds them", next, r[i].begin);
+        next = r[i].end;
+    }
+    if (next != total)
+        return rr_fail(err, "batches %u-%u are missing: no state holds them", next, total);
+    return 0;
+}
+
+static int check_complete(const image *img, const batch_range *r, rr_error *err)
+{
+    size_t n = (size_t)img->width * img->height;
+    for (size_t i = 0; i < n; i++)
+        if (img->px[i].batches != r->end - r->begin)
+            return rr_fail(err, "%s is incomplete (pixel %zu has %u of %u batches): resume it first", r->path, i,
+                           img->px[i].batches, r->end - r->begin);
+    return 0;
+}
+
+/* Adds state `path` into merged (allocated from the first state). */
+static int add_state(const char *path, image *merged, attr_list *first, const char *first_path,
+                     batch_range *range, int is_first, rr_error *err)
+{
+    image img;
+    attr_list attrs;
+    range->path = path;
+    if (output_read_state(path, &img, &attrs, &range->begin, &range->end, err))
+        return -1;
+    int rc = check_complete(&img, range, err);
+    if (!rc && !is_first)
+        rc = attrs_check_identity(first, first_path, &attrs, path, err);
+    if (!rc && is_first) {
+        *first = attrs;
+        *merged = img;
+        return 0;
+    }
+    size_t n = (size_t)img.width * img.height;
+    for (size_t i = 0; i < n && !rc; i++)
+        film_merge(&merged->px[i], &img.px[i]);
+    image_free(&img);
+    return rc;
+}
+
+static int merge_files(char **paths, int n, const char *out, int quiet, rr_error *err)
+{
+    batch_range *ranges = calloc((size_t)n, sizeof *ranges);
+    image merged = {0};
+    static attr_list attrs; /* large; one merge per process */
+    int rc = ranges ? 0 : rr_fail(err, "out of memory");
+    for (int i = 0; i < n && !rc; i++)
+        rc = add_state(paths[i], &merged, &attrs, paths[0], &ranges[i], i == 0, err);
+    if (!rc)
+        rc = check_ranges(ranges, n, (uint32_t)strtoul(attrs_get(&attrs, "refrender:batches"), NULL, 10), err);
+    if (!rc) {
+        int per_batch = atoi(attrs_get(&attrs, "refrender:spp")) * atoi(attrs_get(&attrs, "refrender:tspp"));
+        attrs_set(&attrs, "refrender:command", "refrender merge (%d states)", n);
+        rc = output_write_final(out, &merged, per_batch, &attrs, err);
+    }
+    if (!rc && !quiet)
+        fprintf(stderr, "refrender merge: %d states -> %s\n", n, out);
+    image_free(&merged);
+    free(ranges);
+    return rc;
+}
+
+int cmd_merge(int argc, char **argv)
+{
+    static const struct option longopts[] = {{"output", required_argument, 0, 'o'},
+                                             {"quiet", no_argument, 0, 'q'},
+                                             {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
+    const char *out = NULL;
+    int quiet = 0, c;
+    while ((c = getopt_long(argc, argv, "ho:", longopts, NULL)) != -1) {
+        if (c == 'h') { merge_usage(stdout); return 0; }
+        if (c == 'o') out = optarg;
+        else if (c == 'q') quiet = 1;
+        else { fputs("Try 'refrender merge --help'.\n", stderr); return 2; }
+    }
+    if (!out || optind >= argc) {
+        fputs("refrender merge: need STATE files and -o OUT.exr; try 'refrender merge --help'\n", stderr);
+        return 2;
+    }
+    rr_error err = {{0}};
+    if (cli_check_writable(out, &err) || merge_files(argv + optind, argc - optind, out, quiet, &err)) {
+        fprintf(stderr, "refrender merge: %s\n", err.msg);
+        return 1;
+    }
+    return 0;
+}

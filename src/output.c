@@ -1,0 +1,259 @@
+#include "output.h"
+
+#include <inttypes.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "exr.h"
+
+static const char *const identity_keys[] = {
+    "refrender:sceneHash", "refrender:resolution", "refrender:sampler", "refrender:spp",
+    "refrender:tspp", "refrender:seed", "refrender:epsilon", "refrender:kernelSigma",
+    "refrender:shutter", "refrender:weightFunction", "refrender:timeFactor", "refrender:batches", NULL};
+
+void attrs_set(attr_list *a, const char *key, const char *fmt, ...)
+{
+    int i = 0;
+    while (i < a->n && strcmp(a->key[i], key))
+        i++;
+    if (i == ATTR_MAX)
+        return;
+    if (i == a->n) {
+        a->n++;
+        snprintf(a->key[i], sizeof a->key[i], "%s", key);
+    }
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(a->value[i], sizeof a->value[i], fmt, ap);
+    va_end(ap);
+}
+
+const char *attrs_get(const attr_list *a, const char *key)
+{
+    for (int i = 0; i < a->n; i++)
+        if (!strcmp(a->key[i], key))
+            return a->value[i];
+    return NULL;
+}
+
+void file_hash(const char *path, char out[17])
+{
+    FILE *f = fopen(path, "rb");
+    out[0] = 0;
+    if (!f)
+        return;
+    uint64_t h = 0xcbf29ce484222325ULL;
+    int c;
+    while ((c = fgetc(f)) != EOF)
+        h = (h ^ (uint64_t)c) * 0x100000001b3ULL;
+    fclose(f);
+    snprintf(out, 17, "%016" PRIx64, h);
+}
+
+static void describe_weight(const shutter *sh, char *buf, size_t size)
+{
+    if (sh->kind == WEIGHT_LINEAR)
+        snprintf(buf, size, "linear center=%.17g", sh->center);
+    else if (sh->kind == WEIGHT_EXP)
+        snprintf(buf, size, "exp center=%.17g rate=%.17g", sh->center, sh->rate);
+    else if (sh->kind == WEIGHT_TABLE) {
+        size_t len = (size_t)snprintf(buf, size, "table");
+        for (int i = 0; i < sh->table_size && len < size; i++)
+            len += (size_t)snprintf(buf + len, size - len, " %.17g %.17g", sh->table_t[i], sh->table_w[i]);
+    } else
+        snprintf(buf, size, "box");
+}
+
+void attrs_for_render(attr_list *a, const scene *s, const render_settings *rs, uint32_t total_batches,
+                      const char *scene_hash, const char *command)
+{
+    char weight[4096];
+    describe_weight(&s->shut, weight, sizeof weight);
+    const sampler *smp = &rs->smp;
+    attrs_set(a, "refrender:scene", "%s", s->path);
+    attrs_set(a, "refrender:sceneHash", "%s", scene_hash);
+    attrs_set(a, "refrender:resolution", "%dx%d", s->cam.width, s->cam.height);
+    attrs_set(a, "refrender:sampler", "%s", sampler_name(smp->kind));
+    attrs_set(a, "refrender:spp", "%d", smp->grid * smp->grid);
+    attrs_set(a, "refrender:tspp", "%d", smp->tspp);
+    attrs_set(a, "refrender:seed", "%" PRIu64, smp->seed);
+    attrs_set(a, "refrender:epsilon", "%.17g", s->epsilon);
+    attrs_set(a, "refrender:kernelSigma", "%.17g", s->kernel_sigma);
+    attrs_set(a, "refrender:shutter", "%.17g %.17g", s->shut.open, s->shut.close);
+    attrs_set(a, "refrender:weightFunction", "%s", weight);
+    attrs_set(a, "refrender:timeFactor", "%d", smp->time_factor);
+    attrs_set(a, "refrender:batches", "%u", total_batches);
+    attrs_set(a, "refrender:command", "%s", command);
+    attrs_set(a, "software", "refrender %s", RR_VERSION);
+}
+
+int attrs_check_identity(const attr_list *a, const char *a_name, const attr_list *b, const char *b_name,
+                         rr_error *err)
+{
+    for (const char *const *k = identity_keys; *k; k++) {
+        const char *va = attrs_get(a, *k), *vb = attrs_get(b, *k);
+        if (!va || !vb || strcmp(va, vb))
+            return rr_fail(err, "%s and %s differ in %s ('%s' vs '%s'): not the same render", a_name, b_name,
+                           *k, va ? va : "missing", vb ? vb : "missing");
+    }
+    return 0;
+}
+
+static exr_string_attr *string_attrs(const attr_list *a, exr_string_attr *out)
+{
+    for (int i = 0; i < a->n; i++)
+        out[i] = (exr_string_attr){a->key[i], a->value[i]};
+    return out;
+}
+
+int output_write_final(const char *path, const image *img, int samples_per_batch, const attr_list *a,
+                       rr_error *err)
+{
+    size_t n = (size_t)img->width * img->height;
+    float *rgba = malloc(n * 4 * sizeof *rgba), *var = malloc(n * 4 * sizeof *var);
+    float *se = malloc(n * 4 * sizeof *se), *samples = malloc(n * sizeof *samples);
+    int rc = -1;
+    if (rgba && var && se && samples) {
+        image_resolve(img, samples_per_batch, rgba, var, se, samples);
+        uint32_t most = 0;
+        for (size_t i = 0; i < n; i++)
+            most = img->px[i].batches > most ? img->px[i].batches : most;
+        static const char *const names[3][4] = {{"R", "G", "B", "A"},
+                                                {"variance.R", "variance.G", "variance.B", "variance.A"},
+                                                {"stderr.R", "stderr.G", "stderr.B", "stderr.A"}};
+        float *planes[3] = {rgba, var, se};
+        exr_channel chs[13];
+        int nch = 0;
+        for (int k = 0; k < (most >= 2 ? 3 : 1); k++)
+            for (int c = 0; c < 4; c++)
+                chs[nch++] = (exr_channel){names[k][c], EXR_CHANNEL_FLOAT, planes[k] + c, 16};
+        chs[nch++] = (exr_channel){"samples", EXR_CHANNEL_FLOAT, samples, 4};
+        exr_string_attr sa[ATTR_MAX];
+        rc = exr_write(path, img->width, img->height, chs, nch, string_attrs(a, sa), a->n, err);
+    } else {
+        rr_fail(err, "out of memory");
+    }
+    free(rgba), free(var), free(se), free(samples);
+    return rc;
+}
+
+/* State planes: batches, then per RGBA channel sum (2 words) and sum of
+ * squares (4 words), little-endian word order. */
+enum { STATE_WORDS = 1 + 4 * 6 };
+
+static void state_channel_name(int k, char *buf, size_t size)
+{
+    static const char rgba[] = "RGBA";
+    if (k == 0)
+        snprintf(buf, size, "state.batches");
+    else if ((k - 1) % 6 < 2)
+        snprintf(buf, size, "state.sum.%c.%d", rgba[(k - 1) / 6], (k - 1) % 6);
+    else
+        snprintf(buf, size, "state.sq.%c.%d", rgba[(k - 1) / 6], (k - 1) % 6 - 2);
+}
+
+static void pack_state(const pixel_state *p, uint32_t w[STATE_WORDS])
+{
+    w[0] = p->batches;
+    for (int c = 0; c < 4; c++) {
+        uint64_t s = (uint64_t)p->sum[c];
+        unsigned __int128 q = (unsigned __int128)p->sumsq[c];
+        w[1 + 6 * c] = (uint32_t)s, w[2 + 6 * c] = (uint32_t)(s >> 32);
+        for (int k = 0; k < 4; k++)
+            w[3 + 6 * c + k] = (uint32_t)(q >> (32 * k));
+    }
+}
+
+static void unpack_state(const uint32_t w[STATE_WORDS], pixel_state *p)
+{
+    p->batches = w[0];
+    for (int c = 0; c < 4; c++) {
+        p->sum[c] = (int64_t)((uint64_t)w[1 + 6 * c] | (uint64_t)w[2 + 6 * c] << 32);
+        unsigned __int128 q = 0;
+        for (int k = 3; k >= 0; k--)
+            q = (q << 32) | w[3 + 6 * c + k];
+        p->sumsq[c] = (__int128)q;
+    }
+}
+
+int output_write_state(const char *path, const image *img, uint32_t begin, uint32_t end, attr_list *a,
+                       rr_error *err)
+{
+    size_t n = (size_t)img->width * img->height;
+    uint32_t *words = malloc(n * STATE_WORDS * sizeof *words);
+    float *rgba = malloc(n * 4 * sizeof *rgba);
+    if (!words || !rgba) {
+        free(words), free(rgba);
+        return rr_fail(err, "out of memory");
+    }
+    for (size_t i = 0; i < n; i++) {
+        double mean[4], var[4];
+        pack_state(&img->px[i], words + i * STATE_WORDS);
+        film_resolve(&img->px[i], mean, var);
+        for (int c = 0; c < 4; c++)
+            rgba[4 * i + c] = (float)mean[c];
+    }
+    char names[STATE_WORDS][32];
+    exr_channel chs[4 + STATE_WORDS] = {{"R", EXR_CHANNEL_FLOAT, rgba, 16}, {"G", EXR_CHANNEL_FLOAT, rgba + 1, 16},
+                                        {"B", EXR_CHANNEL_FLOAT, rgba + 2, 16}, {"A", EXR_CHANNEL_FLOAT, rgba + 3, 16}};
+    for (int k = 0; k < STATE_WORDS; k++) {
+        state_channel_name(k, names[k], sizeof names[k]);
+        chs[4 + k] = (exr_channel){names[k], EXR_CHANNEL_UINT, words + k, 4 * STATE_WORDS};
+    }
+    attrs_set(a, "refrender:state", "batches %u-%u", begin, end);
+    exr_string_attr sa[ATTR_MAX];
+    int rc = exr_write(path, img->width, img->height, chs, 4 + STATE_WORDS, string_attrs(a, sa), a->n, err);
+    free(words), free(rgba);
+    return rc;
+}
+
+static int read_attrs(const char *path, attr_list *a, rr_error *err)
+{
+    static const char *const keys[] = {"refrender:scene", "refrender:command", "software", NULL};
+    a->n = 0;
+    for (const char *const *k = identity_keys; *k; k++) {
+        char buf[4200];
+        if (exr_read_string_attr(path, *k, buf, sizeof buf, err))
+            return rr_fail(err, "%s: not a refrender render state (no %s)", path, *k);
+        attrs_set(a, *k, "%s", buf);
+    }
+    for (const char *const *k = keys; *k; k++) {
+        char buf[4200];
+        if (!exr_read_string_attr(path, *k, buf, sizeof buf, NULL))
+            attrs_set(a, *k, "%s", buf);
+    }
+    return 0;
+}
+
+int output_read_state(const char *path, image *img, attr_list *a, uint32_t *begin, uint32_t *end,
+                      rr_error *err)
+{
+    char range[128];
+    int w, h;
+    if (exr_read_size(path, &w, &h, err) || read_attrs(path, a, err))
+        return -1;
+    if (exr_read_string_attr(path, "refrender:state", range, sizeof range, NULL) ||
+        sscanf(range, "batches %u-%u", begin, end) != 2 || *end < *begin)
+        return rr_fail(err, "%s: a final image, not a render state (write states with --pass or --checkpoint)", path);
+    size_t n = (size_t)w * h;
+    uint32_t *words = malloc(n * STATE_WORDS * sizeof *words);
+    if (!words || image_alloc(img, w, h)) {
+        free(words);
+        return rr_fail(err, "out of memory");
+    }
+    int rc = 0;
+    for (int k = 0; k < STATE_WORDS && !rc; k++) {
+        char name[32];
+        state_channel_name(k, name, sizeof name);
+        exr_channel ch = {name, EXR_CHANNEL_UINT, words + k, 4 * STATE_WORDS};
+        rc = exr_read_channel(path, &ch, 0, NULL, err);
+    }
+    for (size_t i = 0; i < n && !rc; i++)
+        unpack_state(words + i * STATE_WORDS, &img->px[i]);
+    free(words);
+    if (rc)
+        image_free(img);
+    return rc;
+}

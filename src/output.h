@@ -1,0 +1,49 @@
+/* refrender's EXR files: final images and render states.
+ *
+ * A final image has float channels R G B A, samples, and (when pixels have
+ * two or more batches) variance.* and stderr.* for R G B A: the variance of
+ * the pixel value and its standard error (film.h).
+ * A render state (a --pass output or a checkpoint) has R G B A of the
+ * batches it holds plus exact uint channels state.* with each pixel's batch
+ * count and fixed-point sums, so states merge bit-exactly.
+ * Both carry string attributes; the identity attributes (scene hash,
+ * resolution, sampler, counts, seed, epsilon, sigma, shutter, weight, time
+ * factor, batches) must agree for states to be merged or resumed. */
+#ifndef RR_OUTPUT_H
+#define RR_OUTPUT_H
+
+#include "render.h"
+
+#define ATTR_MAX 24
+
+typedef struct {
+    int n;
+    char key[ATTR_MAX][64];
+    char value[ATTR_MAX][4200];
+} attr_list;
+
+void attrs_set(attr_list *a, const char *key, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
+const char *attrs_get(const attr_list *a, const char *key);
+
+/* Identity and provenance attributes of a render. */
+void attrs_for_render(attr_list *a, const scene *s, const render_settings *rs, uint32_t total_batches,
+                      const char *scene_hash, const char *command);
+
+/* FNV-1a hash of the file's bytes as 16 hex digits ("" if unreadable). */
+void file_hash(const char *path, char out[17]);
+
+int output_write_final(const char *path, const image *img, int samples_per_batch, const attr_list *a,
+                       rr_error *err);
+/* batch range [begin, end) is recorded in the attributes */
+int output_write_state(const char *path, const image *img, uint32_t begin, uint32_t end, attr_list *a,
+                       rr_error *err);
+
+/* Reads a state file into img (allocated here) and its attributes. */
+int output_read_state(const char *path, image *img, attr_list *a, uint32_t *begin, uint32_t *end,
+                      rr_error *err);
+
+/* Fails naming the first identity attribute on which a and b differ. */
+int attrs_check_identity(const attr_list *a, const char *a_name, const attr_list *b, const char *b_name,
+                         rr_error *err);
+
+#endif
