@@ -17,7 +17,9 @@ def test_help_documents_every_option():
     proc = run(["--help"])
     assert proc.returncode == 0
     for opt in ["--spp", "--tspp", "-o", "--res", "--threads", "--seed", "--eps", "--sigma",
-                "--time-factor", "--preview", "--quiet", "--version", "gen"]:
+                "--time-factor", "--preview", "--quiet", "--version", "gen", "merge", "--sampler",
+                "--batches", "--target-error", "--max-batches", "--pass", "--checkpoint",
+                "--checkpoint-every", "--resume"]:
         assert opt in proc.stdout, opt
     gen = run(["gen", "--help"])
     assert gen.returncode == 0 and "--count" in gen.stdout

@@ -1,0 +1,194 @@
+"""Error estimates, samplers, split-and-merge and checkpoint/resume, end to
+end (issue: ground truth you can trust)."""
+import os
+import signal
+import subprocess
+import time
+
+import numpy as np
+import pytest
+
+from conftest import BIN, ROOT, read_exr, run
+
+SCENE = ROOT / "scenes" / "default.xml"
+DISK = """<scene>
+ <camera position="0 0 0" lookat="0 0 -1" up="0 1 0" fov="30" width="32" height="24"/>
+ <object><pointModel><splat center="-1 0 -10" normal="0 0 1" radius="1.2" color="1 0.5 0.25"/></pointModel>
+ <material shading="unlit"/><animation><linear velocity="2 0 0"/></animation></object>
+</scene>"""
+
+
+def read_full(path):
+    """All channels by name (float32 arrays) and the header."""
+    import OpenImageIO as oiio
+    inp = oiio.ImageInput.open(str(path))
+    spec = inp.spec()
+    px = inp.read_image(oiio.FLOAT)
+    inp.close()
+    return {n: px[:, :, i] for i, n in enumerate(spec.channelnames)}, {a.name: a.value for a in spec.extra_attribs}
+
+
+def render_disk(tmp_path, name, *args):
+    scene = tmp_path / "disk.xml"
+    scene.write_text(DISK)
+    out = tmp_path / name
+    proc = run([scene, "-o", out, "--quiet", *args])
+    assert proc.returncode == 0, proc.stderr
+    return read_full(out)
+
+
+def test_reported_variance_matches_the_spread_over_seeds(tmp_path):
+    # The stderr^2 channel estimates the variance of a pixel's value. Over 16
+    # independent seeds the empirical variance of each pixel measures the
+    # same thing; summed over the noisy pixels the two agree. The ratio of two
+    # averages of many chi-square-like terms is within 25% of 1 here (each
+    # side has hundreds of degrees of freedom).
+    values, reported = [], []
+    for seed in range(16):
+        ch, _ = render_disk(tmp_path, f"s{seed}.exr", "--spp", 1, "--tspp", 4, "--batches", 4, "--seed", seed + 1)
+        values.append(ch["R"])
+        reported.append(ch["variance.R"])
+    values, reported = np.array(values), np.array(reported)
+    observed = values.var(axis=0, ddof=1)
+    noisy = observed > 0
+    assert noisy.sum() > 50
+    ratio = observed[noisy].sum() / reported.mean(axis=0)[noisy].sum()
+    assert 0.8 < ratio < 1.25, ratio
+    ch, header = render_disk(tmp_path, "one.exr", "--batches", 3)
+    assert np.allclose(ch["stderr.G"] ** 2, ch["variance.G"], rtol=1e-5)
+    assert np.all(ch["samples"] == 3 * 4 * 100) and header["refrender:batches"] == "3"
+
+
+def test_single_batch_has_no_error_channels(tmp_path):
+    ch, _ = render_disk(tmp_path, "b1.exr", "--tspp", 4)
+    assert "stderr.R" not in ch and np.all(ch["samples"] == 16)
+
+
+def test_target_error_adds_batches_where_needed(tmp_path):
+    proc_args = ["--spp", 1, "--tspp", 4, "--batches", 2, "--target-error", 0.02, "--max-batches", 12]
+    ch, _ = render_disk(tmp_path, "target.exr", *proc_args)
+    batches = ch["samples"] / 4
+    assert batches.min() == 2  # empty background: zero error after 2 batches
+    assert batches.max() > 2
+    se = np.maximum.reduce([ch["stderr.R"], ch["stderr.G"], ch["stderr.B"]])
+    # every pixel either reached the target or used the whole cap
+    assert np.all((se <= 0.02) | (batches == 12))
+
+
+@pytest.mark.parametrize("sampler", ["thesis", "jittered3d", "sobol"])
+def test_every_sampler_is_unbiased_for_the_moving_disk(tmp_path, sampler):
+    # Reference: the same scene with many samples; each sampler's mean over
+    # the image must agree within 5 standard errors (from its own batches).
+    ch, _ = render_disk(tmp_path, f"{sampler}.exr", "--sampler", sampler, "--spp", 4, "--tspp", 16, "--batches", 4)
+    ref, _ = render_disk(tmp_path, "ref.exr", "--sampler", "jittered3d", "--spp", 16, "--tspp", 64, "--batches", 4,
+                         "--seed", 99)
+    diff = ch["A"].sum() - ref["A"].sum()
+    se = np.sqrt((ch["variance.A"]).sum() + ref["variance.A"].sum())
+    assert abs(diff) <= 5 * se + 1e-6, (sampler, diff, se)
+
+
+def test_unknown_sampler_and_bad_combinations_are_usage_errors():
+    assert run(["--sampler", "halton"]).returncode == 2
+    assert run(["--pass", "1/4", "--batches", 2]).returncode == 2
+    assert run(["--pass", "4/4", "--batches", 4]).returncode == 2
+    assert run(["--target-error", "0.1"]).returncode == 2
+
+
+COMMON = ["--res", "40x32", "--spp", 4, "--tspp", 8, "--batches", 4, "--sampler", "sobol", "--seed", 5]
+
+
+def test_parallel_passes_merge_to_the_single_render_bit_for_bit(tmp_path):
+    single = tmp_path / "single.exr"
+    assert run([SCENE, *COMMON, "-o", single, "--quiet"]).returncode == 0
+    merged = tmp_path / "merged.exr"
+    env = dict(os.environ, REFRENDER=BIN)
+    proc = subprocess.run([str(ROOT / "scripts" / "render-parallel.sh"), "4", str(merged), "--", str(SCENE),
+                           *map(str, COMMON)], capture_output=True, text=True, env=env)
+    assert proc.returncode == 0, proc.stderr
+    a, _ = read_full(single)
+    b, header = read_full(merged)
+    assert a.keys() == b.keys()
+    for name in a:
+        assert np.array_equal(a[name], b[name], equal_nan=True), name
+    assert header["refrender:sampler"] == "sobol"
+    assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".passes")] == []
+
+
+def test_slurm_array_script_runs_each_task_as_a_pass(tmp_path):
+    env = dict(os.environ, REFRENDER=BIN, SLURM_ARRAY_TASK_COUNT="2")
+    for task in range(2):
+        env["SLURM_ARRAY_TASK_ID"] = str(task)
+        proc = subprocess.run(["sh", str(ROOT / "scripts" / "slurm-render.sbatch"), str(tmp_path / "passes"), "--",
+                               str(SCENE), *map(str, COMMON)], capture_output=True, text=True, env=env)
+        assert proc.returncode == 0, proc.stderr
+    out = tmp_path / "merged.exr"
+    assert run(["merge", tmp_path / "passes" / "pass0.exr", tmp_path / "passes" / "pass1.exr", "-o", out]).returncode == 0
+    single = tmp_path / "single.exr"
+    assert run([SCENE, *COMMON, "-o", single, "--quiet"]).returncode == 0
+    assert np.array_equal(read_exr(single)[0], read_exr(out)[0])
+
+
+def test_merge_refuses_mismatched_missing_and_overlapping_states(tmp_path):
+    def state(name, *extra):
+        path = tmp_path / name
+        assert run([SCENE, *COMMON, *extra, "-o", path, "--quiet"]).returncode == 0
+        return path
+    p0, p1 = state("p0.exr", "--pass", "0/2"), state("p1.exr", "--pass", "1/2")
+    other_seed = state("q1.exr", "--pass", "1/2", "--seed", 6)
+    bad = run(["merge", p0, other_seed, "-o", tmp_path / "x.exr"])
+    assert bad.returncode == 1 and "refrender:seed" in bad.stderr
+    missing = run(["merge", p0, "-o", tmp_path / "x.exr"])
+    assert missing.returncode == 1 and "batches 2-4 are missing" in missing.stderr
+    overlap = run(["merge", p0, p0, p1, "-o", tmp_path / "x.exr"])
+    assert overlap.returncode == 1 and "overlaps" in overlap.stderr
+    final = tmp_path / "final.exr"
+    assert run([SCENE, *COMMON, "-o", final, "--quiet"]).returncode == 0
+    not_state = run(["merge", final, "-o", tmp_path / "x.exr"])
+    assert not_state.returncode == 1 and "not a render state" in not_state.stderr
+    assert not (tmp_path / "x.exr").exists()
+
+
+SLOW = [SCENE, "--res", "96x96", "--spp", 4, "--tspp", 48, "--batches", 6, "--threads", 2, "--quiet"]
+
+
+def wait_for(path, timeout=60):
+    end = time.time() + timeout
+    while not path.exists() and time.time() < end:
+        time.sleep(0.05)
+    assert path.exists()
+
+
+def test_killed_render_resumes_to_the_uninterrupted_image(tmp_path):
+    full = tmp_path / "full.exr"
+    assert run([*SLOW, "-o", full]).returncode == 0
+    ck = tmp_path / "ck.exr"
+    proc = subprocess.Popen([BIN, *map(str, SLOW), "-o", str(tmp_path / "never.exr"), "--checkpoint", str(ck),
+                             "--checkpoint-every", "0.2"])
+    wait_for(ck)
+    time.sleep(0.5)
+    proc.send_signal(signal.SIGKILL)
+    proc.wait()
+    assert not (tmp_path / "never.exr").exists()
+    _, header = read_full(ck)
+    assert header["refrender:state"] == "batches 0-6"
+    resumed = tmp_path / "resumed.exr"
+    proc = run([*SLOW, "-o", resumed, "--resume", ck, "--checkpoint", ck])
+    assert proc.returncode == 0, proc.stderr
+    a, _ = read_full(full)
+    b, _ = read_full(resumed)
+    for name in a:
+        assert np.array_equal(a[name], b[name], equal_nan=True), name
+
+
+def test_sigterm_writes_a_final_checkpoint(tmp_path):
+    ck = tmp_path / "ck.exr"
+    longer = [*SLOW, "--max-batches", 60]  # same identity, ~40 s of work: still running at 1.5 s
+    proc = subprocess.Popen([BIN, *map(str, longer), "--batches", "60", "-o", str(tmp_path / "out.exr"),
+                             "--checkpoint", str(ck), "--checkpoint-every", "1000"], stderr=subprocess.PIPE, text=True)
+    time.sleep(1.5)
+    proc.send_signal(signal.SIGTERM)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 130 and "interrupted" in err
+    assert ck.exists() and not (tmp_path / "out.exr").exists()
+    wrong = run([*SLOW, "--batches", 60, "--seed", 2, "-o", tmp_path / "out.exr", "--resume", ck])
+    assert wrong.returncode == 1 and "refrender:seed" in wrong.stderr
