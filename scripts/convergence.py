@@ -2,18 +2,19 @@
 """Convergence study: RMSE against a high-sample reference as the sample
 count grows, for each sampler.
 
-usage: convergence.py SCENE [--res WxH] [--counts 16,64,256,1024]
-                      [--samplers thesis,jittered3d,sobol] [--reference-count 16384]
-                      [--spp 4] [--out DIR]
+usage: convergence.py SCENE [--res WxH] [--counts 25,100,400,1600]
+                      [--samplers thesis,jittered3d,sobol] [--reference-count 25600]
+                      [--baseline 400] [--out DIR]
 
-Every render uses --spp SPP spatial samples and tspp = count / SPP temporal
-samples per spatial sample (counts should be multiples of SPP; powers of two
-suit sobol). The reference is a jittered3d render with --reference-count
-samples per pixel and another seed. Writes DIR/convergence.csv (sampler,
-samples, seconds, rmse), DIR/convergence.png (RMSE vs samples and vs render
-time, log-log) and prints the fitted slope of log RMSE against log samples
-and, per sampler, the samples needed to match the thesis sampler's RMSE at
-its largest count (from the fitted lines)."""
+A count N of samples per pixel is split as refrender's default 4 x 100 is:
+spp : tspp = 1 : 25, i.e. spp = K*K with K = max(1, round(sqrt(0.2 sqrt N)))
+and tspp = N / (K*K) (N = 400 gives exactly --spp 4 --tspp 100); every
+sampler gets the same split. The reference is a jittered3d render with
+--reference-count samples and another seed. Writes DIR/convergence.csv
+(sampler, samples, spp, tspp, seconds, rmse), DIR/convergence.png (RMSE vs
+samples and vs render time, log-log), and prints each sampler's fitted slope
+of log RMSE against log samples and the samples it needs (from its fitted
+line) to reach the thesis sampler's measured RMSE at --baseline samples."""
 import argparse
 import csv
 import os
@@ -25,6 +26,12 @@ import OpenImageIO as oiio
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 BIN = os.environ.get("REFRENDER", os.path.join(ROOT, "build", "refrender"))
+
+
+def split(count):
+    """(spp, tspp) with the default 4:100 ratio."""
+    k = max(1, round((0.2 * count ** 0.5) ** 0.5))
+    return k * k, max(1, count // (k * k))
 
 
 def render(scene, out, res, spp, tspp, sampler, seed):
@@ -70,36 +77,41 @@ def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("scene")
     p.add_argument("--res", default="128x128")
-    p.add_argument("--counts", default="16,64,256,1024")
+    p.add_argument("--counts", default="25,100,400,1600")
     p.add_argument("--samplers", default="thesis,jittered3d,sobol")
-    p.add_argument("--reference-count", type=int, default=16384)
-    p.add_argument("--spp", type=int, default=4)
+    p.add_argument("--reference-count", type=int, default=25600)
+    p.add_argument("--baseline", type=int, default=400)
     p.add_argument("--out", default="convergence")
     a = p.parse_args(argv)
     os.makedirs(a.out, exist_ok=True)
     counts = [int(c) for c in a.counts.split(",")]
-    ref, _ = render(a.scene, os.path.join(a.out, "reference.exr"), a.res, a.spp, a.reference_count // a.spp,
+    if a.baseline not in counts:
+        sys.exit("convergence.py: --baseline must be one of --counts")
+    ref, _ = render(a.scene, os.path.join(a.out, "reference.exr"), a.res, *split(a.reference_count),
                     "jittered3d", 1000003)
     rows = []
     for sampler in a.samplers.split(","):
         for count in counts:
-            img, seconds = render(a.scene, os.path.join(a.out, f"{sampler}_{count}.exr"), a.res, a.spp,
-                                  max(1, count // a.spp), sampler, 7)
-            rows.append({"sampler": sampler, "samples": count, "seconds": seconds,
-                         "rmse": float(np.sqrt(np.mean((img - ref) ** 2)))})
+            spp, tspp = split(count)
+            img, seconds = render(a.scene, os.path.join(a.out, f"{sampler}_{count}.exr"), a.res, spp, tspp,
+                                  sampler, 7)
+            rows.append({"sampler": sampler, "samples": spp * tspp, "spp": spp, "tspp": tspp,
+                         "seconds": seconds, "rmse": float(np.sqrt(np.mean((img - ref) ** 2)))})
     with open(os.path.join(a.out, "convergence.csv"), "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=["sampler", "samples", "seconds", "rmse"])
+        w = csv.DictWriter(f, fieldnames=["sampler", "samples", "spp", "tspp", "seconds", "rmse"])
         w.writeheader()
         w.writerows(rows)
     plot(rows, os.path.join(a.out, "convergence.png"))
     fits = {s: fit_slope([r["samples"] for r in rows if r["sampler"] == s], [r["rmse"] for r in rows if r["sampler"] == s])
             for s in dict.fromkeys(r["sampler"] for r in rows)}
     base = "thesis" if "thesis" in fits else next(iter(fits))
-    target = np.exp(fits[base][1]) * counts[-1] ** fits[base][0]  # base's fitted RMSE at the largest count
-    print(f"{'sampler':12} {'slope':>7} {'samples for thesis RMSE at ' + str(counts[-1]):>34}")
+    spp, tspp = split(a.baseline)
+    target = next(r["rmse"] for r in rows if r["sampler"] == base and r["samples"] == spp * tspp)
+    print(f"baseline: {base} at {spp}x{tspp} samples, RMSE {target:.4g}")
+    print(f"{'sampler':12} {'slope':>7} {'samples for that RMSE':>22} {'ratio':>8}")
     for s, (slope, icpt) in fits.items():
         needed = np.exp((np.log(target) - icpt) / slope)
-        print(f"{s:12} {slope:7.3f} {needed:20.0f} ({counts[-1] / needed:.2f}x fewer)")
+        print(f"{s:12} {slope:7.3f} {needed:22.0f} {spp * tspp / needed:7.2f}x")
     return 0
 
 

@@ -320,6 +320,19 @@ static void report(const render_options *o, const scene *s, const image *img, in
                 (unsigned long long)img->clamped, FILM_LIMIT);
 }
 
+/* --target-error: how many pixels got there (the rest hit --max-batches). */
+static void report_target(const render_options *o, const image *img, attr_list *attrs)
+{
+    size_t n = (size_t)img->width * img->height, reached = 0;
+    for (size_t i = 0; i < n; i++)
+        reached += film_max_stderr(&img->px[i]) <= o->target_error;
+    attrs_set(attrs, "refrender:targetError", "%.17g", o->target_error);
+    attrs_set(attrs, "refrender:targetReached", "%zu of %zu pixels", reached, n);
+    if (!o->quiet)
+        fprintf(stderr, "refrender: %zu of %zu pixels reached standard error <= %g; %zu stopped at %d batches\n",
+                reached, n, o->target_error, n - reached, o->max_batches ? o->max_batches : 8 * o->batches);
+}
+
 static void warn_about_settings(const render_options *o, const render_settings *rs)
 {
     int k = rs->smp.grid, n = sampler_count(&rs->smp);
@@ -353,6 +366,8 @@ static int render_and_write(scene *s, const render_options *o, const char *cmdli
     accel_free(acc);
     if (!rc) {
         report(o, s, &img, tty);
+        if (o->target_error > 0)
+            report_target(o, &img, &run.attrs);
         attrs_set(&run.attrs, "refrender:renderSeconds", "%.3f", img.seconds);
         attrs_set(&run.attrs, "refrender:rays", "%llu", (unsigned long long)img.rays);
         rc = o->passes ? output_write_state(o->output, &img, run.rs.batch_begin,

@@ -66,13 +66,15 @@ def test_single_batch_has_no_error_channels(tmp_path):
 
 def test_target_error_adds_batches_where_needed(tmp_path):
     proc_args = ["--spp", 1, "--tspp", 4, "--batches", 2, "--target-error", 0.02, "--max-batches", 12]
-    ch, _ = render_disk(tmp_path, "target.exr", *proc_args)
+    ch, header = render_disk(tmp_path, "target.exr", *proc_args)
     batches = ch["samples"] / 4
     assert batches.min() == 2  # empty background: zero error after 2 batches
     assert batches.max() > 2
     se = np.maximum.reduce([ch["stderr.R"], ch["stderr.G"], ch["stderr.B"]])
     # every pixel either reached the target or used the whole cap
     assert np.all((se <= 0.02) | (batches == 12))
+    reached = int(np.count_nonzero(se <= 0.02))
+    assert header["refrender:targetReached"] == f"{reached} of {se.size} pixels"
 
 
 @pytest.mark.parametrize("sampler", ["thesis", "jittered3d", "sobol"])
@@ -192,3 +194,21 @@ def test_sigterm_writes_a_final_checkpoint(tmp_path):
     assert ck.exists() and not (tmp_path / "out.exr").exists()
     wrong = run([*SLOW, "--batches", 60, "--seed", 2, "-o", tmp_path / "out.exr", "--resume", ck])
     assert wrong.returncode == 1 and "refrender:seed" in wrong.stderr
+
+
+def test_convergence_script_writes_csv_plot_and_slopes(tmp_path):
+    env = dict(os.environ, REFRENDER=BIN)
+    scene = tmp_path / "disk.xml"
+    scene.write_text(DISK)
+    proc = subprocess.run(["/usr/bin/python3", str(ROOT / "scripts" / "convergence.py"), str(scene), "--res", "16x12",
+                           "--counts", "25,100,400", "--baseline", "100", "--reference-count", "3200",
+                           "--out", str(tmp_path / "conv")], capture_output=True, text=True, env=env)
+    assert proc.returncode == 0, proc.stderr
+    import csv
+    rows = list(csv.DictReader(open(tmp_path / "conv" / "convergence.csv")))
+    assert len(rows) == 9 and {r["sampler"] for r in rows} == {"thesis", "jittered3d", "sobol"}
+    assert (tmp_path / "conv" / "convergence.png").stat().st_size > 1000
+    for sampler in ("thesis", "jittered3d", "sobol"):
+        rmse = [float(r["rmse"]) for r in rows if r["sampler"] == sampler]
+        assert rmse[-1] < rmse[0]  # more samples, less error
+        assert any(line.startswith(sampler) for line in proc.stdout.splitlines())
