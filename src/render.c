@@ -5,7 +5,6 @@
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
-#include <unistd.h>
 
 #include "shade.h"
 
@@ -164,7 +163,10 @@ static void *worker(void *arg)
                 break;
         }
     scratch_free(&scr);
+    pthread_mutex_lock(&job->lock);
     atomic_fetch_sub(&job->workers_left, 1);
+    pthread_cond_broadcast(&job->cond); /* wakes the coordinator at once */
+    pthread_mutex_unlock(&job->lock);
     return NULL;
 }
 
@@ -181,6 +183,20 @@ static int checkpoint_paused(render_job *job, const render_hooks *hooks, rr_erro
     pthread_cond_broadcast(&job->cond);
     pthread_mutex_unlock(&job->lock);
     return rc;
+}
+
+/* Sleeps up to 0.1 s, less if a worker finishes. */
+static void wait_for_workers(render_job *job)
+{
+    struct timespec until;
+    clock_gettime(CLOCK_REALTIME, &until);
+    until.tv_nsec += 100000000L;
+    if (until.tv_nsec >= 1000000000L)
+        until.tv_sec++, until.tv_nsec -= 1000000000L;
+    pthread_mutex_lock(&job->lock);
+    if (atomic_load(&job->workers_left) > 0)
+        pthread_cond_timedwait(&job->cond, &job->lock, &until);
+    pthread_mutex_unlock(&job->lock);
 }
 
 static void report_progress(render_job *job, const render_hooks *hooks, double start)
@@ -207,9 +223,13 @@ static int run_round(render_job *job, const render_hooks *hooks, double start, d
     atomic_fetch_sub(&job->workers_left, threads - started);
     if (!started)
         rc = rr_fail(err, "could not start render threads");
+    double last_report = 0;
     while (atomic_load(&job->workers_left) > 0) {
-        usleep(100000);
-        report_progress(job, hooks, start);
+        wait_for_workers(job);
+        if (now_seconds() - last_report >= 0.2) {
+            report_progress(job, hooks, start);
+            last_report = now_seconds();
+        }
         int due = hooks && hooks->checkpoint && hooks->checkpoint_every > 0 &&
                   now_seconds() - *last_checkpoint >= hooks->checkpoint_every;
         if (due && !*job->cancel && !rc) {
