@@ -34,7 +34,7 @@ TEST_OBJS := $(TEST_SRCS:tests/%.c=$(BUILD)/tests/%.o) $(BUILD)/tests/harness.o
 BIN      := $(BUILD)/refrender
 TESTBIN  := $(BUILD)/unit_tests
 
-.PHONY: all deps demo test test-c test-py clean
+.PHONY: all deps demo test test-c test-py bench clean
 all: $(BIN)
 
 $(BUILD)/%.o: src/%.c src/*.h | $(BUILD)
@@ -49,6 +49,8 @@ $(BUILD):
 $(BIN): $(APP_OBJS) $(LIB_OBJS)
 	$(CC) $(SANLD) -o $@ $^ $(LDLIBS)
 $(TESTBIN): $(TEST_OBJS) $(LIB_OBJS)
+	$(CC) $(SANLD) -o $@ $^ $(LDLIBS)
+$(BUILD)/refrender-bench: $(BUILD)/bench.o $(LIB_OBJS)
 	$(CC) $(SANLD) -o $@ $^ $(LDLIBS)
 
 deps:
@@ -66,6 +68,12 @@ test-py: $(BIN)
 	REFRENDER=$(CURDIR)/$(BIN) $(PYTHON) -m pytest -q tests
 
 test: test-c test-py
+
+# Speed and memory against Embree's built-in disc primitive, measured in the
+# same run (a benchmark, not a test). BENCH_ARGS=quick for a short smoke run.
+bench: $(BUILD)/refrender-bench
+	mkdir -p out
+	$(BUILD)/refrender-bench out/bench.csv $(BENCH_ARGS)
 
 clean:
 	rm -rf build build-san out

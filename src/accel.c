@@ -5,11 +5,25 @@
 #include <stdlib.h>
 #include <string.h>
 
+/* A top-level scene over a subset of the objects. Objects that do not move
+ * during the shutter (static) and those that do (moving) get one each, so a
+ * ray's static hits can be found once and reused for all its times. */
+typedef struct {
+    RTCScene scene;
+    unsigned *ids; /* top-level primitive -> object index */
+    unsigned count;
+    const struct accel *acc;
+} top_level;
+
+enum { TOP_STATIC, TOP_MOVING };
+
 struct accel {
     RTCDevice device;
-    RTCScene top;
+    top_level top[2];
     RTCScene *object_scenes;
-    aabb *swept; /* world bounds of each object over the shutter */
+    aabb *swept;  /* world bounds of each object over the shutter */
+    xform *rest;  /* transform of each static object (the same at every time) */
+    int *is_static;
     const scene *sc;
     float epsilon;
     double sigma;
@@ -25,6 +39,7 @@ typedef struct {
     unsigned obj;
     xform xf; /* current object's transform at `time` */
     kbuffer *kb;
+    int accepted; /* hits offered to the k-buffer in this traversal */
 } trace_context;
 
 /* ---- k-buffer ---------------------------------------------------------- */
@@ -87,6 +102,7 @@ static void accept_hit(trace_context *c, struct RTCRayHit *rh, const struct RTCI
     surface_hit h = {t, c->obj, args->primID, weight, {color[0], color[1], color[2]},
                      {(float)wn.x, (float)wn.y, (float)wn.z}};
     kbuffer_insert(c->kb, &h);
+    c->accepted++;
     rh->ray.tfar = kbuffer_cutoff(c->kb);
     rh->hit.geomID = args->geomID;
     rh->hit.primID = args->primID;
@@ -172,11 +188,12 @@ static void object_intersect(const struct RTCIntersectFunctionNArguments *args)
         return;
     trace_context *c = (trace_context *)args->context;
     struct RTCRayHit *rh = (struct RTCRayHit *)args->rayhit;
-    unsigned obj = args->primID;
-    const scene_object *o = &c->acc->sc->objects[obj];
+    const top_level *top = args->geometryUserPtr;
+    unsigned obj = top->ids[args->primID];
+    const accel *a = c->acc;
     float saved[6] = {rh->ray.org_x, rh->ray.org_y, rh->ray.org_z,
                       rh->ray.dir_x, rh->ray.dir_y, rh->ray.dir_z};
-    c->xf = animation_at(&o->anim, c->time);
+    c->xf = a->is_static[obj] ? a->rest[obj] : animation_at(&a->sc->objects[obj].anim, c->time);
     c->obj = obj;
     vec3 org = xform_inverse_point(&c->xf, v3(saved[0], saved[1], saved[2]));
     vec3 dir = xform_inverse_vector(&c->xf, v3(saved[3], saved[4], saved[5]));
@@ -191,8 +208,8 @@ static void object_intersect(const struct RTCIntersectFunctionNArguments *args)
 
 static void object_bounds_cb(const struct RTCBoundsFunctionArguments *args)
 {
-    const accel *a = args->geometryUserPtr;
-    aabb b = a->swept[args->primID];
+    const top_level *top = args->geometryUserPtr;
+    aabb b = top->acc->swept[top->ids[args->primID]];
     struct RTCBounds *r = args->bounds_o;
     r->lower_x = nextafterf((float)b.lo.x, -INFINITY), r->lower_y = nextafterf((float)b.lo.y, -INFINITY);
     r->lower_z = nextafterf((float)b.lo.z, -INFINITY);
@@ -226,7 +243,7 @@ static void embree_error(void *user, enum RTCError code, const char *str)
         snprintf(e->msg, sizeof e->msg, "Embree error %d: %s", (int)code, str ? str : "");
 }
 
-int accel_build(const scene *s, double epsilon, double sigma, accel **out, rr_error *err)
+int accel_build(const scene *s, double epsilon, double sigma, int reuse_static, accel **out, rr_error *err)
 {
     accel *a = calloc(1, sizeof *a);
     if (!a)
@@ -240,9 +257,14 @@ int accel_build(const scene *s, double epsilon, double sigma, accel **out, rr_er
         return rr_fail(err, "cannot create Embree device (error %d)", (int)rtcGetDeviceError(NULL));
     }
     rtcSetDeviceErrorFunction(a->device, embree_error, &a->build_error);
-    a->object_scenes = calloc((size_t)s->nobjects, sizeof *a->object_scenes);
-    a->swept = calloc((size_t)s->nobjects, sizeof *a->swept);
-    if (!a->object_scenes || !a->swept) {
+    size_t n = (size_t)s->nobjects;
+    a->object_scenes = calloc(n, sizeof *a->object_scenes);
+    a->swept = calloc(n, sizeof *a->swept);
+    a->rest = calloc(n, sizeof *a->rest);
+    a->is_static = calloc(n, sizeof *a->is_static);
+    for (int k = 0; k < 2; k++)
+        a->top[k] = (top_level){NULL, calloc(n, sizeof(unsigned)), 0, a};
+    if (!a->object_scenes || !a->swept || !a->rest || !a->is_static || !a->top[0].ids || !a->top[1].ids) {
         accel_free(a);
         return rr_fail(err, "out of memory");
     }
@@ -253,8 +275,14 @@ int accel_build(const scene *s, double epsilon, double sigma, accel **out, rr_er
                                          points ? splat_bounds_cb : sphere_bounds_cb,
                                          points ? splats_intersect : sphere_intersect);
         a->swept[i] = animation_swept_bounds(&o->anim, scene_object_bounds(o), s->shut.open, s->shut.close);
+        a->is_static[i] = reuse_static && animation_is_static(&o->anim);
+        a->rest[i] = animation_at(&o->anim, s->shut.open);
+        top_level *top = &a->top[a->is_static[i] ? TOP_STATIC : TOP_MOVING];
+        top->ids[top->count++] = (unsigned)i;
     }
-    a->top = user_scene(a->device, (unsigned)s->nobjects, a, object_bounds_cb, object_intersect);
+    for (int k = 0; k < 2; k++)
+        if (a->top[k].count)
+            a->top[k].scene = user_scene(a->device, a->top[k].count, &a->top[k], object_bounds_cb, object_intersect);
     if (a->build_error.msg[0]) {
         rr_fail(err, "%s", a->build_error.msg);
         accel_free(a);
@@ -271,28 +299,36 @@ void accel_free(accel *a)
     for (int i = 0; a->object_scenes && i < a->sc->nobjects; i++)
         if (a->object_scenes[i])
             rtcReleaseScene(a->object_scenes[i]);
-    if (a->top)
-        rtcReleaseScene(a->top);
+    for (int k = 0; k < 2; k++) {
+        if (a->top[k].scene)
+            rtcReleaseScene(a->top[k].scene);
+        free(a->top[k].ids);
+    }
     free(a->object_scenes);
     free(a->swept);
+    free(a->rest);
+    free(a->is_static);
     rtcReleaseDevice(a->device);
     free(a);
 }
 
-void accel_trace(const accel *a, vec3 org, vec3 dir, double time, kbuffer *kb)
+/* Traverses one top-level scene, adding to kb (whose hits bound the ray). */
+static int trace_top(const accel *a, int which, vec3 org, vec3 dir, double time, kbuffer *kb)
 {
+    if (!a->top[which].scene)
+        return 0;
     trace_context c;
     rtcInitIntersectContext(&c.rtc);
     c.acc = a;
     c.time = time;
     c.obj = 0;
     c.kb = kb;
-    kbuffer_reset(kb, a->epsilon);
+    c.accepted = 0;
     struct RTCRayHit rh;
     rh.ray.org_x = (float)org.x, rh.ray.org_y = (float)org.y, rh.ray.org_z = (float)org.z;
     rh.ray.dir_x = (float)dir.x, rh.ray.dir_y = (float)dir.y, rh.ray.dir_z = (float)dir.z;
     rh.ray.tnear = 0.0f;
-    rh.ray.tfar = INFINITY;
+    rh.ray.tfar = kb->count ? kbuffer_cutoff(kb) : INFINITY;
     rh.ray.time = 0.0f;
     rh.ray.mask = 0xFFFFFFFFu;
     rh.ray.id = 0;
@@ -300,5 +336,31 @@ void accel_trace(const accel *a, vec3 org, vec3 dir, double time, kbuffer *kb)
     rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
     rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
     rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-    rtcIntersect1(a->top, &c.rtc, &rh);
+    rtcIntersect1(a->top[which].scene, &c.rtc, &rh);
+    return c.accepted;
+}
+
+int accel_has_moving(const accel *a) { return a->top[TOP_MOVING].count > 0; }
+
+void accel_trace_static(const accel *a, vec3 org, vec3 dir, kbuffer *kb)
+{
+    kbuffer_reset(kb, a->epsilon);
+    trace_top(a, TOP_STATIC, org, dir, 0.0, kb);
+}
+
+int accel_trace_moving(const accel *a, vec3 org, vec3 dir, double time, const kbuffer *static_hits, kbuffer *kb)
+{
+    kb->count = static_hits->count;
+    kb->dropped = static_hits->dropped;
+    kb->closest = static_hits->closest;
+    kb->epsilon = static_hits->epsilon;
+    memcpy(kb->hits, static_hits->hits, (size_t)static_hits->count * sizeof *kb->hits);
+    return trace_top(a, TOP_MOVING, org, dir, time, kb);
+}
+
+void accel_trace(const accel *a, vec3 org, vec3 dir, double time, kbuffer *kb)
+{
+    kbuffer static_hits;
+    accel_trace_static(a, org, dir, &static_hits);
+    accel_trace_moving(a, org, dir, time, &static_hits, kb);
 }

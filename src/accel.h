@@ -41,12 +41,25 @@ void kbuffer_insert(kbuffer *kb, const surface_hit *h);
 typedef struct accel accel;
 
 /* Builds the BVHs for the scene (which must outlive the accel). epsilon and
- * sigma are the blending distance and kernel sigma in use. */
-int accel_build(const scene *s, double epsilon, double sigma, accel **out, rr_error *err);
+ * sigma are the blending distance and kernel sigma in use. With
+ * reuse_static = 0 every object is treated as moving (each time traces
+ * everything): the same images, slower; for benchmarks and tests. */
+int accel_build(const scene *s, double epsilon, double sigma, int reuse_static, accel **out, rr_error *err);
 void accel_free(accel *a);
 
 /* World ray org + t*dir (dir unit) at scene time `time`: fills kb with the
  * epsilon-blended hit set. */
 void accel_trace(const accel *a, vec3 org, vec3 dir, double time, kbuffer *kb);
+
+/* The same in two steps, for reuse over the times of one ray: the hits of
+ * the objects that do not move during the shutter (the same at every time),
+ * then, per time, those hits plus the moving objects' (the ray is bounded by
+ * the static hits from the start). The k-buffer keeps exactly the hits
+ * within epsilon of the closest whatever the insertion order, so the result
+ * equals accel_trace's. Returns the number of moving hits offered: 0 means
+ * kb equals static_hits. */
+void accel_trace_static(const accel *a, vec3 org, vec3 dir, kbuffer *kb);
+int accel_trace_moving(const accel *a, vec3 org, vec3 dir, double time, const kbuffer *static_hits, kbuffer *kb);
+int accel_has_moving(const accel *a);
 
 #endif

@@ -61,6 +61,8 @@ static void usage(FILE *f)
 "Running:\n"
 "  --threads N      render threads (default: all cores)\n"
 "  --quiet          no progress bar and no summary line\n"
+"  --no-static-reuse  trace objects that do not move at every time sample\n"
+"                   again instead of once per ray (same image; for benchmarks)\n"
 "  --version        print the version and exit\n"
 "  -h, --help       print this help and exit\n"
 "\n"
@@ -72,6 +74,7 @@ static void usage(FILE *f)
 typedef struct {
     int spp, tspp, time_factor, threads, quiet, width, height, batches, max_batches;
     int pass, passes; /* passes > 0: --pass pass/passes */
+    int no_static_reuse;
     sampler_kind sampler;
     double eps, sigma, target_error, checkpoint_every; /* eps, sigma < 0: from the scene */
     uint64_t seed;
@@ -80,7 +83,7 @@ typedef struct {
 
 enum { OPT_SPP = 256, OPT_TSPP, OPT_RES, OPT_THREADS, OPT_SEED, OPT_EPS, OPT_SIGMA, OPT_TFACTOR,
        OPT_PREVIEW, OPT_QUIET, OPT_VERSION, OPT_SAMPLER, OPT_BATCHES, OPT_TARGET, OPT_MAXB, OPT_PASS,
-       OPT_CKPT, OPT_CKPT_EVERY, OPT_RESUME };
+       OPT_CKPT, OPT_CKPT_EVERY, OPT_RESUME, OPT_NO_REUSE };
 
 static int parse_pass(const char *arg, render_options *o, rr_error *err)
 {
@@ -115,6 +118,7 @@ static int parse_option(int c, const char *arg, render_options *o, rr_error *err
     case OPT_CKPT: o->checkpoint = arg; return 0;
     case OPT_RESUME: o->resume = arg; return 0;
     case OPT_QUIET: o->quiet = 1; return 0;
+    case OPT_NO_REUSE: o->no_static_reuse = 1; return 0;
     }
     return rr_fail(err, "unknown option");
 }
@@ -149,6 +153,7 @@ static int parse_args(int argc, char **argv, render_options *o)
         {"checkpoint-every", required_argument, 0, OPT_CKPT_EVERY}, {"resume", required_argument, 0, OPT_RESUME},
         {"output", required_argument, 0, 'o'}, {"preview", required_argument, 0, OPT_PREVIEW},
         {"quiet", no_argument, 0, OPT_QUIET}, {"version", no_argument, 0, OPT_VERSION},
+        {"no-static-reuse", no_argument, 0, OPT_NO_REUSE},
         {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
     int c;
     rr_error err;
@@ -351,7 +356,7 @@ static int render_and_write(scene *s, const render_options *o, const char *cmdli
     warn_about_settings(o, &run.rs);
     accel *acc;
     image img;
-    if (accel_build(s, s->epsilon, s->kernel_sigma, &acc, err))
+    if (accel_build(s, s->epsilon, s->kernel_sigma, !o->no_static_reuse, &acc, err))
         return -1;
     if (o->resume ? resume_state(&run, &img, err) : (image_alloc(&img, s->cam.width, s->cam.height)
                                                          ? rr_fail(err, "out of memory for the image") : 0)) {

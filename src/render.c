@@ -37,38 +37,68 @@ static double now_seconds(void)
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
-/* One sample: trace at time t and return its color and coverage. */
-static void trace_sample(const render_job *job, vec3 dir, double t, kbuffer *kb, double rgba[4])
+/* The color and coverage of a k-buffer (background when empty). */
+static void sample_color(const render_job *job, vec3 dir, const kbuffer *kb, double rgba[4])
 {
     const scene *s = job->sc;
-    accel_trace(job->acc, s->cam.position, dir, t, kb);
     vec3 c = kb->count ? shade_hits(s, kb, s->cam.position, dir) : s->background;
     rgba[0] = c.x, rgba[1] = c.y, rgba[2] = c.z, rgba[3] = kb->count ? 1.0 : 0.0;
 }
 
+/* Per ray direction: the static objects' hits and their color, computed
+ * once and reused for every time at which no moving object is hit. */
+typedef struct {
+    double x, y;
+    vec3 dir;
+    kbuffer hits;
+    double rgba[4];
+    int shaded;
+} static_cache;
+
+static void sample_at(render_job *job, static_cache *sc, double t, double rgba[4], uint64_t *overflows)
+{
+    kbuffer kb;
+    const kbuffer *result = &sc->hits;
+    if (accel_has_moving(job->acc) &&
+        accel_trace_moving(job->acc, job->sc->cam.position, sc->dir, t, &sc->hits, &kb) > 0)
+        result = &kb;
+    *overflows += result->dropped > 0;
+    if (result == &sc->hits && sc->shaded) {
+        memcpy(rgba, sc->rgba, sizeof sc->rgba);
+        return;
+    }
+    sample_color(job, sc->dir, result, rgba);
+    if (result == &sc->hits) {
+        memcpy(sc->rgba, rgba, sizeof sc->rgba);
+        sc->shaded = 1;
+    }
+}
+
 /* One batch of a pixel (thesis sec. 4.5): each sample's color is weighted
- * by a(t) and the batch estimate is divided by the sum of the weights. */
+ * by a(t) and the batch estimate is divided by the sum of the weights.
+ * Samples sharing a spatial position (the thesis sampler's s_t times) share
+ * the static objects' hits: tracing them again would give the same hits. */
 static void render_pixel_batch(render_job *job, int px, int py, uint32_t batch, thread_scratch *scr,
                                double est[4], uint64_t *rays, uint64_t *overflows)
 {
     const sampler *smp = &job->rs->smp;
     uint64_t pixel = (uint64_t)py * (uint64_t)job->img->width + (uint64_t)px;
     sampler_batch(smp, pixel, px, py, batch, &scr->ss, scr->x, scr->y, scr->t);
-    double acc[4] = {0, 0, 0, 0}, wsum = 0, last_x = NAN, last_y = NAN;
-    vec3 dir = v3(0, 0, 0);
-    kbuffer kb;
+    double acc[4] = {0, 0, 0, 0}, wsum = 0;
+    static_cache sc;
+    sc.x = sc.y = NAN;
     for (int i = 0; i < sampler_count(smp); i++) {
         double w = shutter_weight(&job->sc->shut, scr->t[i]);
         if (w == 0)
             continue; /* contributes nothing to either sum */
-        if (scr->x[i] != last_x || scr->y[i] != last_y) {
-            dir = camera_ray_direction(&job->sc->cam, scr->x[i], scr->y[i]);
-            last_x = scr->x[i], last_y = scr->y[i];
+        if (scr->x[i] != sc.x || scr->y[i] != sc.y) {
+            sc.x = scr->x[i], sc.y = scr->y[i], sc.shaded = 0;
+            sc.dir = camera_ray_direction(&job->sc->cam, sc.x, sc.y);
+            accel_trace_static(job->acc, job->sc->cam.position, sc.dir, &sc.hits);
         }
         double rgba[4];
-        trace_sample(job, dir, scr->t[i], &kb, rgba);
+        sample_at(job, &sc, scr->t[i], rgba, overflows);
         (*rays)++;
-        *overflows += kb.dropped > 0;
         for (int c = 0; c < 4; c++)
             acc[c] += w * rgba[c];
         wsum += w;

@@ -69,7 +69,7 @@ static int trace_scene(const char *xml, vec3 org, vec3 dir, double time, kbuffer
         return -1;
     }
     accel *a;
-    if (accel_build(&s, s.epsilon, s.kernel_sigma, &a, &e)) {
+    if (accel_build(&s, s.epsilon, s.kernel_sigma, 1, &a, &e)) {
         scene_free(&s);
         return -1;
     }

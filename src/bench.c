@@ -1,0 +1,375 @@
+/* refrender-bench: speed and memory of the render path against Embree's
+ * built-in oriented-disc primitive (closest hit only, no blending, no
+ * motion) on the same splats and the same rays, measured in the same run.
+ * Each case runs in a forked child so its peak memory (ru_maxrss) is its
+ * own. Prints a markdown table and writes CSV. Not a test: no assertions. */
+#include <embree3/rtcore.h>
+#include <pthread.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "render.h"
+#include "shapes.h"
+
+typedef struct {
+    const char *motion;  /* static, linear, rotation */
+    int elliptical;
+    int splats, tspp, threads, res, reps;
+    int background;      /* 1: add a static surfel wall filling the image behind (80% static) */
+} bench_case;
+
+typedef struct {
+    double build_ms, base_build_ms, mrays, base_mrays, peak_mb, bytes_per_splat;
+    unsigned long long rays;
+} bench_result;
+
+static double now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return ts.tv_sec + 1e-9 * ts.tv_nsec;
+}
+
+static int cmp_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+static double median(double *v, int n)
+{
+    qsort(v, (size_t)n, sizeof *v, cmp_double);
+    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+/* A unit sphere of overlapping surfels (elliptical: axes 1.5 and 1/1.5 of
+ * the circle's radius, same area) in front of a camera at distance 3.5. */
+static void build_scene(const bench_case *c, scene *s, surfel **out, size_t *n)
+{
+    scene_init(s);
+    s->cam.position = v3(0, 0, 3.5);
+    s->cam.width = s->cam.height = c->res;
+    s->cam.fov_degrees = 40;
+    camera_prepare(&s->cam, NULL);
+    s->epsilon = 0.01;
+    shape_params p;
+    shape_params_default(&p);
+    p.count = (size_t)c->splats;
+    rr_error err;
+    shape_generate(&p, out, n, &err);
+    s->nobjects = 1;
+    s->objects = calloc(1, sizeof *s->objects);
+    scene_object *o = &s->objects[0];
+    pointmodel_init(&o->model);
+    o->mat = (material){SHADING_PHONG, 1, 0, 32};
+    animation_init_static(&o->anim);
+    if (!strcmp(c->motion, "linear"))
+        o->anim.velocity = v3(0.3, 0.1, 0);
+    if (!strcmp(c->motion, "rotation"))
+        o->anim.has_rotation = 1, o->anim.axis = v3(0, 1, 0), o->anim.degrees_per_time = 90;
+    for (size_t i = 0; i < *n; i++) {
+        surfel *f = &(*out)[i];
+        vec3 u, v;
+        splat_axes_from_normal(f->normal, f->radius, &u, &v);
+        if (c->elliptical)
+            u = v3_scale(u, 1.5), v = v3_scale(v, 1 / 1.5);
+        pointmodel_add(&o->model, f->center, u, v, f->normal, f->color, &err);
+    }
+    if (c->background) { /* a static wall behind; the sphere shrinks to about 20% of the image */
+        s->cam.position = v3(0, 0, 6.5);
+        s->objects = realloc(s->objects, 2 * sizeof *s->objects);
+        s->nobjects = 2;
+        scene_object *w = &s->objects[1];
+        memset(w, 0, sizeof *w);
+        pointmodel_init(&w->model);
+        w->mat = s->objects[0].mat;
+        animation_init_static(&w->anim);
+        w->anim.offset = v3(0, 0, -2);
+        shape_params wall;
+        shape_params_default(&wall);
+        strcpy(wall.kind, "plane");
+        wall.radius = 4;
+        wall.count = (size_t)c->splats / 4;
+        surfel *ws;
+        size_t wn;
+        shape_generate(&wall, &ws, &wn, &err);
+        for (size_t i = 0; i < wn; i++)
+            pointmodel_add_circle(&w->model, ws[i].center, ws[i].normal, ws[i].radius, ws[i].color, &err);
+        free(ws);
+    }
+    s->lights = calloc(1, sizeof *s->lights);
+    s->nlights = 1;
+    s->lights[0] = (light){LIGHT_DIRECTIONAL, v3(0, 0, 0), v3_normalize(v3(-1, -1, -1)), v3(1, 1, 1)};
+}
+
+/* ---- baseline: Embree's oriented discs, closest hit ------------------------ */
+
+typedef struct {
+    RTCScene scene;
+    const scene *sc;
+    const render_settings *rs;
+    int next_row;
+    pthread_mutex_t lock;
+    unsigned long long hits;
+} baseline_job;
+
+static void *baseline_worker(void *arg)
+{
+    baseline_job *job = arg;
+    const sampler *smp = &job->rs->smp;
+    sampler_scratch ss;
+    sampler_scratch_init(&ss, smp);
+    int n = sampler_count(smp);
+    double *x = malloc(n * sizeof *x), *y = malloc(n * sizeof *y), *t = malloc(n * sizeof *t);
+    unsigned long long hits = 0;
+    struct RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    for (;;) {
+        pthread_mutex_lock(&job->lock);
+        int row = job->next_row++;
+        pthread_mutex_unlock(&job->lock);
+        if (row >= job->sc->cam.height)
+            break;
+        for (int px = 0; px < job->sc->cam.width; px++) {
+            sampler_batch(smp, (uint64_t)row * job->sc->cam.width + px, px, row, 0, &ss, x, y, t);
+            for (int i = 0; i < n; i++) { /* the same rays the render path traces */
+                vec3 d = camera_ray_direction(&job->sc->cam, x[i], y[i]);
+                vec3 o = job->sc->cam.position;
+                struct RTCRayHit rh;
+                memset(&rh, 0, sizeof rh);
+                rh.ray.org_x = (float)o.x, rh.ray.org_y = (float)o.y, rh.ray.org_z = (float)o.z;
+                rh.ray.dir_x = (float)d.x, rh.ray.dir_y = (float)d.y, rh.ray.dir_z = (float)d.z;
+                rh.ray.tfar = INFINITY;
+                rh.ray.mask = 0xFFFFFFFFu;
+                rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+                rtcIntersect1(job->scene, &ctx, &rh);
+                hits += rh.hit.geomID != RTC_INVALID_GEOMETRY_ID;
+            }
+        }
+    }
+    pthread_mutex_lock(&job->lock);
+    job->hits += hits;
+    pthread_mutex_unlock(&job->lock);
+    sampler_scratch_free(&ss);
+    free(x), free(y), free(t);
+    return NULL;
+}
+
+static RTCScene baseline_build(RTCDevice dev, const surfel *f, size_t n)
+{
+    RTCScene scene = rtcNewScene(dev);
+    RTCGeometry g = rtcNewGeometry(dev, RTC_GEOMETRY_TYPE_ORIENTED_DISC_POINT);
+    float *vtx = rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4, 16, n);
+    float *nrm = rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_NORMAL, 0, RTC_FORMAT_FLOAT3, 12, n);
+    for (size_t i = 0; i < n; i++) {
+        vtx[4 * i] = (float)f[i].center.x, vtx[4 * i + 1] = (float)f[i].center.y;
+        vtx[4 * i + 2] = (float)f[i].center.z, vtx[4 * i + 3] = (float)f[i].radius;
+        nrm[3 * i] = (float)f[i].normal.x, nrm[3 * i + 1] = (float)f[i].normal.y, nrm[3 * i + 2] = (float)f[i].normal.z;
+    }
+    rtcCommitGeometry(g);
+    rtcAttachGeometry(scene, g);
+    rtcReleaseGeometry(g);
+    rtcCommitScene(scene);
+    return scene;
+}
+
+static double baseline_seconds(RTCScene rtc_scene, const scene *s, const render_settings *rs)
+{
+    baseline_job job = {rtc_scene, s, rs, 0, PTHREAD_MUTEX_INITIALIZER, 0};
+    pthread_t tids[64];
+    double t0 = now();
+    for (int i = 0; i < rs->threads; i++)
+        pthread_create(&tids[i], NULL, baseline_worker, &job);
+    for (int i = 0; i < rs->threads; i++)
+        pthread_join(tids[i], NULL);
+    return now() - t0;
+}
+
+/* ---- one case, in a child process --------------------------------------- */
+
+static double render_mrays(const scene *s, const accel *acc, const render_settings *rs, int res,
+                           unsigned long long *rays)
+{
+    image img;
+    rr_error err;
+    volatile sig_atomic_t never = 0;
+    image_alloc(&img, res, res);
+    render_image(s, acc, rs, &img, NULL, &never, &err);
+    *rays = img.rays;
+    image_free(&img);
+    return img.rays / img.seconds * 1e-6;
+}
+
+/* 80% static background, 20% moving: static-hit reuse against tracing every
+ * time sample separately (mrays = with reuse, base_mrays = without). */
+static void run_reuse_case(const bench_case *c, bench_result *r)
+{
+    scene s;
+    surfel *surfels;
+    size_t n;
+    build_scene(c, &s, &surfels, &n);
+    render_settings rs = {{SAMPLER_THESIS, 1, 2, c->tspp, 4, 0.0, 1.0}, c->threads, 0, 1, 1, 0};
+    rr_error err;
+    accel *with, *without;
+    double t0 = now();
+    accel_build(&s, s.epsilon, s.kernel_sigma, 1, &with, &err);
+    r->build_ms = 1e3 * (now() - t0);
+    accel_build(&s, s.epsilon, s.kernel_sigma, 0, &without, &err);
+    double a[16], b[16];
+    for (int k = 0; k < c->reps; k++) {
+        a[k] = render_mrays(&s, with, &rs, c->res, &r->rays);
+        b[k] = render_mrays(&s, without, &rs, c->res, &r->rays);
+    }
+    r->mrays = median(a, c->reps);
+    r->base_mrays = median(b, c->reps);
+    r->base_build_ms = 0;
+    struct rusage ru;
+    getrusage(RUSAGE_SELF, &ru);
+    r->peak_mb = ru.ru_maxrss / 1024.0;
+    r->bytes_per_splat = 0;
+    accel_free(with);
+    accel_free(without);
+    scene_free(&s);
+    free(surfels);
+}
+
+static void run_case(const bench_case *c, bench_result *r)
+{
+    if (c->background) {
+        run_reuse_case(c, r);
+        return;
+    }
+    scene s;
+    surfel *surfels;
+    size_t n;
+    build_scene(c, &s, &surfels, &n);
+    render_settings rs = {{SAMPLER_THESIS, 1, 2, c->tspp, 4, 0.0, 1.0}, c->threads, 0, 1, 1, 0};
+    rr_error err;
+    accel *acc;
+    struct rusage ru;
+    getrusage(RUSAGE_SELF, &ru);
+    long before_kb = ru.ru_maxrss;
+    double t0 = now();
+    if (accel_build(&s, s.epsilon, s.kernel_sigma, 1, &acc, &err)) {
+        fprintf(stderr, "bench: %s\n", err.msg);
+        exit(1);
+    }
+    r->build_ms = 1e3 * (now() - t0);
+    getrusage(RUSAGE_SELF, &ru);
+    /* splat arrays (pointmodel.h: 48 + 3 * 12 bytes) plus the BVH's growth of the peak */
+    r->bytes_per_splat = 84.0 + (ru.ru_maxrss - before_kb) * 1024.0 / (double)n;
+    RTCDevice dev = rtcNewDevice(NULL);
+    t0 = now();
+    RTCScene base = baseline_build(dev, surfels, n);
+    r->base_build_ms = 1e3 * (now() - t0);
+    double ours[16], theirs[16];
+    volatile sig_atomic_t never = 0;
+    for (int k = 0; k < c->reps; k++) { /* interleaved repetitions */
+        image img;
+        image_alloc(&img, c->res, c->res);
+        render_image(&s, acc, &rs, &img, NULL, &never, &err);
+        ours[k] = img.rays / img.seconds * 1e-6;
+        r->rays = img.rays;
+        image_free(&img);
+        theirs[k] = (double)c->res * c->res * 4 * c->tspp / baseline_seconds(base, &s, &rs) * 1e-6;
+    }
+    r->mrays = median(ours, c->reps);
+    r->base_mrays = median(theirs, c->reps);
+    getrusage(RUSAGE_SELF, &ru);
+    r->peak_mb = ru.ru_maxrss / 1024.0;
+    rtcReleaseScene(base);
+    rtcReleaseDevice(dev);
+    accel_free(acc);
+    scene_free(&s);
+    free(surfels);
+}
+
+static int run_in_child(const bench_case *c, bench_result *r)
+{
+    int fd[2];
+    if (pipe(fd))
+        return -1;
+    pid_t pid = fork();
+    if (pid == 0) {
+        close(fd[0]);
+        run_case(c, r);
+        ssize_t w = write(fd[1], r, sizeof *r);
+        _exit(w == (ssize_t)sizeof *r ? 0 : 1);
+    }
+    close(fd[1]);
+    ssize_t got = read(fd[0], r, sizeof *r);
+    close(fd[0]);
+    int status;
+    waitpid(pid, &status, 0);
+    return got == (ssize_t)sizeof *r && WIFEXITED(status) && WEXITSTATUS(status) == 0 ? 0 : -1;
+}
+
+static void print_row(FILE *csv, const char *series, const bench_case *c, const bench_result *r)
+{
+    printf("| %-9s | %8d | %-8s | %-10s | %4d | %2d | %8.0f | %8.0f | %6.2f | %6.2f | %5.2fx | %7.0f | %6.0f |\n",
+           series, c->splats, c->motion, c->elliptical ? "elliptical" : "circular", c->tspp, c->threads,
+           r->build_ms, r->base_build_ms, r->mrays, r->base_mrays, r->mrays / r->base_mrays, r->peak_mb,
+           r->bytes_per_splat);
+    fprintf(csv, "%s,%d,%s,%s,%d,%d,%d,%.1f,%.1f,%.4f,%.4f,%.4f,%.1f,%.1f\n", series, c->splats, c->motion,
+            c->elliptical ? "elliptical" : "circular", c->tspp, c->threads, c->res, r->build_ms, r->base_build_ms,
+            r->mrays, r->base_mrays, r->mrays / r->base_mrays, r->peak_mb, r->bytes_per_splat);
+    fflush(stdout);
+    fflush(csv);
+}
+
+int main(int argc, char **argv)
+{
+    const char *csv_path = argc > 1 ? argv[1] : "bench.csv";
+    int quick = argc > 2 && !strcmp(argv[2], "quick");
+    int res = quick ? 48 : 128, reps = quick ? 1 : 3;
+    long cores = sysconf(_SC_NPROCESSORS_ONLN);
+    int threads = cores > 0 ? (int)cores : 1;
+    FILE *csv = fopen(csv_path, "w");
+    if (!csv) {
+        perror(csv_path);
+        return 1;
+    }
+    fprintf(csv, "series,splats,motion,splat,tspp,threads,res,build_ms,baseline_build_ms,mrays,baseline_mrays,ratio,peak_mb,bytes_per_splat\n");
+    printf("refrender-bench: %dx%d pixels, 4 spatial samples, thesis sampler, median of %d interleaved runs\n\n"
+           "| series | splats | motion | splat | tspp | thr | build ms | base build ms | Mrays/s | base Mrays/s | ratio | peak MB | B/splat |\n"
+           "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n", res, res, reps);
+    static const char *const motions[] = {"static", "linear", "rotation"};
+    int big = quick ? 20000 : 1000000, small = quick ? 5000 : 100000, tspp = quick ? 8 : 100;
+    bench_result r;
+    for (int size = 0; size < 2; size++)
+        for (int m = 0; m < 3; m++)
+            for (int e = 0; e < 2; e++) {
+                bench_case c = {motions[m], e, size ? big : small, tspp, threads, res, reps, 0};
+                if (!run_in_child(&c, &r))
+                    print_row(csv, "cases", &c, &r);
+            }
+    int counts[] = {10000, 100000, 1000000, 4000000};
+    for (int i = 0; i < (quick ? 1 : 4); i++) {
+        bench_case c = {"rotation", 0, counts[i], tspp, threads, res, reps, 0};
+        if (!run_in_child(&c, &r))
+            print_row(csv, "splats", &c, &r);
+    }
+    int tspps[] = {10, 30, 100};
+    for (int i = 0; i < (quick ? 1 : 3); i++) {
+        bench_case c = {"rotation", 0, big, tspps[i], threads, res, reps, 0};
+        if (!run_in_child(&c, &r))
+            print_row(csv, "tspp", &c, &r);
+    }
+    for (int t = 1; t <= threads; t++) {
+        bench_case c = {"rotation", 0, big, tspp, t, res, reps, 0};
+        if (!run_in_child(&c, &r))
+            print_row(csv, "threads", &c, &r);
+    }
+    printf("\nstatic80: a static wall fills the image, a rotating sphere about 20%% of it; 'base' is the same\n"
+           "render tracing every time sample separately (--no-static-reuse), 'ratio' the speed-up.\n\n");
+    bench_case c80 = {"rotation", 0, small, tspp, threads, res, reps, 1};
+    if (!run_in_child(&c80, &r))
+        print_row(csv, "static80", &c80, &r);
+    fclose(csv);
+    return 0;
+}
