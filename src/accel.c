@@ -17,11 +17,17 @@ typedef struct {
 
 enum { TOP_STATIC, TOP_MOVING };
 
+typedef struct {
+    vec3 center;
+    double radius2;
+} sphere_bound;
+
 struct accel {
     RTCDevice device;
     top_level top[2];
     RTCScene *object_scenes;
     aabb *swept;  /* world bounds of each object over the shutter */
+    sphere_bound *swept_sphere; /* and a world sphere holding it at every time */
     xform *rest;  /* transform of each static object (the same at every time) */
     int *is_static;
     const scene *sc;
@@ -182,6 +188,54 @@ static void no_occluded(const struct RTCOccludedFunctionNArguments *args) { (voi
 
 /* ---- top level (world space) ------------------------------------------- */
 
+/* Does the ray org + t dir, t >= 0, pass within the sphere? (dir need not be
+ * unit; the sphere is padded far above float rounding at build time.) */
+static int ray_meets_sphere(vec3 org, vec3 dir, const sphere_bound *b)
+{
+    vec3 oc = v3_sub(b->center, org);
+    double dd = v3_dot(dir, dir), along = v3_dot(oc, dir), oc2 = v3_dot(oc, oc);
+    if (oc2 <= b->radius2)
+        return 1; /* origin inside */
+    if (along <= 0)
+        return 0; /* sphere behind the origin */
+    return oc2 - along * along / dd <= b->radius2;
+}
+
+/* A sphere about the object's box center holding the object (rest pose). */
+static void object_sphere(const scene_object *o, vec3 *center, double *radius)
+{
+    if (o->kind != OBJECT_POINTS) {
+        *center = o->sphere_center, *radius = o->sphere_radius;
+        return;
+    }
+    const pointmodel *m = &o->model;
+    vec3 c = v3_scale(v3_add(m->bounds.lo, m->bounds.hi), 0.5);
+    double r2 = 0;
+    for (size_t i = 0; i < m->count; i++) {
+        const float *p = m->geom[i].center, *e = &m->extent[3 * i];
+        vec3 far = v3(fabs(p[0] - c.x) + e[0], fabs(p[1] - c.y) + e[1], fabs(p[2] - c.z) + e[2]);
+        double d2 = v3_dot(far, far); /* farthest corner of the splat's box */
+        r2 = d2 > r2 ? d2 : r2;
+    }
+    *center = c, *radius = sqrt(r2);
+}
+
+/* Rigid motion keeps every point within the rest radius of the moving center,
+ * so the sphere about the center's swept box bounds the object at all times. */
+static sphere_bound swept_sphere(const scene_object *o, double t0, double t1)
+{
+    vec3 c;
+    double r;
+    object_sphere(o, &c, &r);
+    aabb path = animation_swept_bounds(&o->anim, (aabb){c, c}, t0, t1);
+    vec3 half = v3_scale(v3_sub(path.hi, path.lo), 0.5);
+    sphere_bound b;
+    b.center = v3_add(path.lo, half);
+    r = (r + sqrt(v3_dot(half, half))) * (1 + 1e-4) + 1e-4 * sqrt(v3_dot(b.center, b.center)) + 1e-6;
+    b.radius2 = r * r;
+    return b;
+}
+
 static void object_intersect(const struct RTCIntersectFunctionNArguments *args)
 {
     if (!args->valid[0])
@@ -191,6 +245,11 @@ static void object_intersect(const struct RTCIntersectFunctionNArguments *args)
     const top_level *top = args->geometryUserPtr;
     unsigned obj = top->ids[args->primID];
     const accel *a = c->acc;
+    /* the swept sphere is often much tighter than the swept box (a spinning
+     * ball): skip the transform and the object's BVH when the ray misses it */
+    if (!ray_meets_sphere(v3(rh->ray.org_x, rh->ray.org_y, rh->ray.org_z),
+                          v3(rh->ray.dir_x, rh->ray.dir_y, rh->ray.dir_z), &a->swept_sphere[obj]))
+        return;
     float saved[6] = {rh->ray.org_x, rh->ray.org_y, rh->ray.org_z,
                       rh->ray.dir_x, rh->ray.dir_y, rh->ray.dir_z};
     c->xf = a->is_static[obj] ? a->rest[obj] : animation_at(&a->sc->objects[obj].anim, c->time);
@@ -260,11 +319,12 @@ int accel_build(const scene *s, double epsilon, double sigma, int reuse_static, 
     size_t n = (size_t)s->nobjects;
     a->object_scenes = calloc(n, sizeof *a->object_scenes);
     a->swept = calloc(n, sizeof *a->swept);
+    a->swept_sphere = calloc(n, sizeof *a->swept_sphere);
     a->rest = calloc(n, sizeof *a->rest);
     a->is_static = calloc(n, sizeof *a->is_static);
     for (int k = 0; k < 2; k++)
         a->top[k] = (top_level){NULL, calloc(n, sizeof(unsigned)), 0, a};
-    if (!a->object_scenes || !a->swept || !a->rest || !a->is_static || !a->top[0].ids || !a->top[1].ids) {
+    if (!a->object_scenes || !a->swept || !a->swept_sphere || !a->rest || !a->is_static || !a->top[0].ids || !a->top[1].ids) {
         accel_free(a);
         return rr_fail(err, "out of memory");
     }
@@ -275,6 +335,7 @@ int accel_build(const scene *s, double epsilon, double sigma, int reuse_static, 
                                          points ? splat_bounds_cb : sphere_bounds_cb,
                                          points ? splats_intersect : sphere_intersect);
         a->swept[i] = animation_swept_bounds(&o->anim, scene_object_bounds(o), s->shut.open, s->shut.close);
+        a->swept_sphere[i] = swept_sphere(o, s->shut.open, s->shut.close);
         a->is_static[i] = reuse_static && animation_is_static(&o->anim);
         a->rest[i] = animation_at(&o->anim, s->shut.open);
         top_level *top = &a->top[a->is_static[i] ? TOP_STATIC : TOP_MOVING];
@@ -306,6 +367,7 @@ void accel_free(accel *a)
     }
     free(a->object_scenes);
     free(a->swept);
+    free(a->swept_sphere);
     free(a->rest);
     free(a->is_static);
     rtcReleaseDevice(a->device);
@@ -340,7 +402,48 @@ static int trace_top(const accel *a, int which, vec3 org, vec3 dir, double time,
     return c.accepted;
 }
 
-int accel_has_moving(const accel *a) { return a->top[TOP_MOVING].count > 0; }
+
+/* Slab test against a box grown by a relative margin far above float
+ * rounding, so that it never rejects a ray Embree's float traversal of the
+ * (outward-rounded) swept bounds would accept. */
+static int ray_meets_box(vec3 org, vec3 dir, aabb b)
+{
+    double o[3] = {org.x, org.y, org.z}, d[3] = {dir.x, dir.y, dir.z};
+    double lo[3] = {b.lo.x, b.lo.y, b.lo.z}, hi[3] = {b.hi.x, b.hi.y, b.hi.z};
+    double tmin = 0.0, tmax = INFINITY;
+    for (int k = 0; k < 3; k++) {
+        double pad = 1e-4 * (hi[k] - lo[k] + fabs(lo[k]) + fabs(hi[k])) + 1e-6;
+        double l = lo[k] - pad, h = hi[k] + pad;
+        if (d[k] == 0.0) {
+            if (o[k] < l || o[k] > h)
+                return 0;
+            continue;
+        }
+        double t1 = (l - o[k]) / d[k], t2 = (h - o[k]) / d[k];
+        if (t1 > t2) {
+            double tmp = t1;
+            t1 = t2, t2 = tmp;
+        }
+        tmin = t1 > tmin ? t1 : tmin;
+        tmax = t2 < tmax ? t2 : tmax;
+        if (tmin > tmax)
+            return 0;
+    }
+    return 1;
+}
+
+int accel_may_hit_moving(const accel *a, vec3 org, vec3 dir)
+{
+    const top_level *top = &a->top[TOP_MOVING];
+    if (top->count > 64)
+        return 1; /* many objects: testing them all per ray would cost more than it saves */
+    for (unsigned i = 0; i < top->count; i++) {
+        unsigned obj = top->ids[i];
+        if (ray_meets_box(org, dir, a->swept[obj]) && ray_meets_sphere(org, dir, &a->swept_sphere[obj]))
+            return 1;
+    }
+    return 0;
+}
 
 void accel_trace_static(const accel *a, vec3 org, vec3 dir, kbuffer *kb)
 {

@@ -60,6 +60,8 @@ void accel_trace(const accel *a, vec3 org, vec3 dir, double time, kbuffer *kb);
  * kb equals static_hits. */
 void accel_trace_static(const accel *a, vec3 org, vec3 dir, kbuffer *kb);
 int accel_trace_moving(const accel *a, vec3 org, vec3 dir, double time, const kbuffer *static_hits, kbuffer *kb);
-int accel_has_moving(const accel *a);
+/* 0 when the ray misses every moving object's swept bounds: then
+ * accel_trace_moving would return the static hits at every time. */
+int accel_may_hit_moving(const accel *a, vec3 org, vec3 dir);
 
 #endif

@@ -309,6 +309,11 @@ static int run_in_child(const bench_case *c, bench_result *r)
     return got == (ssize_t)sizeof *r && WIFEXITED(status) && WEXITSTATUS(status) == 0 ? 0 : -1;
 }
 
+static int wanted(const char *only, const char *series)
+{
+    return !only || !strcmp(only, series);
+}
+
 static void print_row(FILE *csv, const char *series, const bench_case *c, const bench_result *r)
 {
     printf("| %-9s | %8d | %-8s | %-10s | %4d | %2d | %8.0f | %8.0f | %6.2f | %6.2f | %5.2fx | %7.0f | %6.0f |\n",
@@ -326,6 +331,7 @@ int main(int argc, char **argv)
 {
     const char *csv_path = argc > 1 ? argv[1] : "bench.csv";
     int quick = argc > 2 && !strcmp(argv[2], "quick");
+    const char *only = argc > 3 ? argv[3] : NULL; /* one series: cases, splats, tspp, threads, static80, target */
     int res = quick ? 48 : 128, reps = quick ? 1 : 3;
     long cores = sysconf(_SC_NPROCESSORS_ONLN);
     int threads = cores > 0 ? (int)cores : 1;
@@ -341,26 +347,31 @@ int main(int argc, char **argv)
     static const char *const motions[] = {"static", "linear", "rotation"};
     int big = quick ? 20000 : 1000000, small = quick ? 5000 : 100000, tspp = quick ? 8 : 100;
     bench_result r;
-    for (int size = 0; size < 2; size++)
+    for (int size = 0; size < 2 && wanted(only, "cases"); size++)
         for (int m = 0; m < 3; m++)
             for (int e = 0; e < 2; e++) {
                 bench_case c = {motions[m], e, size ? big : small, tspp, threads, res, reps, 0};
                 if (!run_in_child(&c, &r))
                     print_row(csv, "cases", &c, &r);
             }
+    if (only && !strcmp(only, "target")) { /* issue 7's headline case alone, for quick iterations */
+        bench_case c = {"rotation", 0, big, tspp, threads, res, reps, 0};
+        if (!run_in_child(&c, &r))
+            print_row(csv, "target", &c, &r);
+    }
     int counts[] = {10000, 100000, 1000000, 4000000};
-    for (int i = 0; i < (quick ? 1 : 4); i++) {
+    for (int i = 0; i < (quick ? 1 : 4) && wanted(only, "splats"); i++) {
         bench_case c = {"rotation", 0, counts[i], tspp, threads, res, reps, 0};
         if (!run_in_child(&c, &r))
             print_row(csv, "splats", &c, &r);
     }
     int tspps[] = {10, 30, 100};
-    for (int i = 0; i < (quick ? 1 : 3); i++) {
+    for (int i = 0; i < (quick ? 1 : 3) && wanted(only, "tspp"); i++) {
         bench_case c = {"rotation", 0, big, tspps[i], threads, res, reps, 0};
         if (!run_in_child(&c, &r))
             print_row(csv, "tspp", &c, &r);
     }
-    for (int t = 1; t <= threads; t++) {
+    for (int t = 1; t <= threads && wanted(only, "threads"); t++) {
         bench_case c = {"rotation", 0, big, tspp, t, res, reps, 0};
         if (!run_in_child(&c, &r))
             print_row(csv, "threads", &c, &r);
@@ -368,7 +379,7 @@ int main(int argc, char **argv)
     printf("\nstatic80: a static wall fills the image, a rotating sphere about 20%% of it; 'base' is the same\n"
            "render tracing every time sample separately (--no-static-reuse), 'ratio' the speed-up.\n\n");
     bench_case c80 = {"rotation", 0, small, tspp, threads, res, reps, 1};
-    if (!run_in_child(&c80, &r))
+    if (wanted(only, "static80") && !run_in_child(&c80, &r))
         print_row(csv, "static80", &c80, &r);
     fclose(csv);
     return 0;

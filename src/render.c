@@ -53,13 +53,14 @@ typedef struct {
     kbuffer hits;
     double rgba[4];
     int shaded;
+    int may_hit_moving; /* the ray meets a moving object's swept bounds */
 } static_cache;
 
 static void sample_at(render_job *job, static_cache *sc, double t, double rgba[4], uint64_t *overflows)
 {
     kbuffer kb;
     const kbuffer *result = &sc->hits;
-    if (accel_has_moving(job->acc) &&
+    if (sc->may_hit_moving &&
         accel_trace_moving(job->acc, job->sc->cam.position, sc->dir, t, &sc->hits, &kb) > 0)
         result = &kb;
     *overflows += result->dropped > 0;
@@ -95,6 +96,7 @@ static void render_pixel_batch(render_job *job, int px, int py, uint32_t batch, 
             sc.x = scr->x[i], sc.y = scr->y[i], sc.shaded = 0;
             sc.dir = camera_ray_direction(&job->sc->cam, sc.x, sc.y);
             accel_trace_static(job->acc, job->sc->cam.position, sc.dir, &sc.hits);
+            sc.may_hit_moving = accel_may_hit_moving(job->acc, job->sc->cam.position, sc.dir);
         }
         double rgba[4];
         sample_at(job, &sc, scr->t[i], rgba, overflows);

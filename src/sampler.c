@@ -34,17 +34,31 @@ static uint64_t mix64(uint64_t z)
     return z ^ (z >> 31);
 }
 
+/* hash4(seed, a, b, dim) in two halves: the (seed, a) half is the same for
+ * all of a pixel's values, so samplers compute it once per pixel. */
+static uint64_t hash_key(uint64_t seed, uint64_t a)
+{
+    return mix64(mix64(seed + 0x9e3779b97f4a7c15ULL) ^ (a + 0x632be59bd9b4e019ULL));
+}
+
+static uint64_t hash_keyed(uint64_t key, uint64_t b, uint32_t dim)
+{
+    return mix64(mix64(key ^ (b + 0x85157af5ULL * (dim + 1))) ^ dim);
+}
+
 static uint64_t hash4(uint64_t seed, uint64_t a, uint64_t b, uint32_t dim)
 {
-    uint64_t h = mix64(seed + 0x9e3779b97f4a7c15ULL);
-    h = mix64(h ^ (a + 0x632be59bd9b4e019ULL));
-    h = mix64(h ^ (b + 0x85157af5ULL * (dim + 1)));
-    return mix64(h ^ dim);
+    return hash_keyed(hash_key(seed, a), b, dim);
+}
+
+static double uniform_keyed(uint64_t key, uint64_t b, uint32_t dim)
+{
+    return (double)(hash_keyed(key, b, dim) >> 11) * (1.0 / 9007199254740992.0); /* 53 bits */
 }
 
 double sampler_uniform(uint64_t seed, uint64_t a, uint64_t b, uint32_t dim)
 {
-    return (double)(hash4(seed, a, b, dim) >> 11) * (1.0 / 9007199254740992.0); /* 53 bits */
+    return uniform_keyed(hash_key(seed, a), b, dim);
 }
 
 int sampler_scratch_init(sampler_scratch *sc, const sampler *s)
@@ -65,8 +79,21 @@ void sampler_scratch_free(sampler_scratch *sc)
 
 /* ---- thesis ------------------------------------------------------------- */
 
-static void thesis_times(const sampler *s, uint64_t seed, uint64_t pixel, int i, sampler_scratch *sc,
-                         double *times)
+/* Insertion sort (tspp is small). Taking one ray's times in order makes
+ * successive object-space rays of a moving object neighbours, so their BVH
+ * nodes and splats are still in cache; the set of samples is unchanged. */
+static void sort_ascending(double *v, int n)
+{
+    for (int i = 1; i < n; i++) {
+        double x = v[i];
+        int j = i;
+        for (; j > 0 && v[j - 1] > x; j--)
+            v[j] = v[j - 1];
+        v[j] = x;
+    }
+}
+
+static void thesis_times(const sampler *s, uint64_t key, int i, sampler_scratch *sc, double *times)
 {
     int m = s->tspp * s->time_factor;
     for (int j = 0; j < m; j++)
@@ -74,7 +101,7 @@ static void thesis_times(const sampler *s, uint64_t seed, uint64_t pixel, int i,
     for (int k = 0; k < s->tspp; k++) {
         /* choose uniformly among the strata not yet taken */
         uint64_t counter = (uint64_t)i * (uint64_t)m + (uint64_t)k;
-        int pick = k + (int)(sampler_uniform(seed, pixel, counter, DIM_TIME_PICK) * (m - k));
+        int pick = k + (int)(uniform_keyed(key, counter, DIM_TIME_PICK) * (m - k));
         if (pick >= m)
             pick = m - 1;
         int stratum = sc->perm[pick];
@@ -83,18 +110,20 @@ static void thesis_times(const sampler *s, uint64_t seed, uint64_t pixel, int i,
         double t = s->t0 + (s->t1 - s->t0) * (stratum + sc->jitter[stratum]) / m;
         times[k] = t < s->t1 ? t : nextafter(s->t1, s->t0);
     }
+    sort_ascending(times, s->tspp);
 }
 
 static void thesis_batch(const sampler *s, uint64_t seed, uint64_t pixel, int px, int py,
                          sampler_scratch *sc, double *x, double *y, double *t)
 {
     int k = s->grid, m = s->tspp * s->time_factor;
+    uint64_t key = hash_key(seed, pixel);
     for (int j = 0; j < m; j++)
-        sc->jitter[j] = sampler_uniform(seed, pixel, (uint64_t)j, DIM_TIME_JITTER);
+        sc->jitter[j] = uniform_keyed(key, (uint64_t)j, DIM_TIME_JITTER);
     for (int i = 0; i < k * k; i++) {
-        double sx = px + (i % k + sampler_uniform(seed, pixel, (uint64_t)i, DIM_X)) / k;
-        double sy = py + (i / k + sampler_uniform(seed, pixel, (uint64_t)i, DIM_Y)) / k;
-        thesis_times(s, seed, pixel, i, sc, t + (size_t)i * s->tspp);
+        double sx = px + (i % k + uniform_keyed(key, (uint64_t)i, DIM_X)) / k;
+        double sy = py + (i / k + uniform_keyed(key, (uint64_t)i, DIM_Y)) / k;
+        thesis_times(s, key, i, sc, t + (size_t)i * s->tspp);
         for (int j = 0; j < s->tspp; j++) {
             x[(size_t)i * s->tspp + j] = sx;
             y[(size_t)i * s->tspp + j] = sy;
@@ -108,11 +137,12 @@ static void jittered3d_batch(const sampler *s, uint64_t seed, uint64_t pixel, in
                              double *x, double *y, double *t)
 {
     int k = s->grid, n = sampler_count(s);
+    uint64_t key = hash_key(seed, pixel);
     for (int i = 0; i < n; i++) {
         int cell = i / s->tspp, slot = i % s->tspp;
-        x[i] = px + (cell % k + sampler_uniform(seed, pixel, (uint64_t)i, DIM_X)) / k;
-        y[i] = py + (cell / k + sampler_uniform(seed, pixel, (uint64_t)i, DIM_Y)) / k;
-        double u = (slot + sampler_uniform(seed, pixel, (uint64_t)i, DIM_T)) / s->tspp;
+        x[i] = px + (cell % k + uniform_keyed(key, (uint64_t)i, DIM_X)) / k;
+        y[i] = py + (cell / k + uniform_keyed(key, (uint64_t)i, DIM_Y)) / k;
+        double u = (slot + uniform_keyed(key, (uint64_t)i, DIM_T)) / s->tspp;
         t[i] = fmin(s->t0 + (s->t1 - s->t0) * u, nextafter(s->t1, s->t0));
     }
 }
