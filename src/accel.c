@@ -126,9 +126,9 @@ static void splats_intersect(const struct RTCIntersectFunctionNArguments *args)
     float t, r2;
     if (!splat_intersect(&o->model.geom[args->primID], org, dir, rh->ray.tnear, rh->ray.tfar, &t, &r2))
         return;
-    const float *n = &o->model.normal[3 * args->primID];
+    const float *n = pointmodel_normal(&o->model, args->primID);
     float w = (float)splat_kernel_weight(r2, c->acc->sigma);
-    accept_hit(c, rh, args, t, w, v3(n[0], n[1], n[2]), &o->model.color[3 * args->primID]);
+    accept_hit(c, rh, args, t, w, v3(n[0], n[1], n[2]), pointmodel_color(&o->model, args->primID));
 }
 
 static void sphere_intersect(const struct RTCIntersectFunctionNArguments *args)

@@ -6,15 +6,14 @@ void pointmodel_init(pointmodel *m)
 {
     m->count = m->capacity = 0;
     m->geom = NULL;
-    m->normal = m->color = m->extent = NULL;
+    m->shading = m->extent = NULL;
     m->bounds = aabb_empty();
 }
 
 void pointmodel_free(pointmodel *m)
 {
     free(m->geom);
-    free(m->normal);
-    free(m->color);
+    free(m->shading);
     free(m->extent);
     pointmodel_init(m);
 }
@@ -25,16 +24,13 @@ static int grow(pointmodel *m, rr_error *err)
     splat_geom *g = realloc(m->geom, cap * sizeof *g);
     if (g)
         m->geom = g;
-    float *n = realloc(m->normal, cap * 3 * sizeof *n);
-    if (n)
-        m->normal = n;
-    float *c = realloc(m->color, cap * 3 * sizeof *c);
-    if (c)
-        m->color = c;
+    float *sh = realloc(m->shading, cap * 6 * sizeof *sh);
+    if (sh)
+        m->shading = sh;
     float *e = realloc(m->extent, cap * 3 * sizeof *e);
     if (e)
         m->extent = e;
-    if (!g || !n || !c || !e)
+    if (!g || !sh || !e)
         return rr_fail(err, "out of memory for %zu splats", cap);
     m->capacity = cap;
     return 0;
@@ -52,7 +48,7 @@ int pointmodel_add(pointmodel *m, vec3 c, vec3 u, vec3 v, vec3 n, vec3 color, rr
     if (v3_len(n) == 0)
         n = v3_cross(u, v);
     n = v3_normalize(n);
-    float *dn = &m->normal[3 * m->count], *dc = &m->color[3 * m->count];
+    float *dn = &m->shading[6 * m->count], *dc = dn + 3;
     dn[0] = (float)n.x, dn[1] = (float)n.y, dn[2] = (float)n.z;
     dc[0] = (float)color.x, dc[1] = (float)color.y, dc[2] = (float)color.z;
     aabb box = splat_bounds(c, u, v);

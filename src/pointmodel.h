@@ -9,11 +9,15 @@
 typedef struct {
     size_t count, capacity;
     splat_geom *geom; /* intersection form, one per splat */
-    float *normal;    /* 3 per splat: unit shading normal */
-    float *color;     /* 3 per splat: linear RGB */
+    /* 6 per splat: unit shading normal, then linear RGB color. Interleaved
+     * because a hit reads both: one cache miss instead of two. */
+    float *shading;
     float *extent;    /* 3 per splat: half size of the tight box about the center */
     aabb bounds;      /* union of the tight splat bounds */
 } pointmodel;
+
+static inline const float *pointmodel_normal(const pointmodel *m, size_t i) { return &m->shading[6 * i]; }
+static inline const float *pointmodel_color(const pointmodel *m, size_t i) { return &m->shading[6 * i + 3]; }
 
 void pointmodel_init(pointmodel *m);
 void pointmodel_free(pointmodel *m);

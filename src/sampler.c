@@ -34,8 +34,10 @@ static uint64_t mix64(uint64_t z)
     return z ^ (z >> 31);
 }
 
-/* hash4(seed, a, b, dim) in two halves: the (seed, a) half is the same for
- * all of a pixel's values, so samplers compute it once per pixel. */
+/* Random values are counter-based (no state carried between pixels, so any
+ * thread order gives the same image): a key from (seed, pixel), then value
+ * (b, dim) is SplitMix64 at position 8 b + dim + 1 of the stream seeded by
+ * the key. The key is computed once per pixel. */
 static uint64_t hash_key(uint64_t seed, uint64_t a)
 {
     return mix64(mix64(seed + 0x9e3779b97f4a7c15ULL) ^ (a + 0x632be59bd9b4e019ULL));
@@ -43,7 +45,7 @@ static uint64_t hash_key(uint64_t seed, uint64_t a)
 
 static uint64_t hash_keyed(uint64_t key, uint64_t b, uint32_t dim)
 {
-    return mix64(mix64(key ^ (b + 0x85157af5ULL * (dim + 1))) ^ dim);
+    return mix64(key + ((b << 3) + dim + 1) * 0x9e3779b97f4a7c15ULL);
 }
 
 static uint64_t hash4(uint64_t seed, uint64_t a, uint64_t b, uint32_t dim)
@@ -66,40 +68,33 @@ int sampler_scratch_init(sampler_scratch *sc, const sampler *s)
     size_t m = (size_t)s->tspp * (size_t)s->time_factor;
     sc->jitter = malloc(m * sizeof *sc->jitter);
     sc->perm = malloc(m * sizeof *sc->perm);
-    return sc->jitter && sc->perm ? 0 : -1;
+    sc->taken = malloc(m);
+    return sc->jitter && sc->perm && sc->taken ? 0 : -1;
 }
 
 void sampler_scratch_free(sampler_scratch *sc)
 {
     free(sc->jitter);
     free(sc->perm);
+    free(sc->taken);
     sc->jitter = NULL;
     sc->perm = NULL;
+    sc->taken = NULL;
 }
 
 /* ---- thesis ------------------------------------------------------------- */
 
-/* Insertion sort (tspp is small). Taking one ray's times in order makes
- * successive object-space rays of a moving object neighbours, so their BVH
- * nodes and splats are still in cache; the set of samples is unchanged. */
-static void sort_ascending(double *v, int n)
-{
-    for (int i = 1; i < n; i++) {
-        double x = v[i];
-        int j = i;
-        for (; j > 0 && v[j - 1] > x; j--)
-            v[j] = v[j - 1];
-        v[j] = x;
-    }
-}
-
+/* The times of one ray come out in increasing order (the strata taken are
+ * listed in order): successive object-space rays of a moving object are
+ * then neighbours, so their BVH nodes and splats are still in cache. The
+ * set of samples does not depend on the order. */
 static void thesis_times(const sampler *s, uint64_t key, int i, sampler_scratch *sc, double *times)
 {
     int m = s->tspp * s->time_factor;
     for (int j = 0; j < m; j++)
-        sc->perm[j] = j;
+        sc->perm[j] = j, sc->taken[j] = 0;
     for (int k = 0; k < s->tspp; k++) {
-        /* choose uniformly among the strata not yet taken */
+        /* choose uniformly among the strata not yet taken (partial Fisher-Yates) */
         uint64_t counter = (uint64_t)i * (uint64_t)m + (uint64_t)k;
         int pick = k + (int)(uniform_keyed(key, counter, DIM_TIME_PICK) * (m - k));
         if (pick >= m)
@@ -107,10 +102,13 @@ static void thesis_times(const sampler *s, uint64_t key, int i, sampler_scratch 
         int stratum = sc->perm[pick];
         sc->perm[pick] = sc->perm[k];
         sc->perm[k] = stratum;
-        double t = s->t0 + (s->t1 - s->t0) * (stratum + sc->jitter[stratum]) / m;
-        times[k] = t < s->t1 ? t : nextafter(s->t1, s->t0);
+        sc->taken[stratum] = 1;
     }
-    sort_ascending(times, s->tspp);
+    for (int j = 0, k = 0; j < m; j++)
+        if (sc->taken[j]) {
+            double t = s->t0 + (s->t1 - s->t0) * (j + sc->jitter[j]) / m;
+            times[k++] = t < s->t1 ? t : nextafter(s->t1, s->t0);
+        }
 }
 
 static void thesis_batch(const sampler *s, uint64_t seed, uint64_t pixel, int px, int py,

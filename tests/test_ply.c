@@ -71,8 +71,8 @@ TEST(ply_ascii_circular_with_uchar_colors)
     const char *msg = read_result(p, &m);
     CHECK(msg[0] == 0);
     CHECK(m.count == 2);
-    CHECK_NEAR(m.color[2], 0.2, 1e-6); /* 51 / 255 */
-    CHECK_NEAR(m.normal[5], 1.0, 1e-6); /* normalised */
+    CHECK_NEAR(pointmodel_color(&m, 0)[2], 0.2, 1e-6); /* 51 / 255 */
+    CHECK_NEAR(pointmodel_normal(&m, 1)[2], 1.0, 1e-6); /* normalised */
     CHECK_NEAR(m.bounds.hi.x, 1.25, 1e-6);
     pointmodel_free(&m);
 }
@@ -190,8 +190,8 @@ TEST(ply_writer_output_reads_back)
     CHECK(msg[0] == 0 && m.count == 2);
     if (m.count == 2) {
         CHECK_NEAR(m.geom[0].center[1], 2.0, 0);
-        CHECK_NEAR(m.normal[1], 1.0, 1e-6);
-        CHECK_NEAR(m.color[5], 1.0, 1e-6);
+        CHECK_NEAR(pointmodel_normal(&m, 0)[1], 1.0, 1e-6);
+        CHECK_NEAR(pointmodel_color(&m, 1)[2], 1.0, 1e-6);
         CHECK_NEAR(m.extent[3], 0.0, 1e-6); /* normal +x: no extent along x */
     }
     pointmodel_free(&m);
