@@ -70,7 +70,8 @@ test-py: $(BIN)
 test: test-c test-py
 
 # Speed and memory against Embree's built-in disc primitive, measured in the
-# same run (a benchmark, not a test). BENCH_ARGS=quick for a short smoke run.
+# same run (a benchmark, not a test). BENCH_ARGS=quick for a short smoke run,
+# BENCH_ARGS="full SERIES" for one series (see README, Speed).
 bench: $(BUILD)/refrender-bench
 	mkdir -p out
 	$(BUILD)/refrender-bench out/bench.csv $(BENCH_ARGS)
