@@ -207,6 +207,23 @@ static double render_mrays(const scene *s, const accel *acc, const render_settin
     return img.rays / img.seconds * 1e-6;
 }
 
+static render_settings bench_settings(const bench_case *c)
+{
+    render_settings rs = {{SAMPLER_THESIS, 1, 2, c->tspp, 4, 0.0, 1.0}, c->threads, 0, 1, 1, 0};
+    return rs;
+}
+
+static accel *build_or_die(const scene *s, int reuse_static)
+{
+    accel *acc;
+    rr_error err;
+    if (accel_build(s, s->epsilon, s->kernel_sigma, reuse_static, &acc, &err)) {
+        fprintf(stderr, "bench: %s\n", err.msg);
+        exit(1);
+    }
+    return acc;
+}
+
 /* 80% static background, 20% moving: static-hit reuse against tracing every
  * time sample separately (mrays = with reuse, base_mrays = without). */
 static void run_reuse_case(const bench_case *c, bench_result *r)
@@ -215,13 +232,11 @@ static void run_reuse_case(const bench_case *c, bench_result *r)
     surfel *surfels;
     size_t n;
     build_scene(c, &s, &surfels, &n);
-    render_settings rs = {{SAMPLER_THESIS, 1, 2, c->tspp, 4, 0.0, 1.0}, c->threads, 0, 1, 1, 0};
-    rr_error err;
-    accel *with, *without;
+    render_settings rs = bench_settings(c);
     double t0 = now();
-    accel_build(&s, s.epsilon, s.kernel_sigma, 1, &with, &err);
+    accel *with = build_or_die(&s, 1);
     r->build_ms = 1e3 * (now() - t0);
-    accel_build(&s, s.epsilon, s.kernel_sigma, 0, &without, &err);
+    accel *without = build_or_die(&s, 0);
     double a[16], b[16];
     for (int k = 0; k < c->reps; k++) {
         a[k] = render_mrays(&s, with, &rs, c->res, &r->rays);
@@ -255,34 +270,23 @@ static void run_case(const bench_case *c, bench_result *r)
     surfel *surfels;
     size_t n;
     build_scene(c, &s, &surfels, &n);
-    render_settings rs = {{SAMPLER_THESIS, 1, 2, c->tspp, 4, 0.0, 1.0}, c->threads, 0, 1, 1, 0};
-    rr_error err;
-    accel *acc;
+    render_settings rs = bench_settings(c);
     struct rusage ru;
     getrusage(RUSAGE_SELF, &ru);
     long before_kb = ru.ru_maxrss;
     double t0 = now();
-    if (accel_build(&s, s.epsilon, s.kernel_sigma, 1, &acc, &err)) {
-        fprintf(stderr, "bench: %s\n", err.msg);
-        exit(1);
-    }
+    accel *acc = build_or_die(&s, 1);
     r->build_ms = 1e3 * (now() - t0);
     getrusage(RUSAGE_SELF, &ru);
-    /* splat arrays (pointmodel.h: 48 + 3 * 12 bytes) plus the BVH's growth of the peak */
+    /* splat arrays (pointmodel.h: 48 + 6 * 4 + 3 * 4 bytes) plus the BVH's growth of the peak */
     r->bytes_per_splat = 84.0 + (ru.ru_maxrss - before_kb) * 1024.0 / (double)n;
     RTCDevice dev = rtcNewDevice(NULL);
     t0 = now();
     RTCScene base = baseline_build(dev, surfels, n);
     r->base_build_ms = 1e3 * (now() - t0);
     double ours[16], theirs[16];
-    volatile sig_atomic_t never = 0;
     for (int k = 0; k < c->reps; k++) { /* interleaved repetitions */
-        image img;
-        image_alloc(&img, c->res, c->res);
-        render_image(&s, acc, &rs, &img, NULL, &never, &err);
-        ours[k] = img.rays / img.seconds * 1e-6;
-        r->rays = img.rays;
-        image_free(&img);
+        ours[k] = render_mrays(&s, acc, &rs, c->res, &r->rays);
         theirs[k] = (double)c->res * c->res * 4 * c->tspp / baseline_seconds(base, &s, &rs) * 1e-6;
     }
     r->mrays = median(ours, c->reps);
