@@ -35,7 +35,7 @@ BIN      := $(BUILD)/refrender
 TESTBIN  := $(BUILD)/unit_tests
 
 .PHONY: all deps demo test test-c test-py bench clean
-all: $(BIN)
+all: $(BIN) $(BUILD)/refrender-bench
 
 $(BUILD)/%.o: src/%.c src/*.h | $(BUILD)
 	$(CC) $(CFLAGS) -c $< -o $@
