@@ -30,6 +30,7 @@ struct accel {
     sphere_bound *swept_sphere; /* and a world sphere holding it at every time */
     xform *rest;  /* transform of each static object (the same at every time) */
     int *is_static;
+    int reuse_static;
     const scene *sc;
     float epsilon;
     double sigma;
@@ -104,7 +105,7 @@ static void accept_hit(trace_context *c, struct RTCRayHit *rh, const struct RTCI
     vec3 d = v3(rh->ray.dir_x, rh->ray.dir_y, rh->ray.dir_z);
     if (v3_dot(normal, d) > 0) /* two-sided surfaces: shade the side facing the eye */
         normal = v3_scale(normal, -1.0);
-    vec3 wn = xform_vector(&c->xf, normal);
+    vec3 wn = xform_normal(&c->xf, normal);
     surface_hit h = {t, c->obj, args->primID, weight, {color[0], color[1], color[2]},
                      {(float)wn.x, (float)wn.y, (float)wn.z}};
     kbuffer_insert(c->kb, &h);
@@ -227,6 +228,7 @@ static sphere_bound swept_sphere(const scene_object *o, double t0, double t1)
     vec3 c;
     double r;
     object_sphere(o, &c, &r);
+    r *= animation_max_scale(&o->anim, t0, t1);
     aabb path = animation_swept_bounds(&o->anim, (aabb){c, c}, t0, t1);
     vec3 half = v3_scale(v3_sub(path.hi, path.lo), 0.5);
     sphere_bound b;
@@ -302,6 +304,39 @@ static void embree_error(void *user, enum RTCError code, const char *str)
         snprintf(e->msg, sizeof e->msg, "Embree error %d: %s", (int)code, str ? str : "");
 }
 
+/* The top levels depend on the shutter interval (swept bounds, which
+ * objects stand still); the objects' own BVHs do not. */
+static void build_top_levels(accel *a)
+{
+    const scene *s = a->sc;
+    for (int k = 0; k < 2; k++) {
+        if (a->top[k].scene)
+            rtcReleaseScene(a->top[k].scene);
+        a->top[k].scene = NULL;
+        a->top[k].count = 0;
+    }
+    for (int i = 0; i < s->nobjects; i++) {
+        const scene_object *o = &s->objects[i];
+        a->swept[i] = animation_swept_bounds(&o->anim, scene_object_bounds(o), s->shut.open, s->shut.close);
+        a->swept_sphere[i] = swept_sphere(o, s->shut.open, s->shut.close);
+        a->is_static[i] = a->reuse_static && animation_is_static(&o->anim);
+        a->rest[i] = animation_at(&o->anim, s->shut.open);
+        top_level *top = &a->top[a->is_static[i] ? TOP_STATIC : TOP_MOVING];
+        top->ids[top->count++] = (unsigned)i;
+    }
+    for (int k = 0; k < 2; k++)
+        if (a->top[k].count)
+            a->top[k].scene = user_scene(a->device, a->top[k].count, &a->top[k], object_bounds_cb, object_intersect);
+}
+
+int accel_set_shutter(accel *a, rr_error *err)
+{
+    build_top_levels(a);
+    if (a->build_error.msg[0])
+        return rr_fail(err, "%s", a->build_error.msg);
+    return 0;
+}
+
 int accel_build(const scene *s, double epsilon, double sigma, int reuse_static, accel **out, rr_error *err)
 {
     accel *a = calloc(1, sizeof *a);
@@ -334,16 +369,9 @@ int accel_build(const scene *s, double epsilon, double sigma, int reuse_static, 
         a->object_scenes[i] = user_scene(a->device, points ? (unsigned)o->model.count : 1u, o,
                                          points ? splat_bounds_cb : sphere_bounds_cb,
                                          points ? splats_intersect : sphere_intersect);
-        a->swept[i] = animation_swept_bounds(&o->anim, scene_object_bounds(o), s->shut.open, s->shut.close);
-        a->swept_sphere[i] = swept_sphere(o, s->shut.open, s->shut.close);
-        a->is_static[i] = reuse_static && animation_is_static(&o->anim);
-        a->rest[i] = animation_at(&o->anim, s->shut.open);
-        top_level *top = &a->top[a->is_static[i] ? TOP_STATIC : TOP_MOVING];
-        top->ids[top->count++] = (unsigned)i;
     }
-    for (int k = 0; k < 2; k++)
-        if (a->top[k].count)
-            a->top[k].scene = user_scene(a->device, a->top[k].count, &a->top[k], object_bounds_cb, object_intersect);
+    a->reuse_static = reuse_static;
+    build_top_levels(a);
     if (a->build_error.msg[0]) {
         rr_fail(err, "%s", a->build_error.msg);
         accel_free(a);

@@ -47,6 +47,10 @@ typedef struct accel accel;
 int accel_build(const scene *s, double epsilon, double sigma, int reuse_static, accel **out, rr_error *err);
 void accel_free(accel *a);
 
+/* After the scene's shutter changed (the next frame): recomputes the swept
+ * bounds and the top levels; the objects' BVHs are kept. */
+int accel_set_shutter(accel *a, rr_error *err);
+
 /* World ray org + t*dir (dir unit) at scene time `time`: fills kb with the
  * epsilon-blended hit set. */
 void accel_trace(const accel *a, vec3 org, vec3 dir, double time, kbuffer *kb);

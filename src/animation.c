@@ -1,5 +1,7 @@
 #include "animation.h"
 
+#include <stdlib.h>
+
 void animation_init_static(animation *a)
 {
     a->offset = v3(0, 0, 0);
@@ -8,10 +10,34 @@ void animation_init_static(animation *a)
     a->axis = v3(0, 0, 1);
     a->center = v3(0, 0, 0);
     a->degrees_per_time = 0;
+    a->keys = NULL;
+}
+
+void animation_free(animation *a)
+{
+    if (a->keys)
+        for (int i = 0; i < CH_COUNT; i++)
+            curve_free(&a->keys->ch[i]);
+    free(a->keys);
+    a->keys = NULL;
+}
+
+static int curve_is_constant(const curve *c)
+{
+    for (int i = 1; i < c->count; i++)
+        if (c->keys[i].value != c->keys[0].value)
+            return 0;
+    return curve_max_slope(c) == 0;
 }
 
 int animation_is_static(const animation *a)
 {
+    if (a->keys) {
+        for (int i = 0; i < CH_COUNT; i++)
+            if (!curve_is_constant(&a->keys->ch[i]))
+                return 0;
+        return 1;
+    }
     int moves = v3_len(a->velocity) > 0;
     int turns = a->has_rotation && a->degrees_per_time != 0;
     return !moves && !turns;
@@ -42,24 +68,172 @@ vec3 xform_point(const xform *x, vec3 p) { return v3_add(xform_vector(x, p), x->
 
 vec3 xform_inverse_vector(const xform *x, vec3 v)
 {
-    return v3(x->r[0][0] * v.x + x->r[1][0] * v.y + x->r[2][0] * v.z,
-              x->r[0][1] * v.x + x->r[1][1] * v.y + x->r[2][1] * v.z,
-              x->r[0][2] * v.x + x->r[1][2] * v.y + x->r[2][2] * v.z);
+    return v3(x->ri[0][0] * v.x + x->ri[0][1] * v.y + x->ri[0][2] * v.z,
+              x->ri[1][0] * v.x + x->ri[1][1] * v.y + x->ri[1][2] * v.z,
+              x->ri[2][0] * v.x + x->ri[2][1] * v.y + x->ri[2][2] * v.z);
 }
 
 vec3 xform_inverse_point(const xform *x, vec3 p) { return xform_inverse_vector(x, v3_sub(p, x->t)); }
 
-xform animation_at(const animation *a, double t)
+vec3 xform_normal(const xform *x, vec3 n)
+{
+    vec3 w = v3(x->ri[0][0] * n.x + x->ri[1][0] * n.y + x->ri[2][0] * n.z,
+                x->ri[0][1] * n.x + x->ri[1][1] * n.y + x->ri[2][1] * n.z,
+                x->ri[0][2] * n.x + x->ri[1][2] * n.y + x->ri[2][2] * n.z);
+    return x->scaled ? v3_normalize(w) : w;
+}
+
+/* ---- linear and rotation -------------------------------------------------- */
+
+static xform rigid_at(const animation *a, double t)
 {
     xform x;
     double angle = a->has_rotation ? a->degrees_per_time * t * (M_PI / 180.0) : 0.0;
     rotation_matrix(a->axis, angle, x.r);
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++)
+            x.ri[i][j] = x.r[j][i];
+    x.scaled = 0;
     /* p' = R (p + offset - c) + c + v t  =>  T = R (offset - c) + c + v t */
-    xform rot_only = x;
-    rot_only.t = v3(0, 0, 0);
-    vec3 rotated = xform_vector(&rot_only, v3_sub(a->offset, a->center));
+    x.t = v3(0, 0, 0);
+    vec3 rotated = xform_vector(&x, v3_sub(a->offset, a->center));
     x.t = v3_add(v3_add(rotated, a->center), v3_scale(a->velocity, t));
     return x;
+}
+
+/* ---- keyframes ------------------------------------------------------------ */
+
+/* Smallest scale used: keys must be positive, but a spline may dip below. */
+#define MIN_SCALE 1e-9
+
+static double channel(const keyframes *k, int ch, double t, int left)
+{
+    const curve *c = &k->ch[ch];
+    if (c->count == 0)
+        return ch >= CH_SX ? 1.0 : 0.0;
+    return left ? curve_eval_left(c, t) : curve_eval(c, t);
+}
+
+/* R = Rz Ry Rx: x first, then y, then z (Maya's xyz rotate order). */
+static void euler_xyz(double rx, double ry, double rz, double r[3][3])
+{
+    double X[3][3], Y[3][3], Z[3][3], zy[3][3];
+    rotation_matrix(v3(1, 0, 0), rx, X);
+    rotation_matrix(v3(0, 1, 0), ry, Y);
+    rotation_matrix(v3(0, 0, 1), rz, Z);
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++)
+            zy[i][j] = Z[i][0] * Y[0][j] + Z[i][1] * Y[1][j] + Z[i][2] * Y[2][j];
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++)
+            r[i][j] = zy[i][0] * X[0][j] + zy[i][1] * X[1][j] + zy[i][2] * X[2][j];
+}
+
+/* With `left`, the limit from the left (differs at the end of a step). */
+static xform keyed_at(const animation *a, double t, int left)
+{
+    const keyframes *k = a->keys;
+    double rot[3][3], sc[3];
+    euler_xyz(channel(k, CH_RX, t, left), channel(k, CH_RY, t, left), channel(k, CH_RZ, t, left), rot);
+    xform x;
+    x.scaled = 0;
+    for (int j = 0; j < 3; j++) {
+        sc[j] = fmax(channel(k, CH_SX + j, t, left), MIN_SCALE);
+        x.scaled |= sc[j] != 1.0;
+    }
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++) {
+            x.r[i][j] = rot[i][j] * sc[j];  /* R S */
+            x.ri[i][j] = rot[j][i] / sc[i]; /* S^-1 R^T */
+        }
+    /* p' = pivot + T + R S (p + offset - pivot) */
+    vec3 tr = v3(channel(k, CH_TX, t, left), channel(k, CH_TY, t, left), channel(k, CH_TZ, t, left));
+    x.t = v3(0, 0, 0);
+    x.t = v3_add(v3_add(k->pivot, tr), xform_vector(&x, v3_sub(a->offset, k->pivot)));
+    return x;
+}
+
+xform animation_at(const animation *a, double t) { return a->keys ? keyed_at(a, t, 0) : rigid_at(a, t); }
+
+/* ---- bounds over an interval ---------------------------------------------- */
+
+#define GRID_STEPS 64
+#define MAX_SAMPLES 65536
+
+static int cmp_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+static void add_sample(double *s, int *n, double t, double t0, double t1)
+{
+    if (t >= t0 && t <= t1 && *n < MAX_SAMPLES)
+        s[(*n)++] = t;
+}
+
+/* Key times of a curve inside [t0, t1], repeated (and mirrored) through
+ * cycling infinities, where a step may jump. */
+static void add_key_times(const curve *c, double *s, int *n, double t0, double t1)
+{
+    if (c->count < 2)
+        return;
+    double k0 = c->keys[0].time, kn = c->keys[c->count - 1].time, span = kn - k0;
+    int cycles = c->pre >= INF_CYCLE || c->post >= INF_CYCLE;
+    double m_lo = cycles ? floor((t0 - kn) / span) : 0, m_hi = cycles ? ceil((t1 - k0) / span) : 0;
+    for (double m = m_lo; m <= m_hi && *n < MAX_SAMPLES; m++)
+        for (int i = 0; i < c->count; i++) {
+            add_sample(s, n, c->keys[i].time + m * span, t0, t1);
+            add_sample(s, n, k0 + kn - c->keys[i].time + m * span, t0, t1);
+        }
+}
+
+/* Sorted sample times over [t0, t1]: a grid plus every key time. */
+static double *sample_times(const animation *a, double t0, double t1, int *n)
+{
+    double *s = malloc(MAX_SAMPLES * sizeof *s);
+    if (!s)
+        return NULL;
+    *n = 0;
+    for (int i = 0; i <= GRID_STEPS; i++)
+        s[(*n)++] = t0 + (t1 - t0) * i / GRID_STEPS;
+    if (a->keys)
+        for (int c = 0; c < CH_COUNT; c++)
+            add_key_times(&a->keys->ch[c], s, n, t0, t1);
+    qsort(s, (size_t)*n, sizeof *s, cmp_double);
+    return s;
+}
+
+static double largest_gap(const double *s, int n)
+{
+    double g = 0;
+    for (int i = 1; i < n; i++)
+        g = fmax(g, s[i] - s[i - 1]);
+    return g;
+}
+
+static double max_slope_of(const keyframes *k, int first, int count)
+{
+    double m = 0;
+    for (int c = first; c < first + count; c++)
+        m = fmax(m, curve_max_slope(&k->ch[c]));
+    return m;
+}
+
+double animation_max_scale(const animation *a, double t0, double t1)
+{
+    if (!a->keys)
+        return 1.0;
+    int n;
+    double *s = sample_times(a, t0, t1, &n), m = 0;
+    if (!s)
+        return INFINITY;
+    for (int i = 0; i < n; i++)
+        for (int c = CH_SX; c <= CH_SZ; c++)
+            m = fmax(m, fmax(channel(a->keys, c, s[i], 0), channel(a->keys, c, s[i], 1)));
+    m += max_slope_of(a->keys, CH_SX, 3) * largest_gap(s, n) * 0.5;
+    free(s);
+    return m;
 }
 
 static void add_transformed_box(aabb *out, const xform *x, aabb b)
@@ -70,28 +244,63 @@ static void add_transformed_box(aabb *out, const xform *x, aabb b)
     }
 }
 
+/* Farthest corner of the box b (shifted by offset) from the point c. */
+static double box_reach(aabb b, vec3 offset, vec3 c)
+{
+    double reach = 0;
+    for (int i = 0; i < 8; i++) {
+        vec3 p = v3(i & 1 ? b.hi.x : b.lo.x, i & 2 ? b.hi.y : b.lo.y, i & 4 ? b.hi.z : b.lo.z);
+        reach = fmax(reach, v3_len(v3_sub(v3_add(p, offset), c)));
+    }
+    return reach;
+}
+
+/* Bound on the speed of any point of b. Rigid: |v| + |omega| * reach from
+ * the axis. Keyframes, p' = pivot + T + R S q with q = p_rest - pivot:
+ * |dp'/dt| <= |T'| + |R'| |S q| + |S' q| with |R'| <= |rx'| + |ry'| + |rz'|
+ * (each Euler factor is a rotation at that rate). */
+static double speed_bound(const animation *a, aabb b, double t0, double t1)
+{
+    if (!a->keys) {
+        double omega = a->has_rotation ? fabs(a->degrees_per_time) * M_PI / 180.0 : 0.0;
+        return v3_len(a->velocity) + omega * box_reach(b, a->offset, a->center);
+    }
+    const keyframes *k = a->keys;
+    double q = box_reach(b, a->offset, k->pivot);
+    double dt = 0, dr = 0;
+    for (int c = CH_TX; c <= CH_TZ; c++)
+        dt += pow(curve_max_slope(&k->ch[c]), 2);
+    for (int c = CH_RX; c <= CH_RZ; c++)
+        dr += curve_max_slope(&k->ch[c]);
+    return sqrt(dt) + dr * animation_max_scale(a, t0, t1) * q + max_slope_of(k, CH_SX, 3) * q;
+}
+
 aabb animation_swept_bounds(const animation *a, aabb b, double t0, double t1)
 {
     aabb out = aabb_empty();
-    const int steps = animation_is_static(a) ? 1 : 64;
-    for (int i = 0; i <= steps; i++) {
-        xform x = animation_at(a, t0 + (t1 - t0) * i / steps);
+    if (animation_is_static(a)) {
+        xform x = animation_at(a, t0);
         add_transformed_box(&out, &x, b);
-    }
-    if (steps == 1)
         return out;
-    /* Between two steps a point moves at most speed * dt / 2 away from the
-     * nearer step; speed <= |v| + |omega| * (distance from the axis). */
-    vec3 far = v3(0, 0, 0);
-    aabb shifted = {v3_add(b.lo, a->offset), v3_add(b.hi, a->offset)};
-    double reach = 0;
-    for (int i = 0; i < 8; i++) {
-        far = v3(i & 1 ? shifted.hi.x : shifted.lo.x, i & 2 ? shifted.hi.y : shifted.lo.y,
-                 i & 4 ? shifted.hi.z : shifted.lo.z);
-        reach = fmax(reach, v3_len(v3_sub(far, a->center)));
     }
-    double omega = a->has_rotation ? fabs(a->degrees_per_time) * M_PI / 180.0 : 0.0;
-    double pad = (v3_len(a->velocity) + omega * reach) * (t1 - t0) / steps * 0.5;
+    int n;
+    double *s = sample_times(a, t0, t1, &n);
+    if (!s) { /* out of memory: the whole space is conservative */
+        out.lo = v3(-INFINITY, -INFINITY, -INFINITY), out.hi = v3(INFINITY, INFINITY, INFINITY);
+        return out;
+    }
+    for (int i = 0; i < n; i++) {
+        xform x = animation_at(a, s[i]);
+        add_transformed_box(&out, &x, b);
+        if (a->keys) { /* both sides of a possible jump */
+            x = keyed_at(a, s[i], 1);
+            add_transformed_box(&out, &x, b);
+        }
+    }
+    /* Between two samples the motion is continuous, and a point is at most
+     * speed * gap / 2 from where it was at the nearer sample. */
+    double pad = speed_bound(a, b, t0, t1) * largest_gap(s, n) * 0.5;
+    free(s);
     out.lo = v3_sub(out.lo, v3(pad, pad, pad));
     out.hi = v3_add(out.hi, v3(pad, pad, pad));
     return out;

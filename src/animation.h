@@ -1,18 +1,38 @@
-/* Rigid object transforms as functions of time (thesis sec. 4.6, B.2.3).
+/* Object (and camera) transforms as functions of time (thesis sec. 4.6,
+ * B.2.3): static, linear, rotation, and keyframed.
  *
- * An object's world position at time t is  p_world = R(t) p_rest + T(t),
- * where p_rest is the model point plus the object's rest offset. Objects
- * are never moved: the renderer applies the exact inverse to each ray
- * (thesis B.2.3 TransformRay). */
+ * linear/rotation: p_world = R(t) (p_rest - c) + c + v t, with
+ *   p_rest = model point + the object's rest offset, R(t) the rotation by
+ *   degrees_per_time * t about the axis through c.
+ * keyframes: p_world = pivot + T(t) + R(t) S(t) (p_rest - pivot), with
+ *   T, the Euler angles and S from keyed curves (curve.h). R = Rz Ry Rx:
+ *   the X rotation is applied first, then Y, then Z (Maya's default "xyz"
+ *   rotate order). The angles are interpolated as curves (as Maya does),
+ *   so R stays a rotation at every time.
+ * Objects are never moved: the renderer applies the exact inverse to each
+ * ray (thesis B.2.3 TransformRay). */
 #ifndef RR_ANIMATION_H
 #define RR_ANIMATION_H
 
 #include "common.h"
+#include "curve.h"
 
 typedef struct {
-    double r[3][3]; /* rotation, row-major */
-    vec3 t;         /* translation */
+    double r[3][3];  /* linear part (rotation times scale), row-major */
+    double ri[3][3]; /* its inverse */
+    vec3 t;          /* translation */
+    int scaled;      /* 0: r is a rotation (ri = r^T) */
 } xform;
+
+enum { CH_TX, CH_TY, CH_TZ, CH_RX, CH_RY, CH_RZ, CH_SX, CH_SY, CH_SZ, CH_COUNT };
+
+/* Keyed channels; a channel without keys holds 0 (translate, rotate) or 1
+ * (scale). Times in scene time, translate in scene units, rotate in
+ * radians. */
+typedef struct {
+    curve ch[CH_COUNT];
+    vec3 pivot;
+} keyframes;
 
 typedef struct {
     vec3 offset;          /* rest position offset applied to model points */
@@ -20,31 +40,37 @@ typedef struct {
     int has_rotation;     /* <rotation>: angle = degrees_per_time * t */
     vec3 axis, center;    /* rotation axis (unit) through center */
     double degrees_per_time;
+    keyframes *keys;      /* keyframed (owned) instead of linear/rotation */
 } animation;
 
 void animation_init_static(animation *a);
+void animation_free(animation *a);
 
 /* 1 when the transform is the same at every time. */
 int animation_is_static(const animation *a);
 
-/* Transform at absolute scene time t: rotate about the axis through center
- * by degrees_per_time * t (right-handed), then translate by velocity * t,
- * all after the rest offset. */
+/* Transform at absolute scene time t. */
 xform animation_at(const animation *a, double t);
 
 vec3 xform_point(const xform *x, vec3 p);
 vec3 xform_vector(const xform *x, vec3 v);
-/* Exact inverse for rigid transforms: R^T (p - T) and R^T v. */
+/* Exact inverse: ri (p - T) and ri v. */
 vec3 xform_inverse_point(const xform *x, vec3 p);
 vec3 xform_inverse_vector(const xform *x, vec3 v);
+/* An object-space normal in world space (inverse transpose; unit length
+ * kept for rotations, renormalised under scale). */
+vec3 xform_normal(const xform *x, vec3 n);
 
 /* Rotation matrix for angle (radians) about a unit axis (Rodrigues). */
 void rotation_matrix(vec3 axis, double angle, double r[3][3]);
 
 /* A box containing the object-space box b transformed by every transform
- * over [t0, t1]. Conservative: the transform is evaluated at steps and the
- * union padded by the largest distance any point of b can move between two
- * steps (|v| + |omega| * reach) * dt / 2. */
+ * over [t0, t1]. Conservative: the transform is evaluated at steps (and at
+ * every key time, from both sides) and the union padded by the farthest
+ * any point of b can move from the nearer step, (speed bound) * dt / 2. */
 aabb animation_swept_bounds(const animation *a, aabb b, double t0, double t1);
+
+/* An upper bound on the largest scale factor over [t0, t1] (1 if unscaled). */
+double animation_max_scale(const animation *a, double t0, double t1);
 
 #endif

@@ -1,5 +1,6 @@
 #include "cli.h"
 
+#include <ctype.h>
 #include <errno.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -69,4 +70,43 @@ int cli_check_writable(const char *path, rr_error *err)
     close(fd);
     unlink(probe);
     return 0;
+}
+
+/* Finds the one frame-number field "%d", "%4d" or "%04d" (width < 100). */
+static int frame_field(const char *pattern, const char **start, const char **end, int *zero, int *width)
+{
+    const char *p = strchr(pattern, '%');
+    if (!p || strchr(p + 1, '%'))
+        return 0;
+    const char *q = p + 1;
+    *zero = *q == '0';
+    q += *zero;
+    *width = 0;
+    for (int digits = 0; isdigit((unsigned char)*q); q++, digits++) {
+        if (digits == 2)
+            return 0;
+        *width = *width * 10 + (*q - '0');
+    }
+    if (*q != 'd')
+        return 0;
+    *start = p, *end = q + 1;
+    return 1;
+}
+
+int cli_frame_pattern_ok(const char *pattern)
+{
+    const char *a, *b;
+    int zero, width;
+    return frame_field(pattern, &a, &b, &zero, &width);
+}
+
+void cli_frame_path(const char *pattern, int frame, char *out, size_t size)
+{
+    const char *a, *b;
+    int zero, width;
+    if (!frame_field(pattern, &a, &b, &zero, &width)) {
+        snprintf(out, size, "%s", pattern);
+        return;
+    }
+    snprintf(out, size, zero ? "%.*s%0*d%s" : "%.*s%*d%s", (int)(a - pattern), pattern, width, frame, b);
 }

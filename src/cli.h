@@ -17,6 +17,12 @@ int cli_vec3(const char *opt, const char *text, vec3 *out, rr_error *err);
  * directory of path. */
 int cli_check_writable(const char *path, rr_error *err);
 
+/* Output names for frame sequences: a pattern holds exactly one field "%d",
+ * "%4d" or "%04d". cli_frame_path formats it (a name without a field is
+ * copied unchanged). */
+int cli_frame_pattern_ok(const char *pattern);
+void cli_frame_path(const char *pattern, int frame, char *out, size_t size);
+
 int cmd_render(int argc, char **argv);
 int cmd_gen(int argc, char **argv);
 int cmd_merge(int argc, char **argv);

@@ -55,6 +55,10 @@ static void usage(FILE *f)
 "  --res WxH        image size (default: scene <camera width height>)\n"
 "  --eps X          epsilon-blending distance in world units (default: scene, else 0.01)\n"
 "  --sigma X        Gaussian kernel sigma in splat radii (default: scene, else 0.5)\n"
+"Frames (scenes with <frames rate>; frame N starts at time N / rate):\n"
+"  --frame N        render frame N (default: the scene's shutter as given, frame 0)\n"
+"  --frames A-B     render frames A to B; -o (and --preview) must then hold one\n"
+"                   printf-style frame number such as out.%04d.exr\n"
 "Output:\n"
 "  -o, --output F   output EXR (default render.exr); written atomically\n"
 "  --preview F      also write an sRGB 8-bit preview (PNG, by extension)\n"
@@ -75,6 +79,7 @@ typedef struct {
     int spp, tspp, time_factor, threads, quiet, width, height, batches, max_batches;
     int pass, passes; /* passes > 0: --pass pass/passes */
     int no_static_reuse;
+    int frames, first_frame, last_frame; /* frames: 0 none, 1 --frame, 2 --frames */
     sampler_kind sampler;
     double eps, sigma, target_error, checkpoint_every; /* eps, sigma < 0: from the scene */
     uint64_t seed;
@@ -83,7 +88,7 @@ typedef struct {
 
 enum { OPT_SPP = 256, OPT_TSPP, OPT_RES, OPT_THREADS, OPT_SEED, OPT_EPS, OPT_SIGMA, OPT_TFACTOR,
        OPT_PREVIEW, OPT_QUIET, OPT_VERSION, OPT_SAMPLER, OPT_BATCHES, OPT_TARGET, OPT_MAXB, OPT_PASS,
-       OPT_CKPT, OPT_CKPT_EVERY, OPT_RESUME, OPT_NO_REUSE };
+       OPT_CKPT, OPT_CKPT_EVERY, OPT_RESUME, OPT_NO_REUSE, OPT_FRAME, OPT_FRAMES };
 
 static int parse_pass(const char *arg, render_options *o, rr_error *err)
 {
@@ -91,6 +96,15 @@ static int parse_pass(const char *arg, render_options *o, rr_error *err)
     if (sscanf(arg, "%d/%d%c", &o->pass, &o->passes, &extra) != 2 || o->passes < 1 || o->pass < 0 ||
         o->pass >= o->passes)
         return rr_fail(err, "--pass: expected K/N with 0 <= K < N, got '%s'", arg);
+    return 0;
+}
+
+static int parse_frames(const char *arg, render_options *o, rr_error *err)
+{
+    char extra;
+    if (sscanf(arg, "%d-%d%c", &o->first_frame, &o->last_frame, &extra) != 2 || o->last_frame < o->first_frame)
+        return rr_fail(err, "--frames: expected A-B with A <= B, got '%s'", arg);
+    o->frames = 2;
     return 0;
 }
 
@@ -110,6 +124,13 @@ static int parse_option(int c, const char *arg, render_options *o, rr_error *err
     case OPT_TARGET: return cli_double("--target-error", arg, 1e-12, &o->target_error, err);
     case OPT_CKPT_EVERY: return cli_double("--checkpoint-every", arg, 0.0, &o->checkpoint_every, err);
     case OPT_PASS: return parse_pass(arg, o, err);
+    case OPT_FRAMES: return parse_frames(arg, o, err);
+    case OPT_FRAME:
+        o->frames = 1;
+        if (cli_int("--frame", arg, INT_MIN, INT_MAX, &o->first_frame, err))
+            return -1;
+        o->last_frame = o->first_frame;
+        return 0;
     case OPT_SAMPLER:
         return sampler_from_name(arg, &o->sampler)
                    ? rr_fail(err, "--sampler: expected thesis, jittered3d or sobol, got '%s'", arg) : 0;
@@ -136,6 +157,15 @@ static int check_combinations(const render_options *o, rr_error *err)
         return rr_fail(err, "--max-batches must be at least --batches");
     if (o->passes && o->preview)
         return rr_fail(err, "--preview is not available for --pass renders (merge first)");
+    if (o->frames == 2 && (o->passes || o->checkpoint || o->resume))
+        return rr_fail(err, "--frames renders whole frames: render each frame with --frame to use "
+                            "--pass, --checkpoint or --resume");
+    int bad_output = strchr(o->output, '%') && !cli_frame_pattern_ok(o->output);
+    int bad_preview = o->preview && strchr(o->preview, '%') && !cli_frame_pattern_ok(o->preview);
+    if (bad_output || bad_preview ||
+        (o->frames == 2 && (!cli_frame_pattern_ok(o->output) || (o->preview && !cli_frame_pattern_ok(o->preview)))))
+        return rr_fail(err, "--frames needs -o (and --preview) with one frame-number field such as %%04d, "
+                            "e.g. out.%%04d.exr");
     return 0;
 }
 
@@ -153,7 +183,8 @@ static int parse_args(int argc, char **argv, render_options *o)
         {"checkpoint-every", required_argument, 0, OPT_CKPT_EVERY}, {"resume", required_argument, 0, OPT_RESUME},
         {"output", required_argument, 0, 'o'}, {"preview", required_argument, 0, OPT_PREVIEW},
         {"quiet", no_argument, 0, OPT_QUIET}, {"version", no_argument, 0, OPT_VERSION},
-        {"no-static-reuse", no_argument, 0, OPT_NO_REUSE},
+        {"no-static-reuse", no_argument, 0, OPT_NO_REUSE}, {"frame", required_argument, 0, OPT_FRAME},
+        {"frames", required_argument, 0, OPT_FRAMES},
         {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
     int c;
     rr_error err;
@@ -349,39 +380,64 @@ static void warn_about_settings(const render_options *o, const render_settings *
         fprintf(stderr, "refrender: note: sobol works best with a power-of-two spp*tspp (now %d)\n", n);
 }
 
-static int render_and_write(scene *s, const render_options *o, const char *cmdline, rr_error *err)
+/* Renders the scene's current shutter into o->output (or a frame's name). */
+static int render_one(scene *s, accel *acc, const render_options *o, const char *cmdline, const char *output,
+                      const char *preview, rr_error *err)
 {
     render_run run;
     setup_run(&run, s, o, cmdline);
     warn_about_settings(o, &run.rs);
-    accel *acc;
     image img;
-    if (accel_build(s, s->epsilon, s->kernel_sigma, !o->no_static_reuse, &acc, err))
-        return -1;
     if (o->resume ? resume_state(&run, &img, err) : (image_alloc(&img, s->cam.width, s->cam.height)
-                                                         ? rr_fail(err, "out of memory for the image") : 0)) {
-        accel_free(acc);
+                                                         ? rr_fail(err, "out of memory for the image") : 0))
         return -1;
-    }
     int tty = !o->quiet && isatty(STDERR_FILENO);
     render_hooks hooks = {tty ? print_progress : NULL, o->checkpoint ? write_checkpoint : NULL,
                           o->checkpoint_every > 0 ? o->checkpoint_every : 60.0, &run};
-    install_signal_handlers();
     int rc = render_image(s, acc, &run.rs, &img, &hooks, &interrupted, err);
-    accel_free(acc);
     if (!rc) {
         report(o, s, &img, tty);
         if (o->target_error > 0)
             report_target(o, &img, &run.attrs);
         attrs_set(&run.attrs, "refrender:renderSeconds", "%.3f", img.seconds);
         attrs_set(&run.attrs, "refrender:rays", "%llu", (unsigned long long)img.rays);
-        rc = o->passes ? output_write_state(o->output, &img, run.rs.batch_begin,
+        if (o->frames)
+            attrs_set(&run.attrs, "refrender:frameRate", "%.17g", s->frame_rate);
+        rc = o->passes ? output_write_state(output, &img, run.rs.batch_begin,
                                             run.rs.batch_begin + run.rs.batches, &run.attrs, err)
-                       : output_write_final(o->output, &img, sampler_count(&run.rs.smp), &run.attrs, err);
+                       : output_write_final(output, &img, sampler_count(&run.rs.smp), &run.attrs, err);
     }
-    if (!rc && o->preview)
-        rc = write_preview(o->preview, &img, err);
+    if (!rc && preview)
+        rc = write_preview(preview, &img, err);
     image_free(&img);
+    return rc;
+}
+
+/* One frame or a sequence, sharing the loaded models and their BVHs; only
+ * the top levels are rebuilt for each frame's shutter. */
+static int render_and_write(scene *s, const render_options *o, const char *cmdline, rr_error *err)
+{
+    accel *acc;
+    if (o->frames && scene_set_frame(s, o->first_frame, err))
+        return -1;
+    if (accel_build(s, s->epsilon, s->kernel_sigma, !o->no_static_reuse, &acc, err))
+        return -1;
+    install_signal_handlers();
+    int rc = 0;
+    for (int f = o->first_frame; !rc && f <= o->last_frame; f++) {
+        char out[PATH_MAX], prev[PATH_MAX];
+        if (o->frames && (scene_set_frame(s, f, err) || accel_set_shutter(acc, err))) {
+            rc = -1;
+            break;
+        }
+        cli_frame_path(o->output, f, out, sizeof out);
+        if (o->preview)
+            cli_frame_path(o->preview, f, prev, sizeof prev);
+        if (o->frames == 2 && !o->quiet)
+            fprintf(stderr, "refrender: frame %d: shutter [%g, %g] -> %s\n", f, s->shut.open, s->shut.close, out);
+        rc = render_one(s, acc, o, cmdline, out, o->preview ? prev : NULL, err);
+    }
+    accel_free(acc);
     return rc;
 }
 

@@ -13,6 +13,7 @@
 typedef struct {
     const scene *sc;
     const accel *acc;
+    int camera_moves; /* every sample traces its own world ray */
     const render_settings *rs;
     image *img;
     int tiles_x, tiles_y, ntiles;
@@ -38,10 +39,10 @@ static double now_seconds(void)
 }
 
 /* The color and coverage of a k-buffer (background when empty). */
-static void sample_color(const render_job *job, vec3 dir, const kbuffer *kb, double rgba[4])
+static void sample_color(const render_job *job, vec3 eye, vec3 dir, const kbuffer *kb, double rgba[4])
 {
     const scene *s = job->sc;
-    vec3 c = kb->count ? shade_hits(s, kb, s->cam.position, dir) : s->background;
+    vec3 c = kb->count ? shade_hits(s, kb, eye, dir) : s->background;
     rgba[0] = c.x, rgba[1] = c.y, rgba[2] = c.z, rgba[3] = kb->count ? 1.0 : 0.0;
 }
 
@@ -56,8 +57,17 @@ typedef struct {
     int may_hit_moving; /* the ray meets a moving object's swept bounds */
 } static_cache;
 
-static void sample_at(render_job *job, static_cache *sc, double t, double rgba[4], uint64_t *overflows)
+/* A fixed camera: samples at the same raster position share one world ray,
+ * whose static hits are traced once (see static_cache). */
+static void sample_fixed_camera(render_job *job, static_cache *sc, double x, double y, double t, double rgba[4],
+                                uint64_t *overflows)
 {
+    if (x != sc->x || y != sc->y) {
+        sc->x = x, sc->y = y, sc->shaded = 0;
+        sc->dir = camera_ray_direction(&job->sc->cam, x, y);
+        accel_trace_static(job->acc, job->sc->cam.position, sc->dir, &sc->hits);
+        sc->may_hit_moving = accel_may_hit_moving(job->acc, job->sc->cam.position, sc->dir);
+    }
     kbuffer kb;
     const kbuffer *result = &sc->hits;
     if (sc->may_hit_moving &&
@@ -68,11 +78,23 @@ static void sample_at(render_job *job, static_cache *sc, double t, double rgba[4
         memcpy(rgba, sc->rgba, sizeof sc->rgba);
         return;
     }
-    sample_color(job, sc->dir, result, rgba);
+    sample_color(job, job->sc->cam.position, sc->dir, result, rgba);
     if (result == &sc->hits) {
         memcpy(sc->rgba, rgba, sizeof sc->rgba);
         sc->shaded = 1;
     }
+}
+
+/* A moving camera (thesis eq. 3.6): every sample has its own world ray. */
+static void sample_moving_camera(render_job *job, double x, double y, double t, double rgba[4],
+                                 uint64_t *overflows)
+{
+    vec3 org, dir;
+    kbuffer kb;
+    scene_camera_ray(job->sc, x, y, t, &org, &dir);
+    accel_trace(job->acc, org, dir, t, &kb);
+    *overflows += kb.dropped > 0;
+    sample_color(job, org, dir, &kb, rgba);
 }
 
 /* One batch of a pixel (thesis sec. 4.5): each sample's color is weighted
@@ -92,14 +114,11 @@ static void render_pixel_batch(render_job *job, int px, int py, uint32_t batch, 
         double w = shutter_weight(&job->sc->shut, scr->t[i]);
         if (w == 0)
             continue; /* contributes nothing to either sum */
-        if (scr->x[i] != sc.x || scr->y[i] != sc.y) {
-            sc.x = scr->x[i], sc.y = scr->y[i], sc.shaded = 0;
-            sc.dir = camera_ray_direction(&job->sc->cam, sc.x, sc.y);
-            accel_trace_static(job->acc, job->sc->cam.position, sc.dir, &sc.hits);
-            sc.may_hit_moving = accel_may_hit_moving(job->acc, job->sc->cam.position, sc.dir);
-        }
         double rgba[4];
-        sample_at(job, &sc, scr->t[i], rgba, overflows);
+        if (job->camera_moves)
+            sample_moving_camera(job, scr->x[i], scr->y[i], scr->t[i], rgba, overflows);
+        else
+            sample_fixed_camera(job, &sc, scr->x[i], scr->y[i], scr->t[i], rgba, overflows);
         (*rays)++;
         for (int c = 0; c < 4; c++)
             acc[c] += w * rgba[c];
@@ -305,6 +324,7 @@ int render_image(const scene *s, const accel *a, const render_settings *rs, imag
     render_job job;
     memset(&job, 0, sizeof job);
     job.sc = s, job.acc = a, job.rs = rs, job.img = img, job.cancel = cancel;
+    job.camera_moves = scene_camera_moves(s);
     job.tiles_x = (img->width + TILE - 1) / TILE;
     job.tiles_y = (img->height + TILE - 1) / TILE;
     job.ntiles = job.tiles_x * job.tiles_y;

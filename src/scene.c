@@ -18,12 +18,44 @@ void scene_init(scene *s)
     s->epsilon = 0.01;
     s->kernel_sigma = 0.5;
     s->time_factor = 4;
+    animation_init_static(&s->camera_motion);
+}
+
+int scene_camera_moves(const scene *s) { return !animation_is_static(&s->camera_motion); }
+
+void scene_camera_ray(const scene *s, double x, double y, double t, vec3 *org, vec3 *dir)
+{
+    vec3 d = camera_ray_direction(&s->cam, x, y);
+    if (!scene_camera_moves(s)) {
+        *org = s->cam.position, *dir = d;
+        return;
+    }
+    xform m = animation_at(&s->camera_motion, t); /* rigid: keeps d unit */
+    *org = xform_point(&m, s->cam.position);
+    *dir = xform_vector(&m, d);
+}
+
+int scene_set_frame(scene *s, int frame, rr_error *err)
+{
+    if (!(s->frame_rate > 0))
+        return rr_fail(err, "%s: the scene has no frame rate; add <frames rate=\"...\"/> to render frames",
+                       s->path);
+    double shift = frame / s->frame_rate;
+    shutter f = s->frame0_shutter;
+    f.open += shift, f.close += shift, f.center += shift;
+    for (int i = 0; i < f.table_size; i++)
+        f.table_t[i] += shift;
+    s->shut = f;
+    return 0;
 }
 
 void scene_free(scene *s)
 {
-    for (int i = 0; i < s->nobjects; i++)
+    for (int i = 0; i < s->nobjects; i++) {
         pointmodel_free(&s->objects[i].model);
+        animation_free(&s->objects[i].anim);
+    }
+    animation_free(&s->camera_motion);
     free(s->objects);
     free(s->lights);
     s->objects = NULL;

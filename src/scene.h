@@ -43,7 +43,12 @@ typedef struct {
 typedef struct {
     char path[4096]; /* scene file, for messages and EXR metadata */
     camera cam;
-    shutter shut;
+    animation camera_motion; /* the camera's rest pose moved like an object (rigid) */
+    shutter shut;            /* the current frame's (see scene_frame_shutter) */
+    double frame_rate;       /* <frames rate>: frame N starts at time N / rate; 0: no frames */
+    shutter frame0_shutter;  /* the shutter of frame 0, shifted for each frame */
+    double shutter_fraction; /* <shutter fraction>: of the frame interval; 0: open/close given */
+    int shutter_center_given, shutter_line;
     vec3 background, ambient;
     double epsilon, kernel_sigma;
     int time_factor;
@@ -53,6 +58,16 @@ typedef struct {
 } scene;
 
 void scene_init(scene *s);
+
+/* Whether the camera moves during [t0, t1] (then no static-hit reuse). */
+int scene_camera_moves(const scene *s);
+
+/* The world ray through raster (x, y) at time t: origin and unit direction. */
+void scene_camera_ray(const scene *s, double x, double y, double t, vec3 *org, vec3 *dir);
+
+/* Sets s->shut to frame N's shutter: frame 0's shifted by N / frame_rate.
+ * Returns -1 if the scene has no frame rate. */
+int scene_set_frame(scene *s, int frame, rr_error *err);
 void scene_free(scene *s);
 
 /* Object-space bounds of an object (before its animation). */

@@ -2,11 +2,13 @@
 
 #include <libxml/parser.h>
 #include <libxml/xmlerror.h>
+#include <ctype.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
+#include "animfile.h"
 #include "ply.h"
 #include "shapes.h"
 
@@ -135,7 +137,31 @@ static int check_no_text(xml_ctx *c, xmlNodePtr parent)
 
 /* ---- scene-level elements -------------------------------------------- */
 
-static int parse_camera(xml_ctx *c, xmlNodePtr n, camera *cam)
+static int parse_animation(xml_ctx *c, xmlNodePtr n, animation *a);
+
+/* <camera ...> with an optional <animation> moving its rest pose rigidly. */
+static int parse_camera_motion(xml_ctx *c, xmlNodePtr n, const camera *cam, animation *a)
+{
+    if (check_no_text(c, n))
+        return -1;
+    for (xmlNodePtr k = n->children; k; k = k->next) {
+        if (!is_element(k))
+            continue;
+        if (strcmp(elname(k), "animation"))
+            return node_fail(c, k, "unknown element inside <camera> (expected animation)");
+        animation_free(a);
+        animation_init_static(a);
+        a->offset = cam->position; /* the default keyframe pivot; the camera has no model offset */
+        if (parse_animation(c, k, a))
+            return -1;
+        a->offset = v3(0, 0, 0);
+        if (a->keys && (a->keys->ch[CH_SX].count || a->keys->ch[CH_SY].count || a->keys->ch[CH_SZ].count))
+            return node_fail(c, k, "the camera cannot be scaled (its motion must be rigid)");
+    }
+    return 0;
+}
+
+static int parse_camera(xml_ctx *c, xmlNodePtr n, camera *cam, animation *motion)
 {
     static const char *const ok[] = {"position", "lookat", "up", "fov", "width", "height", NULL};
     if (check_attributes(c, n, ok) || attr_vec3(c, n, "position", &cam->position, 0) ||
@@ -147,7 +173,7 @@ static int parse_camera(xml_ctx *c, xmlNodePtr n, camera *cam)
     rr_error sub;
     if (camera_prepare(cam, &sub))
         return node_fail(c, n, "%s", sub.msg);
-    return 0;
+    return parse_camera_motion(c, n, cam, motion);
 }
 
 static int parse_weight_kind(xml_ctx *c, xmlNodePtr n, shutter *s)
@@ -183,12 +209,26 @@ static int parse_weight_table(xml_ctx *c, xmlNodePtr n, shutter *s)
     return 0;
 }
 
-static int parse_shutter(xml_ctx *c, xmlNodePtr n, shutter *s)
+/* <shutter open close | fraction, weight ...>. With <frames>, times are
+ * relative to the start of each frame; fraction is of the frame interval
+ * (0.5 = a 180-degree shutter) and is resolved once the rate is known. */
+static int parse_shutter(xml_ctx *c, xmlNodePtr n, scene *sc)
 {
-    static const char *const ok[] = {"open", "close", "weight", "center", "rate", "table", NULL};
+    static const char *const ok[] = {"open", "close", "fraction", "weight", "center", "rate", "table", NULL};
+    shutter *s = &sc->shut;
+    char probe[8];
     if (check_attributes(c, n, ok) || attr_double(c, n, "open", &s->open, 0) ||
-        attr_double(c, n, "close", &s->close, 0))
+        attr_double(c, n, "close", &s->close, 0) || attr_double(c, n, "fraction", &sc->shutter_fraction, 0))
         return -1;
+    if (attr_text(n, "fraction", probe, sizeof probe)) {
+        if (attr_text(n, "open", probe, sizeof probe) || attr_text(n, "close", probe, sizeof probe))
+            return node_fail(c, n, "give either open/close or fraction, not both");
+        if (!(sc->shutter_fraction > 0 && sc->shutter_fraction <= 1))
+            return node_fail(c, n, "shutter fraction must be in (0, 1]");
+        sc->shutter_line = (int)xmlGetLineNo(n);
+        sc->shutter_center_given = attr_text(n, "center", probe, sizeof probe);
+        s->open = 0, s->close = 1; /* placeholders until the frame rate is known */
+    }
     s->center = s->close; /* thesis Figure 3.1: weighting center t_c = t1 */
     if (attr_double(c, n, "center", &s->center, 0) || attr_double(c, n, "rate", &s->rate, 0) ||
         parse_weight_kind(c, n, s) || parse_weight_table(c, n, s))
@@ -287,26 +327,176 @@ static int parse_rotation(xml_ctx *c, xmlNodePtr n, animation *a)
     return 0;
 }
 
+/* ---- keyframes -------------------------------------------------------- */
+
+static void resolve_path(xml_ctx *c, const char *rel, char *out, size_t size);
+
+static int key_interpolation(xml_ctx *c, xmlNodePtr n, tangent_kind *in, tangent_kind *out)
+{
+    char name[64];
+    if (!attr_text(n, "interpolation", name, sizeof name))
+        return 0;
+    if (!strcmp(name, "linear")) *in = *out = TAN_LINEAR;
+    else if (!strcmp(name, "step")) *in = TAN_FLAT, *out = TAN_STEP;
+    else if (!strcmp(name, "spline")) *in = *out = TAN_SPLINE;
+    else if (!strcmp(name, "clamped")) *in = *out = TAN_CLAMPED;
+    else if (!strcmp(name, "flat")) *in = *out = TAN_FLAT;
+    else return node_fail(c, n, "unknown interpolation '%s' (expected linear, step, spline, clamped or flat)", name);
+    return 0;
+}
+
+static int append_key(xml_ctx *c, xmlNodePtr n, curve *cv, curve_key k)
+{
+    if (cv->count > 0 && !(k.time > cv->keys[cv->count - 1].time))
+        return node_fail(c, n, "key time %g is not after the previous key's %g", k.time,
+                         cv->keys[cv->count - 1].time);
+    curve_key *grown = realloc(cv->keys, (size_t)(cv->count + 1) * sizeof *grown);
+    if (!grown)
+        return node_fail(c, n, "out of memory");
+    cv->keys = grown;
+    cv->keys[cv->count++] = k;
+    return 0;
+}
+
+/* <key time="t" translate="x y z" rotate="degrees x y z" scale="x y z"
+ * interpolation="..."/>: each given vector keys its three channels. */
+static int parse_key(xml_ctx *c, xmlNodePtr n, keyframes *kf, tangent_kind in, tangent_kind out)
+{
+    static const char *const ok[] = {"time", "translate", "rotate", "scale", "interpolation", NULL};
+    static const char *const vectors[] = {"translate", "rotate", "scale"};
+    curve_key k;
+    memset(&k, 0, sizeof k);
+    if (check_attributes(c, n, ok) || check_no_text(c, n) || attr_double(c, n, "time", &k.time, 1) ||
+        key_interpolation(c, n, &in, &out))
+        return -1;
+    k.in = in, k.out = out;
+    int any = 0;
+    for (int v = 0; v < 3; v++) {
+        vec3 val = v3(0, 0, 0);
+        char probe[8];
+        if (!attr_text(n, vectors[v], probe, sizeof probe))
+            continue;
+        if (attr_vec3(c, n, vectors[v], &val, 1))
+            return -1;
+        double xyz[3] = {val.x, val.y, val.z};
+        for (int i = 0; i < 3; i++) {
+            k.value = v == 1 ? xyz[i] * M_PI / 180.0 : xyz[i];
+            if (v == 2 && !(xyz[i] > 0))
+                return node_fail(c, n, "scale must be positive");
+            if (append_key(c, n, &kf->ch[3 * v + i], k))
+                return -1;
+        }
+        any = 1;
+    }
+    if (!any)
+        return node_fail(c, n, "a key needs translate, rotate or scale");
+    return 0;
+}
+
+/* <keyframes interpolation="spline" pivot="x y z" pre="constant"
+ * post="constant"> <key .../> ... </keyframes> */
+static int parse_keyframes(xml_ctx *c, xmlNodePtr n, keyframes *kf)
+{
+    static const char *const ok[] = {"interpolation", "pivot", "pre", "post", NULL};
+    tangent_kind in = TAN_LINEAR, out = TAN_LINEAR;
+    char inf[2][64] = {"constant", "constant"};
+    infinity_kind pre, post;
+    attr_text(n, "pre", inf[0], sizeof inf[0]);
+    attr_text(n, "post", inf[1], sizeof inf[1]);
+    if (check_attributes(c, n, ok) || check_no_text(c, n) || key_interpolation(c, n, &in, &out) ||
+        attr_vec3(c, n, "pivot", &kf->pivot, 0))
+        return -1;
+    if (infinity_from_name(inf[0], &pre) || infinity_from_name(inf[1], &post))
+        return node_fail(c, n, "unknown pre/post infinity (expected constant, linear, cycle, cycleRelative "
+                               "or oscillate)");
+    int keys = 0;
+    for (xmlNodePtr k = n->children; k; k = k->next) {
+        if (!is_element(k))
+            continue;
+        if (strcmp(elname(k), "key"))
+            return node_fail(c, k, "unknown element inside <keyframes> (expected key)");
+        if (parse_key(c, k, kf, in, out))
+            return -1;
+        keys++;
+    }
+    if (!keys)
+        return node_fail(c, n, "<keyframes> needs at least one <key>");
+    for (int i = 0; i < CH_COUNT; i++) {
+        rr_error sub;
+        kf->ch[i].pre = pre, kf->ch[i].post = post;
+        if (kf->ch[i].count && curve_prepare(&kf->ch[i], &sub))
+            return node_fail(c, n, "%s", sub.msg);
+    }
+    return 0;
+}
+
+/* Keyframes rotate and scale about a pivot that defaults to the object's
+ * position (the camera's position): keyed rotations turn it in place. */
+static int new_keyframes(xml_ctx *c, xmlNodePtr n, animation *a)
+{
+    if (a->keys || a->has_rotation || v3_len(a->velocity) > 0)
+        return node_fail(c, n, "an animation is either keyframes (or a .anim file) or linear/rotation, once");
+    a->keys = calloc(1, sizeof *a->keys);
+    if (!a->keys)
+        return node_fail(c, n, "out of memory");
+    a->keys->pivot = a->offset;
+    return 0;
+}
+
+/* <animation>path.anim</animation> as in thesis Figure 4.11. */
+static int load_anim_file(xml_ctx *c, xmlNodePtr n, animation *a)
+{
+    xmlChar *text = xmlNodeGetContent(n);
+    char rel[4096], path[4096];
+    snprintf(rel, sizeof rel, "%s", text ? (const char *)text : "");
+    xmlFree(text);
+    char *start = rel, *end = rel + strlen(rel);
+    while (*start && isspace((unsigned char)*start))
+        start++;
+    while (end > start && isspace((unsigned char)end[-1]))
+        *--end = 0;
+    resolve_path(c, start, path, sizeof path);
+    if (new_keyframes(c, n, a))
+        return -1;
+    vec3 pivot = a->keys->pivot;
+    free(a->keys);
+    a->keys = NULL;
+    rr_error sub;
+    if (animfile_load(path, &a->keys, &sub))
+        return rr_fail(c->err, "%s (animation of %s:%ld)", sub.msg, c->name, xmlGetLineNo(n));
+    a->keys->pivot = pivot;
+    return 0;
+}
+
+static int has_text(xmlNodePtr n)
+{
+    for (xmlNodePtr k = n->children; k; k = k->next)
+        if (k->type == XML_TEXT_NODE && !xmlIsBlankNode(k))
+            return 1;
+    return 0;
+}
+
 static int parse_animation(xml_ctx *c, xmlNodePtr n, animation *a)
 {
     static const char *const ok[] = {NULL};
     if (check_attributes(c, n, ok))
         return -1;
+    if (has_text(n))
+        return load_anim_file(c, n, a);
     for (xmlNodePtr k = n->children; k; k = k->next) {
-        if (k->type == XML_TEXT_NODE && !xmlIsBlankNode(k))
-            return node_fail(c, n, "keyframe animation files (.anim) are not supported yet; "
-                                   "use <linear> and <rotation>");
         if (!is_element(k))
             continue;
-        if (!strcmp(elname(k), "linear")) {
-            if (parse_linear(c, k, a))
-                return -1;
-        } else if (!strcmp(elname(k), "rotation")) {
-            if (parse_rotation(c, k, a))
-                return -1;
-        } else {
-            return node_fail(c, k, "unknown animation element (expected linear or rotation)");
-        }
+        int rc;
+        if (!strcmp(elname(k), "linear"))
+            rc = a->keys ? new_keyframes(c, k, a) : parse_linear(c, k, a);
+        else if (!strcmp(elname(k), "rotation"))
+            rc = a->keys ? new_keyframes(c, k, a) : parse_rotation(c, k, a);
+        else if (!strcmp(elname(k), "keyframes"))
+            rc = new_keyframes(c, k, a) || parse_keyframes(c, k, a->keys);
+        else
+            rc = node_fail(c, k, "unknown animation element (expected linear, rotation or keyframes)");
+        if (rc)
+            return -1;
     }
     return 0;
 }
@@ -482,17 +672,45 @@ static int parse_object(xml_ctx *c, xmlNodePtr n, scene *s)
     return 0;
 }
 
+/* <frames rate="24"/>: frame N starts at scene time N / rate. */
+static int parse_frames(xml_ctx *c, xmlNodePtr n, scene *s)
+{
+    static const char *const ok[] = {"rate", NULL};
+    return check_attributes(c, n, ok) || check_no_text(c, n) || attr_positive(c, n, "rate", &s->frame_rate, 1)
+               ? -1 : 0;
+}
+
+/* The fraction shutter needs the rate; frame 0's shutter is kept to shift. */
+static int finish_frames(xml_ctx *c, scene *s)
+{
+    if (s->shutter_fraction > 0) {
+        if (!(s->frame_rate > 0))
+            return rr_fail(c->err, "%s:%d: a shutter fraction needs <frames rate=\"...\"/>", c->name,
+                           s->shutter_line);
+        s->shut.open = 0;
+        s->shut.close = s->shutter_fraction / s->frame_rate;
+        if (!s->shutter_center_given)
+            s->shut.center = s->shut.close;
+        rr_error sub;
+        if (shutter_check(&s->shut, &sub))
+            return rr_fail(c->err, "%s:%d: %s", c->name, s->shutter_line, sub.msg);
+    }
+    s->frame0_shutter = s->shut;
+    return 0;
+}
+
 static int parse_scene_child(xml_ctx *c, xmlNodePtr k, scene *s)
 {
     const char *name = elname(k);
-    if (!strcmp(name, "camera")) return parse_camera(c, k, &s->cam);
-    if (!strcmp(name, "shutter")) return parse_shutter(c, k, &s->shut);
+    if (!strcmp(name, "camera")) return parse_camera(c, k, &s->cam, &s->camera_motion);
+    if (!strcmp(name, "frames")) return parse_frames(c, k, s);
+    if (!strcmp(name, "shutter")) return parse_shutter(c, k, s);
     if (!strcmp(name, "background")) return parse_color_element(c, k, &s->background);
     if (!strcmp(name, "ambient")) return parse_color_element(c, k, &s->ambient);
     if (!strcmp(name, "light")) return parse_light(c, k, s);
     if (!strcmp(name, "render")) return parse_render(c, k, s);
     if (!strcmp(name, "object")) return parse_object(c, k, s);
-    return node_fail(c, k, "unknown element (expected camera, shutter, background, ambient, "
+    return node_fail(c, k, "unknown element (expected camera, shutter, frames, background, ambient, "
                            "light, render or object)");
 }
 
@@ -512,7 +730,7 @@ static int parse_scene(xml_ctx *c, xmlDocPtr doc, scene *s)
             return -1;
     if (s->nobjects == 0)
         return rr_fail(c->err, "%s: scene has no <object>", c->name);
-    return 0;
+    return finish_frames(c, s);
 }
 
 /* libxml2 reports through a callback; keep the first error with its line. */

@@ -85,7 +85,7 @@ TEST(scene_errors_name_file_and_line)
     CHECK(fails_with("<scene></scene>", "no <object>"));
     CHECK(fails_with("<world/>", "root element must be <scene>"));
     CHECK(fails_with("<scene><object><animation>a.anim</animation><sphere radius='1'/></object></scene>",
-                     "not supported yet"));
+                     "a.anim: cannot open .anim file (animation of mem.xml:1)"));
 }
 
 TEST(scene_xml_syntax_error_reports_line)

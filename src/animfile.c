@@ -1,0 +1,443 @@
+#include "animfile.h"
+
+#include <ctype.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* ---- tokens: words, ';', '{', '}'; comments // and # to end of line ------- */
+
+typedef struct {
+    const char *p;
+    int line;
+    const char *name;
+    rr_error *err;
+    char tok[256];
+    int tok_line;
+} lexer;
+
+static void skip_space(lexer *lx)
+{
+    for (;;) {
+        while (*lx->p && isspace((unsigned char)*lx->p)) {
+            lx->line += *lx->p == '\n';
+            lx->p++;
+        }
+        if (*lx->p == '#' || (lx->p[0] == '/' && lx->p[1] == '/')) {
+            while (*lx->p && *lx->p != '\n')
+                lx->p++;
+            continue;
+        }
+        return;
+    }
+}
+
+/* Next token into lx->tok; 0 at the end of the text. */
+static int next(lexer *lx)
+{
+    skip_space(lx);
+    lx->tok_line = lx->line;
+    if (!*lx->p) {
+        lx->tok[0] = 0;
+        return 0;
+    }
+    size_t n = 0;
+    if (strchr(";{}", *lx->p)) {
+        lx->tok[n++] = *lx->p++;
+    } else {
+        while (*lx->p && !isspace((unsigned char)*lx->p) && !strchr(";{}", *lx->p) && n + 1 < sizeof lx->tok)
+            lx->tok[n++] = *lx->p++;
+    }
+    lx->tok[n] = 0;
+    return 1;
+}
+
+static int peek_is(lexer *lx, const char *word)
+{
+    lexer copy = *lx;
+    return next(&copy) && !strcmp(copy.tok, word);
+}
+
+static int fail(lexer *lx, const char *fmt, ...)
+{
+    char msg[400];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(msg, sizeof msg, fmt, ap);
+    va_end(ap);
+    return rr_fail(lx->err, "%s:%d: %s", lx->name, lx->tok_line, msg);
+}
+
+static int expect(lexer *lx, const char *what)
+{
+    if (!next(lx))
+        return fail(lx, "file ends where '%s' was expected (truncated?)", what);
+    if (strcmp(lx->tok, what))
+        return fail(lx, "expected '%s', found '%s'", what, lx->tok);
+    return 0;
+}
+
+/* Reads the words of one statement up to ';' (at most max). */
+static int statement(lexer *lx, char words[][64], int max, int *count)
+{
+    *count = 0;
+    for (;;) {
+        if (!next(lx))
+            return fail(lx, "file ends inside a statement (missing ';')");
+        if (!strcmp(lx->tok, ";"))
+            return 0;
+        if (!strcmp(lx->tok, "{") || !strcmp(lx->tok, "}"))
+            return fail(lx, "unexpected '%s' (missing ';' on the line before?)", lx->tok);
+        if (*count == max)
+            return fail(lx, "too many fields in this statement");
+        snprintf(words[(*count)++], 64, "%.63s", lx->tok);
+    }
+}
+
+static int number(lexer *lx, const char *word, double *v)
+{
+    char *end;
+    *v = strtod(word, &end);
+    if (end == word || *end)
+        return fail(lx, "'%s' is not a number", word);
+    if (!isfinite(*v))
+        return fail(lx, "'%s' is not a finite number", word);
+    return 0;
+}
+
+/* ---- units ----------------------------------------------------------------- */
+
+typedef struct {
+    double seconds_per_frame, meters_per_unit, radians_per_unit;
+    double version;
+} units;
+
+static int time_unit(const char *u, double *spf)
+{
+    static const struct {
+        const char *name;
+        double seconds;
+    } t[] = {{"film", 1.0 / 24}, {"ntsc", 1.0 / 30}, {"pal", 1.0 / 25}, {"game", 1.0 / 15},
+             {"show", 1.0 / 48}, {"palf", 1.0 / 50}, {"ntscf", 1.0 / 60}, {"sec", 1},
+             {"millisec", 1e-3}, {"min", 60}, {"hour", 3600}};
+    for (size_t i = 0; i < sizeof t / sizeof t[0]; i++)
+        if (!strcmp(u, t[i].name))
+            return *spf = t[i].seconds, 0;
+    return -1;
+}
+
+static int linear_unit(const char *u, double *m)
+{
+    static const struct {
+        const char *name;
+        double meters;
+    } t[] = {{"mm", 1e-3}, {"cm", 1e-2}, {"m", 1}, {"km", 1e3},
+             {"in", 0.0254}, {"ft", 0.3048}, {"yd", 0.9144}, {"mi", 1609.344}};
+    for (size_t i = 0; i < sizeof t / sizeof t[0]; i++)
+        if (!strcmp(u, t[i].name))
+            return *m = t[i].meters, 0;
+    return -1;
+}
+
+static int angular_unit(const char *u, double *r)
+{
+    if (!strcmp(u, "deg")) return *r = M_PI / 180, 0;
+    if (!strcmp(u, "rad")) return *r = 1, 0;
+    if (!strcmp(u, "min")) return *r = M_PI / (180 * 60), 0;
+    if (!strcmp(u, "sec")) return *r = M_PI / (180 * 3600), 0;
+    return -1;
+}
+
+/* ---- one curve ------------------------------------------------------------- */
+
+static int channel_of(const char *leaf)
+{
+    static const char *const longs[] = {"translateX", "translateY", "translateZ", "rotateX", "rotateY",
+                                        "rotateZ", "scaleX", "scaleY", "scaleZ"};
+    static const char *const shorts[] = {"tx", "ty", "tz", "rx", "ry", "rz", "sx", "sy", "sz"};
+    for (int i = 0; i < CH_COUNT; i++)
+        if (!strcmp(leaf, longs[i]) || !strcmp(leaf, shorts[i]))
+            return i;
+    return -1;
+}
+
+typedef struct {
+    curve *c;
+    int channel;      /* -1: read and skip */
+    double value_scale, seconds_per_frame, radians_per_unit;
+    int weighted;
+} curve_reader;
+
+static int add_key(lexer *lx, curve_reader *r, const curve_key *k)
+{
+    curve *c = r->c;
+    if (c->count > 0 && !(k->time > c->keys[c->count - 1].time))
+        return fail(lx, "key time %g is not after the previous key's %g (key times must increase)",
+                    k->time / r->seconds_per_frame, c->keys[c->count - 1].time / r->seconds_per_frame);
+    curve_key *grown = realloc(c->keys, (size_t)(c->count + 1) * sizeof *grown);
+    if (!grown)
+        return fail(lx, "out of memory");
+    c->keys = grown;
+    c->keys[c->count++] = *k;
+    return 0;
+}
+
+/* A fixed tangent's angle in the file's units (value per second in the
+ * file's units) to an angle of the same slope in scene units. */
+static double scene_angle(const curve_reader *r, double file_angle)
+{
+    return atan(tan(file_angle * r->radians_per_unit) * r->value_scale);
+}
+
+static int tangent(lexer *lx, const char *name, tangent_kind *k)
+{
+    if (tangent_from_name(name, k))
+        return fail(lx, "unknown or unsupported tangent type '%s' (expected linear, step, stepnext, flat, "
+                        "spline, clamped, plateau, auto or fixed)", name);
+    return 0;
+}
+
+/* time value in out tanLocked weightLocked [breakdown] [inAngle inWeight]
+ * [outAngle outWeight] */
+static int parse_key(lexer *lx, curve_reader *r, char w[][64], int n, const units *u)
+{
+    curve_key k;
+    memset(&k, 0, sizeof k);
+    if (n < 4)
+        return fail(lx, "a key needs at least time, value and two tangent types, got %d fields", n);
+    if (number(lx, w[0], &k.time) || number(lx, w[1], &k.value) || tangent(lx, w[2], &k.in) ||
+        tangent(lx, w[3], &k.out))
+        return -1;
+    int base = u->version >= 1.1 ? 7 : 6;
+    int extra = 2 * (k.in == TAN_FIXED) + 2 * (k.out == TAN_FIXED);
+    if (n == base - 1 + extra && base == 7)
+        base = 6; /* tolerate a 1.1 file written without breakdown flags */
+    if (n != base + extra)
+        return fail(lx, "a key with tangents %s/%s has %d fields, expected %d", w[2], w[3], n, base + extra);
+    double angle;
+    int at = base;
+    if (k.in == TAN_FIXED) {
+        if (number(lx, w[at], &angle) || number(lx, w[at + 1], &(double){0}))
+            return -1;
+        k.in_angle = scene_angle(r, angle), at += 2;
+    }
+    if (k.out == TAN_FIXED) {
+        if (number(lx, w[at], &angle) || number(lx, w[at + 1], &(double){0}))
+            return -1;
+        k.out_angle = scene_angle(r, angle);
+    }
+    k.time *= r->seconds_per_frame;
+    k.value *= r->value_scale;
+    return add_key(lx, r, &k);
+}
+
+static int parse_keys(lexer *lx, curve_reader *r, const units *u)
+{
+    if (expect(lx, "{"))
+        return -1;
+    char w[16][64];
+    for (;;) {
+        if (peek_is(lx, "}"))
+            return next(lx), 0;
+        int n;
+        if (statement(lx, w, 16, &n) || parse_key(lx, r, w, n, u))
+            return -1;
+    }
+}
+
+static int infinity(lexer *lx, const char *name, infinity_kind *k)
+{
+    if (infinity_from_name(name, k))
+        return fail(lx, "unknown infinity '%s' (expected constant, linear, cycle, cycleRelative or oscillate)", name);
+    return 0;
+}
+
+/* One statement of animData: input, output, weighted, units, infinities. */
+static int anim_data_statement(lexer *lx, curve_reader *r, char w[][64], int n)
+{
+    if (n != 2)
+        return fail(lx, "'%s' takes one value", w[0]);
+    const char *key = w[0], *val = w[1];
+    if (!strcmp(key, "input")) {
+        if (strcmp(val, "time"))
+            return fail(lx, "input '%s' is not supported (only time-driven curves)", val);
+    } else if (!strcmp(key, "weighted")) {
+        r->weighted = strcmp(val, "0") != 0;
+    } else if (!strcmp(key, "preInfinity")) {
+        return infinity(lx, val, &r->c->pre);
+    } else if (!strcmp(key, "postInfinity")) {
+        return infinity(lx, val, &r->c->post);
+    } else if (!strcmp(key, "inputUnit")) {
+        if (time_unit(val, &r->seconds_per_frame))
+            return fail(lx, "unknown time unit '%s'", val);
+    } else if (!strcmp(key, "outputUnit") && r->channel >= 0 && r->channel < CH_SX) {
+        double f;
+        if (r->channel >= CH_RX && r->channel <= CH_RZ ? angular_unit(val, &f) : linear_unit(val, &f))
+            return fail(lx, "unknown output unit '%s' for this curve", val);
+        r->value_scale = f;
+    } /* output, tangentAngleUnit and others: nothing to do */
+    return 0;
+}
+
+static int parse_anim_data(lexer *lx, curve_reader *r, const units *u)
+{
+    if (expect(lx, "animData") || expect(lx, "{"))
+        return -1;
+    char w[16][64];
+    for (;;) {
+        if (peek_is(lx, "}"))
+            return next(lx), 0;
+        if (peek_is(lx, "keys")) {
+            next(lx);
+            if (parse_keys(lx, r, u))
+                return -1;
+            continue;
+        }
+        int n;
+        if (statement(lx, w, 16, &n) || (n > 0 && anim_data_statement(lx, r, w, n)))
+            return -1;
+    }
+}
+
+/* ---- the file ---------------------------------------------------------- */
+
+static int header_statement(lexer *lx, char w[][64], int n, units *u)
+{
+    const char *key = w[0];
+    if (n < 2)
+        return 0;
+    if (!strcmp(key, "animVersion"))
+        return number(lx, w[1], &u->version);
+    if (!strcmp(key, "timeUnit") && time_unit(w[1], &u->seconds_per_frame))
+        return fail(lx, "unknown timeUnit '%s'", w[1]);
+    if (!strcmp(key, "linearUnit") && linear_unit(w[1], &u->meters_per_unit))
+        return fail(lx, "unknown linearUnit '%s'", w[1]);
+    if (!strcmp(key, "angularUnit") && angular_unit(w[1], &u->radians_per_unit))
+        return fail(lx, "unknown angularUnit '%s'", w[1]);
+    return 0; /* mayaVersion, startTime, endTime, ...: informational */
+}
+
+/* anim <attribute path> [<leaf> <node> <row> <child> <index>]; [animData {...}] */
+static int parse_anim(lexer *lx, keyframes *kf, char w[][64], int n, const units *u, int *seen)
+{
+    int line = lx->tok_line;
+    if (n < 2)
+        return fail(lx, "'anim' needs an attribute name");
+    const char *dot = strrchr(w[1], '.');
+    const char *leaf = dot ? dot + 1 : w[1];
+    if (!peek_is(lx, "animData"))
+        return 0; /* an attribute listed without a curve */
+    int ch = channel_of(leaf);
+    curve skipped = {0, NULL, INF_CONSTANT, INF_CONSTANT};
+    curve_reader r = {ch >= 0 ? &kf->ch[ch] : &skipped, ch, 1.0, u->seconds_per_frame, u->radians_per_unit, 0};
+    if (ch < 0)
+        fprintf(stderr, "refrender: warning: %s:%d: skipping curve of unsupported attribute '%s'\n", lx->name,
+                line, w[1]);
+    else if (seen[ch])
+        return rr_fail(lx->err, "%s:%d: a second curve for '%s' (first at line %d)", lx->name, line, leaf, seen[ch]);
+    else
+        seen[ch] = line;
+    r.value_scale = ch >= 0 && ch <= CH_TZ ? u->meters_per_unit : ch >= CH_RX && ch <= CH_RZ ? u->radians_per_unit : 1.0;
+    int rc = parse_anim_data(lx, &r, u);
+    curve_free(&skipped);
+    if (rc)
+        return -1;
+    if (r.weighted && ch >= 0)
+        fprintf(stderr, "refrender: warning: %s:%d: '%s' is a weighted curve; tangent weights are ignored\n",
+                lx->name, line, leaf);
+    rr_error sub;
+    if (ch >= 0 && curve_prepare(r.c, &sub))
+        return rr_fail(lx->err, "%s:%d: curve '%s': %s", lx->name, line, leaf, sub.msg);
+    if (ch >= CH_SX)
+        for (int i = 0; i < r.c->count; i++)
+            if (!(r.c->keys[i].value > 0))
+                return rr_fail(lx->err, "%s:%d: curve '%s': scale keys must be positive", lx->name, line, leaf);
+    return 0;
+}
+
+int animfile_parse(const char *text, const char *name, keyframes **out, rr_error *err)
+{
+    keyframes *kf = calloc(1, sizeof *kf);
+    if (!kf)
+        return rr_fail(err, "out of memory");
+    lexer lx = {text, 1, name, err, {0}, 1};
+    units u = {1.0 / 24, 0.01, M_PI / 180, 1.1}; /* Maya's defaults: film, cm, deg */
+    int seen[CH_COUNT] = {0}, curves = 0, versioned = 0;
+    char w[16][64];
+    while (skip_space(&lx), *lx.p) {
+        int n;
+        if (statement(&lx, w, 16, &n))
+            goto fail;
+        if (n == 0)
+            continue;
+        versioned |= !strcmp(w[0], "animVersion");
+        if (!versioned) {
+            rr_fail(err, "%s:%d: not a Maya .anim file (it must start with 'animVersion')", name, lx.tok_line);
+            goto fail;
+        }
+        if (!strcmp(w[0], "anim")) {
+            if (parse_anim(&lx, kf, w, n, &u, seen))
+                goto fail;
+            curves++;
+        } else if (header_statement(&lx, w, n, &u)) {
+            goto fail;
+        }
+    }
+    if (!versioned) {
+        rr_fail(err, "%s:1: empty file: not a Maya .anim file", name);
+        goto fail;
+    }
+    int used = 0;
+    for (int i = 0; i < CH_COUNT; i++)
+        used += seen[i] != 0;
+    if (!used) {
+        rr_fail(err, "%s: no translate, rotate or scale curve found (%d curves read)", name, curves);
+        goto fail;
+    }
+    *out = kf;
+    return 0;
+fail:
+    for (int i = 0; i < CH_COUNT; i++)
+        curve_free(&kf->ch[i]);
+    free(kf);
+    return -1;
+}
+
+int animfile_load(const char *path, keyframes **out, rr_error *err)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f)
+        return rr_fail(err, "%s: cannot open .anim file", path);
+    char *text = NULL;
+    size_t size = 0, cap = 0;
+    for (;;) {
+        if (size + 4096 + 1 > cap) {
+            char *grown = realloc(text, cap = 2 * cap + 8192);
+            if (!grown) {
+                free(text);
+                fclose(f);
+                return rr_fail(err, "%s: out of memory", path);
+            }
+            text = grown;
+        }
+        size_t got = fread(text + size, 1, 4096, f);
+        size += got;
+        if (got < 4096)
+            break;
+    }
+    int bad = ferror(f);
+    fclose(f);
+    if (bad) {
+        free(text);
+        return rr_fail(err, "%s: read error", path);
+    }
+    text[size] = 0;
+    if (strlen(text) != size) {
+        free(text);
+        return rr_fail(err, "%s: binary data in a text .anim file", path);
+    }
+    int rc = animfile_parse(text, path, out, err);
+    free(text);
+    return rc;
+}
