@@ -53,6 +53,18 @@ static int next(lexer *lx)
     return 1;
 }
 
+static int fail(lexer *lx, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+
+/* At the end of the text inside a block: a truncated file. */
+static int truncated(lexer *lx, const char *block)
+{
+    skip_space(lx);
+    if (*lx->p)
+        return 0;
+    lx->tok_line = lx->line;
+    return fail(lx, "file ends inside the %s block (truncated? missing '}')", block), 1;
+}
+
 static int peek_is(lexer *lx, const char *word)
 {
     lexer copy = *lx;
@@ -238,6 +250,8 @@ static int parse_keys(lexer *lx, curve_reader *r, const units *u)
         return -1;
     char w[16][64];
     for (;;) {
+        if (truncated(lx, "keys"))
+            return -1;
         if (peek_is(lx, "}"))
             return next(lx), 0;
         int n;
@@ -286,6 +300,8 @@ static int parse_anim_data(lexer *lx, curve_reader *r, const units *u)
         return -1;
     char w[16][64];
     for (;;) {
+        if (truncated(lx, "animData"))
+            return -1;
         if (peek_is(lx, "}"))
             return next(lx), 0;
         if (peek_is(lx, "keys")) {

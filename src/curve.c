@@ -116,8 +116,8 @@ static double segment_value(const curve *c, int i, double t)
     const curve_key *a = &c->keys[i], *b = &c->keys[i + 1];
     if (a->out == TAN_STEP)
         return a->value;
-    if (a->out == TAN_STEPNEXT)
-        return b->value;
+    if (a->out == TAN_STEPNEXT) /* the key's own value at its time only */
+        return t == a->time ? a->value : b->value;
     double h = b->time - a->time, u = (t - a->time) / h, u2 = u * u, u3 = u2 * u;
     if (a->out == TAN_LINEAR && b->in == TAN_LINEAR) /* the Hermite form, evaluated exactly */
         return a->value + (b->value - a->value) * u;
@@ -184,11 +184,20 @@ double curve_max_slope(const curve *c)
         const curve_key *a = &c->keys[i], *b = &c->keys[i + 1];
         if (a->out == TAN_STEP || a->out == TAN_STEPNEXT)
             continue;
-        /* the Hermite segment as a Bezier in u; |dv/du| <= 3 max |control step| */
+        /* The segment as a Bezier in u = (t - t_a) / h: dv/du = 3 (d0 (1-u)^2 +
+         * 2 d1 u (1-u) + d2 u^2) with the control steps d_i, a quadratic whose
+         * largest magnitude on [0, 1] is at an end or at its vertex. */
         double h = b->time - a->time;
         double p1 = a->value + h * a->out_slope / 3, p2 = b->value - h * b->in_slope / 3;
-        double d = fmax(fabs(p1 - a->value), fmax(fabs(p2 - p1), fabs(b->value - p2)));
-        m = fmax(m, 3.0 * d / h);
+        double d0 = p1 - a->value, d1 = p2 - p1, d2 = b->value - p2;
+        double qa = d0 - 2 * d1 + d2, qb = 2 * (d1 - d0);
+        double q = fmax(fabs(d0), fabs(d2));
+        if (qa != 0) {
+            double u = -qb / (2 * qa);
+            if (u > 0 && u < 1)
+                q = fmax(q, fabs(d0 + u * (qb + u * qa)));
+        }
+        m = fmax(m, 3.0 * q / h * (1 + 1e-12));
     }
     if (c->count > 0) {
         if (c->pre == INF_LINEAR)

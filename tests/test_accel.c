@@ -172,25 +172,25 @@ static int brute_force_hit(const scene_object *o, vec3 org, vec3 dir, double tim
 /* The renderer skips the moving objects for rays that miss their swept
  * bounds (box and sphere, also used inside the traversal): checked against
  * brute-force hits for rays around the rim of a spinning, drifting object. */
-TEST(swept_bounds_never_rule_out_a_ray_that_hits)
+/* Six splats on a circle of radius 2 around (0, 0, -5), facing the eye. */
+#define RING "<pointModel>"                                                 \
+    "<splat center='2 0 -5' normal='0 0 1' radius='0.5'/>"                   \
+    "<splat center='1 1.7320508 -5' normal='0 0 1' radius='0.5'/>"           \
+    "<splat center='-1 1.7320508 -5' normal='0 0 1' radius='0.5'/>"          \
+    "<splat center='-2 0 -5' normal='0 0 1' radius='0.5'/>"                  \
+    "<splat center='-1 -1.7320508 -5' normal='0 0 1' radius='0.5'/>"         \
+    "<splat center='1 -1.7320508 -5' normal='0 0 1' radius='0.5'/></pointModel>"
+
+/* Nearly parallel rays from far away (so the bounds tests are tight) over
+ * the ring's rim at 40 times: every brute-force hit must be found. */
+static void check_no_missed_hits(const char *xml, double rim)
 {
-    /* six splats on a circle of radius 2 spinning in the image plane: the
-     * swept sphere is nearly tight here, so a too-small one shows */
-    const char *xml = "<scene><shutter open='0' close='1'/><object><pointModel>"
-                      "<splat center='2 0 -5' normal='0 0 1' radius='0.5'/>"
-                      "<splat center='1 1.7320508 -5' normal='0 0 1' radius='0.5'/>"
-                      "<splat center='-1 1.7320508 -5' normal='0 0 1' radius='0.5'/>"
-                      "<splat center='-2 0 -5' normal='0 0 1' radius='0.5'/>"
-                      "<splat center='-1 -1.7320508 -5' normal='0 0 1' radius='0.5'/>"
-                      "<splat center='1 -1.7320508 -5' normal='0 0 1' radius='0.5'/></pointModel>"
-                      "<animation><rotation axis='0 0 1' center='0 0 -5' degrees_per_unit_time='50'/>"
-                      "<linear velocity='0.2 0 0'/></animation></object></scene>";
     scene s;
     rr_error e;
     accel *a;
     CHECK(scene_load_memory(xml, strlen(xml), "mem.xml", ".", &s, &e) == 0);
     CHECK(accel_build(&s, s.epsilon, s.kernel_sigma, 1, &a, &e) == 0);
-    vec3 eye = v3(0, 0, 45); /* far away: nearly parallel rays, so the test is tight */
+    vec3 eye = v3(0, 0, 45);
     int hits = 0, ruled_out = 0, missed = 0, rim_hits = 0;
     for (int i = 0; i < 120; i++)
         for (int j = 0; j < 120; j++) {
@@ -204,7 +204,7 @@ TEST(swept_bounds_never_rule_out_a_ray_that_hits)
                 accel_trace(a, eye, dir, (k + 0.5) / 40, &kb);
                 hits += truth;
                 missed += truth && !near_rim && (kb.count == 0 || !may);
-                rim_hits += truth && hypot(dir.x, dir.y) * 50 / fabs(dir.z) > 2.4;
+                rim_hits += truth && hypot(dir.x, dir.y) * 50 / fabs(dir.z) > rim;
             }
         }
     printf("    hits %d rim %d ruled out %d missed %d\n", hits, rim_hits, ruled_out, missed);
@@ -213,4 +213,29 @@ TEST(swept_bounds_never_rule_out_a_ray_that_hits)
     CHECK(ruled_out > 5000);              /* and the test does skip most rays that cannot */
     accel_free(a);
     scene_free(&s);
+}
+
+TEST(swept_bounds_never_rule_out_a_ray_that_hits)
+{
+    /* the ring spinning in the image plane and drifting: the swept sphere
+     * is nearly tight here, so a too-small one shows */
+    check_no_missed_hits("<scene><shutter open='0' close='1'/><object>" RING
+                         "<animation><rotation axis='0 0 1' center='0 0 -5' degrees_per_unit_time='50'/>"
+                         "<linear velocity='0.2 0 0'/></animation></object></scene>",
+                         2.4);
+}
+
+TEST(keyed_swept_bounds_never_rule_out_a_ray_that_hits)
+{
+    /* non-linear motion: a spline turn that overshoots, a growing scale and a
+     * step in x part-way through the shutter */
+    check_no_missed_hits("<scene><shutter open='0' close='1'/><object>" RING
+                         "<animation><keyframes interpolation='spline' pivot='0 0 -5'>"
+                         "<key time='0' rotate='0 0 0' scale='1 1 1'/>"
+                         "<key time='0.4' rotate='0 0 40' scale='1.15 1.15 1'/>"
+                         "<key time='1' rotate='0 0 20' scale='1.1 1.1 1'/>"
+                         "<key time='0' translate='0 0 0' interpolation='step'/>"
+                         "<key time='0.6' translate='0.15 0 0'/>"
+                         "</keyframes></animation></object></scene>",
+                         2.6);
 }

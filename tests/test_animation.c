@@ -85,3 +85,146 @@ TEST(swept_bounds_contain_the_object_at_all_times)
     }
     CHECK(inside);
 }
+
+/* ---- keyframes ---------------------------------------------------------- */
+
+#include <stdlib.h>
+
+/* Keys (time, value) on one channel of a keyframed animation. */
+static void key_channel(animation *a, int ch, int n, const double *tv, tangent_kind tan, infinity_kind inf)
+{
+    if (!a->keys)
+        a->keys = calloc(1, sizeof *a->keys);
+    curve *c = &a->keys->ch[ch];
+    c->count = n, c->keys = calloc((size_t)n, sizeof(curve_key)), c->pre = c->post = inf;
+    for (int i = 0; i < n; i++) {
+        c->keys[i].time = tv[2 * i], c->keys[i].value = tv[2 * i + 1];
+        c->keys[i].in = tan, c->keys[i].out = tan;
+    }
+    rr_error e;
+    CHECK(curve_prepare(c, &e) == 0);
+}
+
+static double orthonormality_error(const xform *x)
+{
+    double worst = 0;
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++) {
+            double dot = x->r[i][0] * x->r[j][0] + x->r[i][1] * x->r[j][1] + x->r[i][2] * x->r[j][2];
+            worst = fmax(worst, fabs(dot - (i == j)));
+        }
+    return worst;
+}
+
+TEST(keyed_rotations_stay_rigid_between_keys)
+{
+    animation a;
+    animation_init_static(&a);
+    const double rx[] = {0, 0, 0.4, 1.3, 1, -0.7}, ry[] = {0, 2, 1, -1}, rz[] = {0, 0.1, 0.5, 3, 1, 0};
+    key_channel(&a, CH_RX, 3, rx, TAN_SPLINE, INF_CONSTANT);
+    key_channel(&a, CH_RY, 2, ry, TAN_CLAMPED, INF_CONSTANT);
+    key_channel(&a, CH_RZ, 3, rz, TAN_SPLINE, INF_CONSTANT);
+    double worst = 0, det_err = 0;
+    for (int i = 0; i <= 1000; i++) {
+        xform x = animation_at(&a, i / 1000.0);
+        worst = fmax(worst, orthonormality_error(&x));
+        double (*r)[3] = x.r;
+        double det = r[0][0] * (r[1][1] * r[2][2] - r[1][2] * r[2][1]) -
+                     r[0][1] * (r[1][0] * r[2][2] - r[1][2] * r[2][0]) +
+                     r[0][2] * (r[1][0] * r[2][1] - r[1][1] * r[2][0]);
+        det_err = fmax(det_err, fabs(det - 1));
+        CHECK(!x.scaled);
+    }
+    CHECK(worst < 1e-14 && det_err < 1e-14);
+    animation_free(&a);
+}
+
+TEST(a_full_turn_over_the_frame_returns_to_the_start)
+{
+    animation a;
+    animation_init_static(&a);
+    a.offset = v3(0.3, -1, 2);
+    const double turn[] = {0, 0, 1.0 / 24, 2 * M_PI}, drift[] = {0, 0, 1.0 / 24, 0.5};
+    key_channel(&a, CH_RY, 2, turn, TAN_SPLINE, INF_CONSTANT);
+    key_channel(&a, CH_TX, 2, drift, TAN_LINEAR, INF_CONSTANT);
+    a.keys->pivot = a.offset;
+    xform start = animation_at(&a, 0), end = animation_at(&a, 1.0 / 24);
+    vec3 p = v3(1, 2, 3);
+    CHECK(near3(xform_point(&end, p), v3_add(xform_point(&start, p), v3(0.5, 0, 0)), 1e-12));
+    xform half = animation_at(&a, 0.5 / 24); /* half a turn about the pivot */
+    vec3 q = xform_point(&half, v3(1, 0, 0)), pivot = v3_add(a.offset, v3(0.25, 0, 0));
+    CHECK(near3(q, v3_add(pivot, v3(-1, 0, 0)), 1e-12));
+    animation_free(&a);
+}
+
+TEST(euler_angles_apply_x_then_y_then_z)
+{
+    animation a;
+    animation_init_static(&a);
+    const double ninety[] = {0, M_PI / 2};
+    key_channel(&a, CH_RX, 1, ninety, TAN_LINEAR, INF_CONSTANT);
+    key_channel(&a, CH_RY, 1, ninety, TAN_LINEAR, INF_CONSTANT);
+    xform x = animation_at(&a, 0);
+    /* Rx(90) takes +y to +z, then Ry(90) takes +z to +x */
+    CHECK(near3(xform_vector(&x, v3(0, 1, 0)), v3(1, 0, 0), 1e-15));
+    animation_free(&a);
+}
+
+TEST(scale_has_an_exact_inverse_and_keeps_normals_perpendicular)
+{
+    animation a;
+    animation_init_static(&a);
+    const double sx[] = {0, 2}, sz[] = {0, 0.25}, rz[] = {0, 0.7};
+    key_channel(&a, CH_SX, 1, sx, TAN_LINEAR, INF_CONSTANT);
+    key_channel(&a, CH_SZ, 1, sz, TAN_LINEAR, INF_CONSTANT);
+    key_channel(&a, CH_RZ, 1, rz, TAN_LINEAR, INF_CONSTANT);
+    xform x = animation_at(&a, 0);
+    CHECK(x.scaled);
+    vec3 p = v3(0.3, -2, 5);
+    CHECK(near3(xform_inverse_point(&x, xform_point(&x, p)), p, 1e-12));
+    vec3 n = v3_normalize(v3(1, 1, 1)), tangent = v3(1, -1, 0); /* tangent . n = 0 */
+    vec3 wn = xform_normal(&x, n);
+    CHECK_NEAR(v3_len(wn), 1.0, 1e-12);
+    CHECK_NEAR(v3_dot(wn, xform_vector(&x, tangent)), 0.0, 1e-12);
+    animation_free(&a);
+}
+
+/* Every corner of the box at 20001 times inside the swept bounds. */
+static int swept_box_holds(const animation *a, aabb box, double t0, double t1)
+{
+    aabb swept = animation_swept_bounds(a, box, t0, t1);
+    int inside = 1;
+    for (int i = 0; i <= 20000; i++) {
+        xform x = animation_at(a, t0 + (t1 - t0) * i / 20000.0);
+        for (int c = 0; c < 8; c++) {
+            vec3 p = v3(c & 1 ? box.hi.x : box.lo.x, c & 2 ? box.hi.y : box.lo.y, c & 4 ? box.hi.z : box.lo.z);
+            vec3 q = xform_point(&x, p);
+            inside &= q.x >= swept.lo.x && q.y >= swept.lo.y && q.z >= swept.lo.z &&
+                      q.x <= swept.hi.x && q.y <= swept.hi.y && q.z <= swept.hi.z;
+        }
+    }
+    return inside;
+}
+
+TEST(keyed_swept_bounds_contain_splines_steps_and_cycles)
+{
+    animation a;
+    animation_init_static(&a);
+    a.offset = v3(0.5, 0, 0);
+    /* an overshooting spline, a step that jumps inside the interval and lasts
+     * less than one sampling step, a fast cycled spin, and a scale pulse */
+    const double tx[] = {0, 0, 0.3, 3, 0.35, -2, 1, 0}, ty[] = {0, 0, 0.5001, 4, 0.5003, 0};
+    const double rz[] = {0, 0, 0.1, 6.283}, sy[] = {0, 1, 0.5, 3, 1, 1};
+    key_channel(&a, CH_TX, 4, tx, TAN_SPLINE, INF_CONSTANT);
+    key_channel(&a, CH_TY, 3, ty, TAN_STEP, INF_CONSTANT);
+    key_channel(&a, CH_RZ, 2, rz, TAN_SPLINE, INF_CYCLE);
+    key_channel(&a, CH_SY, 3, sy, TAN_SPLINE, INF_CONSTANT);
+    aabb box = {v3(-1, -0.5, -0.2), v3(1, 0.5, 0.2)};
+    CHECK(swept_box_holds(&a, box, 0.0, 1.0));
+    CHECK(swept_box_holds(&a, box, 0.45, 0.55));
+    /* the 0.2 ms step to y = 4 lies between the 20001 checks, but the bounds hold it */
+    aabb swept = animation_swept_bounds(&a, box, 0.0, 1.0);
+    CHECK(swept.hi.y >= 4 + 0.5);
+    CHECK(animation_max_scale(&a, 0, 1) >= 3.0);
+    animation_free(&a);
+}

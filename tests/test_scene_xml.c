@@ -100,3 +100,60 @@ TEST(scene_file_errors_name_the_file)
     CHECK(scene_load_file("/nonexistent/scene.xml", &s, &e) != 0);
     CHECK(strstr(e.msg, "/nonexistent/scene.xml") != NULL);
 }
+
+#define KEYED(keys) "<scene><object><sphere radius='1'/><animation><keyframes interpolation='spline'>" keys \
+                    "</keyframes></animation></object></scene>"
+
+TEST(keyframes_frames_and_camera_motion_parse)
+{
+    const char *xml =
+        "<scene><camera position='0 0 5'><animation><keyframes>"
+        "<key time='0' translate='0 0 0'/><key time='1' translate='1 0 0' rotate='0 10 0'/>"
+        "</keyframes></animation></camera>"
+        "<frames rate='24'/><shutter fraction='0.5'/>"
+        "<object position='1 2 3'><sphere radius='1'/><animation><keyframes interpolation='step' post='cycle'>"
+        "<key time='0' scale='1 2 1'/><key time='0.5' translate='0 1 0' interpolation='linear'/>"
+        "</keyframes></animation></object></scene>";
+    scene s;
+    rr_error e;
+    CHECK(load_text(xml, &s, &e) == 0);
+    CHECK_NEAR(s.frame_rate, 24, 0);
+    CHECK_NEAR(s.shut.open, 0, 0);
+    CHECK_NEAR(s.shut.close, 0.5 / 24, 1e-15);
+    CHECK_NEAR(s.shut.center, 0.5 / 24, 1e-15); /* the default weighting center: close */
+    CHECK(scene_set_frame(&s, 10, &e) == 0);
+    CHECK_NEAR(s.shut.open, 10.0 / 24, 1e-15);
+    CHECK_NEAR(s.shut.close, 10.5 / 24, 1e-15);
+    const keyframes *k = s.objects[0].anim.keys;
+    CHECK(k && k->ch[CH_SY].count == 1 && k->ch[CH_TY].count == 1 && k->ch[CH_TX].count == 1);
+    CHECK(k && k->ch[CH_SY].keys[0].out == TAN_STEP && k->ch[CH_TY].keys[0].out == TAN_LINEAR);
+    CHECK(k && k->ch[CH_TY].post == INF_CYCLE);
+    CHECK(k && k->pivot.x == 1 && k->pivot.z == 3); /* the object's position */
+    CHECK(s.camera_motion.keys && s.camera_motion.keys->pivot.z == 5 && scene_camera_moves(&s));
+    CHECK_NEAR(s.camera_motion.keys->ch[CH_RY].keys[0].value, 10 * M_PI / 180, 1e-15);
+    vec3 org, dir;
+    scene_camera_ray(&s, s.cam.width / 2.0, s.cam.height / 2.0, 1.0, &org, &dir);
+    CHECK(fabs(org.x - 1) < 1e-12 && fabs(org.z - 5) < 1e-12); /* moved, turned in place */
+    CHECK_NEAR(dir.x, -sin(10 * M_PI / 180), 1e-9);
+    scene_free(&s);
+}
+
+TEST(keyframe_and_frame_errors_name_the_line)
+{
+    CHECK(fails_with(KEYED("<key time='0'/>"), "mem.xml:1: <key>: a key needs translate, rotate or scale"));
+    CHECK(fails_with(KEYED("<key time='1' translate='0 0 0'/>\n<key time='1' translate='1 0 0'/>"),
+                     "mem.xml:2: <key>: key time 1 is not after the previous key's 1"));
+    CHECK(fails_with(KEYED("<key time='0' scale='1 0 1'/>"), "scale must be positive"));
+    CHECK(fails_with(KEYED("<key time='0' translate='0 0 0' interpolation='bouncy'/>"), "unknown interpolation 'bouncy'"));
+    CHECK(fails_with("<scene><object><sphere radius='1'/><animation><linear velocity='1 0 0'/>"
+                     "<keyframes><key time='0' translate='0 0 0'/></keyframes></animation></object></scene>",
+                     "either keyframes (or a .anim file) or linear/rotation"));
+    CHECK(fails_with("<scene><camera><animation><keyframes><key time='0' scale='2 2 2'/></keyframes>"
+                     "</animation></camera><object><sphere radius='1'/></object></scene>",
+                     "the camera cannot be scaled"));
+    CHECK(fails_with("<scene>\n<shutter fraction='0.5'/><object><sphere radius='1'/></object></scene>",
+                     "mem.xml:2: a shutter fraction needs <frames"));
+    CHECK(fails_with("<scene><shutter fraction='0.5' close='1'/><object><sphere radius='1'/></object></scene>",
+                     "either open/close or fraction"));
+    CHECK(fails_with("<scene><frames rate='-24'/><object><sphere radius='1'/></object></scene>", "rate"));
+}

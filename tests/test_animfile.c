@@ -1,0 +1,149 @@
+/* Maya .anim reader: the bundled files, units, tangents, and bad input. */
+#include <stdlib.h>
+#include <string.h>
+
+#include "animfile.h"
+#include "harness.h"
+
+static keyframes *load(const char *path)
+{
+    keyframes *k = NULL;
+    rr_error e;
+    if (animfile_load(path, &k, &e)) {
+        printf("    %s\n", e.msg);
+        return NULL;
+    }
+    return k;
+}
+
+static void free_keys(keyframes *k)
+{
+    animation a;
+    animation_init_static(&a);
+    a.keys = k;
+    animation_free(&a);
+}
+
+TEST(rolling_anim_rolls_without_slipping)
+{
+    keyframes *k = load("../scenes/animations/rolling.anim");
+    CHECK(k != NULL);
+    if (!k)
+        return;
+    /* film: frame 12 = 0.5 s; 157.08 cm = 1.5708 m; cycleRelative after frame 24 */
+    CHECK_NEAR(curve_eval(&k->ch[CH_TX], 0.5), M_PI / 2, 1e-6);
+    CHECK_NEAR(curve_eval(&k->ch[CH_TX], 1.5), 3 * M_PI / 2, 1e-6);
+    /* rotateZ -360 deg per second, linear beyond: -4 pi at 2 s */
+    CHECK_NEAR(curve_eval(&k->ch[CH_RZ], 2.0), -4 * M_PI, 1e-9);
+    /* distance = radius (0.5 m) * angle: no slipping */
+    CHECK_NEAR(curve_eval(&k->ch[CH_TX], 0.8), -0.5 * curve_eval(&k->ch[CH_RZ], 0.8), 1e-6);
+    CHECK(k->ch[CH_TY].count == 0 && k->ch[CH_SX].count == 0); /* listed without curves */
+    free_keys(k);
+}
+
+TEST(bouncing_anim_has_flat_tops_sharp_floor_and_stepped_squash)
+{
+    keyframes *k = load("../scenes/animations/bouncing.anim");
+    CHECK(k != NULL);
+    if (!k)
+        return;
+    const curve *y = &k->ch[CH_TY], *sy = &k->ch[CH_SY];
+    CHECK_NEAR(curve_eval(y, 0.5), 0.0, 1e-12);
+    /* frame 6 (0.25 s): flat out of 1 m, linear into 0 (slope -2 m/s over
+     * h = 0.5 s): 1 * h00(1/2) + 0.5 * (-2) * h11(1/2) = 0.5 + 0.125 */
+    CHECK_NEAR(curve_eval(y, 0.25), 0.625, 1e-12);
+    CHECK_NEAR(curve_eval(y, 1.25), 0.625, 1e-12); /* cycled */
+    CHECK_NEAR(curve_eval(sy, 12.5 / 24), 0.7, 0);
+    CHECK_NEAR(curve_eval_left(sy, 0.5), 1.0, 0);
+    CHECK_NEAR(curve_eval(sy, 13.0 / 24), 1.0, 0);
+    CHECK_NEAR(curve_eval(sy, 36.5 / 24), 0.7, 0);
+    free_keys(k);
+}
+
+TEST(thrown_anim_reads_version_1_0_keys_and_fixed_angles)
+{
+    keyframes *k = load("../scenes/animations/thrown.anim");
+    CHECK(k != NULL);
+    if (!k)
+        return;
+    /* ntsc: frame 15 = 0.5 s, x from -150 to 150 cm */
+    CHECK_NEAR(curve_eval(&k->ch[CH_TX], 0.5), 0.0, 1e-12);
+    CHECK_NEAR(curve_eval(&k->ch[CH_TY], 0.5), 1.2, 1e-12);
+    /* 60 degrees in cm per second = 0.01 tan(60) m/s */
+    CHECK_NEAR(k->ch[CH_TY].keys[0].out_slope, 0.01 * tan(M_PI / 3), 1e-12);
+    CHECK_NEAR(k->ch[CH_TY].keys[2].in_slope, -0.01 * tan(M_PI / 3), 1e-12);
+    CHECK_NEAR(curve_eval(&k->ch[CH_RZ], 1.0), 3 * M_PI, 1e-12);
+    free_keys(k);
+}
+
+static const char *parse_error(const char *text)
+{
+    static rr_error e;
+    keyframes *k = NULL;
+    if (animfile_parse(text, "t.anim", &k, &e) == 0) {
+        free_keys(k);
+        return "";
+    }
+    return e.msg;
+}
+
+#define HEAD "animVersion 1.1;\ntimeUnit %s;\nlinearUnit %s;\nangularUnit %s;\n"
+#define CURVE(attr, keys) "anim " attr " " attr " n 0 0 0;\nanimData {\n input time;\n keys {\n" keys " }\n}\n"
+
+TEST(units_are_converted)
+{
+    static const struct {
+        const char *time, *lin, *ang;
+        double seconds_per_frame, meters, radians;
+    } u[] = {{"pal", "m", "rad", 1.0 / 25, 1, 1}, {"game", "mm", "deg", 1.0 / 15, 1e-3, M_PI / 180},
+             {"sec", "ft", "deg", 1, 0.3048, M_PI / 180}, {"ntscf", "in", "rad", 1.0 / 60, 0.0254, 1}};
+    for (size_t i = 0; i < sizeof u / sizeof u[0]; i++) {
+        char text[1024];
+        snprintf(text, sizeof text, HEAD CURVE("translateZ", "  3 2 linear linear 1 1 0;\n")
+                 CURVE("rotateX", "  3 2 linear linear 1 1 0;\n"), u[i].time, u[i].lin, u[i].ang);
+        keyframes *k = NULL;
+        rr_error e;
+        CHECK(animfile_parse(text, "u.anim", &k, &e) == 0);
+        if (!k)
+            continue;
+        CHECK_NEAR(k->ch[CH_TZ].keys[0].time, 3 * u[i].seconds_per_frame, 1e-15);
+        CHECK_NEAR(k->ch[CH_TZ].keys[0].value, 2 * u[i].meters, 1e-15);
+        CHECK_NEAR(k->ch[CH_RX].keys[0].value, 2 * u[i].radians, 1e-15);
+        free_keys(k);
+    }
+}
+
+TEST(bad_anim_files_give_clear_errors_with_lines)
+{
+    const char *ok = "animVersion 1.1;\n" CURVE("translateX", "  0 0 linear linear 1 1 0;\n  5 1 linear linear 1 1 0;\n");
+    CHECK(strcmp(parse_error(ok), "") == 0);
+    /* truncated block */
+    CHECK(strstr(parse_error("animVersion 1.1;\nanim translateX translateX n 0 0 0;\nanimData {\n input time;\n keys {\n"
+                             "  0 0 linear linear 1 1 0;\n"),
+                 "t.anim:7: file ends inside the keys block"));
+    /* unknown tangent type */
+    CHECK(strstr(parse_error("animVersion 1.1;\n" CURVE("translateX", "  0 0 wobbly linear 1 1 0;\n")),
+                 "t.anim:6: unknown or unsupported tangent type 'wobbly'"));
+    /* key times that do not increase */
+    CHECK(strstr(parse_error("animVersion 1.1;\n" CURVE("translateX", "  5 0 linear linear 1 1 0;\n"
+                                                                      "  5 1 linear linear 1 1 0;\n")),
+                 "t.anim:7: key time 5 is not after the previous key's 5"));
+    /* NaN */
+    CHECK(strstr(parse_error("animVersion 1.1;\n" CURVE("translateX", "  0 nan linear linear 1 1 0;\n")),
+                 "t.anim:6: 'nan' is not a finite number"));
+    /* missing fixed-tangent angles */
+    CHECK(strstr(parse_error("animVersion 1.1;\n" CURVE("translateX", "  0 0 fixed linear 1 1 0;\n")),
+                 "has 7 fields, expected 9"));
+    CHECK(strstr(parse_error("anim translateX translateX n 0 0 0;\n"), "t.anim:1: not a Maya .anim file"));
+    CHECK(strstr(parse_error("animVersion 1.1;\ntimeUnit fortnight;\n"), "t.anim:2: unknown timeUnit"));
+    CHECK(strstr(parse_error("animVersion 1.1;\n" CURVE("visibility", "  0 1 linear linear 1 1 0;\n")),
+                 "no translate, rotate or scale curve"));
+    CHECK(strstr(parse_error("animVersion 1.1;\n" CURVE("scaleX", "  0 0 linear linear 1 1 0;\n")),
+                 "scale keys must be positive"));
+    CHECK(strstr(parse_error("animVersion 1.1;\n" CURVE("tx", "  0 0 linear linear 1 1 0;\n")
+                             CURVE("translateX", "  0 0 linear linear 1 1 0;\n")),
+                 "a second curve for 'translateX' (first at line 2)"));
+    rr_error e;
+    keyframes *k;
+    CHECK(animfile_load("no/such.anim", &k, &e) == -1 && strstr(e.msg, "no/such.anim: cannot open"));
+}
