@@ -183,16 +183,12 @@ typedef struct {
 
 static int add_key(lexer *lx, curve_reader *r, const curve_key *k)
 {
-    curve *c = r->c;
-    if (c->count > 0 && !(k->time > c->keys[c->count - 1].time))
+    const curve *c = r->c;
+    int rc = curve_append(r->c, k);
+    if (rc == -1)
         return fail(lx, "key time %g is not after the previous key's %g (key times must increase)",
                     k->time / r->seconds_per_frame, c->keys[c->count - 1].time / r->seconds_per_frame);
-    curve_key *grown = realloc(c->keys, (size_t)(c->count + 1) * sizeof *grown);
-    if (!grown)
-        return fail(lx, "out of memory");
-    c->keys = grown;
-    c->keys[c->count++] = *k;
-    return 0;
+    return rc ? fail(lx, "out of memory") : 0;
 }
 
 /* A fixed tangent's angle in the file's units (value per second in the

@@ -208,6 +208,18 @@ double curve_max_slope(const curve *c)
     return m;
 }
 
+int curve_append(curve *c, const curve_key *k)
+{
+    if (c->count > 0 && !(k->time > c->keys[c->count - 1].time))
+        return -1;
+    curve_key *grown = realloc(c->keys, (size_t)(c->count + 1) * sizeof *grown);
+    if (!grown)
+        return -2;
+    c->keys = grown;
+    c->keys[c->count++] = *k;
+    return 0;
+}
+
 void curve_free(curve *c)
 {
     free(c->keys);

@@ -61,6 +61,10 @@ double curve_eval_left(const curve *c, double t);
  * callers sample the key times themselves). */
 double curve_max_slope(const curve *c);
 
+/* Appends a key: 0, or -1 when its time is not after the last key's, or
+ * -2 when out of memory (the curve is unchanged then). */
+int curve_append(curve *c, const curve_key *k);
+
 void curve_free(curve *c);
 
 #endif

@@ -62,7 +62,8 @@ void scene_init(scene *s);
 /* Whether the camera moves during [t0, t1] (then no static-hit reuse). */
 int scene_camera_moves(const scene *s);
 
-/* The world ray through raster (x, y) at time t: origin and unit direction. */
+/* The world ray through raster (x, y) at time t: origin and unit direction
+ * (the camera's animation applied; callers skip this for a still camera). */
 void scene_camera_ray(const scene *s, double x, double y, double t, vec3 *org, vec3 *dir);
 
 /* Sets s->shut to frame N's shutter: frame 0's shifted by N / frame_rate.

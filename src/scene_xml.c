@@ -149,6 +149,8 @@ static int parse_camera_motion(xml_ctx *c, xmlNodePtr n, const camera *cam, anim
             continue;
         if (strcmp(elname(k), "animation"))
             return node_fail(c, k, "unknown element inside <camera> (expected animation)");
+        if (a->keys || !animation_is_static(a))
+            return node_fail(c, k, "the camera has one <animation>");
         animation_free(a);
         animation_init_static(a);
         a->offset = cam->position; /* the default keyframe pivot; the camera has no model offset */
@@ -347,15 +349,11 @@ static int key_interpolation(xml_ctx *c, xmlNodePtr n, tangent_kind *in, tangent
 
 static int append_key(xml_ctx *c, xmlNodePtr n, curve *cv, curve_key k)
 {
-    if (cv->count > 0 && !(k.time > cv->keys[cv->count - 1].time))
+    int rc = curve_append(cv, &k);
+    if (rc == -1)
         return node_fail(c, n, "key time %g is not after the previous key's %g", k.time,
                          cv->keys[cv->count - 1].time);
-    curve_key *grown = realloc(cv->keys, (size_t)(cv->count + 1) * sizeof *grown);
-    if (!grown)
-        return node_fail(c, n, "out of memory");
-    cv->keys = grown;
-    cv->keys[cv->count++] = k;
-    return 0;
+    return rc ? node_fail(c, n, "out of memory") : 0;
 }
 
 /* <key time="t" translate="x y z" rotate="degrees x y z" scale="x y z"
