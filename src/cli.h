@@ -26,5 +26,6 @@ void cli_frame_path(const char *pattern, int frame, char *out, size_t size);
 int cmd_render(int argc, char **argv);
 int cmd_gen(int argc, char **argv);
 int cmd_merge(int argc, char **argv);
+int cmd_surfels(int argc, char **argv);
 
 #endif

@@ -25,6 +25,7 @@ static void usage(FILE *f)
 "usage: refrender [options] [SCENE.xml]\n"
 "       refrender merge STATE.exr [STATE.exr ...] -o OUT.exr   (see 'refrender merge --help')\n"
 "       refrender gen SHAPE [options] -o FILE.ply              (see 'refrender gen --help')\n"
+"       refrender surfels MESH|CLOUD [options] -o FILE.ply     (see 'refrender surfels --help')\n"
 "\n"
 "Renders a ground-truth motion-blurred image of a point-based scene by Monte\n"
 "Carlo ray tracing (Wolf 2008, sec. 4.5) and writes a 32-bit float EXR.\n"
@@ -478,5 +479,7 @@ int main(int argc, char **argv)
         return cmd_gen(argc - 1, argv + 1);
     if (argc > 1 && !strcmp(argv[1], "merge"))
         return cmd_merge(argc - 1, argv + 1);
+    if (argc > 1 && !strcmp(argv[1], "surfels"))
+        return cmd_surfels(argc - 1, argv + 1);
     return cmd_render(argc, argv);
 }

@@ -136,3 +136,24 @@ def test_interrupt_writes_nothing(tmp_path):
     _, err = proc.communicate(timeout=60)
     assert proc.returncode == 130 and "interrupted" in err
     assert list(tmp_path.iterdir()) == []
+
+
+def test_surfels_converts_meshes_and_point_clouds(tmp_path):
+    obj = tmp_path / "quad.obj"
+    obj.write_text("v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3\nf 1 3 4\n")
+    out = tmp_path / "quad.ply"
+    proc = run(["surfels", obj, "-o", out, "--overlap", 1])
+    assert proc.returncode == 0, proc.stderr
+    header = out.read_bytes().split(b"end_header")[0].decode()
+    assert "element vertex 4" in header and "property float radius" in header
+    xyz = tmp_path / "cloud.xyz"
+    xyz.write_text("".join(f"{i % 4} {i // 4} 0 0 0 1\n" for i in range(16)))
+    assert run(["surfels", xyz, "-o", tmp_path / "cloud.ply"]).returncode == 0
+    bad = tmp_path / "bad.xyz"
+    bad.write_text("0 0 0 0 0 1\n1 2 3\n")
+    proc = run(["surfels", bad, "-o", tmp_path / "bad.ply"])
+    assert proc.returncode == 1 and "bad.xyz:2" in proc.stderr
+    assert not (tmp_path / "bad.ply").exists()
+    proc = run(["surfels", tmp_path / "missing.obj", "-o", tmp_path / "m.ply"])
+    assert proc.returncode == 1 and "missing.obj" in proc.stderr
+    assert run(["surfels", "--help"]).returncode == 0

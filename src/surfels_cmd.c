@@ -1,0 +1,211 @@
+/* 'refrender surfels': scanned meshes (read with Assimp) and xyz point
+ * clouds with normals to surfel PLY files. */
+#include <assimp/cimport.h>
+#include <assimp/postprocess.h>
+#include <assimp/scene.h>
+#include <getopt.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "cli.h"
+#include "surfelize.h"
+
+static void surfels_usage(FILE *f)
+{
+    fputs(
+"usage: refrender surfels INPUT -o OUT.ply [options]\n"
+"\n"
+"Turns a triangle mesh (OBJ, OFF, PLY, ... read with Assimp) or a point cloud\n"
+"with normals (.xyz or .pts text: x y z nx ny nz per line) into circular\n"
+"surfels written as binary PLY (x y z nx ny nz radius red green blue).\n"
+"Mesh: one splat per vertex, area = a third of its adjacent triangles'.\n"
+"Point cloud: area from the distance to the 6th nearest neighbour.\n"
+"  --overlap F       radius factor over the equal-area disk (default 1.5)\n"
+"  --fit R           move the bounding-box center to the origin and scale so\n"
+"                    half the box diagonal is R (default: keep coordinates)\n"
+"  --color \"r g b\"   color (default 0.8 0.8 0.8)\n"
+"  --color2 \"r g b\"  second color of a 3D checkerboard (default 0.2 0.2 0.2)\n"
+"  --checker S       checker cube side in output units; 0 = plain (default 0)\n"
+"  -o, --output F    output PLY file (required)\n", f);
+}
+
+typedef struct {
+    double overlap, fit, checker;
+    vec3 color, color2;
+    const char *out;
+} surfels_options;
+
+/* Every mesh of the file, concatenated. */
+static int load_mesh(const char *path, double **pos, double **nrm, size_t *nv, unsigned **tri, size_t *nt,
+                     rr_error *err)
+{
+    const struct aiScene *sc = aiImportFile(path, aiProcess_Triangulate | aiProcess_JoinIdenticalVertices |
+                                                      aiProcess_GenSmoothNormals | aiProcess_PreTransformVertices);
+    if (!sc)
+        return rr_fail(err, "%s: %s", path, aiGetErrorString());
+    size_t v = 0, t = 0;
+    for (unsigned m = 0; m < sc->mNumMeshes; m++)
+        v += sc->mMeshes[m]->mNumVertices, t += sc->mMeshes[m]->mNumFaces;
+    *pos = malloc((v + 1) * 3 * sizeof **pos), *nrm = calloc((v + 1) * 3, sizeof **nrm);
+    *tri = malloc((t + 1) * 3 * sizeof **tri);
+    if (!*pos || !*nrm || !*tri) {
+        aiReleaseImport(sc);
+        return rr_fail(err, "%s: out of memory", path);
+    }
+    size_t vbase = 0, tcount = 0;
+    for (unsigned m = 0; m < sc->mNumMeshes; m++) {
+        const struct aiMesh *mesh = sc->mMeshes[m];
+        for (unsigned i = 0; i < mesh->mNumVertices; i++) {
+            const struct aiVector3D *p = &mesh->mVertices[i];
+            double *dp = &(*pos)[3 * (vbase + i)], *dn = &(*nrm)[3 * (vbase + i)];
+            dp[0] = p->x, dp[1] = p->y, dp[2] = p->z;
+            if (mesh->mNormals)
+                dn[0] = mesh->mNormals[i].x, dn[1] = mesh->mNormals[i].y, dn[2] = mesh->mNormals[i].z;
+        }
+        for (unsigned f = 0; f < mesh->mNumFaces; f++) {
+            const struct aiFace *face = &mesh->mFaces[f];
+            if (face->mNumIndices != 3)
+                continue; /* points and lines carry no area */
+            for (int k = 0; k < 3; k++)
+                (*tri)[3 * tcount + k] = (unsigned)(vbase + face->mIndices[k]);
+            tcount++;
+        }
+        vbase += mesh->mNumVertices;
+    }
+    aiReleaseImport(sc);
+    *nv = vbase, *nt = tcount;
+    return 0;
+}
+
+static int has_suffix(const char *s, const char *suffix)
+{
+    size_t a = strlen(s), b = strlen(suffix);
+    return a >= b && !strcasecmp(s + a - b, suffix);
+}
+
+/* x y z nx ny nz per line; '#' starts a comment. */
+static int load_points(const char *path, double **pos, double **nrm, size_t *np, rr_error *err)
+{
+    FILE *f = fopen(path, "r");
+    if (!f)
+        return rr_fail(err, "%s: cannot open", path);
+    size_t cap = 1024, n = 0;
+    *pos = malloc(cap * 3 * sizeof **pos), *nrm = malloc(cap * 3 * sizeof **nrm);
+    char line[1024];
+    int lineno = 0, rc = 0;
+    while (!rc && fgets(line, sizeof line, f)) {
+        lineno++;
+        char *hash = strchr(line, '#');
+        if (hash)
+            *hash = 0;
+        double v[6];
+        char extra;
+        int got = sscanf(line, "%lf %lf %lf %lf %lf %lf %c", &v[0], &v[1], &v[2], &v[3], &v[4], &v[5], &extra);
+        if (got == EOF || got == -1)
+            continue;
+        int finite = 1;
+        for (int k = 0; k < got && k < 6; k++)
+            finite &= isfinite(v[k]);
+        if (got != 6 || !finite) {
+            rc = rr_fail(err, "%s:%d: expected six finite numbers (x y z nx ny nz)", path, lineno);
+            break;
+        }
+        if (n == cap) {
+            cap *= 2;
+            double *p = realloc(*pos, cap * 3 * sizeof *p), *q = realloc(*nrm, cap * 3 * sizeof *q);
+            if (p) *pos = p;
+            if (q) *nrm = q;
+            if (!p || !q) {
+                rc = rr_fail(err, "%s: out of memory", path);
+                break;
+            }
+        }
+        memcpy(&(*pos)[3 * n], v, 3 * sizeof *v);
+        memcpy(&(*nrm)[3 * n], v + 3, 3 * sizeof *v);
+        n++;
+    }
+    fclose(f);
+    *np = n;
+    return rc;
+}
+
+/* --fit: center the box at the origin, half diagonal R. */
+static void fit(surfel *s, size_t n, double r)
+{
+    aabb b = aabb_empty();
+    for (size_t i = 0; i < n; i++)
+        aabb_add_point(&b, s[i].center);
+    vec3 c = v3_scale(v3_add(b.lo, b.hi), 0.5);
+    double half = 0.5 * v3_len(v3_sub(b.hi, b.lo)), k = half > 0 ? r / half : 1.0;
+    for (size_t i = 0; i < n; i++) {
+        s[i].center = v3_scale(v3_sub(s[i].center, c), k);
+        s[i].radius *= k;
+    }
+}
+
+static int convert(const char *in, const surfels_options *o, rr_error *err)
+{
+    double *pos = NULL, *nrm = NULL;
+    unsigned *tri = NULL;
+    size_t nv = 0, nt = 0, n = 0;
+    surfel *s = NULL;
+    int points = has_suffix(in, ".xyz") || has_suffix(in, ".pts");
+    int rc = points ? load_points(in, &pos, &nrm, &nv, err) : load_mesh(in, &pos, &nrm, &nv, &tri, &nt, err);
+    if (!rc)
+        rc = points ? surfels_from_points(pos, nrm, nv, o->overlap, &s, &n, err)
+                    : surfels_from_mesh(pos, nrm, nv, tri, nt, o->overlap, &s, &n, err);
+    free(pos), free(nrm), free(tri);
+    if (rc)
+        return rc;
+    if (o->fit > 0)
+        fit(s, n, o->fit);
+    surfels_color(s, n, o->color, o->color2, o->checker);
+    rc = ply_write_surfels(o->out, s, n, err);
+    if (!rc)
+        fprintf(stderr, "refrender surfels: %s: %zu splats -> %s\n", in, n, o->out);
+    free(s);
+    return rc;
+}
+
+static int surfels_option(int c, const char *arg, surfels_options *o, rr_error *err)
+{
+    switch (c) {
+    case 'v': return cli_double("--overlap", arg, 1e-6, &o->overlap, err);
+    case 'f': return cli_double("--fit", arg, 1e-30, &o->fit, err);
+    case 'k': return cli_double("--checker", arg, 0.0, &o->checker, err);
+    case 'c': return cli_vec3("--color", arg, &o->color, err);
+    case 'd': return cli_vec3("--color2", arg, &o->color2, err);
+    case 'o': o->out = arg; return 0;
+    }
+    return rr_fail(err, "unknown option");
+}
+
+int cmd_surfels(int argc, char **argv)
+{
+    static const struct option longopts[] = {
+        {"overlap", required_argument, 0, 'v'}, {"fit", required_argument, 0, 'f'},
+        {"checker", required_argument, 0, 'k'}, {"color", required_argument, 0, 'c'},
+        {"color2", required_argument, 0, 'd'}, {"output", required_argument, 0, 'o'},
+        {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
+    surfels_options o = {1.5, 0, 0, v3(0.8, 0.8, 0.8), v3(0.2, 0.2, 0.2), NULL};
+    rr_error err;
+    int c;
+    while ((c = getopt_long(argc, argv, "ho:", longopts, NULL)) != -1) {
+        if (c == 'h') { surfels_usage(stdout); return 0; }
+        if (c == '?') { fputs("Try 'refrender surfels --help'.\n", stderr); return 2; }
+        if (surfels_option(c, optarg, &o, &err)) {
+            fprintf(stderr, "refrender surfels: %s\n", err.msg);
+            return 2;
+        }
+    }
+    if (optind != argc - 1 || !o.out) {
+        fputs("refrender surfels: need exactly one INPUT and -o OUT.ply; try 'refrender surfels --help'\n", stderr);
+        return 2;
+    }
+    if (cli_check_writable(o.out, &err) || convert(argv[optind], &o, &err)) {
+        fprintf(stderr, "refrender surfels: %s\n", err.msg);
+        return 1;
+    }
+    return 0;
+}
