@@ -22,19 +22,19 @@ INCLUDES := -I/usr/include/embree3 -I/usr/include/OpenEXR -I/usr/include/libxml2
 CFLAGS   += -std=c11 -D_GNU_SOURCE $(OPT) -Wall -Wextra $(INCLUDES) \
             -DRR_SOURCE_SCENE='"$(CURDIR)/scenes/default.xml"'
 CXXFLAGS += -std=c++17 $(OPT) -Wall -Wextra
-LDLIBS   := -lembree3 -lOpenEXRCore -lxml2 -lOpenImageIO -lOpenImageIO_Util -lpthread -lm -lstdc++
+LDLIBS   := -lassimp -lembree3 -lOpenEXRCore -lxml2 -lOpenImageIO -lOpenImageIO_Util -lpthread -lm -lstdc++
 
-LIB_SRCS := common splat pointmodel ply shapes curve animation animfile camera shutter sampler scene \
+LIB_SRCS := common splat pointmodel ply shapes surfelize curve animation animfile camera shutter sampler scene \
             scene_xml accel shade film render exr output cli
 LIB_OBJS := $(LIB_SRCS:%=$(BUILD)/%.o) $(BUILD)/preview.o
-APP_OBJS := $(BUILD)/main.o $(BUILD)/gen_cmd.o $(BUILD)/merge_cmd.o
+APP_OBJS := $(BUILD)/main.o $(BUILD)/gen_cmd.o $(BUILD)/merge_cmd.o $(BUILD)/surfels_cmd.o
 TEST_SRCS := $(wildcard tests/test_*.c)
 TEST_OBJS := $(TEST_SRCS:tests/%.c=$(BUILD)/tests/%.o) $(BUILD)/tests/harness.o
 
 BIN      := $(BUILD)/refrender
 TESTBIN  := $(BUILD)/unit_tests
 
-.PHONY: all deps demo test test-c test-py bench clean
+.PHONY: all deps demo test test-c test-py bench clean scenes references gallery
 all: $(BIN) $(BUILD)/refrender-bench
 
 $(BUILD)/%.o: src/%.c src/*.h | $(BUILD)
@@ -64,7 +64,7 @@ demo: deps
 test-c: $(TESTBIN)
 	cd tests && ../$(TESTBIN)
 
-test-py: $(BIN)
+test-py: $(BIN) scenes
 	REFRENDER=$(CURDIR)/$(BIN) $(PYTHON) -m pytest -q tests
 
 test: test-c test-py
@@ -75,6 +75,24 @@ test: test-c test-py
 bench: $(BUILD)/refrender-bench
 	mkdir -p out
 	$(BUILD)/refrender-bench out/bench.csv $(BENCH_ARGS)
+
+# The scene suite (scenes/*.xml; README "Scene suite"). Scanned models come
+# from Debian packages and are converted into scenes/models/ (not committed).
+SUITE    := sphere_weights_box sphere_weights_linear sphere_weights_exp diagonal rotation \
+            towards_camera crossing thin_fast camera_pan large
+REF_ARGS := --spp 4 --tspp 32 --batches 16 --seed 1
+
+scenes: $(BIN)
+	REFRENDER=$(BIN) scripts/fetch-models.sh
+
+references: scenes
+	for s in $(SUITE); do $(BIN) scenes/$$s.xml $(REF_ARGS) -o reference_images/$$s.exr --quiet || exit 1; done
+	$(PYTHON) scripts/gallery.py reference_images/gallery.png $(SUITE:%=reference_images/%.exr)
+
+gallery: scenes
+	mkdir -p out/gallery
+	for s in $(SUITE); do $(BIN) scenes/$$s.xml --spp 4 --tspp 16 -o out/gallery/$$s.exr --quiet || exit 1; done
+	$(PYTHON) scripts/gallery.py out/gallery.png $(SUITE:%=out/gallery/%.exr)
 
 clean:
 	rm -rf build build-san out
