@@ -68,7 +68,7 @@ int sampler_scratch_init(sampler_scratch *sc, const sampler *s)
     size_t m = (size_t)s->tspp * (size_t)s->time_factor;
     sc->jitter = malloc(m * sizeof *sc->jitter);
     sc->perm = malloc(m * sizeof *sc->perm);
-    sc->taken = malloc(m);
+    sc->taken = malloc((m + 63) / 64 * sizeof *sc->taken);
     return sc->jitter && sc->perm && sc->taken ? 0 : -1;
 }
 
@@ -90,9 +90,10 @@ void sampler_scratch_free(sampler_scratch *sc)
  * set of samples does not depend on the order. */
 static void thesis_times(const sampler *s, uint64_t key, int i, sampler_scratch *sc, double *times)
 {
-    int m = s->tspp * s->time_factor;
+    int m = s->tspp * s->time_factor, words = (m + 63) / 64;
     for (int j = 0; j < m; j++)
-        sc->perm[j] = j, sc->taken[j] = 0;
+        sc->perm[j] = j;
+    memset(sc->taken, 0, (size_t)words * sizeof *sc->taken);
     for (int k = 0; k < s->tspp; k++) {
         /* choose uniformly among the strata not yet taken (partial Fisher-Yates) */
         uint64_t counter = (uint64_t)i * (uint64_t)m + (uint64_t)k;
@@ -102,10 +103,13 @@ static void thesis_times(const sampler *s, uint64_t key, int i, sampler_scratch 
         int stratum = sc->perm[pick];
         sc->perm[pick] = sc->perm[k];
         sc->perm[k] = stratum;
-        sc->taken[stratum] = 1;
+        sc->taken[stratum >> 6] |= 1ULL << (stratum & 63);
     }
-    for (int j = 0, k = 0; j < m; j++)
-        if (sc->taken[j]) {
+    /* list the taken strata in order: set bits, lowest first */
+    int k = 0;
+    for (int w = 0; w < words; w++)
+        for (uint64_t bits = sc->taken[w]; bits; bits &= bits - 1) {
+            int j = 64 * w + __builtin_ctzll(bits);
             double t = s->t0 + (s->t1 - s->t0) * (j + sc->jitter[j]) / m;
             times[k++] = t < s->t1 ? t : nextafter(s->t1, s->t0);
         }

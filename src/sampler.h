@@ -50,7 +50,7 @@ static inline int sampler_count(const sampler *s) { return s->grid * s->grid * s
 typedef struct {
     double *jitter;
     int *perm;
-    unsigned char *taken; /* thesis: strata taken by the current ray */
+    uint64_t *taken; /* thesis: bitset of the strata taken by the current ray */
 } sampler_scratch;
 
 int sampler_scratch_init(sampler_scratch *sc, const sampler *s);
