@@ -100,13 +100,13 @@ static float kbuffer_cutoff(const kbuffer *kb)
 /* ---- object-level callbacks (object space) ----------------------------- */
 
 static void accept_hit(trace_context *c, struct RTCRayHit *rh, const struct RTCIntersectFunctionNArguments *args,
-                       float t, float weight, vec3 normal, const float color[3])
+                       float t, float weight, float r2, vec3 normal, const float color[3])
 {
     vec3 d = v3(rh->ray.dir_x, rh->ray.dir_y, rh->ray.dir_z);
     if (v3_dot(normal, d) > 0) /* two-sided surfaces: shade the side facing the eye */
         normal = v3_scale(normal, -1.0);
     vec3 wn = xform_normal(&c->xf, normal);
-    surface_hit h = {t, c->obj, args->primID, weight, {color[0], color[1], color[2]},
+    surface_hit h = {t, c->obj, args->primID, weight, r2, {color[0], color[1], color[2]},
                      {(float)wn.x, (float)wn.y, (float)wn.z}};
     kbuffer_insert(c->kb, &h);
     c->accepted++;
@@ -128,8 +128,8 @@ static void splats_intersect(const struct RTCIntersectFunctionNArguments *args)
     if (!splat_intersect(&o->model.geom[args->primID], org, dir, rh->ray.tnear, rh->ray.tfar, &t, &r2))
         return;
     const float *n = pointmodel_normal(&o->model, args->primID);
-    float w = (float)splat_kernel_weight(r2, c->acc->sigma);
-    accept_hit(c, rh, args, t, w, v3(n[0], n[1], n[2]), pointmodel_color(&o->model, args->primID));
+    /* weight -1: computed after the traversal, if the hit is still in the buffer */
+    accept_hit(c, rh, args, t, -1.0f, r2, v3(n[0], n[1], n[2]), pointmodel_color(&o->model, args->primID));
 }
 
 static void sphere_intersect(const struct RTCIntersectFunctionNArguments *args)
@@ -154,7 +154,7 @@ static void sphere_intersect(const struct RTCIntersectFunctionNArguments *args)
         if (t >= rh->ray.tnear && t <= rh->ray.tfar) {
             vec3 p = v3_add(oc, v3_scale(dir, roots[i]));
             const float col[3] = {(float)o->sphere_color.x, (float)o->sphere_color.y, (float)o->sphere_color.z};
-            accept_hit(c, rh, args, t, 1.0f, v3_scale(p, 1.0 / o->sphere_radius), col);
+            accept_hit(c, rh, args, t, 1.0f, 0.0f, v3_scale(p, 1.0 / o->sphere_radius), col);
             return;
         }
     }
@@ -427,6 +427,9 @@ static int trace_top(const accel *a, int which, vec3 org, vec3 dir, double time,
     rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
     rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
     rtcIntersect1(a->top[which].scene, &c.rtc, &rh);
+    for (int k = 0; k < kb->count; k++)
+        if (kb->hits[k].weight < 0)
+            kb->hits[k].weight = (float)splat_kernel_weight(kb->hits[k].r2, a->sigma);
     return c.accepted;
 }
 

@@ -23,6 +23,8 @@ typedef struct {
     float t;
     unsigned obj, prim;
     float weight;    /* kernel weight (1 for analytic spheres) */
+    float r2;        /* squared kernel radius; the weight is computed from it
+                        only for the hits that stay in the buffer */
     float color[3];
     float normal[3]; /* world space, facing the ray origin */
 } surface_hit;
