@@ -19,7 +19,7 @@ def test_help_documents_every_option():
     for opt in ["--spp", "--tspp", "-o", "--res", "--threads", "--seed", "--eps", "--sigma",
                 "--time-factor", "--preview", "--quiet", "--version", "gen", "merge", "--sampler",
                 "--batches", "--target-error", "--max-batches", "--pass", "--checkpoint",
-                "--checkpoint-every", "--resume", "--no-static-reuse"]:
+                "--checkpoint-every", "--resume", "--no-static-reuse", "--frame ", "--frames", "surfels"]:
         assert opt in proc.stdout, opt
     gen = run(["gen", "--help"])
     assert gen.returncode == 0 and "--count" in gen.stdout
