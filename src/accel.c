@@ -433,7 +433,6 @@ static int trace_top(const accel *a, int which, vec3 org, vec3 dir, double time,
     return c.accepted;
 }
 
-
 /* Slab test against a box grown by a relative margin far above float
  * rounding, so that it never rejects a ray Embree's float traversal of the
  * (outward-rounded) swept bounds would accept. */

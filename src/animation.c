@@ -160,12 +160,6 @@ xform animation_at(const animation *a, double t) { return a->keys ? keyed_at(a, 
 #define GRID_STEPS 64
 #define MAX_SAMPLES 65536
 
-static int cmp_double(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
-
 static void add_sample(double *s, int *n, double t, double t0, double t1)
 {
     if (t >= t0 && t <= t1 && *n < MAX_SAMPLES)
@@ -220,18 +214,26 @@ static double max_slope_of(const keyframes *k, int first, int count)
     return m;
 }
 
+/* Largest scale at the samples s (both sides of each), plus what the
+ * scale's slope allows between them. */
+static double max_scale_over(const animation *a, const double *s, int n)
+{
+    double m = 0;
+    for (int i = 0; i < n; i++)
+        for (int c = CH_SX; c <= CH_SZ; c++)
+            m = fmax(m, fmax(channel(a->keys, c, s[i], 0), channel(a->keys, c, s[i], 1)));
+    return m + max_slope_of(a->keys, CH_SX, 3) * largest_gap(s, n) * 0.5;
+}
+
 double animation_max_scale(const animation *a, double t0, double t1)
 {
     if (!a->keys)
         return 1.0;
     int n;
-    double *s = sample_times(a, t0, t1, &n), m = 0;
+    double *s = sample_times(a, t0, t1, &n);
     if (!s)
         return INFINITY;
-    for (int i = 0; i < n; i++)
-        for (int c = CH_SX; c <= CH_SZ; c++)
-            m = fmax(m, fmax(channel(a->keys, c, s[i], 0), channel(a->keys, c, s[i], 1)));
-    m += max_slope_of(a->keys, CH_SX, 3) * largest_gap(s, n) * 0.5;
+    double m = max_scale_over(a, s, n);
     free(s);
     return m;
 }
@@ -259,7 +261,7 @@ static double box_reach(aabb b, vec3 offset, vec3 c)
  * the axis. Keyframes, p' = pivot + T + R S q with q = p_rest - pivot:
  * |dp'/dt| <= |T'| + |R'| |S q| + |S' q| with |R'| <= |rx'| + |ry'| + |rz'|
  * (each Euler factor is a rotation at that rate). */
-static double speed_bound(const animation *a, aabb b, double t0, double t1)
+static double speed_bound(const animation *a, aabb b, const double *s, int n) /* s: the sample times */
 {
     if (!a->keys) {
         double omega = a->has_rotation ? fabs(a->degrees_per_time) * M_PI / 180.0 : 0.0;
@@ -272,7 +274,7 @@ static double speed_bound(const animation *a, aabb b, double t0, double t1)
         dt += pow(curve_max_slope(&k->ch[c]), 2);
     for (int c = CH_RX; c <= CH_RZ; c++)
         dr += curve_max_slope(&k->ch[c]);
-    return sqrt(dt) + dr * animation_max_scale(a, t0, t1) * q + max_slope_of(k, CH_SX, 3) * q;
+    return sqrt(dt) + dr * max_scale_over(a, s, n) * q + max_slope_of(k, CH_SX, 3) * q;
 }
 
 aabb animation_swept_bounds(const animation *a, aabb b, double t0, double t1)
@@ -299,7 +301,7 @@ aabb animation_swept_bounds(const animation *a, aabb b, double t0, double t1)
     }
     /* Between two samples the motion is continuous, and a point is at most
      * speed * gap / 2 from where it was at the nearer sample. */
-    double pad = speed_bound(a, b, t0, t1) * largest_gap(s, n) * 0.5;
+    double pad = speed_bound(a, b, s, n) * largest_gap(s, n) * 0.5;
     free(s);
     out.lo = v3_sub(out.lo, v3(pad, pad, pad));
     out.hi = v3_add(out.hi, v3(pad, pad, pad));

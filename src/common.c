@@ -13,3 +13,9 @@ int rr_fail(rr_error *err, const char *fmt, ...)
     }
     return -1;
 }
+
+int cmp_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}

@@ -17,6 +17,9 @@ typedef struct {
 int rr_fail(rr_error *err, const char *fmt, ...)
     __attribute__((format(printf, 2, 3)));
 
+/* qsort comparator for doubles, ascending. */
+int cmp_double(const void *a, const void *b);
+
 typedef struct {
     double x, y, z;
 } vec3;

@@ -2,7 +2,6 @@
 
 #include <libxml/parser.h>
 #include <libxml/xmlerror.h>
-#include <ctype.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -127,12 +126,18 @@ static int is_element(xmlNodePtr n) { return n->type == XML_ELEMENT_NODE; }
 
 /* Text children must be whitespace only, except where an element takes a
  * path as its content. */
+/* Non-blank text directly inside the element (a path, as in Figure 4.11)? */
+static int has_text(xmlNodePtr n)
+{
+    for (xmlNodePtr k = n->children; k; k = k->next)
+        if (k->type == XML_TEXT_NODE && !xmlIsBlankNode(k))
+            return 1;
+    return 0;
+}
+
 static int check_no_text(xml_ctx *c, xmlNodePtr parent)
 {
-    for (xmlNodePtr n = parent->children; n; n = n->next)
-        if (n->type == XML_TEXT_NODE && !xmlIsBlankNode(n))
-            return node_fail(c, parent, "unexpected text inside this element");
-    return 0;
+    return has_text(parent) ? node_fail(c, parent, "unexpected text inside this element") : 0;
 }
 
 /* ---- scene-level elements -------------------------------------------- */
@@ -332,6 +337,7 @@ static int parse_rotation(xml_ctx *c, xmlNodePtr n, animation *a)
 /* ---- keyframes -------------------------------------------------------- */
 
 static void resolve_path(xml_ctx *c, const char *rel, char *out, size_t size);
+static int element_text(xmlNodePtr n, char *buf, size_t size);
 
 static int key_interpolation(xml_ctx *c, xmlNodePtr n, tangent_kind *in, tangent_kind *out)
 {
@@ -444,16 +450,10 @@ static int new_keyframes(xml_ctx *c, xmlNodePtr n, animation *a)
 /* <animation>path.anim</animation> as in thesis Figure 4.11. */
 static int load_anim_file(xml_ctx *c, xmlNodePtr n, animation *a)
 {
-    xmlChar *text = xmlNodeGetContent(n);
     char rel[4096], path[4096];
-    snprintf(rel, sizeof rel, "%s", text ? (const char *)text : "");
-    xmlFree(text);
-    char *start = rel, *end = rel + strlen(rel);
-    while (*start && isspace((unsigned char)*start))
-        start++;
-    while (end > start && isspace((unsigned char)end[-1]))
-        *--end = 0;
-    resolve_path(c, start, path, sizeof path);
+    if (!element_text(n, rel, sizeof rel))
+        return node_fail(c, n, "animation file path is too long");
+    resolve_path(c, rel, path, sizeof path);
     if (new_keyframes(c, n, a))
         return -1;
     vec3 pivot = a->keys->pivot;
@@ -463,14 +463,6 @@ static int load_anim_file(xml_ctx *c, xmlNodePtr n, animation *a)
     if (animfile_load(path, &a->keys, &sub))
         return rr_fail(c->err, "%s (animation of %s:%ld)", sub.msg, c->name, xmlGetLineNo(n));
     a->keys->pivot = pivot;
-    return 0;
-}
-
-static int has_text(xmlNodePtr n)
-{
-    for (xmlNodePtr k = n->children; k; k = k->next)
-        if (k->type == XML_TEXT_NODE && !xmlIsBlankNode(k))
-            return 1;
     return 0;
 }
 
@@ -544,10 +536,10 @@ static void resolve_path(xml_ctx *c, const char *rel, char *out, size_t size)
 }
 
 /* Path from the 'file' attribute or, as in thesis Figure 4.11, the text. */
-static int point_model_path(xmlNodePtr n, char *buf, size_t size)
+/* The element's text with surrounding white space removed; 0 if empty
+ * (or too long for buf). */
+static int element_text(xmlNodePtr n, char *buf, size_t size)
 {
-    if (attr_text(n, "file", buf, size))
-        return 1;
     xmlChar *text = xmlNodeGetContent(n);
     int found = 0;
     if (text) {
@@ -565,6 +557,11 @@ static int point_model_path(xmlNodePtr n, char *buf, size_t size)
         xmlFree(text);
     }
     return found;
+}
+
+static int point_model_path(xmlNodePtr n, char *buf, size_t size)
+{
+    return attr_text(n, "file", buf, size) || element_text(n, buf, size);
 }
 
 static int generate_shape(xml_ctx *c, xmlNodePtr n, const char *kind, pointmodel *m)
