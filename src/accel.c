@@ -28,6 +28,7 @@ struct accel {
     RTCScene *object_scenes;
     aabb *swept;  /* world bounds of each object over the shutter */
     sphere_bound *swept_sphere; /* and a world sphere holding it at every time */
+    double *coherent_spread; /* object-space rays closer than this share a packet */
     xform *rest;  /* transform of each static object (the same at every time) */
     int *is_static;
     int reuse_static;
@@ -37,17 +38,34 @@ struct accel {
     rr_error build_error; /* filled by Embree's error callback */
 };
 
-/* Per-ray state. The RTCIntersectContext must come first: Embree hands the
- * same pointer to every callback, also through the nested rtcIntersect1. */
+/* Per-traversal state: one ray (lane 0) or a packet of one world ray at up
+ * to ACCEL_PACKET times (lane i at its own time). The RTCIntersectContext
+ * must come first: Embree hands the same pointer to every callback, also
+ * through the nested rtcIntersect1. */
 typedef struct {
     struct RTCIntersectContext rtc;
     const accel *acc;
-    double time;
+    double time;                  /* the single ray's time (top-level path) */
+    vec3 world_org, world_dir;    /* and its world ray, unrounded */
     unsigned obj;
-    xform xf; /* current object's transform at `time` */
-    kbuffer *kb;
-    int accepted; /* hits offered to the k-buffer in this traversal */
+    const xform *xf[ACCEL_PACKET]; /* each lane's object transform at its time */
+    kbuffer *kb[ACCEL_PACKET];
+    int accepted[ACCEL_PACKET];   /* hits offered to each lane's k-buffer */
 } trace_context;
+
+/* Embree passes rays to callbacks in SOA layout, N lanes per field
+ * (rtcore_ray.h: RTCRayHitN); C has no accessors, so index it ourselves. */
+enum { F_ORG = 0, F_TNEAR = 3, F_DIR = 4, F_TFAR = 8, F_PRIM = 17, F_GEOM = 18 };
+
+static float *lane_f(void *rayhit, unsigned n, unsigned field, unsigned i)
+{
+    return &((float *)rayhit)[field * n + i];
+}
+
+static unsigned *lane_u(void *rayhit, unsigned n, unsigned field, unsigned i)
+{
+    return &((unsigned *)rayhit)[field * n + i];
+}
 
 /* ---- k-buffer ---------------------------------------------------------- */
 
@@ -99,65 +117,83 @@ static float kbuffer_cutoff(const kbuffer *kb)
 
 /* ---- object-level callbacks (object space) ----------------------------- */
 
-static void accept_hit(trace_context *c, struct RTCRayHit *rh, const struct RTCIntersectFunctionNArguments *args,
+static void accept_hit(trace_context *c, const struct RTCIntersectFunctionNArguments *args, unsigned lane,
                        float t, float weight, float r2, vec3 normal, const float color[3])
 {
-    vec3 d = v3(rh->ray.dir_x, rh->ray.dir_y, rh->ray.dir_z);
+    vec3 d = v3(*lane_f(args->rayhit, args->N, F_DIR, lane), *lane_f(args->rayhit, args->N, F_DIR + 1, lane),
+                *lane_f(args->rayhit, args->N, F_DIR + 2, lane));
     if (v3_dot(normal, d) > 0) /* two-sided surfaces: shade the side facing the eye */
         normal = v3_scale(normal, -1.0);
-    vec3 wn = xform_normal(&c->xf, normal);
+    vec3 wn = xform_normal(c->xf[lane], normal);
     surface_hit h = {t, c->obj, args->primID, weight, r2, {color[0], color[1], color[2]},
                      {(float)wn.x, (float)wn.y, (float)wn.z}};
-    kbuffer_insert(c->kb, &h);
-    c->accepted++;
-    rh->ray.tfar = kbuffer_cutoff(c->kb);
-    rh->hit.geomID = args->geomID;
-    rh->hit.primID = args->primID;
+    kbuffer_insert(c->kb[lane], &h);
+    c->accepted[lane]++;
+    *lane_f(args->rayhit, args->N, F_TFAR, lane) = kbuffer_cutoff(c->kb[lane]);
+    *lane_u(args->rayhit, args->N, F_GEOM, lane) = args->geomID;
+    *lane_u(args->rayhit, args->N, F_PRIM, lane) = args->primID;
+}
+
+/* The object-space ray of one lane, from Embree's SOA layout. */
+static void load_lane(const struct RTCIntersectFunctionNArguments *args, unsigned lane, float org[3],
+                      float dir[3], float *tnear, float *tfar)
+{
+    for (unsigned k = 0; k < 3; k++) {
+        org[k] = *lane_f(args->rayhit, args->N, F_ORG + k, lane);
+        dir[k] = *lane_f(args->rayhit, args->N, F_DIR + k, lane);
+    }
+    *tnear = *lane_f(args->rayhit, args->N, F_TNEAR, lane);
+    *tfar = *lane_f(args->rayhit, args->N, F_TFAR, lane);
 }
 
 static void splats_intersect(const struct RTCIntersectFunctionNArguments *args)
 {
-    if (!args->valid[0])
-        return;
     trace_context *c = (trace_context *)args->context;
-    struct RTCRayHit *rh = (struct RTCRayHit *)args->rayhit;
     const scene_object *o = args->geometryUserPtr;
-    const float org[3] = {rh->ray.org_x, rh->ray.org_y, rh->ray.org_z};
-    const float dir[3] = {rh->ray.dir_x, rh->ray.dir_y, rh->ray.dir_z};
-    float t, r2;
-    if (!splat_intersect(&o->model.geom[args->primID], org, dir, rh->ray.tnear, rh->ray.tfar, &t, &r2))
-        return;
-    const float *n = pointmodel_normal(&o->model, args->primID);
-    /* weight -1: computed after the traversal, if the hit is still in the buffer */
-    accept_hit(c, rh, args, t, -1.0f, r2, v3(n[0], n[1], n[2]), pointmodel_color(&o->model, args->primID));
+    const splat_geom *g = &o->model.geom[args->primID];
+    for (unsigned lane = 0; lane < args->N; lane++) {
+        float org[3], dir[3], tnear, tfar, t, r2;
+        if (!args->valid[lane])
+            continue;
+        load_lane(args, lane, org, dir, &tnear, &tfar);
+        if (!splat_intersect(g, org, dir, tnear, tfar, &t, &r2))
+            continue;
+        const float *n = pointmodel_normal(&o->model, args->primID);
+        /* weight -1: computed after the traversal, if the hit is still in the buffer */
+        accept_hit(c, args, lane, t, -1.0f, r2, v3(n[0], n[1], n[2]), pointmodel_color(&o->model, args->primID));
+    }
 }
 
-static void sphere_intersect(const struct RTCIntersectFunctionNArguments *args)
+/* The visible crossing of an opaque sphere: the nearer root in [tnear, tfar]. */
+static void sphere_intersect_lane(trace_context *c, const struct RTCIntersectFunctionNArguments *args, unsigned lane)
 {
-    if (!args->valid[0])
-        return;
-    trace_context *c = (trace_context *)args->context;
-    struct RTCRayHit *rh = (struct RTCRayHit *)args->rayhit;
     const scene_object *o = args->geometryUserPtr;
-    vec3 org = v3(rh->ray.org_x, rh->ray.org_y, rh->ray.org_z);
-    vec3 dir = v3(rh->ray.dir_x, rh->ray.dir_y, rh->ray.dir_z);
+    float fo[3], fd[3], tnear, tfar;
+    load_lane(args, lane, fo, fd, &tnear, &tfar);
+    vec3 org = v3(fo[0], fo[1], fo[2]), dir = v3(fd[0], fd[1], fd[2]);
     vec3 oc = v3_sub(org, o->sphere_center);
     double a = v3_dot(dir, dir), b = v3_dot(oc, dir), cc = v3_dot(oc, oc) - o->sphere_radius * o->sphere_radius;
     double disc = b * b - a * cc;
     if (disc < 0)
         return;
     double sq = sqrt(disc);
-    /* The visible crossing of the opaque surface: the nearer root in range. */
     double roots[2] = {(-b - sq) / a, (-b + sq) / a};
     for (int i = 0; i < 2; i++) {
         float t = (float)roots[i];
-        if (t >= rh->ray.tnear && t <= rh->ray.tfar) {
+        if (t >= tnear && t <= tfar) {
             vec3 p = v3_add(oc, v3_scale(dir, roots[i]));
             const float col[3] = {(float)o->sphere_color.x, (float)o->sphere_color.y, (float)o->sphere_color.z};
-            accept_hit(c, rh, args, t, 1.0f, 0.0f, v3_scale(p, 1.0 / o->sphere_radius), col);
+            accept_hit(c, args, lane, t, 1.0f, 0.0f, v3_scale(p, 1.0 / o->sphere_radius), col);
             return;
         }
     }
+}
+
+static void sphere_intersect(const struct RTCIntersectFunctionNArguments *args)
+{
+    for (unsigned lane = 0; lane < args->N; lane++)
+        if (args->valid[lane])
+            sphere_intersect_lane((trace_context *)args->context, args, lane);
 }
 
 static void splat_bounds_cb(const struct RTCBoundsFunctionArguments *args)
@@ -238,6 +274,7 @@ static sphere_bound swept_sphere(const scene_object *o, double t0, double t1)
     return b;
 }
 
+/* Only ever traversed with rtcIntersect1, so N = 1. */
 static void object_intersect(const struct RTCIntersectFunctionNArguments *args)
 {
     if (!args->valid[0])
@@ -254,10 +291,13 @@ static void object_intersect(const struct RTCIntersectFunctionNArguments *args)
         return;
     float saved[6] = {rh->ray.org_x, rh->ray.org_y, rh->ray.org_z,
                       rh->ray.dir_x, rh->ray.dir_y, rh->ray.dir_z};
-    c->xf = a->is_static[obj] ? a->rest[obj] : animation_at(&a->sc->objects[obj].anim, c->time);
+    xform xf = a->is_static[obj] ? a->rest[obj] : animation_at(&a->sc->objects[obj].anim, c->time);
+    c->xf[0] = &xf;
     c->obj = obj;
-    vec3 org = xform_inverse_point(&c->xf, v3(saved[0], saved[1], saved[2]));
-    vec3 dir = xform_inverse_vector(&c->xf, v3(saved[3], saved[4], saved[5]));
+    /* from the double world ray, as accel_trace_moving_times does: the
+     * object-space rays of both paths are the same to the bit */
+    vec3 org = xform_inverse_point(&xf, c->world_org);
+    vec3 dir = xform_inverse_vector(&xf, c->world_dir);
     rh->ray.org_x = (float)org.x, rh->ray.org_y = (float)org.y, rh->ray.org_z = (float)org.z;
     rh->ray.dir_x = (float)dir.x, rh->ray.dir_y = (float)dir.y, rh->ray.dir_z = (float)dir.z;
     c->rtc.instID[0] = obj;
@@ -295,6 +335,22 @@ static RTCScene user_scene(RTCDevice dev, unsigned nprims, void *user, RTCBounds
     rtcReleaseGeometry(g);
     rtcCommitScene(scene);
     return scene;
+}
+
+/* Packet traversal pays off while the lanes' rays stay within a few splat
+ * sizes of each other: 8 mean splat extents (measured with make bench, the
+ * rotation-speed series: wider groups win at slow motion but lose at fast
+ * motion, see README, Speed). */
+static double coherent_spread(const scene_object *o)
+{
+    if (o->kind != OBJECT_POINTS)
+        return o->sphere_radius;
+    double sum = 0;
+    for (size_t i = 0; i < o->model.count; i++) {
+        const float *e = &o->model.extent[3 * i];
+        sum += fmax(e[0], fmax(e[1], e[2]));
+    }
+    return o->model.count ? 8.0 * sum / (double)o->model.count : 0.0;
 }
 
 static void embree_error(void *user, enum RTCError code, const char *str)
@@ -355,17 +411,19 @@ int accel_build(const scene *s, double epsilon, double sigma, int reuse_static, 
     a->object_scenes = calloc(n, sizeof *a->object_scenes);
     a->swept = calloc(n, sizeof *a->swept);
     a->swept_sphere = calloc(n, sizeof *a->swept_sphere);
+    a->coherent_spread = calloc(n, sizeof *a->coherent_spread);
     a->rest = calloc(n, sizeof *a->rest);
     a->is_static = calloc(n, sizeof *a->is_static);
     for (int k = 0; k < 2; k++)
         a->top[k] = (top_level){NULL, calloc(n, sizeof(unsigned)), 0, a};
-    if (!a->object_scenes || !a->swept || !a->swept_sphere || !a->rest || !a->is_static || !a->top[0].ids || !a->top[1].ids) {
+    if (!a->object_scenes || !a->swept || !a->swept_sphere || !a->coherent_spread || !a->rest || !a->is_static || !a->top[0].ids || !a->top[1].ids) {
         accel_free(a);
         return rr_fail(err, "out of memory");
     }
     for (int i = 0; i < s->nobjects; i++) {
         scene_object *o = &s->objects[i];
         int points = o->kind == OBJECT_POINTS;
+        a->coherent_spread[i] = coherent_spread(o);
         a->object_scenes[i] = user_scene(a->device, points ? (unsigned)o->model.count : 1u, o,
                                          points ? splat_bounds_cb : sphere_bounds_cb,
                                          points ? splats_intersect : sphere_intersect);
@@ -396,10 +454,20 @@ void accel_free(accel *a)
     free(a->object_scenes);
     free(a->swept);
     free(a->swept_sphere);
+    free(a->coherent_spread);
     free(a->rest);
     free(a->is_static);
     rtcReleaseDevice(a->device);
     free(a);
+}
+
+/* The kernel weights of the hits that stayed in the buffer (deferred: most
+ * hits offered during a traversal are later pushed out by closer ones). */
+static void finish_weights(const accel *a, kbuffer *kb)
+{
+    for (int k = 0; k < kb->count; k++)
+        if (kb->hits[k].weight < 0)
+            kb->hits[k].weight = (float)splat_kernel_weight(kb->hits[k].r2, a->sigma);
 }
 
 /* Traverses one top-level scene, adding to kb (whose hits bound the ray). */
@@ -411,9 +479,10 @@ static int trace_top(const accel *a, int which, vec3 org, vec3 dir, double time,
     rtcInitIntersectContext(&c.rtc);
     c.acc = a;
     c.time = time;
+    c.world_org = org, c.world_dir = dir;
     c.obj = 0;
-    c.kb = kb;
-    c.accepted = 0;
+    c.kb[0] = kb;
+    c.accepted[0] = 0;
     struct RTCRayHit rh;
     rh.ray.org_x = (float)org.x, rh.ray.org_y = (float)org.y, rh.ray.org_z = (float)org.z;
     rh.ray.dir_x = (float)dir.x, rh.ray.dir_y = (float)dir.y, rh.ray.dir_z = (float)dir.z;
@@ -427,10 +496,8 @@ static int trace_top(const accel *a, int which, vec3 org, vec3 dir, double time,
     rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
     rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
     rtcIntersect1(a->top[which].scene, &c.rtc, &rh);
-    for (int k = 0; k < kb->count; k++)
-        if (kb->hits[k].weight < 0)
-            kb->hits[k].weight = (float)splat_kernel_weight(kb->hits[k].r2, a->sigma);
-    return c.accepted;
+    finish_weights(a, kb);
+    return c.accepted[0];
 }
 
 /* Slab test against a box grown by a relative margin far above float
@@ -481,14 +548,173 @@ void accel_trace_static(const accel *a, vec3 org, vec3 dir, kbuffer *kb)
     trace_top(a, TOP_STATIC, org, dir, 0.0, kb);
 }
 
+static void copy_kbuffer(kbuffer *dst, const kbuffer *src)
+{
+    dst->count = src->count;
+    dst->dropped = src->dropped;
+    dst->closest = src->closest;
+    dst->epsilon = src->epsilon;
+    memcpy(dst->hits, src->hits, (size_t)src->count * sizeof *dst->hits);
+}
+
 int accel_trace_moving(const accel *a, vec3 org, vec3 dir, double time, const kbuffer *static_hits, kbuffer *kb)
 {
-    kb->count = static_hits->count;
-    kb->dropped = static_hits->dropped;
-    kb->closest = static_hits->closest;
-    kb->epsilon = static_hits->epsilon;
-    memcpy(kb->hits, static_hits->hits, (size_t)static_hits->count * sizeof *kb->hits);
+    copy_kbuffer(kb, static_hits);
     return trace_top(a, TOP_MOVING, org, dir, time, kb);
+}
+
+/* One time's ray in an object's space. */
+typedef struct {
+    xform xf;
+    vec3 org, dir;
+} lane_ray;
+
+static void init_rayhit1(struct RTCRayHit *rh, vec3 o, vec3 d, float tfar)
+{
+    rh->ray.org_x = (float)o.x, rh->ray.org_y = (float)o.y, rh->ray.org_z = (float)o.z;
+    rh->ray.dir_x = (float)d.x, rh->ray.dir_y = (float)d.y, rh->ray.dir_z = (float)d.z;
+    rh->ray.tnear = 0.0f;
+    rh->ray.tfar = tfar;
+    rh->ray.time = 0.0f;
+    rh->ray.mask = 0xFFFFFFFFu;
+    rh->ray.id = 0;
+    rh->ray.flags = 0;
+    rh->hit.geomID = rh->hit.primID = rh->hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+}
+
+static float start_tfar(const kbuffer *kb)
+{
+    return kb->count ? kbuffer_cutoff(kb) : INFINITY;
+}
+
+/* Fields of Embree's SOA ray-hit layout used below (rtcore_ray.h). */
+enum { F_MASK = 9, F_ID = 10, F_FLAGS = 11, F_INST = 19, F_COUNT = 20 };
+
+/* Lanes [0, m) of c against object obj in one packet traversal of the
+ * smallest width that holds them: every node and splat fetched serves all
+ * the lanes. */
+static void trace_packet(const accel *a, unsigned obj, const lane_ray *rays, int m, trace_context *c)
+{
+    unsigned width = m <= 4 ? 4 : m <= 8 ? 8 : 16;
+    float soa[F_COUNT * 16] __attribute__((aligned(64)));
+    int valid[16] __attribute__((aligned(64)));
+    for (unsigned i = 0; i < width; i++) {
+        int on = (int)i < m;
+        valid[i] = on ? -1 : 0;
+        vec3 o = on ? rays[i].org : v3(0, 0, 0), d = on ? rays[i].dir : v3(0, 0, 1);
+        const float ray[F_FLAGS + 1] = {(float)o.x, (float)o.y, (float)o.z, 0.0f, (float)d.x, (float)d.y, (float)d.z,
+                                        0.0f, on ? start_tfar(c->kb[i]) : 0.0f};
+        for (unsigned f = 0; f < F_MASK; f++)
+            *lane_f(soa, width, f, i) = ray[f];
+        *lane_u(soa, width, F_MASK, i) = 0xFFFFFFFFu;
+        *lane_u(soa, width, F_ID, i) = i;
+        *lane_u(soa, width, F_FLAGS, i) = 0;
+        for (unsigned f = F_PRIM; f <= F_INST; f++)
+            *lane_u(soa, width, f, i) = RTC_INVALID_GEOMETRY_ID;
+    }
+    RTCScene scene = a->object_scenes[obj];
+    if (width == 4)
+        rtcIntersect4(valid, scene, &c->rtc, (struct RTCRayHit4 *)soa);
+    else if (width == 8)
+        rtcIntersect8(valid, scene, &c->rtc, (struct RTCRayHit8 *)soa);
+    else
+        rtcIntersect16(valid, scene, &c->rtc, (struct RTCRayHit16 *)soa);
+}
+
+static void trace_single(const accel *a, unsigned obj, const lane_ray *ray, trace_context *c)
+{
+    struct RTCRayHit rh;
+    init_rayhit1(&rh, ray->org, ray->dir, start_tfar(c->kb[0]));
+    rtcIntersect1(a->object_scenes[obj], &c->rtc, &rh);
+}
+
+/* Packets of 2 or 3 coherent rays measured slower than tracing them alone
+ * (make bench, rotation-speed series). */
+enum { MIN_PACKET = 4 };
+
+/* Lanes rays[0..m) (one traced alone, more as a packet), adding to kbs. */
+static void trace_lanes(const accel *a, unsigned obj, const lane_ray *rays, int m, kbuffer **kbs, int *accepted,
+                        trace_context *c)
+{
+    for (int k = 0; k < m; k++) {
+        c->xf[k] = &rays[k].xf;
+        c->kb[k] = kbs[k];
+        c->accepted[k] = 0;
+    }
+    if (m > 1)
+        trace_packet(a, obj, rays, m, c);
+    else
+        trace_single(a, obj, rays, c);
+    for (int k = 0; k < m; k++)
+        accepted[k] += c->accepted[k];
+}
+
+/* How far apart lanes a and b are over the stretch [tmin, tmax] of the
+ * world ray that can meet the object (|do + t dd| is convex in t: its
+ * maximum is at an end). */
+static double lane_spread(const lane_ray *a, const lane_ray *b, double tmin, double tmax)
+{
+    vec3 dorg = v3_sub(a->org, b->org), ddir = v3_sub(a->dir, b->dir);
+    return fmax(v3_len(v3_add(dorg, v3_scale(ddir, tmin))), v3_len(v3_add(dorg, v3_scale(ddir, tmax))));
+}
+
+/* One moving object against all n times: lanes are grouped into packets of
+ * nearby object-space rays (which share BVH nodes and splats); a lane far
+ * from its neighbours (fast motion) is traced alone, as packets of
+ * divergent rays cost more than single rays. */
+static void trace_object_times(const accel *a, unsigned obj, vec3 org, vec3 dir, const double *times, int n,
+                               kbuffer **kbs, int *accepted)
+{
+    const animation *anim = &a->sc->objects[obj].anim;
+    lane_ray rays[ACCEL_PACKET];
+    for (int i = 0; i < n; i++) {
+        rays[i].xf = animation_at(anim, times[i]);
+        rays[i].org = xform_inverse_point(&rays[i].xf, org);
+        rays[i].dir = xform_inverse_vector(&rays[i].xf, dir);
+    }
+    const sphere_bound *b = &a->swept_sphere[obj];
+    double dist = v3_len(v3_sub(b->center, org)), radius = sqrt(b->radius2);
+    double tmin = fmax(dist - radius, 0.0), tmax = dist + radius;
+    trace_context c;
+    rtcInitIntersectContext(&c.rtc);
+    c.acc = a;
+    c.obj = obj;
+    for (int first = 0, end; first < n; first = end) {
+        for (end = first + 1; end < n; end++)
+            if (lane_spread(&rays[first], &rays[end], tmin, tmax) > a->coherent_spread[obj])
+                break;
+        if (end - first >= MIN_PACKET)
+            trace_lanes(a, obj, &rays[first], end - first, kbs + first, accepted + first, &c);
+        else
+            for (int k = first; k < end; k++)
+                trace_lanes(a, obj, &rays[k], 1, kbs + k, accepted + k, &c);
+    }
+}
+
+void accel_trace_moving_times(const accel *a, vec3 org, vec3 dir, const double *times, int n,
+                              const kbuffer *static_hits, kbuffer *kbs, int *hit_moving)
+{
+    const top_level *top = &a->top[TOP_MOVING];
+    if (top->count > 64) { /* many objects: let the top-level BVH pick them, per ray */
+        for (int i = 0; i < n; i++)
+            hit_moving[i] = accel_trace_moving(a, org, dir, times[i], static_hits, &kbs[i]) > 0;
+        return;
+    }
+    kbuffer *kb[ACCEL_PACKET];
+    for (int i = 0; i < n; i++) {
+        copy_kbuffer(&kbs[i], static_hits);
+        kb[i] = &kbs[i];
+        hit_moving[i] = 0;
+    }
+    for (unsigned k = 0; k < top->count; k++) {
+        unsigned obj = top->ids[k];
+        if (ray_meets_box(org, dir, a->swept[obj]) && ray_meets_sphere(org, dir, &a->swept_sphere[obj]))
+            trace_object_times(a, obj, org, dir, times, n, kb, hit_moving);
+    }
+    for (int i = 0; i < n; i++) {
+        finish_weights(a, &kbs[i]);
+        hit_moving[i] = hit_moving[i] > 0;
+    }
 }
 
 void accel_trace(const accel *a, vec3 org, vec3 dir, double time, kbuffer *kb)

@@ -66,6 +66,12 @@ void accel_trace(const accel *a, vec3 org, vec3 dir, double time, kbuffer *kb);
  * kb equals static_hits. */
 void accel_trace_static(const accel *a, vec3 org, vec3 dir, kbuffer *kb);
 int accel_trace_moving(const accel *a, vec3 org, vec3 dir, double time, const kbuffer *static_hits, kbuffer *kb);
+/* accel_trace_moving for up to ACCEL_PACKET times of the same world ray,
+ * traced together as a packet: kbs[i] gets the hits at times[i] and
+ * hit_moving[i] whether any moving object was hit. Same results. */
+#define ACCEL_PACKET 16
+void accel_trace_moving_times(const accel *a, vec3 org, vec3 dir, const double *times, int n,
+                              const kbuffer *static_hits, kbuffer *kbs, int *hit_moving);
 /* 0 when the ray misses every moving object's swept bounds: then
  * accel_trace_moving would return the static hits at every time. */
 int accel_may_hit_moving(const accel *a, vec3 org, vec3 dir);

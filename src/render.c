@@ -57,22 +57,11 @@ typedef struct {
     int may_hit_moving; /* the ray meets a moving object's swept bounds */
 } static_cache;
 
-/* A fixed camera: samples at the same raster position share one world ray,
- * whose static hits are traced once (see static_cache). */
-static void sample_fixed_camera(render_job *job, static_cache *sc, double x, double y, double t, double rgba[4],
-                                uint64_t *overflows)
+/* The color of one sample whose hits are `result`; the static hits' color
+ * is shaded once per ray and reused. */
+static void fixed_camera_color(render_job *job, static_cache *sc, const kbuffer *result, double rgba[4],
+                               uint64_t *overflows)
 {
-    if (x != sc->x || y != sc->y) {
-        sc->x = x, sc->y = y, sc->shaded = 0;
-        sc->dir = camera_ray_direction(&job->sc->cam, x, y);
-        accel_trace_static(job->acc, job->sc->cam.position, sc->dir, &sc->hits);
-        sc->may_hit_moving = accel_may_hit_moving(job->acc, job->sc->cam.position, sc->dir);
-    }
-    kbuffer kb;
-    const kbuffer *result = &sc->hits;
-    if (sc->may_hit_moving &&
-        accel_trace_moving(job->acc, job->sc->cam.position, sc->dir, t, &sc->hits, &kb) > 0)
-        result = &kb;
     *overflows += result->dropped > 0;
     if (result == &sc->hits && sc->shaded) {
         memcpy(rgba, sc->rgba, sizeof sc->rgba);
@@ -85,6 +74,30 @@ static void sample_fixed_camera(render_job *job, static_cache *sc, double x, dou
     }
 }
 
+/* A fixed camera: samples at the same raster position share one world ray,
+ * whose static hits are traced once (see static_cache) and whose n <=
+ * ACCEL_PACKET times are traced against the moving objects as one packet. */
+static void samples_fixed_camera(render_job *job, static_cache *sc, double x, double y, const double *t, int n,
+                                 double (*rgba)[4], uint64_t *overflows)
+{
+    if (x != sc->x || y != sc->y) {
+        sc->x = x, sc->y = y, sc->shaded = 0;
+        sc->dir = camera_ray_direction(&job->sc->cam, x, y);
+        accel_trace_static(job->acc, job->sc->cam.position, sc->dir, &sc->hits);
+        sc->may_hit_moving = accel_may_hit_moving(job->acc, job->sc->cam.position, sc->dir);
+    }
+    if (!sc->may_hit_moving) {
+        for (int i = 0; i < n; i++)
+            fixed_camera_color(job, sc, &sc->hits, rgba[i], overflows);
+        return;
+    }
+    kbuffer kbs[ACCEL_PACKET];
+    int hit_moving[ACCEL_PACKET];
+    accel_trace_moving_times(job->acc, job->sc->cam.position, sc->dir, t, n, &sc->hits, kbs, hit_moving);
+    for (int i = 0; i < n; i++)
+        fixed_camera_color(job, sc, hit_moving[i] ? &kbs[i] : &sc->hits, rgba[i], overflows);
+}
+
 /* A moving camera (thesis eq. 3.6): every sample has its own world ray. */
 static void sample_moving_camera(render_job *job, double x, double y, double t, double rgba[4],
                                  uint64_t *overflows)
@@ -95,6 +108,27 @@ static void sample_moving_camera(render_job *job, double x, double y, double t, 
     accel_trace(job->acc, org, dir, t, &kb);
     *overflows += kb.dropped > 0;
     sample_color(job, org, dir, &kb, rgba);
+}
+
+/* The next group of samples from `first`: those sharing its raster position
+ * (fixed camera; the thesis sampler lists a position's times together), at
+ * most ACCEL_PACKET, keeping only the times with a nonzero weight a(t).
+ * Returns the index after the group. */
+static int next_group(const render_job *job, const thread_scratch *scr, int first, int count, double *t,
+                      double *w, int *n)
+{
+    int end = first + 1;
+    if (!job->camera_moves)
+        while (end < count && end - first < ACCEL_PACKET && scr->x[end] == scr->x[first] &&
+               scr->y[end] == scr->y[first])
+            end++;
+    *n = 0;
+    for (int i = first; i < end; i++) {
+        double wi = shutter_weight(&job->sc->shut, scr->t[i]);
+        if (wi != 0) /* contributes nothing to either sum */
+            t[*n] = scr->t[i], w[(*n)++] = wi;
+    }
+    return end;
 }
 
 /* One batch of a pixel (thesis sec. 4.5): each sample's color is weighted
@@ -110,19 +144,21 @@ static void render_pixel_batch(render_job *job, int px, int py, uint32_t batch, 
     double acc[4] = {0, 0, 0, 0}, wsum = 0;
     static_cache sc;
     sc.x = sc.y = NAN;
-    for (int i = 0; i < sampler_count(smp); i++) {
-        double w = shutter_weight(&job->sc->shut, scr->t[i]);
-        if (w == 0)
-            continue; /* contributes nothing to either sum */
-        double rgba[4];
-        if (job->camera_moves)
-            sample_moving_camera(job, scr->x[i], scr->y[i], scr->t[i], rgba, overflows);
-        else
-            sample_fixed_camera(job, &sc, scr->x[i], scr->y[i], scr->t[i], rgba, overflows);
-        (*rays)++;
-        for (int c = 0; c < 4; c++)
-            acc[c] += w * rgba[c];
-        wsum += w;
+    int count = sampler_count(smp);
+    for (int i = 0; i < count;) {
+        double t[ACCEL_PACKET], w[ACCEL_PACKET], rgba[ACCEL_PACKET][4];
+        int n, first = i;
+        i = next_group(job, scr, first, count, t, w, &n);
+        if (job->camera_moves && n)
+            sample_moving_camera(job, scr->x[first], scr->y[first], t[0], rgba[0], overflows);
+        else if (n)
+            samples_fixed_camera(job, &sc, scr->x[first], scr->y[first], t, n, rgba, overflows);
+        *rays += (uint64_t)n;
+        for (int k = 0; k < n; k++) {
+            for (int c = 0; c < 4; c++)
+                acc[c] += w[k] * rgba[k][c];
+            wsum += w[k];
+        }
     }
     for (int c = 0; c < 4; c++)
         est[c] = wsum > 0 ? acc[c] / wsum : 0.0;

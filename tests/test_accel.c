@@ -239,3 +239,57 @@ TEST(keyed_swept_bounds_never_rule_out_a_ray_that_hits)
                          "</keyframes></animation></object></scene>",
                          2.6);
 }
+
+/* A slowly turning sphere (its 16 time rays stay close: one packet), a fast
+ * spinning torus (rays far apart: traced one by one) and a static wall, all
+ * within epsilon of each other in places. */
+static const char *const PACKET_SCENE =
+    "<scene><shutter open='0' close='1'/><render epsilon='0.3'/>"
+    "<object><pointModel generate='plane' count='4000' radius='3'/></object>"
+    "<object position='-0.6 0 1.5'><pointModel generate='sphere' count='20000' radius='0.8'/>"
+    "<animation><rotation axis='0 1 0' center='-0.6 0 1.5' degrees_per_unit_time='2'/></animation></object>"
+    "<object position='0.7 0 1.5'><pointModel generate='torus' count='20000' radius='0.6' minor_radius='0.25'/>"
+    "<animation><rotation axis='1 1 0' center='0.7 0 1.5' degrees_per_unit_time='200'/>"
+    "<linear velocity='0 0.3 0'/></animation></object></scene>";
+
+static int same_kbuffer(const kbuffer *a, const kbuffer *b)
+{
+    return a->count == b->count && a->dropped == b->dropped && a->closest == b->closest &&
+           !memcmp(a->hits, b->hits, (size_t)a->count * sizeof *a->hits);
+}
+
+/* The packet path (all the times of one world ray together) is an
+ * optimisation only: every time's hits must equal, bit for bit, those of
+ * tracing that time alone through the top-level BVH. */
+TEST(packets_of_times_give_the_hits_of_single_rays)
+{
+    scene s;
+    rr_error e;
+    accel *a;
+    CHECK(scene_load_memory(PACKET_SCENE, strlen(PACKET_SCENE), "mem.xml", ".", &s, &e) == 0);
+    CHECK(accel_build(&s, s.epsilon, s.kernel_sigma, 1, &a, &e) == 0);
+    vec3 eye = v3(0, 0, 6);
+    int rays = 0, differ = 0, moving_hits = 0;
+    for (int i = 0; i < 60; i++)
+        for (int j = 0; j < 30; j++) {
+            vec3 dir = v3_normalize(v3(-0.3 + 0.6 * i / 59.0, -0.15 + 0.3 * j / 29.0, -1));
+            double times[ACCEL_PACKET];
+            for (int k = 0; k < ACCEL_PACKET; k++)
+                times[k] = (k + 0.5 * ((i + j + k) % 3)) / ACCEL_PACKET; /* increasing, as the sampler lists them */
+            kbuffer static_hits, packet[ACCEL_PACKET], single;
+            int hit_moving[ACCEL_PACKET];
+            accel_trace_static(a, eye, dir, &static_hits);
+            accel_trace_moving_times(a, eye, dir, times, ACCEL_PACKET, &static_hits, packet, hit_moving);
+            for (int k = 0; k < ACCEL_PACKET; k++) {
+                int moving = accel_trace_moving(a, eye, dir, times[k], &static_hits, &single) > 0;
+                differ += moving != hit_moving[k] || (moving && !same_kbuffer(&single, &packet[k]));
+                moving_hits += moving;
+                rays++;
+            }
+        }
+    printf("    rays %d meeting moving objects %d differing %d\n", rays, moving_hits, differ);
+    CHECK(differ == 0);
+    CHECK(moving_hits > rays / 4);
+    accel_free(a);
+    scene_free(&s);
+}
