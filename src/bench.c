@@ -21,10 +21,12 @@ typedef struct {
     int elliptical;
     int splats, tspp, threads, res, reps;
     int background;      /* 1: add a static surfel wall filling the image behind (80% static) */
+    double degrees;      /* rotation speed per time unit (shutter [0,1]); 0: the default 90 */
 } bench_case;
 
 typedef struct {
     double build_ms, base_build_ms, mrays, base_mrays, peak_mb, bytes_per_splat;
+    double same_rays_mrays; /* the baseline on refrender's object-space rays (0: not measured) */
     double moving_share; /* static80: pixel-center rays meeting the moving swept bounds */
     unsigned long long rays;
 } bench_result;
@@ -66,7 +68,7 @@ static void build_scene(const bench_case *c, scene *s, surfel **out, size_t *n)
     if (!strcmp(c->motion, "linear"))
         o->anim.velocity = v3(0.3, 0.1, 0);
     if (!strcmp(c->motion, "rotation"))
-        o->anim.has_rotation = 1, o->anim.axis = v3(0, 1, 0), o->anim.degrees_per_time = 90;
+        o->anim.has_rotation = 1, o->anim.axis = v3(0, 1, 0), o->anim.degrees_per_time = c->degrees ? c->degrees : 90;
     for (size_t i = 0; i < *n; i++) {
         surfel *f = &(*out)[i];
         vec3 u, v;
@@ -109,6 +111,7 @@ typedef struct {
     RTCScene scene;
     const scene *sc;
     const render_settings *rs;
+    int same_rays; /* 1: trace each time's object-space ray (as refrender does), 0: the world ray */
     int next_row;
     pthread_mutex_t lock;
     unsigned long long hits;
@@ -136,6 +139,10 @@ static void *baseline_worker(void *arg)
             for (int i = 0; i < n; i++) { /* the same rays the render path traces */
                 vec3 d = camera_ray_direction(&job->sc->cam, x[i], y[i]);
                 vec3 o = job->sc->cam.position;
+                if (job->same_rays) {
+                    xform xf = animation_at(&job->sc->objects[0].anim, t[i]);
+                    o = xform_inverse_point(&xf, o), d = xform_inverse_vector(&xf, d);
+                }
                 struct RTCRayHit rh;
                 memset(&rh, 0, sizeof rh);
                 rh.ray.org_x = (float)o.x, rh.ray.org_y = (float)o.y, rh.ray.org_z = (float)o.z;
@@ -174,9 +181,9 @@ static RTCScene baseline_build(RTCDevice dev, const surfel *f, size_t n)
     return scene;
 }
 
-static double baseline_seconds(RTCScene rtc_scene, const scene *s, const render_settings *rs)
+static double baseline_seconds(RTCScene rtc_scene, const scene *s, const render_settings *rs, int same_rays)
 {
-    baseline_job job = {rtc_scene, s, rs, 0, PTHREAD_MUTEX_INITIALIZER, 0};
+    baseline_job job = {rtc_scene, s, rs, same_rays, 0, PTHREAD_MUTEX_INITIALIZER, 0};
     pthread_t tids[64];
     double t0 = now();
     for (int i = 0; i < rs->threads; i++)
@@ -239,6 +246,7 @@ static void run_reuse_case(const bench_case *c, bench_result *r)
     r->mrays = median(a, c->reps);
     r->base_mrays = median(b, c->reps);
     r->base_build_ms = 0;
+    r->same_rays_mrays = 0;
     struct rusage ru;
     getrusage(RUSAGE_SELF, &ru);
     r->peak_mb = ru.ru_maxrss / 1024.0;
@@ -278,13 +286,15 @@ static void run_case(const bench_case *c, bench_result *r)
     t0 = now();
     RTCScene base = baseline_build(dev, surfels, n);
     r->base_build_ms = 1e3 * (now() - t0);
-    double ours[16], theirs[16];
+    double ours[16], theirs[16], same[16], rays = (double)c->res * c->res * 4 * c->tspp;
     for (int k = 0; k < c->reps; k++) { /* interleaved repetitions */
         ours[k] = render_mrays(&s, acc, &rs, c->res, &r->rays);
-        theirs[k] = (double)c->res * c->res * 4 * c->tspp / baseline_seconds(base, &s, &rs) * 1e-6;
+        theirs[k] = rays / baseline_seconds(base, &s, &rs, 0) * 1e-6;
+        same[k] = rays / baseline_seconds(base, &s, &rs, 1) * 1e-6;
     }
     r->mrays = median(ours, c->reps);
     r->base_mrays = median(theirs, c->reps);
+    r->same_rays_mrays = median(same, c->reps);
     getrusage(RUSAGE_SELF, &ru);
     r->peak_mb = ru.ru_maxrss / 1024.0;
     rtcReleaseScene(base);
@@ -321,13 +331,16 @@ static int wanted(const char *only, const char *series)
 
 static void print_row(FILE *csv, const char *series, const bench_case *c, const bench_result *r)
 {
-    printf("| %-9s | %8d | %-8s | %-10s | %4d | %2d | %8.0f | %8.0f | %6.2f | %6.2f | %5.2fx | %7.0f | %6.0f |\n",
-           series, c->splats, c->motion, c->elliptical ? "elliptical" : "circular", c->tspp, c->threads,
-           r->build_ms, r->base_build_ms, r->mrays, r->base_mrays, r->mrays / r->base_mrays, r->peak_mb,
-           r->bytes_per_splat);
-    fprintf(csv, "%s,%d,%s,%s,%d,%d,%d,%.1f,%.1f,%.4f,%.4f,%.4f,%.1f,%.1f\n", series, c->splats, c->motion,
-            c->elliptical ? "elliptical" : "circular", c->tspp, c->threads, c->res, r->build_ms, r->base_build_ms,
-            r->mrays, r->base_mrays, r->mrays / r->base_mrays, r->peak_mb, r->bytes_per_splat);
+    double deg = strcmp(c->motion, "rotation") ? 0 : c->degrees ? c->degrees : 90;
+    double same = r->same_rays_mrays > 0 ? r->mrays / r->same_rays_mrays : 0;
+    printf("| %-9s | %8d | %-8s | %4.0f | %-10s | %4d | %2d | %8.0f | %8.0f | %6.2f | %6.2f | %5.2fx | %6.2f | %5.2fx | %7.0f | %6.0f |\n",
+           series, c->splats, c->motion, deg, c->elliptical ? "elliptical" : "circular", c->tspp, c->threads,
+           r->build_ms, r->base_build_ms, r->mrays, r->base_mrays, r->mrays / r->base_mrays, r->same_rays_mrays,
+           same, r->peak_mb, r->bytes_per_splat);
+    fprintf(csv, "%s,%d,%s,%.1f,%s,%d,%d,%d,%.1f,%.1f,%.4f,%.4f,%.4f,%.4f,%.4f,%.1f,%.1f\n", series, c->splats,
+            c->motion, deg, c->elliptical ? "elliptical" : "circular", c->tspp, c->threads, c->res, r->build_ms,
+            r->base_build_ms, r->mrays, r->base_mrays, r->mrays / r->base_mrays, r->same_rays_mrays, same,
+            r->peak_mb, r->bytes_per_splat);
     fflush(stdout);
     fflush(csv);
 }
@@ -336,7 +349,7 @@ int main(int argc, char **argv)
 {
     const char *csv_path = argc > 1 ? argv[1] : "bench.csv";
     int quick = argc > 2 && !strcmp(argv[2], "quick");
-    const char *only = argc > 3 ? argv[3] : NULL; /* one series: cases, splats, tspp, threads, static80, target */
+    const char *only = argc > 3 ? argv[3] : NULL; /* one series: cases, speed, splats, tspp, threads, static80, target */
     int res = quick ? 48 : 128, reps = quick ? 1 : 3;
     long cores = sysconf(_SC_NPROCESSORS_ONLN);
     int threads = cores > 0 ? (int)cores : 1;
@@ -345,43 +358,54 @@ int main(int argc, char **argv)
         perror(csv_path);
         return 1;
     }
-    fprintf(csv, "series,splats,motion,splat,tspp,threads,res,build_ms,baseline_build_ms,mrays,baseline_mrays,ratio,peak_mb,bytes_per_splat\n");
+    fprintf(csv, "series,splats,motion,degrees_per_time,splat,tspp,threads,res,build_ms,baseline_build_ms,mrays,"
+                 "baseline_mrays,ratio,same_rays_baseline_mrays,same_rays_ratio,peak_mb,bytes_per_splat\n");
     printf("refrender-bench: %dx%d pixels, 4 spatial samples, thesis sampler, median of %d interleaved runs\n\n"
-           "| series | splats | motion | splat | tspp | thr | build ms | base build ms | Mrays/s | base Mrays/s | ratio | peak MB | B/splat |\n"
-           "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n", res, res, reps);
+           "'base': Embree's built-in discs, closest hit, on the world rays of the scene at rest (no motion);\n"
+           "'same rays': the same discs on the object-space rays refrender traces (each time's ray moved by the\n"
+           "inverse motion), which pay motion's cache misses too. Ratios are refrender / baseline.\n\n"
+           "| series | splats | motion | deg/t | splat | tspp | thr | build ms | base build ms | Mrays/s | base Mrays/s | ratio "
+           "| same rays Mrays/s | ratio same rays | peak MB | B/splat |\n"
+           "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n", res, res, reps);
     static const char *const motions[] = {"static", "linear", "rotation"};
     int big = quick ? 20000 : 1000000, small = quick ? 5000 : 100000, tspp = quick ? 8 : 100;
     bench_result r;
     for (int size = 0; size < 2 && wanted(only, "cases"); size++)
         for (int m = 0; m < 3; m++)
             for (int e = 0; e < 2; e++) {
-                bench_case c = {motions[m], e, size ? big : small, tspp, threads, res, reps, 0};
+                bench_case c = {motions[m], e, size ? big : small, tspp, threads, res, reps, 0, 0};
                 if (!run_in_child(&c, &r))
                     print_row(csv, "cases", &c, &r);
             }
     if (only && !strcmp(only, "target")) { /* issue 7's headline case alone, for quick iterations */
-        bench_case c = {"rotation", 0, big, tspp, threads, res, reps, 0};
+        bench_case c = {"rotation", 0, big, tspp, threads, res, reps, 0, 0};
         if (!run_in_child(&c, &r))
             print_row(csv, "target", &c, &r);
     }
+    double speeds[] = {1, 10, 90};
+    for (int i = 0; i < (quick ? 1 : 3) && wanted(only, "speed"); i++) {
+        bench_case c = {"rotation", 0, big, tspp, threads, res, reps, 0, speeds[i]};
+        if (!run_in_child(&c, &r))
+            print_row(csv, "speed", &c, &r);
+    }
     int counts[] = {10000, 100000, 1000000, 4000000};
     for (int i = 0; i < (quick ? 1 : 4) && wanted(only, "splats"); i++) {
-        bench_case c = {"rotation", 0, counts[i], tspp, threads, res, reps, 0};
+        bench_case c = {"rotation", 0, counts[i], tspp, threads, res, reps, 0, 0};
         if (!run_in_child(&c, &r))
             print_row(csv, "splats", &c, &r);
     }
     int tspps[] = {10, 30, 100};
     for (int i = 0; i < (quick ? 1 : 3) && wanted(only, "tspp"); i++) {
-        bench_case c = {"rotation", 0, big, tspps[i], threads, res, reps, 0};
+        bench_case c = {"rotation", 0, big, tspps[i], threads, res, reps, 0, 0};
         if (!run_in_child(&c, &r))
             print_row(csv, "tspp", &c, &r);
     }
     for (int t = 1; t <= threads && wanted(only, "threads"); t++) {
-        bench_case c = {"rotation", 0, big, tspp, t, res, reps, 0};
+        bench_case c = {"rotation", 0, big, tspp, t, res, reps, 0, 0};
         if (!run_in_child(&c, &r))
             print_row(csv, "threads", &c, &r);
     }
-    bench_case c80 = {"rotation", 0, small, tspp, threads, res, reps, 1};
+    bench_case c80 = {"rotation", 0, small, tspp, threads, res, reps, 1, 0};
     if (wanted(only, "static80"))
         printf("\nstatic80: a static wall fills the image, a rotating sphere covers about 15%% of it; 'base' is\n"
                "the same render tracing every time sample separately (--no-static-reuse), 'ratio' the speed-up.\n\n");
