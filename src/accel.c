@@ -36,6 +36,7 @@ struct accel {
     float epsilon;
     double sigma;
     rr_error build_error; /* filled by Embree's error callback */
+    long long embree_bytes, embree_peak; /* Embree's own allocations (BVHs) */
 };
 
 /* Per-traversal state: one ray (lane 0) or a packet of one world ray at up
@@ -353,6 +354,25 @@ static double coherent_spread(const scene_object *o)
     return o->model.count ? 8.0 * sum / (double)o->model.count : 0.0;
 }
 
+/* Embree reports each allocation before it happens and each release after
+ * (negative bytes), from its build threads. */
+static bool embree_memory(void *user, ssize_t bytes, bool post)
+{
+    (void)post;
+    accel *a = user;
+    long long now = __atomic_add_fetch(&a->embree_bytes, (long long)bytes, __ATOMIC_RELAXED);
+    long long peak = __atomic_load_n(&a->embree_peak, __ATOMIC_RELAXED);
+    while (now > peak && !__atomic_compare_exchange_n(&a->embree_peak, &peak, now, 1, __ATOMIC_RELAXED,
+                                                      __ATOMIC_RELAXED))
+        ;
+    return true;
+}
+
+size_t accel_embree_peak_bytes(const accel *a)
+{
+    return (size_t)__atomic_load_n(&a->embree_peak, __ATOMIC_RELAXED);
+}
+
 static void embree_error(void *user, enum RTCError code, const char *str)
 {
     rr_error *e = user;
@@ -407,6 +427,7 @@ int accel_build(const scene *s, double epsilon, double sigma, int reuse_static, 
         return rr_fail(err, "cannot create Embree device (error %d)", (int)rtcGetDeviceError(NULL));
     }
     rtcSetDeviceErrorFunction(a->device, embree_error, &a->build_error);
+    rtcSetDeviceMemoryMonitorFunction(a->device, embree_memory, a);
     size_t n = (size_t)s->nobjects;
     a->object_scenes = calloc(n, sizeof *a->object_scenes);
     a->swept = calloc(n, sizeof *a->swept);

@@ -75,5 +75,7 @@ void accel_trace_moving_times(const accel *a, vec3 org, vec3 dir, const double *
 /* 0 when the ray misses every moving object's swept bounds: then
  * accel_trace_moving would return the static hits at every time. */
 int accel_may_hit_moving(const accel *a, vec3 org, vec3 dir);
+/* The most memory Embree held at once for the BVHs (build included). */
+size_t accel_embree_peak_bytes(const accel *a);
 
 #endif

@@ -77,6 +77,18 @@ static void build_scene(const bench_case *c, scene *s, surfel **out, size_t *n)
             u = v3_scale(u, 1.5), v = v3_scale(v, 1 / 1.5);
         pointmodel_add(&o->model, f->center, u, v, f->normal, f->color, &err);
     }
+    /* as the scene loader does; the baseline gets the same splat order */
+    size_t *order;
+    if (pointmodel_sort_spatially(&o->model, &order, &err)) {
+        fprintf(stderr, "bench: %s\n", err.msg);
+        exit(1);
+    }
+    surfel *sorted = malloc(*n * sizeof *sorted);
+    for (size_t i = 0; sorted && i < *n; i++)
+        sorted[i] = (*out)[order[i]];
+    free(order);
+    free(*out);
+    *out = sorted;
     if (c->background) { /* a static wall behind; the sphere covers about 15% of the image */
         s->cam.position = v3(0, 0, 6.5);
         s->objects = realloc(s->objects, 2 * sizeof *s->objects);
@@ -98,6 +110,7 @@ static void build_scene(const bench_case *c, scene *s, surfel **out, size_t *n)
         shape_generate(&wall, &ws, &wn, &err);
         for (size_t i = 0; i < wn; i++)
             pointmodel_add_circle(&w->model, ws[i].center, ws[i].normal, ws[i].radius, ws[i].color, &err);
+        pointmodel_sort_spatially(&w->model, NULL, &err);
         free(ws);
     }
     s->lights = calloc(1, sizeof *s->lights);
@@ -273,15 +286,11 @@ static void run_case(const bench_case *c, bench_result *r)
     size_t n;
     build_scene(c, &s, &surfels, &n);
     render_settings rs = bench_settings(c);
-    struct rusage ru;
-    getrusage(RUSAGE_SELF, &ru);
-    long before_kb = ru.ru_maxrss;
     double t0 = now();
     accel *acc = build_or_die(&s, 1);
     r->build_ms = 1e3 * (now() - t0);
-    getrusage(RUSAGE_SELF, &ru);
-    /* splat arrays (pointmodel.h: 48 + 6 * 4 + 3 * 4 bytes) plus the BVH's growth of the peak */
-    r->bytes_per_splat = 84.0 + (ru.ru_maxrss - before_kb) * 1024.0 / (double)n;
+    /* splat arrays (pointmodel.h: 48 + 6 * 4 + 3 * 4 bytes) plus Embree's peak for the BVHs */
+    r->bytes_per_splat = 84.0 + (double)accel_embree_peak_bytes(acc) / (double)n;
     RTCDevice dev = rtcNewDevice(NULL);
     t0 = now();
     RTCScene base = baseline_build(dev, surfels, n);
@@ -295,6 +304,7 @@ static void run_case(const bench_case *c, bench_result *r)
     r->mrays = median(ours, c->reps);
     r->base_mrays = median(theirs, c->reps);
     r->same_rays_mrays = median(same, c->reps);
+    struct rusage ru;
     getrusage(RUSAGE_SELF, &ru);
     r->peak_mb = ru.ru_maxrss / 1024.0;
     rtcReleaseScene(base);

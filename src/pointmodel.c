@@ -1,6 +1,8 @@
 #include "pointmodel.h"
 
+#include <stdint.h>
 #include <stdlib.h>
+#include <string.h>
 
 void pointmodel_init(pointmodel *m)
 {
@@ -68,4 +70,88 @@ int pointmodel_add_circle(pointmodel *m, vec3 c, vec3 n, double radius, vec3 col
     vec3 u, v;
     splat_axes_from_normal(n, radius, &u, &v);
     return pointmodel_add(m, c, u, v, n, color, err);
+}
+
+/* ---- spatial order ------------------------------------------------------- */
+
+/* The low 21 bits of v spread to every third bit (for a 63-bit Morton code). */
+static uint64_t spread_bits3(uint64_t v)
+{
+    v &= 0x1fffff;
+    v = (v | v << 32) & 0x1f00000000ffffULL;
+    v = (v | v << 16) & 0x1f0000ff0000ffULL;
+    v = (v | v << 8) & 0x100f00f00f00f00fULL;
+    v = (v | v << 4) & 0x10c30c30c30c30c3ULL;
+    v = (v | v << 2) & 0x1249249249249249ULL;
+    return v;
+}
+
+typedef struct {
+    uint64_t code;
+    size_t index;
+} morton_key;
+
+static int cmp_morton_key(const void *a, const void *b)
+{
+    const morton_key *x = a, *y = b;
+    if (x->code != y->code)
+        return x->code < y->code ? -1 : 1;
+    return (x->index > y->index) - (x->index < y->index); /* unique keys: a deterministic order */
+}
+
+/* Splat centers on a 2^21 grid over the model's bounds (cubic cells). */
+static morton_key *morton_keys(const pointmodel *m)
+{
+    morton_key *k = malloc(m->count * sizeof *k);
+    if (!k)
+        return NULL;
+    vec3 lo = m->bounds.lo, size = v3_sub(m->bounds.hi, m->bounds.lo);
+    double extent = fmax(size.x, fmax(size.y, size.z)), scale = extent > 0 ? 2097151.0 / extent : 0.0;
+    for (size_t i = 0; i < m->count; i++) {
+        const float *c = m->geom[i].center;
+        uint64_t q[3];
+        for (int a = 0; a < 3; a++) {
+            double f = (c[a] - (&lo.x)[a]) * scale;
+            q[a] = f <= 0 ? 0 : f >= 2097151.0 ? 2097151 : (uint64_t)f;
+        }
+        k[i] = (morton_key){spread_bits3(q[0]) | spread_bits3(q[1]) << 1 | spread_bits3(q[2]) << 2, i};
+    }
+    qsort(k, m->count, sizeof *k, cmp_morton_key);
+    return k;
+}
+
+/* Reorders n items of `size` bytes: item i becomes old item order[i]. */
+static int permute(void *items, size_t n, size_t size, const morton_key *order)
+{
+    char *copy = malloc(n * size);
+    if (!copy)
+        return -1;
+    memcpy(copy, items, n * size);
+    for (size_t i = 0; i < n; i++)
+        memcpy((char *)items + i * size, copy + order[i].index * size, size);
+    free(copy);
+    return 0;
+}
+
+int pointmodel_sort_spatially(pointmodel *m, size_t **order_out, rr_error *err)
+{
+    if (order_out)
+        *order_out = NULL;
+    if (m->count == 0)
+        return 0;
+    morton_key *k = morton_keys(m);
+    size_t *order = order_out ? malloc(m->count * sizeof *order) : NULL;
+    if (!k || (order_out && !order) || permute(m->geom, m->count, sizeof *m->geom, k) ||
+        permute(m->shading, m->count, 6 * sizeof *m->shading, k) ||
+        permute(m->extent, m->count, 3 * sizeof *m->extent, k)) {
+        free(k);
+        free(order);
+        return rr_fail(err, "out of memory sorting %zu splats", m->count);
+    }
+    for (size_t i = 0; order && i < m->count; i++)
+        order[i] = k[i].index;
+    if (order_out)
+        *order_out = order;
+    free(k);
+    return 0;
 }

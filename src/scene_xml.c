@@ -621,6 +621,9 @@ static int parse_point_model(xml_ctx *c, xmlNodePtr n, scene_object *o)
     if (o->model.count == 0)
         return node_fail(c, n, "point model has no splats: give a PLY path, 'generate', or "
                                "<splat> children");
+    rr_error sub;
+    if (pointmodel_sort_spatially(&o->model, NULL, &sub))
+        return node_fail(c, n, "%s", sub.msg);
     return 0;
 }
 
