@@ -44,8 +44,9 @@ typedef struct accel accel;
 
 /* Builds the BVHs for the scene (which must outlive the accel). epsilon and
  * sigma are the blending distance and kernel sigma in use. With
- * reuse_static = 0 every object is treated as moving (each time traces
- * everything): the same images, slower; for benchmarks and tests. */
+ * reuse_static = 0 every object is treated as moving and every time is
+ * traced on its own, one ray through the top level (no packets of a ray's
+ * times): the same images, slower; for benchmarks and tests. */
 int accel_build(const scene *s, double epsilon, double sigma, int reuse_static, accel **out, rr_error *err);
 void accel_free(accel *a);
 

@@ -94,11 +94,23 @@ def static_and_moving_within_eps():
 
 def test_static_hit_reuse_gives_the_same_image_bit_for_bit(tmp_path):
     """Reusing the static objects' hits across the time samples of a spatial
-    sample is an optimisation only: the image must not change at all."""
+    sample, and tracing those times together as packets, are optimisations
+    only: the image must equal, bit for bit, that of tracing every time
+    sample on its own (--no-static-reuse)."""
     cases = [(ROOT / "scenes" / "default.xml", ["--res", "48x48"])]
     mixed = tmp_path / "mixed.xml"
     mixed.write_text(static_and_moving_within_eps())
     cases.append((mixed, []))
+    slow = tmp_path / "slow.xml"  # a slow turn: a ray's times stay coherent, so they go as packets
+    slow.write_text("""<scene>
+ <camera position="0 0 4" lookat="0 0 0" up="0 1 0" fov="40" width="32" height="32"/>
+ <shutter open="0" close="1"/> <render epsilon="0.05"/>
+ <light type="directional" direction="-1 -1 -1" color="1 1 1"/>
+ <object position="0 0 -1.5"><pointModel generate="plane" count="3000" radius="3"/></object>
+ <object><pointModel generate="sphere" count="20000" radius="1" checker="6" color2="0.1 0.2 0.9"/>
+  <animation><rotation axis="0 1 0" center="0 0 0" degrees_per_unit_time="3"/></animation></object>
+</scene>""")
+    cases.append((slow, []))
     for scene, extra in cases:
         images = []
         for flag in ([], ["--no-static-reuse"]):
