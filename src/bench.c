@@ -238,6 +238,18 @@ static accel *build_or_die(const scene *s, int reuse_static)
     return acc;
 }
 
+/* The case's scene and settings, and its BVHs (with static reuse), timed. */
+static accel *setup_case(const bench_case *c, scene *s, surfel **surfels, size_t *n, render_settings *rs,
+                         bench_result *r)
+{
+    build_scene(c, s, surfels, n);
+    *rs = bench_settings(c);
+    double t0 = now();
+    accel *acc = build_or_die(s, 1);
+    r->build_ms = 1e3 * (now() - t0);
+    return acc;
+}
+
 /* 80% static background, 20% moving: static-hit reuse against tracing every
  * time sample separately (mrays = with reuse, base_mrays = without). */
 static void run_reuse_case(const bench_case *c, bench_result *r)
@@ -245,11 +257,8 @@ static void run_reuse_case(const bench_case *c, bench_result *r)
     scene s;
     surfel *surfels;
     size_t n;
-    build_scene(c, &s, &surfels, &n);
-    render_settings rs = bench_settings(c);
-    double t0 = now();
-    accel *with = build_or_die(&s, 1);
-    r->build_ms = 1e3 * (now() - t0);
+    render_settings rs;
+    accel *with = setup_case(c, &s, &surfels, &n, &rs, r);
     accel *without = build_or_die(&s, 0);
     double a[16], b[16];
     for (int k = 0; k < c->reps; k++) {
@@ -284,15 +293,12 @@ static void run_case(const bench_case *c, bench_result *r)
     scene s;
     surfel *surfels;
     size_t n;
-    build_scene(c, &s, &surfels, &n);
-    render_settings rs = bench_settings(c);
-    double t0 = now();
-    accel *acc = build_or_die(&s, 1);
-    r->build_ms = 1e3 * (now() - t0);
+    render_settings rs;
+    accel *acc = setup_case(c, &s, &surfels, &n, &rs, r);
     /* splat arrays (pointmodel.h: 48 + 6 * 4 + 3 * 4 bytes) plus Embree's peak for the BVHs */
     r->bytes_per_splat = 84.0 + (double)accel_embree_peak_bytes(acc) / (double)n;
     RTCDevice dev = rtcNewDevice(NULL);
-    t0 = now();
+    double t0 = now();
     RTCScene base = baseline_build(dev, surfels, n);
     r->base_build_ms = 1e3 * (now() - t0);
     double ours[16], theirs[16], same[16], rays = (double)c->res * c->res * 4 * c->tspp;

@@ -61,19 +61,28 @@ TEST(kbuffer_overflow_keeps_the_closest_hits)
         CHECK(kb.hits[k].prim == (unsigned)k);
 }
 
-static int trace_scene(const char *xml, vec3 org, vec3 dir, double time, kbuffer *kb)
+/* An in-memory scene and its BVHs, with static reuse. */
+static int load_and_build(const char *xml, scene *s, accel **a)
 {
-    scene s;
     rr_error e;
-    if (scene_load_memory(xml, strlen(xml), "mem.xml", ".", &s, &e)) {
+    if (scene_load_memory(xml, strlen(xml), "mem.xml", ".", s, &e)) {
         printf("    %s\n", e.msg);
         return -1;
     }
-    accel *a;
-    if (accel_build(&s, s.epsilon, s.kernel_sigma, 1, &a, &e)) {
-        scene_free(&s);
+    if (accel_build(s, s->epsilon, s->kernel_sigma, 1, a, &e)) {
+        printf("    %s\n", e.msg);
+        scene_free(s);
         return -1;
     }
+    return 0;
+}
+
+static int trace_scene(const char *xml, vec3 org, vec3 dir, double time, kbuffer *kb)
+{
+    scene s;
+    accel *a;
+    if (load_and_build(xml, &s, &a))
+        return -1;
     accel_trace(a, org, dir, time, kb);
     accel_free(a);
     scene_free(&s);
@@ -186,10 +195,8 @@ static int brute_force_hit(const scene_object *o, vec3 org, vec3 dir, double tim
 static void check_no_missed_hits(const char *xml, double rim)
 {
     scene s;
-    rr_error e;
     accel *a;
-    CHECK(scene_load_memory(xml, strlen(xml), "mem.xml", ".", &s, &e) == 0);
-    CHECK(accel_build(&s, s.epsilon, s.kernel_sigma, 1, &a, &e) == 0);
+    CHECK(load_and_build(xml, &s, &a) == 0);
     vec3 eye = v3(0, 0, 45);
     int hits = 0, ruled_out = 0, missed = 0, rim_hits = 0;
     for (int i = 0; i < 120; i++)
@@ -264,10 +271,8 @@ static int same_kbuffer(const kbuffer *a, const kbuffer *b)
 TEST(packets_of_times_give_the_hits_of_single_rays)
 {
     scene s;
-    rr_error e;
     accel *a;
-    CHECK(scene_load_memory(PACKET_SCENE, strlen(PACKET_SCENE), "mem.xml", ".", &s, &e) == 0);
-    CHECK(accel_build(&s, s.epsilon, s.kernel_sigma, 1, &a, &e) == 0);
+    CHECK(load_and_build(PACKET_SCENE, &s, &a) == 0);
     vec3 eye = v3(0, 0, 6);
     int rays = 0, differ = 0, moving_hits = 0;
     for (int i = 0; i < 60; i++)
