@@ -716,7 +716,8 @@ void accel_trace_moving_times(const accel *a, vec3 org, vec3 dir, const double *
                               const kbuffer *static_hits, kbuffer *kbs, int *hit_moving)
 {
     const top_level *top = &a->top[TOP_MOVING];
-    /* many objects: let the top-level BVH pick them, per ray */
+    /* every time on its own (--no-static-reuse), or many moving objects,
+     * which the top-level BVH picks better: one ray per time */
     if (!a->reuse_static || top->count > 64) {
         for (int i = 0; i < n; i++)
             hit_moving[i] = accel_trace_moving(a, org, dir, times[i], static_hits, &kbs[i]) > 0;
