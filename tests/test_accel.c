@@ -248,8 +248,8 @@ TEST(keyed_swept_bounds_never_rule_out_a_ray_that_hits)
 }
 
 /* A slowly turning sphere (its 16 time rays stay close: one packet), a fast
- * spinning torus (rays far apart: traced one by one) and a static wall, all
- * within epsilon of each other in places. */
+ * spinning torus (rays far apart: traced one by one), a drifting analytic
+ * sphere and a static wall, all within epsilon of each other in places. */
 static const char *const PACKET_SCENE =
     "<scene><shutter open='0' close='1'/><render epsilon='0.3'/>"
     "<object><pointModel generate='plane' count='4000' radius='3'/></object>"
@@ -257,7 +257,9 @@ static const char *const PACKET_SCENE =
     "<animation><rotation axis='0 1 0' center='-0.6 0 1.5' degrees_per_unit_time='2'/></animation></object>"
     "<object position='0.7 0 1.5'><pointModel generate='torus' count='20000' radius='0.6' minor_radius='0.25'/>"
     "<animation><rotation axis='1 1 0' center='0.7 0 1.5' degrees_per_unit_time='200'/>"
-    "<linear velocity='0 0.3 0'/></animation></object></scene>";
+    "<linear velocity='0 0.3 0'/></animation></object>"
+    "<object position='0 0.5 1.2'><sphere radius='0.3'/>"
+    "<animation><linear velocity='0.4 -0.2 0'/></animation></object></scene>";
 
 static int same_kbuffer(const kbuffer *a, const kbuffer *b)
 {
