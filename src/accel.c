@@ -491,6 +491,25 @@ static void finish_weights(const accel *a, kbuffer *kb)
             kb->hits[k].weight = (float)splat_kernel_weight(kb->hits[k].r2, a->sigma);
 }
 
+/* A ray from 0 to tfar (no hit yet), as Embree takes it. */
+static void init_rayhit1(struct RTCRayHit *rh, vec3 o, vec3 d, float tfar)
+{
+    rh->ray.org_x = (float)o.x, rh->ray.org_y = (float)o.y, rh->ray.org_z = (float)o.z;
+    rh->ray.dir_x = (float)d.x, rh->ray.dir_y = (float)d.y, rh->ray.dir_z = (float)d.z;
+    rh->ray.tnear = 0.0f;
+    rh->ray.tfar = tfar;
+    rh->ray.time = 0.0f;
+    rh->ray.mask = 0xFFFFFFFFu;
+    rh->ray.id = 0;
+    rh->ray.flags = 0;
+    rh->hit.geomID = rh->hit.primID = rh->hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+}
+
+static float start_tfar(const kbuffer *kb)
+{
+    return kb->count ? kbuffer_cutoff(kb) : INFINITY;
+}
+
 /* Traverses one top-level scene, adding to kb (whose hits bound the ray). */
 static int trace_top(const accel *a, int which, vec3 org, vec3 dir, double time, kbuffer *kb)
 {
@@ -505,17 +524,7 @@ static int trace_top(const accel *a, int which, vec3 org, vec3 dir, double time,
     c.kb[0] = kb;
     c.accepted[0] = 0;
     struct RTCRayHit rh;
-    rh.ray.org_x = (float)org.x, rh.ray.org_y = (float)org.y, rh.ray.org_z = (float)org.z;
-    rh.ray.dir_x = (float)dir.x, rh.ray.dir_y = (float)dir.y, rh.ray.dir_z = (float)dir.z;
-    rh.ray.tnear = 0.0f;
-    rh.ray.tfar = kb->count ? kbuffer_cutoff(kb) : INFINITY;
-    rh.ray.time = 0.0f;
-    rh.ray.mask = 0xFFFFFFFFu;
-    rh.ray.id = 0;
-    rh.ray.flags = 0;
-    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-    rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
-    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    init_rayhit1(&rh, org, dir, start_tfar(kb));
     rtcIntersect1(a->top[which].scene, &c.rtc, &rh);
     finish_weights(a, kb);
     return c.accepted[0];
@@ -589,24 +598,6 @@ typedef struct {
     xform xf;
     vec3 org, dir;
 } lane_ray;
-
-static void init_rayhit1(struct RTCRayHit *rh, vec3 o, vec3 d, float tfar)
-{
-    rh->ray.org_x = (float)o.x, rh->ray.org_y = (float)o.y, rh->ray.org_z = (float)o.z;
-    rh->ray.dir_x = (float)d.x, rh->ray.dir_y = (float)d.y, rh->ray.dir_z = (float)d.z;
-    rh->ray.tnear = 0.0f;
-    rh->ray.tfar = tfar;
-    rh->ray.time = 0.0f;
-    rh->ray.mask = 0xFFFFFFFFu;
-    rh->ray.id = 0;
-    rh->ray.flags = 0;
-    rh->hit.geomID = rh->hit.primID = rh->hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-}
-
-static float start_tfar(const kbuffer *kb)
-{
-    return kb->count ? kbuffer_cutoff(kb) : INFINITY;
-}
 
 /* Fields of Embree's SOA ray-hit layout used below (rtcore_ray.h). */
 enum { F_MASK = 9, F_ID = 10, F_FLAGS = 11, F_INST = 19, F_COUNT = 20 };

@@ -124,8 +124,6 @@ static int attr_int(xml_ctx *c, xmlNodePtr n, const char *name, int *v, int lo, 
 
 static int is_element(xmlNodePtr n) { return n->type == XML_ELEMENT_NODE; }
 
-/* Text children must be whitespace only, except where an element takes a
- * path as its content. */
 /* Non-blank text directly inside the element (a path, as in Figure 4.11)? */
 static int has_text(xmlNodePtr n)
 {
@@ -135,6 +133,8 @@ static int has_text(xmlNodePtr n)
     return 0;
 }
 
+/* Text children must be whitespace only, except where an element takes a
+ * path as its content. */
 static int check_no_text(xml_ctx *c, xmlNodePtr parent)
 {
     return has_text(parent) ? node_fail(c, parent, "unexpected text inside this element") : 0;
@@ -535,7 +535,6 @@ static void resolve_path(xml_ctx *c, const char *rel, char *out, size_t size)
         snprintf(out, size, "%s/%s", c->base_dir, clean);
 }
 
-/* Path from the 'file' attribute or, as in thesis Figure 4.11, the text. */
 /* The element's text with surrounding white space removed; 0 if empty
  * (or too long for buf). */
 static int element_text(xmlNodePtr n, char *buf, size_t size)
@@ -559,6 +558,7 @@ static int element_text(xmlNodePtr n, char *buf, size_t size)
     return found;
 }
 
+/* Path from the 'file' attribute or, as in thesis Figure 4.11, the text. */
 static int point_model_path(xmlNodePtr n, char *buf, size_t size)
 {
     return attr_text(n, "file", buf, size) || element_text(n, buf, size);
