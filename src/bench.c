@@ -28,6 +28,7 @@ typedef struct {
     double build_ms, base_build_ms, mrays, base_mrays, peak_mb, bytes_per_splat;
     double same_rays_mrays; /* the baseline on refrender's object-space rays (0: not measured) */
     double moving_share; /* static80: pixel-center rays meeting the moving swept bounds */
+    double base_splats_px, same_splats_px; /* distinct discs hit per covered pixel, each baseline */
     unsigned long long rays;
 } bench_result;
 
@@ -125,10 +126,29 @@ typedef struct {
     const scene *sc;
     const render_settings *rs;
     int same_rays; /* 1: trace each time's object-space ray (as refrender does), 0: the world ray */
+    int count_distinct; /* an untimed run counting the discs hit (sorting would distort the timing) */
     int next_row;
     pthread_mutex_t lock;
-    unsigned long long hits;
+    unsigned long long distinct, covered; /* distinct discs hit, summed over the pixels hitting any */
 } baseline_job;
+
+static int cmp_unsigned(const void *a, const void *b)
+{
+    unsigned x = *(const unsigned *)a, y = *(const unsigned *)b;
+    return (x > y) - (x < y);
+}
+
+/* How many different discs the n hits prims[0..n) are: what a pixel's rays
+ * must fetch (the same few disc at rest, a new one per time under fast
+ * motion). */
+static unsigned distinct_prims(unsigned *prims, int n)
+{
+    qsort(prims, (size_t)n, sizeof *prims, cmp_unsigned);
+    unsigned d = 0;
+    for (int i = 0; i < n; i++)
+        d += i == 0 || prims[i] != prims[i - 1];
+    return d;
+}
 
 static void *baseline_worker(void *arg)
 {
@@ -138,7 +158,8 @@ static void *baseline_worker(void *arg)
     sampler_scratch_init(&ss, smp);
     int n = sampler_count(smp);
     double *x = malloc(n * sizeof *x), *y = malloc(n * sizeof *y), *t = malloc(n * sizeof *t);
-    unsigned long long hits = 0;
+    unsigned *prims = malloc(n * sizeof *prims);
+    unsigned long long distinct = 0, covered = 0;
     struct RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
     for (;;) {
@@ -149,6 +170,7 @@ static void *baseline_worker(void *arg)
             break;
         for (int px = 0; px < job->sc->cam.width; px++) {
             sampler_batch(smp, (uint64_t)row * job->sc->cam.width + px, px, row, 0, &ss, x, y, t);
+            int nhits = 0;
             for (int i = 0; i < n; i++) { /* the same rays the render path traces */
                 vec3 d = camera_ray_direction(&job->sc->cam, x[i], y[i]);
                 vec3 o = job->sc->cam.position;
@@ -164,15 +186,19 @@ static void *baseline_worker(void *arg)
                 rh.ray.mask = 0xFFFFFFFFu;
                 rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
                 rtcIntersect1(job->scene, &ctx, &rh);
-                hits += rh.hit.geomID != RTC_INVALID_GEOMETRY_ID;
+                if (job->count_distinct && rh.hit.geomID != RTC_INVALID_GEOMETRY_ID)
+                    prims[nhits++] = rh.hit.primID;
             }
+            distinct += distinct_prims(prims, nhits);
+            covered += nhits > 0;
         }
     }
     pthread_mutex_lock(&job->lock);
-    job->hits += hits;
+    job->distinct += distinct;
+    job->covered += covered;
     pthread_mutex_unlock(&job->lock);
     sampler_scratch_free(&ss);
-    free(x), free(y), free(t);
+    free(x), free(y), free(t), free(prims);
     return NULL;
 }
 
@@ -194,16 +220,22 @@ static RTCScene baseline_build(RTCDevice dev, const surfel *f, size_t n)
     return scene;
 }
 
-static double baseline_seconds(RTCScene rtc_scene, const scene *s, const render_settings *rs, int same_rays)
+/* The baseline's time; with count_distinct (not for timing), *splats_px gets
+ * the distinct discs hit per covered pixel. */
+static double baseline_seconds(RTCScene rtc_scene, const scene *s, const render_settings *rs, int same_rays,
+                               int count_distinct, double *splats_px)
 {
-    baseline_job job = {rtc_scene, s, rs, same_rays, 0, PTHREAD_MUTEX_INITIALIZER, 0};
+    baseline_job job = {rtc_scene, s, rs, same_rays, count_distinct, 0, PTHREAD_MUTEX_INITIALIZER, 0, 0};
     pthread_t tids[64];
     double t0 = now();
     for (int i = 0; i < rs->threads; i++)
         pthread_create(&tids[i], NULL, baseline_worker, &job);
     for (int i = 0; i < rs->threads; i++)
         pthread_join(tids[i], NULL);
-    return now() - t0;
+    double seconds = now() - t0;
+    if (count_distinct)
+        *splats_px = job.covered ? (double)job.distinct / (double)job.covered : 0.0;
+    return seconds;
 }
 
 /* ---- one case, in a child process --------------------------------------- */
@@ -269,6 +301,7 @@ static void run_reuse_case(const bench_case *c, bench_result *r)
     r->base_mrays = median(b, c->reps);
     r->base_build_ms = 0;
     r->same_rays_mrays = 0;
+    r->base_splats_px = r->same_splats_px = 0;
     struct rusage ru;
     getrusage(RUSAGE_SELF, &ru);
     r->peak_mb = ru.ru_maxrss / 1024.0;
@@ -304,9 +337,11 @@ static void run_case(const bench_case *c, bench_result *r)
     double ours[16], theirs[16], same[16], rays = (double)c->res * c->res * 4 * c->tspp;
     for (int k = 0; k < c->reps; k++) { /* interleaved repetitions */
         ours[k] = render_mrays(&s, acc, &rs, c->res, &r->rays);
-        theirs[k] = rays / baseline_seconds(base, &s, &rs, 0) * 1e-6;
-        same[k] = rays / baseline_seconds(base, &s, &rs, 1) * 1e-6;
+        theirs[k] = rays / baseline_seconds(base, &s, &rs, 0, 0, NULL) * 1e-6;
+        same[k] = rays / baseline_seconds(base, &s, &rs, 1, 0, NULL) * 1e-6;
     }
+    baseline_seconds(base, &s, &rs, 0, 1, &r->base_splats_px);
+    baseline_seconds(base, &s, &rs, 1, 1, &r->same_splats_px);
     r->mrays = median(ours, c->reps);
     r->base_mrays = median(theirs, c->reps);
     r->same_rays_mrays = median(same, c->reps);
@@ -349,14 +384,15 @@ static void print_row(FILE *csv, const char *series, const bench_case *c, const 
 {
     double deg = strcmp(c->motion, "rotation") ? 0 : c->degrees ? c->degrees : 90;
     double same = r->same_rays_mrays > 0 ? r->mrays / r->same_rays_mrays : 0;
-    printf("| %-9s | %8d | %-8s | %4.0f | %-10s | %4d | %2d | %8.0f | %8.0f | %6.2f | %6.2f | %5.2fx | %6.2f | %5.2fx | %7.0f | %6.0f |\n",
+    printf("| %-9s | %8d | %-8s | %4.0f | %-10s | %4d | %2d | %8.0f | %8.0f | %6.2f | %6.2f | %5.2fx | %6.2f | %5.2fx "
+           "| %7.0f | %6.0f | %5.1f | %6.1f |\n",
            series, c->splats, c->motion, deg, c->elliptical ? "elliptical" : "circular", c->tspp, c->threads,
            r->build_ms, r->base_build_ms, r->mrays, r->base_mrays, r->mrays / r->base_mrays, r->same_rays_mrays,
-           same, r->peak_mb, r->bytes_per_splat);
-    fprintf(csv, "%s,%d,%s,%.1f,%s,%d,%d,%d,%.1f,%.1f,%.4f,%.4f,%.4f,%.4f,%.4f,%.1f,%.1f\n", series, c->splats,
-            c->motion, deg, c->elliptical ? "elliptical" : "circular", c->tspp, c->threads, c->res, r->build_ms,
-            r->base_build_ms, r->mrays, r->base_mrays, r->mrays / r->base_mrays, r->same_rays_mrays, same,
-            r->peak_mb, r->bytes_per_splat);
+           same, r->peak_mb, r->bytes_per_splat, r->base_splats_px, r->same_splats_px);
+    fprintf(csv, "%s,%d,%s,%.1f,%s,%d,%d,%d,%.1f,%.1f,%.4f,%.4f,%.4f,%.4f,%.4f,%.1f,%.1f,%.2f,%.2f\n", series,
+            c->splats, c->motion, deg, c->elliptical ? "elliptical" : "circular", c->tspp, c->threads, c->res,
+            r->build_ms, r->base_build_ms, r->mrays, r->base_mrays, r->mrays / r->base_mrays, r->same_rays_mrays,
+            same, r->peak_mb, r->bytes_per_splat, r->base_splats_px, r->same_splats_px);
     fflush(stdout);
     fflush(csv);
 }
@@ -375,14 +411,16 @@ int main(int argc, char **argv)
         return 1;
     }
     fprintf(csv, "series,splats,motion,degrees_per_time,splat,tspp,threads,res,build_ms,baseline_build_ms,mrays,"
-                 "baseline_mrays,ratio,same_rays_baseline_mrays,same_rays_ratio,peak_mb,bytes_per_splat\n");
+                 "baseline_mrays,ratio,same_rays_baseline_mrays,same_rays_ratio,peak_mb,bytes_per_splat,"
+                 "base_splats_per_pixel,same_rays_splats_per_pixel\n");
     printf("refrender-bench: %dx%d pixels, 4 spatial samples, thesis sampler, median of %d interleaved runs\n\n"
            "'base': Embree's built-in discs, closest hit, on the world rays of the scene at rest (no motion);\n"
            "'same rays': the same discs on the object-space rays refrender traces (each time's ray moved by the\n"
-           "inverse motion), which pay motion's cache misses too. Ratios are refrender / baseline.\n\n"
+           "inverse motion), which pay motion's cache misses too. Ratios are refrender / baseline.\n"
+           "'splats/px': distinct discs the baseline's rays hit per covered pixel, at rest and on the same rays.\n\n"
            "| series | splats | motion | deg/t | splat | tspp | thr | build ms | base build ms | Mrays/s | base Mrays/s | ratio "
-           "| same rays Mrays/s | ratio same rays | peak MB | B/splat |\n"
-           "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n", res, res, reps);
+           "| same rays Mrays/s | ratio same rays | peak MB | B/splat | splats/px rest | splats/px same rays |\n"
+           "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n", res, res, reps);
     static const char *const motions[] = {"static", "linear", "rotation"};
     int big = quick ? 20000 : 1000000, small = quick ? 5000 : 100000, tspp = quick ? 8 : 100;
     bench_result r;
