@@ -22,6 +22,7 @@ typedef struct {
     int splats, tspp, threads, res, reps;
     int background;      /* 1: add a static surfel wall filling the image behind (80% static) */
     double degrees;      /* rotation speed per time unit (shutter [0,1]); 0: the default 90 */
+    int scaling;         /* 1: `threads` threads against 1 thread, alternated in one process */
 } bench_case;
 
 typedef struct {
@@ -282,20 +283,24 @@ static accel *setup_case(const bench_case *c, scene *s, surfel **surfels, size_t
     return acc;
 }
 
-/* 80% static background, 20% moving: static-hit reuse against tracing every
- * time sample separately (mrays = with reuse, base_mrays = without). */
-static void run_reuse_case(const bench_case *c, bench_result *r)
+/* Two renders of one scene alternated, the medians compared (mrays against
+ * base_mrays): static80's reuse against tracing every time sample
+ * separately, or the thread scaling's N threads against 1. */
+static void run_pair_case(const bench_case *c, bench_result *r)
 {
     scene s;
     surfel *surfels;
     size_t n;
     render_settings rs;
     accel *with = setup_case(c, &s, &surfels, &n, &rs, r);
-    accel *without = build_or_die(&s, 0);
+    accel *without = c->scaling ? with : build_or_die(&s, 0);
+    render_settings base_rs = rs;
+    if (c->scaling)
+        base_rs.threads = 1;
     double a[16], b[16];
     for (int k = 0; k < c->reps; k++) {
         a[k] = render_mrays(&s, with, &rs, c->res, &r->rays);
-        b[k] = render_mrays(&s, without, &rs, c->res, &r->rays);
+        b[k] = render_mrays(&s, without, &base_rs, c->res, &r->rays);
     }
     r->mrays = median(a, c->reps);
     r->base_mrays = median(b, c->reps);
@@ -311,16 +316,17 @@ static void run_reuse_case(const bench_case *c, bench_result *r)
         for (int x = 0; x < c->res; x++)
             meets += accel_may_hit_moving(with, s.cam.position, camera_ray_direction(&s.cam, x + 0.5, y + 0.5));
     r->moving_share = meets / ((double)c->res * c->res);
+    if (without != with)
+        accel_free(without);
     accel_free(with);
-    accel_free(without);
     scene_free(&s);
     free(surfels);
 }
 
 static void run_case(const bench_case *c, bench_result *r)
 {
-    if (c->background) {
-        run_reuse_case(c, r);
+    if (c->background || c->scaling) {
+        run_pair_case(c, r);
         return;
     }
     scene s;
@@ -427,39 +433,45 @@ int main(int argc, char **argv)
     for (int size = 0; size < 2 && wanted(only, "cases"); size++)
         for (int m = 0; m < 3; m++)
             for (int e = 0; e < 2; e++) {
-                bench_case c = {motions[m], e, size ? big : small, tspp, threads, res, reps, 0, 0};
+                bench_case c = {motions[m], e, size ? big : small, tspp, threads, res, reps, 0, 0, 0};
                 if (!run_in_child(&c, &r))
                     print_row(csv, "cases", &c, &r);
             }
     if (only && !strcmp(only, "target")) { /* issue 7's headline case alone, for quick iterations */
-        bench_case c = {"rotation", 0, big, tspp, threads, res, reps, 0, 0};
+        bench_case c = {"rotation", 0, big, tspp, threads, res, reps, 0, 0, 0};
         if (!run_in_child(&c, &r))
             print_row(csv, "target", &c, &r);
     }
     double speeds[] = {1, 10, 90};
     for (int i = 0; i < (quick ? 1 : 3) && wanted(only, "speed"); i++) {
-        bench_case c = {"rotation", 0, big, tspp, threads, res, reps, 0, speeds[i]};
+        bench_case c = {"rotation", 0, big, tspp, threads, res, reps, 0, speeds[i], 0};
         if (!run_in_child(&c, &r))
             print_row(csv, "speed", &c, &r);
     }
     int counts[] = {10000, 100000, 1000000, 4000000};
     for (int i = 0; i < (quick ? 1 : 4) && wanted(only, "splats"); i++) {
-        bench_case c = {"rotation", 0, counts[i], tspp, threads, res, reps, 0, 0};
+        bench_case c = {"rotation", 0, counts[i], tspp, threads, res, reps, 0, 0, 0};
         if (!run_in_child(&c, &r))
             print_row(csv, "splats", &c, &r);
     }
     int tspps[] = {10, 30, 100};
     for (int i = 0; i < (quick ? 1 : 3) && wanted(only, "tspp"); i++) {
-        bench_case c = {"rotation", 0, big, tspps[i], threads, res, reps, 0, 0};
+        bench_case c = {"rotation", 0, big, tspps[i], threads, res, reps, 0, 0, 0};
         if (!run_in_child(&c, &r))
             print_row(csv, "tspp", &c, &r);
     }
     for (int t = 1; t <= threads && wanted(only, "threads"); t++) {
-        bench_case c = {"rotation", 0, big, tspp, t, res, reps, 0, 0};
+        bench_case c = {"rotation", 0, big, tspp, t, res, reps, 0, 0, 0};
         if (!run_in_child(&c, &r))
             print_row(csv, "threads", &c, &r);
     }
-    bench_case c80 = {"rotation", 0, small, tspp, threads, res, reps, 1, 0};
+    bench_case scaling = {"rotation", 0, big, tspp, threads, res, reps, 0, 0, 1};
+    if (threads > 1 && wanted(only, "threads") && !run_in_child(&scaling, &r)) {
+        print_row(csv, "scaling", &scaling, &r);
+        printf("\nscaling: %d threads against 1, alternated in one process ('base' = 1 thread): %.2fx\n\n", threads,
+               r.mrays / r.base_mrays);
+    }
+    bench_case c80 = {"rotation", 0, small, tspp, threads, res, reps, 1, 0, 0};
     if (wanted(only, "static80"))
         printf("\nstatic80: a static wall fills the image, a rotating sphere covers about 15%% of it; 'base' is\n"
                "the same render tracing every time sample separately (--no-static-reuse), 'ratio' the speed-up.\n\n");
