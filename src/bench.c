@@ -140,7 +140,7 @@ static int cmp_unsigned(const void *a, const void *b)
 }
 
 /* How many different discs the n hits prims[0..n) are: what a pixel's rays
- * must fetch (the same few disc at rest, a new one per time under fast
+ * must fetch (the same few discs at rest, a new one per time under fast
  * motion). */
 static unsigned distinct_prims(unsigned *prims, int n)
 {
@@ -190,8 +190,10 @@ static void *baseline_worker(void *arg)
                 if (job->count_distinct && rh.hit.geomID != RTC_INVALID_GEOMETRY_ID)
                     prims[nhits++] = rh.hit.primID;
             }
-            distinct += distinct_prims(prims, nhits);
-            covered += nhits > 0;
+            if (job->count_distinct) {
+                distinct += distinct_prims(prims, nhits);
+                covered += nhits > 0;
+            }
         }
     }
     pthread_mutex_lock(&job->lock);
