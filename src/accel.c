@@ -56,7 +56,8 @@ typedef struct {
 
 /* Embree passes rays to callbacks in SOA layout, N lanes per field
  * (rtcore_ray.h: RTCRayHitN); C has no accessors, so index it ourselves. */
-enum { F_ORG = 0, F_TNEAR = 3, F_DIR = 4, F_TFAR = 8, F_PRIM = 17, F_GEOM = 18 };
+enum { F_ORG = 0, F_TNEAR = 3, F_DIR = 4, F_TFAR = 8, F_MASK = 9, F_ID = 10, F_FLAGS = 11,
+       F_PRIM = 17, F_GEOM = 18, F_INST = 19, F_COUNT = 20 };
 
 static float *lane_f(void *rayhit, unsigned n, unsigned field, unsigned i)
 {
@@ -119,11 +120,9 @@ static float kbuffer_cutoff(const kbuffer *kb)
 /* ---- object-level callbacks (object space) ----------------------------- */
 
 static void accept_hit(trace_context *c, const struct RTCIntersectFunctionNArguments *args, unsigned lane,
-                       float t, float weight, float r2, vec3 normal, const float color[3])
+                       const float dir[3], float t, float weight, float r2, vec3 normal, const float color[3])
 {
-    vec3 d = v3(*lane_f(args->rayhit, args->N, F_DIR, lane), *lane_f(args->rayhit, args->N, F_DIR + 1, lane),
-                *lane_f(args->rayhit, args->N, F_DIR + 2, lane));
-    if (v3_dot(normal, d) > 0) /* two-sided surfaces: shade the side facing the eye */
+    if (v3_dot(normal, v3(dir[0], dir[1], dir[2])) > 0) /* two-sided surfaces: shade the side facing the eye */
         normal = v3_scale(normal, -1.0);
     vec3 wn = xform_normal(c->xf[lane], normal);
     surface_hit h = {t, c->obj, args->primID, weight, r2, {color[0], color[1], color[2]},
@@ -161,7 +160,7 @@ static void splats_intersect(const struct RTCIntersectFunctionNArguments *args)
             continue;
         const float *n = pointmodel_normal(&o->model, args->primID);
         /* weight -1: computed after the traversal, if the hit is still in the buffer */
-        accept_hit(c, args, lane, t, -1.0f, r2, v3(n[0], n[1], n[2]), pointmodel_color(&o->model, args->primID));
+        accept_hit(c, args, lane, dir, t, -1.0f, r2, v3(n[0], n[1], n[2]), pointmodel_color(&o->model, args->primID));
     }
 }
 
@@ -184,7 +183,7 @@ static void sphere_intersect_lane(trace_context *c, const struct RTCIntersectFun
         if (t >= tnear && t <= tfar) {
             vec3 p = v3_add(oc, v3_scale(dir, roots[i]));
             const float col[3] = {(float)o->sphere_color.x, (float)o->sphere_color.y, (float)o->sphere_color.z};
-            accept_hit(c, args, lane, t, 1.0f, 0.0f, v3_scale(p, 1.0 / o->sphere_radius), col);
+            accept_hit(c, args, lane, fd, t, 1.0f, 0.0f, v3_scale(p, 1.0 / o->sphere_radius), col);
             return;
         }
     }
@@ -559,14 +558,19 @@ static int ray_meets_box(vec3 org, vec3 dir, aabb b)
     return 1;
 }
 
+/* Does the world ray meet the object's swept box and swept sphere? */
+static int ray_meets_swept(const accel *a, unsigned obj, vec3 org, vec3 dir)
+{
+    return ray_meets_box(org, dir, a->swept[obj]) && ray_meets_sphere(org, dir, &a->swept_sphere[obj]);
+}
+
 int accel_may_hit_moving(const accel *a, vec3 org, vec3 dir)
 {
     const top_level *top = &a->top[TOP_MOVING];
     if (top->count > 64)
         return 1; /* many objects: testing them all per ray would cost more than it saves */
     for (unsigned i = 0; i < top->count; i++) {
-        unsigned obj = top->ids[i];
-        if (ray_meets_box(org, dir, a->swept[obj]) && ray_meets_sphere(org, dir, &a->swept_sphere[obj]))
+        if (ray_meets_swept(a, top->ids[i], org, dir))
             return 1;
     }
     return 0;
@@ -598,9 +602,6 @@ typedef struct {
     xform xf;
     vec3 org, dir;
 } lane_ray;
-
-/* Fields of Embree's SOA ray-hit layout used below (rtcore_ray.h). */
-enum { F_MASK = 9, F_ID = 10, F_FLAGS = 11, F_INST = 19, F_COUNT = 20 };
 
 /* Lanes [0, m) of c against object obj in one packet traversal of the
  * smallest width that holds them: every node and splat fetched serves all
@@ -721,9 +722,8 @@ void accel_trace_moving_times(const accel *a, vec3 org, vec3 dir, const double *
         hit_moving[i] = 0;
     }
     for (unsigned k = 0; k < top->count; k++) {
-        unsigned obj = top->ids[k];
-        if (ray_meets_box(org, dir, a->swept[obj]) && ray_meets_sphere(org, dir, &a->swept_sphere[obj]))
-            trace_object_times(a, obj, org, dir, times, n, kb, hit_moving);
+        if (ray_meets_swept(a, top->ids[k], org, dir))
+            trace_object_times(a, top->ids[k], org, dir, times, n, kb, hit_moving);
     }
     for (int i = 0; i < n; i++) {
         finish_weights(a, &kbs[i]);

@@ -86,7 +86,11 @@ static void build_scene(const bench_case *c, scene *s, surfel **out, size_t *n)
         exit(1);
     }
     surfel *sorted = malloc(*n * sizeof *sorted);
-    for (size_t i = 0; sorted && i < *n; i++)
+    if (!sorted) {
+        fprintf(stderr, "bench: out of memory\n");
+        exit(1);
+    }
+    for (size_t i = 0; i < *n; i++)
         sorted[i] = (*out)[order[i]];
     free(order);
     free(*out);
