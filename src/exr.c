@@ -43,11 +43,46 @@ static exr_result_t write_header(exr_context_t ctx, int w, int h, const exr_chan
     return rc;
 }
 
+/* OpenEXRCore 3.1.5 (Debian 12) ZIP encoder bug (upstream OpenEXR issue 2306,
+ * fixed by PR 2307): when zlib's output is exactly as long as the packed chunk
+ * it keeps the zlib bytes, but every reader takes a chunk whose stored size
+ * equals its unpacked size as raw data, so the pixels read back as garbage.
+ * The file format's rule (OpenEXR file layout: "either the compressed or the
+ * uncompressed data are stored, whichever is smaller") is enforced here after
+ * the library's own compressor: a chunk that did not shrink is stored raw. */
+typedef struct {
+    exr_result_t (*library_compress)(exr_encode_pipeline_t *);
+} compress_guard;
+
+static exr_result_t compress_or_store_raw(exr_encode_pipeline_t *enc)
+{
+    const compress_guard *guard = enc->encoding_user_data;
+    exr_result_t rc = guard->library_compress(enc);
+    if (rc || enc->compressed_bytes < enc->packed_bytes)
+        return rc;
+    if (enc->compressed_buffer != enc->packed_buffer)
+        memcpy(enc->compressed_buffer, enc->packed_buffer, enc->packed_bytes);
+    enc->compressed_bytes = enc->packed_bytes;
+    return rc;
+}
+
+static exr_result_t choose_routines(exr_context_t ctx, exr_encode_pipeline_t *enc, compress_guard *guard)
+{
+    exr_result_t rc = exr_encoding_choose_default_routines(ctx, 0, enc);
+    if (!rc && enc->compress_fn) {
+        guard->library_compress = enc->compress_fn;
+        enc->encoding_user_data = guard;
+        enc->compress_fn = compress_or_store_raw;
+    }
+    return rc;
+}
+
 static exr_result_t write_chunks(exr_context_t ctx, int w, int h, const exr_channel *chs, int nch)
 {
     int32_t lines_per_chunk;
     exr_result_t rc = exr_get_scanlines_per_chunk(ctx, 0, &lines_per_chunk);
     exr_encode_pipeline_t enc = EXR_ENCODE_PIPELINE_INITIALIZER;
+    compress_guard guard = {NULL};
     int initialized = 0;
     for (int y = 0; y < h && !rc; y += lines_per_chunk) {
         exr_chunk_info_t cinfo;
@@ -67,7 +102,7 @@ static exr_result_t write_chunks(exr_context_t ctx, int w, int h, const exr_chan
             info->encode_from_ptr = (const uint8_t *)src->base + (size_t)y * w * src->stride;
         }
         if (!initialized)
-            rc = exr_encoding_choose_default_routines(ctx, 0, &enc);
+            rc = choose_routines(ctx, &enc, &guard);
         initialized = 1;
         if (!rc)
             rc = exr_encoding_run(ctx, 0, &enc);
