@@ -164,15 +164,21 @@ static void render_pixel_batch(render_job *job, int px, int py, uint32_t batch, 
         est[c] = wsum > 0 ? acc[c] / wsum : 0.0;
 }
 
+/* Does a pixel holding p->batches batches take another one? Every pixel
+ * takes the first `batches`; with a target error it goes on while its error
+ * is above it, up to the cap. Decided from the pixel's own batches only, so
+ * the result does not depend on tile order, threads or resumes. */
+static int pixel_wants_another(const render_settings *rs, const pixel_state *p)
+{
+    if (p->batches < rs->batches)
+        return 1;
+    return rs->target_error > 0 && p->batches < rs->max_batches && film_max_stderr(p) > rs->target_error;
+}
+
 /* Does this pixel take a batch in the current round? */
 static int pixel_wants_batch(const render_job *job, const pixel_state *p)
 {
-    const render_settings *rs = job->rs;
-    if (p->batches != job->round)
-        return 0;
-    if (job->round < rs->batches)
-        return 1;
-    return rs->target_error > 0 && job->round < rs->max_batches && film_max_stderr(p) > rs->target_error;
+    return p->batches == job->round && pixel_wants_another(job->rs, p);
 }
 
 static void render_tile(render_job *job, int tile, thread_scratch *scr)
@@ -330,12 +336,17 @@ static int run_round(render_job *job, const render_hooks *hooks, double start, d
     return rc;
 }
 
-static int any_pixel_wants_batch(const render_job *job)
+/* Will any pixel take a batch in this round or a later one? A resumed
+ * checkpoint was written between tiles, in the middle of a round, so some
+ * pixels can be a round ahead of all the others that still want batches. */
+static int any_pixel_wants_more(const render_job *job)
 {
     size_t n = (size_t)job->img->width * job->img->height;
-    for (size_t i = 0; i < n; i++)
-        if (pixel_wants_batch(job, &job->img->px[i]))
+    for (size_t i = 0; i < n; i++) {
+        const pixel_state *p = &job->img->px[i];
+        if (p->batches >= job->round && pixel_wants_another(job->rs, p))
             return 1;
+    }
     return 0;
 }
 
@@ -370,7 +381,7 @@ int render_image(const scene *s, const accel *a, const render_settings *rs, imag
     uint32_t rounds = rs->target_error > 0 ? rs->max_batches : rs->batches;
     int rc = 0;
     for (job.round = 0; job.round < rounds && !rc && !*cancel; job.round++) {
-        if (job.round >= rs->batches && !any_pixel_wants_batch(&job))
+        if (job.round >= rs->batches && !any_pixel_wants_more(&job))
             break;
         rc = run_round(&job, hooks, start, &last_checkpoint, err);
     }

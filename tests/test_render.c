@@ -1,0 +1,78 @@
+/* The render loop: batches, target error and resumes (render.c). */
+#include <stdlib.h>
+#include <string.h>
+
+#include "harness.h"
+#include "render.h"
+#include "scene_xml.h"
+
+/* A disk moving across a 32x16 image: two 16x16 tiles, and pixels whose
+ * noise differs (edges, interior, background), so a target error stops them
+ * after different numbers of batches. */
+static const char *const MOVING_DISK =
+    "<scene><camera position='0 0 0' lookat='0 0 -1' up='0 1 0' fov='20' width='32' height='16'/>"
+    "<object><pointModel><splat center='-1 0 -10' normal='0 0 1' radius='1.1' color='1 0.5 0.25'/>"
+    "</pointModel><material shading='unlit'/><animation><linear velocity='2.5 0 0'/></animation></object>"
+    "</scene>";
+
+static render_settings target_settings(const scene *s, uint32_t max_batches)
+{
+    render_settings rs = {{SAMPLER_THESIS, 7, 1, 4, 4, s->shut.open, s->shut.close}, 2, 0, 2, max_batches, 0.03};
+    return rs;
+}
+
+static int render_into(const scene *s, const accel *a, uint32_t max_batches, image *img)
+{
+    volatile sig_atomic_t cancel = 0;
+    render_settings rs = target_settings(s, max_batches);
+    rr_error e;
+    return render_image(s, a, &rs, img, NULL, &cancel, &e);
+}
+
+static int same_pixels(const image *a, const image *b)
+{
+    return !memcmp(a->px, b->px, (size_t)a->width * a->height * sizeof *a->px);
+}
+
+/* A checkpoint is written between tiles, so it can hold round r for the
+ * first tile and round r - 1 for the second. Such a state is built here
+ * from two renders capped at r and r + 1 batches (each pixel's batches
+ * depend on that pixel only), resumed, and must give the uninterrupted
+ * image for every r (issue 18.2: the loop used to stop when no pixel of the
+ * current round wanted a batch, although pixels a round ahead still did). */
+TEST(render_resumed_mid_round_equals_uninterrupted)
+{
+    enum { BATCHES = 2, MAX = 14 };
+    scene s;
+    accel *a;
+    rr_error e;
+    CHECK(scene_load_memory(MOVING_DISK, strlen(MOVING_DISK), "mem.xml", ".", &s, &e) == 0);
+    CHECK(accel_build(&s, s.epsilon, s.kernel_sigma, 1, &a, &e) == 0);
+    image full, before, after;
+    CHECK(image_alloc(&full, 32, 16) == 0 && render_into(&s, a, MAX, &full) == 0);
+    int mismatches = 0, rounds_tried = 0;
+    for (uint32_t r = BATCHES; r < MAX; r++) {
+        CHECK(image_alloc(&before, 32, 16) == 0 && render_into(&s, a, r, &before) == 0);
+        CHECK(image_alloc(&after, 32, 16) == 0 && render_into(&s, a, r + 1, &after) == 0);
+        for (int y = 0; y < 16; y++) /* the first tile has finished round r */
+            memcpy(&before.px[y * 32], &after.px[y * 32], 16 * sizeof *before.px);
+        CHECK(render_into(&s, a, MAX, &before) == 0);
+        mismatches += !same_pixels(&before, &full);
+        rounds_tried++;
+        image_free(&before);
+        image_free(&after);
+    }
+    if (mismatches)
+        printf("    %d of %d mid-round resumes differ from the uninterrupted render\n", mismatches, rounds_tried);
+    CHECK(mismatches == 0);
+    /* the target error spread the pixels over several batch counts */
+    uint32_t least = MAX, most = 0;
+    for (int i = 0; i < 32 * 16; i++) {
+        least = full.px[i].batches < least ? full.px[i].batches : least;
+        most = full.px[i].batches > most ? full.px[i].batches : most;
+    }
+    CHECK(least == BATCHES && most > least + 2);
+    image_free(&full);
+    accel_free(a);
+    scene_free(&s);
+}
