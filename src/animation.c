@@ -167,7 +167,9 @@ static void add_sample(double *s, int *n, double t, double t0, double t1)
 }
 
 /* Key times of a curve inside [t0, t1], repeated (and mirrored) through
- * cycling infinities, where a step may jump. */
+ * cycling infinities, where a step may jump. The spans are counted with an
+ * integer: far from the keys (a shutter at 1e18 s) m + 1 == m in doubles and
+ * a loop over m would never end; more spans than samples cannot be listed. */
 static void add_key_times(const curve *c, double *s, int *n, double t0, double t1)
 {
     if (c->count < 2)
@@ -175,11 +177,14 @@ static void add_key_times(const curve *c, double *s, int *n, double t0, double t
     double k0 = c->keys[0].time, kn = c->keys[c->count - 1].time, span = kn - k0;
     int cycles = c->pre >= INF_CYCLE || c->post >= INF_CYCLE;
     double m_lo = cycles ? floor((t0 - kn) / span) : 0, m_hi = cycles ? ceil((t1 - k0) / span) : 0;
-    for (double m = m_lo; m <= m_hi && *n < MAX_SAMPLES; m++)
+    long spans = (long)fmin(m_hi - m_lo, (double)MAX_SAMPLES);
+    for (long j = 0; j <= spans && *n < MAX_SAMPLES; j++) {
+        double m = m_lo + (double)j;
         for (int i = 0; i < c->count; i++) {
             add_sample(s, n, c->keys[i].time + m * span, t0, t1);
             add_sample(s, n, k0 + kn - c->keys[i].time + m * span, t0, t1);
         }
+    }
 }
 
 /* Sorted sample times over [t0, t1]: a grid plus every key time. */

@@ -6,6 +6,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "inputfile.h"
+
 /* ---- tokens: words, ';', '{', '}'; comments // and # to end of line ------- */
 
 typedef struct {
@@ -416,40 +418,15 @@ fail:
     return -1;
 }
 
-int animfile_load(const char *path, keyframes **out, rr_error *err)
+int animfile_load(const char *path, keyframes **out, uint64_t *content_hash, rr_error *err)
 {
-    FILE *f = fopen(path, "rb");
-    if (!f)
-        return rr_fail(err, "%s: cannot open .anim file", path);
-    char *text = NULL;
-    size_t size = 0, cap = 0;
-    for (;;) {
-        if (size + 4096 + 1 > cap) {
-            char *grown = realloc(text, cap = 2 * cap + 8192);
-            if (!grown) {
-                free(text);
-                fclose(f);
-                return rr_fail(err, "%s: out of memory", path);
-            }
-            text = grown;
-        }
-        size_t got = fread(text + size, 1, 4096, f);
-        size += got;
-        if (got < 4096)
-            break;
-    }
-    int bad = ferror(f);
-    fclose(f);
-    if (bad) {
-        free(text);
-        return rr_fail(err, "%s: read error", path);
-    }
-    text[size] = 0;
-    if (strlen(text) != size) {
-        free(text);
-        return rr_fail(err, "%s: binary data in a text .anim file", path);
-    }
-    int rc = animfile_parse(text, path, out, err);
-    free(text);
+    input_file in;
+    if (input_file_read(path, ANIMFILE_MAX_BYTES, &in, err))
+        return -1;
+    if (content_hash)
+        *content_hash = input_hash(*content_hash, in.data, in.len);
+    int rc = strlen(in.data) != in.len ? rr_fail(err, "%s: binary data in a text .anim file", path)
+                                       : animfile_parse(in.data, path, out, err);
+    input_file_free(&in);
     return rc;
 }

@@ -12,9 +12,15 @@
 
 #include "animation.h"
 
+#include <stdint.h>
+
+/* Largest .anim file read (bytes); real exports of whole rigs are a few MB. */
+#define ANIMFILE_MAX_BYTES ((size_t)256 << 20)
+
 /* Reads path into *out (allocated; free with animation_free's keyframes
- * handling). Errors name the file and line. */
-int animfile_load(const char *path, keyframes **out, rr_error *err);
+ * handling), folding the file's bytes into *content_hash unless it is NULL
+ * (inputfile.h). Only regular files are read. Errors name the file and line. */
+int animfile_load(const char *path, keyframes **out, uint64_t *content_hash, rr_error *err);
 
 /* The same from text in memory; name is used in messages. */
 int animfile_parse(const char *text, const char *name, keyframes **out, rr_error *err);

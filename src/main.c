@@ -322,10 +322,8 @@ static void setup_run(render_run *run, const scene *s, const render_options *o, 
     run->rs = (render_settings){
         {o->sampler, o->seed, sampler_grid_for_spp(o->spp), o->tspp, s->time_factor, s->shut.open, s->shut.close},
         o->threads, begin, end - begin, o->max_batches ? (uint32_t)o->max_batches : 8 * total, o->target_error};
-    char hash[17];
-    file_hash(s->path, hash);
     run->attrs.n = 0;
-    attrs_for_render(&run->attrs, s, &run->rs, total, hash, cmdline);
+    attrs_for_render(&run->attrs, s, &run->rs, total, cmdline);
 }
 
 static int write_preview(const char *path, const image *img, rr_error *err)

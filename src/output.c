@@ -9,7 +9,7 @@
 #include "exr.h"
 
 static const char *const identity_keys[] = {
-    "refrender:sceneHash", "refrender:resolution", "refrender:sampler", "refrender:spp",
+    "refrender:sceneHash", "refrender:inputsHash", "refrender:resolution", "refrender:sampler", "refrender:spp",
     "refrender:tspp", "refrender:seed", "refrender:epsilon", "refrender:kernelSigma",
     "refrender:shutter", "refrender:weightFunction", "refrender:timeFactor", "refrender:batches", NULL};
 
@@ -38,20 +38,6 @@ const char *attrs_get(const attr_list *a, const char *key)
     return NULL;
 }
 
-void file_hash(const char *path, char out[17])
-{
-    FILE *f = fopen(path, "rb");
-    out[0] = 0;
-    if (!f)
-        return;
-    uint64_t h = 0xcbf29ce484222325ULL;
-    int c;
-    while ((c = fgetc(f)) != EOF)
-        h = (h ^ (uint64_t)c) * 0x100000001b3ULL;
-    fclose(f);
-    snprintf(out, 17, "%016" PRIx64, h);
-}
-
 static void describe_weight(const shutter *sh, char *buf, size_t size)
 {
     if (sh->kind == WEIGHT_LINEAR)
@@ -67,13 +53,14 @@ static void describe_weight(const shutter *sh, char *buf, size_t size)
 }
 
 void attrs_for_render(attr_list *a, const scene *s, const render_settings *rs, uint32_t total_batches,
-                      const char *scene_hash, const char *command)
+                      const char *command)
 {
     char weight[4096];
     describe_weight(&s->shut, weight, sizeof weight);
     const sampler *smp = &rs->smp;
     attrs_set(a, "refrender:scene", "%s", s->path);
-    attrs_set(a, "refrender:sceneHash", "%s", scene_hash);
+    attrs_set(a, "refrender:sceneHash", "%016" PRIx64, s->scene_hash);
+    attrs_set(a, "refrender:inputsHash", "%016" PRIx64, s->inputs_hash);
     attrs_set(a, "refrender:resolution", "%dx%d", s->cam.width, s->cam.height);
     attrs_set(a, "refrender:sampler", "%s", sampler_name(smp->kind));
     attrs_set(a, "refrender:spp", "%d", smp->grid * smp->grid);

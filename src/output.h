@@ -6,8 +6,8 @@
  * A render state (a --pass output or a checkpoint) has R G B A of the
  * batches it holds plus exact uint channels state.* with each pixel's batch
  * count and fixed-point sums, so states merge bit-exactly.
- * Both carry string attributes; the identity attributes (scene hash,
- * resolution, sampler, counts, seed, epsilon, sigma, shutter, weight, time
+ * Both carry string attributes; the identity attributes (scene hash, hash
+ * of every input file's content, resolution, sampler, counts, seed, epsilon, sigma, shutter, weight, time
  * factor, batches) must agree for states to be merged or resumed. */
 #ifndef RR_OUTPUT_H
 #define RR_OUTPUT_H
@@ -27,10 +27,8 @@ const char *attrs_get(const attr_list *a, const char *key);
 
 /* Identity and provenance attributes of a render. */
 void attrs_for_render(attr_list *a, const scene *s, const render_settings *rs, uint32_t total_batches,
-                      const char *scene_hash, const char *command);
+                      const char *command);
 
-/* FNV-1a hash of the file's bytes as 16 hex digits ("" if unreadable). */
-void file_hash(const char *path, char out[17]);
 
 int output_write_final(const char *path, const image *img, int samples_per_batch, const attr_list *a,
                        rr_error *err);

@@ -1,10 +1,14 @@
 #include "ply.h"
 
+#include <math.h>
+
 #include <errno.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+
+#include "inputfile.h"
 
 enum ply_format { PLY_ASCII, PLY_LE, PLY_BE };
 enum { SLOT_X, SLOT_Y, SLOT_Z, SLOT_NX, SLOT_NY, SLOT_NZ, SLOT_RADIUS, SLOT_UX, SLOT_UY,
@@ -26,9 +30,11 @@ typedef struct {
     ply_property props[64];
 } ply_element;
 
+/* The file is parsed from memory (inputfile.h): cur walks from the start of
+ * the data to end. */
 typedef struct {
     const char *path;
-    FILE *f;
+    const char *data, *cur, *end;
     enum ply_format format;
     int nelements;
     ply_element elements[16];
@@ -148,18 +154,37 @@ static int parse_header_line(ply_reader *r, char *line, int *done)
     return header_fail(r, "unknown header keyword");
 }
 
+/* Copies the next line (without its newline) into buf; 0 at the end of
+ * the data, -1 if the line does not fit. */
+static int next_line(ply_reader *r, char *buf, size_t size)
+{
+    if (r->cur >= r->end)
+        return 0;
+    const char *eol = memchr(r->cur, '\n', (size_t)(r->end - r->cur));
+    size_t len = (size_t)((eol ? eol : r->end) - r->cur);
+    if (len >= size)
+        return -1;
+    memcpy(buf, r->cur, len);
+    buf[len] = 0;
+    if (len && buf[len - 1] == '\r')
+        buf[len - 1] = 0;
+    r->cur = eol ? eol + 1 : r->end;
+    return 1;
+}
+
 static int read_header(ply_reader *r)
 {
     char line[1024];
     r->line = 1;
-    if (!fgets(line, sizeof line, r->f) || strncmp(line, "ply", 3) || (line[3] != '\n' && line[3] != '\r'))
+    if (next_line(r, line, sizeof line) != 1 || strcmp(line, "ply"))
         return header_fail(r, "not a PLY file (first line must be 'ply')");
     int format_seen = 0, done = 0;
     while (!done) {
         r->line++;
-        if (!fgets(line, sizeof line, r->f))
+        int got = next_line(r, line, sizeof line);
+        if (got == 0)
             return header_fail(r, "file ends inside the header (no 'end_header')");
-        if (!strchr(line, '\n'))
+        if (got < 0)
             return header_fail(r, "header line too long");
         if (!strncmp(line, "format", 6))
             format_seen = 1;
@@ -200,38 +225,32 @@ static double decode_binary(const unsigned char *bytes, int type, int swap)
 /* Reads one binary scalar; returns -1 at end of file. */
 static int read_binary_value(ply_reader *r, int type, double *out)
 {
-    unsigned char bytes[8];
-    if (fread(bytes, (size_t)type_table[type].size, 1, r->f) != 1)
+    size_t size = (size_t)type_table[type].size;
+    if ((size_t)(r->end - r->cur) < size)
         return -1;
     int swap = (r->format == PLY_LE) != host_is_little_endian();
-    *out = decode_binary(bytes, type, swap);
+    *out = decode_binary((const unsigned char *)r->cur, type, swap);
+    r->cur += size;
     return 0;
 }
 
-/* Reads one ascii token as a number; returns -1 at end of file, -2 if the
- * token is not a number. Tracks line numbers. */
+static int is_blank(char c) { return c == ' ' || c == '\t' || c == '\r'; }
+
+/* Reads the next number of the current ascii line (an instance is one line,
+ * PLY 1.0); returns -1 at the end of the line, -2 if the token is not a
+ * number. strtod reads the token in place, whatever its length. */
 static int read_ascii_value(ply_reader *r, double *out)
 {
-    int c;
-    while ((c = fgetc(r->f)) != EOF && (c == ' ' || c == '\t' || c == '\r' || c == '\n'))
-        if (c == '\n')
-            r->line++;
-    if (c == EOF)
+    while (r->cur < r->end && is_blank(*r->cur))
+        r->cur++;
+    if (r->cur >= r->end || *r->cur == '\n')
         return -1;
-    char tok[128];
-    size_t n = 0;
-    while (c != EOF && c != ' ' && c != '\t' && c != '\r' && c != '\n') {
-        if (n + 1 < sizeof tok)
-            tok[n++] = (char)c;
-        c = fgetc(r->f);
-    }
-    if (c != EOF)
-        ungetc(c, r->f);
-    tok[n] = 0;
-    char *end;
-    errno = 0;
-    *out = strtod(tok, &end);
-    return (*end || end == tok) ? -2 : 0;
+    const char *tok = r->cur;
+    while (r->cur < r->end && !is_blank(*r->cur) && *r->cur != '\n' && *r->cur)
+        r->cur++;
+    char *stop;
+    *out = strtod(tok, &stop);
+    return stop == r->cur && stop != tok ? 0 : -2;
 }
 
 static int element_fail(ply_reader *r, const ply_element *e, size_t index, const char *what)
@@ -239,12 +258,34 @@ static int element_fail(ply_reader *r, const ply_element *e, size_t index, const
     if (r->format == PLY_ASCII)
         return rr_fail(r->err, "%s:%ld: %s %zu: %s", r->path, r->line, e->name, index, what);
     return rr_fail(r->err, "%s: %s %zu (byte offset %ld): %s", r->path, e->name, index,
-                   ftell(r->f), what);
+                   (long)(r->cur - r->data), what);
 }
 
-static int read_value(ply_reader *r, const ply_element *e, size_t index, int type, double *out)
+/* Ends an ascii instance: nothing but blanks may follow on its line. */
+static int end_ascii_line(ply_reader *r, const ply_element *e, size_t index, int values)
+{
+    while (r->cur < r->end && is_blank(*r->cur))
+        r->cur++;
+    if (r->cur < r->end && *r->cur != '\n') {
+        char what[128];
+        snprintf(what, sizeof what, "more values on the line than the %d its properties declare", values);
+        return element_fail(r, e, index, what);
+    }
+    if (r->cur < r->end)
+        r->cur++;
+    return 0;
+}
+
+static int read_value(ply_reader *r, const ply_element *e, size_t index, int type, int nth, double *out)
 {
     int rc = r->format == PLY_ASCII ? read_ascii_value(r, out) : read_binary_value(r, type, out);
+    if (rc == -1 && r->format == PLY_ASCII && r->cur >= r->end)
+        return element_fail(r, e, index, "file is truncated (ends before all declared data)");
+    if (rc == -1 && r->format == PLY_ASCII) {
+        char what[128];
+        snprintf(what, sizeof what, "the line ends after %d values: a short or truncated line", nth);
+        return element_fail(r, e, index, what);
+    }
     if (rc == -1)
         return element_fail(r, e, index, "file is truncated (ends before all declared data)");
     if (rc == -2)
@@ -255,22 +296,23 @@ static int read_value(ply_reader *r, const ply_element *e, size_t index, int typ
 /* Reads the properties of one element instance; slot values land in vals. */
 static int read_instance(ply_reader *r, const ply_element *e, size_t index, double *vals)
 {
+    int nth = 0;
     for (int i = 0; i < e->nprops; i++) {
         const ply_property *p = &e->props[i];
         double v;
         if (p->list_count >= 0) {
-            if (read_value(r, e, index, p->list_count, &v))
+            if (read_value(r, e, index, p->list_count, nth++, &v))
                 return -1;
-            if (v < 0 || v > 1e6)
+            if (v < 0 || v > 1e6 || v != floor(v))
                 return element_fail(r, e, index, "list length out of range");
             for (long k = 0; k < (long)v; k++) {
                 double item;
-                if (read_value(r, e, index, p->type, &item))
+                if (read_value(r, e, index, p->type, nth++, &item))
                     return -1;
             }
             continue;
         }
-        if (read_value(r, e, index, p->type, &v))
+        if (read_value(r, e, index, p->type, nth++, &v))
             return -1;
         if (p->slot >= 0) {
             if (type_table[p->type].is_int && p->slot >= SLOT_R)
@@ -278,7 +320,7 @@ static int read_instance(ply_reader *r, const ply_element *e, size_t index, doub
             vals[p->slot] = v;
         }
     }
-    return 0;
+    return r->format == PLY_ASCII ? end_ascii_line(r, e, index, nth) : 0;
 }
 
 static int has_slot(const ply_element *e, int slot)
@@ -321,32 +363,31 @@ static int check_vertex_properties(ply_reader *r, const ply_element *e)
     return 0;
 }
 
-static size_t element_stride(const ply_element *e)
+/* The fewest bytes one instance can take: each scalar (and list count) at
+ * its binary size, or in ascii one character and a separator. */
+static size_t instance_min_bytes(const ply_reader *r, const ply_element *e)
 {
     size_t s = 0;
     for (int i = 0; i < e->nprops; i++) {
-        if (e->props[i].list_count >= 0)
-            return 0; /* variable size */
-        s += (size_t)type_table[e->props[i].type].size;
+        const ply_property *p = &e->props[i];
+        s += r->format == PLY_ASCII ? 2 : (size_t)type_table[p->list_count >= 0 ? p->list_count : p->type].size;
     }
     return s;
 }
 
-/* Rejects a binary vertex count that cannot fit the rest of the file before
- * allocating anything for it. */
-static int check_binary_size(ply_reader *r, const ply_element *e)
+/* Rejects a declared count that cannot fit the rest of the file before
+ * reading or allocating anything for it (a count of 10^15 would otherwise
+ * loop for days). */
+static int check_element_size(ply_reader *r, const ply_element *e)
 {
-    size_t stride = element_stride(e);
-    long here = ftell(r->f);
-    if (r->format == PLY_ASCII || stride == 0 || here < 0 || fseek(r->f, 0, SEEK_END))
-        return 0;
-    long end = ftell(r->f);
-    fseek(r->f, here, SEEK_SET);
-    size_t remaining = (size_t)(end - here);
-    if (e->count > remaining / stride)
-        return rr_fail(r->err, "%s: header declares %zu vertices (%zu bytes) but only %zu "
-                               "bytes follow the header: file truncated or count wrong",
-                       r->path, e->count, e->count * stride, remaining);
+    size_t least = instance_min_bytes(r, e), remaining = (size_t)(r->end - r->cur) + 1;
+    if (e->count > 0 && least == 0)
+        return rr_fail(r->err, "%s: element '%s' declares %zu instances but no properties", r->path, e->name,
+                       e->count);
+    if (least && e->count > remaining / least)
+        return rr_fail(r->err, "%s: header declares %zu '%s' elements (at least %zu bytes each) but only %zu "
+                               "bytes remain: file truncated or count wrong",
+                       r->path, e->count, e->name, least, remaining - 1);
     return 0;
 }
 
@@ -379,7 +420,7 @@ static int read_elements(ply_reader *r, vec3 default_color, pointmodel *m)
     for (int k = 0; k < r->nelements; k++) {
         const ply_element *e = &r->elements[k];
         int is_vertex = !strcmp(e->name, "vertex");
-        if (is_vertex && (check_vertex_properties(r, e) || check_binary_size(r, e)))
+        if ((is_vertex && check_vertex_properties(r, e)) || check_element_size(r, e))
             return -1;
         int has_color = is_vertex && has_slot(e, SLOT_R);
         for (size_t i = 0; i < e->count; i++) {
@@ -388,6 +429,7 @@ static int read_elements(ply_reader *r, vec3 default_color, pointmodel *m)
                 return -1;
             if (is_vertex && add_vertex(r, e, i, vals, has_color, default_color, m))
                 return -1;
+            r->line += r->format == PLY_ASCII; /* the next instance's line */
         }
         if (is_vertex)
             return 0; /* later elements (faces, ...) are not needed */
@@ -395,22 +437,26 @@ static int read_elements(ply_reader *r, vec3 default_color, pointmodel *m)
     return rr_fail(r->err, "%s: no 'vertex' element", r->path);
 }
 
-int ply_read(const char *path, vec3 default_color, pointmodel *m, rr_error *err)
+int ply_read(const char *path, vec3 default_color, pointmodel *m, uint64_t *content_hash, rr_error *err)
 {
+    input_file in;
+    if (input_file_read(path, PLY_MAX_BYTES, &in, err))
+        return -1;
+    if (content_hash)
+        *content_hash = input_hash(*content_hash, in.data, in.len);
     ply_reader r;
     memset(&r, 0, sizeof r);
     r.path = path;
     r.err = err;
     r.format = PLY_ASCII;
-    r.f = fopen(path, "rb");
-    if (!r.f)
-        return rr_fail(err, "%s: cannot open: %s", path, strerror(errno));
+    r.data = r.cur = in.data;
+    r.end = in.data + in.len;
     int rc = read_header(&r);
     if (!rc) {
         r.line++; /* ascii body starts on the line after end_header */
         rc = read_elements(&r, default_color, m);
     }
-    fclose(r.f);
+    input_file_free(&in);
     return rc;
 }
 

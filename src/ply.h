@@ -15,10 +15,18 @@
 
 #include "pointmodel.h"
 
+#include <stdint.h>
+
+/* Largest PLY file read (bytes): about 100M splats of 13 floats and a color. */
+#define PLY_MAX_BYTES ((size_t)1 << 33)
+
 /* Appends every vertex of the PLY file to m. default_color is used when the
- * file has no colors. Errors name the file and the header line, ascii line,
- * or binary vertex index. */
-int ply_read(const char *path, vec3 default_color, pointmodel *m, rr_error *err);
+ * file has no colors. In ascii files each element is one line (PLY 1.0): a
+ * line with fewer or more values than its properties declare is an error.
+ * The file's bytes are folded into *content_hash unless it is NULL
+ * (inputfile.h). Errors name the file and the header line, ascii line, or
+ * binary vertex index. */
+int ply_read(const char *path, vec3 default_color, pointmodel *m, uint64_t *content_hash, rr_error *err);
 
 typedef struct {
     vec3 center, normal;

@@ -3,6 +3,8 @@
 #ifndef RR_SCENE_H
 #define RR_SCENE_H
 
+#include <stdint.h>
+
 #include "animation.h"
 #include "camera.h"
 #include "pointmodel.h"
@@ -42,6 +44,8 @@ typedef struct {
 
 typedef struct {
     char path[4096]; /* scene file, for messages and EXR metadata */
+    uint64_t scene_hash;  /* content of the scene file (scene_xml.h) */
+    uint64_t inputs_hash; /* content of the scene file and every file it names */
     camera cam;
     animation camera_motion; /* the camera's rest pose moved like an object (rigid) */
     shutter shut;            /* the current frame's (see scene_frame_shutter) */

@@ -8,12 +8,14 @@
 #include <string.h>
 
 #include "animfile.h"
+#include "inputfile.h"
 #include "ply.h"
 #include "shapes.h"
 
 typedef struct {
     const char *name;     /* file name for messages */
     const char *base_dir; /* directory relative paths resolve against */
+    uint64_t *inputs_hash;/* every input file's bytes are folded in (inputfile.h) */
     rr_error *err;
 } xml_ctx;
 
@@ -460,7 +462,7 @@ static int load_anim_file(xml_ctx *c, xmlNodePtr n, animation *a)
     free(a->keys);
     a->keys = NULL;
     rr_error sub;
-    if (animfile_load(path, &a->keys, &sub))
+    if (animfile_load(path, &a->keys, c->inputs_hash, &sub))
         return rr_fail(c->err, "%s (animation of %s:%ld)", sub.msg, c->name, xmlGetLineNo(n));
     a->keys->pivot = pivot;
     return 0;
@@ -605,7 +607,7 @@ static int parse_point_model(xml_ctx *c, xmlNodePtr n, scene_object *o)
     if (point_model_path(n, rel, sizeof rel)) {
         resolve_path(c, rel, path, sizeof path);
         rr_error sub;
-        if (ply_read(path, default_color, &o->model, &sub))
+        if (ply_read(path, default_color, &o->model, c->inputs_hash, &sub))
             return rr_fail(c->err, "%s (point model of %s:%ld)", sub.msg, c->name, xmlGetLineNo(n));
     }
     if (attr_text(n, "generate", kind, sizeof kind) && generate_shape(c, n, kind, &o->model))
@@ -731,33 +733,46 @@ static int parse_scene(xml_ctx *c, xmlDocPtr doc, scene *s)
     return finish_frames(c, s);
 }
 
-/* libxml2 reports through a callback; keep the first error with its line. */
+/* libxml2 reports through a callback; keep the first error with its line.
+ * Some errors (entities) come without a file name: use the scene's. */
+typedef struct {
+    rr_error first;
+    const char *name;
+} xml_error_sink;
+
 static void record_xml_error(void *user, xmlErrorPtr e)
 {
-    rr_error *first = user;
-    if (first->msg[0] || !e)
+    xml_error_sink *sink = user;
+    if (sink->first.msg[0] || !e)
         return;
     char msg[512];
     snprintf(msg, sizeof msg, "%s", e->message ? e->message : "XML error");
     size_t len = strlen(msg);
     while (len && msg[len - 1] == '\n')
         msg[--len] = 0;
-    snprintf(first->msg, sizeof first->msg, "%s:%d: XML syntax error: %s",
-             e->file ? e->file : "(scene)", e->line, msg);
+    snprintf(sink->first.msg, sizeof sink->first.msg, "%s:%d: XML syntax error: %s",
+             e->file ? e->file : sink->name, e->line > 0 ? e->line : 1, msg);
 }
 
-static int load(xmlDocPtr (*read)(const void *, size_t, const char *), const void *src,
-                size_t len, const char *name, const char *base_dir, scene *s, rr_error *err)
+/* XML_PARSE_BIG_LINES: libxml2 otherwise reports every line past 65535 as
+ * 65535. The file name is the document's URL, so libxml2's own messages
+ * (entities, syntax) name it too. */
+int scene_load_memory(const char *xml, size_t len, const char *name, const char *base_dir,
+                      scene *s, rr_error *err)
 {
-    rr_error xml_err = {{0}};
+    xml_error_sink sink = {{{0}}, name};
     scene_init(s); /* on any error s is left empty, safe to scene_free */
-    xmlSetStructuredErrorFunc(&xml_err, record_xml_error);
-    xmlDocPtr doc = read(src, len, name);
+    if (len > SCENE_MAX_BYTES)
+        return rr_fail(err, "%s: larger than %zu bytes", name, (size_t)SCENE_MAX_BYTES);
+    s->scene_hash = input_hash(INPUT_HASH_INIT, xml, len);
+    s->inputs_hash = s->scene_hash;
+    xmlSetStructuredErrorFunc(&sink, record_xml_error);
+    xmlDocPtr doc = xmlReadMemory(xml, (int)len, name, NULL, XML_PARSE_NONET | XML_PARSE_BIG_LINES);
     xmlSetStructuredErrorFunc(NULL, NULL);
     if (!doc)
-        return rr_fail(err, "%s", xml_err.msg[0] ? xml_err.msg : "cannot parse scene");
+        return rr_fail(err, "%s", sink.first.msg[0] ? sink.first.msg : "cannot parse scene");
     snprintf(s->path, sizeof s->path, "%s", name);
-    xml_ctx c = {name, base_dir, err};
+    xml_ctx c = {name, base_dir, &s->inputs_hash, err};
     int rc = parse_scene(&c, doc, s);
     xmlFreeDoc(doc);
     if (rc)
@@ -765,25 +780,13 @@ static int load(xmlDocPtr (*read)(const void *, size_t, const char *), const voi
     return rc;
 }
 
-static xmlDocPtr read_file(const void *path, size_t len, const char *name)
-{
-    (void)len;
-    (void)name;
-    return xmlReadFile(path, NULL, XML_PARSE_NONET);
-}
-
-static xmlDocPtr read_memory(const void *xml, size_t len, const char *name)
-{
-    return xmlReadMemory(xml, (int)len, name, NULL, XML_PARSE_NONET);
-}
-
 int scene_load_file(const char *path, scene *s, rr_error *err)
 {
     scene_init(s);
-    FILE *f = fopen(path, "rb");
-    if (!f)
-        return rr_fail(err, "%s: cannot open scene file", path);
-    fclose(f);
+    input_file in;
+    rr_error sub;
+    if (input_file_read(path, SCENE_MAX_BYTES, &in, &sub))
+        return rr_fail(err, "%s (scene file)", sub.msg);
     char dir[4096];
     snprintf(dir, sizeof dir, "%s", path);
     char *slash = strrchr(dir, '/');
@@ -791,11 +794,7 @@ int scene_load_file(const char *path, scene *s, rr_error *err)
         *slash = 0;
     else
         strcpy(dir, ".");
-    return load(read_file, path, 0, path, dir, s, err);
-}
-
-int scene_load_memory(const char *xml, size_t len, const char *name, const char *base_dir,
-                      scene *s, rr_error *err)
-{
-    return load(read_memory, xml, len, name, base_dir, s, err);
+    int rc = scene_load_memory(in.data, in.len, path, dir, s, err);
+    input_file_free(&in);
+    return rc;
 }

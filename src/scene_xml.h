@@ -5,6 +5,12 @@
 
 #include "scene.h"
 
+/* Largest scene file (bytes); inline splats make big scenes possible. */
+#define SCENE_MAX_BYTES ((size_t)256 << 20)
+
+/* Loads a scene file and everything it names. s->scene_hash is the FNV-1a
+ * hash of the scene file's bytes, s->inputs_hash that of the scene file, then
+ * every model and .anim file in the order they are read. */
 int scene_load_file(const char *path, scene *s, rr_error *err);
 
 /* Parses XML text; name is used in messages and relative paths resolve

@@ -228,3 +228,23 @@ TEST(keyed_swept_bounds_contain_splines_steps_and_cycles)
     CHECK(animation_max_scale(&a, 0, 1) >= 3.0);
     animation_free(&a);
 }
+
+/* Issue 18.6: a cycled curve with the shutter ~3.5e19 s from its keys used to
+ * hang the key-time loop (there m + 1 == m in doubles and no listed key time
+ * fell inside the shutter, so neither bound stopped it); the bounds must
+ * come back (this test would not end) and still hold the cycled motion. */
+TEST(cycled_swept_bounds_far_from_the_keys_terminate)
+{
+    animation a;
+    animation_init_static(&a);
+    const double tx[] = {0, 0, 0.05, 1, 0.1, 0};
+    key_channel(&a, CH_TX, 3, tx, TAN_LINEAR, INF_CYCLE);
+    double t0 = 1e15; /* 1e15 * 3.7^8, a start found to hang the old loop */
+    for (int i = 0; i < 8; i++)
+        t0 *= 3.7;
+    aabb box = {v3(-0.1, -0.1, -0.1), v3(0.1, 0.1, 0.1)};
+    aabb swept = animation_swept_bounds(&a, box, t0, t0 + 1e3);
+    CHECK(swept.lo.x <= -0.1 && swept.hi.x >= 0.1);
+    CHECK(isfinite(animation_max_scale(&a, t0, t0 + 1e3)));
+    animation_free(&a);
+}

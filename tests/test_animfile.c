@@ -9,7 +9,7 @@ static keyframes *load(const char *path)
 {
     keyframes *k = NULL;
     rr_error e;
-    if (animfile_load(path, &k, &e)) {
+    if (animfile_load(path, &k, NULL, &e)) {
         printf("    %s\n", e.msg);
         return NULL;
     }
@@ -145,5 +145,14 @@ TEST(bad_anim_files_give_clear_errors_with_lines)
                  "a second curve for 'translateX' (first at line 2)"));
     rr_error e;
     keyframes *k;
-    CHECK(animfile_load("no/such.anim", &k, &e) == -1 && strstr(e.msg, "no/such.anim: cannot open"));
+    CHECK(animfile_load("no/such.anim", &k, NULL, &e) == -1 && strstr(e.msg, "no/such.anim: cannot open"));
+}
+
+/* Issue 18.6: <animation>/dev/zero</animation> used to read forever. */
+TEST(anim_refuses_what_is_not_a_regular_file)
+{
+    keyframes *k = NULL;
+    rr_error e;
+    CHECK(animfile_load("/dev/zero", &k, NULL, &e) == -1 && strstr(e.msg, "/dev/zero: not a regular file"));
+    CHECK(animfile_load("/tmp", &k, NULL, &e) == -1 && strstr(e.msg, "/tmp: not a regular file"));
 }

@@ -212,3 +212,35 @@ def test_convergence_script_writes_csv_plot_and_slopes(tmp_path):
         rmse = [float(r["rmse"]) for r in rows if r["sampler"] == sampler]
         assert rmse[-1] < rmse[0]  # more samples, less error
         assert any(line.startswith(sampler) for line in proc.stdout.splitlines())
+
+
+def test_states_of_changed_model_or_animation_files_do_not_merge_or_resume(tmp_path):
+    """Issue 18.3: the identity covers every input file's content, not only
+    the scene file: a pass rendered after the PLY or .anim changed is refused."""
+    (tmp_path / "m.ply").write_text("ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
+                                    "property float z\nproperty float nx\nproperty float ny\nproperty float nz\n"
+                                    "property float radius\nend_header\n0 0 -10 0 0 1 1.2\n")
+    anim = (ROOT / "scenes" / "animations" / "rolling.anim").read_text()
+    (tmp_path / "a.anim").write_text(anim)
+    scene = tmp_path / "s.xml"
+    scene.write_text('<scene><camera position="0 0 0" lookat="0 0 -1" up="0 1 0" fov="30" width="16" height="12"/>'
+                     '<object><pointModel>m.ply</pointModel><material shading="unlit"/></object>'
+                     '<object position="0 0 -12"><sphere radius="0.5"/><animation>a.anim</animation></object></scene>')
+    args = [scene, "--spp", 1, "--tspp", 4, "--batches", 2, "--quiet"]
+
+    def state(name, k):
+        assert run([*args, "--pass", f"{k}/2", "-o", tmp_path / name]).returncode == 0
+        return tmp_path / name
+    p0 = state("p0.exr", 0)
+    (tmp_path / "m.ply").write_text((tmp_path / "m.ply").read_text().replace("1.2", "1.3"))
+    changed_model = state("p1.exr", 1)
+    bad = run(["merge", p0, changed_model, "-o", tmp_path / "x.exr"])
+    assert bad.returncode == 1 and "refrender:inputsHash" in bad.stderr, bad.stderr
+    resumed = run([*args, "--pass", "0/2", "-o", tmp_path / "y.exr", "--resume", p0])
+    assert resumed.returncode == 1 and "refrender:inputsHash" in resumed.stderr
+    q0 = state("q0.exr", 0)
+    (tmp_path / "a.anim").write_text(anim.replace("timeUnit film;", "timeUnit pal;"))
+    changed_anim = state("q1.exr", 1)
+    bad = run(["merge", q0, changed_anim, "-o", tmp_path / "x.exr"])
+    assert bad.returncode == 1 and "refrender:inputsHash" in bad.stderr, bad.stderr
+    assert not (tmp_path / "x.exr").exists() and not (tmp_path / "y.exr").exists()

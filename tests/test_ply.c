@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include "harness.h"
+#include "inputfile.h"
 #include "ply.h"
 
 static const char *tmp_path(const char *name)
@@ -30,7 +31,7 @@ static const char *read_result(const char *path, pointmodel *m)
     static rr_error e;
     e.msg[0] = 0;
     pointmodel_init(m);
-    if (ply_read(path, v3(0.5, 0.5, 0.5), m, &e) == 0)
+    if (ply_read(path, v3(0.5, 0.5, 0.5), m, NULL, &e) == 0)
         e.msg[0] = 0;
     unlink(path);
     return e.msg;
@@ -131,7 +132,7 @@ TEST(ply_binary_both_endians_decode_the_same_values)
 
 TEST(ply_binary_count_that_cannot_fit_is_rejected)
 {
-    CHECK(fails_with(write_binary("c.ply", 0, 1000000, 3), "only 84 bytes follow"));
+    CHECK(fails_with(write_binary("c.ply", 0, 1000000, 3), "only 84 bytes remain"));
 }
 
 TEST(ply_truncated_ascii_data)
@@ -194,5 +195,79 @@ TEST(ply_writer_output_reads_back)
         CHECK_NEAR(pointmodel_color(&m, 1)[2], 1.0, 1e-6);
         CHECK_NEAR(m.extent[3], 0.0, 1e-6); /* normal +x: no extent along x */
     }
+    pointmodel_free(&m);
+}
+
+/* ---- hostile input (issue 18.5): each a clear error naming file and line ---- */
+
+TEST(ply_huge_count_of_an_element_without_properties_fails_at_once)
+{
+    CHECK(fails_with(write_text("huge.ply", "ply\nformat ascii 1.0\nelement junk 1000000000000000\n"
+        "element vertex 1\nproperty float x\nproperty float y\nproperty float z\nproperty float nx\n"
+        "property float ny\nproperty float nz\nproperty float radius\nend_header\n0 0 0 0 0 1 1\n"),
+        "element 'junk' declares 1000000000000000 instances but no properties"));
+    CHECK(fails_with(write_text("huge2.ply", "ply\nformat ascii 1.0\nelement face 99999999999\n"
+                                "property list uchar int vertex_indices\nelement vertex 1\nproperty float x\n"
+                                "end_header\n3 0 1 2\n0\n"), "file truncated or count wrong"));
+}
+
+TEST(ply_long_ascii_token_is_read_whole)
+{
+    /* 1 followed by 126 zeros and e-116 is 1e10; cut at 127 characters it
+     * would read as 1e126 */
+    char text[1024], token[160] = "1";
+    memset(token + 1, '0', 126);
+    strcpy(token + 127, "e-116");
+    snprintf(text, sizeof text, HEADER_XYZNR "end_header\n%s 0 0 0 0 1 0.5\n1 0 0 0 0 1 1\n", token);
+    pointmodel m;
+    const char *msg = read_result(write_text("long.ply", text), &m);
+    CHECK(msg[0] == 0 && m.count == 2);
+    if (m.count == 2)
+        CHECK_NEAR(m.geom[0].center[0], 1e10, 1e3);
+    pointmodel_free(&m);
+}
+
+TEST(ply_ascii_instance_is_one_line)
+{
+    /* a short line must not borrow the next line's values */
+    CHECK(fails_with(write_text("short.ply", HEADER_XYZNR "end_header\n0.0 0.0 0.0 0.0 0.0 1.0\n1.0 0.0 0.0 0.0 0.0 1.0 1.0\n"),
+                     ":12: vertex 0: the line ends after 6 values"));
+    /* 8 + 6 values are not two vertices of 7 */
+    CHECK(fails_with(write_text("wrap.ply", HEADER_XYZNR "end_header\n0 0 0 0 0 1 0.5 1\n0 0 0 0 1 1\n"),
+                     ":12: vertex 0: more values on the line than the 7"));
+}
+
+TEST(ply_out_of_range_radius_says_so)
+{
+    CHECK(fails_with(write_text("big.ply", HEADER_XYZNR "end_header\n0 0 0 0 0 1 1e300\n1 0 0 0 0 1 1\n"),
+                     ":12: vertex 0: splat radius must be positive and at most 1e+15, got 1e+300"));
+    CHECK(fails_with(write_text("far.ply", HEADER_XYZNR "end_header\n1e200 0 0 0 0 1 1\n1 0 0 0 0 1 1\n"),
+                     ":12: vertex 0: splat value 1e+200 is out of range"));
+}
+
+TEST(ply_refuses_what_is_not_a_regular_file)
+{
+    /* not through fails_with: it deletes the file it read */
+    pointmodel m;
+    rr_error e;
+    pointmodel_init(&m);
+    CHECK(ply_read("/dev/zero", v3(1, 1, 1), &m, NULL, &e) != 0 && strstr(e.msg, "/dev/zero: not a regular file"));
+    pointmodel_free(&m);
+}
+
+TEST(ply_content_hash_covers_the_bytes)
+{
+    uint64_t h1 = INPUT_HASH_INIT, h2 = INPUT_HASH_INIT;
+    pointmodel m;
+    rr_error e;
+    pointmodel_init(&m);
+    CHECK(ply_read(write_text("h1.ply", HEADER_XYZNR "end_header\n0 0 0 0 0 1 0.5\n1 0 0 0 0 1 1\n"),
+                   v3(1, 1, 1), &m, &h1, &e) == 0);
+    CHECK(ply_read(write_text("h2.ply", HEADER_XYZNR "end_header\n0 0 0 0 0 1 0.5\n1 0 0 0 0 1 2\n"),
+                   v3(1, 1, 1), &m, &h2, &e) == 0);
+    CHECK(h1 != h2 && h1 != INPUT_HASH_INIT);
+    const char *text = HEADER_XYZNR "end_header\n0 0 0 0 0 1 0.5\n1 0 0 0 0 1 1\n";
+    CHECK(h1 == input_hash(INPUT_HASH_INIT, text, strlen(text)));
+    unlink(tmp_path("h1.ply")), unlink(tmp_path("h2.ply"));
     pointmodel_free(&m);
 }

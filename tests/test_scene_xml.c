@@ -1,8 +1,11 @@
 /* Scene XML: a good scene parses to the documented values; every error
  * names the file and the line. */
+#include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "harness.h"
+#include "inputfile.h"
 #include "scene_xml.h"
 
 static int load_text(const char *xml, scene *s, rr_error *e)
@@ -85,7 +88,7 @@ TEST(scene_errors_name_file_and_line)
     CHECK(fails_with("<scene></scene>", "no <object>"));
     CHECK(fails_with("<world/>", "root element must be <scene>"));
     CHECK(fails_with("<scene><object><animation>a.anim</animation><sphere radius='1'/></object></scene>",
-                     "a.anim: cannot open .anim file (animation of mem.xml:1)"));
+                     "a.anim: cannot open: No such file or directory (animation of mem.xml:1)"));
 }
 
 TEST(scene_xml_syntax_error_reports_line)
@@ -156,4 +159,48 @@ TEST(keyframe_and_frame_errors_name_the_line)
     CHECK(fails_with("<scene><shutter fraction='0.5' close='1'/><object><sphere radius='1'/></object></scene>",
                      "either open/close or fraction"));
     CHECK(fails_with("<scene><frames rate='-24'/><object><sphere radius='1'/></object></scene>", "rate"));
+}
+
+/* Issue 18.3: a render state's identity covers every input's content. The
+ * inputs hash changes with a model file's bytes while the scene file's own
+ * hash does not, and is the hash of the scene file then the model. */
+TEST(inputs_hash_covers_the_model_files)
+{
+    char dir[] = "/tmp/refrender-hash-XXXXXX";
+    CHECK(mkdtemp(dir) != NULL);
+    char scene_path[128], ply_path[128];
+    snprintf(scene_path, sizeof scene_path, "%s/s.xml", dir);
+    snprintf(ply_path, sizeof ply_path, "%s/m.ply", dir);
+    const char *xml = "<scene><object><pointModel>m.ply</pointModel></object></scene>";
+    const char *ply[2] = {"ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
+                          "property float z\nproperty float nx\nproperty float ny\nproperty float nz\n"
+                          "property float radius\nend_header\n0 0 0 0 0 1 0.5\n",
+                          "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
+                          "property float z\nproperty float nx\nproperty float ny\nproperty float nz\n"
+                          "property float radius\nend_header\n0 0 0 0 0 1 0.6\n"};
+    uint64_t scene_hash[2], inputs_hash[2];
+    for (int k = 0; k < 2; k++) {
+        FILE *f = fopen(scene_path, "w");
+        fputs(xml, f), fclose(f);
+        f = fopen(ply_path, "w");
+        fputs(ply[k], f), fclose(f);
+        scene s;
+        rr_error e;
+        CHECK(scene_load_file(scene_path, &s, &e) == 0);
+        scene_hash[k] = s.scene_hash, inputs_hash[k] = s.inputs_hash;
+        scene_free(&s);
+    }
+    CHECK(scene_hash[0] == scene_hash[1] && inputs_hash[0] != inputs_hash[1]);
+    uint64_t expect = input_hash(input_hash(INPUT_HASH_INIT, xml, strlen(xml)), ply[0], strlen(ply[0]));
+    CHECK(inputs_hash[0] == expect);
+    unlink(scene_path), unlink(ply_path), rmdir(dir);
+}
+
+/* Issue 18.9: entity errors named "(scene)" instead of the file. */
+TEST(xml_errors_name_the_scene_file)
+{
+    scene s;
+    rr_error e;
+    const char *xml = "<!DOCTYPE scene [<!ENTITY a \"&b;\">]><scene>&a;</scene>";
+    CHECK(scene_load_memory(xml, strlen(xml), "ent.xml", ".", &s, &e) != 0 && strstr(e.msg, "ent.xml:1:"));
 }
