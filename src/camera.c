@@ -9,6 +9,9 @@ int camera_prepare(camera *c, rr_error *err)
         return rr_fail(err, "camera fov must be in (0, 180) degrees, got %g", c->fov_degrees);
     if (c->width < 1 || c->height < 1)
         return rr_fail(err, "image size must be at least 1x1, got %dx%d", c->width, c->height);
+    if ((long long)c->width * c->height > RR_MAX_PIXELS)
+        return rr_fail(err, "image size %dx%d has more than the %lld pixels refrender renders", c->width,
+                       c->height, RR_MAX_PIXELS);
     c->forward = v3_normalize(f);
     vec3 r = v3_cross(c->forward, c->up);
     if (!(v3_len(r) > 1e-9 * v3_len(c->up)))

@@ -13,6 +13,11 @@ typedef struct {
     char msg[1024];
 } rr_error;
 
+/* Largest image refrender renders or reads: 2^26 pixels (8192 x 8192). A
+ * render state holds ~112 bytes a pixel, so this bounds what any file,
+ * crafted or not, can make the readers allocate (7.5 GB). */
+#define RR_MAX_PIXELS ((long long)1 << 26)
+
 /* Formats msg into err (if err is non-NULL) and returns -1. */
 int rr_fail(rr_error *err, const char *fmt, ...)
     __attribute__((format(printf, 2, 3)));

@@ -1,6 +1,7 @@
 #include "exr.h"
 
 #include <openexr.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -98,6 +99,8 @@ static exr_result_t write_chunks(exr_context_t ctx, int w, int h, const exr_chan
             info->user_bytes_per_element = 4;
             info->user_data_type = (uint16_t)pixel_type(src->type);
             info->user_pixel_stride = src->stride;
+            if ((long long)src->stride * w > INT32_MAX)
+                return EXR_ERR_INVALID_ARGUMENT; /* OpenEXRCore's line stride is 32-bit */
             info->user_line_stride = src->stride * w;
             info->encode_from_ptr = (const uint8_t *)src->base + (size_t)y * w * src->stride;
         }
@@ -169,6 +172,47 @@ int exr_write_rgba(const char *path, int w, int h, const float *rgba, const exr_
 
 /* ---- reading ------------------------------------------------------------ */
 
+/* The data window's size, computed in 64 bits (a crafted header can hold
+ * INT_MIN..INT_MAX) and bounded by RR_MAX_PIXELS before anything is
+ * allocated for it. */
+static int window_size(const char *path, const exr_attr_box2i_t *dw, int *w, int *h, rr_error *err)
+{
+    long long ww = (long long)dw->max.x - dw->min.x + 1, hh = (long long)dw->max.y - dw->min.y + 1;
+    if (ww < 1 || hh < 1 || ww > RR_MAX_PIXELS || hh > RR_MAX_PIXELS || ww * hh > RR_MAX_PIXELS)
+        return rr_fail(err, "%s: data window %lldx%lld is empty or larger than the %lld pixels refrender reads",
+                       path, ww, hh, RR_MAX_PIXELS);
+    *w = (int)ww, *h = (int)hh;
+    return 0;
+}
+
+static const char *pixel_type_name(exr_pixel_type_t t)
+{
+    return t == EXR_PIXEL_UINT ? "uint" : t == EXR_PIXEL_HALF ? "half" : t == EXR_PIXEL_FLOAT ? "float" : "unknown";
+}
+
+/* An exact integer channel must be stored as uint: a half or float one
+ * would be converted, not read. Float channels may be stored as half. */
+static int check_channel_type(exr_context_t ctx, const char *path, const exr_channel *ch, rr_error *err)
+{
+    const exr_attr_chlist_t *chl = NULL;
+    if (exr_get_channels(ctx, 0, &chl) || !chl)
+        return rr_fail(err, "%s: cannot read the channel list", path);
+    for (int i = 0; i < chl->num_channels; i++) {
+        const exr_attr_chlist_entry_t *e = &chl->entries[i];
+        if (strcmp(e->name.str, ch->name))
+            continue;
+        if (e->x_sampling != 1 || e->y_sampling != 1)
+            return rr_fail(err, "%s: channel %s is subsampled; refrender reads full-resolution channels", path,
+                           ch->name);
+        if (ch->type == EXR_CHANNEL_UINT && e->pixel_type != EXR_PIXEL_UINT)
+            return rr_fail(err, "%s: channel %s is %s, expected uint", path, ch->name,
+                           pixel_type_name(e->pixel_type));
+        if (ch->type == EXR_CHANNEL_FLOAT && e->pixel_type == EXR_PIXEL_UINT)
+            return rr_fail(err, "%s: channel %s is uint, expected float or half", path, ch->name);
+    }
+    return 0;
+}
+
 static exr_context_t open_for_read(const char *path, exr_result_t *rc)
 {
     exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
@@ -179,10 +223,9 @@ static exr_context_t open_for_read(const char *path, exr_result_t *rc)
 }
 
 /* Decodes one channel of every chunk into ch; *found tells whether the file has it. */
-static exr_result_t decode_channel(exr_context_t ctx, const exr_attr_box2i_t *dw, const exr_channel *ch,
+static exr_result_t decode_channel(exr_context_t ctx, const exr_attr_box2i_t *dw, int w, const exr_channel *ch,
                                    int *found)
 {
-    int w = dw->max.x - dw->min.x + 1;
     int32_t lines;
     exr_result_t rc = exr_get_scanlines_per_chunk(ctx, 0, &lines);
     exr_decode_pipeline_t dec = EXR_DECODE_PIPELINE_INITIALIZER;
@@ -197,14 +240,18 @@ static exr_result_t decode_channel(exr_context_t ctx, const exr_attr_box2i_t *dw
         if (rc)
             break;
         initialized = 1;
-        int row = cinfo.start_y - dw->min.y;
+        long long row = (long long)cinfo.start_y - dw->min.y;
+        if (row < 0 || row >= (long long)dw->max.y - dw->min.y + 1) {
+            rc = EXR_ERR_BAD_CHUNK_LEADER;
+            break;
+        }
         for (int c = 0; c < dec.channel_count; c++) {
             exr_coding_channel_info_t *info = &dec.channels[c];
             int wanted = !strcmp(info->channel_name, ch->name);
             *found |= wanted;
             info->decode_to_ptr = wanted ? (uint8_t *)ch->base + (size_t)row * w * ch->stride : NULL;
             info->user_pixel_stride = ch->stride;
-            info->user_line_stride = ch->stride * w;
+            info->user_line_stride = (int32_t)((size_t)ch->stride * (size_t)w);
             info->user_bytes_per_element = 4;
             info->user_data_type = (uint16_t)pixel_type(ch->type);
         }
@@ -232,9 +279,22 @@ int exr_read_size(const char *path, int *w, int *h, rr_error *err)
     exr_finish(&ctx);
     if (rc)
         return exr_fail(err, path, "cannot read the data window", rc);
-    *w = dw.max.x - dw.min.x + 1;
-    *h = dw.max.y - dw.min.y + 1;
-    return 0;
+    return window_size(path, &dw, w, h, err);
+}
+
+/* Everything checked before a channel is decoded into the caller's buffer. */
+static int check_readable(exr_context_t ctx, const char *path, const exr_channel *ch, exr_attr_box2i_t *dw, int *w,
+                          rr_error *err)
+{
+    int h;
+    exr_result_t rc = exr_get_data_window(ctx, 0, dw);
+    if (rc)
+        return exr_fail(err, path, "cannot read the data window", rc);
+    if (window_size(path, dw, w, &h, err))
+        return -1;
+    if ((long long)ch->stride * *w > INT32_MAX)
+        return rr_fail(err, "%s: rows of %d pixels are too wide for OpenEXRCore's 32-bit line stride", path, *w);
+    return check_channel_type(ctx, path, ch, err);
 }
 
 int exr_read_channel(const char *path, const exr_channel *ch, int optional, int *found, rr_error *err)
@@ -244,10 +304,12 @@ int exr_read_channel(const char *path, const exr_channel *ch, int optional, int 
     if (rc)
         return exr_fail(err, path, "cannot read", rc);
     exr_attr_box2i_t dw;
-    int have = 0;
-    rc = exr_get_data_window(ctx, 0, &dw);
-    if (!rc)
-        rc = decode_channel(ctx, &dw, ch, &have);
+    int have = 0, w;
+    if (check_readable(ctx, path, ch, &dw, &w, err)) {
+        exr_finish(&ctx);
+        return -1;
+    }
+    rc = decode_channel(ctx, &dw, w, ch, &have);
     exr_finish(&ctx);
     if (rc)
         return exr_fail(err, path, "cannot decode", rc);

@@ -19,6 +19,22 @@ int film_add_batch(pixel_state *p, const double estimate[4])
     return clamped;
 }
 
+int film_check(const pixel_state *p)
+{
+    const __int128 most = (__int128)1 << 44; /* FILM_LIMIT * FILM_SCALE */
+    __int128 b = p->batches;
+    if (p->batches > FILM_MAX_BATCHES)
+        return -1;
+    for (int c = 0; c < 4; c++) {
+        __int128 s = p->sum[c], q = p->sumsq[c];
+        if (s > b * most || s < -b * most || q < 0 || q > b * most * most)
+            return -1;
+        if (s * s > b * q)
+            return -1;
+    }
+    return 0;
+}
+
 void film_merge(pixel_state *into, const pixel_state *from)
 {
     into->batches += from->batches;

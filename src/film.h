@@ -18,6 +18,9 @@
 
 #define FILM_SCALE 16777216.0 /* 2^24 */
 #define FILM_LIMIT 1048576.0  /* 2^20 */
+/* Most batches a pixel may hold: each adds at most 2^44 (FILM_LIMIT *
+ * FILM_SCALE) to a 64-bit sum, so 2^19 batches can never overflow it. */
+#define FILM_MAX_BATCHES 524288u
 
 typedef struct {
     uint32_t batches;
@@ -27,6 +30,13 @@ typedef struct {
 
 /* Adds one batch estimate; returns 1 if a value had to be clamped. */
 int film_add_batch(pixel_state *p, const double estimate[4]);
+
+/* 0 if the state can come from adding `batches` clamped estimates
+ * (batches <= FILM_MAX_BATCHES, |sum| <= batches 2^44, 0 <= sum of squares <=
+ * batches 2^88, and sum^2 <= batches * sum of squares by Cauchy-Schwarz);
+ * -1 otherwise. A state read from a file is checked before it is used: sums
+ * that no render can make would overflow film_merge and film_resolve. */
+int film_check(const pixel_state *p);
 
 /* Adds the sums of another partial state of the same pixel. */
 void film_merge(pixel_state *into, const pixel_state *from);

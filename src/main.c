@@ -121,8 +121,8 @@ static int parse_option(int c, const char *arg, render_options *o, rr_error *err
     case OPT_SEED: return cli_u64("--seed", arg, &o->seed, err);
     case OPT_EPS: return cli_double("--eps", arg, 0.0, &o->eps, err);
     case OPT_SIGMA: return cli_double("--sigma", arg, 1e-6, &o->sigma, err);
-    case OPT_BATCHES: return cli_int("--batches", arg, 1, 1000000, &o->batches, err);
-    case OPT_MAXB: return cli_int("--max-batches", arg, 1, 1000000, &o->max_batches, err);
+    case OPT_BATCHES: return cli_int("--batches", arg, 1, FILM_MAX_BATCHES, &o->batches, err);
+    case OPT_MAXB: return cli_int("--max-batches", arg, 1, FILM_MAX_BATCHES, &o->max_batches, err);
     case OPT_TARGET: return cli_double("--target-error", arg, 1e-12, &o->target_error, err);
     case OPT_CKPT_EVERY: return cli_double("--checkpoint-every", arg, 0.0, &o->checkpoint_every, err);
     case OPT_PASS: return parse_pass(arg, o, err);
@@ -293,6 +293,22 @@ static int write_checkpoint(void *user, const image *img, rr_error *err)
                               run->rs.batch_begin + run->rs.batches, &run->attrs, err);
 }
 
+/* No pixel of a resumed state may hold more batches than this render gives
+ * one: its range, or with --target-error the batch cap. */
+static int check_resumable_counts(const render_run *run, image *img, rr_error *err)
+{
+    uint32_t most = run->rs.target_error > 0 ? run->rs.max_batches : run->rs.batches;
+    size_t n = (size_t)img->width * img->height;
+    for (size_t i = 0; i < n; i++)
+        if (img->px[i].batches > most) {
+            rr_fail(err, "%s: pixel (%zu, %zu) holds %u batches, more than the %u this render gives a pixel",
+                    run->o->resume, i % (size_t)img->width, i / (size_t)img->width, img->px[i].batches, most);
+            image_free(img);
+            return -1;
+        }
+    return 0;
+}
+
 /* Loads --resume into img after checking it is this very render. */
 static int resume_state(render_run *run, image *img, rr_error *err)
 {
@@ -309,7 +325,14 @@ static int resume_state(render_run *run, image *img, rr_error *err)
         return rr_fail(err, "%s holds batches %u-%u, this render %u-%u", run->o->resume, begin, end,
                        run->rs.batch_begin, run->rs.batch_begin + run->rs.batches);
     }
-    return 0;
+    return check_resumable_counts(run, img, err);
+}
+
+/* --max-batches, by default 8 B (at most FILM_MAX_BATCHES). */
+static uint32_t max_batches_of(const render_options *o)
+{
+    uint64_t eight = 8 * (uint64_t)o->batches;
+    return o->max_batches ? (uint32_t)o->max_batches : (uint32_t)(eight < FILM_MAX_BATCHES ? eight : FILM_MAX_BATCHES);
 }
 
 static void setup_run(render_run *run, const scene *s, const render_options *o, const char *cmdline)
@@ -321,7 +344,7 @@ static void setup_run(render_run *run, const scene *s, const render_options *o, 
     run->total_batches = total;
     run->rs = (render_settings){
         {o->sampler, o->seed, sampler_grid_for_spp(o->spp), o->tspp, s->time_factor, s->shut.open, s->shut.close},
-        o->threads, begin, end - begin, o->max_batches ? (uint32_t)o->max_batches : 8 * total, o->target_error};
+        o->threads, begin, end - begin, max_batches_of(o), o->target_error};
     run->attrs.n = 0;
     attrs_for_render(&run->attrs, s, &run->rs, total, cmdline);
 }
@@ -365,8 +388,8 @@ static void report_target(const render_options *o, const image *img, attr_list *
     attrs_set(attrs, "refrender:targetError", "%.17g", o->target_error);
     attrs_set(attrs, "refrender:targetReached", "%zu of %zu pixels", reached, n);
     if (!o->quiet)
-        fprintf(stderr, "refrender: %zu of %zu pixels reached standard error <= %g; %zu stopped at %d batches\n",
-                reached, n, o->target_error, n - reached, o->max_batches ? o->max_batches : 8 * o->batches);
+        fprintf(stderr, "refrender: %zu of %zu pixels reached standard error <= %g; %zu stopped at %u batches\n",
+                reached, n, o->target_error, n - reached, max_batches_of(o));
 }
 
 static void warn_about_settings(const render_options *o, const render_settings *rs)

@@ -214,21 +214,48 @@ static int read_attrs(const char *path, attr_list *a, rr_error *err)
     return 0;
 }
 
+/* The data window must be the resolution the identity attributes state:
+ * states are merged pixel by pixel. */
+static int check_state_size(const char *path, const attr_list *a, int w, int h, rr_error *err)
+{
+    int rw, rh;
+    char extra;
+    const char *res = attrs_get(a, "refrender:resolution");
+    if (!res || sscanf(res, "%dx%d%c", &rw, &rh, &extra) != 2 || rw != w || rh != h)
+        return rr_fail(err, "%s: data window %dx%d differs from refrender:resolution '%s'", path, w, h,
+                       res ? res : "missing");
+    return 0;
+}
+
+/* Every pixel's sums must be ones a render can make (film_check). */
+static int check_state_pixels(const char *path, const image *img, rr_error *err)
+{
+    size_t n = (size_t)img->width * img->height;
+    for (size_t i = 0; i < n; i++)
+        if (film_check(&img->px[i]))
+            return rr_fail(err, "%s: pixel (%zu, %zu) holds sums that no render can produce (%u batches): "
+                                "a damaged or crafted state", path, i % (size_t)img->width,
+                           i / (size_t)img->width, img->px[i].batches);
+    return 0;
+}
+
 int output_read_state(const char *path, image *img, attr_list *a, uint32_t *begin, uint32_t *end,
                       rr_error *err)
 {
-    char range[128];
+    char range[128], extra;
     int w, h;
     if (exr_read_size(path, &w, &h, err) || read_attrs(path, a, err))
         return -1;
     if (exr_read_string_attr(path, "refrender:state", range, sizeof range, NULL) ||
-        sscanf(range, "batches %u-%u", begin, end) != 2 || *end < *begin)
+        sscanf(range, "batches %u-%u%c", begin, end, &extra) != 2 || *end < *begin)
         return rr_fail(err, "%s: a final image, not a render state (write states with --pass or --checkpoint)", path);
+    if (check_state_size(path, a, w, h, err))
+        return -1;
     size_t n = (size_t)w * h;
     uint32_t *words = malloc(n * STATE_WORDS * sizeof *words);
     if (!words || image_alloc(img, w, h)) {
         free(words);
-        return rr_fail(err, "out of memory");
+        return rr_fail(err, "%s: out of memory for a %dx%d state", path, w, h);
     }
     int rc = 0;
     for (int k = 0; k < STATE_WORDS && !rc; k++) {
@@ -240,6 +267,8 @@ int output_read_state(const char *path, image *img, attr_list *a, uint32_t *begi
     for (size_t i = 0; i < n && !rc; i++)
         unpack_state(words + i * STATE_WORDS, &img->px[i]);
     free(words);
+    if (!rc)
+        rc = check_state_pixels(path, img, err);
     if (rc)
         image_free(img);
     return rc;
