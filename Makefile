@@ -34,7 +34,7 @@ TEST_OBJS := $(TEST_SRCS:tests/%.c=$(BUILD)/tests/%.o) $(BUILD)/tests/harness.o
 BIN      := $(BUILD)/refrender
 TESTBIN  := $(BUILD)/unit_tests
 
-.PHONY: all deps demo test test-c test-py bench clean scenes references gallery
+.PHONY: all deps demo test test-c test-py test-fuzz fuzz bench clean scenes references gallery
 all: $(BIN) $(BUILD)/refrender-bench
 
 $(BUILD)/%.o: src/%.c src/*.h | $(BUILD)
@@ -67,7 +67,47 @@ test-c: $(TESTBIN)
 test-py: $(BIN) scenes
 	REFRENDER=$(CURDIR)/$(BIN) $(PYTHON) -m pytest -q tests
 
-test: test-c test-py
+test: test-c test-fuzz test-py
+
+# Fuzz targets (tests/fuzz/): libFuzzer with ASan + UBSan, built with clang
+# in build-fuzz/. `make test` replays each target's committed corpus (a
+# regression run of seconds); `make fuzz FUZZ_SECONDS=N` fuzzes each target
+# for N seconds, keeping what it finds in build-fuzz/corpus/.
+FUZZ_TARGETS := scene ply anim state
+FUZZ_SECONDS ?= 60
+FUZZ_DIR     := build-fuzz
+FUZZ_FLAGS   := -O1 -g -fno-omit-frame-pointer -fsanitize=address,undefined -fno-sanitize-recover=undefined
+FUZZ_CFLAGS  := -std=c11 -D_GNU_SOURCE $(FUZZ_FLAGS) -fsanitize=fuzzer-no-link -Wall -Wextra $(INCLUDES) \
+                -DSCENE_MAX_GENERATED=1e4
+FUZZ_OBJS    := $(LIB_SRCS:%=$(FUZZ_DIR)/%.o) $(FUZZ_DIR)/preview.o
+
+$(FUZZ_DIR)/%.o: src/%.c src/*.h
+	@mkdir -p $(FUZZ_DIR)
+	clang $(FUZZ_CFLAGS) -c $< -o $@
+$(FUZZ_DIR)/preview.o: src/preview.cpp src/preview.h
+	@mkdir -p $(FUZZ_DIR)
+	clang++ -std=c++17 $(FUZZ_FLAGS) -c $< -o $@
+$(FUZZ_DIR)/fuzz_%.o: tests/fuzz/fuzz_%.c src/*.h
+	@mkdir -p $(FUZZ_DIR)
+	clang $(FUZZ_CFLAGS) -Isrc -c $< -o $@
+$(FUZZ_DIR)/fuzz_%: $(FUZZ_DIR)/fuzz_%.o $(FUZZ_OBJS)
+	clang++ $(FUZZ_FLAGS) -fsanitize=fuzzer $^ -o $@ $(LDLIBS)
+.SECONDARY: $(FUZZ_OBJS) $(FUZZ_TARGETS:%=$(FUZZ_DIR)/fuzz_%.o)
+
+test-fuzz: $(FUZZ_TARGETS:%=$(FUZZ_DIR)/fuzz_%)
+	for t in $(FUZZ_TARGETS); do \
+	    $(FUZZ_DIR)/fuzz_$$t -runs=0 -rss_limit_mb=8192 tests/fuzz/corpus/$$t 2>$(FUZZ_DIR)/replay_$$t.log \
+	        || { tail -40 $(FUZZ_DIR)/replay_$$t.log; exit 1; }; \
+	    echo "fuzz_$$t: replayed $$(ls tests/fuzz/corpus/$$t | wc -l) corpus inputs"; \
+	done
+
+fuzz: $(FUZZ_TARGETS:%=$(FUZZ_DIR)/fuzz_%)
+	for t in $(FUZZ_TARGETS); do \
+	    mkdir -p $(FUZZ_DIR)/corpus/$$t $(FUZZ_DIR)/crashes/$$t; \
+	    $(FUZZ_DIR)/fuzz_$$t $(FUZZ_DIR)/corpus/$$t tests/fuzz/corpus/$$t -dict=tests/fuzz/$$t.dict \
+	        -max_total_time=$(FUZZ_SECONDS) -rss_limit_mb=8192 -timeout=10 -print_final_stats=1 \
+	        -artifact_prefix=$(FUZZ_DIR)/crashes/$$t/ || exit 1; \
+	done
 
 # Speed and memory against Embree's built-in disc primitive, measured in the
 # same run (a benchmark, not a test). BENCH_ARGS=quick for a short smoke run,
@@ -95,4 +135,4 @@ gallery: scenes
 	$(PYTHON) scripts/gallery.py out/gallery.png $(SUITE:%=out/gallery/%.exr)
 
 clean:
-	rm -rf build build-san out
+	rm -rf build build-san build-fuzz out

@@ -38,7 +38,8 @@ int film_add_batch(pixel_state *p, const double estimate[4]);
  * that no render can make would overflow film_merge and film_resolve. */
 int film_check(const pixel_state *p);
 
-/* Adds the sums of another partial state of the same pixel. */
+/* Adds the sums of another partial state of the same pixel. The two may
+ * hold at most FILM_MAX_BATCHES batches together (then nothing overflows). */
 void film_merge(pixel_state *into, const pixel_state *from);
 
 /* Mean, variance of the mean (s^2 / B; NaN for B < 2) per channel. */

@@ -60,9 +60,24 @@ static int check_complete(const image *img, const batch_range *r, rr_error *err)
     return 0;
 }
 
+/* The batches of all states together stay within the render's count, which
+ * is at most FILM_MAX_BATCHES: so the summed fixed-point sums cannot overflow
+ * (film.h), whatever overlapping states a user or a crafted file offers. */
+static int check_batch_total(const attr_list *first, const batch_range *range, uint32_t *so_far, rr_error *err)
+{
+    unsigned long total = strtoul(attrs_get(first, "refrender:batches"), NULL, 10);
+    if (total > FILM_MAX_BATCHES)
+        return rr_fail(err, "%s: refrender:batches %lu is more than %u", range->path, total, FILM_MAX_BATCHES);
+    if ((uint64_t)*so_far + (range->end - range->begin) > total)
+        return rr_fail(err, "%s (batches %u-%u) overlaps another state: more than the render's %lu batches",
+                       range->path, range->begin, range->end, total);
+    *so_far += range->end - range->begin;
+    return 0;
+}
+
 /* Adds state `path` into merged (allocated from the first state). */
 static int add_state(const char *path, image *merged, attr_list *first, const char *first_path,
-                     batch_range *range, int is_first, rr_error *err)
+                     batch_range *range, int is_first, uint32_t *so_far, rr_error *err)
 {
     image img;
     attr_list attrs;
@@ -72,6 +87,8 @@ static int add_state(const char *path, image *merged, attr_list *first, const ch
     int rc = check_complete(&img, range, err);
     if (!rc && !is_first)
         rc = attrs_check_identity(first, first_path, &attrs, path, err);
+    if (!rc)
+        rc = check_batch_total(is_first ? &attrs : first, range, so_far, err);
     if (!rc && is_first) {
         *first = attrs;
         *merged = img;
@@ -90,8 +107,9 @@ static int merge_files(char **paths, int n, const char *out, int quiet, rr_error
     image merged = {0};
     static attr_list attrs; /* large; one merge per process */
     int rc = ranges ? 0 : rr_fail(err, "out of memory");
+    uint32_t so_far = 0;
     for (int i = 0; i < n && !rc; i++)
-        rc = add_state(paths[i], &merged, &attrs, paths[0], &ranges[i], i == 0, err);
+        rc = add_state(paths[i], &merged, &attrs, paths[0], &ranges[i], i == 0, &so_far, err);
     if (!rc)
         rc = check_ranges(ranges, n, (uint32_t)strtoul(attrs_get(&attrs, "refrender:batches"), NULL, 10), err);
     if (!rc) {

@@ -437,6 +437,23 @@ static int read_elements(ply_reader *r, vec3 default_color, pointmodel *m)
     return rr_fail(r->err, "%s: no 'vertex' element", r->path);
 }
 
+int ply_parse(const char *name, const char *data, size_t len, vec3 default_color, pointmodel *m, rr_error *err)
+{
+    ply_reader r;
+    memset(&r, 0, sizeof r);
+    r.path = name;
+    r.err = err;
+    r.format = PLY_ASCII;
+    r.data = r.cur = data;
+    r.end = data + len;
+    int rc = read_header(&r);
+    if (!rc) {
+        r.line++; /* ascii body starts on the line after end_header */
+        rc = read_elements(&r, default_color, m);
+    }
+    return rc;
+}
+
 int ply_read(const char *path, vec3 default_color, pointmodel *m, uint64_t *content_hash, rr_error *err)
 {
     input_file in;
@@ -444,18 +461,7 @@ int ply_read(const char *path, vec3 default_color, pointmodel *m, uint64_t *cont
         return -1;
     if (content_hash)
         *content_hash = input_hash(*content_hash, in.data, in.len);
-    ply_reader r;
-    memset(&r, 0, sizeof r);
-    r.path = path;
-    r.err = err;
-    r.format = PLY_ASCII;
-    r.data = r.cur = in.data;
-    r.end = in.data + in.len;
-    int rc = read_header(&r);
-    if (!rc) {
-        r.line++; /* ascii body starts on the line after end_header */
-        rc = read_elements(&r, default_color, m);
-    }
+    int rc = ply_parse(path, in.data, in.len, default_color, m, err);
     input_file_free(&in);
     return rc;
 }

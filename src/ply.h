@@ -28,6 +28,9 @@
  * binary vertex index. */
 int ply_read(const char *path, vec3 default_color, pointmodel *m, uint64_t *content_hash, rr_error *err);
 
+/* The same from len bytes in memory; name is used in messages. */
+int ply_parse(const char *name, const char *data, size_t len, vec3 default_color, pointmodel *m, rr_error *err);
+
 typedef struct {
     vec3 center, normal;
     double radius;
