@@ -24,7 +24,7 @@ CFLAGS   += -std=c11 -D_GNU_SOURCE $(OPT) -Wall -Wextra $(INCLUDES) \
 CXXFLAGS += -std=c++17 $(OPT) -Wall -Wextra
 LDLIBS   := -lassimp -lembree3 -lOpenEXRCore -lxml2 -lOpenImageIO -lOpenImageIO_Util -lpthread -lm -lstdc++
 
-LIB_SRCS := common inputfile splat pointmodel ply shapes surfelize curve animation animfile camera shutter sampler scene \
+LIB_SRCS := common inputfile atomicfile splat pointmodel ply shapes surfelize curve animation animfile camera shutter sampler scene \
             scene_xml accel shade film render exr output cli
 LIB_OBJS := $(LIB_SRCS:%=$(BUILD)/%.o) $(BUILD)/preview.o
 APP_OBJS := $(BUILD)/main.o $(BUILD)/gen_cmd.o $(BUILD)/merge_cmd.o $(BUILD)/surfels_cmd.o
@@ -64,8 +64,12 @@ demo: deps
 test-c: $(TESTBIN)
 	cd tests && ../$(TESTBIN)
 
-test-py: $(BIN) scenes
-	REFRENDER=$(CURDIR)/$(BIN) $(PYTHON) -m pytest -q tests
+# LD_PRELOAD shim that fails the Nth write or rename (tests/test_faults.py)
+$(BUILD)/libfaultinject.so: tests/faultinject.c | $(BUILD)
+	$(CC) -O1 -g -Wall -Wextra -shared -fPIC $< -o $@ -ldl
+
+test-py: $(BIN) $(BUILD)/libfaultinject.so scenes
+	REFRENDER=$(CURDIR)/$(BIN) FAULTINJECT=$(CURDIR)/$(BUILD)/libfaultinject.so $(PYTHON) -m pytest -q tests
 
 test: test-c test-fuzz test-py
 

@@ -2,9 +2,11 @@
 
 #include <ctype.h>
 #include <errno.h>
+#include <limits.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 int cli_int(const char *opt, const char *text, long lo, long hi, int *out, rr_error *err)
@@ -62,7 +64,13 @@ int cli_vec3(const char *opt, const char *text, vec3 *out, rr_error *err)
 
 int cli_check_writable(const char *path, rr_error *err)
 {
-    char probe[4200];
+    struct stat st;
+    if (strlen(path) > PATH_MAX - 64)
+        return rr_fail(err, "%.200s...: path is too long (%zu characters, at most %d)", path, strlen(path),
+                       PATH_MAX - 64);
+    if (stat(path, &st) == 0 && S_ISDIR(st.st_mode))
+        return rr_fail(err, "%s: is a directory, not a file name", path);
+    char probe[PATH_MAX + 64];
     snprintf(probe, sizeof probe, "%s.probe-XXXXXX", path);
     int fd = mkstemp(probe);
     if (fd < 0)
@@ -70,6 +78,29 @@ int cli_check_writable(const char *path, rr_error *err)
     close(fd);
     unlink(probe);
     return 0;
+}
+
+/* The absolute name path has or would have: the real path of its directory
+ * (which exists: outputs are checked writable first) and its base name. */
+static int canonical_name(const char *path, char *out, size_t size)
+{
+    char dir[PATH_MAX], real[PATH_MAX];
+    const char *slash = strrchr(path, '/'), *base = slash ? slash + 1 : path;
+    snprintf(dir, sizeof dir, "%.*s", slash ? (int)(slash - path) + (slash == path) : 1, slash ? path : ".");
+    if (!realpath(dir, real))
+        return -1;
+    return snprintf(out, size, "%s/%s", real, base) < (int)size ? 0 : -1;
+}
+
+int cli_same_file(const char *a, const char *b)
+{
+    struct stat sa, sb;
+    if (stat(a, &sa) == 0 && stat(b, &sb) == 0)
+        return sa.st_dev == sb.st_dev && sa.st_ino == sb.st_ino;
+    char ca[2 * PATH_MAX], cb[2 * PATH_MAX];
+    if (canonical_name(a, ca, sizeof ca) || canonical_name(b, cb, sizeof cb))
+        return !strcmp(a, b);
+    return !strcmp(ca, cb);
 }
 
 /* Finds the one frame-number field "%d", "%4d" or "%04d" (width < 100). */

@@ -13,9 +13,13 @@ int cli_double(const char *opt, const char *text, double lo, double *out, rr_err
 int cli_resolution(const char *opt, const char *text, int *w, int *h, rr_error *err);
 int cli_vec3(const char *opt, const char *text, vec3 *out, rr_error *err);
 
-/* Fails early, before a long render, if no file can be created in the
- * directory of path. */
+/* Fails early, before a long render, if path is too long, names a
+ * directory, or no file can be created in its directory. */
 int cli_check_writable(const char *path, rr_error *err);
+
+/* Whether two paths name the same file: the same inode when both exist,
+ * else the same absolute name (their directories resolved). */
+int cli_same_file(const char *a, const char *b);
 
 /* Output names for frame sequences: a pattern holds exactly one field "%d",
  * "%4d" or "%04d". cli_frame_path formats it (a name without a field is

@@ -1,5 +1,6 @@
 #include "exr.h"
 
+#include <limits.h>
 #include <openexr.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -7,6 +8,8 @@
 #include <string.h>
 #include <sys/stat.h>
 #include <unistd.h>
+
+#include "atomicfile.h"
 
 static int exr_fail(rr_error *err, const char *path, const char *what, exr_result_t rc)
 {
@@ -115,33 +118,18 @@ static exr_result_t write_chunks(exr_context_t ctx, int w, int h, const exr_chan
     return rc;
 }
 
-/* A temporary file beside path, with the permissions a plain create would
- * give (mkstemp makes it private). */
-static int make_temp(const char *path, char *tmp, size_t size)
-{
-    snprintf(tmp, size, "%s.tmp-XXXXXX", path);
-    int fd = mkstemp(tmp);
-    if (fd < 0)
-        return -1;
-    mode_t mask = umask(0);
-    umask(mask);
-    fchmod(fd, 0666 & ~mask);
-    close(fd);
-    return 0;
-}
-
 int exr_write(const char *path, int w, int h, const exr_channel *channels, int nchannels,
               const exr_string_attr *attrs, int nattrs, rr_error *err)
 {
-    char tmp[4200];
-    if (make_temp(path, tmp, sizeof tmp))
-        return rr_fail(err, "%s: cannot create a temporary file beside the output", path);
+    char tmp[PATH_MAX + 64];
+    if (atomic_create(path, "", tmp, sizeof tmp, err))
+        return -1;
     exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
     init.error_handler_fn = silent_handler;
     exr_context_t ctx;
     exr_result_t rc = exr_start_write(&ctx, tmp, EXR_WRITE_FILE_DIRECTLY, &init);
     if (rc) {
-        unlink(tmp);
+        atomic_discard(tmp);
         return exr_fail(err, path, "cannot start writing", rc);
     }
     rc = write_header(ctx, w, h, channels, nchannels, attrs, nattrs);
@@ -151,14 +139,10 @@ int exr_write(const char *path, int w, int h, const exr_channel *channels, int n
     if (!rc)
         rc = fin;
     if (rc) {
-        unlink(tmp);
+        atomic_discard(tmp);
         return exr_fail(err, path, "writing failed", rc);
     }
-    if (rename(tmp, path)) {
-        unlink(tmp);
-        return rr_fail(err, "%s: cannot move the finished image into place", path);
-    }
-    return 0;
+    return atomic_commit(tmp, path, err);
 }
 
 int exr_write_rgba(const char *path, int w, int h, const float *rgba, const exr_string_attr *attrs,

@@ -162,10 +162,8 @@ static int check_combinations(const render_options *o, rr_error *err)
     if (o->frames == 2 && (o->passes || o->checkpoint || o->resume))
         return rr_fail(err, "--frames renders whole frames: render each frame with --frame to use "
                             "--pass, --checkpoint or --resume");
-    int bad_output = strchr(o->output, '%') && !cli_frame_pattern_ok(o->output);
-    int bad_preview = o->preview && strchr(o->preview, '%') && !cli_frame_pattern_ok(o->preview);
-    if (bad_output || bad_preview ||
-        (o->frames == 2 && (!cli_frame_pattern_ok(o->output) || (o->preview && !cli_frame_pattern_ok(o->preview)))))
+    /* only a sequence needs a frame field; elsewhere a '%' is a literal one */
+    if (o->frames == 2 && (!cli_frame_pattern_ok(o->output) || (o->preview && !cli_frame_pattern_ok(o->preview))))
         return rr_fail(err, "--frames needs -o (and --preview) with one frame-number field such as %%04d, "
                             "e.g. out.%%04d.exr");
     return 0;
@@ -293,6 +291,13 @@ static int write_checkpoint(void *user, const image *img, rr_error *err)
                               run->rs.batch_begin + run->rs.batches, &run->attrs, err);
 }
 
+static void warn_checkpoint(void *user, const rr_error *err)
+{
+    (void)user;
+    fprintf(stderr, "\nrefrender: warning: checkpoint not written, the previous one is kept; rendering goes on: %s\n",
+            err->msg);
+}
+
 /* No pixel of a resumed state may hold more batches than this render gives
  * one: its range, or with --target-error the batch cap. */
 static int check_resumable_counts(const render_run *run, image *img, rr_error *err)
@@ -415,7 +420,7 @@ static int render_one(scene *s, accel *acc, const render_options *o, const char 
                                                          ? rr_fail(err, "out of memory for the image") : 0))
         return -1;
     int tty = !o->quiet && isatty(STDERR_FILENO);
-    render_hooks hooks = {tty ? print_progress : NULL, o->checkpoint ? write_checkpoint : NULL,
+    render_hooks hooks = {tty ? print_progress : NULL, o->checkpoint ? write_checkpoint : NULL, warn_checkpoint,
                           o->checkpoint_every > 0 ? o->checkpoint_every : 60.0, &run};
     int rc = render_image(s, acc, &run.rs, &img, &hooks, &interrupted, err);
     if (!rc) {
@@ -436,6 +441,29 @@ static int render_one(scene *s, accel *acc, const render_options *o, const char 
     return rc;
 }
 
+/* No output may overwrite an input (scene, model, .anim, the resumed state)
+ * or another output of the same run; the checkpoint may be the resumed
+ * state (that is how a render is continued). */
+static int check_distinct_files(const scene *s, const render_options *o, const char *out, const char *prev,
+                                rr_error *err)
+{
+    const char *outputs[3] = {out, prev, o->checkpoint}, *names[3] = {"-o", "--preview", "--checkpoint"};
+    for (int i = 0; i < 3; i++) {
+        if (!outputs[i])
+            continue;
+        for (int k = 0; k < s->ninputs; k++)
+            if (cli_same_file(outputs[i], s->inputs[k]))
+                return rr_fail(err, "%s %s is an input of this render (%s): refusing to overwrite it", names[i],
+                               outputs[i], s->inputs[k]);
+        if (o->resume && i < 2 && cli_same_file(outputs[i], o->resume))
+            return rr_fail(err, "%s %s is the state being resumed: refusing to overwrite it", names[i], outputs[i]);
+        for (int j = 0; j < i; j++)
+            if (outputs[j] && cli_same_file(outputs[i], outputs[j]))
+                return rr_fail(err, "%s and %s name the same file %s", names[j], names[i], outputs[i]);
+    }
+    return 0;
+}
+
 /* One frame or a sequence, sharing the loaded models and their BVHs; only
  * the top levels are rebuilt for each frame's shutter. */
 static int render_and_write(scene *s, const render_options *o, const char *cmdline, rr_error *err)
@@ -447,17 +475,22 @@ static int render_and_write(scene *s, const render_options *o, const char *cmdli
         return -1;
     install_signal_handlers();
     int rc = 0;
-    for (int f = o->first_frame; !rc && f <= o->last_frame; f++) {
+    /* 64-bit: --frame 2147483647 must not wrap around into more frames */
+    for (long long f = o->first_frame; !rc && f <= o->last_frame; f++) {
         char out[PATH_MAX], prev[PATH_MAX];
-        if (o->frames && (scene_set_frame(s, f, err) || accel_set_shutter(acc, err))) {
+        if (o->frames && (scene_set_frame(s, (int)f, err) || accel_set_shutter(acc, err))) {
             rc = -1;
             break;
         }
-        cli_frame_path(o->output, f, out, sizeof out);
+        cli_frame_path(o->output, (int)f, out, sizeof out); /* a '%' that is no frame field stays literal */
         if (o->preview)
-            cli_frame_path(o->preview, f, prev, sizeof prev);
+            cli_frame_path(o->preview, (int)f, prev, sizeof prev);
+        if (check_distinct_files(s, o, out, o->preview ? prev : NULL, err)) {
+            rc = -1;
+            break;
+        }
         if (o->frames == 2 && !o->quiet)
-            fprintf(stderr, "refrender: frame %d: shutter [%g, %g] -> %s\n", f, s->shut.open, s->shut.close, out);
+            fprintf(stderr, "refrender: frame %lld: shutter [%g, %g] -> %s\n", f, s->shut.open, s->shut.close, out);
         rc = render_one(s, acc, o, cmdline, out, o->preview ? prev : NULL, err);
     }
     accel_free(acc);
@@ -482,6 +515,7 @@ int cmd_render(int argc, char **argv)
     char cmdline[2048];
     join_args(argc, argv, cmdline, sizeof cmdline);
     if (cli_check_writable(o.output, &err) || (o.preview && cli_check_writable(o.preview, &err)) ||
+        (o.preview && preview_check_format(o.preview, err.msg, (int)sizeof err.msg)) ||
         (o.checkpoint && cli_check_writable(o.checkpoint, &err)) || scene_load_file(o.scene, &s, &err)) {
         fprintf(stderr, "refrender: %s\n", err.msg);
         return 1;

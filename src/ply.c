@@ -3,11 +3,13 @@
 #include <math.h>
 
 #include <errno.h>
+#include <limits.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
+#include "atomicfile.h"
 #include "inputfile.h"
 
 enum ply_format { PLY_ASCII, PLY_LE, PLY_BE };
@@ -468,7 +470,8 @@ int ply_read(const char *path, vec3 default_color, pointmodel *m, uint64_t *cont
 
 /* ---- writer ---------------------------------------------------------- */
 
-static void put_f32le(FILE *f, double v)
+/* Returns 1 when written. */
+static int put_f32le(FILE *f, double v)
 {
     float x = (float)v;
     unsigned char b[4];
@@ -477,7 +480,7 @@ static void put_f32le(FILE *f, double v)
         unsigned char t = b[0]; b[0] = b[3]; b[3] = t;
         t = b[1]; b[1] = b[2]; b[2] = t;
     }
-    fwrite(b, 4, 1, f);
+    return fwrite(b, 4, 1, f) == 1;
 }
 
 static unsigned char to_u8(double c)
@@ -486,27 +489,57 @@ static unsigned char to_u8(double c)
     return (unsigned char)lrint(c * 255.0);
 }
 
-int ply_write_surfels(const char *path, const surfel *s, size_t n, rr_error *err)
+/* Returns 1 when every byte was written. */
+static int write_surfels(FILE *f, const surfel *s, size_t n)
 {
-    FILE *f = fopen(path, "wb");
-    if (!f)
-        return rr_fail(err, "%s: cannot write: %s", path, strerror(errno));
-    fprintf(f, "ply\nformat binary_little_endian 1.0\ncomment written by refrender %s\n"
-               "element vertex %zu\n", RR_VERSION, n);
-    fputs("property float x\nproperty float y\nproperty float z\nproperty float nx\n"
-          "property float ny\nproperty float nz\nproperty float radius\n"
-          "property uchar red\nproperty uchar green\nproperty uchar blue\nend_header\n", f);
-    for (size_t i = 0; i < n; i++) {
+    int ok = fprintf(f, "ply\nformat binary_little_endian 1.0\ncomment written by refrender %s\n"
+                        "element vertex %zu\n", RR_VERSION, n) > 0;
+    ok = ok && fputs("property float x\nproperty float y\nproperty float z\nproperty float nx\n"
+                     "property float ny\nproperty float nz\nproperty float radius\n"
+                     "property uchar red\nproperty uchar green\nproperty uchar blue\nend_header\n", f) >= 0;
+    for (size_t i = 0; i < n && ok; i++) {
         const surfel *p = &s[i];
         double vals[7] = {p->center.x, p->center.y, p->center.z, p->normal.x, p->normal.y,
                           p->normal.z, p->radius};
         for (int k = 0; k < 7; k++)
-            put_f32le(f, vals[k]);
+            ok = ok && put_f32le(f, vals[k]);
         unsigned char rgb[3] = {to_u8(p->color.x), to_u8(p->color.y), to_u8(p->color.z)};
-        fwrite(rgb, 3, 1, f);
+        ok = ok && fwrite(rgb, 3, 1, f) == 1;
     }
-    int bad = ferror(f);
-    if (fclose(f) || bad)
-        return rr_fail(err, "%s: write failed", path);
+    return ok && !ferror(f);
+}
+
+/* Refuses what would not read back as the same splats: none at all, or
+ * values a float cannot hold (inf after the conversion). */
+static int check_surfels(const char *path, const surfel *s, size_t n, rr_error *err)
+{
+    if (n == 0)
+        return rr_fail(err, "%s: no splats to write", path);
+    for (size_t i = 0; i < n; i++) {
+        const surfel *p = &s[i];
+        double vals[7] = {p->center.x, p->center.y, p->center.z, p->normal.x, p->normal.y, p->normal.z, p->radius};
+        for (int k = 0; k < 7; k++)
+            if (!(fabs(vals[k]) <= POINTMODEL_MAX_ABS))
+                return rr_fail(err, "%s: splat %zu has a value %g out of range (at most %g in magnitude)", path, i,
+                               vals[k], POINTMODEL_MAX_ABS);
+        if (!(p->radius > 0) || v3_len(p->normal) == 0)
+            return rr_fail(err, "%s: splat %zu has a zero radius or normal", path, i);
+    }
     return 0;
+}
+
+int ply_write_surfels(const char *path, const surfel *s, size_t n, rr_error *err)
+{
+    char tmp[PATH_MAX + 64];
+    if (check_surfels(path, s, n, err) || atomic_create(path, "", tmp, sizeof tmp, err))
+        return -1;
+    FILE *f = fopen(tmp, "wb");
+    int ok = f && write_surfels(f, s, n);
+    if (f && fclose(f))
+        ok = 0;
+    if (!ok) {
+        atomic_discard(tmp);
+        return rr_fail(err, "%s: write failed (disk full?)", path);
+    }
+    return atomic_commit(tmp, path, err);
 }

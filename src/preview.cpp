@@ -1,12 +1,13 @@
 #include "preview.h"
 
+#include "atomicfile.h"
+
+#include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <string>
-#include <sys/stat.h>
-#include <unistd.h>
 #include <vector>
 
 /* IEC 61966-2-1 sRGB encoding of a linear value in [0, 1]. */
@@ -23,34 +24,77 @@ static int fail(char *msg, int size, const std::string &what)
     return -1;
 }
 
+static std::string extension_of(const std::string &p)
+{
+    size_t slash = p.rfind('/'), dot = p.rfind('.');
+    return dot != std::string::npos && (slash == std::string::npos || dot > slash) ? p.substr(dot) : std::string();
+}
+
+extern "C" int preview_check_format(const char *path, char *msg, int msg_size)
+{
+    std::string ext = extension_of(path);
+    auto out = OIIO::ImageOutput::create(ext.empty() ? std::string("none") : ext.substr(1));
+    if (!out)
+        return fail(msg, msg_size, std::string(path) + ": no image format for the extension '" + ext +
+                                       "' (use e.g. .png)");
+    if (!out->supports("ioproxy"))
+        return fail(msg, msg_size, std::string(path) + ": OpenImageIO cannot write '" + ext +
+                                       "' through memory, which refrender needs to check every write (use .png)");
+    return 0;
+}
+
+/* Encodes the image in memory: OpenImageIO's PNG writer does not report a
+ * full disk (libpng ignores fwrite's result), so the bytes are written to
+ * the file by write_all below, which checks every write. */
+static bool encode(const std::string &path, int w, int h, const std::vector<unsigned char> &px,
+                   std::vector<unsigned char> &bytes, std::string &why)
+{
+    auto out = OIIO::ImageOutput::create(path);
+    if (!out || !out->supports("ioproxy")) {
+        why = "OpenImageIO cannot encode this format in memory";
+        return false;
+    }
+    OIIO::Filesystem::IOVecOutput memory(bytes);
+    OIIO::ImageSpec spec(w, h, 3, OIIO::TypeDesc::UINT8);
+    spec.attribute("oiio:ColorSpace", "sRGB");
+    bool ok = out->set_ioproxy(&memory) && out->open(path, spec) &&
+              out->write_image(OIIO::TypeDesc::UINT8, px.data());
+    ok = out->close() && ok;
+    if (!ok)
+        why = out->geterror();
+    return ok;
+}
+
+static bool write_all(const char *name, const std::vector<unsigned char> &bytes)
+{
+    FILE *f = std::fopen(name, "wb");
+    if (!f)
+        return false;
+    bool ok = std::fwrite(bytes.data(), 1, bytes.size(), f) == bytes.size();
+    ok = std::fflush(f) == 0 && ok;
+    return std::fclose(f) == 0 && ok;
+}
+
 extern "C" int preview_write_srgb(const char *path, int w, int h, const float *rgba, char *msg, int msg_size)
 {
-    std::string p(path);
-    std::string ext = p.find('.') != std::string::npos ? p.substr(p.rfind('.')) : std::string(".png");
-    std::string tmp = p + ".tmp-XXXXXX" + ext;
-    std::vector<char> name(tmp.begin(), tmp.end());
-    name.push_back('\0');
-    int fd = mkstemps(name.data(), (int)ext.size());
-    if (fd < 0)
-        return fail(msg, msg_size, p + ": cannot create a temporary file beside the preview");
-    mode_t mask = umask(0); /* mkstemps makes the file private; use the umask */
-    umask(mask);
-    fchmod(fd, 0666 & ~mask);
-    close(fd);
-    std::vector<unsigned char> px((size_t)w * h * 3);
+    std::string p(path), why;
+    if (preview_check_format(path, msg, msg_size))
+        return -1;
+    std::vector<unsigned char> px((size_t)w * h * 3), bytes;
     for (size_t i = 0; i < (size_t)w * h; i++)
         for (int c = 0; c < 3; c++)
             px[3 * i + c] = srgb8(rgba[4 * i + c]);
-    auto out = OIIO::ImageOutput::create(name.data());
-    OIIO::ImageSpec spec(w, h, 3, OIIO::TypeDesc::UINT8);
-    spec.attribute("oiio:ColorSpace", "sRGB");
-    bool ok = out && out->open(name.data(), spec) && out->write_image(OIIO::TypeDesc::UINT8, px.data());
-    std::string why = out ? out->geterror() : OIIO::geterror();
-    if (out)
-        ok = out->close() && ok;
-    if (!ok || std::rename(name.data(), path) != 0) {
-        unlink(name.data());
-        return fail(msg, msg_size, p + ": cannot write preview: " + why);
+    if (!encode(p, w, h, px, bytes, why))
+        return fail(msg, msg_size, p + ": cannot encode preview: " + why);
+    std::vector<char> name(p.size() + 128);
+    rr_error err;
+    if (atomic_create(path, extension_of(p).c_str(), name.data(), name.size(), &err))
+        return fail(msg, msg_size, err.msg);
+    if (!write_all(name.data(), bytes)) {
+        atomic_discard(name.data());
+        return fail(msg, msg_size, p + ": cannot write preview (disk full?)");
     }
+    if (atomic_commit(name.data(), path, &err))
+        return fail(msg, msg_size, err.msg);
     return 0;
 }

@@ -326,7 +326,9 @@ static int run_round(render_job *job, const render_hooks *hooks, double start, d
         int due = hooks && hooks->checkpoint && hooks->checkpoint_every > 0 &&
                   now_seconds() - *last_checkpoint >= hooks->checkpoint_every;
         if (due && !*job->cancel && !rc) {
-            rc = checkpoint_paused(job, hooks, err);
+            rr_error ck_err;
+            if (checkpoint_paused(job, hooks, &ck_err) && hooks->checkpoint_failed)
+                hooks->checkpoint_failed(hooks->user, &ck_err);
             *last_checkpoint = now_seconds();
         }
     }

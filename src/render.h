@@ -34,6 +34,10 @@ typedef struct {
     void (*progress)(void *user, double fraction, uint64_t rays, double seconds);
     /* writes a checkpoint of a consistent state (workers are paused) */
     int (*checkpoint)(void *user, const image *img, rr_error *err);
+    /* a periodic checkpoint failed (disk full...): the render goes on and the
+     * previous checkpoint stays; only the one written when interrupted is
+     * an error */
+    void (*checkpoint_failed)(void *user, const rr_error *err);
     double checkpoint_every; /* seconds; 0: only when interrupted */
     void *user;
 } render_hooks;

@@ -52,11 +52,28 @@ void scene_free(scene *s)
         animation_free(&s->objects[i].anim);
     }
     animation_free(&s->camera_motion);
+    for (int i = 0; i < s->ninputs; i++)
+        free(s->inputs[i]);
+    free(s->inputs);
+    s->inputs = NULL;
+    s->ninputs = 0;
     free(s->objects);
     free(s->lights);
     s->objects = NULL;
     s->lights = NULL;
     s->nobjects = s->nlights = 0;
+}
+
+int scene_add_input(scene *s, const char *path)
+{
+    char **grown = realloc(s->inputs, (size_t)(s->ninputs + 1) * sizeof *grown);
+    if (!grown)
+        return -1;
+    s->inputs = grown;
+    if (!(s->inputs[s->ninputs] = strdup(path)))
+        return -1;
+    s->ninputs++;
+    return 0;
 }
 
 aabb scene_object_bounds(const scene_object *o)

@@ -46,6 +46,8 @@ typedef struct {
     char path[4096]; /* scene file, for messages and EXR metadata */
     uint64_t scene_hash;  /* content of the scene file (scene_xml.h) */
     uint64_t inputs_hash; /* content of the scene file and every file it names */
+    char **inputs;        /* those files' paths (owned), for refusing outputs onto them */
+    int ninputs;
     camera cam;
     animation camera_motion; /* the camera's rest pose moved like an object (rigid) */
     shutter shut;            /* the current frame's (see scene_frame_shutter) */
@@ -74,6 +76,9 @@ void scene_camera_ray(const scene *s, double x, double y, double t, vec3 *org, v
  * Returns -1 if the scene has no frame rate. */
 int scene_set_frame(scene *s, int frame, rr_error *err);
 void scene_free(scene *s);
+
+/* Records an input file's path; -1 when out of memory. */
+int scene_add_input(scene *s, const char *path);
 
 /* Object-space bounds of an object (before its animation). */
 aabb scene_object_bounds(const scene_object *o);

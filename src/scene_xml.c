@@ -22,6 +22,7 @@ typedef struct {
     const char *name;     /* file name for messages */
     const char *base_dir; /* directory relative paths resolve against */
     uint64_t *inputs_hash;/* every input file's bytes are folded in (inputfile.h) */
+    scene *sc;            /* the input files read are recorded (scene_add_input) */
     rr_error *err;
 } xml_ctx;
 
@@ -344,7 +345,7 @@ static int parse_rotation(xml_ctx *c, xmlNodePtr n, animation *a)
 
 /* ---- keyframes -------------------------------------------------------- */
 
-static void resolve_path(xml_ctx *c, const char *rel, char *out, size_t size);
+static int resolve_path(xml_ctx *c, xmlNodePtr n, const char *rel, char *out, size_t size);
 static int element_text(xmlNodePtr n, char *buf, size_t size);
 
 static int key_interpolation(xml_ctx *c, xmlNodePtr n, tangent_kind *in, tangent_kind *out)
@@ -458,11 +459,10 @@ static int new_keyframes(xml_ctx *c, xmlNodePtr n, animation *a)
 /* <animation>path.anim</animation> as in thesis Figure 4.11. */
 static int load_anim_file(xml_ctx *c, xmlNodePtr n, animation *a)
 {
-    char rel[4096], path[4096];
+    char rel[4096], path[8192];
     if (!element_text(n, rel, sizeof rel))
         return node_fail(c, n, "animation file path is too long");
-    resolve_path(c, rel, path, sizeof path);
-    if (new_keyframes(c, n, a))
+    if (resolve_path(c, n, rel, path, sizeof path) || new_keyframes(c, n, a))
         return -1;
     vec3 pivot = a->keys->pivot;
     free(a->keys);
@@ -470,6 +470,8 @@ static int load_anim_file(xml_ctx *c, xmlNodePtr n, animation *a)
     rr_error sub;
     if (animfile_load(path, &a->keys, c->inputs_hash, &sub))
         return rr_fail(c->err, "%s (animation of %s:%ld)", sub.msg, c->name, xmlGetLineNo(n));
+    if (scene_add_input(c->sc, path))
+        return node_fail(c, n, "out of memory");
     a->keys->pivot = pivot;
     return 0;
 }
@@ -530,17 +532,18 @@ static int parse_splat(xml_ctx *c, xmlNodePtr n, pointmodel *m, vec3 default_col
     return rc ? node_fail(c, n, "%s (give 'normal' and 'radius', or axes 'u' and 'v')", sub.msg) : 0;
 }
 
-static void resolve_path(xml_ctx *c, const char *rel, char *out, size_t size)
+/* Resolves rel against the scene's directory; a path that does not fit is
+ * an error, never silently cut. */
+static int resolve_path(xml_ctx *c, xmlNodePtr n, const char *rel, char *out, size_t size)
 {
     char clean[4096];
     snprintf(clean, sizeof clean, "%s", rel);
     for (char *p = clean; *p; p++)
         if (*p == '\\')
             *p = '/'; /* thesis Figure 4.11 writes Windows paths */
-    if (clean[0] == '/' || !c->base_dir || !c->base_dir[0])
-        snprintf(out, size, "%s", clean);
-    else
-        snprintf(out, size, "%s/%s", c->base_dir, clean);
+    int len = clean[0] == '/' || !c->base_dir || !c->base_dir[0] ? snprintf(out, size, "%s", clean)
+                                                                   : snprintf(out, size, "%s/%s", c->base_dir, clean);
+    return len < 0 || (size_t)len >= size ? node_fail(c, n, "file path is too long") : 0;
 }
 
 /* The element's text with surrounding white space removed; 0 if empty
@@ -611,10 +614,13 @@ static int parse_point_model(xml_ctx *c, xmlNodePtr n, scene_object *o)
         return -1;
     char rel[4096], path[8192], kind[sizeof ((shape_params *)0)->kind];
     if (point_model_path(n, rel, sizeof rel)) {
-        resolve_path(c, rel, path, sizeof path);
+        if (resolve_path(c, n, rel, path, sizeof path))
+            return -1;
         rr_error sub;
         if (ply_read(path, default_color, &o->model, c->inputs_hash, &sub))
             return rr_fail(c->err, "%s (point model of %s:%ld)", sub.msg, c->name, xmlGetLineNo(n));
+        if (scene_add_input(c->sc, path))
+            return node_fail(c, n, "out of memory");
     }
     if (attr_text(n, "generate", kind, sizeof kind) && generate_shape(c, n, kind, &o->model))
         return -1;
@@ -778,7 +784,7 @@ int scene_load_memory(const char *xml, size_t len, const char *name, const char 
     if (!doc)
         return rr_fail(err, "%s", sink.first.msg[0] ? sink.first.msg : "cannot parse scene");
     snprintf(s->path, sizeof s->path, "%s", name);
-    xml_ctx c = {name, base_dir, &s->inputs_hash, err};
+    xml_ctx c = {name, base_dir, &s->inputs_hash, s, err};
     int rc = parse_scene(&c, doc, s);
     xmlFreeDoc(doc);
     if (rc)
@@ -789,6 +795,8 @@ int scene_load_memory(const char *xml, size_t len, const char *name, const char 
 int scene_load_file(const char *path, scene *s, rr_error *err)
 {
     scene_init(s);
+    if (strlen(path) >= sizeof s->path)
+        return rr_fail(err, "%.200s...: scene path is too long (%zu characters)", path, strlen(path));
     input_file in;
     rr_error sub;
     if (input_file_read(path, SCENE_MAX_BYTES, &in, &sub))
@@ -802,5 +810,9 @@ int scene_load_file(const char *path, scene *s, rr_error *err)
         strcpy(dir, ".");
     int rc = scene_load_memory(in.data, in.len, path, dir, s, err);
     input_file_free(&in);
+    if (!rc && scene_add_input(s, path)) {
+        scene_free(s);
+        return rr_fail(err, "%s: out of memory", path);
+    }
     return rc;
 }

@@ -1,0 +1,35 @@
+/* Outputs written atomically: into a temporary file beside the target that
+ * is renamed over it only when complete, so a failed, interrupted or killed
+ * write never leaves a partial file and never replaces a good one.
+ *
+ * Temporary names are "<target>.tmp-<pid>-XXXXXX[suffix]": a later write of
+ * the same target removes those whose process no longer exists (left by a
+ * SIGKILL), and never another live process's. */
+#ifndef RR_ATOMICFILE_H
+#define RR_ATOMICFILE_H
+
+#include <stddef.h>
+
+#include "common.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* Creates an empty temporary file for `path` (the umask's permissions, as a
+ * plain create would give) and writes its name into tmp. suffix (may be "")
+ * ends the name, for writers that choose a format by extension. Stale
+ * temporaries of the same target are removed first. */
+int atomic_create(const char *path, const char *suffix, char *tmp, size_t size, rr_error *err);
+
+/* Renames tmp over path; on failure removes tmp. */
+int atomic_commit(const char *tmp, const char *path, rr_error *err);
+
+/* Removes tmp after a failed write. */
+void atomic_discard(const char *tmp);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif

@@ -1,0 +1,113 @@
+/* LD_PRELOAD shim for the write-fault tests (tests/test_faults.py): the Nth
+ * write to a regular file, and with RR_FAULT_STICKY every one after it, fails
+ * with ENOSPC as on a full disk; or the Nth rename fails. Writes to pipes and
+ * terminals (stderr) are never touched.
+ *   RR_FAULT_AT=N       which call fails (1-based; unset: none)
+ *   RR_FAULT_OP=write   write, pwrite, fwrite, fflush, fclose (default)
+ *   RR_FAULT_OP=rename  rename
+ *   RR_FAULT_STICKY=1   every later write fails too (a disk that stays full)
+ *   RR_FAULT_LOG=FILE   a line is appended to FILE for each injected fault,
+ *                       and "calls W R" (writes, renames seen) at exit */
+#define _GNU_SOURCE
+#include <dlfcn.h>
+#include <errno.h>
+#include <fcntl.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+static long calls[2]; /* writes, renames */
+
+/* A regular file open for writing (closing a file read is no write). */
+static int is_regular(int fd)
+{
+    struct stat st;
+    int flags = fd >= 0 ? fcntl(fd, F_GETFL) : -1;
+    return flags >= 0 && (flags & O_ACCMODE) != O_RDONLY && fstat(fd, &st) == 0 && S_ISREG(st.st_mode);
+}
+
+static void log_line(const char *what)
+{
+    const char *path = getenv("RR_FAULT_LOG");
+    if (!path)
+        return;
+    int fd = open(path, O_WRONLY | O_APPEND | O_CREAT, 0644);
+    if (fd >= 0) {
+        char line[128];
+        int n = snprintf(line, sizeof line, "%s %ld %ld\n", what, calls[0], calls[1]);
+        ssize_t ignored = syscall(1 /* SYS_write */, fd, line, (size_t)n);
+        (void)ignored;
+        close(fd);
+    }
+}
+
+/* Whether this call (kind 0 write, 1 rename) is to fail. */
+static int should_fail(int kind, int fd)
+{
+    const char *at = getenv("RR_FAULT_AT"), *op = getenv("RR_FAULT_OP");
+    int want = op && !strcmp(op, "rename");
+    if (kind == 0 && !is_regular(fd))
+        return 0;
+    long n = ++calls[kind], k = at ? atol(at) : 0;
+    if (!at || kind != want)
+        return 0;
+    int fail = n == k || (getenv("RR_FAULT_STICKY") && n > k);
+    if (fail)
+        log_line(kind ? "rename" : "write");
+    return fail;
+}
+
+__attribute__((destructor)) static void log_calls(void) { log_line("calls"); }
+
+#define REAL(name) ((__typeof__(&name))dlsym(RTLD_NEXT, #name))
+
+ssize_t write(int fd, const void *buf, size_t n)
+{
+    if (should_fail(0, fd))
+        return errno = ENOSPC, -1;
+    return REAL(write)(fd, buf, n);
+}
+
+ssize_t pwrite(int fd, const void *buf, size_t n, off_t off)
+{
+    if (should_fail(0, fd))
+        return errno = ENOSPC, -1;
+    return REAL(pwrite)(fd, buf, n, off);
+}
+
+ssize_t pwrite64(int fd, const void *buf, size_t n, off_t off)
+{
+    if (should_fail(0, fd))
+        return errno = ENOSPC, -1;
+    return REAL(pwrite64)(fd, buf, n, off);
+}
+
+size_t fwrite(const void *buf, size_t size, size_t n, FILE *f)
+{
+    if (should_fail(0, fileno(f)))
+        return errno = ENOSPC, 0;
+    return REAL(fwrite)(buf, size, n, f);
+}
+
+int fflush(FILE *f)
+{
+    if (f && should_fail(0, fileno(f)))
+        return errno = ENOSPC, EOF;
+    return REAL(fflush)(f);
+}
+
+int fclose(FILE *f)
+{
+    int fail = should_fail(0, fileno(f));
+    int rc = REAL(fclose)(f);
+    return fail ? (errno = ENOSPC, EOF) : rc;
+}
+
+int rename(const char *from, const char *to)
+{
+    if (should_fail(1, -1))
+        return errno = EIO, -1;
+    return REAL(rename)(from, to);
+}

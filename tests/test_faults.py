@@ -1,0 +1,144 @@
+"""Issue 18.8: write faults. Every output (final EXR, render state, merge,
+preview, frames, gen and surfels PLY) either completes or leaves the previous
+file untouched, and the exit status says which: the LD_PRELOAD shim
+tests/faultinject.c makes the Nth write to a regular file (and every later
+one: a disk that stays full) or the Nth rename fail, for every N until a run
+meets no fault. A periodic checkpoint that fails is a warning: the render
+goes on and the previous checkpoint stays."""
+import os
+import subprocess
+
+import numpy as np
+import pytest
+
+from conftest import BIN, read_exr, run
+
+SHIM = os.environ.get("FAULTINJECT", "")
+pytestmark = pytest.mark.skipif(not os.path.exists(SHIM), reason="needs FAULTINJECT (make test builds it)")
+SCENE = """<scene><frames rate="24"/><camera position="0 0 0" lookat="0 0 -1" up="0 1 0" fov="30" width="12" height="8"/>
+<object><pointModel><splat center="-1 0 -10" normal="0 0 1" radius="1.2" color="1 0.5 0.25"/></pointModel>
+<material shading="unlit"/><animation><linear velocity="2 0 0"/></animation></object></scene>"""
+FAST = ["--spp", 1, "--tspp", 4, "--quiet"]
+PREVIOUS = b"the previous good file"
+
+
+def faulty_run(args, at, op, log, sticky=True):
+    """Runs refrender under the shim; returns the process, whether a fault
+    was injected, and the (writes, renames) it saw."""
+    env = dict(os.environ, LD_PRELOAD=SHIM, RR_FAULT_OP=op, RR_FAULT_LOG=str(log),
+               ASAN_OPTIONS="verify_asan_link_order=0")
+    if at:
+        env["RR_FAULT_AT"] = str(at)
+    if sticky:
+        env["RR_FAULT_STICKY"] = "1"
+    if log.exists():
+        log.unlink()
+    proc = subprocess.run([BIN, *map(str, args)], capture_output=True, text=True, env=env, timeout=120)
+    lines = log.read_text().split("\n") if log.exists() else []
+    calls = [tuple(map(int, line.split()[1:])) for line in lines if line.startswith("calls")]
+    faulted = any(line.startswith(("write", "rename")) for line in lines)
+    return proc, faulted, calls[-1] if calls else (0, 0)
+
+
+def same_pixels(a, b):
+    return np.array_equal(read_exr(a)[0], read_exr(b)[0], equal_nan=True)
+
+
+def fault_points(total):
+    """Every one of the first and last calls, and a spread in between."""
+    points = set(range(1, min(total, 8) + 1)) | set(range(max(1, total - 3), total + 1))
+    points |= {1 + (total - 1) * k // 12 for k in range(13)}
+    return sorted(p for p in points if 1 <= p <= total)
+
+
+def check_every_fault(tmp_path, args, outputs, complete, op):
+    """Runs args with a fault at calls spread over all the run's writes (or
+    renames); outputs are pre-filled with PREVIOUS, complete(path) says
+    whether a file is the full result. Returns how many runs met a fault."""
+    log = tmp_path / "faults.log"
+    for out in outputs:
+        out.write_bytes(PREVIOUS)
+    proc, _, calls = faulty_run(args, 0, op, log)
+    assert proc.returncode == 0 and all(complete(out) for out in outputs), proc.stderr
+    total = calls[1 if op == "rename" else 0]
+    assert total >= len(outputs)
+    for n in fault_points(total):
+        for out in outputs:
+            out.write_bytes(PREVIOUS)
+        proc, faulted, _ = faulty_run(args, n, op, log)
+        assert faulted, n
+        for out in outputs:
+            assert out.read_bytes() == PREVIOUS or complete(out), (n, out)
+        leftovers = [p.name for p in tmp_path.iterdir() if ".tmp-" in p.name]
+        assert leftovers == [], (n, leftovers)
+        assert proc.returncode == 1 and proc.stderr.strip(), (n, proc.returncode, proc.stderr)
+        assert any(out.read_bytes() == PREVIOUS for out in outputs), (n, "a fault but every output written")
+    return len(fault_points(total))
+
+
+@pytest.fixture
+def scene(tmp_path):
+    path = tmp_path / "s.xml"
+    path.write_text(SCENE)
+    return path
+
+
+@pytest.mark.parametrize("op", ["write", "rename"])
+def test_final_image_and_preview(tmp_path, scene, op):
+    good = tmp_path / "good"
+    good.mkdir()
+    assert run([scene, *FAST, "-o", good / "o.exr", "--preview", good / "p.png"]).returncode == 0
+    out, preview = tmp_path / "o.exr", tmp_path / "p.png"
+
+    def complete(path):
+        return path.read_bytes() != PREVIOUS and (same_pixels(path, good / "o.exr") if path == out else
+                                                  path.read_bytes() == (good / "p.png").read_bytes())
+    assert check_every_fault(tmp_path, [scene, *FAST, "-o", out, "--preview", preview], [out, preview], complete,
+                             op) >= 2
+
+
+@pytest.mark.parametrize("op", ["write", "rename"])
+def test_states_merge_and_frames(tmp_path, scene, op):
+    good = tmp_path / "good"
+    good.mkdir()
+    states = [good / "p0.exr", good / "p1.exr"]
+    for k, st in enumerate(states):
+        assert run([scene, *FAST, "--batches", 2, "--pass", f"{k}/2", "-o", st]).returncode == 0
+    assert run(["merge", *states, "-o", good / "m.exr", "--quiet"]).returncode == 0
+    assert run([scene, *FAST, "--frames", "0-2", "-o", good / "f%d.exr"]).returncode == 0
+
+    state = tmp_path / "p0.exr"
+    check_every_fault(tmp_path, [scene, *FAST, "--batches", 2, "--pass", "0/2", "-o", state], [state],
+                      lambda p: p.read_bytes() != PREVIOUS and same_pixels(p, states[0]), op)
+    merged = tmp_path / "m.exr"
+    check_every_fault(tmp_path, ["merge", *states, "-o", merged, "--quiet"], [merged],
+                      lambda p: p.read_bytes() != PREVIOUS and same_pixels(p, good / "m.exr"), op)
+    frames = [tmp_path / f"f{i}.exr" for i in range(3)]
+    check_every_fault(tmp_path, [scene, *FAST, "--frames", "0-2", "-o", tmp_path / "f%d.exr"], frames,
+                      lambda p: p.read_bytes() != PREVIOUS and same_pixels(p, good / p.name), op)
+
+
+@pytest.mark.parametrize("op", ["write", "rename"])
+def test_gen_and_surfels_models(tmp_path, op):
+    good = tmp_path / "good"
+    good.mkdir()
+    xyz = good / "cloud.xyz"
+    xyz.write_text("".join(f"{i % 4} {i // 4} 0 0 0 1\n" for i in range(16)))
+    assert run(["gen", "torus", "--count", 300, "-o", good / "g.ply"]).returncode == 0
+    assert run(["surfels", xyz, "-o", good / "c.ply"]).returncode == 0
+    for name, args in (("g.ply", ["gen", "torus", "--count", 300]), ("c.ply", ["surfels", xyz])):
+        out = tmp_path / name
+        check_every_fault(tmp_path, [*args, "-o", out], [out],
+                          lambda p: p.read_bytes() == (good / p.name).read_bytes(), op)
+
+
+def test_failed_periodic_checkpoint_keeps_the_previous_and_the_render_goes_on(tmp_path, scene):
+    ck, out, log = tmp_path / "ck.exr", tmp_path / "o.exr", tmp_path / "faults.log"
+    ck.write_bytes(PREVIOUS)
+    args = [scene, "--spp", 4, "--tspp", 64, "--batches", 40, "--res", "48x32", "--threads", 1,
+            "-o", out, "--checkpoint", ck, "--checkpoint-every", "0.01"]
+    proc, faulted, _ = faulty_run(args, 1, "write", log, sticky=False)  # the first checkpoint's first write
+    assert faulted and proc.returncode == 0, proc.stderr
+    assert "checkpoint not written, the previous one is kept" in proc.stderr
+    assert out.exists()
+    assert [p.name for p in tmp_path.iterdir() if ".tmp-" in p.name] == []

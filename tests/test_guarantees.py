@@ -1,0 +1,89 @@
+"""Issue 18: never a corrupt, wrong or lost result. Outputs never overwrite
+inputs or each other, odd but valid names work, bad names fail before any
+rendering, stale temporary files of killed runs are cleaned up, and frame
+numbers at the ends of the int range do not wrap."""
+import os
+import signal
+import subprocess
+import time
+
+from conftest import BIN, run
+
+TINY = """<scene><camera width="8" height="6"/>
+<object><sphere radius="1" color="0.5 0.6 0.7"/><material shading="unlit"/></object></scene>"""
+FAST = ["--spp", 1, "--tspp", 2, "--quiet"]
+
+
+def scene(tmp_path, text=TINY, name="s.xml"):
+    path = tmp_path / name
+    path.write_text(text)
+    return path
+
+
+def test_outputs_never_overwrite_inputs_or_each_other(tmp_path):
+    s = scene(tmp_path)
+    original = s.read_bytes()
+    ply = tmp_path / "m.ply"
+    assert run(["gen", "sphere", "--count", 50, "-o", ply]).returncode == 0
+    model_scene = scene(tmp_path, '<scene><camera width="8" height="6"/><object><pointModel>m.ply</pointModel>'
+                                  '</object></scene>', "m.xml")
+    model = ply.read_bytes()
+    cases = [
+        ([s, "-o", s], "is an input of this render"),
+        ([model_scene, "-o", ply], "is an input of this render"),
+        ([s, "-o", tmp_path / "a.exr", "--preview", tmp_path / "a.exr"], "name the same file"),
+        ([s, "-o", tmp_path / "a.exr", "--preview", f"{tmp_path}/../{tmp_path.name}/a.exr"], "name the same file"),
+        ([s, "-o", tmp_path / "a.exr", "--checkpoint", tmp_path / "a.exr"], "name the same file"),
+    ]
+    os.link(s, tmp_path / "hardlink.exr")
+    cases.append(([s, "-o", tmp_path / "hardlink.exr"], "is an input of this render"))
+    for args, why in cases:
+        proc = run([*args, *FAST])
+        assert proc.returncode == 1 and why in proc.stderr, (args, proc.stderr)
+    assert s.read_bytes() == original and ply.read_bytes() == model
+    assert not (tmp_path / "a.exr").exists()
+
+
+def test_bad_output_names_fail_before_rendering(tmp_path):
+    s = scene(tmp_path)
+    start = time.time()
+    d = run([s, "-o", tmp_path, *FAST])
+    assert d.returncode == 1 and "is a directory" in d.stderr
+    long_name = tmp_path / ("x" * 5000 + ".exr")
+    proc = run([s, "-o", long_name, *FAST])
+    assert proc.returncode == 1 and "path is too long" in proc.stderr
+    preview = run([s, "-o", tmp_path / "o.exr", "--preview", tmp_path / "p.notaformat", *FAST])
+    assert preview.returncode == 1 and "p.notaformat" in preview.stderr and "no image format" in preview.stderr
+    assert "tmp-" not in preview.stderr  # names the user's file, not a temporary one
+    assert not (tmp_path / "o.exr").exists()
+    assert time.time() - start < 30
+
+
+def test_a_literal_percent_is_a_valid_output_name(tmp_path):
+    s = scene(tmp_path)
+    proc = run([s, "-o", tmp_path / "render_50%.exr", *FAST])
+    assert proc.returncode == 0, proc.stderr
+    assert (tmp_path / "render_50%.exr").exists()
+
+
+def test_extreme_frame_numbers_render_exactly_one_frame(tmp_path):
+    s = scene(tmp_path, '<scene><frames rate="24"/><camera width="4" height="4"/>'
+                        '<object><sphere radius="1"/></object></scene>')
+    for frame in (2147483647, -2147483648):
+        out = tmp_path / f"f{frame}.exr"
+        proc = run([s, "--frame", frame, "-o", out, *FAST], timeout=60)
+        assert proc.returncode == 0, proc.stderr
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["f-2147483648.exr", "f2147483647.exr", "s.xml"]
+
+
+def test_temporary_files_of_a_killed_run_are_removed_by_the_next(tmp_path):
+    s = scene(tmp_path)
+    out = tmp_path / "o.exr"
+    dead = subprocess.Popen(["true"])
+    dead.wait()  # a pid that no longer runs
+    stale = tmp_path / f"o.exr.tmp-{dead.pid}-AbCdEf"
+    stale.write_bytes(b"half a file")
+    live = tmp_path / f"o.exr.tmp-{os.getpid()}-XyZwVu"  # a live process's: kept
+    live.write_bytes(b"still being written")
+    assert run([s, "-o", out, *FAST]).returncode == 0
+    assert out.exists() and not stale.exists() and live.exists()
