@@ -106,12 +106,13 @@ test-fuzz: $(FUZZ_TARGETS:%=$(FUZZ_DIR)/fuzz_%)
 	done
 
 fuzz: $(FUZZ_TARGETS:%=$(FUZZ_DIR)/fuzz_%)
-	for t in $(FUZZ_TARGETS); do \
+	failed=""; for t in $(FUZZ_TARGETS); do \
 	    mkdir -p $(FUZZ_DIR)/corpus/$$t $(FUZZ_DIR)/crashes/$$t; \
 	    $(FUZZ_DIR)/fuzz_$$t $(FUZZ_DIR)/corpus/$$t tests/fuzz/corpus/$$t -dict=tests/fuzz/$$t.dict \
 	        -max_total_time=$(FUZZ_SECONDS) -rss_limit_mb=8192 -timeout=10 -print_final_stats=1 \
-	        -artifact_prefix=$(FUZZ_DIR)/crashes/$$t/ || exit 1; \
-	done
+	        -artifact_prefix=$(FUZZ_DIR)/crashes/$$t/ || failed="$$failed $$t"; \
+	done; \
+	[ -z "$$failed" ] || { echo "fuzz: findings in$$failed (inputs in $(FUZZ_DIR)/crashes/)"; exit 1; }
 
 # Speed and memory against Embree's built-in disc primitive, measured in the
 # same run (a benchmark, not a test). BENCH_ARGS=quick for a short smoke run,

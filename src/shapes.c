@@ -48,7 +48,7 @@ static void gen_sphere(const shape_params *p, surfel *s, size_t n)
 static size_t gen_torus(const shape_params *p, surfel *s, size_t n)
 {
     double R = p->radius, rt = p->minor_radius;
-    size_t nv = (size_t)fmax(3.0, round(sqrt((double)n * rt / R)));
+    size_t nv = (size_t)fmax(3.0, round(sqrt((double)n * rt / R))); /* rt < R: at most sqrt(n) */
     size_t nu = (size_t)fmax(3.0, round((double)n / (double)nv));
     double du = 2 * M_PI / (double)nu, dv = 2 * M_PI / (double)nv;
     size_t k = 0;
@@ -90,6 +90,13 @@ int shape_generate(const shape_params *p, surfel **out, size_t *n, rr_error *err
         return rr_fail(err, "splat count must be in [1, 1e8], got %zu", p->count);
     if (!(p->radius > 0) || !(p->overlap > 0) || !(p->minor_radius > 0))
         return rr_fail(err, "shape radius, minor radius and overlap must be positive");
+    /* splat sizes and positions must stay in range (pointmodel.h); a torus
+     * whose tube is not thinner than its ring is not a ring torus, and its
+     * grid size (from the radius ratio) would overflow */
+    if (p->radius > 1e12 || p->overlap > 1e3 || p->minor_radius > 1e12)
+        return rr_fail(err, "shape radius and minor radius must be at most 1e12, overlap at most 1000");
+    if (!strcmp(p->kind, "torus") && !(p->minor_radius < p->radius))
+        return rr_fail(err, "torus minor radius %g must be smaller than its radius %g", p->minor_radius, p->radius);
     surfel *s = calloc(p->count, sizeof *s);
     if (!s)
         return rr_fail(err, "out of memory for %zu surfels", p->count);
