@@ -7,7 +7,7 @@ import signal
 import subprocess
 import time
 
-from conftest import BIN, run
+from conftest import BIN, ROOT, run
 
 TINY = """<scene><camera width="8" height="6"/>
 <object><sphere radius="1" color="0.5 0.6 0.7"/><material shading="unlit"/></object></scene>"""
@@ -87,3 +87,38 @@ def test_temporary_files_of_a_killed_run_are_removed_by_the_next(tmp_path):
     live.write_bytes(b"still being written")
     assert run([s, "-o", out, *FAST]).returncode == 0
     assert out.exists() and not stale.exists() and live.exists()
+
+
+def test_models_that_would_not_read_back_are_not_written(tmp_path):
+    """Issue 18.9: surfels/gen wrote PLY files with 0 splats or inf values and
+    exited 0."""
+    dup = tmp_path / "dup.xyz"
+    dup.write_text("0 0 0 0 0 0\n" * 8)  # zero normals
+    proc = run(["surfels", dup, "-o", tmp_path / "dup.ply"])
+    assert proc.returncode == 1 and "dup.ply" in proc.stderr, proc.stderr
+    cloud = tmp_path / "cloud.xyz"
+    cloud.write_text("".join(f"{i % 4} {i // 4} 0 0 0 1\n" for i in range(16)))
+    proc = run(["surfels", cloud, "--fit", "1e39", "-o", tmp_path / "huge.ply"])
+    assert proc.returncode == 1 and "out of range" in proc.stderr, proc.stderr
+    proc = run(["gen", "sphere", "--radius", "1e300", "-o", tmp_path / "g.ply"])
+    assert proc.returncode == 1 and "at most" in proc.stderr, proc.stderr
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["cloud.xyz", "dup.xyz"]
+
+
+def test_resume_refuses_pixels_with_more_batches_than_the_render_gives(tmp_path):
+    """A --target-error checkpoint holds pixels beyond --batches; resumed as
+    a plain render they are impossible (merge used to say 'resume it first')."""
+    s = tmp_path / "d.xml"
+    s.write_text((ROOT / "scenes" / "default.xml").read_text())
+    ck = tmp_path / "ck.exr"
+    args = [s, "--res", "96x96", "--spp", 4, "--tspp", 48, "--batches", 2, "--threads", 2, "--quiet"]
+    proc = subprocess.Popen([BIN, *map(str, args), "--target-error", "1e-9", "--max-batches", "60",
+                             "-o", str(tmp_path / "never.exr"), "--checkpoint", str(ck), "--checkpoint-every", "1000"],
+                            stderr=subprocess.PIPE, text=True)
+    time.sleep(2.0)
+    proc.send_signal(signal.SIGTERM)
+    proc.communicate(timeout=60)
+    assert proc.returncode == 130 and ck.exists()
+    resumed = run([*args, "-o", tmp_path / "out.exr", "--resume", ck])
+    assert resumed.returncode == 1 and "more than the 2 this render gives a pixel" in resumed.stderr, resumed.stderr
+    assert not (tmp_path / "out.exr").exists()

@@ -204,3 +204,17 @@ TEST(xml_errors_name_the_scene_file)
     const char *xml = "<!DOCTYPE scene [<!ENTITY a \"&b;\">]><scene>&a;</scene>";
     CHECK(scene_load_memory(xml, strlen(xml), "ent.xml", ".", &s, &e) != 0 && strstr(e.msg, "ent.xml:1:"));
 }
+
+/* Issue 18.9: libxml2 reported every line past 65535 as 65535. */
+TEST(errors_past_line_65535_name_their_line)
+{
+    size_t lines = 70000;
+    char *xml = malloc(lines + 64);
+    strcpy(xml, "<scene>");
+    memset(xml + 7, '\n', lines);
+    strcpy(xml + 7 + lines, "<nonsense/></scene>");
+    scene s;
+    rr_error e;
+    CHECK(load_text(xml, &s, &e) != 0 && strstr(e.msg, "mem.xml:70001:"));
+    free(xml);
+}
