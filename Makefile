@@ -25,7 +25,7 @@ CXXFLAGS += -std=c++17 $(OPT) -Wall -Wextra
 LDLIBS   := -lassimp -lembree3 -lOpenEXRCore -lxml2 -lOpenImageIO -lOpenImageIO_Util -lpthread -lm -lstdc++
 
 LIB_SRCS := common inputfile atomicfile splat pointmodel ply shapes surfelize curve animation animfile camera shutter sampler scene \
-            scene_xml accel shade film render exr output cli
+            scene_xml accel shade film render exr output render_attrs cli
 LIB_OBJS := $(LIB_SRCS:%=$(BUILD)/%.o) $(BUILD)/preview.o
 APP_OBJS := $(BUILD)/main.o $(BUILD)/gen_cmd.o $(BUILD)/merge_cmd.o $(BUILD)/surfels_cmd.o
 TEST_SRCS := $(wildcard tests/test_*.c)

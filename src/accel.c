@@ -17,6 +17,11 @@ typedef struct {
 
 enum { TOP_STATIC, TOP_MOVING };
 
+/* With more moving objects than this, testing each one's swept bounds per
+ * ray costs more than the top-level BVH's own traversal, which then picks
+ * them (and the times of a ray are traced one by one). */
+enum { TOP_LEVEL_OWN_BVH = 64 };
+
 typedef struct {
     vec3 center;
     double radius2;
@@ -58,6 +63,8 @@ typedef struct {
  * (rtcore_ray.h: RTCRayHitN); C has no accessors, so index it ourselves. */
 enum { F_ORG = 0, F_TNEAR = 3, F_DIR = 4, F_TFAR = 8, F_MASK = 9, F_ID = 10, F_FLAGS = 11,
        F_PRIM = 17, F_GEOM = 18, F_INST = 19, F_COUNT = 20 };
+/* the hand-written layout must be Embree's: 20 four-byte fields per lane */
+_Static_assert(sizeof(struct RTCRayHit16) == F_COUNT * 16 * sizeof(float), "Embree's RTCRayHitN layout changed");
 
 static float *lane_f(void *rayhit, unsigned n, unsigned field, unsigned i)
 {
@@ -381,7 +388,7 @@ static void embree_error(void *user, enum RTCError code, const char *str)
 
 /* The top levels depend on the shutter interval (swept bounds, which
  * objects stand still); the objects' own BVHs do not. */
-static void build_top_levels(accel *a)
+static void build_top_levels(accel *a, double open, double close)
 {
     const scene *s = a->sc;
     for (int k = 0; k < 2; k++) {
@@ -392,10 +399,10 @@ static void build_top_levels(accel *a)
     }
     for (int i = 0; i < s->nobjects; i++) {
         const scene_object *o = &s->objects[i];
-        a->swept[i] = animation_swept_bounds(&o->anim, scene_object_bounds(o), s->shut.open, s->shut.close);
-        a->swept_sphere[i] = swept_sphere(o, s->shut.open, s->shut.close);
+        a->swept[i] = animation_swept_bounds(&o->anim, scene_object_bounds(o), open, close);
+        a->swept_sphere[i] = swept_sphere(o, open, close);
         a->is_static[i] = a->reuse_static && animation_is_static(&o->anim);
-        a->rest[i] = animation_at(&o->anim, s->shut.open);
+        a->rest[i] = animation_at(&o->anim, open);
         top_level *top = &a->top[a->is_static[i] ? TOP_STATIC : TOP_MOVING];
         top->ids[top->count++] = (unsigned)i;
     }
@@ -404,22 +411,22 @@ static void build_top_levels(accel *a)
             a->top[k].scene = user_scene(a->device, a->top[k].count, &a->top[k], object_bounds_cb, object_intersect);
 }
 
-int accel_set_shutter(accel *a, rr_error *err)
+int accel_set_shutter(accel *a, double open, double close, rr_error *err)
 {
-    build_top_levels(a);
+    build_top_levels(a, open, close);
     if (a->build_error.msg[0])
         return rr_fail(err, "%s", a->build_error.msg);
     return 0;
 }
 
-int accel_build(const scene *s, double epsilon, double sigma, int reuse_static, accel **out, rr_error *err)
+int accel_build(const scene *s, const accel_settings *set, accel **out, rr_error *err)
 {
     accel *a = calloc(1, sizeof *a);
     if (!a)
         return rr_fail(err, "out of memory");
     a->sc = s;
-    a->epsilon = (float)epsilon;
-    a->sigma = sigma;
+    a->epsilon = (float)set->epsilon;
+    a->sigma = set->sigma;
     a->device = rtcNewDevice(NULL);
     if (!a->device) {
         free(a);
@@ -448,8 +455,8 @@ int accel_build(const scene *s, double epsilon, double sigma, int reuse_static, 
                                          points ? splat_bounds_cb : sphere_bounds_cb,
                                          points ? splats_intersect : sphere_intersect);
     }
-    a->reuse_static = reuse_static;
-    build_top_levels(a);
+    a->reuse_static = set->reuse_static;
+    build_top_levels(a, set->open, set->close);
     if (a->build_error.msg[0]) {
         rr_fail(err, "%s", a->build_error.msg);
         accel_free(a);
@@ -564,10 +571,10 @@ static int ray_meets_swept(const accel *a, unsigned obj, vec3 org, vec3 dir)
     return ray_meets_box(org, dir, a->swept[obj]) && ray_meets_sphere(org, dir, &a->swept_sphere[obj]);
 }
 
-int accel_may_hit_moving(const accel *a, vec3 org, vec3 dir)
+static int may_hit_moving(const accel *a, vec3 org, vec3 dir)
 {
     const top_level *top = &a->top[TOP_MOVING];
-    if (top->count > 64)
+    if (top->count > TOP_LEVEL_OWN_BVH)
         return 1; /* many objects: testing them all per ray would cost more than it saves */
     for (unsigned i = 0; i < top->count; i++) {
         if (ray_meets_swept(a, top->ids[i], org, dir))
@@ -576,7 +583,7 @@ int accel_may_hit_moving(const accel *a, vec3 org, vec3 dir)
     return 0;
 }
 
-void accel_trace_static(const accel *a, vec3 org, vec3 dir, kbuffer *kb)
+static void trace_static(const accel *a, vec3 org, vec3 dir, kbuffer *kb)
 {
     kbuffer_reset(kb, a->epsilon);
     trace_top(a, TOP_STATIC, org, dir, 0.0, kb);
@@ -591,7 +598,7 @@ static void copy_kbuffer(kbuffer *dst, const kbuffer *src)
     memcpy(dst->hits, src->hits, (size_t)src->count * sizeof *dst->hits);
 }
 
-int accel_trace_moving(const accel *a, vec3 org, vec3 dir, double time, const kbuffer *static_hits, kbuffer *kb)
+static int trace_moving(const accel *a, vec3 org, vec3 dir, double time, const kbuffer *static_hits, kbuffer *kb)
 {
     copy_kbuffer(kb, static_hits);
     return trace_top(a, TOP_MOVING, org, dir, time, kb);
@@ -704,15 +711,15 @@ static void trace_object_times(const accel *a, unsigned obj, vec3 org, vec3 dir,
     }
 }
 
-void accel_trace_moving_times(const accel *a, vec3 org, vec3 dir, const double *times, int n,
-                              const kbuffer *static_hits, kbuffer *kbs, int *hit_moving)
+static void trace_moving_times(const accel *a, vec3 org, vec3 dir, const double *times, int n,
+                               const kbuffer *static_hits, kbuffer *kbs, int *hit_moving)
 {
     const top_level *top = &a->top[TOP_MOVING];
     /* every time on its own (--no-static-reuse), or many moving objects,
      * which the top-level BVH picks better: one ray per time */
-    if (!a->reuse_static || top->count > 64) {
+    if (!a->reuse_static || top->count > TOP_LEVEL_OWN_BVH) {
         for (int i = 0; i < n; i++)
-            hit_moving[i] = accel_trace_moving(a, org, dir, times[i], static_hits, &kbs[i]) > 0;
+            hit_moving[i] = trace_moving(a, org, dir, times[i], static_hits, &kbs[i]) > 0;
         return;
     }
     kbuffer *kb[ACCEL_PACKET];
@@ -734,6 +741,23 @@ void accel_trace_moving_times(const accel *a, vec3 org, vec3 dir, const double *
 void accel_trace(const accel *a, vec3 org, vec3 dir, double time, kbuffer *kb)
 {
     kbuffer static_hits;
-    accel_trace_static(a, org, dir, &static_hits);
-    accel_trace_moving(a, org, dir, time, &static_hits, kb);
+    trace_static(a, org, dir, &static_hits);
+    trace_moving(a, org, dir, time, &static_hits, kb);
+}
+
+void accel_ray_begin(const accel *a, vec3 org, vec3 dir, accel_ray *r)
+{
+    r->org = org, r->dir = dir;
+    trace_static(a, org, dir, &r->static_hits);
+    r->may_hit_moving = may_hit_moving(a, org, dir);
+}
+
+void accel_ray_trace_times(const accel *a, const accel_ray *r, const double *times, int n, kbuffer *kbs,
+                           const kbuffer **result)
+{
+    int hit_moving[ACCEL_PACKET] = {0};
+    if (r->may_hit_moving)
+        trace_moving_times(a, r->org, r->dir, times, n, &r->static_hits, kbs, hit_moving);
+    for (int i = 0; i < n; i++)
+        result[i] = hit_moving[i] ? &kbs[i] : &r->static_hits;
 }

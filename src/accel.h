@@ -42,40 +42,47 @@ void kbuffer_insert(kbuffer *kb, const surface_hit *h);
 
 typedef struct accel accel;
 
-/* Builds the BVHs for the scene (which must outlive the accel). epsilon and
- * sigma are the blending distance and kernel sigma in use. With
- * reuse_static = 0 every object is treated as moving and every time is
- * traced on its own, one ray through the top level (no packets of a ray's
- * times): the same images, slower; for benchmarks and tests. */
-int accel_build(const scene *s, double epsilon, double sigma, int reuse_static, accel **out, rr_error *err);
+typedef struct {
+    double open, close; /* the shutter interval the swept bounds cover */
+    double epsilon;     /* blending distance (world units) */
+    double sigma;       /* kernel sigma (splat radii) */
+    int reuse_static;   /* 0: every object is treated as moving and every time
+                           traced on its own, one ray through the top level (no
+                           packets of a ray's times): the same images, slower;
+                           for benchmarks and tests */
+} accel_settings;
+
+/* Builds the BVHs for the scene (which must outlive the accel). */
+int accel_build(const scene *s, const accel_settings *set, accel **out, rr_error *err);
 void accel_free(accel *a);
 
-/* After the scene's shutter changed (the next frame): recomputes the swept
+/* For another shutter interval (the next frame): recomputes the swept
  * bounds and the top levels; the objects' BVHs are kept. */
-int accel_set_shutter(accel *a, rr_error *err);
+int accel_set_shutter(accel *a, double open, double close, rr_error *err);
 
 /* World ray org + t*dir (dir unit) at scene time `time`: fills kb with the
  * epsilon-blended hit set. */
 void accel_trace(const accel *a, vec3 org, vec3 dir, double time, kbuffer *kb);
 
-/* The same in two steps, for reuse over the times of one ray: the hits of
- * the objects that do not move during the shutter (the same at every time),
- * then, per time, those hits plus the moving objects' (the ray is bounded by
- * the static hits from the start). The k-buffer keeps exactly the hits
- * within epsilon of the closest whatever the insertion order, so the result
- * equals accel_trace's. Returns the number of moving hits offered: 0 means
- * kb equals static_hits. */
-void accel_trace_static(const accel *a, vec3 org, vec3 dir, kbuffer *kb);
-int accel_trace_moving(const accel *a, vec3 org, vec3 dir, double time, const kbuffer *static_hits, kbuffer *kb);
-/* accel_trace_moving for up to ACCEL_PACKET times of the same world ray,
- * traced together as a packet: kbs[i] gets the hits at times[i] and
- * hit_moving[i] whether any moving object was hit. Same results. */
+/* One world ray traced at many times (a fixed camera's samples at one
+ * raster position share it): the objects that do not move during the
+ * shutter are traced once, in accel_ray_begin; accel_ray_trace_times adds
+ * the moving ones at up to ACCEL_PACKET times, as packets where the
+ * object-space rays are coherent. Each time's hits equal accel_trace's. */
+typedef struct {
+    vec3 org, dir;
+    kbuffer static_hits; /* the same at every time */
+    int may_hit_moving;  /* 0: the ray misses every moving object's swept bounds */
+} accel_ray;
+
 #define ACCEL_PACKET 16
-void accel_trace_moving_times(const accel *a, vec3 org, vec3 dir, const double *times, int n,
-                              const kbuffer *static_hits, kbuffer *kbs, int *hit_moving);
-/* 0 when the ray misses every moving object's swept bounds: then
- * accel_trace_moving would return the static hits at every time. */
-int accel_may_hit_moving(const accel *a, vec3 org, vec3 dir);
+void accel_ray_begin(const accel *a, vec3 org, vec3 dir, accel_ray *r);
+/* result[i] is the hit set at times[i]: &r->static_hits when no moving
+ * object is hit then (so callers can reuse what they derived from it),
+ * else &kbs[i]. */
+void accel_ray_trace_times(const accel *a, const accel_ray *r, const double *times, int n, kbuffer *kbs,
+                           const kbuffer **result);
+
 /* The most memory Embree held at once for the BVHs (build included). */
 size_t accel_embree_peak_bytes(const accel *a);
 

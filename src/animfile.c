@@ -15,6 +15,7 @@ typedef struct {
     int line;
     const char *name;
     rr_error *err;
+    rr_warnings *warnings; /* returned to the caller, never printed here */
     char tok[256];
     int tok_line;
 } lexer;
@@ -346,8 +347,7 @@ static int parse_anim(lexer *lx, keyframes *kf, char w[][64], int n, const units
     curve skipped = {0, NULL, INF_CONSTANT, INF_CONSTANT};
     curve_reader r = {ch >= 0 ? &kf->ch[ch] : &skipped, ch, 1.0, u->seconds_per_frame, u->radians_per_unit, 0};
     if (ch < 0)
-        fprintf(stderr, "refrender: warning: %s:%d: skipping curve of unsupported attribute '%s'\n", lx->name,
-                line, w[1]);
+        rr_warn(lx->warnings, "%s:%d: skipping curve of unsupported attribute '%s'", lx->name, line, w[1]);
     else if (seen[ch])
         return rr_fail(lx->err, "%s:%d: a second curve for '%s' (first at line %d)", lx->name, line, leaf, seen[ch]);
     else
@@ -358,8 +358,7 @@ static int parse_anim(lexer *lx, keyframes *kf, char w[][64], int n, const units
     if (rc)
         return -1;
     if (r.weighted && ch >= 0)
-        fprintf(stderr, "refrender: warning: %s:%d: '%s' is a weighted curve; tangent weights are ignored\n",
-                lx->name, line, leaf);
+        rr_warn(lx->warnings, "%s:%d: '%s' is a weighted curve; tangent weights are ignored", lx->name, line, leaf);
     rr_error sub;
     if (ch >= 0 && curve_prepare(r.c, &sub))
         return rr_fail(lx->err, "%s:%d: curve '%s': %s", lx->name, line, leaf, sub.msg);
@@ -370,12 +369,12 @@ static int parse_anim(lexer *lx, keyframes *kf, char w[][64], int n, const units
     return 0;
 }
 
-int animfile_parse(const char *text, const char *name, keyframes **out, rr_error *err)
+int animfile_parse(const char *text, const char *name, keyframes **out, rr_warnings *warnings, rr_error *err)
 {
     keyframes *kf = calloc(1, sizeof *kf);
     if (!kf)
         return rr_fail(err, "out of memory");
-    lexer lx = {text, 1, name, err, {0}, 1};
+    lexer lx = {text, 1, name, err, warnings, {0}, 1};
     units u = {1.0 / 24, 0.01, M_PI / 180, 1.1}; /* Maya's defaults: film, cm, deg */
     int seen[CH_COUNT] = {0}, curves = 0, versioned = 0;
     char w[16][64];
@@ -418,7 +417,7 @@ fail:
     return -1;
 }
 
-int animfile_load(const char *path, keyframes **out, uint64_t *content_hash, rr_error *err)
+int animfile_load(const char *path, keyframes **out, uint64_t *content_hash, rr_warnings *warnings, rr_error *err)
 {
     input_file in;
     if (input_file_read(path, ANIMFILE_MAX_BYTES, &in, err))
@@ -426,7 +425,7 @@ int animfile_load(const char *path, keyframes **out, uint64_t *content_hash, rr_
     if (content_hash)
         *content_hash = input_hash(*content_hash, in.data, in.len);
     int rc = strlen(in.data) != in.len ? rr_fail(err, "%s: binary data in a text .anim file", path)
-                                       : animfile_parse(in.data, path, out, err);
+                                       : animfile_parse(in.data, path, out, warnings, err);
     input_file_free(&in);
     return rc;
 }

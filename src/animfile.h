@@ -5,8 +5,9 @@
  * ntsc 30, pal 25, game 15, show 48, palf 50, ntscf 60 fps; sec, millisec,
  * min, hour), translate values from linearUnit to meters, rotate values and
  * tangent angles from angularUnit to radians. Unknown attributes are
- * skipped with a warning on stderr; tangent weights are read and ignored
- * (curves are evaluated unweighted), with a warning for weighted curves. */
+ * skipped with a warning (returned in *warnings, which may be NULL); tangent
+ * weights are read and ignored (curves are evaluated unweighted), with a
+ * warning for weighted curves. */
 #ifndef RR_ANIMFILE_H
 #define RR_ANIMFILE_H
 
@@ -20,9 +21,10 @@
 /* Reads path into *out (allocated; free with animation_free's keyframes
  * handling), folding the file's bytes into *content_hash unless it is NULL
  * (inputfile.h). Only regular files are read. Errors name the file and line. */
-int animfile_load(const char *path, keyframes **out, uint64_t *content_hash, rr_error *err);
+int animfile_load(const char *path, keyframes **out, uint64_t *content_hash, rr_warnings *warnings,
+                  rr_error *err);
 
 /* The same from text in memory; name is used in messages. */
-int animfile_parse(const char *text, const char *name, keyframes **out, rr_error *err);
+int animfile_parse(const char *text, const char *name, keyframes **out, rr_warnings *warnings, rr_error *err);
 
 #endif

@@ -174,7 +174,8 @@ static void *baseline_worker(void *arg)
         if (row >= job->sc->cam.height)
             break;
         for (int px = 0; px < job->sc->cam.width; px++) {
-            sampler_batch(smp, (uint64_t)row * job->sc->cam.width + px, px, row, 0, &ss, x, y, t);
+            sampler_batch(smp, job->rs->shut.open, job->rs->shut.close, (uint64_t)row * job->sc->cam.width + px, px,
+                          row, 0, &ss, x, y, t);
             int nhits = 0;
             for (int i = 0; i < n; i++) { /* the same rays the render path traces */
                 vec3 d = camera_ray_direction(&job->sc->cam, x[i], y[i]);
@@ -233,12 +234,22 @@ static double baseline_seconds(RTCScene rtc_scene, const scene *s, const render_
                                int count_distinct, double *splats_px)
 {
     baseline_job job = {rtc_scene, s, rs, same_rays, count_distinct, 0, PTHREAD_MUTEX_INITIALIZER, 0, 0};
-    pthread_t tids[64];
+    pthread_t *tids = calloc((size_t)rs->threads, sizeof *tids);
+    if (!tids) {
+        fprintf(stderr, "bench: out of memory\n");
+        exit(1);
+    }
+    int started = 0;
     double t0 = now();
-    for (int i = 0; i < rs->threads; i++)
-        pthread_create(&tids[i], NULL, baseline_worker, &job);
-    for (int i = 0; i < rs->threads; i++)
+    while (started < rs->threads && pthread_create(&tids[started], NULL, baseline_worker, &job) == 0)
+        started++;
+    for (int i = 0; i < started; i++)
         pthread_join(tids[i], NULL);
+    free(tids);
+    if (started < rs->threads) {
+        fprintf(stderr, "bench: could start only %d of %d threads\n", started, rs->threads);
+        exit(1);
+    }
     double seconds = now() - t0;
     if (count_distinct)
         *splats_px = job.covered ? (double)job.distinct / (double)job.covered : 0.0;
@@ -260,9 +271,16 @@ static double render_mrays(const scene *s, const accel *acc, const render_settin
     return img.rays / img.seconds * 1e-6;
 }
 
-static render_settings bench_settings(const bench_case *c)
+static int may_hit_moving(const accel *a, vec3 org, vec3 dir)
 {
-    render_settings rs = {{SAMPLER_THESIS, 1, 2, c->tspp, 4, 0.0, 1.0}, c->threads, 0, 1, 1, 0};
+    accel_ray ray;
+    accel_ray_begin(a, org, dir, &ray);
+    return ray.may_hit_moving;
+}
+
+static render_settings bench_settings(const bench_case *c, const scene *s)
+{
+    render_settings rs = {{SAMPLER_THESIS, 1, 2, c->tspp, 4}, s->shut, c->threads, 0, 1, 1, 0};
     return rs;
 }
 
@@ -270,7 +288,8 @@ static accel *build_or_die(const scene *s, int reuse_static)
 {
     accel *acc;
     rr_error err;
-    if (accel_build(s, s->epsilon, s->kernel_sigma, reuse_static, &acc, &err)) {
+    accel_settings set = {s->shut.open, s->shut.close, s->epsilon, s->kernel_sigma, reuse_static};
+    if (accel_build(s, &set, &acc, &err)) {
         fprintf(stderr, "bench: %s\n", err.msg);
         exit(1);
     }
@@ -282,7 +301,7 @@ static accel *setup_case(const bench_case *c, scene *s, surfel **surfels, size_t
                          bench_result *r)
 {
     build_scene(c, s, surfels, n);
-    *rs = bench_settings(c);
+    *rs = bench_settings(c, s);
     double t0 = now();
     accel *acc = build_or_die(s, 1);
     r->build_ms = 1e3 * (now() - t0);
@@ -320,7 +339,7 @@ static void run_pair_case(const bench_case *c, bench_result *r)
     int meets = 0;
     for (int y = 0; y < c->res; y++)
         for (int x = 0; x < c->res; x++)
-            meets += accel_may_hit_moving(with, s.cam.position, camera_ray_direction(&s.cam, x + 0.5, y + 0.5));
+            meets += may_hit_moving(with, s.cam.position, camera_ray_direction(&s.cam, x + 0.5, y + 0.5));
     r->moving_share = meets / ((double)c->res * c->res);
     if (without != with)
         accel_free(without);

@@ -14,6 +14,19 @@ int rr_fail(rr_error *err, const char *fmt, ...)
     return -1;
 }
 
+void rr_warn(rr_warnings *w, const char *fmt, ...)
+{
+    if (!w)
+        return;
+    if (w->count < RR_WARNINGS_KEPT) {
+        va_list ap;
+        va_start(ap, fmt);
+        vsnprintf(w->msg[w->count], sizeof w->msg[w->count], fmt, ap);
+        va_end(ap);
+    }
+    w->count++;
+}
+
 int cmp_double(const void *a, const void *b)
 {
     double x = *(const double *)a, y = *(const double *)b;

@@ -9,6 +9,10 @@
 
 #define RR_VERSION "0.1.0"
 
+#ifdef __cplusplus
+extern "C" { /* preview.cpp reports through rr_error too */
+#endif
+
 typedef struct {
     char msg[1024];
 } rr_error;
@@ -22,8 +26,22 @@ typedef struct {
 int rr_fail(rr_error *err, const char *fmt, ...)
     __attribute__((format(printf, 2, 3)));
 
+/* Warnings a reader returns to its caller, who decides to print them (only
+ * main() prints). The first RR_WARNINGS_KEPT are kept, the rest counted. */
+#define RR_WARNINGS_KEPT 8
+typedef struct {
+    int count; /* all warnings, kept or not */
+    char msg[RR_WARNINGS_KEPT][512];
+} rr_warnings;
+
+void rr_warn(rr_warnings *w, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+
 /* qsort comparator for doubles, ascending. */
 int cmp_double(const void *a, const void *b);
+
+#ifdef __cplusplus
+}
+#endif
 
 typedef struct {
     double x, y, z;

@@ -1,6 +1,8 @@
 #include "film.h"
 
 #include <math.h>
+#include <stdlib.h>
+#include <string.h>
 
 int film_add_batch(pixel_state *p, const double estimate[4])
 {
@@ -67,4 +69,35 @@ double film_max_stderr(const pixel_state *p)
         return INFINITY;
     film_resolve(p, mean, var);
     return sqrt(fmax(var[0], fmax(var[1], var[2])));
+}
+
+int image_alloc(image *img, int width, int height)
+{
+    memset(img, 0, sizeof *img);
+    img->width = width;
+    img->height = height;
+    img->px = calloc((size_t)width * (size_t)height, sizeof *img->px);
+    return img->px ? 0 : -1;
+}
+
+void image_free(image *img)
+{
+    free(img->px);
+    img->px = NULL;
+}
+
+void image_resolve(const image *img, int samples_per_batch, float *rgba, float *variance,
+                   float *stderr_rgba, float *samples)
+{
+    size_t n = (size_t)img->width * img->height;
+    for (size_t i = 0; i < n; i++) {
+        double mean[4], var[4];
+        film_resolve(&img->px[i], mean, var);
+        for (int c = 0; c < 4; c++) {
+            rgba[4 * i + c] = (float)mean[c];
+            variance[4 * i + c] = (float)var[c];
+            stderr_rgba[4 * i + c] = (float)sqrt(var[c]);
+        }
+        samples[i] = (float)img->px[i].batches * (float)samples_per_batch;
+    }
 }

@@ -48,4 +48,20 @@ void film_resolve(const pixel_state *p, double mean[4], double var_of_mean[4]);
 /* Largest standard error of the pixel's RGB mean (INFINITY for B < 2). */
 double film_max_stderr(const pixel_state *p);
 
+/* An image of pixel states, with the render's counters. */
+typedef struct {
+    int width, height;
+    pixel_state *px;        /* width * height; may hold batches from a checkpoint */
+    uint64_t rays, kbuffer_overflows, clamped;
+    double seconds;
+} image;
+
+int image_alloc(image *img, int width, int height);
+void image_free(image *img);
+
+/* Final values per pixel: mean RGBA, variance of the mean and standard
+ * error (NaN with fewer than 2 batches), and the number of samples. */
+void image_resolve(const image *img, int samples_per_batch, float *rgba, float *variance,
+                   float *stderr_rgba, float *samples);
+
 #endif

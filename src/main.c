@@ -9,6 +9,7 @@
 
 #include "cli.h"
 #include "output.h"
+#include "render_attrs.h"
 #include "preview.h"
 #include "scene_xml.h"
 
@@ -340,7 +341,8 @@ static uint32_t max_batches_of(const render_options *o)
     return o->max_batches ? (uint32_t)o->max_batches : (uint32_t)(eight < FILM_MAX_BATCHES ? eight : FILM_MAX_BATCHES);
 }
 
-static void setup_run(render_run *run, const scene *s, const render_options *o, const char *cmdline)
+static void setup_run(render_run *run, const scene *s, const shutter *shut, const render_options *o,
+                      const char *cmdline)
 {
     uint32_t total = (uint32_t)o->batches;
     uint32_t begin = o->passes ? (uint32_t)((uint64_t)o->pass * total / o->passes) : 0;
@@ -348,7 +350,7 @@ static void setup_run(render_run *run, const scene *s, const render_options *o, 
     run->o = o;
     run->total_batches = total;
     run->rs = (render_settings){
-        {o->sampler, o->seed, sampler_grid_for_spp(o->spp), o->tspp, s->time_factor, s->shut.open, s->shut.close},
+        {o->sampler, o->seed, sampler_grid_for_spp(o->spp), o->tspp, s->time_factor}, *shut,
         o->threads, begin, end - begin, max_batches_of(o), o->target_error};
     run->attrs.n = 0;
     attrs_for_render(&run->attrs, s, &run->rs, total, cmdline);
@@ -362,7 +364,7 @@ static int write_preview(const char *path, const image *img, rr_error *err)
     int rc = rgba && var && se && samples ? 0 : rr_fail(err, "out of memory");
     if (!rc) {
         image_resolve(img, 1, rgba, var, se, samples);
-        rc = preview_write_srgb(path, img->width, img->height, rgba, err->msg, (int)sizeof err->msg);
+        rc = preview_write_srgb(path, img->width, img->height, rgba, err);
     }
     free(rgba), free(var), free(se), free(samples);
     return rc;
@@ -408,12 +410,12 @@ static void warn_about_settings(const render_options *o, const render_settings *
         fprintf(stderr, "refrender: note: sobol works best with a power-of-two spp*tspp (now %d)\n", n);
 }
 
-/* Renders the scene's current shutter into o->output (or a frame's name). */
-static int render_one(scene *s, accel *acc, const render_options *o, const char *cmdline, const char *output,
-                      const char *preview, rr_error *err)
+/* Renders one shutter interval (a frame) into output (and preview). */
+static int render_one(const scene *s, const shutter *shut, accel *acc, const render_options *o, const char *cmdline,
+                      const char *output, const char *preview, rr_error *err)
 {
     render_run run;
-    setup_run(&run, s, o, cmdline);
+    setup_run(&run, s, shut, o, cmdline);
     warn_about_settings(o, &run.rs);
     image img;
     if (o->resume ? resume_state(&run, &img, err) : (image_alloc(&img, s->cam.width, s->cam.height)
@@ -464,21 +466,31 @@ static int check_distinct_files(const scene *s, const render_options *o, const c
     return 0;
 }
 
+/* Frame f's shutter; without <frames> the scene's own. */
+static int frame_shutter(const scene *s, const render_options *o, long long f, shutter *out, rr_error *err)
+{
+    *out = s->shut;
+    return o->frames ? scene_frame_shutter(s, (int)f, out, err) : 0;
+}
+
 /* One frame or a sequence, sharing the loaded models and their BVHs; only
  * the top levels are rebuilt for each frame's shutter. */
-static int render_and_write(scene *s, const render_options *o, const char *cmdline, rr_error *err)
+static int render_and_write(const scene *s, const render_options *o, const char *cmdline, rr_error *err)
 {
     accel *acc;
-    if (o->frames && scene_set_frame(s, o->first_frame, err))
+    shutter shut;
+    if (frame_shutter(s, o, o->first_frame, &shut, err))
         return -1;
-    if (accel_build(s, s->epsilon, s->kernel_sigma, !o->no_static_reuse, &acc, err))
+    accel_settings set = {shut.open, shut.close, s->epsilon, s->kernel_sigma, !o->no_static_reuse};
+    if (accel_build(s, &set, &acc, err))
         return -1;
     install_signal_handlers();
     int rc = 0;
     /* 64-bit: --frame 2147483647 must not wrap around into more frames */
     for (long long f = o->first_frame; !rc && f <= o->last_frame; f++) {
         char out[PATH_MAX], prev[PATH_MAX];
-        if (o->frames && (scene_set_frame(s, (int)f, err) || accel_set_shutter(acc, err))) {
+        if (f > o->first_frame &&
+            (frame_shutter(s, o, f, &shut, err) || accel_set_shutter(acc, shut.open, shut.close, err))) {
             rc = -1;
             break;
         }
@@ -490,11 +502,19 @@ static int render_and_write(scene *s, const render_options *o, const char *cmdli
             break;
         }
         if (o->frames == 2 && !o->quiet)
-            fprintf(stderr, "refrender: frame %lld: shutter [%g, %g] -> %s\n", f, s->shut.open, s->shut.close, out);
-        rc = render_one(s, acc, o, cmdline, out, o->preview ? prev : NULL, err);
+            fprintf(stderr, "refrender: frame %lld: shutter [%g, %g] -> %s\n", f, shut.open, shut.close, out);
+        rc = render_one(s, &shut, acc, o, cmdline, out, o->preview ? prev : NULL, err);
     }
     accel_free(acc);
     return rc;
+}
+
+static void print_warnings(const rr_warnings *w)
+{
+    for (int i = 0; i < w->count && i < RR_WARNINGS_KEPT; i++)
+        fprintf(stderr, "refrender: warning: %s\n", w->msg[i]);
+    if (w->count > RR_WARNINGS_KEPT)
+        fprintf(stderr, "refrender: warning: ... and %d more warnings\n", w->count - RR_WARNINGS_KEPT);
 }
 
 int cmd_render(int argc, char **argv)
@@ -515,11 +535,12 @@ int cmd_render(int argc, char **argv)
     char cmdline[2048];
     join_args(argc, argv, cmdline, sizeof cmdline);
     if (cli_check_writable(o.output, &err) || (o.preview && cli_check_writable(o.preview, &err)) ||
-        (o.preview && preview_check_format(o.preview, err.msg, (int)sizeof err.msg)) ||
+        (o.preview && preview_check_format(o.preview, &err)) ||
         (o.checkpoint && cli_check_writable(o.checkpoint, &err)) || scene_load_file(o.scene, &s, &err)) {
         fprintf(stderr, "refrender: %s\n", err.msg);
         return 1;
     }
+    print_warnings(&s.warnings);
     rc = apply_overrides(&s, &o, &err) ? -1 : render_and_write(&s, &o, cmdline, &err);
     scene_free(&s);
     if (rc) {

@@ -18,8 +18,10 @@ void attrs_set(attr_list *a, const char *key, const char *fmt, ...)
     int i = 0;
     while (i < a->n && strcmp(a->key[i], key))
         i++;
-    if (i == ATTR_MAX)
-        return;
+    if (i == ATTR_MAX) { /* the keys are refrender's own: more is a programming error, never dropped silently */
+        fprintf(stderr, "refrender: internal error: more than %d EXR attributes (adding '%s')\n", ATTR_MAX, key);
+        abort();
+    }
     if (i == a->n) {
         a->n++;
         snprintf(a->key[i], sizeof a->key[i], "%s", key);
@@ -36,44 +38,6 @@ const char *attrs_get(const attr_list *a, const char *key)
         if (!strcmp(a->key[i], key))
             return a->value[i];
     return NULL;
-}
-
-static void describe_weight(const shutter *sh, char *buf, size_t size)
-{
-    if (sh->kind == WEIGHT_LINEAR)
-        snprintf(buf, size, "linear center=%.17g", sh->center);
-    else if (sh->kind == WEIGHT_EXP)
-        snprintf(buf, size, "exp center=%.17g rate=%.17g", sh->center, sh->rate);
-    else if (sh->kind == WEIGHT_TABLE) {
-        size_t len = (size_t)snprintf(buf, size, "table");
-        for (int i = 0; i < sh->table_size && len < size; i++)
-            len += (size_t)snprintf(buf + len, size - len, " %.17g %.17g", sh->table_t[i], sh->table_w[i]);
-    } else
-        snprintf(buf, size, "box");
-}
-
-void attrs_for_render(attr_list *a, const scene *s, const render_settings *rs, uint32_t total_batches,
-                      const char *command)
-{
-    char weight[4096];
-    describe_weight(&s->shut, weight, sizeof weight);
-    const sampler *smp = &rs->smp;
-    attrs_set(a, "refrender:scene", "%s", s->path);
-    attrs_set(a, "refrender:sceneHash", "%016" PRIx64, s->scene_hash);
-    attrs_set(a, "refrender:inputsHash", "%016" PRIx64, s->inputs_hash);
-    attrs_set(a, "refrender:resolution", "%dx%d", s->cam.width, s->cam.height);
-    attrs_set(a, "refrender:sampler", "%s", sampler_name(smp->kind));
-    attrs_set(a, "refrender:spp", "%d", smp->grid * smp->grid);
-    attrs_set(a, "refrender:tspp", "%d", smp->tspp);
-    attrs_set(a, "refrender:seed", "%" PRIu64, smp->seed);
-    attrs_set(a, "refrender:epsilon", "%.17g", s->epsilon);
-    attrs_set(a, "refrender:kernelSigma", "%.17g", s->kernel_sigma);
-    attrs_set(a, "refrender:shutter", "%.17g %.17g", s->shut.open, s->shut.close);
-    attrs_set(a, "refrender:weightFunction", "%s", weight);
-    attrs_set(a, "refrender:timeFactor", "%d", smp->time_factor);
-    attrs_set(a, "refrender:batches", "%u", total_batches);
-    attrs_set(a, "refrender:command", "%s", command);
-    attrs_set(a, "software", "refrender %s", RR_VERSION);
 }
 
 int attrs_check_identity(const attr_list *a, const char *a_name, const attr_list *b, const char *b_name,

@@ -12,9 +12,10 @@
 #ifndef RR_OUTPUT_H
 #define RR_OUTPUT_H
 
-#include "render.h"
+#include "common.h"
+#include "film.h"
 
-#define ATTR_MAX 24
+#define ATTR_MAX 32
 
 typedef struct {
     int n;
@@ -25,9 +26,6 @@ typedef struct {
 void attrs_set(attr_list *a, const char *key, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
 const char *attrs_get(const attr_list *a, const char *key);
 
-/* Identity and provenance attributes of a render. */
-void attrs_for_render(attr_list *a, const scene *s, const render_settings *rs, uint32_t total_batches,
-                      const char *command);
 
 
 int output_write_final(const char *path, const image *img, int samples_per_batch, const attr_list *a,

@@ -18,10 +18,9 @@ static unsigned char srgb8(float linear)
     return (unsigned char)std::lround(e * 255.f);
 }
 
-static int fail(char *msg, int size, const std::string &what)
+static int fail(rr_error *err, const std::string &what)
 {
-    std::snprintf(msg, (size_t)size, "%s", what.c_str());
-    return -1;
+    return rr_fail(err, "%s", what.c_str());
 }
 
 static std::string extension_of(const std::string &p)
@@ -30,15 +29,15 @@ static std::string extension_of(const std::string &p)
     return dot != std::string::npos && (slash == std::string::npos || dot > slash) ? p.substr(dot) : std::string();
 }
 
-extern "C" int preview_check_format(const char *path, char *msg, int msg_size)
+extern "C" int preview_check_format(const char *path, rr_error *err)
 {
     std::string ext = extension_of(path);
     auto out = OIIO::ImageOutput::create(ext.empty() ? std::string("none") : ext.substr(1));
     if (!out)
-        return fail(msg, msg_size, std::string(path) + ": no image format for the extension '" + ext +
+        return fail(err, std::string(path) + ": no image format for the extension '" + ext +
                                        "' (use e.g. .png)");
     if (!out->supports("ioproxy"))
-        return fail(msg, msg_size, std::string(path) + ": OpenImageIO cannot write '" + ext +
+        return fail(err, std::string(path) + ": OpenImageIO cannot write '" + ext +
                                        "' through memory, which refrender needs to check every write (use .png)");
     return 0;
 }
@@ -75,26 +74,23 @@ static bool write_all(const char *name, const std::vector<unsigned char> &bytes)
     return std::fclose(f) == 0 && ok;
 }
 
-extern "C" int preview_write_srgb(const char *path, int w, int h, const float *rgba, char *msg, int msg_size)
+extern "C" int preview_write_srgb(const char *path, int w, int h, const float *rgba, rr_error *err)
 {
     std::string p(path), why;
-    if (preview_check_format(path, msg, msg_size))
+    if (preview_check_format(path, err))
         return -1;
     std::vector<unsigned char> px((size_t)w * h * 3), bytes;
     for (size_t i = 0; i < (size_t)w * h; i++)
         for (int c = 0; c < 3; c++)
             px[3 * i + c] = srgb8(rgba[4 * i + c]);
     if (!encode(p, w, h, px, bytes, why))
-        return fail(msg, msg_size, p + ": cannot encode preview: " + why);
+        return fail(err, p + ": cannot encode preview: " + why);
     std::vector<char> name(p.size() + 128);
-    rr_error err;
-    if (atomic_create(path, extension_of(p).c_str(), name.data(), name.size(), &err))
-        return fail(msg, msg_size, err.msg);
+    if (atomic_create(path, extension_of(p).c_str(), name.data(), name.size(), err))
+        return -1;
     if (!write_all(name.data(), bytes)) {
         atomic_discard(name.data());
-        return fail(msg, msg_size, p + ": cannot write preview (disk full?)");
+        return fail(err, p + ": cannot write preview (disk full?)");
     }
-    if (atomic_commit(name.data(), path, &err))
-        return fail(msg, msg_size, err.msg);
-    return 0;
+    return atomic_commit(name.data(), path, err);
 }

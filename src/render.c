@@ -20,6 +20,7 @@ typedef struct {
     uint32_t round; /* pixels holding `round` batches render batch batch_begin + round */
     atomic_int next_tile, workers_left;
     atomic_uint_fast64_t rays, overflows, clamped, pixel_batches;
+    atomic_int scratch_failed; /* a worker could not allocate its scratch */
     pthread_mutex_t lock;
     pthread_cond_t cond;
     int paused, active; /* under lock: pause requested; workers inside a tile */
@@ -46,56 +47,47 @@ static void sample_color(const render_job *job, vec3 eye, vec3 dir, const kbuffe
     rgba[0] = c.x, rgba[1] = c.y, rgba[2] = c.z, rgba[3] = kb->count ? 1.0 : 0.0;
 }
 
-/* Per ray direction: the static objects' hits and their color, computed
- * once and reused for every time at which no moving object is hit. */
+/* Per raster position (a fixed camera's world ray): its static hits from
+ * accel, and their color, shaded once and reused for every time at which
+ * no moving object is hit. */
 typedef struct {
     double x, y;
-    vec3 dir;
-    kbuffer hits;
+    accel_ray ray;
     double rgba[4];
     int shaded;
-    int may_hit_moving; /* the ray meets a moving object's swept bounds */
 } static_cache;
 
-/* The color of one sample whose hits are `result`; the static hits' color
- * is shaded once per ray and reused. */
+/* The color of one sample whose hits are `result`. */
 static void fixed_camera_color(render_job *job, static_cache *sc, const kbuffer *result, double rgba[4],
                                uint64_t *overflows)
 {
     *overflows += result->dropped > 0;
-    if (result == &sc->hits && sc->shaded) {
+    int is_static = result == &sc->ray.static_hits;
+    if (is_static && sc->shaded) {
         memcpy(rgba, sc->rgba, sizeof sc->rgba);
         return;
     }
-    sample_color(job, job->sc->cam.position, sc->dir, result, rgba);
-    if (result == &sc->hits) {
+    sample_color(job, job->sc->cam.position, sc->ray.dir, result, rgba);
+    if (is_static) {
         memcpy(sc->rgba, rgba, sizeof sc->rgba);
         sc->shaded = 1;
     }
 }
 
-/* A fixed camera: samples at the same raster position share one world ray,
- * whose static hits are traced once (see static_cache) and whose n <=
- * ACCEL_PACKET times are traced against the moving objects as one packet. */
+/* A fixed camera: samples at the same raster position share one world ray
+ * (accel_ray), whose n <= ACCEL_PACKET times are traced together. */
 static void samples_fixed_camera(render_job *job, static_cache *sc, double x, double y, const double *t, int n,
                                  double (*rgba)[4], uint64_t *overflows)
 {
     if (x != sc->x || y != sc->y) {
         sc->x = x, sc->y = y, sc->shaded = 0;
-        sc->dir = camera_ray_direction(&job->sc->cam, x, y);
-        accel_trace_static(job->acc, job->sc->cam.position, sc->dir, &sc->hits);
-        sc->may_hit_moving = accel_may_hit_moving(job->acc, job->sc->cam.position, sc->dir);
-    }
-    if (!sc->may_hit_moving) {
-        for (int i = 0; i < n; i++)
-            fixed_camera_color(job, sc, &sc->hits, rgba[i], overflows);
-        return;
+        accel_ray_begin(job->acc, job->sc->cam.position, camera_ray_direction(&job->sc->cam, x, y), &sc->ray);
     }
     kbuffer kbs[ACCEL_PACKET];
-    int hit_moving[ACCEL_PACKET];
-    accel_trace_moving_times(job->acc, job->sc->cam.position, sc->dir, t, n, &sc->hits, kbs, hit_moving);
+    const kbuffer *result[ACCEL_PACKET];
+    accel_ray_trace_times(job->acc, &sc->ray, t, n, kbs, result);
     for (int i = 0; i < n; i++)
-        fixed_camera_color(job, sc, hit_moving[i] ? &kbs[i] : &sc->hits, rgba[i], overflows);
+        fixed_camera_color(job, sc, result[i], rgba[i], overflows);
 }
 
 /* A moving camera (thesis eq. 3.6): every sample has its own world ray. */
@@ -124,7 +116,7 @@ static int next_group(const render_job *job, const thread_scratch *scr, int firs
             end++;
     *n = 0;
     for (int i = first; i < end; i++) {
-        double wi = shutter_weight(&job->sc->shut, scr->t[i]);
+        double wi = shutter_weight(&job->rs->shut, scr->t[i]);
         if (wi != 0) /* contributes nothing to either sum */
             t[*n] = scr->t[i], w[(*n)++] = wi;
     }
@@ -140,7 +132,8 @@ static void render_pixel_batch(render_job *job, int px, int py, uint32_t batch, 
 {
     const sampler *smp = &job->rs->smp;
     uint64_t pixel = (uint64_t)py * (uint64_t)job->img->width + (uint64_t)px;
-    sampler_batch(smp, pixel, px, py, batch, &scr->ss, scr->x, scr->y, scr->t);
+    sampler_batch(smp, job->rs->shut.open, job->rs->shut.close, pixel, px, py, batch, &scr->ss, scr->x, scr->y,
+                  scr->t);
     double acc[4] = {0, 0, 0, 0}, wsum = 0;
     static_cache sc;
     sc.x = sc.y = NAN;
@@ -246,7 +239,9 @@ static void *worker(void *arg)
 {
     render_job *job = arg;
     thread_scratch scr;
-    if (scratch_init(&scr, &job->rs->smp) == 0)
+    if (scratch_init(&scr, &job->rs->smp))
+        atomic_store(&job->scratch_failed, 1); /* the render fails: no silently black tiles */
+    else
         while (!enter_work(job)) {
             int tile = atomic_fetch_add(&job->next_tile, 1);
             if (tile < job->ntiles)
@@ -335,6 +330,8 @@ static int run_round(render_job *job, const render_hooks *hooks, double start, d
     for (int i = 0; i < started; i++)
         pthread_join(tids[i], NULL);
     free(tids);
+    if (!rc && atomic_load(&job->scratch_failed))
+        rc = rr_fail(err, "out of memory for a render thread's samples (%d per batch)", sampler_count(&job->rs->smp));
     return rc;
 }
 
@@ -403,35 +400,4 @@ int render_image(const scene *s, const accel *a, const render_settings *rs, imag
     if (hooks && hooks->progress)
         hooks->progress(hooks->user, 1.0, img->rays, img->seconds);
     return 0;
-}
-
-int image_alloc(image *img, int width, int height)
-{
-    memset(img, 0, sizeof *img);
-    img->width = width;
-    img->height = height;
-    img->px = calloc((size_t)width * (size_t)height, sizeof *img->px);
-    return img->px ? 0 : -1;
-}
-
-void image_free(image *img)
-{
-    free(img->px);
-    img->px = NULL;
-}
-
-void image_resolve(const image *img, int samples_per_batch, float *rgba, float *variance,
-                   float *stderr_rgba, float *samples)
-{
-    size_t n = (size_t)img->width * img->height;
-    for (size_t i = 0; i < n; i++) {
-        double mean[4], var[4];
-        film_resolve(&img->px[i], mean, var);
-        for (int c = 0; c < 4; c++) {
-            rgba[4 * i + c] = (float)mean[c];
-            variance[4 * i + c] = (float)var[c];
-            stderr_rgba[4 * i + c] = (float)sqrt(var[c]);
-        }
-        samples[i] = (float)img->px[i].batches * (float)samples_per_batch;
-    }
 }

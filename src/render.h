@@ -9,9 +9,11 @@
 #include "accel.h"
 #include "film.h"
 #include "sampler.h"
+#include "shutter.h"
 
 typedef struct {
-    sampler smp;            /* kind, seed, counts, shutter */
+    sampler smp;            /* kind, seed, counts */
+    shutter shut;           /* the interval sampled and the weight a(t) */
     int threads;
     uint32_t batch_begin;   /* index of this render's first batch (passes) */
     uint32_t batches;       /* batches every pixel gets */
@@ -19,15 +21,6 @@ typedef struct {
     double target_error;    /* > 0: pixels whose RGB standard error is above it get more batches */
 } render_settings;
 
-typedef struct {
-    int width, height;
-    pixel_state *px;        /* width * height; may hold batches from a checkpoint */
-    uint64_t rays, kbuffer_overflows, clamped;
-    double seconds;
-} image;
-
-int image_alloc(image *img, int width, int height);
-void image_free(image *img);
 
 typedef struct {
     /* about 5 times a second, and once at the end with fraction 1 */
@@ -48,10 +41,5 @@ typedef struct {
  * checkpoint, if there is a hook) or on error. */
 int render_image(const scene *s, const accel *a, const render_settings *rs, image *img,
                  const render_hooks *hooks, volatile sig_atomic_t *cancel, rr_error *err);
-
-/* Final values per pixel: mean RGBA, variance of the mean and standard
- * error (NaN with fewer than 2 batches), and the number of samples. */
-void image_resolve(const image *img, int samples_per_batch, float *rgba, float *variance,
-                   float *stderr_rgba, float *samples);
 
 #endif

@@ -88,7 +88,8 @@ void sampler_scratch_free(sampler_scratch *sc)
  * listed in order): successive object-space rays of a moving object are
  * then neighbours, so their BVH nodes and splats are still in cache. The
  * set of samples does not depend on the order. */
-static void thesis_times(const sampler *s, uint64_t key, int i, sampler_scratch *sc, double *times)
+static void thesis_times(const sampler *s, double t0, double t1, uint64_t key, int i, sampler_scratch *sc,
+                         double *times)
 {
     int m = s->tspp * s->time_factor, words = (m + 63) / 64;
     for (int j = 0; j < m; j++)
@@ -110,12 +111,12 @@ static void thesis_times(const sampler *s, uint64_t key, int i, sampler_scratch 
     for (int w = 0; w < words; w++)
         for (uint64_t bits = sc->taken[w]; bits; bits &= bits - 1) {
             int j = 64 * w + __builtin_ctzll(bits);
-            double t = s->t0 + (s->t1 - s->t0) * (j + sc->jitter[j]) / m;
-            times[k++] = t < s->t1 ? t : nextafter(s->t1, s->t0);
+            double t = t0 + (t1 - t0) * (j + sc->jitter[j]) / m;
+            times[k++] = t < t1 ? t : nextafter(t1, t0);
         }
 }
 
-static void thesis_batch(const sampler *s, uint64_t seed, uint64_t pixel, int px, int py,
+static void thesis_batch(const sampler *s, double t0, double t1, uint64_t seed, uint64_t pixel, int px, int py,
                          sampler_scratch *sc, double *x, double *y, double *t)
 {
     int k = s->grid, m = s->tspp * s->time_factor;
@@ -125,7 +126,7 @@ static void thesis_batch(const sampler *s, uint64_t seed, uint64_t pixel, int px
     for (int i = 0; i < k * k; i++) {
         double sx = px + (i % k + uniform_keyed(key, (uint64_t)i, DIM_X)) / k;
         double sy = py + (i / k + uniform_keyed(key, (uint64_t)i, DIM_Y)) / k;
-        thesis_times(s, key, i, sc, t + (size_t)i * s->tspp);
+        thesis_times(s, t0, t1, key, i, sc, t + (size_t)i * s->tspp);
         for (int j = 0; j < s->tspp; j++) {
             x[(size_t)i * s->tspp + j] = sx;
             y[(size_t)i * s->tspp + j] = sy;
@@ -135,7 +136,7 @@ static void thesis_batch(const sampler *s, uint64_t seed, uint64_t pixel, int px
 
 /* ---- jittered 3D --------------------------------------------------------- */
 
-static void jittered3d_batch(const sampler *s, uint64_t seed, uint64_t pixel, int px, int py,
+static void jittered3d_batch(const sampler *s, double t0, double t1, uint64_t seed, uint64_t pixel, int px, int py,
                              double *x, double *y, double *t)
 {
     int k = s->grid, n = sampler_count(s);
@@ -145,7 +146,7 @@ static void jittered3d_batch(const sampler *s, uint64_t seed, uint64_t pixel, in
         x[i] = px + (cell % k + uniform_keyed(key, (uint64_t)i, DIM_X)) / k;
         y[i] = py + (cell / k + uniform_keyed(key, (uint64_t)i, DIM_Y)) / k;
         double u = (slot + uniform_keyed(key, (uint64_t)i, DIM_T)) / s->tspp;
-        t[i] = fmin(s->t0 + (s->t1 - s->t0) * u, nextafter(s->t1, s->t0));
+        t[i] = fmin(t0 + (t1 - t0) * u, nextafter(t1, t0));
     }
 }
 
@@ -222,7 +223,7 @@ static double sobol_sample(uint32_t index, int dim, uint64_t seed, uint64_t pixe
     return (v + 0.5) * (1.0 / 4294967296.0); /* cell center: never 0 or 1 */
 }
 
-static void sobol_batch(const sampler *s, uint64_t pixel, int px, int py, uint32_t batch,
+static void sobol_batch(const sampler *s, double t0, double t1, uint64_t pixel, int px, int py, uint32_t batch,
                         double *x, double *y, double *t)
 {
     int n = sampler_count(s);
@@ -230,24 +231,24 @@ static void sobol_batch(const sampler *s, uint64_t pixel, int px, int py, uint32
         uint32_t index = batch * (uint32_t)n + (uint32_t)i;
         x[i] = px + sobol_sample(index, 0, s->seed, pixel);
         y[i] = py + sobol_sample(index, 1, s->seed, pixel);
-        t[i] = s->t0 + (s->t1 - s->t0) * sobol_sample(index, 2, s->seed, pixel);
+        t[i] = t0 + (t1 - t0) * sobol_sample(index, 2, s->seed, pixel);
     }
 }
 
-void sampler_batch(const sampler *s, uint64_t pixel, int px, int py, uint32_t batch,
+void sampler_batch(const sampler *s, double t0, double t1, uint64_t pixel, int px, int py, uint32_t batch,
                    sampler_scratch *sc, double *x, double *y, double *t)
 {
     /* batches of the hashed samplers draw from independent streams */
     uint64_t seed = batch == 0 ? s->seed : mix64(s->seed ^ mix64(0xba7c400000000000ULL + batch));
     switch (s->kind) {
     case SAMPLER_THESIS:
-        thesis_batch(s, seed, pixel, px, py, sc, x, y, t);
+        thesis_batch(s, t0, t1, seed, pixel, px, py, sc, x, y, t);
         break;
     case SAMPLER_JITTERED3D:
-        jittered3d_batch(s, seed, pixel, px, py, x, y, t);
+        jittered3d_batch(s, t0, t1, seed, pixel, px, py, x, y, t);
         break;
     case SAMPLER_SOBOL:
-        sobol_batch(s, pixel, px, py, batch, x, y, t);
+        sobol_batch(s, t0, t1, pixel, px, py, batch, x, y, t);
         break;
     }
 }

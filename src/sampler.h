@@ -8,7 +8,7 @@
  *
  * thesis (Wolf 2008, sec. 4.5): K x K jittered positions; for each, tspp
  *   times taken as a random subset of a finer jittered grid of
- *   tspp * time_factor strata over [t0, t1] (jittered once per pixel and
+ *   tspp * time_factor strata over the shutter [t0, t1] (jittered once per pixel and
  *   batch, subset by partial Fisher-Yates). Each stratum is equally likely
  *   and its jitter uniform, so each time is uniform on [t0, t1].
  * jittered3d: one sample in each cell of a K x K x tspp grid over
@@ -31,7 +31,6 @@ typedef struct {
     int grid;        /* K: spatial strata per axis (thesis, jittered3d); n = K*K*tspp */
     int tspp;        /* temporal samples per spatial sample */
     int time_factor; /* thesis: fine time grid factor */
-    double t0, t1;
 } sampler;
 
 /* Largest accepted values (keep per-pixel scratch small and counts sane). */
@@ -57,9 +56,9 @@ int sampler_scratch_init(sampler_scratch *sc, const sampler *s);
 void sampler_scratch_free(sampler_scratch *sc);
 
 /* The n samples of batch `batch` of pixel (px, py) (pixel = py * width + px):
- * raster positions x, y and times t. For the thesis sampler, samples
- * k*tspp .. k*tspp + tspp - 1 share spatial position k. */
-void sampler_batch(const sampler *s, uint64_t pixel, int px, int py, uint32_t batch,
+ * raster positions x, y and times t in [t0, t1) (the shutter). For the
+ * thesis sampler, samples k*tspp .. k*tspp + tspp - 1 share spatial position k. */
+void sampler_batch(const sampler *s, double t0, double t1, uint64_t pixel, int px, int py, uint32_t batch,
                    sampler_scratch *sc, double *x, double *y, double *t);
 
 /* Building blocks, exposed for tests. */

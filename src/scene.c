@@ -31,17 +31,17 @@ void scene_camera_ray(const scene *s, double x, double y, double t, vec3 *org, v
     *dir = xform_vector(&m, d);
 }
 
-int scene_set_frame(scene *s, int frame, rr_error *err)
+int scene_frame_shutter(const scene *s, int frame, shutter *out, rr_error *err)
 {
     if (!(s->frame_rate > 0))
         return rr_fail(err, "%s: the scene has no frame rate; add <frames rate=\"...\"/> to render frames",
                        s->path);
     double shift = frame / s->frame_rate;
-    shutter f = s->frame0_shutter;
+    shutter f = s->shut;
     f.open += shift, f.close += shift, f.center += shift;
     for (int i = 0; i < f.table_size; i++)
         f.table_t[i] += shift;
-    s->shut = f;
+    *out = f;
     return 0;
 }
 

@@ -48,11 +48,11 @@ typedef struct {
     uint64_t inputs_hash; /* content of the scene file and every file it names */
     char **inputs;        /* those files' paths (owned), for refusing outputs onto them */
     int ninputs;
+    rr_warnings warnings; /* from reading the scene and its files, for the caller to print */
     camera cam;
     animation camera_motion; /* the camera's rest pose moved like an object (rigid) */
-    shutter shut;            /* the current frame's (see scene_frame_shutter) */
+    shutter shut;            /* as the file gives it: frame 0's with <frames> (scene_frame_shutter) */
     double frame_rate;       /* <frames rate>: frame N starts at time N / rate; 0: no frames */
-    shutter frame0_shutter;  /* the shutter of frame 0, shifted for each frame */
     double shutter_fraction; /* <shutter fraction>: of the frame interval; 0: open/close given */
     int shutter_center_given, shutter_line;
     vec3 background, ambient;
@@ -72,9 +72,9 @@ int scene_camera_moves(const scene *s);
  * (the camera's animation applied; callers skip this for a still camera). */
 void scene_camera_ray(const scene *s, double x, double y, double t, vec3 *org, vec3 *dir);
 
-/* Sets s->shut to frame N's shutter: frame 0's shifted by N / frame_rate.
+/* Frame N's shutter: s->shut (frame 0's) shifted by N / frame_rate.
  * Returns -1 if the scene has no frame rate. */
-int scene_set_frame(scene *s, int frame, rr_error *err);
+int scene_frame_shutter(const scene *s, int frame, shutter *out, rr_error *err);
 void scene_free(scene *s);
 
 /* Records an input file's path; -1 when out of memory. */

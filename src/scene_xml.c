@@ -468,7 +468,7 @@ static int load_anim_file(xml_ctx *c, xmlNodePtr n, animation *a)
     free(a->keys);
     a->keys = NULL;
     rr_error sub;
-    if (animfile_load(path, &a->keys, c->inputs_hash, &sub))
+    if (animfile_load(path, &a->keys, c->inputs_hash, &c->sc->warnings, &sub))
         return rr_fail(c->err, "%s (animation of %s:%ld)", sub.msg, c->name, xmlGetLineNo(n));
     if (scene_add_input(c->sc, path))
         return node_fail(c, n, "out of memory");
@@ -707,7 +707,6 @@ static int finish_frames(xml_ctx *c, scene *s)
         if (shutter_check(&s->shut, &sub))
             return rr_fail(c->err, "%s:%d: %s", c->name, s->shutter_line, sub.msg);
     }
-    s->frame0_shutter = s->shut;
     return 0;
 }
 

@@ -69,7 +69,8 @@ static int load_and_build(const char *xml, scene *s, accel **a)
         printf("    %s\n", e.msg);
         return -1;
     }
-    if (accel_build(s, s->epsilon, s->kernel_sigma, 1, a, &e)) {
+    accel_settings set = {s->shut.open, s->shut.close, s->epsilon, s->kernel_sigma, 1};
+    if (accel_build(s, &set, a, &e)) {
         printf("    %s\n", e.msg);
         scene_free(s);
         return -1;
@@ -202,7 +203,9 @@ static void check_no_missed_hits(const char *xml, double rim)
     for (int i = 0; i < 120; i++)
         for (int j = 0; j < 120; j++) {
             vec3 dir = v3_normalize(v3(-0.09 + 0.18 * i / 119.0, -0.09 + 0.18 * j / 119.0, -1));
-            int may = accel_may_hit_moving(a, eye, dir);
+            accel_ray ray;
+            accel_ray_begin(a, eye, dir, &ray);
+            int may = ray.may_hit_moving;
             ruled_out += !may;
             for (int k = 0; k < 40; k++) {
                 kbuffer kb;
@@ -283,13 +286,15 @@ TEST(packets_of_times_give_the_hits_of_single_rays)
             double times[ACCEL_PACKET];
             for (int k = 0; k < ACCEL_PACKET; k++)
                 times[k] = (k + 0.5 * ((i + j + k) % 3)) / ACCEL_PACKET; /* increasing, as the sampler lists them */
-            kbuffer static_hits, packet[ACCEL_PACKET], single;
-            int hit_moving[ACCEL_PACKET];
-            accel_trace_static(a, eye, dir, &static_hits);
-            accel_trace_moving_times(a, eye, dir, times, ACCEL_PACKET, &static_hits, packet, hit_moving);
+            kbuffer packet[ACCEL_PACKET], single;
+            const kbuffer *result[ACCEL_PACKET];
+            accel_ray ray;
+            accel_ray_begin(a, eye, dir, &ray);
+            accel_ray_trace_times(a, &ray, times, ACCEL_PACKET, packet, result);
             for (int k = 0; k < ACCEL_PACKET; k++) {
-                int moving = accel_trace_moving(a, eye, dir, times[k], &static_hits, &single) > 0;
-                differ += moving != hit_moving[k] || (moving && !same_kbuffer(&single, &packet[k]));
+                accel_trace(a, eye, dir, times[k], &single);
+                int moving = result[k] != &ray.static_hits;
+                differ += !same_kbuffer(&single, result[k]) || (moving && result[k] != &packet[k]);
                 moving_hits += moving;
                 rays++;
             }

@@ -17,7 +17,7 @@ static const char *const MOVING_DISK =
 
 static render_settings target_settings(const scene *s, uint32_t max_batches)
 {
-    render_settings rs = {{SAMPLER_THESIS, 7, 1, 4, 4, s->shut.open, s->shut.close}, 2, 0, 2, max_batches, 0.03};
+    render_settings rs = {{SAMPLER_THESIS, 7, 1, 4, 4}, s->shut, 2, 0, 2, max_batches, 0.03};
     return rs;
 }
 
@@ -47,7 +47,8 @@ TEST(render_resumed_mid_round_equals_uninterrupted)
     accel *a;
     rr_error e;
     CHECK(scene_load_memory(MOVING_DISK, strlen(MOVING_DISK), "mem.xml", ".", &s, &e) == 0);
-    CHECK(accel_build(&s, s.epsilon, s.kernel_sigma, 1, &a, &e) == 0);
+    accel_settings set = {s.shut.open, s.shut.close, s.epsilon, s.kernel_sigma, 1};
+    CHECK(accel_build(&s, &set, &a, &e) == 0);
     image full, before, after;
     CHECK(image_alloc(&full, 32, 16) == 0 && render_into(&s, a, MAX, &full) == 0);
     int mismatches = 0, rounds_tried = 0;

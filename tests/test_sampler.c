@@ -10,9 +10,13 @@ typedef struct {
     double x[4096], y[4096], t[4096];
 } batch_buf;
 
+/* every test's shutter: [2, 3.5) */
+#define T0 2.0
+#define T1 3.5
+
 static sampler make(sampler_kind kind, int grid, int tspp, int factor)
 {
-    sampler s = {kind, 12345, grid, tspp, factor, 2.0, 3.5};
+    sampler s = {kind, 12345, grid, tspp, factor};
     return s;
 }
 
@@ -20,7 +24,7 @@ static void run_batch(const sampler *s, uint64_t pixel, uint32_t batch, batch_bu
 {
     sampler_scratch sc;
     CHECK(sampler_scratch_init(&sc, s) == 0);
-    sampler_batch(s, pixel, 7, 9, batch, &sc, b->x, b->y, b->t);
+    sampler_batch(s, T0, T1, pixel, 7, 9, batch, &sc, b->x, b->y, b->t);
     sampler_scratch_free(&sc);
 }
 

@@ -124,9 +124,11 @@ TEST(keyframes_frames_and_camera_motion_parse)
     CHECK_NEAR(s.shut.open, 0, 0);
     CHECK_NEAR(s.shut.close, 0.5 / 24, 1e-15);
     CHECK_NEAR(s.shut.center, 0.5 / 24, 1e-15); /* the default weighting center: close */
-    CHECK(scene_set_frame(&s, 10, &e) == 0);
-    CHECK_NEAR(s.shut.open, 10.0 / 24, 1e-15);
-    CHECK_NEAR(s.shut.close, 10.5 / 24, 1e-15);
+    shutter f10;
+    CHECK(scene_frame_shutter(&s, 10, &f10, &e) == 0);
+    CHECK_NEAR(f10.open, 10.0 / 24, 1e-15);
+    CHECK_NEAR(f10.close, 10.5 / 24, 1e-15);
+    CHECK_NEAR(s.shut.open, 0, 0); /* the scene keeps frame 0's */
     const keyframes *k = s.objects[0].anim.keys;
     CHECK(k && k->ch[CH_SY].count == 1 && k->ch[CH_TY].count == 1 && k->ch[CH_TX].count == 1);
     CHECK(k && k->ch[CH_SY].keys[0].out == TAN_STEP && k->ch[CH_TY].keys[0].out == TAN_LINEAR);
