@@ -18,10 +18,13 @@ OPT     := -O2 -g
 SANLD   :=
 endif
 
-INCLUDES := -I/usr/include/embree3 -I/usr/include/OpenEXR -I/usr/include/libxml2
-CFLAGS   += -std=c11 -D_GNU_SOURCE $(OPT) -Wall -Wextra $(INCLUDES) \
-            -DRR_SOURCE_SCENE='"$(CURDIR)/scenes/default.xml"'
-CXXFLAGS += -std=c++17 $(OPT) -Wall -Wextra
+# The user's CFLAGS/CXXFLAGS/CPPFLAGS come last (make CFLAGS=-O0 still
+# builds); -MMD -MP track header dependencies.
+INCLUDES  := -I/usr/include/embree3 -I/usr/include/OpenEXR -I/usr/include/libxml2
+RR_CPPFLAGS = -D_GNU_SOURCE $(INCLUDES) -DRR_SOURCE_SCENE='"$(CURDIR)/scenes/default.xml"' \
+              -DRR_SOURCE_DIR='"$(CURDIR)"' -MMD -MP $(CPPFLAGS)
+RR_CFLAGS   = -std=c11 $(OPT) -Wall -Wextra $(CFLAGS)
+RR_CXXFLAGS = -std=c++17 $(OPT) -Wall -Wextra $(CXXFLAGS)
 LDLIBS   := -lassimp -lembree3 -lOpenEXRCore -lxml2 -lOpenImageIO -lOpenImageIO_Util -lpthread -lm -lstdc++
 
 LIB_SRCS := common inputfile atomicfile splat pointmodel ply shapes surfelize curve animation animfile camera shutter sampler scene \
@@ -34,15 +37,16 @@ TEST_OBJS := $(TEST_SRCS:tests/%.c=$(BUILD)/tests/%.o) $(BUILD)/tests/harness.o
 BIN      := $(BUILD)/refrender
 TESTBIN  := $(BUILD)/unit_tests
 
-.PHONY: all deps demo test test-c test-py test-fuzz fuzz bench clean scenes references gallery
+.PHONY: all deps demo test test-c test-py test-fuzz fuzz bench clean clean-models scenes references gallery
 all: $(BIN) $(BUILD)/refrender-bench
 
-$(BUILD)/%.o: src/%.c src/*.h | $(BUILD)
-	$(CC) $(CFLAGS) -c $< -o $@
-$(BUILD)/preview.o: src/preview.cpp src/preview.h | $(BUILD)
-	$(CXX) $(CXXFLAGS) -c $< -o $@
-$(BUILD)/tests/%.o: tests/%.c tests/harness.h src/*.h | $(BUILD)
-	$(CC) $(CFLAGS) -Isrc -c $< -o $@
+$(BUILD)/%.o: src/%.c | $(BUILD)
+	$(CC) $(RR_CPPFLAGS) $(RR_CFLAGS) -c $< -o $@
+$(BUILD)/preview.o: src/preview.cpp | $(BUILD)
+	$(CXX) $(RR_CPPFLAGS) $(RR_CXXFLAGS) -c $< -o $@
+$(BUILD)/tests/%.o: tests/%.c | $(BUILD)
+	$(CC) $(RR_CPPFLAGS) $(RR_CFLAGS) -Isrc -c $< -o $@
+-include $(wildcard $(BUILD)/*.d $(BUILD)/tests/*.d)
 $(BUILD):
 	mkdir -p $(BUILD)/tests
 
@@ -62,7 +66,7 @@ demo: deps
 	$(BIN) scenes/default.xml -o out/demo.exr --preview out/demo.png
 
 test-c: $(TESTBIN)
-	cd tests && ../$(TESTBIN)
+	$(TESTBIN)
 
 # LD_PRELOAD shim that fails the Nth write or rename (tests/test_faults.py)
 $(BUILD)/libfaultinject.so: tests/faultinject.c | $(BUILD)
@@ -85,15 +89,16 @@ FUZZ_CFLAGS  := -std=c11 -D_GNU_SOURCE $(FUZZ_FLAGS) -fsanitize=fuzzer-no-link -
                 -DSCENE_MAX_GENERATED=1e4
 FUZZ_OBJS    := $(LIB_SRCS:%=$(FUZZ_DIR)/%.o) $(FUZZ_DIR)/preview.o
 
-$(FUZZ_DIR)/%.o: src/%.c src/*.h
+$(FUZZ_DIR)/%.o: src/%.c
 	@mkdir -p $(FUZZ_DIR)
-	clang $(FUZZ_CFLAGS) -c $< -o $@
-$(FUZZ_DIR)/preview.o: src/preview.cpp src/preview.h
+	clang $(FUZZ_CFLAGS) -MMD -MP -c $< -o $@
+$(FUZZ_DIR)/preview.o: src/preview.cpp
 	@mkdir -p $(FUZZ_DIR)
-	clang++ -std=c++17 $(FUZZ_FLAGS) -c $< -o $@
-$(FUZZ_DIR)/fuzz_%.o: tests/fuzz/fuzz_%.c src/*.h
+	clang++ -std=c++17 $(FUZZ_FLAGS) -MMD -MP -c $< -o $@
+$(FUZZ_DIR)/fuzz_%.o: tests/fuzz/fuzz_%.c
 	@mkdir -p $(FUZZ_DIR)
-	clang $(FUZZ_CFLAGS) -Isrc -c $< -o $@
+	clang $(FUZZ_CFLAGS) -MMD -MP -Isrc -c $< -o $@
+-include $(wildcard $(FUZZ_DIR)/*.d)
 $(FUZZ_DIR)/fuzz_%: $(FUZZ_DIR)/fuzz_%.o $(FUZZ_OBJS)
 	clang++ $(FUZZ_FLAGS) -fsanitize=fuzzer $^ -o $@ $(LDLIBS)
 .SECONDARY: $(FUZZ_OBJS) $(FUZZ_TARGETS:%=$(FUZZ_DIR)/fuzz_%.o)
@@ -139,5 +144,9 @@ gallery: scenes
 	for s in $(SUITE); do $(BIN) scenes/$$s.xml --spp 4 --tspp 16 -o out/gallery/$$s.exr --quiet || exit 1; done
 	$(PYTHON) scripts/gallery.py out/gallery.png $(SUITE:%=out/gallery/%.exr)
 
+# Keeps scenes/models/ (converted scanned models and their download):
+# 'make clean-models' removes them, and the next 'make scenes' fetches again.
 clean:
 	rm -rf build build-san build-fuzz out
+clean-models:
+	rm -rf scenes/models

@@ -6,12 +6,14 @@
 #   armadillo.ply, bunny00.ply, kitten.ply
 #                  libcgal-demo: data.tar.gz, fetched with 'apt-get download'
 #                  and unpacked with dpkg-deb, never installed
-# Nothing downloaded is committed (scenes/models/ is ignored by git).
+# Nothing downloaded is committed (scenes/models/ is ignored by git). The
+# unpacked CGAL data stays in scenes/models/download/ ('make clean' keeps it,
+# 'make clean-models' removes it): with the models present nothing is fetched.
 set -eu
 cd "$(dirname "$0")/.."
 BIN=${REFRENDER:-build/refrender}
 OUT=scenes/models
-CACHE=build/cache
+CACHE=scenes/models/download
 mkdir -p "$OUT" "$CACHE"
 
 convert() { # convert INPUT NAME [options]: scenes/models/NAME.ply unless present
@@ -21,7 +23,8 @@ convert() { # convert INPUT NAME [options]: scenes/models/NAME.ply unless presen
     "$BIN" surfels "$in" -o "$OUT/$name.ply" "$@"
 }
 
-cgal_data() { # unpack the three CGAL data files into build/cache/cgal
+cgal_data() { # unpack the three CGAL data files into $CACHE/cgal (unless converted already)
+    [ -s "$OUT/armadillo.ply" ] && [ -s "$OUT/bunny00.ply" ] && [ -s "$OUT/kitten.ply" ] && return 0
     [ -s "$CACHE/cgal/data/points_3/kitten.xyz" ] && return 0
     rm -rf "$CACHE/cgal" && mkdir -p "$CACHE/cgal"
     if ! (cd "$CACHE/cgal" && apt-get download libcgal-demo >/dev/null 2>&1); then

@@ -29,7 +29,7 @@ static void free_keys(keyframes *k)
 
 TEST(rolling_anim_rolls_without_slipping)
 {
-    keyframes *k = load("../scenes/animations/rolling.anim");
+    keyframes *k = load(RR_SOURCE_DIR "/scenes/animations/rolling.anim");
     CHECK(k != NULL);
     /* its visibility curve is skipped with a warning returned, not printed */
     CHECK(last_warnings.count == 1 && strstr(last_warnings.msg[0], "rolling.anim:36: skipping curve of "
@@ -49,7 +49,7 @@ TEST(rolling_anim_rolls_without_slipping)
 
 TEST(bouncing_anim_has_flat_tops_sharp_floor_and_stepped_squash)
 {
-    keyframes *k = load("../scenes/animations/bouncing.anim");
+    keyframes *k = load(RR_SOURCE_DIR "/scenes/animations/bouncing.anim");
     CHECK(k != NULL);
     if (!k)
         return;
@@ -68,7 +68,7 @@ TEST(bouncing_anim_has_flat_tops_sharp_floor_and_stepped_squash)
 
 TEST(thrown_anim_reads_version_1_0_keys_and_fixed_angles)
 {
-    keyframes *k = load("../scenes/animations/thrown.anim");
+    keyframes *k = load(RR_SOURCE_DIR "/scenes/animations/thrown.anim");
     CHECK(k != NULL);
     if (!k)
         return;
