@@ -24,7 +24,6 @@ typedef enum { OBJECT_POINTS, OBJECT_SPHERE } object_kind;
 typedef struct {
     object_kind kind;
     char name[64];
-    int line;          /* line of <object> in the scene file */
     pointmodel model;  /* OBJECT_POINTS */
     vec3 sphere_center;/* OBJECT_SPHERE, object space */
     double sphere_radius;
@@ -53,8 +52,6 @@ typedef struct {
     animation camera_motion; /* the camera's rest pose moved like an object (rigid) */
     shutter shut;            /* as the file gives it: frame 0's with <frames> (scene_frame_shutter) */
     double frame_rate;       /* <frames rate>: frame N starts at time N / rate; 0: no frames */
-    double shutter_fraction; /* <shutter fraction>: of the frame interval; 0: open/close given */
-    int shutter_center_given, shutter_line;
     vec3 background, ambient;
     double epsilon, kernel_sigma;
     int time_factor;

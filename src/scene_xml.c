@@ -23,6 +23,9 @@ typedef struct {
     const char *base_dir; /* directory relative paths resolve against */
     uint64_t *inputs_hash;/* every input file's bytes are folded in (inputfile.h) */
     scene *sc;            /* the input files read are recorded (scene_add_input) */
+    /* <shutter fraction>, resolved when the frame rate is known (finish_frames) */
+    double shutter_fraction; /* of the frame interval; 0: open/close given */
+    int shutter_center_given, shutter_line;
     rr_error *err;
 } xml_ctx;
 
@@ -234,15 +237,15 @@ static int parse_shutter(xml_ctx *c, xmlNodePtr n, scene *sc)
     shutter *s = &sc->shut;
     char probe[8];
     if (check_attributes(c, n, ok) || attr_double(c, n, "open", &s->open, 0) ||
-        attr_double(c, n, "close", &s->close, 0) || attr_double(c, n, "fraction", &sc->shutter_fraction, 0))
+        attr_double(c, n, "close", &s->close, 0) || attr_double(c, n, "fraction", &c->shutter_fraction, 0))
         return -1;
     if (attr_text(n, "fraction", probe, sizeof probe)) {
         if (attr_text(n, "open", probe, sizeof probe) || attr_text(n, "close", probe, sizeof probe))
             return node_fail(c, n, "give either open/close or fraction, not both");
-        if (!(sc->shutter_fraction > 0 && sc->shutter_fraction <= 1))
+        if (!(c->shutter_fraction > 0 && c->shutter_fraction <= 1))
             return node_fail(c, n, "shutter fraction must be in (0, 1]");
-        sc->shutter_line = (int)xmlGetLineNo(n);
-        sc->shutter_center_given = attr_text(n, "center", probe, sizeof probe);
+        c->shutter_line = (int)xmlGetLineNo(n);
+        c->shutter_center_given = attr_text(n, "center", probe, sizeof probe);
         s->open = 0, s->close = 1; /* placeholders until the frame rate is known */
     }
     s->center = s->close; /* thesis Figure 3.1: weighting center t_c = t1 */
@@ -667,7 +670,6 @@ static int parse_object(xml_ctx *c, xmlNodePtr n, scene *s)
     scene_object *o = &s->objects[s->nobjects++];
     memset(o, 0, sizeof *o);
     pointmodel_init(&o->model);
-    o->line = (int)xmlGetLineNo(n);
     o->mat = (material){SHADING_PHONG, 1.0, 0.0, 32.0};
     animation_init_static(&o->anim);
     snprintf(o->name, sizeof o->name, "object%d", s->nobjects);
@@ -695,17 +697,17 @@ static int parse_frames(xml_ctx *c, xmlNodePtr n, scene *s)
 /* The fraction shutter needs the rate; frame 0's shutter is kept to shift. */
 static int finish_frames(xml_ctx *c, scene *s)
 {
-    if (s->shutter_fraction > 0) {
+    if (c->shutter_fraction > 0) {
         if (!(s->frame_rate > 0))
             return rr_fail(c->err, "%s:%d: a shutter fraction needs <frames rate=\"...\"/>", c->name,
-                           s->shutter_line);
+                           c->shutter_line);
         s->shut.open = 0;
-        s->shut.close = s->shutter_fraction / s->frame_rate;
-        if (!s->shutter_center_given)
+        s->shut.close = c->shutter_fraction / s->frame_rate;
+        if (!c->shutter_center_given)
             s->shut.center = s->shut.close;
         rr_error sub;
         if (shutter_check(&s->shut, &sub))
-            return rr_fail(c->err, "%s:%d: %s", c->name, s->shutter_line, sub.msg);
+            return rr_fail(c->err, "%s:%d: %s", c->name, c->shutter_line, sub.msg);
     }
     return 0;
 }
@@ -783,7 +785,7 @@ int scene_load_memory(const char *xml, size_t len, const char *name, const char 
     if (!doc)
         return rr_fail(err, "%s", sink.first.msg[0] ? sink.first.msg : "cannot parse scene");
     snprintf(s->path, sizeof s->path, "%s", name);
-    xml_ctx c = {name, base_dir, &s->inputs_hash, s, err};
+    xml_ctx c = {name, base_dir, &s->inputs_hash, s, 0, 0, 0, err};
     int rc = parse_scene(&c, doc, s);
     xmlFreeDoc(doc);
     if (rc)
