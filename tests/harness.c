@@ -27,6 +27,17 @@ void harness_check(int ok, const char *expr, const char *file, int line)
     }
 }
 
+void harness_check_near(double a, double b, double tol, const char *expr, const char *file, int line)
+{
+    if (!(fabs(a - b) <= tol)) {
+        printf("  FAIL %s:%d: %s: %.17g vs %.17g (difference %.3g, tolerance %.3g)\n", file, line, expr, a, b,
+               fabs(a - b), tol);
+        current_failed = 1;
+    }
+}
+
+int harness_failed_now(void) { return current_failed; }
+
 int main(int argc, char **argv)
 {
     int passed = 0, failed = 0;

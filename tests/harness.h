@@ -10,6 +10,8 @@
 typedef void (*test_fn)(void);
 void harness_register(const char *name, test_fn fn);
 void harness_check(int ok, const char *expr, const char *file, int line);
+/* Harness self-check: the number of checks failed so far in this test. */
+int harness_failed_now(void);
 
 #define TEST(name)                                                         \
     static void name(void);                                                \
@@ -21,7 +23,9 @@ void harness_check(int ok, const char *expr, const char *file, int line);
 
 #define CHECK(expr) harness_check(!!(expr), #expr, __FILE__, __LINE__)
 #define CHECK_NEAR(a, b, tol)                                              \
-    harness_check(fabs((double)(a) - (double)(b)) <= (tol), #a " ~= " #b,  \
-                  __FILE__, __LINE__)
+    harness_check_near((double)(a), (double)(b), (double)(tol), #a " ~= " #b, \
+                       __FILE__, __LINE__)
+/* Fails, printing both values and the tolerance, unless |a - b| <= tol. */
+void harness_check_near(double a, double b, double tol, const char *expr, const char *file, int line);
 
 #endif
