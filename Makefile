@@ -27,10 +27,10 @@ RR_CFLAGS   = -std=c11 $(OPT) -Wall -Wextra $(CFLAGS)
 RR_CXXFLAGS = -std=c++17 $(OPT) -Wall -Wextra $(CXXFLAGS)
 LDLIBS   := -lassimp -lembree3 -lOpenEXRCore -lxml2 -lOpenImageIO -lOpenImageIO_Util -lpthread -lm -lstdc++
 
-LIB_SRCS := common inputfile atomicfile splat pointmodel ply shapes surfelize curve animation animfile camera shutter sampler scene \
-            scene_xml accel shade film render exr output render_attrs cli
+LIB_SRCS := common inputfile atomicfile kbuffer splat pointmodel ply shapes surfelize meshload curve animation animfile camera shutter sampler scene \
+            scene_xml accel accel_build shade film render exr output render_attrs cli
 LIB_OBJS := $(LIB_SRCS:%=$(BUILD)/%.o) $(BUILD)/preview.o
-APP_OBJS := $(BUILD)/main.o $(BUILD)/gen_cmd.o $(BUILD)/merge_cmd.o $(BUILD)/surfels_cmd.o
+APP_OBJS := $(BUILD)/cmd/main.o $(BUILD)/cmd/gen_cmd.o $(BUILD)/cmd/merge_cmd.o $(BUILD)/cmd/surfels_cmd.o
 TEST_SRCS := $(wildcard tests/test_*.c)
 TEST_OBJS := $(TEST_SRCS:tests/%.c=$(BUILD)/tests/%.o) $(BUILD)/tests/harness.o
 
@@ -42,19 +42,22 @@ all: $(BIN) $(BUILD)/refrender-bench
 
 $(BUILD)/%.o: src/%.c | $(BUILD)
 	$(CC) $(RR_CPPFLAGS) $(RR_CFLAGS) -c $< -o $@
+$(BUILD)/cmd/%.o: src/cmd/%.c | $(BUILD)
+	@mkdir -p $(@D)
+	$(CC) $(RR_CPPFLAGS) $(RR_CFLAGS) -Isrc -c $< -o $@
 $(BUILD)/preview.o: src/preview.cpp | $(BUILD)
 	$(CXX) $(RR_CPPFLAGS) $(RR_CXXFLAGS) -c $< -o $@
 $(BUILD)/tests/%.o: tests/%.c | $(BUILD)
 	$(CC) $(RR_CPPFLAGS) $(RR_CFLAGS) -Isrc -c $< -o $@
--include $(wildcard $(BUILD)/*.d $(BUILD)/tests/*.d)
+-include $(wildcard $(BUILD)/*.d $(BUILD)/cmd/*.d $(BUILD)/tests/*.d)
 $(BUILD):
-	mkdir -p $(BUILD)/tests
+	mkdir -p $(BUILD)/tests $(BUILD)/cmd
 
 $(BIN): $(APP_OBJS) $(LIB_OBJS)
 	$(CC) $(SANLD) -o $@ $^ $(LDLIBS)
 $(TESTBIN): $(TEST_OBJS) $(LIB_OBJS)
 	$(CC) $(SANLD) -o $@ $^ $(LDLIBS)
-$(BUILD)/refrender-bench: $(BUILD)/bench.o $(LIB_OBJS)
+$(BUILD)/refrender-bench: $(BUILD)/cmd/bench.o $(LIB_OBJS)
 	$(CC) $(SANLD) -o $@ $^ $(LDLIBS)
 
 deps:

@@ -5,66 +5,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-/* A top-level scene over a subset of the objects. Objects that do not move
- * during the shutter (static) and those that do (moving) get one each, so a
- * ray's static hits can be found once and reused for all its times. */
-typedef struct {
-    RTCScene scene;
-    unsigned *ids; /* top-level primitive -> object index */
-    unsigned count;
-    const struct accel *acc;
-} top_level;
-
-enum { TOP_STATIC, TOP_MOVING };
-
-/* With more moving objects than this, testing each one's swept bounds per
- * ray costs more than the top-level BVH's own traversal, which then picks
- * them (and the times of a ray are traced one by one). */
-enum { TOP_LEVEL_OWN_BVH = 64 };
-
-typedef struct {
-    vec3 center;
-    double radius2;
-} sphere_bound;
-
-struct accel {
-    RTCDevice device;
-    top_level top[2];
-    RTCScene *object_scenes;
-    aabb *swept;  /* world bounds of each object over the shutter */
-    sphere_bound *swept_sphere; /* and a world sphere holding it at every time */
-    double *coherent_spread; /* object-space rays closer than this share a packet */
-    xform *rest;  /* transform of each static object (the same at every time) */
-    int *is_static;
-    int reuse_static;
-    const scene *sc;
-    float epsilon;
-    double sigma;
-    rr_error build_error; /* filled by Embree's error callback */
-    long long embree_bytes, embree_peak; /* Embree's own allocations (BVHs) */
-};
-
-/* Per-traversal state: one ray (lane 0) or a packet of one world ray at up
- * to ACCEL_PACKET times (lane i at its own time). The RTCIntersectContext
- * must come first: Embree hands the same pointer to every callback, also
- * through the nested rtcIntersect1. */
-typedef struct {
-    struct RTCIntersectContext rtc;
-    const accel *acc;
-    double time;                  /* the single ray's time (top-level path) */
-    vec3 world_org, world_dir;    /* and its world ray, unrounded */
-    unsigned obj;
-    const xform *xf[ACCEL_PACKET]; /* each lane's object transform at its time */
-    kbuffer *kb[ACCEL_PACKET];
-    int accepted[ACCEL_PACKET];   /* hits offered to each lane's k-buffer */
-} trace_context;
-
-/* Embree passes rays to callbacks in SOA layout, N lanes per field
- * (rtcore_ray.h: RTCRayHitN); C has no accessors, so index it ourselves. */
-enum { F_ORG = 0, F_TNEAR = 3, F_DIR = 4, F_TFAR = 8, F_MASK = 9, F_ID = 10, F_FLAGS = 11,
-       F_PRIM = 17, F_GEOM = 18, F_INST = 19, F_COUNT = 20 };
-/* the hand-written layout must be Embree's: 20 four-byte fields per lane */
-_Static_assert(sizeof(struct RTCRayHit16) == F_COUNT * 16 * sizeof(float), "Embree's RTCRayHitN layout changed");
+#include "accel_internal.h"
 
 static float *lane_f(void *rayhit, unsigned n, unsigned field, unsigned i)
 {
@@ -74,54 +15,6 @@ static float *lane_f(void *rayhit, unsigned n, unsigned field, unsigned i)
 static unsigned *lane_u(void *rayhit, unsigned n, unsigned field, unsigned i)
 {
     return &((unsigned *)rayhit)[field * n + i];
-}
-
-/* ---- k-buffer ---------------------------------------------------------- */
-
-void kbuffer_reset(kbuffer *kb, float epsilon)
-{
-    kb->count = 0;
-    kb->dropped = 0;
-    kb->closest = INFINITY;
-    kb->epsilon = epsilon;
-}
-
-static int hit_before(const surface_hit *a, const surface_hit *b)
-{
-    if (a->t != b->t)
-        return a->t < b->t;
-    if (a->obj != b->obj)
-        return a->obj < b->obj;
-    return a->prim < b->prim;
-}
-
-void kbuffer_insert(kbuffer *kb, const surface_hit *h)
-{
-    if (!(h->t <= kb->closest + kb->epsilon))
-        return;
-    int pos = kb->count;
-    while (pos > 0 && hit_before(h, &kb->hits[pos - 1]))
-        pos--;
-    if (kb->count == KBUFFER_MAX) {
-        kb->dropped++;
-        if (pos == KBUFFER_MAX)
-            return;
-        kb->count--; /* the farthest entry makes room */
-    }
-    memmove(&kb->hits[pos + 1], &kb->hits[pos], (size_t)(kb->count - pos) * sizeof *h);
-    kb->hits[pos] = *h;
-    kb->count++;
-    if (h->t < kb->closest) {
-        kb->closest = h->t;
-        /* entries are sorted by t: drop the tail now beyond the window */
-        while (kb->count > 0 && kb->hits[kb->count - 1].t > kb->closest + kb->epsilon)
-            kb->count--;
-    }
-}
-
-static float kbuffer_cutoff(const kbuffer *kb)
-{
-    return nextafterf(kb->closest + kb->epsilon, INFINITY);
 }
 
 /* ---- object-level callbacks (object space) ----------------------------- */
@@ -153,7 +46,7 @@ static void load_lane(const struct RTCIntersectFunctionNArguments *args, unsigne
     *tfar = *lane_f(args->rayhit, args->N, F_TFAR, lane);
 }
 
-static void splats_intersect(const struct RTCIntersectFunctionNArguments *args)
+void accel_splats_intersect(const struct RTCIntersectFunctionNArguments *args)
 {
     trace_context *c = (trace_context *)args->context;
     const scene_object *o = args->geometryUserPtr;
@@ -196,14 +89,14 @@ static void sphere_intersect_lane(trace_context *c, const struct RTCIntersectFun
     }
 }
 
-static void sphere_intersect(const struct RTCIntersectFunctionNArguments *args)
+void accel_sphere_intersect(const struct RTCIntersectFunctionNArguments *args)
 {
     for (unsigned lane = 0; lane < args->N; lane++)
         if (args->valid[lane])
             sphere_intersect_lane((trace_context *)args->context, args, lane);
 }
 
-static void splat_bounds_cb(const struct RTCBoundsFunctionArguments *args)
+void accel_splat_bounds_cb(const struct RTCBoundsFunctionArguments *args)
 {
     const scene_object *o = args->geometryUserPtr;
     const float *c = o->model.geom[args->primID].center;
@@ -217,7 +110,7 @@ static void splat_bounds_cb(const struct RTCBoundsFunctionArguments *args)
     b->upper_x = c[0] + pad[0], b->upper_y = c[1] + pad[1], b->upper_z = c[2] + pad[2];
 }
 
-static void sphere_bounds_cb(const struct RTCBoundsFunctionArguments *args)
+void accel_sphere_bounds_cb(const struct RTCBoundsFunctionArguments *args)
 {
     const scene_object *o = args->geometryUserPtr;
     aabb b = scene_object_bounds(o);
@@ -228,7 +121,7 @@ static void sphere_bounds_cb(const struct RTCBoundsFunctionArguments *args)
 }
 
 /* We never call rtcOccluded; the callback exists so the geometry is complete. */
-static void no_occluded(const struct RTCOccludedFunctionNArguments *args) { (void)args; }
+void accel_no_occluded(const struct RTCOccludedFunctionNArguments *args) { (void)args; }
 
 /* ---- top level (world space) ------------------------------------------- */
 
@@ -266,7 +159,7 @@ static void object_sphere(const scene_object *o, vec3 *center, double *radius)
 
 /* Rigid motion keeps every point within the rest radius of the moving center,
  * so the sphere about the center's swept box bounds the object at all times. */
-static sphere_bound swept_sphere(const scene_object *o, double t0, double t1)
+sphere_bound accel_swept_sphere(const scene_object *o, double t0, double t1)
 {
     vec3 c;
     double r;
@@ -282,7 +175,7 @@ static sphere_bound swept_sphere(const scene_object *o, double t0, double t1)
 }
 
 /* Only ever traversed with rtcIntersect1, so N = 1. */
-static void object_intersect(const struct RTCIntersectFunctionNArguments *args)
+void accel_object_intersect(const struct RTCIntersectFunctionNArguments *args)
 {
     if (!args->valid[0])
         return;
@@ -314,7 +207,7 @@ static void object_intersect(const struct RTCIntersectFunctionNArguments *args)
     rh->ray.dir_x = saved[3], rh->ray.dir_y = saved[4], rh->ray.dir_z = saved[5];
 }
 
-static void object_bounds_cb(const struct RTCBoundsFunctionArguments *args)
+void accel_object_bounds_cb(const struct RTCBoundsFunctionArguments *args)
 {
     const top_level *top = args->geometryUserPtr;
     aabb b = top->acc->swept[top->ids[args->primID]];
@@ -323,169 +216,6 @@ static void object_bounds_cb(const struct RTCBoundsFunctionArguments *args)
     r->lower_z = nextafterf((float)b.lo.z, -INFINITY);
     r->upper_x = nextafterf((float)b.hi.x, INFINITY), r->upper_y = nextafterf((float)b.hi.y, INFINITY);
     r->upper_z = nextafterf((float)b.hi.z, INFINITY);
-}
-
-/* ---- building ------------------------------------------------------------ */
-
-static RTCScene user_scene(RTCDevice dev, unsigned nprims, void *user, RTCBoundsFunction bounds,
-                           RTCIntersectFunctionN intersect)
-{
-    RTCScene scene = rtcNewScene(dev);
-    RTCGeometry g = rtcNewGeometry(dev, RTC_GEOMETRY_TYPE_USER);
-    rtcSetGeometryUserPrimitiveCount(g, nprims);
-    rtcSetGeometryUserData(g, user);
-    rtcSetGeometryBoundsFunction(g, bounds, user);
-    rtcSetGeometryIntersectFunction(g, intersect);
-    rtcSetGeometryOccludedFunction(g, no_occluded);
-    rtcCommitGeometry(g);
-    rtcAttachGeometry(scene, g);
-    rtcReleaseGeometry(g);
-    rtcCommitScene(scene);
-    return scene;
-}
-
-/* Packet traversal pays off while the lanes' rays stay within a few splat
- * sizes of each other: 8 mean splat extents (measured with make bench, the
- * rotation-speed series: wider groups win at slow motion but lose at fast
- * motion, see README, Speed). */
-static double coherent_spread(const scene_object *o)
-{
-    if (o->kind != OBJECT_POINTS)
-        return o->sphere_radius;
-    double sum = 0;
-    for (size_t i = 0; i < o->model.count; i++) {
-        const float *e = &o->model.extent[3 * i];
-        sum += fmax(e[0], fmax(e[1], e[2]));
-    }
-    return o->model.count ? 8.0 * sum / (double)o->model.count : 0.0;
-}
-
-/* Embree reports each allocation before it happens and each release after
- * (negative bytes), from its build threads. */
-static bool embree_memory(void *user, ssize_t bytes, bool post)
-{
-    (void)post;
-    accel *a = user;
-    long long now = __atomic_add_fetch(&a->embree_bytes, (long long)bytes, __ATOMIC_RELAXED);
-    long long peak = __atomic_load_n(&a->embree_peak, __ATOMIC_RELAXED);
-    while (now > peak && !__atomic_compare_exchange_n(&a->embree_peak, &peak, now, 1, __ATOMIC_RELAXED,
-                                                      __ATOMIC_RELAXED))
-        ;
-    return true;
-}
-
-size_t accel_embree_peak_bytes(const accel *a)
-{
-    return (size_t)__atomic_load_n(&a->embree_peak, __ATOMIC_RELAXED);
-}
-
-static void embree_error(void *user, enum RTCError code, const char *str)
-{
-    rr_error *e = user;
-    if (!e->msg[0])
-        snprintf(e->msg, sizeof e->msg, "Embree error %d: %s", (int)code, str ? str : "");
-}
-
-/* The top levels depend on the shutter interval (swept bounds, which
- * objects stand still); the objects' own BVHs do not. */
-static void build_top_levels(accel *a, double open, double close)
-{
-    const scene *s = a->sc;
-    for (int k = 0; k < 2; k++) {
-        if (a->top[k].scene)
-            rtcReleaseScene(a->top[k].scene);
-        a->top[k].scene = NULL;
-        a->top[k].count = 0;
-    }
-    for (int i = 0; i < s->nobjects; i++) {
-        const scene_object *o = &s->objects[i];
-        a->swept[i] = animation_swept_bounds(&o->anim, scene_object_bounds(o), open, close);
-        a->swept_sphere[i] = swept_sphere(o, open, close);
-        a->is_static[i] = a->reuse_static && animation_is_static(&o->anim);
-        a->rest[i] = animation_at(&o->anim, open);
-        top_level *top = &a->top[a->is_static[i] ? TOP_STATIC : TOP_MOVING];
-        top->ids[top->count++] = (unsigned)i;
-    }
-    for (int k = 0; k < 2; k++)
-        if (a->top[k].count)
-            a->top[k].scene = user_scene(a->device, a->top[k].count, &a->top[k], object_bounds_cb, object_intersect);
-}
-
-int accel_set_shutter(accel *a, double open, double close, rr_error *err)
-{
-    build_top_levels(a, open, close);
-    if (a->build_error.msg[0])
-        return rr_fail(err, "%s", a->build_error.msg);
-    return 0;
-}
-
-int accel_build(const scene *s, const accel_settings *set, accel **out, rr_error *err)
-{
-    accel *a = calloc(1, sizeof *a);
-    if (!a)
-        return rr_fail(err, "out of memory");
-    a->sc = s;
-    a->epsilon = (float)set->epsilon;
-    a->sigma = set->sigma;
-    a->device = rtcNewDevice(NULL);
-    if (!a->device) {
-        free(a);
-        return rr_fail(err, "cannot create Embree device (error %d)", (int)rtcGetDeviceError(NULL));
-    }
-    rtcSetDeviceErrorFunction(a->device, embree_error, &a->build_error);
-    rtcSetDeviceMemoryMonitorFunction(a->device, embree_memory, a);
-    size_t n = (size_t)s->nobjects;
-    a->object_scenes = calloc(n, sizeof *a->object_scenes);
-    a->swept = calloc(n, sizeof *a->swept);
-    a->swept_sphere = calloc(n, sizeof *a->swept_sphere);
-    a->coherent_spread = calloc(n, sizeof *a->coherent_spread);
-    a->rest = calloc(n, sizeof *a->rest);
-    a->is_static = calloc(n, sizeof *a->is_static);
-    for (int k = 0; k < 2; k++)
-        a->top[k] = (top_level){NULL, calloc(n, sizeof(unsigned)), 0, a};
-    if (!a->object_scenes || !a->swept || !a->swept_sphere || !a->coherent_spread || !a->rest || !a->is_static || !a->top[0].ids || !a->top[1].ids) {
-        accel_free(a);
-        return rr_fail(err, "out of memory");
-    }
-    for (int i = 0; i < s->nobjects; i++) {
-        scene_object *o = &s->objects[i];
-        int points = o->kind == OBJECT_POINTS;
-        a->coherent_spread[i] = coherent_spread(o);
-        a->object_scenes[i] = user_scene(a->device, points ? (unsigned)o->model.count : 1u, o,
-                                         points ? splat_bounds_cb : sphere_bounds_cb,
-                                         points ? splats_intersect : sphere_intersect);
-    }
-    a->reuse_static = set->reuse_static;
-    build_top_levels(a, set->open, set->close);
-    if (a->build_error.msg[0]) {
-        rr_fail(err, "%s", a->build_error.msg);
-        accel_free(a);
-        return -1;
-    }
-    *out = a;
-    return 0;
-}
-
-void accel_free(accel *a)
-{
-    if (!a)
-        return;
-    for (int i = 0; a->object_scenes && i < a->sc->nobjects; i++)
-        if (a->object_scenes[i])
-            rtcReleaseScene(a->object_scenes[i]);
-    for (int k = 0; k < 2; k++) {
-        if (a->top[k].scene)
-            rtcReleaseScene(a->top[k].scene);
-        free(a->top[k].ids);
-    }
-    free(a->object_scenes);
-    free(a->swept);
-    free(a->swept_sphere);
-    free(a->coherent_spread);
-    free(a->rest);
-    free(a->is_static);
-    rtcReleaseDevice(a->device);
-    free(a);
 }
 
 /* The kernel weights of the hits that stayed in the buffer (deferred: most

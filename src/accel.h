@@ -15,30 +15,8 @@
 #ifndef RR_ACCEL_H
 #define RR_ACCEL_H
 
+#include "kbuffer.h"
 #include "scene.h"
-
-#define KBUFFER_MAX 64
-
-typedef struct {
-    float t;
-    unsigned obj, prim;
-    float weight;    /* kernel weight (1 for analytic spheres) */
-    float r2;        /* squared kernel radius; the weight is computed from it
-                        only for the hits that stay in the buffer */
-    float color[3];
-    float normal[3]; /* world space, facing the ray origin */
-} surface_hit;
-
-typedef struct {
-    int count;
-    int dropped;     /* hits beyond KBUFFER_MAX within epsilon (farthest dropped) */
-    float closest, epsilon;
-    surface_hit hits[KBUFFER_MAX]; /* sorted by (t, obj, prim) */
-} kbuffer;
-
-void kbuffer_reset(kbuffer *kb, float epsilon);
-/* Inserts a hit if it lies within epsilon of the closest so far. */
-void kbuffer_insert(kbuffer *kb, const surface_hit *h);
 
 typedef struct accel accel;
 

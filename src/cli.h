@@ -27,9 +27,5 @@ int cli_same_file(const char *a, const char *b);
 int cli_frame_pattern_ok(const char *pattern);
 void cli_frame_path(const char *pattern, int frame, char *out, size_t size);
 
-int cmd_render(int argc, char **argv);
-int cmd_gen(int argc, char **argv);
-int cmd_merge(int argc, char **argv);
-int cmd_surfels(int argc, char **argv);
 
 #endif

@@ -7,6 +7,7 @@
 #include <string.h>
 
 #include "cli.h"
+#include "commands.h"
 #include "output.h"
 
 static void merge_usage(FILE *f)

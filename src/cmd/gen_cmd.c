@@ -5,6 +5,7 @@
 #include <string.h>
 
 #include "cli.h"
+#include "commands.h"
 #include "shapes.h"
 
 static void gen_usage(FILE *f)

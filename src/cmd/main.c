@@ -8,6 +8,7 @@
 #include <unistd.h>
 
 #include "cli.h"
+#include "commands.h"
 #include "output.h"
 #include "render_attrs.h"
 #include "preview.h"

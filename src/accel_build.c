@@ -1,0 +1,168 @@
+/* Building accel: one Embree user-geometry BVH per object (object space)
+ * and the two top levels over the objects' swept bounds (accel.h). */
+#include "accel_internal.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+static RTCScene user_scene(RTCDevice dev, unsigned nprims, void *user, RTCBoundsFunction bounds,
+                           RTCIntersectFunctionN intersect)
+{
+    RTCScene scene = rtcNewScene(dev);
+    RTCGeometry g = rtcNewGeometry(dev, RTC_GEOMETRY_TYPE_USER);
+    rtcSetGeometryUserPrimitiveCount(g, nprims);
+    rtcSetGeometryUserData(g, user);
+    rtcSetGeometryBoundsFunction(g, bounds, user);
+    rtcSetGeometryIntersectFunction(g, intersect);
+    rtcSetGeometryOccludedFunction(g, accel_no_occluded);
+    rtcCommitGeometry(g);
+    rtcAttachGeometry(scene, g);
+    rtcReleaseGeometry(g);
+    rtcCommitScene(scene);
+    return scene;
+}
+
+/* Packet traversal pays off while the lanes' rays stay within a few splat
+ * sizes of each other: 8 mean splat extents (measured with make bench, the
+ * rotation-speed series: wider groups win at slow motion but lose at fast
+ * motion, see README, Speed). */
+static double coherent_spread(const scene_object *o)
+{
+    if (o->kind != OBJECT_POINTS)
+        return o->sphere_radius;
+    double sum = 0;
+    for (size_t i = 0; i < o->model.count; i++) {
+        const float *e = &o->model.extent[3 * i];
+        sum += fmax(e[0], fmax(e[1], e[2]));
+    }
+    return o->model.count ? 8.0 * sum / (double)o->model.count : 0.0;
+}
+
+/* Embree reports each allocation before it happens and each release after
+ * (negative bytes), from its build threads. */
+static bool embree_memory(void *user, ssize_t bytes, bool post)
+{
+    (void)post;
+    accel *a = user;
+    long long now = __atomic_add_fetch(&a->embree_bytes, (long long)bytes, __ATOMIC_RELAXED);
+    long long peak = __atomic_load_n(&a->embree_peak, __ATOMIC_RELAXED);
+    while (now > peak && !__atomic_compare_exchange_n(&a->embree_peak, &peak, now, 1, __ATOMIC_RELAXED,
+                                                      __ATOMIC_RELAXED))
+        ;
+    return true;
+}
+
+size_t accel_embree_peak_bytes(const accel *a)
+{
+    return (size_t)__atomic_load_n(&a->embree_peak, __ATOMIC_RELAXED);
+}
+
+static void embree_error(void *user, enum RTCError code, const char *str)
+{
+    rr_error *e = user;
+    if (!e->msg[0])
+        snprintf(e->msg, sizeof e->msg, "Embree error %d: %s", (int)code, str ? str : "");
+}
+
+/* The top levels depend on the shutter interval (swept bounds, which
+ * objects stand still); the objects' own BVHs do not. */
+static void build_top_levels(accel *a, double open, double close)
+{
+    const scene *s = a->sc;
+    for (int k = 0; k < 2; k++) {
+        if (a->top[k].scene)
+            rtcReleaseScene(a->top[k].scene);
+        a->top[k].scene = NULL;
+        a->top[k].count = 0;
+    }
+    for (int i = 0; i < s->nobjects; i++) {
+        const scene_object *o = &s->objects[i];
+        a->swept[i] = animation_swept_bounds(&o->anim, scene_object_bounds(o), open, close);
+        a->swept_sphere[i] = accel_swept_sphere(o, open, close);
+        a->is_static[i] = a->reuse_static && animation_is_static(&o->anim);
+        a->rest[i] = animation_at(&o->anim, open);
+        top_level *top = &a->top[a->is_static[i] ? TOP_STATIC : TOP_MOVING];
+        top->ids[top->count++] = (unsigned)i;
+    }
+    for (int k = 0; k < 2; k++)
+        if (a->top[k].count)
+            a->top[k].scene = user_scene(a->device, a->top[k].count, &a->top[k], accel_object_bounds_cb, accel_object_intersect);
+}
+
+int accel_set_shutter(accel *a, double open, double close, rr_error *err)
+{
+    build_top_levels(a, open, close);
+    if (a->build_error.msg[0])
+        return rr_fail(err, "%s", a->build_error.msg);
+    return 0;
+}
+
+int accel_build(const scene *s, const accel_settings *set, accel **out, rr_error *err)
+{
+    accel *a = calloc(1, sizeof *a);
+    if (!a)
+        return rr_fail(err, "out of memory");
+    a->sc = s;
+    a->epsilon = (float)set->epsilon;
+    a->sigma = set->sigma;
+    a->device = rtcNewDevice(NULL);
+    if (!a->device) {
+        free(a);
+        return rr_fail(err, "cannot create Embree device (error %d)", (int)rtcGetDeviceError(NULL));
+    }
+    rtcSetDeviceErrorFunction(a->device, embree_error, &a->build_error);
+    rtcSetDeviceMemoryMonitorFunction(a->device, embree_memory, a);
+    size_t n = (size_t)s->nobjects;
+    a->object_scenes = calloc(n, sizeof *a->object_scenes);
+    a->swept = calloc(n, sizeof *a->swept);
+    a->swept_sphere = calloc(n, sizeof *a->swept_sphere);
+    a->coherent_spread = calloc(n, sizeof *a->coherent_spread);
+    a->rest = calloc(n, sizeof *a->rest);
+    a->is_static = calloc(n, sizeof *a->is_static);
+    for (int k = 0; k < 2; k++)
+        a->top[k] = (top_level){NULL, calloc(n, sizeof(unsigned)), 0, a};
+    if (!a->object_scenes || !a->swept || !a->swept_sphere || !a->coherent_spread || !a->rest || !a->is_static || !a->top[0].ids || !a->top[1].ids) {
+        accel_free(a);
+        return rr_fail(err, "out of memory");
+    }
+    for (int i = 0; i < s->nobjects; i++) {
+        scene_object *o = &s->objects[i];
+        int points = o->kind == OBJECT_POINTS;
+        a->coherent_spread[i] = coherent_spread(o);
+        a->object_scenes[i] = user_scene(a->device, points ? (unsigned)o->model.count : 1u, o,
+                                         points ? accel_splat_bounds_cb : accel_sphere_bounds_cb,
+                                         points ? accel_splats_intersect : accel_sphere_intersect);
+    }
+    a->reuse_static = set->reuse_static;
+    build_top_levels(a, set->open, set->close);
+    if (a->build_error.msg[0]) {
+        rr_fail(err, "%s", a->build_error.msg);
+        accel_free(a);
+        return -1;
+    }
+    *out = a;
+    return 0;
+}
+
+void accel_free(accel *a)
+{
+    if (!a)
+        return;
+    for (int i = 0; a->object_scenes && i < a->sc->nobjects; i++)
+        if (a->object_scenes[i])
+            rtcReleaseScene(a->object_scenes[i]);
+    for (int k = 0; k < 2; k++) {
+        if (a->top[k].scene)
+            rtcReleaseScene(a->top[k].scene);
+        free(a->top[k].ids);
+    }
+    free(a->object_scenes);
+    free(a->swept);
+    free(a->swept_sphere);
+    free(a->coherent_spread);
+    free(a->rest);
+    free(a->is_static);
+    rtcReleaseDevice(a->device);
+    free(a);
+}

@@ -1,0 +1,11 @@
+/* The refrender subcommands (src/cmd/): each parses its own arguments and
+ * returns the process exit status. */
+#ifndef RR_COMMANDS_H
+#define RR_COMMANDS_H
+
+int cmd_render(int argc, char **argv);
+int cmd_gen(int argc, char **argv);
+int cmd_merge(int argc, char **argv);
+int cmd_surfels(int argc, char **argv);
+
+#endif
