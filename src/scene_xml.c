@@ -1,5 +1,7 @@
 #include "scene_xml.h"
 
+#include "scene_xml_internal.h"
+
 #include <libxml/parser.h>
 #include <libxml/xmlerror.h>
 #include <stdarg.h>
@@ -18,164 +20,29 @@
 #define SCENE_MAX_GENERATED 1e8
 #endif
 
-typedef struct {
-    const char *name;     /* file name for messages */
-    const char *base_dir; /* directory relative paths resolve against */
-    uint64_t *inputs_hash;/* every input file's bytes are folded in (inputfile.h) */
-    scene *sc;            /* the input files read are recorded (scene_add_input) */
-    /* <shutter fraction>, resolved when the frame rate is known (finish_frames) */
-    double shutter_fraction; /* of the frame interval; 0: open/close given */
-    int shutter_center_given, shutter_line;
-    rr_error *err;
-} xml_ctx;
-
-static const char *elname(xmlNodePtr n) { return (const char *)n->name; }
-
-static int node_fail(xml_ctx *c, xmlNodePtr n, const char *fmt, ...)
-    __attribute__((format(printf, 3, 4)));
-
-static int node_fail(xml_ctx *c, xmlNodePtr n, const char *fmt, ...)
-{
-    char what[2048];
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(what, sizeof what, fmt, ap);
-    va_end(ap);
-    return rr_fail(c->err, "%s:%ld: <%s>: %s", c->name, xmlGetLineNo(n), elname(n), what);
-}
-
-/* Rejects attributes not in the NULL-terminated list (catches typos). */
-static int check_attributes(xml_ctx *c, xmlNodePtr n, const char *const *allowed)
-{
-    for (xmlAttrPtr a = n->properties; a; a = a->next) {
-        int ok = 0;
-        for (const char *const *p = allowed; *p && !ok; p++)
-            ok = !strcmp(*p, (const char *)a->name);
-        if (!ok)
-            return node_fail(c, n, "unknown attribute '%s'", (const char *)a->name);
-    }
-    return 0;
-}
-
-/* Copies attribute text into buf; returns 1 if present, 0 if absent. */
-static int attr_text(xmlNodePtr n, const char *name, char *buf, size_t size)
-{
-    xmlChar *v = xmlGetProp(n, (const xmlChar *)name);
-    if (!v)
-        return 0;
-    snprintf(buf, size, "%s", (const char *)v);
-    xmlFree(v);
-    return 1;
-}
-
-/* Parses up to max whitespace-separated finite numbers; returns the count,
- * or -1 if a token is not a finite number. */
-static int parse_numbers(const char *text, double *out, int max)
-{
-    int n = 0;
-    const char *p = text;
-    for (;;) {
-        while (*p == ' ' || *p == '\t' || *p == '\n' || *p == '\r' || *p == ',')
-            p++;
-        if (!*p)
-            return n;
-        char *end;
-        double v = strtod(p, &end);
-        if (end == p || !isfinite(v) || n == max)
-            return -1;
-        out[n++] = v;
-        p = end;
-    }
-}
-
-static int attr_numbers(xml_ctx *c, xmlNodePtr n, const char *name, double *out, int count,
-                        int required)
-{
-    char buf[4096];
-    if (!attr_text(n, name, buf, sizeof buf))
-        return required ? node_fail(c, n, "missing required attribute '%s'", name) : 0;
-    if (parse_numbers(buf, out, count) != count)
-        return node_fail(c, n, "attribute '%s' must be %d finite number%s, got '%s'", name, count,
-                         count > 1 ? "s" : "", buf);
-    return 0;
-}
-
-static int attr_double(xml_ctx *c, xmlNodePtr n, const char *name, double *v, int required)
-{
-    return attr_numbers(c, n, name, v, 1, required);
-}
-
-static int attr_vec3(xml_ctx *c, xmlNodePtr n, const char *name, vec3 *v, int required)
-{
-    double a[3] = {v->x, v->y, v->z};
-    if (attr_numbers(c, n, name, a, 3, required))
-        return -1;
-    *v = v3(a[0], a[1], a[2]);
-    return 0;
-}
-
-static int attr_positive(xml_ctx *c, xmlNodePtr n, const char *name, double *v, int required)
-{
-    if (attr_double(c, n, name, v, required))
-        return -1;
-    if (!(*v > 0))
-        return node_fail(c, n, "attribute '%s' must be positive", name);
-    return 0;
-}
-
-static int attr_int(xml_ctx *c, xmlNodePtr n, const char *name, int *v, int lo, int hi)
-{
-    double d = *v;
-    if (attr_double(c, n, name, &d, 0))
-        return -1;
-    if (d != floor(d) || d < lo || d > hi)
-        return node_fail(c, n, "attribute '%s' must be an integer in [%d, %d]", name, lo, hi);
-    *v = (int)d;
-    return 0;
-}
-
-static int is_element(xmlNodePtr n) { return n->type == XML_ELEMENT_NODE; }
-
-/* Non-blank text directly inside the element (a path, as in Figure 4.11)? */
-static int has_text(xmlNodePtr n)
-{
-    for (xmlNodePtr k = n->children; k; k = k->next)
-        if (k->type == XML_TEXT_NODE && !xmlIsBlankNode(k))
-            return 1;
-    return 0;
-}
-
-/* Text children must be whitespace only, except where an element takes a
- * path as its content. */
-static int check_no_text(xml_ctx *c, xmlNodePtr parent)
-{
-    return has_text(parent) ? node_fail(c, parent, "unexpected text inside this element") : 0;
-}
-
 /* ---- scene-level elements -------------------------------------------- */
 
-static int parse_animation(xml_ctx *c, xmlNodePtr n, animation *a);
 
 /* <camera ...> with an optional <animation> moving its rest pose rigidly. */
 static int parse_camera_motion(xml_ctx *c, xmlNodePtr n, const camera *cam, animation *a)
 {
-    if (check_no_text(c, n))
+    if (xml_check_no_text(c, n))
         return -1;
     for (xmlNodePtr k = n->children; k; k = k->next) {
-        if (!is_element(k))
+        if (!xml_is_element(k))
             continue;
-        if (strcmp(elname(k), "animation"))
-            return node_fail(c, k, "unknown element inside <camera> (expected animation)");
+        if (strcmp(xml_elname(k), "animation"))
+            return xml_fail(c, k, "unknown element inside <camera> (expected animation)");
         if (a->keys || !animation_is_static(a))
-            return node_fail(c, k, "the camera has one <animation>");
+            return xml_fail(c, k, "the camera has one <animation>");
         animation_free(a);
         animation_init_static(a);
         a->offset = cam->position; /* the default keyframe pivot; the camera has no model offset */
-        if (parse_animation(c, k, a))
+        if (xml_parse_animation(c, k, a))
             return -1;
         a->offset = v3(0, 0, 0);
         if (a->keys && (a->keys->ch[CH_SX].count || a->keys->ch[CH_SY].count || a->keys->ch[CH_SZ].count))
-            return node_fail(c, k, "the camera cannot be scaled (its motion must be rigid)");
+            return xml_fail(c, k, "the camera cannot be scaled (its motion must be rigid)");
     }
     return 0;
 }
@@ -183,43 +50,43 @@ static int parse_camera_motion(xml_ctx *c, xmlNodePtr n, const camera *cam, anim
 static int parse_camera(xml_ctx *c, xmlNodePtr n, camera *cam, animation *motion)
 {
     static const char *const ok[] = {"position", "lookat", "up", "fov", "width", "height", NULL};
-    if (check_attributes(c, n, ok) || attr_vec3(c, n, "position", &cam->position, 0) ||
-        attr_vec3(c, n, "lookat", &cam->lookat, 0) || attr_vec3(c, n, "up", &cam->up, 0) ||
-        attr_double(c, n, "fov", &cam->fov_degrees, 0) ||
-        attr_int(c, n, "width", &cam->width, 1, 65536) ||
-        attr_int(c, n, "height", &cam->height, 1, 65536))
+    if (xml_check_attributes(c, n, ok) || xml_attr_vec3(c, n, "position", &cam->position, 0) ||
+        xml_attr_vec3(c, n, "lookat", &cam->lookat, 0) || xml_attr_vec3(c, n, "up", &cam->up, 0) ||
+        xml_attr_double(c, n, "fov", &cam->fov_degrees, 0) ||
+        xml_attr_int(c, n, "width", &cam->width, 1, 65536) ||
+        xml_attr_int(c, n, "height", &cam->height, 1, 65536))
         return -1;
     rr_error sub;
     if (camera_prepare(cam, &sub))
-        return node_fail(c, n, "%s", sub.msg);
+        return xml_fail(c, n, "%s", sub.msg);
     return parse_camera_motion(c, n, cam, motion);
 }
 
 static int parse_weight_kind(xml_ctx *c, xmlNodePtr n, shutter *s)
 {
     char kind[64];
-    if (!attr_text(n, "weight", kind, sizeof kind))
+    if (!xml_attr_text(n, "weight", kind, sizeof kind))
         return 0;
     for (int k = WEIGHT_BOX; k <= WEIGHT_TABLE; k++)
         if (!strcmp(kind, shutter_weight_name((weight_kind)k))) {
             s->kind = (weight_kind)k;
             return 0;
         }
-    return node_fail(c, n, "unknown weight '%s' (expected box, linear, exp or table)", kind);
+    return xml_fail(c, n, "unknown weight '%s' (expected box, linear, exp or table)", kind);
 }
 
 static int parse_weight_table(xml_ctx *c, xmlNodePtr n, shutter *s)
 {
     char buf[16384];
-    if (!attr_text(n, "table", buf, sizeof buf)) {
+    if (!xml_attr_text(n, "table", buf, sizeof buf)) {
         if (s->kind == WEIGHT_TABLE)
-            return node_fail(c, n, "weight 'table' needs a 'table' attribute of 't w' pairs");
+            return xml_fail(c, n, "weight 'table' needs a 'table' attribute of 't w' pairs");
         return 0;
     }
     double v[2 * SHUTTER_TABLE_MAX];
-    int count = parse_numbers(buf, v, 2 * SHUTTER_TABLE_MAX);
+    int count = xml_parse_numbers(buf, v, 2 * SHUTTER_TABLE_MAX);
     if (count < 2 || count % 2)
-        return node_fail(c, n, "attribute 'table' must hold 1 to 256 't w' number pairs");
+        return xml_fail(c, n, "attribute 'table' must hold 1 to 256 't w' number pairs");
     s->table_size = count / 2;
     for (int i = 0; i < s->table_size; i++) {
         s->table_t[i] = v[2 * i];
@@ -236,43 +103,43 @@ static int parse_shutter(xml_ctx *c, xmlNodePtr n, scene *sc)
     static const char *const ok[] = {"open", "close", "fraction", "weight", "center", "rate", "table", NULL};
     shutter *s = &sc->shut;
     char probe[8];
-    if (check_attributes(c, n, ok) || attr_double(c, n, "open", &s->open, 0) ||
-        attr_double(c, n, "close", &s->close, 0) || attr_double(c, n, "fraction", &c->shutter_fraction, 0))
+    if (xml_check_attributes(c, n, ok) || xml_attr_double(c, n, "open", &s->open, 0) ||
+        xml_attr_double(c, n, "close", &s->close, 0) || xml_attr_double(c, n, "fraction", &c->shutter_fraction, 0))
         return -1;
-    if (attr_text(n, "fraction", probe, sizeof probe)) {
-        if (attr_text(n, "open", probe, sizeof probe) || attr_text(n, "close", probe, sizeof probe))
-            return node_fail(c, n, "give either open/close or fraction, not both");
+    if (xml_attr_text(n, "fraction", probe, sizeof probe)) {
+        if (xml_attr_text(n, "open", probe, sizeof probe) || xml_attr_text(n, "close", probe, sizeof probe))
+            return xml_fail(c, n, "give either open/close or fraction, not both");
         if (!(c->shutter_fraction > 0 && c->shutter_fraction <= 1))
-            return node_fail(c, n, "shutter fraction must be in (0, 1]");
+            return xml_fail(c, n, "shutter fraction must be in (0, 1]");
         c->shutter_line = (int)xmlGetLineNo(n);
-        c->shutter_center_given = attr_text(n, "center", probe, sizeof probe);
+        c->shutter_center_given = xml_attr_text(n, "center", probe, sizeof probe);
         s->open = 0, s->close = 1; /* placeholders until the frame rate is known */
     }
     s->center = s->close; /* thesis Figure 3.1: weighting center t_c = t1 */
-    if (attr_double(c, n, "center", &s->center, 0) || attr_double(c, n, "rate", &s->rate, 0) ||
+    if (xml_attr_double(c, n, "center", &s->center, 0) || xml_attr_double(c, n, "rate", &s->rate, 0) ||
         parse_weight_kind(c, n, s) || parse_weight_table(c, n, s))
         return -1;
     rr_error sub;
     if (shutter_check(s, &sub))
-        return node_fail(c, n, "%s", sub.msg);
+        return xml_fail(c, n, "%s", sub.msg);
     return 0;
 }
 
 static int parse_color_element(xml_ctx *c, xmlNodePtr n, vec3 *color)
 {
     static const char *const ok[] = {"color", NULL};
-    return check_attributes(c, n, ok) || attr_vec3(c, n, "color", color, 1) ? -1 : 0;
+    return xml_check_attributes(c, n, ok) || xml_attr_vec3(c, n, "color", color, 1) ? -1 : 0;
 }
 
 static int parse_render(xml_ctx *c, xmlNodePtr n, scene *s)
 {
     static const char *const ok[] = {"epsilon", "kernel_sigma", "time_factor", NULL};
-    if (check_attributes(c, n, ok) || attr_double(c, n, "epsilon", &s->epsilon, 0) ||
-        attr_positive(c, n, "kernel_sigma", &s->kernel_sigma, 0) ||
-        attr_int(c, n, "time_factor", &s->time_factor, 1, 1024))
+    if (xml_check_attributes(c, n, ok) || xml_attr_double(c, n, "epsilon", &s->epsilon, 0) ||
+        xml_attr_positive(c, n, "kernel_sigma", &s->kernel_sigma, 0) ||
+        xml_attr_int(c, n, "time_factor", &s->time_factor, 1, 1024))
         return -1;
     if (s->epsilon < 0)
-        return node_fail(c, n, "attribute 'epsilon' must be >= 0");
+        return xml_fail(c, n, "attribute 'epsilon' must be >= 0");
     return 0;
 }
 
@@ -281,25 +148,25 @@ static int parse_light(xml_ctx *c, xmlNodePtr n, scene *s)
     static const char *const ok[] = {"type", "position", "direction", "color", NULL};
     light l = {LIGHT_POINT, v3(0, 0, 0), v3(0, 0, -1), v3(1, 1, 1)};
     char type[64] = "point";
-    attr_text(n, "type", type, sizeof type);
-    if (check_attributes(c, n, ok) || attr_vec3(c, n, "color", &l.color, 0))
+    xml_attr_text(n, "type", type, sizeof type);
+    if (xml_check_attributes(c, n, ok) || xml_attr_vec3(c, n, "color", &l.color, 0))
         return -1;
     if (!strcmp(type, "point")) {
-        if (attr_vec3(c, n, "position", &l.position, 1))
+        if (xml_attr_vec3(c, n, "position", &l.position, 1))
             return -1;
     } else if (!strcmp(type, "directional")) {
         l.kind = LIGHT_DIRECTIONAL;
-        if (attr_vec3(c, n, "direction", &l.direction, 1))
+        if (xml_attr_vec3(c, n, "direction", &l.direction, 1))
             return -1;
         if (!(v3_len(l.direction) > 0))
-            return node_fail(c, n, "light direction must be non-zero");
+            return xml_fail(c, n, "light direction must be non-zero");
         l.direction = v3_normalize(l.direction);
     } else {
-        return node_fail(c, n, "unknown light type '%s' (expected point or directional)", type);
+        return xml_fail(c, n, "unknown light type '%s' (expected point or directional)", type);
     }
     light *grown = realloc(s->lights, (size_t)(s->nlights + 1) * sizeof *grown);
     if (!grown)
-        return node_fail(c, n, "out of memory");
+        return xml_fail(c, n, "out of memory");
     s->lights = grown;
     s->lights[s->nlights++] = l;
     return 0;
@@ -311,196 +178,18 @@ static int parse_material(xml_ctx *c, xmlNodePtr n, material *m)
 {
     static const char *const ok[] = {"shading", "diffuse", "specular", "shininess", NULL};
     char shading[64];
-    if (check_attributes(c, n, ok))
+    if (xml_check_attributes(c, n, ok))
         return -1;
-    if (attr_text(n, "shading", shading, sizeof shading)) {
+    if (xml_attr_text(n, "shading", shading, sizeof shading)) {
         if (!strcmp(shading, "phong")) m->shading = SHADING_PHONG;
         else if (!strcmp(shading, "unlit")) m->shading = SHADING_UNLIT;
-        else return node_fail(c, n, "unknown shading '%s' (expected phong or unlit)", shading);
+        else return xml_fail(c, n, "unknown shading '%s' (expected phong or unlit)", shading);
     }
-    if (attr_double(c, n, "diffuse", &m->diffuse, 0) || attr_double(c, n, "specular", &m->specular, 0) ||
-        attr_double(c, n, "shininess", &m->shininess, 0))
+    if (xml_attr_double(c, n, "diffuse", &m->diffuse, 0) || xml_attr_double(c, n, "specular", &m->specular, 0) ||
+        xml_attr_double(c, n, "shininess", &m->shininess, 0))
         return -1;
     if (m->diffuse < 0 || m->specular < 0 || m->shininess < 0)
-        return node_fail(c, n, "diffuse, specular and shininess must be >= 0");
-    return 0;
-}
-
-static int parse_linear(xml_ctx *c, xmlNodePtr n, animation *a)
-{
-    static const char *const ok[] = {"velocity", NULL};
-    return check_attributes(c, n, ok) || attr_vec3(c, n, "velocity", &a->velocity, 1) ? -1 : 0;
-}
-
-static int parse_rotation(xml_ctx *c, xmlNodePtr n, animation *a)
-{
-    static const char *const ok[] = {"axis", "center", "degrees_per_unit_time", NULL};
-    if (check_attributes(c, n, ok) || attr_vec3(c, n, "axis", &a->axis, 1) ||
-        attr_vec3(c, n, "center", &a->center, 0) ||
-        attr_double(c, n, "degrees_per_unit_time", &a->degrees_per_time, 1))
-        return -1;
-    if (!(v3_len(a->axis) > 0))
-        return node_fail(c, n, "rotation axis must be non-zero");
-    a->axis = v3_normalize(a->axis);
-    a->has_rotation = 1;
-    return 0;
-}
-
-/* ---- keyframes -------------------------------------------------------- */
-
-static int resolve_path(xml_ctx *c, xmlNodePtr n, const char *rel, char *out, size_t size);
-static int element_text(xmlNodePtr n, char *buf, size_t size);
-
-static int key_interpolation(xml_ctx *c, xmlNodePtr n, tangent_kind *in, tangent_kind *out)
-{
-    char name[64];
-    if (!attr_text(n, "interpolation", name, sizeof name))
-        return 0;
-    if (!strcmp(name, "linear")) *in = *out = TAN_LINEAR;
-    else if (!strcmp(name, "step")) *in = TAN_FLAT, *out = TAN_STEP;
-    else if (!strcmp(name, "spline")) *in = *out = TAN_SPLINE;
-    else if (!strcmp(name, "clamped")) *in = *out = TAN_CLAMPED;
-    else if (!strcmp(name, "flat")) *in = *out = TAN_FLAT;
-    else return node_fail(c, n, "unknown interpolation '%s' (expected linear, step, spline, clamped or flat)", name);
-    return 0;
-}
-
-static int append_key(xml_ctx *c, xmlNodePtr n, curve *cv, curve_key k)
-{
-    int rc = curve_append(cv, &k);
-    if (rc == -1)
-        return node_fail(c, n, "key time %g is not after the previous key's %g", k.time,
-                         cv->keys[cv->count - 1].time);
-    return rc ? node_fail(c, n, "out of memory") : 0;
-}
-
-/* <key time="t" translate="x y z" rotate="degrees x y z" scale="x y z"
- * interpolation="..."/>: each given vector keys its three channels. */
-static int parse_key(xml_ctx *c, xmlNodePtr n, keyframes *kf, tangent_kind in, tangent_kind out)
-{
-    static const char *const ok[] = {"time", "translate", "rotate", "scale", "interpolation", NULL};
-    static const char *const vectors[] = {"translate", "rotate", "scale"};
-    curve_key k;
-    memset(&k, 0, sizeof k);
-    if (check_attributes(c, n, ok) || check_no_text(c, n) || attr_double(c, n, "time", &k.time, 1) ||
-        key_interpolation(c, n, &in, &out))
-        return -1;
-    k.in = in, k.out = out;
-    int any = 0;
-    for (int v = 0; v < 3; v++) {
-        vec3 val = v3(0, 0, 0);
-        char probe[8];
-        if (!attr_text(n, vectors[v], probe, sizeof probe))
-            continue;
-        if (attr_vec3(c, n, vectors[v], &val, 1))
-            return -1;
-        double xyz[3] = {val.x, val.y, val.z};
-        for (int i = 0; i < 3; i++) {
-            k.value = v == 1 ? xyz[i] * M_PI / 180.0 : xyz[i];
-            if (v == 2 && !(xyz[i] > 0))
-                return node_fail(c, n, "scale must be positive");
-            if (append_key(c, n, &kf->ch[3 * v + i], k))
-                return -1;
-        }
-        any = 1;
-    }
-    if (!any)
-        return node_fail(c, n, "a key needs translate, rotate or scale");
-    return 0;
-}
-
-/* <keyframes interpolation="spline" pivot="x y z" pre="constant"
- * post="constant"> <key .../> ... </keyframes> */
-static int parse_keyframes(xml_ctx *c, xmlNodePtr n, keyframes *kf)
-{
-    static const char *const ok[] = {"interpolation", "pivot", "pre", "post", NULL};
-    tangent_kind in = TAN_LINEAR, out = TAN_LINEAR;
-    char inf[2][64] = {"constant", "constant"};
-    infinity_kind pre, post;
-    attr_text(n, "pre", inf[0], sizeof inf[0]);
-    attr_text(n, "post", inf[1], sizeof inf[1]);
-    if (check_attributes(c, n, ok) || check_no_text(c, n) || key_interpolation(c, n, &in, &out) ||
-        attr_vec3(c, n, "pivot", &kf->pivot, 0))
-        return -1;
-    if (infinity_from_name(inf[0], &pre) || infinity_from_name(inf[1], &post))
-        return node_fail(c, n, "unknown pre/post infinity (expected constant, linear, cycle, cycleRelative "
-                               "or oscillate)");
-    int keys = 0;
-    for (xmlNodePtr k = n->children; k; k = k->next) {
-        if (!is_element(k))
-            continue;
-        if (strcmp(elname(k), "key"))
-            return node_fail(c, k, "unknown element inside <keyframes> (expected key)");
-        if (parse_key(c, k, kf, in, out))
-            return -1;
-        keys++;
-    }
-    if (!keys)
-        return node_fail(c, n, "<keyframes> needs at least one <key>");
-    for (int i = 0; i < CH_COUNT; i++) {
-        rr_error sub;
-        kf->ch[i].pre = pre, kf->ch[i].post = post;
-        if (kf->ch[i].count && curve_prepare(&kf->ch[i], &sub))
-            return node_fail(c, n, "%s", sub.msg);
-    }
-    return 0;
-}
-
-/* Keyframes rotate and scale about a pivot that defaults to the object's
- * position (the camera's position): keyed rotations turn it in place. */
-static int new_keyframes(xml_ctx *c, xmlNodePtr n, animation *a)
-{
-    if (a->keys || a->has_rotation || v3_len(a->velocity) > 0)
-        return node_fail(c, n, "an animation is either keyframes (or a .anim file) or linear/rotation, once");
-    a->keys = calloc(1, sizeof *a->keys);
-    if (!a->keys)
-        return node_fail(c, n, "out of memory");
-    a->keys->pivot = a->offset;
-    return 0;
-}
-
-/* <animation>path.anim</animation> as in thesis Figure 4.11. */
-static int load_anim_file(xml_ctx *c, xmlNodePtr n, animation *a)
-{
-    char rel[4096], path[8192];
-    if (!element_text(n, rel, sizeof rel))
-        return node_fail(c, n, "animation file path is too long");
-    if (resolve_path(c, n, rel, path, sizeof path) || new_keyframes(c, n, a))
-        return -1;
-    vec3 pivot = a->keys->pivot;
-    free(a->keys);
-    a->keys = NULL;
-    rr_error sub;
-    if (animfile_load(path, &a->keys, c->inputs_hash, &c->sc->warnings, &sub))
-        return rr_fail(c->err, "%s (animation of %s:%ld)", sub.msg, c->name, xmlGetLineNo(n));
-    if (scene_add_input(c->sc, path))
-        return node_fail(c, n, "out of memory");
-    a->keys->pivot = pivot;
-    return 0;
-}
-
-static int parse_animation(xml_ctx *c, xmlNodePtr n, animation *a)
-{
-    static const char *const ok[] = {NULL};
-    if (check_attributes(c, n, ok))
-        return -1;
-    if (has_text(n))
-        return load_anim_file(c, n, a);
-    for (xmlNodePtr k = n->children; k; k = k->next) {
-        if (!is_element(k))
-            continue;
-        int rc;
-        if (!strcmp(elname(k), "linear"))
-            rc = a->keys ? new_keyframes(c, k, a) : parse_linear(c, k, a);
-        else if (!strcmp(elname(k), "rotation"))
-            rc = a->keys ? new_keyframes(c, k, a) : parse_rotation(c, k, a);
-        else if (!strcmp(elname(k), "keyframes"))
-            rc = new_keyframes(c, k, a) || parse_keyframes(c, k, a->keys);
-        else
-            rc = node_fail(c, k, "unknown animation element (expected linear, rotation or keyframes)");
-        if (rc)
-            return -1;
-    }
+        return xml_fail(c, n, "diffuse, specular and shininess must be >= 0");
     return 0;
 }
 
@@ -510,9 +199,9 @@ static int parse_sphere(xml_ctx *c, xmlNodePtr n, scene_object *o)
     o->kind = OBJECT_SPHERE;
     o->sphere_center = v3(0, 0, 0);
     o->sphere_color = v3(0.8, 0.8, 0.8);
-    return check_attributes(c, n, ok) || attr_vec3(c, n, "center", &o->sphere_center, 0) ||
-                   attr_positive(c, n, "radius", &o->sphere_radius, 1) ||
-                   attr_vec3(c, n, "color", &o->sphere_color, 0)
+    return xml_check_attributes(c, n, ok) || xml_attr_vec3(c, n, "center", &o->sphere_center, 0) ||
+                   xml_attr_positive(c, n, "radius", &o->sphere_radius, 1) ||
+                   xml_attr_vec3(c, n, "color", &o->sphere_color, 0)
                ? -1
                : 0;
 }
@@ -523,59 +212,22 @@ static int parse_splat(xml_ctx *c, xmlNodePtr n, pointmodel *m, vec3 default_col
     vec3 center = v3(0, 0, 0), normal = v3(0, 0, 0), u = v3(0, 0, 0), v = v3(0, 0, 0);
     vec3 color = default_color;
     double radius = 0;
-    if (check_attributes(c, n, ok) || attr_vec3(c, n, "center", &center, 1) ||
-        attr_vec3(c, n, "normal", &normal, 0) || attr_vec3(c, n, "color", &color, 0) ||
-        attr_double(c, n, "radius", &radius, 0) || attr_vec3(c, n, "u", &u, 0) ||
-        attr_vec3(c, n, "v", &v, 0))
+    if (xml_check_attributes(c, n, ok) || xml_attr_vec3(c, n, "center", &center, 1) ||
+        xml_attr_vec3(c, n, "normal", &normal, 0) || xml_attr_vec3(c, n, "color", &color, 0) ||
+        xml_attr_double(c, n, "radius", &radius, 0) || xml_attr_vec3(c, n, "u", &u, 0) ||
+        xml_attr_vec3(c, n, "v", &v, 0))
         return -1;
     rr_error sub;
     int has_axes = xmlHasProp(n, (const xmlChar *)"u") || xmlHasProp(n, (const xmlChar *)"v");
     int rc = has_axes ? pointmodel_add(m, center, u, v, normal, color, &sub)
                       : pointmodel_add_circle(m, center, normal, radius, color, &sub);
-    return rc ? node_fail(c, n, "%s (give 'normal' and 'radius', or axes 'u' and 'v')", sub.msg) : 0;
-}
-
-/* Resolves rel against the scene's directory; a path that does not fit is
- * an error, never silently cut. */
-static int resolve_path(xml_ctx *c, xmlNodePtr n, const char *rel, char *out, size_t size)
-{
-    char clean[4096];
-    snprintf(clean, sizeof clean, "%s", rel);
-    for (char *p = clean; *p; p++)
-        if (*p == '\\')
-            *p = '/'; /* thesis Figure 4.11 writes Windows paths */
-    int len = clean[0] == '/' || !c->base_dir || !c->base_dir[0] ? snprintf(out, size, "%s", clean)
-                                                                   : snprintf(out, size, "%s/%s", c->base_dir, clean);
-    return len < 0 || (size_t)len >= size ? node_fail(c, n, "file path is too long") : 0;
-}
-
-/* The element's text with surrounding white space removed; 0 if empty
- * (or too long for buf). */
-static int element_text(xmlNodePtr n, char *buf, size_t size)
-{
-    xmlChar *text = xmlNodeGetContent(n);
-    int found = 0;
-    if (text) {
-        const char *s = (const char *)text;
-        while (*s == ' ' || *s == '\n' || *s == '\t' || *s == '\r')
-            s++;
-        size_t len = strlen(s);
-        while (len && (s[len - 1] == ' ' || s[len - 1] == '\n' || s[len - 1] == '\t' || s[len - 1] == '\r'))
-            len--;
-        if (len && len < size) {
-            memcpy(buf, s, len);
-            buf[len] = 0;
-            found = 1;
-        }
-        xmlFree(text);
-    }
-    return found;
+    return rc ? xml_fail(c, n, "%s (give 'normal' and 'radius', or axes 'u' and 'v')", sub.msg) : 0;
 }
 
 /* Path from the 'file' attribute or, as in thesis Figure 4.11, the text. */
 static int point_model_path(xmlNodePtr n, char *buf, size_t size)
 {
-    return attr_text(n, "file", buf, size) || element_text(n, buf, size);
+    return xml_attr_text(n, "file", buf, size) || xml_element_text(n, buf, size);
 }
 
 static int generate_shape(xml_ctx *c, xmlNodePtr n, const char *kind, pointmodel *m)
@@ -584,25 +236,25 @@ static int generate_shape(xml_ctx *c, xmlNodePtr n, const char *kind, pointmodel
     shape_params_default(&p);
     snprintf(p.kind, sizeof p.kind, "%s", kind);
     double count = (double)p.count;
-    if (attr_double(c, n, "count", &count, 0) || attr_positive(c, n, "radius", &p.radius, 0) ||
-        attr_positive(c, n, "minor_radius", &p.minor_radius, 0) ||
-        attr_vec3(c, n, "color", &p.color, 0) || attr_vec3(c, n, "color2", &p.color2, 0) ||
-        attr_int(c, n, "checker", &p.checker, 0, 100000) ||
-        attr_positive(c, n, "overlap", &p.overlap, 0))
+    if (xml_attr_double(c, n, "count", &count, 0) || xml_attr_positive(c, n, "radius", &p.radius, 0) ||
+        xml_attr_positive(c, n, "minor_radius", &p.minor_radius, 0) ||
+        xml_attr_vec3(c, n, "color", &p.color, 0) || xml_attr_vec3(c, n, "color2", &p.color2, 0) ||
+        xml_attr_int(c, n, "checker", &p.checker, 0, 100000) ||
+        xml_attr_positive(c, n, "overlap", &p.overlap, 0))
         return -1;
     if (count < 1 || count > SCENE_MAX_GENERATED || count != floor(count))
-        return node_fail(c, n, "attribute 'count' must be an integer in [1, %g]", (double)SCENE_MAX_GENERATED);
+        return xml_fail(c, n, "attribute 'count' must be an integer in [1, %g]", (double)SCENE_MAX_GENERATED);
     p.count = (size_t)count;
     surfel *s;
     size_t ns;
     rr_error sub;
     if (shape_generate(&p, &s, &ns, &sub))
-        return node_fail(c, n, "%s", sub.msg);
+        return xml_fail(c, n, "%s", sub.msg);
     int rc = 0;
     for (size_t i = 0; i < ns && !rc; i++)
         rc = pointmodel_add_circle(m, s[i].center, s[i].normal, s[i].radius, s[i].color, &sub);
     free(s);
-    return rc ? node_fail(c, n, "%s", sub.msg) : 0;
+    return rc ? xml_fail(c, n, "%s", sub.msg) : 0;
 }
 
 static int parse_point_model(xml_ctx *c, xmlNodePtr n, scene_object *o)
@@ -610,53 +262,53 @@ static int parse_point_model(xml_ctx *c, xmlNodePtr n, scene_object *o)
     static const char *const ok[] = {"file", "generate", "count", "radius", "minor_radius",
                                      "color", "color2", "checker", "overlap", NULL};
     o->kind = OBJECT_POINTS;
-    if (check_attributes(c, n, ok))
+    if (xml_check_attributes(c, n, ok))
         return -1;
     vec3 default_color = v3(0.8, 0.8, 0.8);
-    if (attr_vec3(c, n, "color", &default_color, 0))
+    if (xml_attr_vec3(c, n, "color", &default_color, 0))
         return -1;
     char rel[4096], path[8192], kind[sizeof ((shape_params *)0)->kind];
     if (point_model_path(n, rel, sizeof rel)) {
-        if (resolve_path(c, n, rel, path, sizeof path))
+        if (xml_resolve_path(c, n, rel, path, sizeof path))
             return -1;
         rr_error sub;
         if (ply_read(path, default_color, &o->model, c->inputs_hash, &sub))
             return rr_fail(c->err, "%s (point model of %s:%ld)", sub.msg, c->name, xmlGetLineNo(n));
         if (scene_add_input(c->sc, path))
-            return node_fail(c, n, "out of memory");
+            return xml_fail(c, n, "out of memory");
     }
-    if (attr_text(n, "generate", kind, sizeof kind) && generate_shape(c, n, kind, &o->model))
+    if (xml_attr_text(n, "generate", kind, sizeof kind) && generate_shape(c, n, kind, &o->model))
         return -1;
     for (xmlNodePtr k = n->children; k; k = k->next) {
-        if (!is_element(k))
+        if (!xml_is_element(k))
             continue;
-        if (strcmp(elname(k), "splat"))
-            return node_fail(c, k, "unknown element inside <pointModel> (expected splat)");
+        if (strcmp(xml_elname(k), "splat"))
+            return xml_fail(c, k, "unknown element inside <pointModel> (expected splat)");
         if (parse_splat(c, k, &o->model, default_color))
             return -1;
     }
     if (o->model.count == 0)
-        return node_fail(c, n, "point model has no splats: give a PLY path, 'generate', or "
+        return xml_fail(c, n, "point model has no splats: give a PLY path, 'generate', or "
                                "<splat> children");
     rr_error sub;
     if (pointmodel_sort_spatially(&o->model, NULL, &sub))
-        return node_fail(c, n, "%s", sub.msg);
+        return xml_fail(c, n, "%s", sub.msg);
     return 0;
 }
 
 static int parse_object_child(xml_ctx *c, xmlNodePtr k, scene_object *o, int *shapes)
 {
-    const char *name = elname(k);
+    const char *name = xml_elname(k);
     if (!strcmp(name, "pointModel") || !strcmp(name, "sphere")) {
         if (++*shapes > 1)
-            return node_fail(c, k, "an object holds exactly one pointModel or sphere");
+            return xml_fail(c, k, "an object holds exactly one pointModel or sphere");
         return !strcmp(name, "sphere") ? parse_sphere(c, k, o) : parse_point_model(c, k, o);
     }
     if (!strcmp(name, "material"))
         return parse_material(c, k, &o->mat);
     if (!strcmp(name, "animation"))
-        return parse_animation(c, k, &o->anim);
-    return node_fail(c, k, "unknown element inside <object> (expected pointModel, sphere, "
+        return xml_parse_animation(c, k, &o->anim);
+    return xml_fail(c, k, "unknown element inside <object> (expected pointModel, sphere, "
                            "material or animation)");
 }
 
@@ -665,7 +317,7 @@ static int parse_object(xml_ctx *c, xmlNodePtr n, scene *s)
     static const char *const ok[] = {"name", "position", NULL};
     scene_object *grown = realloc(s->objects, (size_t)(s->nobjects + 1) * sizeof *grown);
     if (!grown)
-        return node_fail(c, n, "out of memory");
+        return xml_fail(c, n, "out of memory");
     s->objects = grown;
     scene_object *o = &s->objects[s->nobjects++];
     memset(o, 0, sizeof *o);
@@ -673,16 +325,16 @@ static int parse_object(xml_ctx *c, xmlNodePtr n, scene *s)
     o->mat = (material){SHADING_PHONG, 1.0, 0.0, 32.0};
     animation_init_static(&o->anim);
     snprintf(o->name, sizeof o->name, "object%d", s->nobjects);
-    attr_text(n, "name", o->name, sizeof o->name);
-    if (check_attributes(c, n, ok) || attr_vec3(c, n, "position", &o->anim.offset, 0) ||
-        check_no_text(c, n))
+    xml_attr_text(n, "name", o->name, sizeof o->name);
+    if (xml_check_attributes(c, n, ok) || xml_attr_vec3(c, n, "position", &o->anim.offset, 0) ||
+        xml_check_no_text(c, n))
         return -1;
     int shapes = 0;
     for (xmlNodePtr k = n->children; k; k = k->next)
-        if (is_element(k) && parse_object_child(c, k, o, &shapes))
+        if (xml_is_element(k) && parse_object_child(c, k, o, &shapes))
             return -1;
     if (!shapes)
-        return node_fail(c, n, "object has no geometry: add <pointModel> or <sphere>");
+        return xml_fail(c, n, "object has no geometry: add <pointModel> or <sphere>");
     return 0;
 }
 
@@ -690,7 +342,7 @@ static int parse_object(xml_ctx *c, xmlNodePtr n, scene *s)
 static int parse_frames(xml_ctx *c, xmlNodePtr n, scene *s)
 {
     static const char *const ok[] = {"rate", NULL};
-    return check_attributes(c, n, ok) || check_no_text(c, n) || attr_positive(c, n, "rate", &s->frame_rate, 1)
+    return xml_check_attributes(c, n, ok) || xml_check_no_text(c, n) || xml_attr_positive(c, n, "rate", &s->frame_rate, 1)
                ? -1 : 0;
 }
 
@@ -714,7 +366,7 @@ static int finish_frames(xml_ctx *c, scene *s)
 
 static int parse_scene_child(xml_ctx *c, xmlNodePtr k, scene *s)
 {
-    const char *name = elname(k);
+    const char *name = xml_elname(k);
     if (!strcmp(name, "camera")) return parse_camera(c, k, &s->cam, &s->camera_motion);
     if (!strcmp(name, "frames")) return parse_frames(c, k, s);
     if (!strcmp(name, "shutter")) return parse_shutter(c, k, s);
@@ -723,23 +375,23 @@ static int parse_scene_child(xml_ctx *c, xmlNodePtr k, scene *s)
     if (!strcmp(name, "light")) return parse_light(c, k, s);
     if (!strcmp(name, "render")) return parse_render(c, k, s);
     if (!strcmp(name, "object")) return parse_object(c, k, s);
-    return node_fail(c, k, "unknown element (expected camera, shutter, frames, background, ambient, "
+    return xml_fail(c, k, "unknown element (expected camera, shutter, frames, background, ambient, "
                            "light, render or object)");
 }
 
 static int parse_scene(xml_ctx *c, xmlDocPtr doc, scene *s)
 {
     xmlNodePtr root = xmlDocGetRootElement(doc);
-    if (!root || strcmp(elname(root), "scene"))
+    if (!root || strcmp(xml_elname(root), "scene"))
         return rr_fail(c->err, "%s:%ld: root element must be <scene>", c->name,
                        root ? xmlGetLineNo(root) : 1L);
     static const char *const ok[] = {NULL};
-    if (check_attributes(c, root, ok) || check_no_text(c, root))
+    if (xml_check_attributes(c, root, ok) || xml_check_no_text(c, root))
         return -1;
     if (camera_prepare(&s->cam, c->err))
         return -1;
     for (xmlNodePtr k = root->children; k; k = k->next)
-        if (is_element(k) && parse_scene_child(c, k, s))
+        if (xml_is_element(k) && parse_scene_child(c, k, s))
             return -1;
     if (s->nobjects == 0)
         return rr_fail(c->err, "%s: scene has no <object>", c->name);

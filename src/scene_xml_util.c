@@ -1,0 +1,163 @@
+/* Attribute and element helpers of the scene XML reader. */
+#include "scene_xml_internal.h"
+
+#include <stdarg.h>
+#include <stdio.h>
+#include <string.h>
+
+const char *xml_elname(xmlNodePtr n) { return (const char *)n->name; }
+
+int xml_fail(xml_ctx *c, xmlNodePtr n, const char *fmt, ...)
+{
+    char what[2048];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(what, sizeof what, fmt, ap);
+    va_end(ap);
+    return rr_fail(c->err, "%s:%ld: <%s>: %s", c->name, xmlGetLineNo(n), xml_elname(n), what);
+}
+
+/* Rejects attributes not in the NULL-terminated list (catches typos). */
+int xml_check_attributes(xml_ctx *c, xmlNodePtr n, const char *const *allowed)
+{
+    for (xmlAttrPtr a = n->properties; a; a = a->next) {
+        int ok = 0;
+        for (const char *const *p = allowed; *p && !ok; p++)
+            ok = !strcmp(*p, (const char *)a->name);
+        if (!ok)
+            return xml_fail(c, n, "unknown attribute '%s'", (const char *)a->name);
+    }
+    return 0;
+}
+
+/* Copies attribute text into buf; returns 1 if present, 0 if absent. */
+int xml_attr_text(xmlNodePtr n, const char *name, char *buf, size_t size)
+{
+    xmlChar *v = xmlGetProp(n, (const xmlChar *)name);
+    if (!v)
+        return 0;
+    snprintf(buf, size, "%s", (const char *)v);
+    xmlFree(v);
+    return 1;
+}
+
+/* Parses up to max whitespace-separated finite numbers; returns the count,
+ * or -1 if a token is not a finite number. */
+int xml_parse_numbers(const char *text, double *out, int max)
+{
+    int n = 0;
+    const char *p = text;
+    for (;;) {
+        while (*p == ' ' || *p == '\t' || *p == '\n' || *p == '\r' || *p == ',')
+            p++;
+        if (!*p)
+            return n;
+        char *end;
+        double v = strtod(p, &end);
+        if (end == p || !isfinite(v) || n == max)
+            return -1;
+        out[n++] = v;
+        p = end;
+    }
+}
+
+int xml_attr_numbers(xml_ctx *c, xmlNodePtr n, const char *name, double *out, int count,
+                        int required)
+{
+    char buf[4096];
+    if (!xml_attr_text(n, name, buf, sizeof buf))
+        return required ? xml_fail(c, n, "missing required attribute '%s'", name) : 0;
+    if (xml_parse_numbers(buf, out, count) != count)
+        return xml_fail(c, n, "attribute '%s' must be %d finite number%s, got '%s'", name, count,
+                         count > 1 ? "s" : "", buf);
+    return 0;
+}
+
+int xml_attr_double(xml_ctx *c, xmlNodePtr n, const char *name, double *v, int required)
+{
+    return xml_attr_numbers(c, n, name, v, 1, required);
+}
+
+int xml_attr_vec3(xml_ctx *c, xmlNodePtr n, const char *name, vec3 *v, int required)
+{
+    double a[3] = {v->x, v->y, v->z};
+    if (xml_attr_numbers(c, n, name, a, 3, required))
+        return -1;
+    *v = v3(a[0], a[1], a[2]);
+    return 0;
+}
+
+int xml_attr_positive(xml_ctx *c, xmlNodePtr n, const char *name, double *v, int required)
+{
+    if (xml_attr_double(c, n, name, v, required))
+        return -1;
+    if (!(*v > 0))
+        return xml_fail(c, n, "attribute '%s' must be positive", name);
+    return 0;
+}
+
+int xml_attr_int(xml_ctx *c, xmlNodePtr n, const char *name, int *v, int lo, int hi)
+{
+    double d = *v;
+    if (xml_attr_double(c, n, name, &d, 0))
+        return -1;
+    if (d != floor(d) || d < lo || d > hi)
+        return xml_fail(c, n, "attribute '%s' must be an integer in [%d, %d]", name, lo, hi);
+    *v = (int)d;
+    return 0;
+}
+
+int xml_is_element(xmlNodePtr n) { return n->type == XML_ELEMENT_NODE; }
+
+/* Non-blank text directly inside the element (a path, as in Figure 4.11)? */
+int xml_has_text(xmlNodePtr n)
+{
+    for (xmlNodePtr k = n->children; k; k = k->next)
+        if (k->type == XML_TEXT_NODE && !xmlIsBlankNode(k))
+            return 1;
+    return 0;
+}
+
+/* Text children must be whitespace only, except where an element takes a
+ * path as its content. */
+int xml_check_no_text(xml_ctx *c, xmlNodePtr parent)
+{
+    return xml_has_text(parent) ? xml_fail(c, parent, "unexpected text inside this element") : 0;
+}
+
+/* Resolves rel against the scene's directory; a path that does not fit is
+ * an error, never silently cut. */
+int xml_resolve_path(xml_ctx *c, xmlNodePtr n, const char *rel, char *out, size_t size)
+{
+    char clean[4096];
+    snprintf(clean, sizeof clean, "%s", rel);
+    for (char *p = clean; *p; p++)
+        if (*p == '\\')
+            *p = '/'; /* thesis Figure 4.11 writes Windows paths */
+    int len = clean[0] == '/' || !c->base_dir || !c->base_dir[0] ? snprintf(out, size, "%s", clean)
+                                                                   : snprintf(out, size, "%s/%s", c->base_dir, clean);
+    return len < 0 || (size_t)len >= size ? xml_fail(c, n, "file path is too long") : 0;
+}
+
+/* The element's text with surrounding white space removed; 0 if empty
+ * (or too long for buf). */
+int xml_element_text(xmlNodePtr n, char *buf, size_t size)
+{
+    xmlChar *text = xmlNodeGetContent(n);
+    int found = 0;
+    if (text) {
+        const char *s = (const char *)text;
+        while (*s == ' ' || *s == '\n' || *s == '\t' || *s == '\r')
+            s++;
+        size_t len = strlen(s);
+        while (len && (s[len - 1] == ' ' || s[len - 1] == '\n' || s[len - 1] == '\t' || s[len - 1] == '\r'))
+            len--;
+        if (len && len < size) {
+            memcpy(buf, s, len);
+            buf[len] = 0;
+            found = 1;
+        }
+        xmlFree(text);
+    }
+    return found;
+}
