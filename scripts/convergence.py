@@ -22,7 +22,8 @@ import subprocess
 import sys
 
 import numpy as np
-import OpenImageIO as oiio
+
+import imagecompare
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 BIN = os.environ.get("REFRENDER", os.path.join(ROOT, "build", "refrender"))
@@ -40,13 +41,9 @@ def render(scene, out, res, spp, tspp, sampler, seed):
     proc = subprocess.run(cmd, capture_output=True, text=True)
     if proc.returncode:
         sys.exit(f"convergence.py: render failed: {' '.join(cmd)}\n{proc.stderr}")
-    inp = oiio.ImageInput.open(out)
-    spec = inp.spec()
-    pixels = inp.read_image(oiio.FLOAT)
-    inp.close()
-    names = list(spec.channelnames)
-    rgb = np.stack([pixels[:, :, names.index(c)] for c in "RGB"], axis=-1).astype(np.float64)
-    return rgb, float(spec.get_string_attribute("refrender:renderSeconds", "0"))
+    channels, _, header = imagecompare.read_channels(out)
+    rgb = np.stack([channels[c] for c in "RGB"], axis=-1).astype(np.float64)
+    return rgb, float(header.get("refrender:renderSeconds", "0"))
 
 
 def fit_slope(samples, rmse):

@@ -5,15 +5,15 @@ name when a font is available, four to a row in the order given.
 
 usage: gallery.py OUT.png IMAGE.exr [IMAGE.exr ...]
 """
+import argparse
 import os
 import sys
 
 import numpy as np
 import OpenImageIO as oiio
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-import flip  # noqa: E402
-import imagecompare  # noqa: E402
+import flip
+import imagecompare
 
 COLUMNS, LABEL = 4, 18
 
@@ -32,11 +32,12 @@ def tile(path):
     return buf.get_pixels(oiio.FLOAT)
 
 
-def main(argv):
-    if len(argv) < 3:
-        print(__doc__, file=sys.stderr)
-        return 2
-    tiles = [tile(p) for p in argv[2:]]
+def main(argv=None):
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("out", metavar="OUT.png", help="contact sheet to write (8-bit, format by extension)")
+    p.add_argument("images", metavar="IMAGE", nargs="+", help="images to show, in this order")
+    args = p.parse_args(argv)
+    tiles = [tile(path) for path in args.images]
     h = max(t.shape[0] for t in tiles)
     w = max(t.shape[1] for t in tiles)
     rows = (len(tiles) + COLUMNS - 1) // COLUMNS
@@ -45,12 +46,12 @@ def main(argv):
         y, x = (i // COLUMNS) * h, (i % COLUMNS) * w
         sheet[y:y + t.shape[0], x:x + t.shape[1]] = t
     buf = oiio.ImageBuf(sheet)
-    if not buf.write(argv[1], "uint8"):
-        print(f"gallery.py: {argv[1]}: {buf.geterror()}", file=sys.stderr)
+    if not buf.write(args.out, "uint8"):
+        print(f"gallery.py: {args.out}: {buf.geterror()}", file=sys.stderr)
         return 1
-    print(f"gallery.py: {len(tiles)} images -> {argv[1]}")
+    print(f"gallery.py: {len(tiles)} images -> {args.out}")
     return 0
 
 
 if __name__ == "__main__":
-    sys.exit(main(sys.argv))
+    sys.exit(main())

@@ -47,11 +47,12 @@ def _channel(pixels, names, wanted):
     return None
 
 
-def read_image(path, colorspace="auto"):
-    """Reads any OpenImageIO format as linear RGB (+ alpha, + refrender's
-    standard-error channels stderr.R/G/B when present)."""
+def read_channels(path, unassociated_alpha=True):
+    """Every channel of an image by name (float32 planes), its spec and its
+    header attributes: the one image reader of the scripts and tests."""
     config = oiio.ImageSpec()
-    config.attribute("oiio:UnassociatedAlpha", 1)  # PNG alpha as stored, not premultiplied
+    if unassociated_alpha:
+        config.attribute("oiio:UnassociatedAlpha", 1)  # PNG alpha as stored, not premultiplied
     inp = oiio.ImageInput.open(str(path), config)
     if not inp:
         raise CompareError(f"{path}: cannot read image: {oiio.geterror()}")
@@ -62,6 +63,15 @@ def read_image(path, colorspace="auto"):
         raise CompareError(f"{path}: cannot decode pixels")
     if pixels.ndim == 2:
         pixels = pixels[:, :, None]
+    channels = {name: pixels[:, :, i] for i, name in enumerate(spec.channelnames)}
+    return channels, spec, {a.name: a.value for a in spec.extra_attribs}
+
+
+def read_image(path, colorspace="auto"):
+    """Reads any OpenImageIO format as linear RGB (+ alpha, + refrender's
+    standard-error channels stderr.R/G/B when present)."""
+    channels, spec, header = read_channels(path)
+    pixels = np.stack(list(channels.values()), axis=-1)
     names = list(spec.channelnames)
     if spec.nchannels < 3 and names[0] not in ("R", "Y"):
         names = ["Y"] + names[1:]
@@ -76,9 +86,7 @@ def read_image(path, colorspace="auto"):
     alpha = _channel(pixels, names, ["A"])
     se = [_channel(pixels, names, [f"stderr.{c}"]) for c in "RGB"]
     stderr = np.stack(se, axis=-1) if all(s is not None for s in se) else None
-    unassociated = spec.get_int_attribute("oiio:UnassociatedAlpha", 0)
-    header = {a.name: a.value for a in spec.extra_attribs}
-    header["_unassociated"] = unassociated
+    header["_unassociated"] = spec.get_int_attribute("oiio:UnassociatedAlpha", 0)
     return Image(str(path), rgb, alpha, stderr, space, header)
 
 

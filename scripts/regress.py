@@ -23,13 +23,11 @@ usage: regress.py REFERENCE.exr TEST.exr [--json]   (exit 1 when inconsistent)
 """
 import argparse
 import json
-import os
 import sys
 
 import numpy as np
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-import imagecompare  # noqa: E402
+import imagecompare
 
 OUTLIER_Z, MAX_OUTLIERS, BLOCK, BLOCK_Z, MAX_BLOCKS, MEAN_SIGMAS = 5.0, 0.01, 8, 4.0, 0.01, 5.0
 

@@ -3,25 +3,27 @@
 tests/test_regression.py does) with N different seeds and counts how many
 renders regress.py calls inconsistent with the reference.
 
-usage: regress_seeds.py SCENE_NAME [N] [--eps X]   (from the repository root)
+usage: regress_seeds.py SCENE_NAME [N] [--eps X]
 """
+import argparse
 import os
 import subprocess
 import sys
 import tempfile
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-import regress  # noqa: E402
+import regress
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 
-def main(argv):
-    if len(argv) < 2:
-        print(__doc__, file=sys.stderr)
-        return 2
-    name, n = argv[1], int(argv[2]) if len(argv) > 2 and not argv[2].startswith("-") else 50
-    extra = argv[argv.index("--eps"):argv.index("--eps") + 2] if "--eps" in argv else []
+def main(argv=None):
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("scene", metavar="SCENE_NAME", help="a suite scene: scenes/NAME.xml with reference_images/NAME.exr")
+    p.add_argument("n", metavar="N", type=int, nargs="?", default=50, help="number of seeds (default 50)")
+    p.add_argument("--eps", metavar="X", help="render with this epsilon (a planted blending bug)")
+    args = p.parse_args(argv)
+    name, n = args.scene, args.n
+    extra = ["--eps", args.eps] if args.eps is not None else []
     binary = os.environ.get("REFRENDER", os.path.join(ROOT, "build", "refrender"))
     ref = os.path.join(ROOT, "reference_images", f"{name}.exr")
     failures = 0
@@ -39,4 +41,4 @@ def main(argv):
 
 
 if __name__ == "__main__":
-    sys.exit(main(sys.argv))
+    sys.exit(main())

@@ -2,14 +2,18 @@
 given as XML text and read the EXR back with OpenImageIO."""
 import os
 import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
-import OpenImageIO as oiio
 import pytest
 
 ROOT = Path(__file__).resolve().parent.parent
 BIN = str(Path(os.environ.get("REFRENDER", ROOT / "build" / "refrender")).resolve())
+# the tests import the scripts' modules (imagecompare, regress, flip): one
+# place puts scripts/ on the path, as running a script there does for it
+sys.path.insert(0, str(ROOT / "scripts"))
+import imagecompare  # noqa: E402
 
 
 def run(args, **kw):
@@ -18,15 +22,14 @@ def run(args, **kw):
 
 def read_exr(path):
     """Returns (H x W x 4 float32 array in R, G, B, A order, header dict)."""
-    inp = oiio.ImageInput.open(str(path))
-    assert inp, oiio.geterror()
-    spec = inp.spec()
-    pixels = inp.read_image(oiio.FLOAT)
-    inp.close()
-    names = list(spec.channelnames)
-    rgba = np.stack([pixels[:, :, names.index(c)] for c in "RGBA"], axis=-1)
-    header = {a.name: a.value for a in spec.extra_attribs}
-    return rgba, header
+    channels, _, header = imagecompare.read_channels(path, unassociated_alpha=False)
+    return np.stack([channels[c] for c in "RGBA"], axis=-1), header
+
+
+def read_full(path):
+    """All channels by name (float32 arrays) and the header."""
+    channels, _, header = imagecompare.read_channels(path, unassociated_alpha=False)
+    return channels, header
 
 
 @pytest.fixture

@@ -8,7 +8,7 @@ import time
 import numpy as np
 import pytest
 
-from conftest import BIN, ROOT, read_exr, run
+from conftest import BIN, ROOT, read_exr, read_full, run
 
 SCENE = ROOT / "scenes" / "default.xml"
 DISK = """<scene>
@@ -16,16 +16,6 @@ DISK = """<scene>
  <object><pointModel><splat center="-1 0 -10" normal="0 0 1" radius="1.2" color="1 0.5 0.25"/></pointModel>
  <material shading="unlit"/><animation><linear velocity="2 0 0"/></animation></object>
 </scene>"""
-
-
-def read_full(path):
-    """All channels by name (float32 arrays) and the header."""
-    import OpenImageIO as oiio
-    inp = oiio.ImageInput.open(str(path))
-    spec = inp.spec()
-    px = inp.read_image(oiio.FLOAT)
-    inp.close()
-    return {n: px[:, :, i] for i, n in enumerate(spec.channelnames)}, {a.name: a.value for a in spec.extra_attribs}
 
 
 def render_disk(tmp_path, name, *args):

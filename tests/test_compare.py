@@ -4,17 +4,14 @@ input, and the machine-readable and picture outputs."""
 import csv
 import json
 import subprocess
-import sys
 
 import numpy as np
 import OpenImageIO as oiio
 import pytest
 
+import flip
 from conftest import ROOT
-
-sys.path.insert(0, str(ROOT / "scripts"))
-import flip  # noqa: E402
-from imagecompare import basic_metrics  # noqa: E402
+from imagecompare import basic_metrics
 
 COMPARE = ROOT / "scripts" / "compare.py"
 
