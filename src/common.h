@@ -39,6 +39,9 @@ void rr_warn(rr_warnings *w, const char *fmt, ...) __attribute__((format(printf,
 /* qsort comparator for doubles, ascending. */
 int cmp_double(const void *a, const void *b);
 
+/* Monotonic wall-clock seconds (for progress, checkpoints and timings). */
+double rr_seconds(void);
+
 #ifdef __cplusplus
 }
 #endif
@@ -62,6 +65,10 @@ static inline vec3 v3_normalize(vec3 a)
     double l = v3_len(a);
     return l > 0 ? v3_scale(a, 1.0 / l) : a;
 }
+/* The color of a splat, sphere or model that gives none (README: 0.8 grey);
+ * rr_default_color2 is the second color of generated checkerboards. */
+static inline vec3 rr_default_color(void) { return v3(0.8, 0.8, 0.8); }
+static inline vec3 rr_default_color2(void) { return v3(0.2, 0.2, 0.2); }
 static inline int v3_finite(vec3 a) { return isfinite(a.x) && isfinite(a.y) && isfinite(a.z); }
 
 /* Axis-aligned box; empty when lo > hi. */

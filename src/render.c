@@ -32,13 +32,6 @@ typedef struct { /* per-thread scratch */
     double *x, *y, *t;
 } thread_scratch;
 
-static double now_seconds(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
 /* The color and coverage of a k-buffer (background when empty). */
 static void sample_color(const render_job *job, vec3 eye, vec3 dir, const kbuffer *kb, double rgba[4])
 {
@@ -293,7 +286,7 @@ static void report_progress(render_job *job, const render_hooks *hooks, double s
         return;
     double planned = (double)job->img->width * job->img->height * job->rs->batches;
     double fraction = fmin(0.999, atomic_load(&job->pixel_batches) / fmax(planned, 1.0));
-    hooks->progress(hooks->user, fraction, atomic_load(&job->rays), now_seconds() - start);
+    hooks->progress(hooks->user, fraction, atomic_load(&job->rays), rr_seconds() - start);
 }
 
 /* Runs one round over all tiles with the worker threads, writing periodic
@@ -314,17 +307,17 @@ static int run_round(render_job *job, const render_hooks *hooks, double start, d
     double last_report = 0;
     while (atomic_load(&job->workers_left) > 0) {
         wait_for_workers(job);
-        if (now_seconds() - last_report >= 0.2) {
+        if (rr_seconds() - last_report >= 0.2) {
             report_progress(job, hooks, start);
-            last_report = now_seconds();
+            last_report = rr_seconds();
         }
         int due = hooks && hooks->checkpoint && hooks->checkpoint_every > 0 &&
-                  now_seconds() - *last_checkpoint >= hooks->checkpoint_every;
+                  rr_seconds() - *last_checkpoint >= hooks->checkpoint_every;
         if (due && !*job->cancel && !rc) {
             rr_error ck_err;
             if (checkpoint_paused(job, hooks, &ck_err) && hooks->checkpoint_failed)
                 hooks->checkpoint_failed(hooks->user, &ck_err);
-            *last_checkpoint = now_seconds();
+            *last_checkpoint = rr_seconds();
         }
     }
     for (int i = 0; i < started; i++)
@@ -376,7 +369,7 @@ int render_image(const scene *s, const accel *a, const render_settings *rs, imag
     job.ntiles = job.tiles_x * job.tiles_y;
     pthread_mutex_init(&job.lock, NULL);
     pthread_cond_init(&job.cond, NULL);
-    double start = now_seconds(), last_checkpoint = start;
+    double start = rr_seconds(), last_checkpoint = start;
     uint32_t rounds = rs->target_error > 0 ? rs->max_batches : rs->batches;
     int rc = 0;
     for (job.round = 0; job.round < rounds && !rc && !*cancel; job.round++) {
@@ -386,7 +379,7 @@ int render_image(const scene *s, const accel *a, const render_settings *rs, imag
     }
     pthread_mutex_destroy(&job.lock);
     pthread_cond_destroy(&job.cond);
-    img->seconds += now_seconds() - start;
+    img->seconds += rr_seconds() - start;
     img->rays += atomic_load(&job.rays);
     img->kbuffer_overflows += atomic_load(&job.overflows);
     img->clamped += atomic_load(&job.clamped);

@@ -19,6 +19,13 @@ typedef struct {
     double shininess; /* Phong exponent */
 } material;
 
+/* README's defaults: Phong, diffuse 1, specular 0, shininess 32. */
+static inline material material_default(void)
+{
+    material m = {SHADING_PHONG, 1.0, 0.0, 32.0};
+    return m;
+}
+
 typedef enum { OBJECT_POINTS, OBJECT_SPHERE } object_kind;
 
 typedef struct {

@@ -198,7 +198,7 @@ static int parse_sphere(xml_ctx *c, xmlNodePtr n, scene_object *o)
     static const char *const ok[] = {"center", "radius", "color", NULL};
     o->kind = OBJECT_SPHERE;
     o->sphere_center = v3(0, 0, 0);
-    o->sphere_color = v3(0.8, 0.8, 0.8);
+    o->sphere_color = rr_default_color();
     return xml_check_attributes(c, n, ok) || xml_attr_vec3(c, n, "center", &o->sphere_center, 0) ||
                    xml_attr_positive(c, n, "radius", &o->sphere_radius, 1) ||
                    xml_attr_vec3(c, n, "color", &o->sphere_color, 0)
@@ -264,7 +264,7 @@ static int parse_point_model(xml_ctx *c, xmlNodePtr n, scene_object *o)
     o->kind = OBJECT_POINTS;
     if (xml_check_attributes(c, n, ok))
         return -1;
-    vec3 default_color = v3(0.8, 0.8, 0.8);
+    vec3 default_color = rr_default_color();
     if (xml_attr_vec3(c, n, "color", &default_color, 0))
         return -1;
     char rel[4096], path[8192], kind[sizeof ((shape_params *)0)->kind];
@@ -322,7 +322,7 @@ static int parse_object(xml_ctx *c, xmlNodePtr n, scene *s)
     scene_object *o = &s->objects[s->nobjects++];
     memset(o, 0, sizeof *o);
     pointmodel_init(&o->model);
-    o->mat = (material){SHADING_PHONG, 1.0, 0.0, 32.0};
+    o->mat = material_default();
     animation_init_static(&o->anim);
     snprintf(o->name, sizeof o->name, "object%d", s->nobjects);
     xml_attr_text(n, "name", o->name, sizeof o->name);

@@ -10,8 +10,8 @@ void shape_params_default(shape_params *p)
     p->count = 20000;
     p->radius = 1.0;
     p->minor_radius = 0.3;
-    p->color = v3(0.8, 0.8, 0.8);
-    p->color2 = v3(0.2, 0.2, 0.2);
+    p->color = rr_default_color();
+    p->color2 = rr_default_color2();
     p->checker = 0;
     p->overlap = 1.5;
 }

@@ -32,7 +32,7 @@ int surfels_from_mesh(const double *pos, const double *nrm, size_t nv, const uns
         s[m].center = at(pos, i);
         s[m].normal = v3_normalize(normal);
         s[m].radius = overlap * sqrt(area[i] / M_PI);
-        s[m].color = v3(0.8, 0.8, 0.8);
+        s[m].color = rr_default_color();
         m++;
     }
     free(area);
@@ -168,7 +168,7 @@ int surfels_from_points(const double *pos, const double *nrm, size_t np, double 
         s[m].center = at(pos, i);
         s[m].normal = v3_normalize(normal);
         s[m].radius = overlap * d / sqrt(KNN + 1.0); /* disk of area pi d^2 / (KNN + 1) */
-        s[m].color = v3(0.8, 0.8, 0.8);
+        s[m].color = rr_default_color();
         m++;
     }
     free(g.start), free(g.items);

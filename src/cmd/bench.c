@@ -33,13 +33,6 @@ typedef struct {
     unsigned long long rays;
 } bench_result;
 
-static double now(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return ts.tv_sec + 1e-9 * ts.tv_nsec;
-}
-
 static double median(double *v, int n)
 {
     qsort(v, (size_t)n, sizeof *v, cmp_double);
@@ -65,7 +58,7 @@ static void build_scene(const bench_case *c, scene *s, surfel **out, size_t *n)
     s->objects = calloc(1, sizeof *s->objects);
     scene_object *o = &s->objects[0];
     pointmodel_init(&o->model);
-    o->mat = (material){SHADING_PHONG, 1, 0, 32};
+    o->mat = material_default();
     animation_init_static(&o->anim);
     if (!strcmp(c->motion, "linear"))
         o->anim.velocity = v3(0.3, 0.1, 0);
@@ -240,7 +233,7 @@ static double baseline_seconds(RTCScene rtc_scene, const scene *s, const render_
         exit(1);
     }
     int started = 0;
-    double t0 = now();
+    double t0 = rr_seconds();
     while (started < rs->threads && pthread_create(&tids[started], NULL, baseline_worker, &job) == 0)
         started++;
     for (int i = 0; i < started; i++)
@@ -250,7 +243,7 @@ static double baseline_seconds(RTCScene rtc_scene, const scene *s, const render_
         fprintf(stderr, "bench: could start only %d of %d threads\n", started, rs->threads);
         exit(1);
     }
-    double seconds = now() - t0;
+    double seconds = rr_seconds() - t0;
     if (count_distinct)
         *splats_px = job.covered ? (double)job.distinct / (double)job.covered : 0.0;
     return seconds;
@@ -302,9 +295,9 @@ static accel *setup_case(const bench_case *c, scene *s, surfel **surfels, size_t
 {
     build_scene(c, s, surfels, n);
     *rs = bench_settings(c, s);
-    double t0 = now();
+    double t0 = rr_seconds();
     accel *acc = build_or_die(s, 1);
-    r->build_ms = 1e3 * (now() - t0);
+    r->build_ms = 1e3 * (rr_seconds() - t0);
     return acc;
 }
 
@@ -362,9 +355,9 @@ static void run_case(const bench_case *c, bench_result *r)
     /* splat arrays (pointmodel.h: 48 + 6 * 4 + 3 * 4 bytes) plus Embree's peak for the BVHs */
     r->bytes_per_splat = 84.0 + (double)accel_embree_peak_bytes(acc) / (double)n;
     RTCDevice dev = rtcNewDevice(NULL);
-    double t0 = now();
+    double t0 = rr_seconds();
     RTCScene base = baseline_build(dev, surfels, n);
-    r->base_build_ms = 1e3 * (now() - t0);
+    r->base_build_ms = 1e3 * (rr_seconds() - t0);
     double ours[16], theirs[16], same[16], rays = (double)c->res * c->res * 4 * c->tspp;
     for (int k = 0; k < c->reps; k++) { /* interleaved repetitions */
         ours[k] = render_mrays(&s, acc, &rs, c->res, &r->rays);

@@ -93,7 +93,7 @@ int cmd_surfels(int argc, char **argv)
         {"checker", required_argument, 0, 'k'}, {"color", required_argument, 0, 'c'},
         {"color2", required_argument, 0, 'd'}, {"output", required_argument, 0, 'o'},
         {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
-    surfels_options o = {1.5, 0, 0, v3(0.8, 0.8, 0.8), v3(0.2, 0.2, 0.2), NULL};
+    surfels_options o = {1.5, 0, 0, rr_default_color(), rr_default_color2(), NULL};
     rr_error err;
     int c;
     while ((c = getopt_long(argc, argv, "ho:", longopts, NULL)) != -1) {
