@@ -194,11 +194,13 @@ static int add_key(lexer *lx, curve_reader *r, const curve_key *k)
     return rc ? fail(lx, "out of memory") : 0;
 }
 
-/* A fixed tangent's angle in the file's units (value per second in the
- * file's units) to an angle of the same slope in scene units. */
+/* A fixed tangent's angle to an angle of the same slope in scene units.
+ * Maya writes tan(angle) as the slope in the file's value units per frame of
+ * its timeUnit (checked on Maya 2026 exports: the tangent of a fixed key
+ * equals the per-frame secant to seven digits), not per second. */
 static double scene_angle(const curve_reader *r, double file_angle)
 {
-    return atan(tan(file_angle * r->radians_per_unit) * r->value_scale);
+    return atan(tan(file_angle * r->radians_per_unit) * r->value_scale / r->seconds_per_frame);
 }
 
 static int tangent(lexer *lx, const char *name, tangent_kind *k)

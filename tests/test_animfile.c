@@ -75,10 +75,33 @@ TEST(thrown_anim_reads_version_1_0_keys_and_fixed_angles)
     /* ntsc: frame 15 = 0.5 s, x from -150 to 150 cm */
     CHECK_NEAR(curve_eval(&k->ch[CH_TX], 0.5), 0.0, 1e-12);
     CHECK_NEAR(curve_eval(&k->ch[CH_TY], 0.5), 1.2, 1e-12);
-    /* 60 degrees in cm per second = 0.01 tan(60) m/s */
-    CHECK_NEAR(k->ch[CH_TY].keys[0].out_slope, 0.01 * tan(M_PI / 3), 1e-12);
-    CHECK_NEAR(k->ch[CH_TY].keys[2].in_slope, -0.01 * tan(M_PI / 3), 1e-12);
+    /* 86.4237 degrees: tan = 16.000 cm per ntsc frame = 0.16 m / (1/30 s) = 4.8 m/s */
+    double launch = 0.01 * 30 * tan(86.4237 * M_PI / 180);
+    CHECK_NEAR(launch, 4.8, 1e-3);
+    CHECK_NEAR(k->ch[CH_TY].keys[0].out_slope, launch, 1e-12);
+    CHECK_NEAR(k->ch[CH_TY].keys[2].in_slope, -launch, 1e-12);
     CHECK_NEAR(curve_eval(&k->ch[CH_RZ], 1.0), 3 * M_PI, 1e-12);
+    free_keys(k);
+}
+
+/* Issue 17.1: a fixed tangent's tan(angle) is value per frame of the
+ * file's timeUnit. Keys (frame 0, 0 m, fixed 45 degrees out) and (frame 24,
+ * 24 m, linear): both end slopes are the secant, 1 m/frame = 24 m/s, so the
+ * segment is the straight line x = 24 t (per second it was 1 m/s and the
+ * curve passed 2.766 m at 0.25 s). */
+TEST(fixed_tangent_angles_are_per_frame)
+{
+    const char *text = "animVersion 1.1;\ntimeUnit film;\nlinearUnit m;\nangularUnit deg;\n"
+                       "anim translate.translateX translateX n 0 0 0;\nanimData {\n input time;\n output linear;\n"
+                       " weighted 0;\n keys {\n  0 0 fixed fixed 1 1 45 1 45 1;\n  24 24 linear linear 1 1;\n }\n}\n";
+    keyframes *k = NULL;
+    rr_error e;
+    CHECK(animfile_parse(text, "fixed.anim", &k, NULL, &e) == 0);
+    if (!k)
+        return;
+    for (int i = 1; i <= 8; i++)
+        CHECK_NEAR(curve_eval(&k->ch[CH_TX], i / 8.0), 24.0 * i / 8.0, 1e-9);
+    CHECK_NEAR(curve_eval(&k->ch[CH_TX], 0.25), 6.0, 1e-9);
     free_keys(k);
 }
 
