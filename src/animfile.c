@@ -179,7 +179,7 @@ static int channel_of(const char *leaf)
 
 typedef struct {
     curve *c;
-    int channel;      /* -1: read and skip */
+    int channel;      /* < 0: read and skip (-1 unsupported attribute, -2 another node) */
     double value_scale, seconds_per_frame, radians_per_unit;
     int weighted;
 } curve_reader;
@@ -336,7 +336,7 @@ static int header_statement(lexer *lx, char w[][64], int n, units *u)
 }
 
 /* anim <attribute path> [<leaf> <node> <row> <child> <index>]; [animData {...}] */
-static int parse_anim(lexer *lx, keyframes *kf, char w[][64], int n, const units *u, int *seen)
+static int parse_anim(lexer *lx, keyframes *kf, char w[][64], int n, const units *u, int *seen, int selected)
 {
     int line = lx->tok_line;
     if (n < 2)
@@ -345,14 +345,14 @@ static int parse_anim(lexer *lx, keyframes *kf, char w[][64], int n, const units
     const char *leaf = dot ? dot + 1 : w[1];
     if (!peek_is(lx, "animData"))
         return 0; /* an attribute listed without a curve */
-    int ch = channel_of(leaf);
+    int ch = selected ? channel_of(leaf) : -2; /* -2: another node's curve, read and dropped */
     curve skipped = {0, NULL, INF_CONSTANT, INF_CONSTANT};
     curve_reader r = {ch >= 0 ? &kf->ch[ch] : &skipped, ch, 1.0, u->seconds_per_frame, u->radians_per_unit, 0};
-    if (ch < 0)
+    if (ch == -1)
         rr_warn(lx->warnings, "%s:%d: skipping curve of unsupported attribute '%s'", lx->name, line, w[1]);
-    else if (seen[ch])
+    else if (ch >= 0 && seen[ch])
         return rr_fail(lx->err, "%s:%d: a second curve for '%s' (first at line %d)", lx->name, line, leaf, seen[ch]);
-    else
+    else if (ch >= 0)
         seen[ch] = line;
     r.value_scale = ch >= 0 && ch <= CH_TZ ? u->meters_per_unit : ch >= CH_RX && ch <= CH_RZ ? u->radians_per_unit : 1.0;
     int rc = parse_anim_data(lx, &r, u);
@@ -371,7 +371,51 @@ static int parse_anim(lexer *lx, keyframes *kf, char w[][64], int n, const units
     return 0;
 }
 
-int animfile_parse(const char *text, const char *name, keyframes **out, rr_warnings *warnings, rr_error *err)
+/* The distinct nodes that 'anim' statements name (the 4th word: "anim
+ * translate.translateX translateX joint2 0 1 0;"). */
+typedef struct {
+    int count;
+    char names[ANIMFILE_MAX_NODES][64];
+} node_list;
+
+/* Records the statement's node; returns whether its curve is the wanted
+ * node's (node NULL: the first node named in the file). */
+static int select_node(node_list *nodes, char w[][64], int n, const char *node)
+{
+    const char *here = n >= 4 ? w[3] : "";
+    int known = 0;
+    for (int i = 0; i < nodes->count && !known; i++)
+        known = !strcmp(nodes->names[i], here);
+    if (!known && nodes->count < ANIMFILE_MAX_NODES)
+        snprintf(nodes->names[nodes->count++], sizeof nodes->names[0], "%s", here);
+    return !strcmp(here, node ? node : nodes->names[0]);
+}
+
+static void list_nodes(const node_list *nodes, char *buf, size_t size)
+{
+    size_t len = 0;
+    buf[0] = 0;
+    for (int i = 0; i < nodes->count && len < size; i++)
+        len += (size_t)snprintf(buf + len, size - len, "%s'%s'", i ? ", " : "", nodes->names[i]);
+}
+
+/* With several nodes in the file a node must be named, and a named node
+ * must be there. */
+static int check_node_choice(const node_list *nodes, const char *name, const char *node, rr_error *err)
+{
+    char names[1024];
+    list_nodes(nodes, names, sizeof names);
+    if (!node && nodes->count > 1)
+        return rr_fail(err, "%s: the file animates %d nodes (%s): choose one with <animation file=\"...\" "
+                            "node=\"NAME\"/>", name, nodes->count, names);
+    for (int i = 0; node && i < nodes->count; i++)
+        if (!strcmp(nodes->names[i], node))
+            return 0;
+    return node ? rr_fail(err, "%s: no curves for node '%s'; the file animates %s", name, node, names) : 0;
+}
+
+int animfile_parse(const char *text, const char *name, const char *node, keyframes **out, rr_warnings *warnings,
+                   rr_error *err)
 {
     keyframes *kf = calloc(1, sizeof *kf);
     if (!kf)
@@ -379,6 +423,7 @@ int animfile_parse(const char *text, const char *name, keyframes **out, rr_warni
     lexer lx = {text, 1, name, err, warnings, {0}, 1};
     units u = {1.0 / 24, 0.01, M_PI / 180, 1.1}; /* Maya's defaults: film, cm, deg */
     int seen[CH_COUNT] = {0}, curves = 0, versioned = 0;
+    node_list nodes = {0, {{0}}};
     char w[16][64];
     while (skip_space(&lx), *lx.p) {
         int n;
@@ -392,7 +437,7 @@ int animfile_parse(const char *text, const char *name, keyframes **out, rr_warni
             goto fail;
         }
         if (!strcmp(w[0], "anim")) {
-            if (parse_anim(&lx, kf, w, n, &u, seen))
+            if (parse_anim(&lx, kf, w, n, &u, seen, select_node(&nodes, w, n, node)))
                 goto fail;
             curves++;
         } else if (header_statement(&lx, w, n, &u)) {
@@ -403,6 +448,8 @@ int animfile_parse(const char *text, const char *name, keyframes **out, rr_warni
         rr_fail(err, "%s:1: empty file: not a Maya .anim file", name);
         goto fail;
     }
+    if (check_node_choice(&nodes, name, node, err))
+        goto fail;
     int used = 0;
     for (int i = 0; i < CH_COUNT; i++)
         used += seen[i] != 0;
@@ -419,7 +466,8 @@ fail:
     return -1;
 }
 
-int animfile_load(const char *path, keyframes **out, uint64_t *content_hash, rr_warnings *warnings, rr_error *err)
+int animfile_load(const char *path, const char *node, keyframes **out, uint64_t *content_hash, rr_warnings *warnings,
+                  rr_error *err)
 {
     input_file in;
     if (input_file_read(path, ANIMFILE_MAX_BYTES, &in, err))
@@ -427,7 +475,7 @@ int animfile_load(const char *path, keyframes **out, uint64_t *content_hash, rr_
     if (content_hash)
         *content_hash = input_hash(*content_hash, in.data, in.len);
     int rc = strlen(in.data) != in.len ? rr_fail(err, "%s: binary data in a text .anim file", path)
-                                       : animfile_parse(in.data, path, out, warnings, err);
+                                       : animfile_parse(in.data, path, node, out, warnings, err);
     input_file_free(&in);
     return rc;
 }

@@ -18,13 +18,21 @@
 /* Largest .anim file read (bytes); real exports of whole rigs are a few MB. */
 #define ANIMFILE_MAX_BYTES ((size_t)256 << 20)
 
-/* Reads path into *out (allocated; free with animation_free's keyframes
- * handling), folding the file's bytes into *content_hash unless it is NULL
- * (inputfile.h). Only regular files are read. Errors name the file and line. */
-int animfile_load(const char *path, keyframes **out, uint64_t *content_hash, rr_warnings *warnings,
+/* Most distinct nodes a file may animate. */
+#define ANIMFILE_MAX_NODES 256
+
+/* Reads the curves of node `node` of path into *out (allocated; free with
+ * animation_free's keyframes handling). A file animating several nodes
+ * (Maya exports a whole hierarchy) needs a node name; NULL takes the only
+ * one, and a wrong or missing name is an error listing the nodes present.
+ * Parent transforms are not composed. The file's bytes are folded into
+ * *content_hash unless it is NULL (inputfile.h). Only regular files are
+ * read. Errors name the file and line. */
+int animfile_load(const char *path, const char *node, keyframes **out, uint64_t *content_hash, rr_warnings *warnings,
                   rr_error *err);
 
 /* The same from text in memory; name is used in messages. */
-int animfile_parse(const char *text, const char *name, keyframes **out, rr_warnings *warnings, rr_error *err);
+int animfile_parse(const char *text, const char *name, const char *node, keyframes **out, rr_warnings *warnings,
+                   rr_error *err);
 
 #endif

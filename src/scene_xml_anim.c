@@ -138,11 +138,15 @@ static int new_keyframes(xml_ctx *c, xmlNodePtr n, animation *a)
     return 0;
 }
 
-/* <animation>path.anim</animation> as in thesis Figure 4.11. */
+/* <animation>path.anim</animation> as in thesis Figure 4.11, or
+ * <animation file="path.anim" node="NAME"/> for a file of several nodes. */
 static int load_anim_file(xml_ctx *c, xmlNodePtr n, animation *a)
 {
-    char rel[4096], path[8192];
-    if (!xml_element_text(n, rel, sizeof rel))
+    char rel[4096], path[8192], node[64];
+    int has_file = xml_attr_text(n, "file", rel, sizeof rel), has_node = xml_attr_text(n, "node", node, sizeof node);
+    if (has_file && xml_has_text(n))
+        return xml_fail(c, n, "give the .anim path as the 'file' attribute or as the text, not both");
+    if (!has_file && !xml_element_text(n, rel, sizeof rel))
         return xml_fail(c, n, "animation file path is too long");
     if (xml_resolve_path(c, n, rel, path, sizeof path) || new_keyframes(c, n, a))
         return -1;
@@ -150,7 +154,7 @@ static int load_anim_file(xml_ctx *c, xmlNodePtr n, animation *a)
     free(a->keys);
     a->keys = NULL;
     rr_error sub;
-    if (animfile_load(path, &a->keys, c->inputs_hash, &c->sc->warnings, &sub))
+    if (animfile_load(path, has_node ? node : NULL, &a->keys, c->inputs_hash, &c->sc->warnings, &sub))
         return rr_fail(c->err, "%s (animation of %s:%ld)", sub.msg, c->name, xmlGetLineNo(n));
     if (scene_add_input(c->sc, path))
         return xml_fail(c, n, "out of memory");
@@ -160,11 +164,14 @@ static int load_anim_file(xml_ctx *c, xmlNodePtr n, animation *a)
 
 int xml_parse_animation(xml_ctx *c, xmlNodePtr n, animation *a)
 {
-    static const char *const ok[] = {NULL};
+    static const char *const ok[] = {"file", "node", NULL};
+    char probe[8];
     if (xml_check_attributes(c, n, ok))
         return -1;
-    if (xml_has_text(n))
+    if (xml_has_text(n) || xml_attr_text(n, "file", probe, sizeof probe))
         return load_anim_file(c, n, a);
+    if (xml_attr_text(n, "node", probe, sizeof probe))
+        return xml_fail(c, n, "'node' selects a node of an .anim file: give the file too");
     for (xmlNodePtr k = n->children; k; k = k->next) {
         if (!xml_is_element(k))
             continue;

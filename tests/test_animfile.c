@@ -12,7 +12,7 @@ static keyframes *load(const char *path)
     keyframes *k = NULL;
     rr_error e;
     memset(&last_warnings, 0, sizeof last_warnings);
-    if (animfile_load(path, &k, NULL, &last_warnings, &e)) {
+    if (animfile_load(path, NULL, &k, NULL, &last_warnings, &e)) {
         printf("    %s\n", e.msg);
         return NULL;
     }
@@ -96,7 +96,7 @@ TEST(fixed_tangent_angles_are_per_frame)
                        " weighted 0;\n keys {\n  0 0 fixed fixed 1 1 45 1 45 1;\n  24 24 linear linear 1 1;\n }\n}\n";
     keyframes *k = NULL;
     rr_error e;
-    CHECK(animfile_parse(text, "fixed.anim", &k, NULL, &e) == 0);
+    CHECK(animfile_parse(text, "fixed.anim", NULL, &k, NULL, &e) == 0);
     if (!k)
         return;
     for (int i = 1; i <= 8; i++)
@@ -110,7 +110,7 @@ static const char *parse_error(const char *text)
     static rr_error e;
     static rr_warnings w;
     keyframes *k = NULL;
-    if (animfile_parse(text, "t.anim", &k, &w, &e) == 0) {
+    if (animfile_parse(text, "t.anim", NULL, &k, &w, &e) == 0) {
         free_keys(k);
         return "";
     }
@@ -133,7 +133,7 @@ TEST(units_are_converted)
                  CURVE("rotateX", "  3 2 linear linear 1 1 0;\n"), u[i].time, u[i].lin, u[i].ang);
         keyframes *k = NULL;
         rr_error e;
-        CHECK(animfile_parse(text, "u.anim", &k, NULL, &e) == 0);
+        CHECK(animfile_parse(text, "u.anim", NULL, &k, NULL, &e) == 0);
         if (!k)
             continue;
         CHECK_NEAR(k->ch[CH_TZ].keys[0].time, 3 * u[i].seconds_per_frame, 1e-15);
@@ -175,7 +175,7 @@ TEST(bad_anim_files_give_clear_errors_with_lines)
                  "a second curve for 'translateX' (first at line 2)"));
     rr_error e;
     keyframes *k;
-    CHECK(animfile_load("no/such.anim", &k, NULL, NULL, &e) == -1 && strstr(e.msg, "no/such.anim: cannot open"));
+    CHECK(animfile_load("no/such.anim", NULL, &k, NULL, NULL, &e) == -1 && strstr(e.msg, "no/such.anim: cannot open"));
 }
 
 /* Issue 18.6: <animation>/dev/zero</animation> used to read forever. */
@@ -183,6 +183,45 @@ TEST(anim_refuses_what_is_not_a_regular_file)
 {
     keyframes *k = NULL;
     rr_error e;
-    CHECK(animfile_load("/dev/zero", &k, NULL, NULL, &e) == -1 && strstr(e.msg, "/dev/zero: not a regular file"));
-    CHECK(animfile_load("/tmp", &k, NULL, NULL, &e) == -1 && strstr(e.msg, "/tmp: not a regular file"));
+    CHECK(animfile_load("/dev/zero", NULL, &k, NULL, NULL, &e) == -1 && strstr(e.msg, "/dev/zero: not a regular file"));
+    CHECK(animfile_load("/tmp", NULL, &k, NULL, NULL, &e) == -1 && strstr(e.msg, "/tmp: not a regular file"));
+}
+
+/* Issue 17.2: a Maya export holds a hierarchy; each 'anim' line names its
+ * node. Two nodes here, in Maya's syntax: 'ball' moves in x (linear keys),
+ * 'joint2' in y (step then linear) and x (fixed 45 degrees per frame). */
+static const char TWO_NODES[] =
+    "animVersion 1.1;\nmayaVersion 2026;\ntimeUnit film;\nlinearUnit m;\nangularUnit deg;\n"
+    "startTime 0;\nendTime 24;\n"
+    "anim translate.translateX translateX ball 0 1 0;\nanimData {\n  input time;\n  output linear;\n"
+    "  weighted 0;\n  preInfinity constant;\n  postInfinity constant;\n  keys {\n"
+    "    0 0 linear linear 1 1 0;\n    24 2 linear linear 1 1 0;\n  }\n}\n"
+    "anim translate.translateY translateY joint2 0 1 1;\nanimData {\n  input time;\n  output linear;\n"
+    "  weighted 0;\n  preInfinity constant;\n  postInfinity constant;\n  keys {\n"
+    "    0 1 step step 1 1 0;\n    12 3 linear linear 1 1 0;\n    24 5 linear linear 1 1 0;\n  }\n}\n"
+    "anim translate.translateX translateX joint2 0 1 2;\nanimData {\n  input time;\n  output linear;\n"
+    "  weighted 0;\n  preInfinity constant;\n  postInfinity constant;\n  keys {\n"
+    "    0 0 fixed fixed 1 1 0 45 1 45 1;\n    24 24 linear linear 1 1 0;\n  }\n}\n";
+
+TEST(multi_node_files_select_a_node)
+{
+    keyframes *k = NULL;
+    rr_error e;
+    CHECK(animfile_parse(TWO_NODES, "rig.anim", "joint2", &k, NULL, &e) == 0);
+    if (k) {
+        CHECK_NEAR(curve_eval(&k->ch[CH_TY], 0.25), 1.0, 1e-12); /* frame 6: held by the step */
+        CHECK_NEAR(curve_eval(&k->ch[CH_TY], 0.75), 4.0, 1e-12); /* frame 18: linear 3 -> 5 */
+        CHECK_NEAR(curve_eval(&k->ch[CH_TX], 0.25), 6.0, 1e-9);  /* fixed 45: 1 m/frame, straight */
+        free_keys(k), k = NULL;
+    }
+    CHECK(animfile_parse(TWO_NODES, "rig.anim", "ball", &k, NULL, &e) == 0);
+    if (k) {
+        CHECK_NEAR(curve_eval(&k->ch[CH_TX], 0.5), 1.0, 1e-12);
+        CHECK(k->ch[CH_TY].count == 0); /* joint2's curves are not ball's */
+        free_keys(k), k = NULL;
+    }
+    CHECK(animfile_parse(TWO_NODES, "rig.anim", NULL, &k, NULL, &e) != 0 &&
+          strstr(e.msg, "rig.anim: the file animates 2 nodes ('ball', 'joint2'): choose one"));
+    CHECK(animfile_parse(TWO_NODES, "rig.anim", "joint3", &k, NULL, &e) != 0 &&
+          strstr(e.msg, "no curves for node 'joint3'; the file animates 'ball', 'joint2'"));
 }

@@ -220,3 +220,33 @@ TEST(errors_past_line_65535_name_their_line)
     CHECK(load_text(xml, &s, &e) != 0 && strstr(e.msg, "mem.xml:70001:"));
     free(xml);
 }
+
+/* Issue 17.2: <animation file="..." node="..."/> picks a node of an .anim file. */
+TEST(animation_file_attribute_selects_a_node)
+{
+    char dir[] = "/tmp/refrender-node-XXXXXX";
+    CHECK(mkdtemp(dir) != NULL);
+    char path[128];
+    snprintf(path, sizeof path, "%s/rig.anim", dir);
+    FILE *f = fopen(path, "w");
+    fputs("animVersion 1.1;\ntimeUnit film;\nlinearUnit m;\n"
+          "anim translate.translateX translateX a 0 1 0;\nanimData {\n keys {\n  0 0 linear linear 1 1 0;\n"
+          "  24 2 linear linear 1 1 0;\n }\n}\n"
+          "anim translate.translateX translateX b 0 1 0;\nanimData {\n keys {\n  0 0 linear linear 1 1 0;\n"
+          "  24 8 linear linear 1 1 0;\n }\n}\n", f);
+    fclose(f);
+    scene s;
+    rr_error e;
+    char xml[512];
+    snprintf(xml, sizeof xml, "<scene><object><sphere radius='1'/><animation file='rig.anim' node='b'/></object></scene>");
+    CHECK(scene_load_memory(xml, strlen(xml), "mem.xml", dir, &s, &e) == 0);
+    if (s.nobjects == 1) {
+        xform x = animation_at(&s.objects[0].anim, 0.5);
+        CHECK_NEAR(xform_point(&x, v3(0, 0, 0)).x, 4.0, 1e-12);
+        scene_free(&s);
+    }
+    snprintf(xml, sizeof xml, "<scene><object><sphere radius='1'/>\n<animation>rig.anim</animation></object></scene>");
+    CHECK(scene_load_memory(xml, strlen(xml), "mem.xml", dir, &s, &e) != 0 &&
+          strstr(e.msg, "animates 2 nodes ('a', 'b')") && strstr(e.msg, "mem.xml:2"));
+    unlink(path), rmdir(dir);
+}

@@ -15,7 +15,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     text[size] = 0;
     keyframes *k = NULL;
     rr_error err;
-    if (animfile_parse(text, "fuzz.anim", &k, NULL, &err) == 0) {
+    if (animfile_parse(text, "fuzz.anim", NULL, &k, NULL, &err) == 0) {
         animation a;
         animation_init_static(&a);
         a.keys = k;
