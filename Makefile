@@ -40,16 +40,25 @@ TESTBIN  := $(BUILD)/unit_tests
 .PHONY: all deps demo test test-c test-py test-fuzz fuzz bench clean clean-models scenes references gallery
 all: $(BIN) $(BUILD)/refrender-bench
 
-$(BUILD)/%.o: src/%.c | $(BUILD)
+# An object without its .d file (built before dependency tracking, or the
+# .d was lost) depends on a missing file and is rebuilt; objects are touched
+# after compiling because clang writes the .d after the object.
+$(BUILD)/%.o: src/%.c $(BUILD)/%.d | $(BUILD)
 	$(CC) $(RR_CPPFLAGS) $(RR_CFLAGS) -c $< -o $@
-$(BUILD)/cmd/%.o: src/cmd/%.c | $(BUILD)
+	@touch $@
+$(BUILD)/cmd/%.o: src/cmd/%.c $(BUILD)/cmd/%.d | $(BUILD)
 	@mkdir -p $(@D)
 	$(CC) $(RR_CPPFLAGS) $(RR_CFLAGS) -Isrc -c $< -o $@
-$(BUILD)/preview.o: src/preview.cpp | $(BUILD)
+	@touch $@
+$(BUILD)/preview.o: src/preview.cpp $(BUILD)/preview.d | $(BUILD)
 	$(CXX) $(RR_CPPFLAGS) $(RR_CXXFLAGS) -c $< -o $@
-$(BUILD)/tests/%.o: tests/%.c | $(BUILD)
+	@touch $@
+$(BUILD)/tests/%.o: tests/%.c $(BUILD)/tests/%.d | $(BUILD)
 	$(CC) $(RR_CPPFLAGS) $(RR_CFLAGS) -Isrc -c $< -o $@
--include $(wildcard $(BUILD)/*.d $(BUILD)/cmd/*.d $(BUILD)/tests/*.d)
+	@touch $@
+DEPFILES := $(LIB_OBJS:.o=.d) $(APP_OBJS:.o=.d) $(TEST_OBJS:.o=.d) $(BUILD)/cmd/bench.d
+$(DEPFILES):
+-include $(wildcard $(DEPFILES))
 $(BUILD):
 	mkdir -p $(BUILD)/tests $(BUILD)/cmd
 
@@ -92,16 +101,21 @@ FUZZ_CFLAGS  := -std=c11 -D_GNU_SOURCE $(FUZZ_FLAGS) -fsanitize=fuzzer-no-link -
                 -DSCENE_MAX_GENERATED=1e4
 FUZZ_OBJS    := $(LIB_SRCS:%=$(FUZZ_DIR)/%.o) $(FUZZ_DIR)/preview.o
 
-$(FUZZ_DIR)/%.o: src/%.c
+$(FUZZ_DIR)/%.o: src/%.c $(FUZZ_DIR)/%.d
 	@mkdir -p $(FUZZ_DIR)
 	clang $(FUZZ_CFLAGS) -MMD -MP -c $< -o $@
-$(FUZZ_DIR)/preview.o: src/preview.cpp
+	@touch $@
+$(FUZZ_DIR)/preview.o: src/preview.cpp $(FUZZ_DIR)/preview.d
 	@mkdir -p $(FUZZ_DIR)
 	clang++ -std=c++17 $(FUZZ_FLAGS) -MMD -MP -c $< -o $@
-$(FUZZ_DIR)/fuzz_%.o: tests/fuzz/fuzz_%.c
+	@touch $@
+$(FUZZ_DIR)/fuzz_%.o: tests/fuzz/fuzz_%.c $(FUZZ_DIR)/fuzz_%.d
 	@mkdir -p $(FUZZ_DIR)
 	clang $(FUZZ_CFLAGS) -MMD -MP -Isrc -c $< -o $@
--include $(wildcard $(FUZZ_DIR)/*.d)
+	@touch $@
+FUZZ_DEPS := $(FUZZ_OBJS:.o=.d) $(FUZZ_TARGETS:%=$(FUZZ_DIR)/fuzz_%.d)
+$(FUZZ_DEPS):
+-include $(wildcard $(FUZZ_DEPS))
 $(FUZZ_DIR)/fuzz_%: $(FUZZ_DIR)/fuzz_%.o $(FUZZ_OBJS)
 	clang++ $(FUZZ_FLAGS) -fsanitize=fuzzer $^ -o $@ $(LDLIBS)
 .SECONDARY: $(FUZZ_OBJS) $(FUZZ_TARGETS:%=$(FUZZ_DIR)/fuzz_%.o)
