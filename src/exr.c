@@ -88,6 +88,9 @@ static exr_result_t write_chunks(exr_context_t ctx, int w, int h, const exr_chan
     exr_encode_pipeline_t enc = EXR_ENCODE_PIPELINE_INITIALIZER;
     compress_guard guard = {NULL};
     int initialized = 0;
+    for (int c = 0; c < nch && !rc; c++)
+        if ((long long)chs[c].stride * w > INT32_MAX)
+            rc = EXR_ERR_INVALID_ARGUMENT; /* OpenEXRCore's line stride is 32-bit */
     for (int y = 0; y < h && !rc; y += lines_per_chunk) {
         exr_chunk_info_t cinfo;
         rc = exr_write_scanline_chunk_info(ctx, 0, y, &cinfo);
@@ -102,8 +105,6 @@ static exr_result_t write_chunks(exr_context_t ctx, int w, int h, const exr_chan
             info->user_bytes_per_element = 4;
             info->user_data_type = (uint16_t)pixel_type(src->type);
             info->user_pixel_stride = src->stride;
-            if ((long long)src->stride * w > INT32_MAX)
-                return EXR_ERR_INVALID_ARGUMENT; /* OpenEXRCore's line stride is 32-bit */
             info->user_line_stride = src->stride * w;
             info->encode_from_ptr = (const uint8_t *)src->base + (size_t)y * w * src->stride;
         }
@@ -235,7 +236,7 @@ static exr_result_t decode_channel(exr_context_t ctx, const exr_attr_box2i_t *dw
             *found |= wanted;
             info->decode_to_ptr = wanted ? (uint8_t *)ch->base + (size_t)row * w * ch->stride : NULL;
             info->user_pixel_stride = ch->stride;
-            info->user_line_stride = (int32_t)((size_t)ch->stride * (size_t)w);
+            info->user_line_stride = ch->stride * w; /* fits: check_readable */
             info->user_bytes_per_element = 4;
             info->user_data_type = (uint16_t)pixel_type(ch->type);
         }

@@ -281,9 +281,7 @@ static int end_ascii_line(ply_reader *r, const ply_element *e, size_t index, int
 static int read_value(ply_reader *r, const ply_element *e, size_t index, int type, int nth, double *out)
 {
     int rc = r->format == PLY_ASCII ? read_ascii_value(r, out) : read_binary_value(r, type, out);
-    if (rc == -1 && r->format == PLY_ASCII && r->cur >= r->end)
-        return element_fail(r, e, index, "file is truncated (ends before all declared data)");
-    if (rc == -1 && r->format == PLY_ASCII) {
+    if (rc == -1 && r->format == PLY_ASCII && r->cur < r->end) { /* the line ended, not the file */
         char what[128];
         snprintf(what, sizeof what, "the line ends after %d values: a short or truncated line", nth);
         return element_fail(r, e, index, what);

@@ -48,9 +48,9 @@ extern "C" int preview_check_format(const char *path, rr_error *err)
 static bool encode(const std::string &path, int w, int h, const std::vector<unsigned char> &px,
                    std::vector<unsigned char> &bytes, std::string &why)
 {
-    auto out = OIIO::ImageOutput::create(path);
-    if (!out || !out->supports("ioproxy")) {
-        why = "OpenImageIO cannot encode this format in memory";
+    auto out = OIIO::ImageOutput::create(path); /* a format preview_check_format accepted */
+    if (!out) {
+        why = OIIO::geterror();
         return false;
     }
     OIIO::Filesystem::IOVecOutput memory(bytes);

@@ -467,6 +467,27 @@ static int check_distinct_files(const scene *s, const render_options *o, const c
     return 0;
 }
 
+/* Frame f's output and preview names (prev NULL without --preview); a '%'
+ * that is no frame field stays literal. */
+static const char *frame_names(const render_options *o, long long f, char *out, char *prev, size_t size)
+{
+    cli_frame_path(o->output, (int)f, out, size);
+    if (!o->preview)
+        return NULL;
+    cli_frame_path(o->preview, (int)f, prev, size);
+    return prev;
+}
+
+/* Every frame's outputs are checked before anything is built or rendered. */
+static int check_frame_outputs(const scene *s, const render_options *o, rr_error *err)
+{
+    char out[PATH_MAX], prev[PATH_MAX];
+    for (long long f = o->first_frame; f <= o->last_frame; f++)
+        if (check_distinct_files(s, o, out, frame_names(o, f, out, prev, sizeof out), err))
+            return -1;
+    return 0;
+}
+
 /* Frame f's shutter; without <frames> the scene's own. */
 static int frame_shutter(const scene *s, const render_options *o, long long f, shutter *out, rr_error *err)
 {
@@ -480,7 +501,7 @@ static int render_and_write(const scene *s, const render_options *o, const char 
 {
     accel *acc;
     shutter shut;
-    if (frame_shutter(s, o, o->first_frame, &shut, err))
+    if (check_frame_outputs(s, o, err) || frame_shutter(s, o, o->first_frame, &shut, err))
         return -1;
     accel_settings set = {shut.open, shut.close, s->epsilon, s->kernel_sigma, !o->no_static_reuse};
     if (accel_build(s, &set, &acc, err))
@@ -495,16 +516,10 @@ static int render_and_write(const scene *s, const render_options *o, const char 
             rc = -1;
             break;
         }
-        cli_frame_path(o->output, (int)f, out, sizeof out); /* a '%' that is no frame field stays literal */
-        if (o->preview)
-            cli_frame_path(o->preview, (int)f, prev, sizeof prev);
-        if (check_distinct_files(s, o, out, o->preview ? prev : NULL, err)) {
-            rc = -1;
-            break;
-        }
+        const char *preview = frame_names(o, f, out, prev, sizeof out);
         if (o->frames == 2 && !o->quiet)
             fprintf(stderr, "refrender: frame %lld: shutter [%g, %g] -> %s\n", f, shut.open, shut.close, out);
-        rc = render_one(s, &shut, acc, o, cmdline, out, o->preview ? prev : NULL, err);
+        rc = render_one(s, &shut, acc, o, cmdline, out, preview, err);
     }
     accel_free(acc);
     return rc;

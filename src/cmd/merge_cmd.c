@@ -17,9 +17,10 @@ static void merge_usage(FILE *f)
 "\n"
 "Combines the render states written by 'refrender --pass K/N' (all N of them)\n"
 "into the final EXR, identical to a single render with all batches. Refuses\n"
-"states of different renders (scene file hash, resolution, sampler, counts,\n"
-"seed, epsilon, sigma, shutter, weight, time factor, batches), overlapping\n"
-"or missing batch ranges, and incomplete states.\n"
+"states of different renders (hashes of the scene and of every model and\n"
+".anim file, resolution, sampler, counts, seed, epsilon, sigma, shutter,\n"
+"weight, time factor, batches), overlapping or missing batch ranges,\n"
+"incomplete states, and states whose contents no render can produce.\n"
 "  -o, --output F   output EXR (required); written atomically\n"
 "  --quiet          no summary line\n", f);
 }
