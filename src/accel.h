@@ -61,6 +61,25 @@ void accel_ray_begin(const accel *a, vec3 org, vec3 dir, accel_ray *r);
 void accel_ray_trace_times(const accel *a, const accel_ray *r, const double *times, int n, kbuffer *kbs,
                            const kbuffer **result);
 
+/* ---- for exact time integration (exact.h) ---- */
+
+typedef struct {
+    unsigned *ids;
+    size_t count, cap;
+} accel_prims;
+
+/* Appends to out, sorted and unique, the primitives of object obj whose
+ * BVH bounds overlap one of the object-space boxes (rtcCollide). -1 when
+ * out of memory. */
+int accel_collide_boxes(const accel *a, unsigned obj, const aabb *boxes, unsigned nboxes, accel_prims *out);
+
+/* Whether accel traces the object as moving over the current shutter (a
+ * static object's hits are in accel_ray's static_hits). */
+int accel_object_moves(const accel *a, unsigned obj);
+
+/* A world sphere holding the object at every time of the current shutter. */
+void accel_object_swept_sphere(const accel *a, unsigned obj, vec3 *center, double *radius);
+
 /* The most memory Embree held at once for the BVHs (build included). */
 size_t accel_embree_peak_bytes(const accel *a);
 

@@ -6,7 +6,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-static RTCScene user_scene(RTCDevice dev, unsigned nprims, void *user, RTCBoundsFunction bounds,
+RTCScene accel_user_scene(RTCDevice dev, unsigned nprims, void *user, RTCBoundsFunction bounds,
                            RTCIntersectFunctionN intersect)
 {
     RTCScene scene = rtcNewScene(dev);
@@ -87,7 +87,7 @@ static void build_top_levels(accel *a, double open, double close)
     }
     for (int k = 0; k < 2; k++)
         if (a->top[k].count)
-            a->top[k].scene = user_scene(a->device, a->top[k].count, &a->top[k], accel_object_bounds_cb, accel_object_intersect);
+            a->top[k].scene = accel_user_scene(a->device, a->top[k].count, &a->top[k], accel_object_bounds_cb, accel_object_intersect);
 }
 
 int accel_set_shutter(accel *a, double open, double close, rr_error *err)
@@ -130,7 +130,7 @@ int accel_build(const scene *s, const accel_settings *set, accel **out, rr_error
         scene_object *o = &s->objects[i];
         int points = o->kind == OBJECT_POINTS;
         a->coherent_spread[i] = coherent_spread(o);
-        a->object_scenes[i] = user_scene(a->device, points ? (unsigned)o->model.count : 1u, o,
+        a->object_scenes[i] = accel_user_scene(a->device, points ? (unsigned)o->model.count : 1u, o,
                                          points ? accel_splat_bounds_cb : accel_sphere_bounds_cb,
                                          points ? accel_splats_intersect : accel_sphere_intersect);
     }

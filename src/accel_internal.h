@@ -76,6 +76,9 @@ void accel_sphere_bounds_cb(const struct RTCBoundsFunctionArguments *args);
 void accel_no_occluded(const struct RTCOccludedFunctionNArguments *args);
 void accel_object_intersect(const struct RTCIntersectFunctionNArguments *args);
 void accel_object_bounds_cb(const struct RTCBoundsFunctionArguments *args);
+/* A committed scene of one user geometry (accel_build.c). */
+RTCScene accel_user_scene(RTCDevice dev, unsigned nprims, void *user, RTCBoundsFunction bounds,
+                          RTCIntersectFunctionN intersect);
 /* A world sphere that holds the object at every time in [t0, t1]. */
 sphere_bound accel_swept_sphere(const scene_object *o, double t0, double t1);
 

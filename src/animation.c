@@ -262,24 +262,68 @@ static double box_reach(aabb b, vec3 offset, vec3 c)
     return reach;
 }
 
-/* Bound on the speed of any point of b. Rigid: |v| + |omega| * reach from
- * the axis. Keyframes, p' = pivot + T + R S q with q = p_rest - pivot:
+/* Speed of a point p (model coordinates): at most linear + angular *
+ * |p - center|. Rigid: |v| + |omega| |p + offset - c|. Keyframes,
+ * p' = pivot + T + R S q with q = p + offset - pivot:
  * |dp'/dt| <= |T'| + |R'| |S q| + |S' q| with |R'| <= |rx'| + |ry'| + |rz'|
  * (each Euler factor is a rotation at that rate). */
-static double speed_bound(const animation *a, aabb b, const double *s, int n) /* s: the sample times */
+static motion_bound motion_bound_over(const animation *a, const double *s, int n) /* s: the sample times */
 {
+    motion_bound m = {0, 0, v3(0, 0, 0), 0, 0};
     if (!a->keys) {
         double omega = a->has_rotation ? fabs(a->degrees_per_time) * M_PI / 180.0 : 0.0;
-        return v3_len(a->velocity) + omega * box_reach(b, a->offset, a->center);
+        m = (motion_bound){v3_len(a->velocity), omega, v3_sub(a->center, a->offset), omega, 0.0};
+        return m;
     }
     const keyframes *k = a->keys;
-    double q = box_reach(b, a->offset, k->pivot);
-    double dt = 0, dr = 0;
+    double dt = 0, dr = 0, ds = max_slope_of(k, CH_SX, 3);
     for (int c = CH_TX; c <= CH_TZ; c++)
         dt += pow(curve_max_slope(&k->ch[c]), 2);
     for (int c = CH_RX; c <= CH_RZ; c++)
         dr += curve_max_slope(&k->ch[c]);
-    return sqrt(dt) + dr * max_scale_over(a, s, n) * q + max_slope_of(k, CH_SX, 3) * q;
+    m = (motion_bound){sqrt(dt), dr * max_scale_over(a, s, n) + ds, v3_sub(k->pivot, a->offset), dr, ds};
+    return m;
+}
+
+static double speed_bound(const animation *a, aabb b, const double *s, int n)
+{
+    motion_bound m = motion_bound_over(a, s, n);
+    return m.linear + m.angular * box_reach(b, v3(0, 0, 0), m.center);
+}
+
+motion_bound animation_motion_bound(const animation *a, double t0, double t1)
+{
+    motion_bound none = {0, 0, v3(0, 0, 0), 0, 0};
+    if (animation_is_static(a))
+        return none;
+    int n;
+    double *s = sample_times(a, t0, t1, &n);
+    if (!s) { /* out of memory: no bound */
+        none.linear = none.angular = none.turn = none.scale_rate = INFINITY;
+        return none;
+    }
+    motion_bound m = motion_bound_over(a, s, n);
+    free(s);
+    return m;
+}
+
+/* Smallest scale at the samples (both sides of each), less what the
+ * scale's slope allows between them, never below the clamp keyed_at uses. */
+double animation_min_scale(const animation *a, double t0, double t1)
+{
+    if (!a->keys)
+        return 1.0;
+    int n;
+    double *s = sample_times(a, t0, t1, &n);
+    if (!s)
+        return MIN_SCALE;
+    double m = INFINITY;
+    for (int i = 0; i < n; i++)
+        for (int c = CH_SX; c <= CH_SZ; c++)
+            m = fmin(m, fmin(channel(a->keys, c, s[i], 0), channel(a->keys, c, s[i], 1)));
+    m -= max_slope_of(a->keys, CH_SX, 3) * largest_gap(s, n) * 0.5;
+    free(s);
+    return fmax(m, MIN_SCALE);
 }
 
 aabb animation_swept_bounds(const animation *a, aabb b, double t0, double t1)

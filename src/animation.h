@@ -70,6 +70,21 @@ void rotation_matrix(vec3 axis, double angle, double r[3][3]);
  * any point of b can move from the nearer step, (speed bound) * dt / 2. */
 aabb animation_swept_bounds(const animation *a, aabb b, double t0, double t1);
 
+/* Bounds on the motion over [t0, t1] (all 0 for a static animation): a
+ * point p in model coordinates moves at most at linear + angular *
+ * |p - center| (world units per unit time); directions turn at most at
+ * `turn` (radians per unit time) and scale factors change at most at
+ * scale_rate. */
+typedef struct {
+    double linear, angular;
+    vec3 center;
+    double turn, scale_rate;
+} motion_bound;
+motion_bound animation_motion_bound(const animation *a, double t0, double t1);
+
+/* A lower bound on the smallest scale factor over [t0, t1] (1 if unscaled). */
+double animation_min_scale(const animation *a, double t0, double t1);
+
 /* An upper bound on the largest scale factor over [t0, t1] (1 if unscaled). */
 double animation_max_scale(const animation *a, double t0, double t1);
 

@@ -11,7 +11,8 @@
 static const char *const identity_keys[] = {
     "refrender:sceneHash", "refrender:inputsHash", "refrender:resolution", "refrender:sampler", "refrender:spp",
     "refrender:tspp", "refrender:seed", "refrender:epsilon", "refrender:kernelSigma",
-    "refrender:shutter", "refrender:weightFunction", "refrender:timeFactor", "refrender:batches", NULL};
+    "refrender:shutter", "refrender:weightFunction", "refrender:timeFactor", "refrender:batches",
+    "refrender:timeIntegration", NULL};
 
 void attrs_set(attr_list *a, const char *key, const char *fmt, ...)
 {

@@ -6,6 +6,7 @@
 #include <string.h>
 #include <time.h>
 
+#include "exact.h"
 #include "shade.h"
 
 #define TILE 16
@@ -15,6 +16,7 @@ typedef struct {
     const accel *acc;
     int camera_moves; /* every sample traces its own world ray */
     const render_settings *rs;
+    const exact_plan *exact; /* with rs->exact_time */
     image *img;
     int tiles_x, tiles_y, ntiles;
     uint32_t round; /* pixels holding `round` batches render batch batch_begin + round */
@@ -30,6 +32,8 @@ typedef struct {
 typedef struct { /* per-thread scratch */
     sampler_scratch ss;
     double *x, *y, *t;
+    exact_scratch *exact;
+    int failed; /* out of memory in exact integration */
 } thread_scratch;
 
 /* The color and coverage of a k-buffer (background when empty). */
@@ -150,6 +154,30 @@ static void render_pixel_batch(render_job *job, int px, int py, uint32_t batch, 
         est[c] = wsum > 0 ? acc[c] / wsum : 0.0;
 }
 
+/* One batch of a pixel with exact time integration: the mean over the
+ * batch's spatial positions of each one's exact time average. */
+static void render_pixel_batch_exact(render_job *job, int px, int py, uint32_t batch, thread_scratch *scr,
+                                     double est[4], uint64_t *rays, uint64_t *overflows)
+{
+    const sampler *smp = &job->rs->smp;
+    uint64_t pixel = (uint64_t)py * (uint64_t)job->img->width + (uint64_t)px;
+    sampler_batch(smp, job->rs->shut.open, job->rs->shut.close, pixel, px, py, batch, &scr->ss, scr->x, scr->y,
+                  scr->t);
+    int count = sampler_count(smp);
+    exact_stats st = {0};
+    for (int c = 0; c < 4; c++)
+        est[c] = 0;
+    for (int i = 0; i < count; i++) {
+        double rgba[4];
+        if (exact_sample(job->exact, scr->exact, scr->x[i], scr->y[i], rgba, &st))
+            scr->failed = 1;
+        for (int c = 0; c < 4; c++)
+            est[c] += rgba[c] / count;
+    }
+    *rays += (uint64_t)count;
+    *overflows += st.overflows;
+}
+
 /* Does a pixel holding p->batches batches take another one? Every pixel
  * takes the first `batches`; with a target error it goes on while its error
  * is above it, up to the cap. Decided from the pixel's own batches only, so
@@ -180,7 +208,10 @@ static void render_tile(render_job *job, int tile, thread_scratch *scr)
             if (!pixel_wants_batch(job, p))
                 continue;
             double est[4];
-            render_pixel_batch(job, x, y, job->rs->batch_begin + job->round, scr, est, &rays, &overflows);
+            if (job->rs->exact_time)
+                render_pixel_batch_exact(job, x, y, job->rs->batch_begin + job->round, scr, est, &rays, &overflows);
+            else
+                render_pixel_batch(job, x, y, job->rs->batch_begin + job->round, scr, est, &rays, &overflows);
             clamped += (uint64_t)film_add_batch(p, est);
             done++;
         }
@@ -217,7 +248,9 @@ static int scratch_init(thread_scratch *scr, const sampler *s)
     scr->x = malloc(n * sizeof(double));
     scr->y = malloc(n * sizeof(double));
     scr->t = malloc(n * sizeof(double));
-    return sampler_scratch_init(&scr->ss, s) || !scr->x || !scr->y || !scr->t ? -1 : 0;
+    scr->exact = exact_scratch_new();
+    scr->failed = 0;
+    return sampler_scratch_init(&scr->ss, s) || !scr->x || !scr->y || !scr->t || !scr->exact ? -1 : 0;
 }
 
 static void scratch_free(thread_scratch *scr)
@@ -226,6 +259,7 @@ static void scratch_free(thread_scratch *scr)
     free(scr->x);
     free(scr->y);
     free(scr->t);
+    exact_scratch_free(scr->exact);
 }
 
 static void *worker(void *arg)
@@ -243,6 +277,8 @@ static void *worker(void *arg)
             if (tile >= job->ntiles)
                 break;
         }
+    if (scr.failed)
+        atomic_store(&job->scratch_failed, 1);
     scratch_free(&scr);
     pthread_mutex_lock(&job->lock);
     atomic_fetch_sub(&job->workers_left, 1);
@@ -367,6 +403,10 @@ int render_image(const scene *s, const accel *a, const render_settings *rs, imag
     job.tiles_x = (img->width + TILE - 1) / TILE;
     job.tiles_y = (img->height + TILE - 1) / TILE;
     job.ntiles = job.tiles_x * job.tiles_y;
+    exact_plan *plan = NULL;
+    if (rs->exact_time && exact_plan_new(s, a, &rs->shut, 1.0, &plan, err))
+        return -1;
+    job.exact = plan;
     pthread_mutex_init(&job.lock, NULL);
     pthread_cond_init(&job.cond, NULL);
     double start = rr_seconds(), last_checkpoint = start;
@@ -379,6 +419,7 @@ int render_image(const scene *s, const accel *a, const render_settings *rs, imag
     }
     pthread_mutex_destroy(&job.lock);
     pthread_cond_destroy(&job.cond);
+    exact_plan_free(plan);
     img->seconds += rr_seconds() - start;
     img->rays += atomic_load(&job.rays);
     img->kbuffer_overflows += atomic_load(&job.overflows);

@@ -19,6 +19,8 @@ typedef struct {
     uint32_t batches;       /* batches every pixel gets */
     uint32_t max_batches;   /* with target_error: cap per pixel (>= batches) */
     double target_error;    /* > 0: pixels whose RGB standard error is above it get more batches */
+    int exact_time;         /* 1: each spatial sample integrated over the shutter exactly (exact.h);
+                               the sampler's times are not used */
 } render_settings;
 
 

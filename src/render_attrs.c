@@ -36,6 +36,7 @@ void attrs_for_render(attr_list *a, const scene *s, const render_settings *rs, u
     attrs_set(a, "refrender:shutter", "%.17g %.17g", rs->shut.open, rs->shut.close);
     attrs_set(a, "refrender:weightFunction", "%s", weight);
     attrs_set(a, "refrender:timeFactor", "%d", smp->time_factor);
+    attrs_set(a, "refrender:timeIntegration", "%s", rs->exact_time ? "exact" : "sampled");
     attrs_set(a, "refrender:batches", "%u", total_batches);
     attrs_set(a, "refrender:command", "%s", command);
     attrs_set(a, "software", "refrender %s", RR_VERSION);

@@ -21,7 +21,7 @@ static void identity(attr_list *a, int w, int h)
     static const char *const keys[] = {"refrender:sceneHash", "refrender:inputsHash", "refrender:sampler",
                                        "refrender:spp", "refrender:tspp", "refrender:seed", "refrender:epsilon",
                                        "refrender:kernelSigma", "refrender:shutter", "refrender:weightFunction",
-                                       "refrender:timeFactor", "refrender:batches", NULL};
+                                       "refrender:timeFactor", "refrender:batches", "refrender:timeIntegration", NULL};
     a->n = 0;
     for (const char *const *k = keys; *k; k++)
         attrs_set(a, *k, "1");

@@ -42,6 +42,10 @@ static void usage(FILE *f)
 "  --time-factor F  thesis sampler: tspp*F jittered time strata, each spatial\n"
 "                   sample takes a random subset of tspp (default: scene, else 4)\n"
 "  --seed N         random seed; same seed, same image, any thread count (default 1)\n"
+"  --time-integration M  sampled (default): time is sampled as above (the\n"
+"                   thesis method); exact: each spatial sample is integrated\n"
+"                   over the whole shutter exactly (no temporal noise; --tspp\n"
+"                   is 1 and the default sampler sobol; README, Exact time)\n"
 "Error estimates:\n"
 "  --batches B      average B independent batches of spp*tspp samples; with\n"
 "                   B >= 2 the EXR gets variance.* and stderr.* channels (default 1)\n"
@@ -83,6 +87,7 @@ typedef struct {
     int spp, tspp, time_factor, threads, quiet, width, height, batches, max_batches;
     int pass, passes; /* passes > 0: --pass pass/passes */
     int no_static_reuse;
+    int exact_time, tspp_given, sampler_given; /* --time-integration exact */
     int frames, first_frame, last_frame; /* frames: 0 none, 1 --frame, 2 --frames */
     sampler_kind sampler;
     double eps, sigma, target_error, checkpoint_every; /* eps, sigma < 0: from the scene */
@@ -92,7 +97,8 @@ typedef struct {
 
 enum { OPT_SPP = 256, OPT_TSPP, OPT_RES, OPT_THREADS, OPT_SEED, OPT_EPS, OPT_SIGMA, OPT_TFACTOR,
        OPT_PREVIEW, OPT_QUIET, OPT_VERSION, OPT_SAMPLER, OPT_BATCHES, OPT_TARGET, OPT_MAXB, OPT_PASS,
-       OPT_CKPT, OPT_CKPT_EVERY, OPT_RESUME, OPT_NO_REUSE, OPT_FRAME, OPT_FRAMES };
+       OPT_CKPT, OPT_CKPT_EVERY, OPT_RESUME, OPT_NO_REUSE, OPT_FRAME, OPT_FRAMES,
+       OPT_TIME_INTEGRATION };
 
 static int parse_pass(const char *arg, render_options *o, rr_error *err)
 {
@@ -116,7 +122,7 @@ static int parse_option(int c, const char *arg, render_options *o, rr_error *err
 {
     switch (c) {
     case OPT_SPP: return cli_int("--spp", arg, 1, 4096, &o->spp, err);
-    case OPT_TSPP: return cli_int("--tspp", arg, 1, 1000000, &o->tspp, err);
+    case OPT_TSPP: o->tspp_given = 1; return cli_int("--tspp", arg, 1, 1000000, &o->tspp, err);
     case OPT_TFACTOR: return cli_int("--time-factor", arg, 1, 1024, &o->time_factor, err);
     case OPT_RES: return cli_resolution("--res", arg, &o->width, &o->height, err);
     case OPT_THREADS: return cli_int("--threads", arg, 1, 1024, &o->threads, err);
@@ -135,7 +141,13 @@ static int parse_option(int c, const char *arg, render_options *o, rr_error *err
             return -1;
         o->last_frame = o->first_frame;
         return 0;
+    case OPT_TIME_INTEGRATION:
+        if (strcmp(arg, "sampled") && strcmp(arg, "exact"))
+            return rr_fail(err, "--time-integration: expected sampled or exact, got '%s'", arg);
+        o->exact_time = !strcmp(arg, "exact");
+        return 0;
     case OPT_SAMPLER:
+        o->sampler_given = 1;
         return sampler_from_name(arg, &o->sampler)
                    ? rr_fail(err, "--sampler: expected thesis, jittered3d or sobol, got '%s'", arg) : 0;
     case 'o': o->output = arg; return 0;
@@ -150,6 +162,9 @@ static int parse_option(int c, const char *arg, render_options *o, rr_error *err
 
 static int check_combinations(const render_options *o, rr_error *err)
 {
+    if (o->exact_time && o->tspp_given && o->tspp != 1)
+        return rr_fail(err, "--tspp %d: with --time-integration exact each spatial sample is integrated over "
+                            "the whole shutter (no time samples); leave --tspp out", o->tspp);
     if (o->passes && o->batches < o->passes)
         return rr_fail(err, "--pass %d/%d needs --batches >= %d (each pass renders whole batches)",
                        o->pass, o->passes, o->passes);
@@ -187,6 +202,7 @@ static int parse_args(int argc, char **argv, render_options *o)
         {"quiet", no_argument, 0, OPT_QUIET}, {"version", no_argument, 0, OPT_VERSION},
         {"no-static-reuse", no_argument, 0, OPT_NO_REUSE}, {"frame", required_argument, 0, OPT_FRAME},
         {"frames", required_argument, 0, OPT_FRAMES},
+        {"time-integration", required_argument, 0, OPT_TIME_INTEGRATION},
         {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
     int c;
     rr_error err;
@@ -352,7 +368,7 @@ static void setup_run(render_run *run, const scene *s, const shutter *shut, cons
     run->total_batches = total;
     run->rs = (render_settings){
         {o->sampler, o->seed, sampler_grid_for_spp(o->spp), o->tspp, s->time_factor}, *shut,
-        o->threads, begin, end - begin, max_batches_of(o), o->target_error};
+        o->threads, begin, end - begin, max_batches_of(o), o->target_error, o->exact_time};
     run->attrs.n = 0;
     attrs_for_render(&run->attrs, s, &run->rs, total, cmdline);
 }
@@ -543,6 +559,11 @@ int cmd_render(int argc, char **argv)
     int rc = parse_args(argc, argv, &o);
     if (rc)
         return rc == 1 ? 0 : 2;
+    if (o.exact_time) { /* time is not sampled: one time per position, Sobol' positions */
+        o.tspp = 1;
+        if (!o.sampler_given)
+            o.sampler = SAMPLER_SOBOL;
+    }
     char scene_buf[PATH_MAX + 64];
     if (!o.scene)
         o.scene = default_scene(scene_buf, sizeof scene_buf);

@@ -1,0 +1,608 @@
+/* Exact time integration, steps 1 and 2 (exact.h): the plan of motion
+ * bounds, candidate gathering and the certified partition of the shutter
+ * into pieces of fixed blended set. Step 3 is in exact_integrate.c.
+ *
+ * Every bound below rests on one number per object, W: how fast (object
+ * units per unit time) a point of the sample's ray can move in the object's
+ * own space, where the splats stand still. Over a piece of length h about
+ * its middle tm, every point X(t, s) = O(t) + s D(t) of the ray stays
+ * within delta = W h / 2 of X(tm, s); the direction D moves by at most
+ * delta / L (two points L apart on each side of a hit). */
+#include "exact_internal.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+/* ---- plan --------------------------------------------------------------- */
+
+/* The part of the shutter each candidate box covers, and of the ray's
+ * depth range: 8 x 4 boxes per object and sample. */
+enum { BOX_TIME_SLICES = 16, BOX_DEPTH_SLICES = 32 };
+
+/* W for the object (exact_internal.h). A world point Y seen in model
+ * space, X = F^-1(Y), moves at (DF)^-1 (dY/dt - v_F(X)), where v_F is the
+ * object's own motion (animation_motion_bound) and |(DF)^-1| <= 1 /
+ * min_scale. The camera's part is bounded once for the depths the object
+ * can be at (rest-pose ray points out to depth_hi). The direction
+ * D = S^-1 R^T d turns at most at (turn + camera turn) / min_scale +
+ * scale_rate / min_scale^2. */
+static void object_speed(const exact_plan *p, const scene_object *o, object_plan *op)
+{
+    motion_bound m = animation_motion_bound(&o->anim, p->shut.open, p->shut.close);
+    motion_bound cam = animation_motion_bound(&p->sc->camera_motion, p->shut.open, p->shut.close);
+    double cam_reach = v3_len(v3_sub(p->sc->cam.position, cam.center)) + op->depth_hi;
+    double camera = cam.linear + cam.angular * cam_reach;
+    op->base = (m.linear + camera) / op->min_scale;
+    op->angular = m.angular / op->min_scale;
+    op->center = m.center;
+    op->dir_rate = (m.turn + cam.turn) / op->min_scale + m.scale_rate / (op->min_scale * op->min_scale);
+}
+
+/* How far a point at distance dist from the center (in model space) can
+ * move in time h/2: delta = (base + angular (dist + delta)) h / 2 (it may
+ * drift delta farther out while moving), solved for delta. */
+static double reach_delta(const object_plan *op, double dist, double h)
+{
+    double k = op->angular * h * 0.5;
+    if (op->base == 0 && op->angular == 0)
+        return 0.0;
+    if (!(k < 0.5))
+        return INFINITY;
+    return (op->base + op->angular * dist) * h * 0.5 / (1.0 - k);
+}
+
+/* Depths along a ray from any camera position of the shutter at which the
+ * object can be: the distance from the camera's swept box to the swept
+ * sphere's center, plus or minus its radius. */
+static void depth_range(const exact_plan *p, object_plan *op)
+{
+    vec3 c = op->swept_center, lo = p->camera_path.lo, hi = p->camera_path.hi;
+    vec3 near = v3(fmin(fmax(c.x, lo.x), hi.x), fmin(fmax(c.y, lo.y), hi.y), fmin(fmax(c.z, lo.z), hi.z));
+    vec3 far = v3(fabs(c.x - lo.x) > fabs(c.x - hi.x) ? lo.x : hi.x, fabs(c.y - lo.y) > fabs(c.y - hi.y) ? lo.y : hi.y,
+                  fabs(c.z - lo.z) > fabs(c.z - hi.z) ? lo.z : hi.z);
+    op->depth_lo = fmax(0.0, v3_len(v3_sub(c, near)) - op->swept_radius);
+    op->depth_hi = v3_len(v3_sub(c, far)) + op->swept_radius;
+}
+
+static void plan_object(exact_plan *p, unsigned i)
+{
+    const scene_object *o = &p->sc->objects[i];
+    object_plan *op = &p->obj[i];
+    accel_object_swept_sphere(p->acc, i, &op->swept_center, &op->swept_radius);
+    op->min_scale = animation_min_scale(&o->anim, p->shut.open, p->shut.close);
+    op->max_scale = animation_max_scale(&o->anim, p->shut.open, p->shut.close);
+    op->gathered = p->camera_moves || accel_object_moves(p->acc, i);
+    depth_range(p, op);
+    if (op->gathered)
+        object_speed(p, o, op);
+}
+
+/* Times where a(t) has a kink or a jump: the integrand is split there. */
+static int weight_breaks(exact_plan *p)
+{
+    const shutter *s = &p->shut;
+    int n = 0, cap = s->table_size + 5;
+    p->breaks = malloc((size_t)cap * sizeof *p->breaks);
+    if (!p->breaks)
+        return -1;
+    double cand[3] = {s->center, s->center - (s->close - s->open), s->center + (s->close - s->open)};
+    p->breaks[n++] = s->open;
+    if (s->kind == WEIGHT_LINEAR || s->kind == WEIGHT_EXP)
+        for (int k = 0; k < (s->kind == WEIGHT_LINEAR ? 3 : 1); k++)
+            p->breaks[n++] = cand[k];
+    for (int k = 0; s->kind == WEIGHT_TABLE && k < s->table_size; k++)
+        p->breaks[n++] = s->table_t[k];
+    int m = 0;
+    qsort(p->breaks + 1, (size_t)n - 1, sizeof *p->breaks, cmp_double);
+    for (int k = 0; k < n; k++) /* inside the shutter, increasing */
+        if (p->breaks[k] >= s->open && p->breaks[k] < s->close && (m == 0 || p->breaks[k] > p->breaks[m - 1]))
+            p->breaks[m++] = p->breaks[k];
+    p->breaks[m++] = s->close;
+    p->nbreaks = m;
+    return 0;
+}
+
+int exact_plan_new(const scene *s, const accel *a, const shutter *shut, double box_scale, exact_plan **out,
+                   rr_error *err)
+{
+    exact_plan *p = calloc(1, sizeof *p);
+    if (!p)
+        return rr_fail(err, "out of memory");
+    p->sc = s, p->acc = a, p->shut = *shut, p->box_scale = box_scale;
+    p->tol = EXACT_TIME_TOL * (shut->close - shut->open);
+    p->camera_moves = scene_camera_moves(s);
+    aabb at_rest = {s->cam.position, s->cam.position};
+    p->camera_path = animation_swept_bounds(&s->camera_motion, at_rest, shut->open, shut->close);
+    p->obj = calloc((size_t)s->nobjects + 1, sizeof *p->obj);
+    if (!p->obj || weight_breaks(p)) {
+        exact_plan_free(p);
+        return rr_fail(err, "out of memory");
+    }
+    for (int i = 0; i < s->nobjects; i++)
+        plan_object(p, (unsigned)i);
+    *out = p;
+    return 0;
+}
+
+void exact_plan_free(exact_plan *p)
+{
+    if (!p)
+        return;
+    free(p->obj);
+    free(p->breaks);
+    free(p);
+}
+
+exact_scratch *exact_scratch_new(void) { return calloc(1, sizeof(exact_scratch)); }
+
+void exact_scratch_free(exact_scratch *scr)
+{
+    if (!scr)
+        return;
+    free(scr->keys);
+    free(scr->prims.ids);
+    free(scr->boxes);
+    free(scr->lists);
+    free(scr->evals);
+    free(scr->inherit);
+    free(scr->sorted);
+    free(scr->leaves);
+    free(scr->sets);
+    free(scr->objs_out);
+    free(scr->prims_out);
+    free(scr->ray_cache);
+    free(scr);
+}
+
+/* ---- the sample's rays ---------------------------------------------------- */
+
+void exact_world_ray(const sample_ctx *c, double t, vec3 *org, vec3 *dir)
+{
+    if (c->p->camera_moves)
+        scene_camera_ray(c->p->sc, c->x, c->y, t, org, dir);
+    else
+        *org = c->p->sc->cam.position, *dir = c->dir0;
+}
+
+/* Object obj's ray at time t, cached: candidates come object by object. */
+const object_ray *exact_object_ray(const sample_ctx *c, unsigned obj, double t)
+{
+    object_ray *r = &c->scr->ray_cache[obj];
+    if (r->valid && r->time == t)
+        return r;
+    vec3 org, dir;
+    exact_world_ray(c, t, &org, &dir);
+    r->xf = animation_at(&c->p->sc->objects[obj].anim, t);
+    r->org = xform_inverse_point(&r->xf, org);
+    r->dir = xform_inverse_vector(&r->xf, dir);
+    r->world_org = org, r->world_dir = dir;
+    r->time = t, r->valid = 1;
+    return r;
+}
+
+/* ---- step 1: candidates --------------------------------------------------- */
+
+static int grow(void **buf, size_t *cap, size_t need, size_t elem)
+{
+    if (need <= *cap)
+        return 0;
+    size_t n = *cap ? *cap : 64;
+    while (n < need)
+        n *= 2;
+    void *b = realloc(*buf, n * elem);
+    if (!b)
+        return -1;
+    *buf = b, *cap = n;
+    return 0;
+}
+
+static int push_key(exact_scratch *scr, unsigned obj, unsigned prim)
+{
+    if (grow((void **)&scr->keys, &scr->keys_cap, scr->nkeys + 1, sizeof *scr->keys))
+        return -1;
+    scr->keys[scr->nkeys++] = (uint64_t)obj << 32 | prim;
+    return 0;
+}
+
+/* Does the fixed world ray pass within the swept sphere (ahead of it)? */
+static int ray_meets_swept_sphere(const sample_ctx *c, const object_plan *op)
+{
+    vec3 org, dir;
+    exact_world_ray(c, c->p->shut.open, &org, &dir);
+    vec3 oc = v3_sub(op->swept_center, org);
+    double along = v3_dot(oc, dir), oc2 = v3_dot(oc, oc), r2 = op->swept_radius * op->swept_radius;
+    return oc2 <= r2 || (along > 0 && oc2 - along * along <= r2 * (1 + 1e-9));
+}
+
+/* Boxes around the object-space ray over each time slice and depth slice:
+ * every X(t, s) of the slice is within delta of the segment at the
+ * slice's middle time, whose box is that of its two ends (and whose
+ * farthest point from the center is an end). */
+static unsigned candidate_boxes(const sample_ctx *c, unsigned obj, aabb *boxes)
+{
+    const exact_plan *p = c->p;
+    const object_plan *op = &p->obj[obj];
+    double t0 = p->shut.open, len = p->shut.close - t0, h = len / BOX_TIME_SLICES;
+    unsigned n = 0;
+    for (int k = 0; k < BOX_TIME_SLICES; k++) {
+        const object_ray *r = exact_object_ray(c, obj, t0 + (k + 0.5) * h);
+        for (int j = 0; j < BOX_DEPTH_SLICES; j++) {
+            double s0 = op->depth_lo + (op->depth_hi - op->depth_lo) * j / BOX_DEPTH_SLICES;
+            double s1 = op->depth_lo + (op->depth_hi - op->depth_lo) * (j + 1) / BOX_DEPTH_SLICES;
+            vec3 e0 = v3_add(r->org, v3_scale(r->dir, s0)), e1 = v3_add(r->org, v3_scale(r->dir, s1));
+            aabb b = aabb_empty();
+            aabb_add_point(&b, e0);
+            aabb_add_point(&b, e1);
+            double dist = fmax(v3_len(v3_sub(e0, op->center)), v3_len(v3_sub(e1, op->center)));
+            double delta = reach_delta(op, dist, h);
+            vec3 mid = v3_scale(v3_add(b.lo, b.hi), 0.5);
+            vec3 half = v3_add(v3_scale(v3_sub(b.hi, b.lo), 0.5), v3(delta, delta, delta));
+            half = v3_scale(half, p->box_scale);
+            boxes[n++] = (aabb){v3_sub(mid, half), v3_add(mid, half)};
+        }
+    }
+    return n;
+}
+
+static int gather_moving(const sample_ctx *c, unsigned obj)
+{
+    exact_scratch *scr = c->scr;
+    if (!c->p->camera_moves && !ray_meets_swept_sphere(c, &c->p->obj[obj]))
+        return 0;
+    if (grow((void **)&scr->boxes, &scr->boxes_cap, BOX_TIME_SLICES * BOX_DEPTH_SLICES, sizeof *scr->boxes))
+        return -1;
+    unsigned n = candidate_boxes(c, obj, scr->boxes);
+    scr->prims.count = 0;
+    if (accel_collide_boxes(c->p->acc, obj, scr->boxes, n, &scr->prims))
+        return -1;
+    for (size_t i = 0; i < scr->prims.count; i++)
+        if (push_key(scr, obj, scr->prims.ids[i]))
+            return -1;
+    return 0;
+}
+
+static int cmp_u64(const void *a, const void *b)
+{
+    uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
+    return (x > y) - (x < y);
+}
+
+/* Objects that neither move nor see the camera move: their hits at any
+ * time are accel's static hits of the one world ray. Those beyond the
+ * static window are never blended: the closest hit can only come nearer. */
+static int gather_static(const sample_ctx *c)
+{
+    accel_ray ray;
+    accel_ray_begin(c->p->acc, c->p->sc->cam.position, c->dir0, &ray);
+    for (int k = 0; k < ray.static_hits.count; k++) {
+        const surface_hit *h = &ray.static_hits.hits[k];
+        if (!c->p->obj[h->obj].gathered && push_key(c->scr, h->obj, h->prim))
+            return -1;
+    }
+    return 0;
+}
+
+int exact_gather(const sample_ctx *c)
+{
+    exact_scratch *scr = c->scr;
+    scr->nkeys = 0;
+    if (!c->p->camera_moves && gather_static(c))
+        return -1;
+    for (int i = 0; i < c->p->sc->nobjects; i++)
+        if (c->p->obj[i].gathered && gather_moving(c, (unsigned)i))
+            return -1;
+    qsort(scr->keys, scr->nkeys, sizeof *scr->keys, cmp_u64);
+    return 0;
+}
+
+int exact_candidates(const exact_plan *p, exact_scratch *scr, double x, double y, const unsigned **objs,
+                     const unsigned **prims)
+{
+    sample_ctx c;
+    if (exact_context(p, scr, x, y, NULL, &c) || exact_gather(&c))
+        return -1;
+    if (grow((void **)&scr->objs_out, &scr->objs_out_cap, scr->nkeys, sizeof *scr->objs_out) ||
+        grow((void **)&scr->prims_out, &scr->prims_out_cap, scr->nkeys, sizeof *scr->prims_out))
+        return -1;
+    for (size_t i = 0; i < scr->nkeys; i++) {
+        scr->objs_out[i] = (unsigned)(scr->keys[i] >> 32);
+        scr->prims_out[i] = (unsigned)scr->keys[i];
+    }
+    *objs = scr->objs_out, *prims = scr->prims_out;
+    return (int)scr->nkeys;
+}
+
+int exact_context(const exact_plan *p, exact_scratch *scr, double x, double y, exact_stats *st, sample_ctx *c)
+{
+    if (grow((void **)&scr->ray_cache, &scr->ray_cache_cap, (size_t)p->sc->nobjects + 1, sizeof *scr->ray_cache))
+        return -1;
+    memset(scr->ray_cache, 0, ((size_t)p->sc->nobjects + 1) * sizeof *scr->ray_cache);
+    c->p = p, c->scr = scr, c->x = x, c->y = y, c->st = st;
+    c->dir0 = camera_ray_direction(&p->sc->cam, x, y);
+    return 0;
+}
+
+/* ---- step 2: certified pieces -------------------------------------------- */
+
+static vec3 f3(const float *a) { return v3(a[0], a[1], a[2]); }
+
+/* A splat at the piece's middle, and whether its state holds over the piece.
+ * Hit plane crossing P (depth s), ellipse radius r. Over the piece:
+ * - the crossing moves by at most sigma = delta / (|D.n| - eps_d) in depth
+ *   (the ray point at depth s moves by delta, then slides along the ray to
+ *   the plane) and by move = delta + sigma (|D| + eps_d) in the plane;
+ * - the ellipse coordinates (a, b) = (du.q, dv.q) move by at most
+ *   kappa * move, kappa = sqrt(|du|^2 + |dv|^2) (a Frobenius bound);
+ * so r > 1 + kappa move: never covered; r < 1 - kappa move and s > sigma:
+ * always covered. D moves by at most eps_d (its turn rate). The same argument run backwards from a hit at another
+ * time gives the first (a hit then puts P within move of the ellipse). */
+static cand_eval splat_eval(const scene_object *o, unsigned prim, const object_ray *r, double delta, double eps_d)
+{
+    const splat_geom *g = &o->model.geom[prim];
+    vec3 n = f3(g->plane_normal), co = v3_sub(f3(g->center), r->org);
+    double denom = v3_dot(r->dir, n);
+    cand_eval e = {0, 1, INFINITY, 0.0};
+    double radius = INFINITY;
+    if (denom != 0) {
+        e.s = v3_dot(co, n) / denom;
+        vec3 q = v3_sub(v3_scale(r->dir, e.s), co);
+        double a = v3_dot(f3(g->dual_u), q), b = v3_dot(f3(g->dual_v), q);
+        radius = sqrt(a * a + b * b);
+    }
+    e.hit = denom != 0 && e.s >= 0 && radius <= 1;
+    if (delta == 0) /* nothing moves relative to the ray */
+        return e;
+    double cabs = fabs(denom);
+    e.sure = 0;
+    e.sigma = INFINITY; /* depth range unknown */
+    if (!(cabs > eps_d))
+        return e;
+    e.sigma = delta / (cabs - eps_d);
+    double move = delta + e.sigma * (v3_len(r->dir) + eps_d);
+    double slack = sqrt(v3_dot(f3(g->dual_u), f3(g->dual_u)) + v3_dot(f3(g->dual_v), f3(g->dual_v))) * move;
+    /* which side of the shading normal faces the eye must not change either */
+    double side = fabs(v3_dot(f3(pointmodel_normal(&o->model, prim)), r->dir));
+    e.sure = radius > 1 + slack || (e.s < -e.sigma && slack < 1) || (radius < 1 - slack && e.s > e.sigma && side > eps_d);
+    return e;
+}
+
+/* An analytic sphere: the line's distance rho from the center moves by at
+ * most delta, and the visible crossing stays within the shell of
+ * half-width delta about the surface on the same side (front from outside,
+ * back from inside): its depth stays between the shell's crossings. */
+static cand_eval sphere_eval(const scene_object *o, const object_ray *r, double delta)
+{
+    vec3 oc = v3_sub(r->org, o->sphere_center);
+    double R = o->sphere_radius, A = v3_dot(r->dir, r->dir), B = v3_dot(oc, r->dir);
+    double oc2 = v3_dot(oc, oc), disc = B * B - A * (oc2 - R * R);
+    cand_eval e = {0, 1, INFINITY, 0.0};
+    if (disc >= 0) {
+        double sq = sqrt(disc), s0 = (-B - sq) / A, s1 = (-B + sq) / A;
+        e.s = s0 >= 0 ? s0 : s1;
+        e.hit = e.s >= 0;
+    }
+    if (delta == 0)
+        return e;
+    double rho = sqrt(fmax(0.0, oc2 - B * B / A)), lam = sqrt(A), centre = -B / A, dist = sqrt(oc2);
+    e.sure = rho > R + delta;
+    e.sigma = INFINITY; /* depth range unknown until certified */
+    if (e.sure || !(rho < R - delta) || fabs(dist - R) <= delta)
+        return e;
+    double outer = sqrt((R + delta) * (R + delta) - rho * rho) / lam;
+    double inner = sqrt(fmax(0.0, (R - delta) * (R - delta) - rho * rho)) / lam;
+    double lo = dist > R ? centre - outer : centre + inner, hi = dist > R ? centre - inner : centre + outer;
+    e.sigma = fmax(e.s - lo, hi - e.s);
+    e.sure = lo > 0 || hi < 0;
+    return e;
+}
+
+/* The farthest a point of the primitive is from the model-space point c. */
+static double primitive_reach(const scene_object *o, unsigned prim, vec3 c)
+{
+    if (o->kind == OBJECT_SPHERE)
+        return v3_len(v3_sub(o->sphere_center, c)) + o->sphere_radius;
+    const float *e = &o->model.extent[3 * (size_t)prim];
+    /* twice the splat's radius: a plane crossing within the slack of the
+     * ellipse (splat_eval, slack < 1) is inside it */
+    return v3_len(v3_sub(f3(o->model.geom[prim].center), c)) + 2.0 * sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
+}
+
+/* One candidate at the middle of [a, b]: its state, and whether that
+ * state holds over the whole piece. */
+static cand_eval evaluate_one(const sample_ctx *c, uint64_t key, double a, double b)
+{
+    unsigned obj = (unsigned)(key >> 32), prim = (unsigned)key;
+    const object_plan *op = &c->p->obj[obj];
+    const scene_object *o = &c->p->sc->objects[obj];
+    double h = b - a;
+    const object_ray *r = exact_object_ray(c, obj, 0.5 * (a + b));
+    double delta = reach_delta(op, primitive_reach(o, prim, op->center), h);
+    return o->kind == OBJECT_SPHERE ? sphere_eval(o, r, delta) : splat_eval(o, prim, r, delta, op->dir_rate * h * 0.5);
+}
+
+/* Evaluates list[0..n) on [a, b] into ev. A candidate whose state was
+ * certain on the parent piece (inherited) keeps that evaluation: its depth
+ * range holds on every part of the parent. */
+static void evaluate(const sample_ctx *c, const int *list, const cand_eval *inherited, int n, double a, double b,
+                     cand_eval *ev)
+{
+    for (int i = 0; i < n; i++)
+        ev[i] = inherited && inherited[i].sure ? inherited[i] : evaluate_one(c, c->scr->keys[list[i]], a, b);
+}
+
+/* Re-evaluates the inherited hits on [a, b] itself: their depth ranges
+ * shrink with the piece (for the window test and for the state at the
+ * middle). */
+static void refresh(const sample_ctx *c, const int *list, int n, double a, double b, cand_eval *ev)
+{
+    for (int i = 0; i < n; i++)
+        if (ev[i].hit)
+            ev[i] = evaluate_one(c, c->scr->keys[list[i]], a, b);
+}
+
+static int cmp_depth(const void *a, const void *b)
+{
+    double x = ((const cand_eval *)a)->s, y = ((const cand_eval *)b)->s;
+    return (x > y) - (x < y);
+}
+
+/* With more hits in the window than the k-buffer holds, the nearest
+ * KBUFFER_MAX are blended: their order must not change either. */
+static int order_sure(const cand_eval *ev, const int *in, int m, cand_eval *tmp)
+{
+    for (int k = 0; k < m; k++)
+        tmp[k] = ev[in[k]];
+    qsort(tmp, (size_t)m, sizeof *tmp, cmp_depth);
+    for (int k = 1; k < m; k++)
+        if (!(tmp[k].s - tmp[k].sigma > tmp[k - 1].s + tmp[k - 1].sigma))
+            return 0;
+    return 1;
+}
+
+/* The epsilon window over the piece: the closest depth stays in [lo, hi];
+ * a certain hit is in the window throughout if s + sigma <= lo + eps, out
+ * of it throughout if s - sigma > hi + eps. A candidate whose coverage is
+ * uncertain does not matter when it stays out of the window (behind a
+ * certain hit by more than eps) whether it is hit or not. Fills set
+ * (indices into ev) and returns 1 when the blended set is certain, 0 when
+ * only depth ranges of certain hits were in doubt (tighter ranges may
+ * settle it), -1 when a candidate's coverage matters and is uncertain. */
+static int window_sure(const cand_eval *ev, int n, double eps, int *set, int *nset, cand_eval *tmp)
+{
+    double lo = INFINITY, hi = INFINITY;
+    for (int i = 0; i < n; i++) {
+        if (ev[i].sure && !ev[i].hit)
+            continue;
+        lo = fmin(lo, ev[i].s - ev[i].sigma);
+        if (ev[i].sure)
+            hi = fmin(hi, ev[i].s + ev[i].sigma);
+    }
+    *nset = 0;
+    for (int i = 0; i < n; i++) {
+        if (ev[i].sure && !ev[i].hit)
+            continue;
+        int out = ev[i].s - ev[i].sigma > hi + eps;
+        if (!ev[i].sure && !out)
+            return -1;
+        if (ev[i].sure && ev[i].s + ev[i].sigma <= lo + eps)
+            set[(*nset)++] = i;
+        else if (!out)
+            return 0;
+    }
+    return *nset <= KBUFFER_MAX || order_sure(ev, set, *nset, tmp);
+}
+
+/* The blended set at one time, for pieces too short to certify. */
+static void window_at(const cand_eval *ev, int n, double eps, int *set, int *nset)
+{
+    double closest = INFINITY;
+    for (int i = 0; i < n; i++)
+        if (ev[i].hit)
+            closest = fmin(closest, ev[i].s);
+    *nset = 0;
+    for (int i = 0; i < n; i++)
+        if (ev[i].hit && ev[i].s <= closest + eps)
+            set[(*nset)++] = i;
+}
+
+/* Appends the piece [a, b] with the blended set (candidate indices, in
+ * increasing order), merged with the previous piece when the sets agree. */
+static int emit_piece(exact_scratch *scr, double a, double b, const int *set, int n)
+{
+    piece *last = scr->npieces ? &scr->leaves[scr->npieces - 1] : NULL;
+    if (last && last->b == a && last->count == n && !memcmp(scr->sets + last->first, set, (size_t)n * sizeof *set)) {
+        last->b = b;
+        return 0;
+    }
+    if (grow((void **)&scr->leaves, &scr->leaves_cap, scr->npieces + 1, sizeof *scr->leaves) ||
+        grow((void **)&scr->sets, &scr->sets_cap, scr->nsets + (size_t)n, sizeof *scr->sets))
+        return -1;
+    memcpy(scr->sets + scr->nsets, set, (size_t)n * sizeof *set);
+    scr->leaves[scr->npieces++] = (piece){a, b, scr->nsets, n};
+    scr->nsets += (size_t)n;
+    return 0;
+}
+
+/* A piece's blended set as candidate indices (set holds indices into list). */
+static void to_candidates(const int *list, int *set, int n)
+{
+    for (int k = 0; k < n; k++)
+        set[k] = list[set[k]];
+}
+
+/* The piece [a, b] with a certain blended set, or too short to split. */
+static int settle(const sample_ctx *c, double a, double b, const int *list, int n, cand_eval *ev, int inherited)
+{
+    exact_scratch *scr = c->scr;
+    int *set = scr->lists + (list - scr->lists) + n, nset = 0;
+    double eps = c->p->sc->epsilon;
+    int window = window_sure(ev, n, eps, set, &nset, scr->sorted);
+    if (window == 1) {
+        to_candidates(list, set, nset);
+        return emit_piece(scr, a, b, set, nset);
+    }
+    int short_piece = !(b - a > c->p->tol && scr->npieces < EXACT_MAX_PIECES);
+    if (inherited && (window == 0 || short_piece)) { /* tighter depth ranges may settle the window */
+        refresh(c, list, n, a, b, ev);
+        return settle(c, a, b, list, n, ev, 0);
+    }
+    if (!short_piece)
+        return 1; /* split */
+    window_at(ev, n, eps, set, &nset);
+    to_candidates(list, set, nset);
+    if (c->st)
+        c->st->unresolved += b - a;
+    return emit_piece(scr, a, b, set, nset) ? -1 : 0;
+}
+
+/* Splits [a, b] until every candidate's coverage and window membership is
+ * certain on each piece. list (depth-first on the scratch stack, at
+ * lists + top, with its inherited evaluations at inherit + top) holds the
+ * candidates not yet certified absent; children get only those. */
+static int classify(const sample_ctx *c, double a, double b, int n, size_t top)
+{
+    exact_scratch *scr = c->scr;
+    const int *list = scr->lists + top;
+    cand_eval *ev = scr->evals + top;
+    int inherited = top > 0;
+    evaluate(c, list, inherited ? scr->inherit + top : NULL, n, a, b, ev);
+    int rc = settle(c, a, b, list, n, ev, inherited);
+    if (rc <= 0)
+        return rc;
+    int *child = scr->lists + top + (size_t)n, m = 0;
+    cand_eval *child_ev = scr->inherit + top + (size_t)n;
+    for (int i = 0; i < n; i++)
+        if (!(ev[i].sure && !ev[i].hit)) { /* absent over [a, b]: absent over both halves */
+            child_ev[m] = ev[i];
+            child[m++] = list[i];
+        }
+    double mid = 0.5 * (a + b);
+    return classify(c, a, mid, m, top + (size_t)n) || classify(c, mid, b, m, top + (size_t)n);
+}
+
+/* Room on the scratch stack for the deepest recursion: each level keeps a
+ * list (and set) and evaluations of at most all candidates, twice. */
+static int reserve_stack(exact_scratch *scr)
+{
+    size_t need = (size_t)(EXACT_MAX_DEPTH + 2) * (scr->nkeys + 1) * 2;
+    return grow((void **)&scr->lists, &scr->lists_cap, need, sizeof *scr->lists) ||
+           grow((void **)&scr->evals, &scr->evals_cap, need, sizeof *scr->evals) ||
+           grow((void **)&scr->inherit, &scr->inherit_cap, need, sizeof *scr->inherit) ||
+           grow((void **)&scr->sorted, &scr->sorted_cap, scr->nkeys + 1, sizeof *scr->sorted);
+}
+
+int exact_partition(const sample_ctx *c)
+{
+    exact_scratch *scr = c->scr;
+    scr->npieces = 0, scr->nsets = 0;
+    if (reserve_stack(scr))
+        return -1;
+    int n = (int)scr->nkeys;
+    for (int i = 0; i < n; i++)
+        scr->lists[i] = i;
+    const exact_plan *p = c->p;
+    for (int k = 0; k + 1 < p->nbreaks; k++)
+        if (classify(c, p->breaks[k], p->breaks[k + 1], n, 0))
+            return -1;
+    return 0;
+}

@@ -1,0 +1,72 @@
+/* Exact time integration (--time-integration exact): the a(t)-weighted
+ * average over the whole shutter of what one spatial sample position sees,
+ * with no temporal sampling, so the only noise left is spatial.
+ *
+ * The thesis estimates the time integral of sec. 3.1 (eq. 3.3) by sampling
+ * (sec. 4.5); here it is computed the way Gribel et al. resolve visibility
+ * over time (seeds/gribel-semi-analytical-visibility.txt), but exactly and
+ * for epsilon-blended splats:
+ *  1. candidates: every splat (or sphere) the moving ray may meet during the
+ *     shutter, from Embree's BVH of each object (accel_collide_boxes) with
+ *     boxes around time slices of the object-space ray, padded by a bound on
+ *     how fast that ray moves (animation_speed_bound);
+ *  2. events: the shutter is split until, on each piece, every candidate is
+ *     certified covered or not covered, and in or out of the epsilon window,
+ *     for the whole piece (bounds on how far the hit point and the depth can
+ *     move, below); pieces shorter than EXACT_TIME_TOL of the shutter are
+ *     not split further;
+ *  3. integration: on a piece the blended set is fixed and a(t) * color(t)
+ *     is smooth: adaptive Gauss-Kronrod (7-15) to EXACT_REL_TOL, each node
+ *     shaded exactly as the sampled path shades one time (kbuffer, shade_hits).
+ * The result equals the expectation of the sampled path's time average at
+ * the same spatial position. */
+#ifndef RR_EXACT_H
+#define RR_EXACT_H
+
+#include <stdint.h>
+
+#include "accel.h"
+#include "scene.h"
+#include "shutter.h"
+
+/* A piece of the shutter shorter than this fraction of it is not split
+ * further: its blended set is the one at its middle. The total time so
+ * classified is reported (exact_stats.unresolved). */
+#define EXACT_TIME_TOL 1e-9
+/* Gauss-Kronrod: a piece is split until the 7- and 15-point rules agree to
+ * this fraction of the piece's largest integral (its weight integral or a
+ * color's). */
+#define EXACT_REL_TOL 1e-7
+
+typedef struct exact_plan exact_plan;       /* per shutter; read-only, shared by threads */
+typedef struct exact_scratch exact_scratch; /* per thread */
+
+/* box_scale: 1; tests shrink the candidate boxes with it to show that the
+ * candidate test can fail. */
+int exact_plan_new(const scene *s, const accel *a, const shutter *shut, double box_scale, exact_plan **out,
+                   rr_error *err);
+void exact_plan_free(exact_plan *p);
+
+exact_scratch *exact_scratch_new(void);
+void exact_scratch_free(exact_scratch *scr);
+
+typedef struct {
+    uint64_t candidates;  /* splats and spheres gathered */
+    uint64_t pieces;      /* pieces of fixed blended set integrated */
+    uint64_t nodes;       /* integrand evaluations (shaded times) */
+    uint64_t overflows;   /* samples where more than KBUFFER_MAX hits blended */
+    double unresolved;    /* shutter time in pieces left at EXACT_TIME_TOL */
+} exact_stats;
+
+/* The exact weighted time average of the color (rgb) and coverage (a) seen
+ * through raster position (x, y): integral of a(t) rgba(t) over the
+ * shutter divided by the integral of a(t). -1 when out of memory. */
+int exact_sample(const exact_plan *p, exact_scratch *scr, double x, double y, double rgba[4], exact_stats *st);
+
+/* For tests: the candidates gathered for (x, y) as (object, primitive)
+ * pairs, object-major and sorted. Returns the count (-1: out of memory);
+ * *objs and *prims point into the scratch. */
+int exact_candidates(const exact_plan *p, exact_scratch *scr, double x, double y, const unsigned **objs,
+                     const unsigned **prims);
+
+#endif

@@ -1,0 +1,93 @@
+/* exact's private state, shared by exact.c (plan, candidates, pieces) and
+ * exact_integrate.c (Gauss-Kronrod over the pieces). */
+#ifndef RR_EXACT_INTERNAL_H
+#define RR_EXACT_INTERNAL_H
+
+#include "exact.h"
+
+/* A sample's pieces beyond this are not split further (pathological
+ * motion): the rest of the shutter counts as unresolved. */
+#define EXACT_MAX_PIECES 100000
+/* Halving a shutter down to EXACT_TIME_TOL takes 30 levels. */
+#define EXACT_MAX_DEPTH 64
+
+typedef struct {
+    vec3 swept_center;
+    double swept_radius;      /* world sphere holding the object all shutter long */
+    double min_scale, max_scale;
+    double depth_lo, depth_hi; /* depths along the ray where it can be */
+    /* W: a ray point X (model coordinates) moves at most at
+     * base + angular * |X - center| in the object's space; its direction
+     * turns at most at dir_rate */
+    double base, angular, dir_rate;
+    vec3 center;
+    int gathered;             /* candidates from rtcCollide (moves relative to the camera) */
+} object_plan;
+
+struct exact_plan {
+    const scene *sc;
+    const accel *acc;
+    shutter shut;
+    double tol;        /* EXACT_TIME_TOL of the shutter, in time units */
+    double box_scale;
+    int camera_moves;
+    aabb camera_path;  /* the camera position over the shutter */
+    double *breaks;    /* open, a(t)'s kinks inside, close */
+    int nbreaks;
+    object_plan *obj;
+};
+
+typedef struct {
+    int valid;
+    double time;
+    xform xf;
+    vec3 org, dir;             /* object space */
+    vec3 world_org, world_dir;
+} object_ray;
+
+typedef struct {
+    int hit, sure;   /* covered at the middle; state certain over the piece */
+    double s, sigma; /* depth at the middle and how far it can move */
+} cand_eval;
+
+typedef struct {
+    double a, b;
+    size_t first; /* its blended set: sets[first .. first + count) */
+    int count;
+} piece;
+
+struct exact_scratch {
+    uint64_t *keys; /* candidates: object << 32 | primitive, sorted */
+    size_t nkeys, keys_cap;
+    accel_prims prims;
+    aabb *boxes;
+    size_t boxes_cap;
+    int *lists;
+    size_t lists_cap;
+    cand_eval *evals, *inherit, *sorted;
+    size_t evals_cap, inherit_cap, sorted_cap;
+    piece *leaves;
+    size_t npieces, leaves_cap;
+    int *sets;
+    size_t nsets, sets_cap;
+    unsigned *objs_out, *prims_out;
+    size_t objs_out_cap, prims_out_cap;
+    object_ray *ray_cache; /* one per object */
+    size_t ray_cache_cap;
+};
+
+typedef struct {
+    const exact_plan *p;
+    exact_scratch *scr;
+    double x, y;
+    vec3 dir0; /* the ray direction at rest (a still camera's at every time) */
+    exact_stats *st;
+} sample_ctx;
+
+int exact_context(const exact_plan *p, exact_scratch *scr, double x, double y, exact_stats *st, sample_ctx *c);
+void exact_world_ray(const sample_ctx *c, double t, vec3 *org, vec3 *dir);
+const object_ray *exact_object_ray(const sample_ctx *c, unsigned obj, double t);
+int exact_gather(const sample_ctx *c);
+int exact_partition(const sample_ctx *c);
+
+#endif
