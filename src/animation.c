@@ -230,18 +230,34 @@ static double max_scale_over(const animation *a, const double *s, int n)
     return m + max_slope_of(a->keys, CH_SX, 3) * largest_gap(s, n) * 0.5;
 }
 
-double animation_max_scale(const animation *a, double t0, double t1)
+/* Smallest scale at the samples (both sides of each), less what the
+ * scale's slope allows between them, never below the clamp keyed_at uses. */
+static double min_scale_over(const animation *a, const double *s, int n)
+{
+    double m = INFINITY;
+    for (int i = 0; i < n; i++)
+        for (int c = CH_SX; c <= CH_SZ; c++)
+            m = fmin(m, fmin(channel(a->keys, c, s[i], 0), channel(a->keys, c, s[i], 1)));
+    return fmax(m - max_slope_of(a->keys, CH_SX, 3) * largest_gap(s, n) * 0.5, MIN_SCALE);
+}
+
+/* The largest (or smallest) scale over [t0, t1]; out of memory: no bound. */
+static double scale_extreme(const animation *a, double t0, double t1, int largest)
 {
     if (!a->keys)
         return 1.0;
     int n;
     double *s = sample_times(a, t0, t1, &n);
     if (!s)
-        return INFINITY;
-    double m = max_scale_over(a, s, n);
+        return largest ? INFINITY : MIN_SCALE;
+    double m = largest ? max_scale_over(a, s, n) : min_scale_over(a, s, n);
     free(s);
     return m;
 }
+
+double animation_max_scale(const animation *a, double t0, double t1) { return scale_extreme(a, t0, t1, 1); }
+
+double animation_min_scale(const animation *a, double t0, double t1) { return scale_extreme(a, t0, t1, 0); }
 
 static void add_transformed_box(aabb *out, const xform *x, aabb b)
 {
@@ -305,25 +321,6 @@ motion_bound animation_motion_bound(const animation *a, double t0, double t1)
     motion_bound m = motion_bound_over(a, s, n);
     free(s);
     return m;
-}
-
-/* Smallest scale at the samples (both sides of each), less what the
- * scale's slope allows between them, never below the clamp keyed_at uses. */
-double animation_min_scale(const animation *a, double t0, double t1)
-{
-    if (!a->keys)
-        return 1.0;
-    int n;
-    double *s = sample_times(a, t0, t1, &n);
-    if (!s)
-        return MIN_SCALE;
-    double m = INFINITY;
-    for (int i = 0; i < n; i++)
-        for (int c = CH_SX; c <= CH_SZ; c++)
-            m = fmin(m, fmin(channel(a->keys, c, s[i], 0), channel(a->keys, c, s[i], 1)));
-    m -= max_slope_of(a->keys, CH_SX, 3) * largest_gap(s, n) * 0.5;
-    free(s);
-    return fmax(m, MIN_SCALE);
 }
 
 aabb animation_swept_bounds(const animation *a, aabb b, double t0, double t1)

@@ -120,6 +120,17 @@ static int next_group(const render_job *job, const thread_scratch *scr, int firs
     return end;
 }
 
+/* The positions and times of batch `batch` of pixel (px, py) into the
+ * scratch; returns their count. */
+static int batch_samples(const render_job *job, int px, int py, uint32_t batch, thread_scratch *scr)
+{
+    const sampler *smp = &job->rs->smp;
+    uint64_t pixel = (uint64_t)py * (uint64_t)job->img->width + (uint64_t)px;
+    sampler_batch(smp, job->rs->shut.open, job->rs->shut.close, pixel, px, py, batch, &scr->ss, scr->x, scr->y,
+                  scr->t);
+    return sampler_count(smp);
+}
+
 /* One batch of a pixel (thesis sec. 4.5): each sample's color is weighted
  * by a(t) and the batch estimate is divided by the sum of the weights.
  * Samples sharing a spatial position (the thesis sampler's s_t times) share
@@ -127,14 +138,10 @@ static int next_group(const render_job *job, const thread_scratch *scr, int firs
 static void render_pixel_batch(render_job *job, int px, int py, uint32_t batch, thread_scratch *scr,
                                double est[4], uint64_t *rays, uint64_t *overflows)
 {
-    const sampler *smp = &job->rs->smp;
-    uint64_t pixel = (uint64_t)py * (uint64_t)job->img->width + (uint64_t)px;
-    sampler_batch(smp, job->rs->shut.open, job->rs->shut.close, pixel, px, py, batch, &scr->ss, scr->x, scr->y,
-                  scr->t);
+    int count = batch_samples(job, px, py, batch, scr);
     double acc[4] = {0, 0, 0, 0}, wsum = 0;
     static_cache sc;
     sc.x = sc.y = NAN;
-    int count = sampler_count(smp);
     for (int i = 0; i < count;) {
         double t[ACCEL_PACKET], w[ACCEL_PACKET], rgba[ACCEL_PACKET][4];
         int n, first = i;
@@ -159,11 +166,7 @@ static void render_pixel_batch(render_job *job, int px, int py, uint32_t batch, 
 static void render_pixel_batch_exact(render_job *job, int px, int py, uint32_t batch, thread_scratch *scr,
                                      double est[4], uint64_t *rays, uint64_t *overflows)
 {
-    const sampler *smp = &job->rs->smp;
-    uint64_t pixel = (uint64_t)py * (uint64_t)job->img->width + (uint64_t)px;
-    sampler_batch(smp, job->rs->shut.open, job->rs->shut.close, pixel, px, py, batch, &scr->ss, scr->x, scr->y,
-                  scr->t);
-    int count = sampler_count(smp);
+    int count = batch_samples(job, px, py, batch, scr);
     exact_stats st = {0};
     for (int c = 0; c < 4; c++)
         est[c] = 0;
