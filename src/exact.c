@@ -326,13 +326,26 @@ int exact_context(const exact_plan *p, exact_scratch *scr, double x, double y, e
 
 static vec3 f3(const float *a) { return v3(a[0], a[1], a[2]); }
 
+/* The largest factor by which the ellipse coordinates (du.q, dv.q) stretch
+ * an in-plane displacement q: the spectral norm of the 2x3 map, from the
+ * larger eigenvalue of its 2x2 Gram matrix (1 / the smaller radius). */
+static double dual_norm(const splat_geom *g)
+{
+    vec3 du = f3(g->dual_u), dv = f3(g->dual_v);
+    double a = v3_dot(du, du), b = v3_dot(du, dv), c = v3_dot(dv, dv);
+    double lambda = 0.5 * (a + c) + sqrt(0.25 * (a - c) * (a - c) + b * b);
+    return sqrt(lambda) * (1 + 1e-12);
+}
+
 /* A splat at the piece's middle, and whether its state holds over the piece.
  * Hit plane crossing P (depth s), ellipse radius r. Over the piece:
  * - the crossing moves by at most sigma = delta / (|D.n| - eps_d) in depth
  *   (the ray point at depth s moves by delta, then slides along the ray to
- *   the plane) and by move = delta + sigma (|D| + eps_d) in the plane;
+ *   the plane) and in the plane by the ray point's motion projected along
+ *   the ray onto the plane, a projection of norm 1 / cos(ray, normal):
+ *   move = delta (|D| + eps_d) / (|D.n| - eps_d) = sigma (|D| + eps_d);
  * - the ellipse coordinates (a, b) = (du.q, dv.q) move by at most
- *   kappa * move, kappa = sqrt(|du|^2 + |dv|^2) (a Frobenius bound);
+ *   kappa * move, kappa the spectral norm of [du; dv] (dual_norm);
  * so r > 1 + kappa move: never covered; r < 1 - kappa move and s > sigma:
  * always covered. D moves by at most eps_d (its turn rate). The same argument run backwards from a hit at another
  * time gives the first (a hit then puts P within move of the ellipse). */
@@ -358,8 +371,8 @@ static cand_eval splat_eval(const scene_object *o, unsigned prim, const object_r
     if (!(cabs > eps_d))
         return e;
     e.sigma = delta / (cabs - eps_d);
-    double move = delta + e.sigma * (v3_len(r->dir) + eps_d);
-    double slack = sqrt(v3_dot(f3(g->dual_u), f3(g->dual_u)) + v3_dot(f3(g->dual_v), f3(g->dual_v))) * move;
+    double move = e.sigma * (v3_len(r->dir) + eps_d);
+    double slack = dual_norm(g) * move;
     /* which side of the shading normal faces the eye must not change either */
     double side = fabs(v3_dot(f3(pointmodel_normal(&o->model, prim)), r->dir));
     e.sure = radius > 1 + slack || (e.s < -e.sigma && slack < 1) || (radius < 1 - slack && e.s > e.sigma && side > eps_d);
