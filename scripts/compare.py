@@ -48,7 +48,15 @@ def parse_args(argv):
     p.add_argument("--hdr-exposures", metavar="START,STOP",
                    help="HDR-FLIP exposure range in stops (default: from the reference's luminance)")
     p.add_argument("--k-sigma", type=float, default=3.0,
-                   help="report pixels differing by more than K reference standard errors (default 3)")
+                   help="report the fraction of pixels (>KSE) differing by more than K standard errors of the "
+                        "difference: the reference's stderr.* channels combined with the test's own stderr.* "
+                        "channels or --test-noise (default 3)")
+    p.add_argument("--test-noise", metavar="A,B",
+                   help="two renders of the test method with other seeds: their difference estimates the "
+                        "test's per-pixel standard error as |A - B| / sqrt(2)")
+    p.add_argument("--se-floor", type=float, default=1e-6,
+                   help="smallest standard error used for >KSE, so pixels whose standard error is exactly 0 "
+                        "(converged, or outside every object) are not flagged for float rounding (default 1e-6)")
     p.add_argument("--json", metavar="FILE", help="write results as JSON ('-' for stdout)")
     p.add_argument("--csv", metavar="FILE", help="write results as CSV ('-' for stdout)")
     p.add_argument("--heatmaps", metavar="DIR", help="write error maps and contact sheets as PNG")
@@ -88,8 +96,9 @@ def load(path, colorspace, args, expect_shape=None):
     return img, rgb * 2.0 ** args.exposure
 
 
-def evaluate(ref_img, ref, test, valid, window, args):
-    """Metrics of one window (x, y, w, h) of the full-image arrays."""
+def evaluate(ref_img, ref, test, valid, window, args, test_se=None, test_se_source=None):
+    """Metrics of one window (x, y, w, h) of the full-image arrays; test_se:
+    the test's own per-pixel standard errors, if known."""
     x, y, w, h = window
     sl = (slice(y, y + h), slice(x, x + w))
     r, t, v = ref[sl], test[sl], valid[sl]
@@ -110,7 +119,12 @@ def evaluate(ref_img, ref, test, valid, window, args):
         res["HDR-FLIP"], res["HDR-FLIP note"] = None, str(e)
     res["pixels"] = int(v.sum())
     if ref_img.stderr is not None:
-        res[f">{args.k_sigma:g}SE"] = stderr_fraction(ref_img.stderr[sl], r0, t0, v, args.k_sigma)
+        se = ref_img.stderr[sl] ** 2
+        if test_se is not None:
+            se = se + test_se[sl] ** 2
+        se = np.maximum(np.sqrt(se), args.se_floor)
+        res[f">{args.k_sigma:g}SE"] = stderr_fraction(se, r0, t0, v, args.k_sigma)
+        res["SE source"] = "reference" + ("" if test_se is None else f" and {test_se_source}")
     return res, flip_map
 
 
@@ -155,6 +169,17 @@ def write_machine_readable(rows, json_path, csv_path):
             f.close()
 
 
+def test_noise(args, shape):
+    """(per-pixel standard error, its description) from --test-noise, or (None, None)."""
+    if not args.test_noise:
+        return None, None
+    paths = args.test_noise.split(",")
+    if len(paths) != 2:
+        raise CompareError(f"--test-noise {args.test_noise}: expected two images A,B")
+    (_, a), (_, b) = (load(p, args.test_colorspace, args, shape) for p in paths)
+    return np.abs(a - b) / math.sqrt(2.0), "--test-noise"
+
+
 def compare(args):
     ref_img, ref = load(args.reference, args.ref_colorspace, args)
     height, width = ref.shape[:2]
@@ -165,12 +190,14 @@ def compare(args):
                     ref.shape)
         mask = m[..., 0] > 0.5
     rows, maps = [], []
+    noise = test_noise(args, ref.shape)
     for path in args.tests:
-        _, test = load(path, args.test_colorspace, args, ref.shape)
+        test_img, test = load(path, args.test_colorspace, args, ref.shape)
+        se, source = (test_img.stderr, "test stderr channels") if test_img.stderr is not None else noise
         finite = np.isfinite(ref).all(axis=-1) & np.isfinite(test).all(axis=-1)
         for name, win in windows:
             x, y, w, h = win
-            res, flip_map = evaluate(ref_img, ref, test, finite & mask, win, args)
+            res, flip_map = evaluate(ref_img, ref, test, finite & mask, win, args, se, source)
             res = {"image": path, "window": name,
                    "nonfinite": int((~finite[y:y + h, x:x + w]).sum()), **res}
             rows.append(res)

@@ -64,8 +64,41 @@ def write_all(maps, out_dir):
     return written
 
 
+LEGEND = {
+    "MAE": "mean |test - reference| over valid pixels and RGB",
+    "MSE": "mean (test - reference)^2",
+    "RMSE": "square root of MSE",
+    "PSNR": "10 log10(peak^2 / MSE), peak from --psnr-peak (default 1)",
+    "relMSE": "mean (test - reference)^2 / (reference^2 + 0.01)",
+    "SSIM": "structural similarity (Wang et al. 2004), Gaussian sigma 1.5, on RGB clamped to [0, peak]",
+    "FLIP": "mean LDR-FLIP (Andersson et al. 2020), 0 = identical, 1 = most different",
+    "FLIP p50w": "error-weighted median of the LDR-FLIP map",
+    "FLIP p95w": "error-weighted 95th percentile of the LDR-FLIP map",
+    "HDR-FLIP": "mean HDR-FLIP (Andersson et al. 2021); n/a: the reason is given below the table",
+    "pixels": "valid pixels compared (finite in both images, inside --mask)",
+    "nonfinite": "pixels left out because either image is NaN or infinite there",
+    "SE source": "the standard errors >KSE divides by",
+}
+
+
+def _legend(cols):
+    items = []
+    for c in cols:
+        if c.startswith(">") and c.endswith("SE"):
+            text = (f"fraction of pixels where some channel differs by more than {c[1:-2]} standard errors of the "
+                    "difference: the reference's stderr.* channels, combined with the test's (its stderr.* "
+                    "channels or --test-noise) when known, never below --se-floor")
+        else:
+            text = LEGEND.get(c)
+        if text:
+            items.append(f"<li><b>{html.escape(c)}</b>: {html.escape(text)}</li>")
+    return "<ul>" + "".join(items) + "</ul>"
+
+
 def write_report(rows, pictures, out_dir, reference):
     cols = [k for k in dict.fromkeys(k for r in rows for k in r) if not k.endswith("note")]
+    notes = "".join(f"<p>HDR-FLIP n/a for {html.escape(r['image'])} [{html.escape(r['window'])}]: "
+                    f"{html.escape(r['HDR-FLIP note'])}</p>\n" for r in rows if r.get("HDR-FLIP note"))
     head = "".join(f"<th>{html.escape(c)}</th>" for c in cols)
     body = ""
     for r in rows:
@@ -82,7 +115,9 @@ td,th{{border:1px solid #999;padding:2px 6px;text-align:right}} img{{max-width:4
 </head><body><h1>Comparison against {html.escape(reference)}</h1>
 <table><tr>{head}</tr>
 {body}</table>
-<p>Metric definitions: see refrender's README (scripts section).</p>
+{notes}<h2>Columns</h2>
+{_legend(cols)}
+<p>Full definitions: refrender's README (Comparing images).</p>
 {figures}</body></html>
 """
     with open(os.path.join(out_dir, "index.html"), "w") as f:

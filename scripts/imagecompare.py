@@ -90,13 +90,33 @@ def read_image(path, colorspace="auto"):
     return Image(str(path), rgb, alpha, stderr, space, header)
 
 
+def scene_background(img):
+    """The background a refrender image's RGB already holds where its
+    coverage (alpha) is below 1 (header refrender:background), or None."""
+    text = img.header.get("refrender:background")
+    if text is None:
+        return None
+    try:
+        vals = [float(v) for v in str(text).split()]
+    except ValueError:
+        vals = []
+    if len(vals) != 3:
+        raise CompareError(f"{img.path}: refrender:background is not three numbers: '{text}'")
+    return np.asarray(vals)
+
+
 def composite(img, background):
-    """Alpha over a background color: straight alpha for files stored
+    """Alpha over a background color. refrender's RGB is the covered
+    surfaces plus its own background times (1 - coverage): that background
+    is swapped for the new one. Other files: straight alpha when stored
     unassociated (PNG), premultiplied otherwise (EXR)."""
     if img.alpha is None:
         return img.rgb
     a = img.alpha[..., None]
     bg = np.asarray(background, dtype=np.float64)
+    own = scene_background(img)
+    if own is not None:
+        return img.rgb + (bg - own) * (1 - a)
     return img.rgb * a + bg * (1 - a) if img.header.get("_unassociated") else img.rgb + bg * (1 - a)
 
 

@@ -163,7 +163,8 @@ int output_write_state(const char *path, const image *img, uint32_t begin, uint3
 
 static int read_attrs(const char *path, attr_list *a, rr_error *err)
 {
-    static const char *const keys[] = {"refrender:scene", "refrender:command", "software", NULL};
+    static const char *const keys[] = {"refrender:scene", "refrender:command", "software", "refrender:background",
+                                       "refrender:alpha", NULL};
     a->n = 0;
     for (const char *const *k = identity_keys; *k; k++) {
         char buf[4200];

@@ -37,6 +37,9 @@ void attrs_for_render(attr_list *a, const scene *s, const render_settings *rs, u
     attrs_set(a, "refrender:weightFunction", "%s", weight);
     attrs_set(a, "refrender:timeFactor", "%d", smp->time_factor);
     attrs_set(a, "refrender:timeIntegration", "%s", rs->exact_time ? "exact" : "sampled");
+    /* the convention compare.py --alpha composite relies on (README, Output) */
+    attrs_set(a, "refrender:background", "%.9g %.9g %.9g", s->background.x, s->background.y, s->background.z);
+    attrs_set(a, "refrender:alpha", "coverage; RGB already holds refrender:background where coverage < 1");
     attrs_set(a, "refrender:batches", "%u", total_batches);
     attrs_set(a, "refrender:command", "%s", command);
     attrs_set(a, "software", "refrender %s", RR_VERSION);

@@ -11,7 +11,7 @@ import pytest
 
 import flip
 from conftest import ROOT
-from imagecompare import basic_metrics
+from imagecompare import basic_metrics, composite, read_image
 
 COMPARE = ROOT / "scripts" / "compare.py"
 
@@ -136,6 +136,32 @@ def test_alpha_composite_and_exposure(tmp_path):
     assert bright["MSE"] == pytest.approx(4 * plain["MSE"], rel=1e-5)
 
 
+def test_composite_swaps_refrender_background_for_the_new_one(tmp_path):
+    """refrender's RGB already holds its background where coverage < 1:
+    compositing over white must give white where nothing is covered and
+    leave covered pixels alone (compositing the RGB again as premultiplied
+    made an uncovered pixel background + white, e.g. 1.2 over white)."""
+    scene = tmp_path / "s.xml"
+    scene.write_text("""<scene><camera position="0 0 5" lookat="0 0 0" width="16" height="16" fov="30"/>
+<background color="0.2 0.4 0.6"/><object><sphere radius="0.6" color="0.9 0.1 0.1"/>
+<material shading="unlit"/></object></scene>""")
+    out = tmp_path / "r.exr"
+    proc = subprocess.run([str(ROOT / "build" / "refrender"), str(scene), "-o", str(out), "--spp", "4", "--tspp", "1",
+                           "--quiet"], capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stderr
+    img = read_image(out)
+    assert img.header["refrender:background"] == "0.2 0.4 0.6"
+    over_white = composite(img, [1, 1, 1])
+    a = img.alpha
+    assert (a == 0).any() and (a == 1).any() and ((a > 0) & (a < 1)).any()
+    assert np.allclose(over_white[a == 0], 1.0, atol=1e-6)
+    assert np.allclose(over_white[a == 1], img.rgb[a == 1], atol=1e-6)
+    own = np.array([0.2, 0.4, 0.6])
+    edge = (a > 0) & (a < 1)
+    expected = img.rgb[edge] + (1 - own) * (1 - a[edge])[:, None]
+    assert np.allclose(over_white[edge], expected, atol=1e-6)
+
+
 def test_standard_error_channels_give_fraction_beyond_k_sigma(tmp_path):
     rgb = np.full((20, 20, 3), 0.5, np.float32)
     se = np.full((20, 20, 3), 0.01, np.float32)
@@ -145,6 +171,33 @@ def test_standard_error_channels_give_fraction_beyond_k_sigma(tmp_path):
     test_rgb[:, :10] += 0.05  # 5 standard errors off on the left half
     test = write_image(tmp_path / "test.exr", test_rgb)
     assert compare_json(ref, test)[0][">3SE"] == pytest.approx(0.5)
+
+
+def test_kse_counts_the_test_noise_and_floors_zero_errors(tmp_path):
+    """A test 3.5 reference standard errors off is flagged at k = 3 on the
+    reference's error alone, and not once the test's own equal error is
+    counted (3.5 / sqrt(2) = 2.47), from its stderr channels or from two
+    other seeds' difference; a reference with standard error exactly 0
+    flags float-rounding differences only without the floor."""
+    rgb = np.full((20, 20, 3), 0.5, np.float32)
+    se = np.full((20, 20, 3), 0.01, np.float32)
+    one = np.ones((20, 20, 1), np.float32)
+    names = ["R", "G", "B", "A", "stderr.R", "stderr.G", "stderr.B"]
+    ref = write_image(tmp_path / "ref.exr", np.concatenate([rgb, one, se], -1), names)
+    off = rgb + 0.035
+    plain = write_image(tmp_path / "plain.exr", off)
+    with_se = write_image(tmp_path / "with_se.exr", np.concatenate([off, one, se], -1), names)
+    seed_a = write_image(tmp_path / "a.exr", off + 0.005)
+    seed_b = write_image(tmp_path / "b.exr", off - 0.005)  # |a - b| / sqrt(2) = 0.00707
+    assert compare_json(ref, plain)[0][">3SE"] == 1.0
+    row = compare_json(ref, with_se)[0]
+    assert row[">3SE"] == 0.0 and "test stderr channels" in row["SE source"]
+    # 0.035 / sqrt(0.01^2 + 0.00707^2) = 2.86 < 3
+    assert compare_json(ref, plain, "--test-noise", f"{seed_a},{seed_b}")[0][">3SE"] == 0.0
+    zero = write_image(tmp_path / "zero.exr", np.concatenate([rgb, one, np.zeros_like(se)], -1), names)
+    rounding = write_image(tmp_path / "rounding.exr", rgb + np.float32(6e-8))
+    assert compare_json(zero, rounding)[0][">3SE"] == 0.0
+    assert compare_json(zero, rounding, "--se-floor", "0")[0][">3SE"] == 1.0
 
 
 def test_crops_and_outputs(tmp_path):
@@ -164,6 +217,7 @@ def test_crops_and_outputs(tmp_path):
     page = (tmp_path / "rep" / "index.html").read_text()
     for name in ["t1_full_flip.png", "t2_10_5_30_30_sheet.png"]:
         assert name in page and (tmp_path / "rep" / name).exists()
+    assert "<b>RMSE</b>" in page and "<b>FLIP</b>" in page  # every column has its legend
 
 
 def test_bad_inputs_give_clear_errors(tmp_path):
