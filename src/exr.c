@@ -31,6 +31,32 @@ static const exr_channel *find_channel(const exr_channel *chs, int n, const char
     return NULL;
 }
 
+/* A 4x4 matrix given as 16 numbers. */
+static exr_result_t set_matrix(exr_context_t ctx, int part, const exr_string_attr *a)
+{
+    exr_attr_m44f_t m;
+    const char *p = a->value;
+    for (int k = 0; k < 16; k++) {
+        char *end;
+        m.m[k] = strtof(p, &end);
+        if (end == p)
+            return EXR_ERR_INVALID_ARGUMENT;
+        p = end;
+    }
+    return exr_attr_set_m44f(ctx, part, a->key, &m);
+}
+
+static exr_result_t set_attr(exr_context_t ctx, int part, const exr_string_attr *a)
+{
+    switch (a->kind) {
+    case RR_ATTR_INT: return exr_attr_set_int(ctx, part, a->key, (int32_t)strtol(a->value, NULL, 10));
+    case RR_ATTR_DOUBLE: return exr_attr_set_double(ctx, part, a->key, strtod(a->value, NULL));
+    case RR_ATTR_M44F: return set_matrix(ctx, part, a);
+    case RR_ATTR_TEXT: break;
+    }
+    return exr_attr_set_string(ctx, part, a->key, a->value);
+}
+
 static exr_result_t write_header(exr_context_t ctx, int w, int h, const exr_channel *chs, int nch,
                                  const exr_string_attr *attrs, int nattrs)
 {
@@ -41,7 +67,7 @@ static exr_result_t write_header(exr_context_t ctx, int w, int h, const exr_chan
     for (int c = 0; c < nch && !rc; c++)
         rc = exr_add_channel(ctx, part, chs[c].name, pixel_type(chs[c].type), EXR_PERCEPTUALLY_LINEAR, 1, 1);
     for (int i = 0; i < nattrs && !rc; i++)
-        rc = exr_attr_set_string(ctx, part, attrs[i].key, attrs[i].value);
+        rc = set_attr(ctx, part, &attrs[i]);
     if (!rc)
         rc = exr_write_header(ctx);
     return rc;
@@ -333,11 +359,19 @@ int exr_read_string_attr(const char *path, const char *key, char *buf, size_t si
     exr_context_t ctx = open_for_read(path, &rc);
     if (rc)
         return exr_fail(err, path, "cannot read", rc);
-    int32_t len = 0;
-    const char *s = NULL;
-    rc = exr_attr_get_string(ctx, 0, key, &len, &s);
-    if (!rc)
-        snprintf(buf, size, "%.*s", (int)len, s);
+    const exr_attribute_t *a = NULL;
+    rc = exr_get_attribute_by_name(ctx, 0, key, &a);
+    int ok = !rc && a;
+    if (ok && a->type == EXR_ATTR_STRING)
+        snprintf(buf, size, "%.*s", (int)a->string->length, a->string->str);
+    else if (ok && a->type == EXR_ATTR_INT)
+        snprintf(buf, size, "%d", (int)a->i);
+    else if (ok && a->type == EXR_ATTR_DOUBLE)
+        snprintf(buf, size, "%.17g", a->d);
+    else if (ok && a->type == EXR_ATTR_FLOAT)
+        snprintf(buf, size, "%.9g", (double)a->f);
+    else
+        ok = 0;
     exr_finish(&ctx);
-    return rc ? rr_fail(err, "%s: no string attribute '%s'", path, key) : 0;
+    return ok ? 0 : rr_fail(err, "%s: no string or number attribute '%s'", path, key);
 }

@@ -6,8 +6,14 @@
 
 #include "common.h"
 
+/* How an attribute given as text is stored: as a string, or parsed into a
+ * numeric EXR attribute (int, double, or a 4x4 float matrix of 16 numbers,
+ * row-major as Imath's M44f, which multiplies row vectors: p' = p M). */
+typedef enum { RR_ATTR_TEXT, RR_ATTR_INT, RR_ATTR_DOUBLE, RR_ATTR_M44F } rr_attr_kind;
+
 typedef struct {
     const char *key, *value;
+    rr_attr_kind kind;
 } exr_string_attr;
 
 typedef enum { EXR_CHANNEL_FLOAT, EXR_CHANNEL_UINT } exr_channel_type;
@@ -47,7 +53,9 @@ int exr_read_channel(const char *path, const exr_channel *ch, int optional, int 
  * malloc'ed. */
 int exr_read_rgba(const char *path, int *w, int *h, float **rgba, rr_error *err);
 
-/* Reads a string attribute of part 0 into buf. */
+/* Reads an attribute of part 0 into buf as text: strings as they are, int
+ * attributes with %d, double with %.17g and float with %.9g (the same text
+ * they were written from). */
 int exr_read_string_attr(const char *path, const char *key, char *buf, size_t size, rr_error *err);
 
 #endif

@@ -14,7 +14,24 @@ static const char *const identity_keys[] = {
     "refrender:shutter", "refrender:weightFunction", "refrender:timeFactor", "refrender:batches",
     "refrender:timeIntegration", NULL};
 
-void attrs_set(attr_list *a, const char *key, const char *fmt, ...)
+/* The attributes stored as EXR numbers (README, Output). */
+static rr_attr_kind attr_kind(const char *key)
+{
+    static const char *const ints[] = {"refrender:spp", "refrender:tspp", "refrender:timeFactor",
+                                       "refrender:batches", "refrender:frame", NULL};
+    static const char *const doubles[] = {"refrender:epsilon", "refrender:kernelSigma", "refrender:targetError",
+                                          "refrender:renderSeconds", "refrender:rays", "refrender:frameRate",
+                                          "refrender:shutterOpen", "refrender:shutterClose", NULL};
+    for (const char *const *k = ints; *k; k++)
+        if (!strcmp(*k, key))
+            return RR_ATTR_INT;
+    for (const char *const *k = doubles; *k; k++)
+        if (!strcmp(*k, key))
+            return RR_ATTR_DOUBLE;
+    return !strcmp(key, "worldToCamera") || !strcmp(key, "worldToNDC") ? RR_ATTR_M44F : RR_ATTR_TEXT;
+}
+
+static void attrs_vset(attr_list *a, const char *key, const char *fmt, va_list ap)
 {
     int i = 0;
     while (i < a->n && strcmp(a->key[i], key))
@@ -27,9 +44,15 @@ void attrs_set(attr_list *a, const char *key, const char *fmt, ...)
         a->n++;
         snprintf(a->key[i], sizeof a->key[i], "%s", key);
     }
+    a->kind[i] = attr_kind(key);
+    vsnprintf(a->value[i], sizeof a->value[i], fmt, ap);
+}
+
+void attrs_set(attr_list *a, const char *key, const char *fmt, ...)
+{
     va_list ap;
     va_start(ap, fmt);
-    vsnprintf(a->value[i], sizeof a->value[i], fmt, ap);
+    attrs_vset(a, key, fmt, ap);
     va_end(ap);
 }
 
@@ -56,7 +79,7 @@ int attrs_check_identity(const attr_list *a, const char *a_name, const attr_list
 static exr_string_attr *string_attrs(const attr_list *a, exr_string_attr *out)
 {
     for (int i = 0; i < a->n; i++)
-        out[i] = (exr_string_attr){a->key[i], a->value[i]};
+        out[i] = (exr_string_attr){a->key[i], a->value[i], a->kind[i]};
     return out;
 }
 

@@ -13,16 +13,25 @@
 #define RR_OUTPUT_H
 
 #include "common.h"
+#include "exr.h"
 #include "film.h"
 
-#define ATTR_MAX 32
+#define ATTR_MAX 48
 
+/* A render's EXR attributes, each held as text (identity checks compare
+ * text) and written as its kind (exr.h): the counts, distances, times and
+ * camera matrices as EXR numbers, the rest as strings (attrs_set knows
+ * which is which). */
 typedef struct {
     int n;
     char key[ATTR_MAX][64];
     char value[ATTR_MAX][4200];
+    rr_attr_kind kind[ATTR_MAX];
 } attr_list;
 
+/* Sets an attribute from printf-style text; a numeric attribute's text
+ * must parse as its number ("%d" for ints, "%.17g" for doubles, 16
+ * numbers for matrices). */
 void attrs_set(attr_list *a, const char *key, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
 const char *attrs_get(const attr_list *a, const char *key);
 

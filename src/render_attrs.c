@@ -17,6 +17,46 @@ static void describe_weight(const shutter *sh, char *buf, size_t size)
         snprintf(buf, size, "box");
 }
 
+/* Writes the column-vector matrix m (p' = m p) as OpenEXR stores it: for
+ * Imath's row vectors (p' = p M), i.e. transposed, row after row. */
+static void set_matrix(attr_list *a, const char *key, double m[4][4])
+{
+    char buf[512];
+    size_t len = 0;
+    for (int r = 0; r < 4; r++)
+        for (int c = 0; c < 4; c++)
+            len += (size_t)snprintf(buf + len, sizeof buf - len, "%s%.9g", len ? " " : "", m[c][r]);
+    attrs_set(a, key, "%s", buf);
+}
+
+/* The rest-pose camera (no camera motion) as pbrt-v4 and OpenEXR's
+ * standard attributes name it. Camera space: x right, y up, z forward (the
+ * view direction; left-handed, as pbrt's). NDC: x = raster x / width,
+ * y = raster y / height (0, 0 the top-left image corner, as refrender's
+ * raster), z = 1 / depth, after dividing by w = depth. */
+static void camera_matrices(attr_list *a, const camera *cam)
+{
+    vec3 axes[3] = {cam->right, cam->image_up, cam->forward};
+    double view[4][4] = {{0}}, proj[4][4] = {{0}}, ndc[4][4];
+    for (int r = 0; r < 3; r++) {
+        double *row = view[r];
+        row[0] = axes[r].x, row[1] = axes[r].y, row[2] = axes[r].z;
+        row[3] = -v3_dot(axes[r], cam->position);
+    }
+    view[3][3] = 1;
+    double aspect = (double)cam->width / cam->height, t = cam->tan_half_fov;
+    proj[0][0] = 0.5 / (t * aspect), proj[0][2] = 0.5;
+    proj[1][1] = -0.5 / t, proj[1][2] = 0.5;
+    proj[2][3] = 1;
+    proj[3][2] = 1;
+    for (int r = 0; r < 4; r++)
+        for (int c = 0; c < 4; c++)
+            ndc[r][c] = proj[r][0] * view[0][c] + proj[r][1] * view[1][c] + proj[r][2] * view[2][c] +
+                        proj[r][3] * view[3][c];
+    set_matrix(a, "worldToCamera", view);
+    set_matrix(a, "worldToNDC", ndc);
+}
+
 void attrs_for_render(attr_list *a, const scene *s, const render_settings *rs, uint32_t total_batches,
                       const char *command)
 {
@@ -34,6 +74,9 @@ void attrs_for_render(attr_list *a, const scene *s, const render_settings *rs, u
     attrs_set(a, "refrender:epsilon", "%.17g", s->epsilon);
     attrs_set(a, "refrender:kernelSigma", "%.17g", s->kernel_sigma);
     attrs_set(a, "refrender:shutter", "%.17g %.17g", rs->shut.open, rs->shut.close);
+    attrs_set(a, "refrender:shutterOpen", "%.17g", rs->shut.open);
+    attrs_set(a, "refrender:shutterClose", "%.17g", rs->shut.close);
+    camera_matrices(a, &s->cam);
     attrs_set(a, "refrender:weightFunction", "%s", weight);
     attrs_set(a, "refrender:timeFactor", "%d", smp->time_factor);
     attrs_set(a, "refrender:timeIntegration", "%s", rs->exact_time ? "exact" : "sampled");

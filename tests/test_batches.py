@@ -46,7 +46,7 @@ def test_reported_variance_matches_the_spread_over_seeds(tmp_path):
     assert 0.8 < ratio < 1.25, ratio
     ch, header = render_disk(tmp_path, "one.exr", "--batches", 3)
     assert np.allclose(ch["stderr.G"] ** 2, ch["variance.G"], rtol=1e-5)
-    assert np.all(ch["samples"] == 3 * 4 * 100) and header["refrender:batches"] == "3"
+    assert np.all(ch["samples"] == 3 * 4 * 100) and header["refrender:batches"] == 3
 
 
 def test_single_batch_has_no_error_channels(tmp_path):

@@ -34,7 +34,7 @@ def test_exact_is_the_same_for_any_thread_count_and_pass_split(tmp_path):
     two, _ = render_to(tmp_path, "t2.exr", *EXACT, "--threads", 2)
     for c in "RGBA":
         assert np.array_equal(one[c], two[c])
-    assert h1["refrender:timeIntegration"] == "exact" and h1["refrender:tspp"] == "1"
+    assert h1["refrender:timeIntegration"] == "exact" and h1["refrender:tspp"] == 1
     render_to(tmp_path, "p0.exr", *EXACT, "--pass", "0/2")
     render_to(tmp_path, "p1.exr", *EXACT, "--pass", "1/2")
     assert run(["merge", tmp_path / "p0.exr", tmp_path / "p1.exr", "-o", tmp_path / "m.exr"]).returncode == 0

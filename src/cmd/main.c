@@ -428,8 +428,8 @@ static void warn_about_settings(const render_options *o, const render_settings *
 }
 
 /* Renders one shutter interval (a frame) into output (and preview). */
-static int render_one(const scene *s, const shutter *shut, accel *acc, const render_options *o, const char *cmdline,
-                      const char *output, const char *preview, rr_error *err)
+static int render_one(const scene *s, const shutter *shut, long long frame, accel *acc, const render_options *o,
+                      const char *cmdline, const char *output, const char *preview, rr_error *err)
 {
     render_run run;
     setup_run(&run, s, shut, o, cmdline);
@@ -448,8 +448,10 @@ static int render_one(const scene *s, const shutter *shut, accel *acc, const ren
             report_target(o, &img, &run.attrs);
         attrs_set(&run.attrs, "refrender:renderSeconds", "%.3f", img.seconds);
         attrs_set(&run.attrs, "refrender:rays", "%llu", (unsigned long long)img.rays);
-        if (o->frames)
+        if (o->frames) {
             attrs_set(&run.attrs, "refrender:frameRate", "%.17g", s->frame_rate);
+            attrs_set(&run.attrs, "refrender:frame", "%lld", frame);
+        }
         rc = o->passes ? output_write_state(output, &img, run.rs.batch_begin,
                                             run.rs.batch_begin + run.rs.batches, &run.attrs, err)
                        : output_write_final(output, &img, sampler_count(&run.rs.smp), &run.attrs, err);
@@ -535,7 +537,7 @@ static int render_and_write(const scene *s, const render_options *o, const char 
         const char *preview = frame_names(o, f, out, prev, sizeof out);
         if (o->frames == 2 && !o->quiet)
             fprintf(stderr, "refrender: frame %lld: shutter [%g, %g] -> %s\n", f, shut.open, shut.close, out);
-        rc = render_one(s, &shut, acc, o, cmdline, out, preview, err);
+        rc = render_one(s, &shut, f, acc, o, cmdline, out, preview, err);
     }
     accel_free(acc);
     return rc;

@@ -1,0 +1,55 @@
+"""EXR header (issue 15): numbers are stored as EXR numbers, the rest-pose
+camera as OpenEXR m44f worldToCamera / worldToNDC (row vectors, Imath's
+convention), and a frame render names its frame and shutter. The matrices
+are checked by projecting a small disc's center and finding it where the
+render puts it (the centroid of its coverage), to a tenth of a pixel."""
+import numpy as np
+
+from conftest import run, read_full
+
+DISC = """<scene><camera position="0.3 0.2 4" lookat="0 0 0" up="0.1 1 0" fov="40" width="{w}" height="{h}"/>
+<frames rate="24"/>
+<object position="{x} {y} {z}"><pointModel><splat center="0 0 0" normal="{nx} {ny} {nz}" radius="0.03"/>
+</pointModel><material shading="unlit"/></object></scene>"""
+
+
+def matrix(header, key):
+    m = np.asarray(header[key], dtype=np.float64)
+    assert m.shape == (16,), (key, header[key])
+    return m.reshape(4, 4)
+
+
+def test_numbers_are_numbers_and_frames_name_themselves(tmp_path):
+    scene = tmp_path / "s.xml"
+    scene.write_text(DISC.format(w=16, h=12, x=0, y=0, z=0, nx=0, ny=0, nz=1))
+    out = tmp_path / "f.exr"
+    assert run([scene, "-o", out, "--frame", 3, "--spp", 1, "--tspp", 2, "--quiet"]).returncode == 0
+    _, h = read_full(out)
+    assert h["refrender:spp"] == 1 and h["refrender:tspp"] == 2 and h["refrender:batches"] == 1
+    assert isinstance(h["refrender:epsilon"], float) and h["refrender:frame"] == 3
+    # the default shutter [0, 1] shifted by frame / rate
+    assert h["refrender:shutterOpen"] == 3 / 24 and h["refrender:shutterClose"] == 1 + 3 / 24
+    assert h["refrender:frameRate"] == 24.0
+
+
+def test_world_to_ndc_projects_onto_the_rendered_position(tmp_path):
+    width, height = 96, 64
+    for k, (x, y, z) in enumerate([(0.8, 0.5, 0.3), (-1.1, -0.4, -0.5), (0.0, 0.9, 1.0)]):
+        scene = tmp_path / f"d{k}.xml"
+        to_eye = np.array([0.3, 0.2, 4.0]) - np.array([x, y, z])
+        n = to_eye / np.linalg.norm(to_eye)  # face the camera: a round image
+        scene.write_text(DISC.format(w=width, h=height, x=x, y=y, z=z, nx=n[0], ny=n[1], nz=n[2]))
+        out = tmp_path / f"d{k}.exr"
+        assert run([scene, "-o", out, "--sampler", "sobol", "--spp", 64, "--tspp", 1, "--quiet"]).returncode == 0
+        ch, h = read_full(out)
+        ndc = np.array([x, y, z, 1.0]) @ matrix(h, "worldToNDC")
+        px, py = ndc[0] / ndc[3] * width, ndc[1] / ndc[3] * height
+        a = ch["A"].astype(np.float64)
+        rows, cols = np.indices(a.shape)
+        cx, cy = (a * (cols + 0.5)).sum() / a.sum(), (a * (rows + 0.5)).sum() / a.sum()
+        assert abs(px - cx) < 0.1 and abs(py - cy) < 0.1, (px, py, cx, cy)
+        cam = np.array([x, y, z, 1.0]) @ matrix(h, "worldToCamera")
+        forward = -np.array([0.3, 0.2, 4.0]) / np.linalg.norm([0.3, 0.2, 4.0])
+        assert np.isclose(cam[2], np.dot(np.array([x, y, z]) -
+                          np.array([0.3, 0.2, 4.0]), forward), rtol=1e-5)  # z: depth along the view
+        assert np.isclose(1.0 / (ndc[2] / ndc[3]), cam[2], rtol=1e-5)  # z: 1 / depth
