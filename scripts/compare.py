@@ -2,11 +2,16 @@
 """Compare images against a refrender ground truth.
 
 usage: compare.py REFERENCE TEST [TEST ...] [options]
+       compare.py 'gt.%04d.exr' 'method.%04d.exr' [...] --frames 0-23 [options]
+       compare.py GT_DIR METHOD_DIR [...] [options]
 
 Reads any format OpenImageIO reads, converts to linear RGB, and reports MAE,
 MSE, RMSE, PSNR, relMSE, SSIM, LDR-FLIP and HDR-FLIP for the whole image and
-for each --crop. Formulas and references: scripts/imagecompare.py, flip.py and
-README.md. Exit status: 0 success, 2 bad input (message names the file).
+for each --crop. Sequences (printf-style patterns or directories) are paired
+by frame number and reported per frame, then as the mean and the worst frame
+(by RMSE) of each test. Formulas and references: scripts/imagecompare.py,
+flip.py and README.md. Exit status: 0 success, 2 bad input (message names the
+file).
 """
 import argparse
 import csv
@@ -19,6 +24,7 @@ import sys
 import numpy as np
 
 import flip
+import sequences
 from imagecompare import (CompareError, basic_metrics, composite, read_image, ssim_map,
                           stderr_fraction)
 
@@ -43,7 +49,16 @@ def parse_args(argv):
     p.add_argument("--crop", action="append", default=[], metavar="X,Y,W,H",
                    help="also report this pixel window (may be repeated)")
     p.add_argument("--mask", help="image whose first channel > 0.5 marks the pixels to evaluate")
-    p.add_argument("--psnr-peak", type=float, default=1.0, help="peak value for PSNR and SSIM (default 1)")
+    p.add_argument("--psnr-peak", type=float, default=1.0, help="peak value for PSNR only (default 1)")
+    p.add_argument("--ssim-peak", type=float, default=1.0,
+                   help="SSIM's data range: values are clamped to [0, peak] (default 1)")
+    p.add_argument("--metrics-space", choices=["linear", "srgb"], default="linear",
+                   help="compute MAE, MSE, RMSE, PSNR, relMSE and SSIM on linear values (default) or on "
+                        "sRGB-encoded ones clamped to [0, 1], as most papers report; FLIP always takes linear")
+    p.add_argument("--label", action="append", default=[], metavar="NAME",
+                   help="a name for each TEST, in order, used in every table, picture and file name "
+                        "(default: the file name, or the path when two share one)")
+    p.add_argument("--frames", metavar="A-B", help="frames of a pattern sequence (with a directory: a selection)")
     p.add_argument("--ppd", type=float, default=flip.DEFAULT_PPD, help="FLIP pixels per degree (67.02)")
     p.add_argument("--hdr-exposures", metavar="START,STOP",
                    help="HDR-FLIP exposure range in stops (default: from the reference's luminance)")
@@ -106,8 +121,9 @@ def evaluate(ref_img, ref, test, valid, window, args, test_se=None, test_se_sour
         raise CompareError("no valid pixels to compare (mask empty, or all pixels NaN/Inf)")
     r0, t0 = np.where(np.isfinite(r), r, 0.0), np.where(np.isfinite(t), t, 0.0)
     v3 = np.repeat(v[..., None], 3, axis=-1)
-    res = basic_metrics(r0, t0, v3, args.psnr_peak)
-    res["SSIM"] = float(ssim_map(r0, t0, args.psnr_peak)[v].mean())
+    rm, tm = (flip.linear_to_srgb(r0), flip.linear_to_srgb(t0)) if args.metrics_space == "srgb" else (r0, t0)
+    res = basic_metrics(rm, tm, v3, args.psnr_peak)
+    res["SSIM"] = float(ssim_map(rm, tm, args.ssim_peak)[v].mean())
     flip_map = flip.ldr_flip(r0, t0, args.ppd)
     res["FLIP"] = float(flip_map[v].mean())
     res["FLIP p50w"] = flip.weighted_percentile(flip_map[v], 50)
@@ -138,11 +154,14 @@ def format_value(v):
 
 def print_table(rows, out=sys.stdout):
     extra = sorted({k for r in rows for k in r if k.startswith(">")})
-    cols = ["image", "window", "pixels", "nonfinite"] + COLUMNS + extra
+    frame = ["frame"] if any("frame" in r for r in rows) else []
+    cols = ["image"] + frame + ["window", "pixels", "nonfinite"] + COLUMNS + extra
     cells = [cols] + [[format_value(r.get(c)) for c in cols] for r in rows]
     widths = [max(len(row[i]) for row in cells) for i in range(len(cols))]
     for row in cells:
-        print("  ".join(c.rjust(w) if i > 1 else c.ljust(w) for i, (c, w) in enumerate(zip(row, widths))), file=out)
+        left = 2 + len(frame)  # name columns left-aligned, numbers right-aligned
+        print("  ".join(c.rjust(w) if i >= left else c.ljust(w) for i, (c, w) in enumerate(zip(row, widths))),
+              file=out)
     for r in rows:
         if r.get("HDR-FLIP note"):
             print(f"note: {r['image']} [{r['window']}]: HDR-FLIP n/a: {r['HDR-FLIP note']}", file=out)
@@ -180,8 +199,26 @@ def test_noise(args, shape):
     return np.abs(a - b) / math.sqrt(2.0), "--test-noise"
 
 
-def compare(args):
-    ref_img, ref = load(args.reference, args.ref_colorspace, args)
+def labels_of(args, tests):
+    """One unique label per test input (--label, else the file name, else
+    the path): pictures and rows are named by it, so none overwrite another."""
+    if args.label and len(args.label) != len(tests):
+        raise CompareError(f"--label given {len(args.label)} times for {len(tests)} test inputs")
+    if args.label:
+        labels = list(args.label)
+    else:
+        stems = [os.path.basename(t.rstrip("/")) for t in tests]
+        labels = stems if len(set(stems)) == len(stems) else list(tests)
+    if len(set(labels)) != len(labels):
+        raise CompareError("two test inputs have the same label: give --label for each")
+    return labels
+
+
+def compare_images(args, reference, tests, labels, frame=None):
+    """Rows (one per test and window) and picture inputs for one reference."""
+    ref_img, ref = load(reference, args.ref_colorspace, args)
+    if frame is not None:
+        sequences.check_frame(reference, ref_img.header, frame)
     height, width = ref.shape[:2]
     windows = [("full", (0, 0, width, height))] + [(c, parse_crop(c, width, height)) for c in args.crop]
     mask = np.ones((height, width), bool)
@@ -191,18 +228,54 @@ def compare(args):
         mask = m[..., 0] > 0.5
     rows, maps = [], []
     noise = test_noise(args, ref.shape)
-    for path in args.tests:
+    for path, label in zip(tests, labels):
         test_img, test = load(path, args.test_colorspace, args, ref.shape)
+        if frame is not None:
+            sequences.check_frame(path, test_img.header, frame)
         se, source = (test_img.stderr, "test stderr channels") if test_img.stderr is not None else noise
         finite = np.isfinite(ref).all(axis=-1) & np.isfinite(test).all(axis=-1)
         for name, win in windows:
             x, y, w, h = win
             res, flip_map = evaluate(ref_img, ref, test, finite & mask, win, args, se, source)
-            res = {"image": path, "window": name,
-                   "nonfinite": int((~finite[y:y + h, x:x + w]).sum()), **res}
+            head = {"image": label, "window": name} if frame is None else {"image": label, "frame": frame,
+                                                                           "window": name}
+            res = {**head, "nonfinite": int((~finite[y:y + h, x:x + w]).sum()), **res}
             rows.append(res)
-            maps.append((path, name, win, ref, test, flip_map))
+            picture = label if frame is None else f"{label}_f{frame}"
+            maps.append((picture, name, win, ref, test, flip_map))
     return rows, maps
+
+
+def summarize(rows, labels):
+    """Per test and window: the mean over frames and the worst frame (largest RMSE)."""
+    out = []
+    for label in labels:
+        for window in dict.fromkeys(r["window"] for r in rows):
+            mine = [r for r in rows if r["image"] == label and r["window"] == window]
+            mean = {"image": label, "frame": "mean", "window": window}
+            for k in mine[0]:
+                vals = [r.get(k) for r in mine]
+                if k not in mean and all(isinstance(v, (int, float)) and v is not None for v in vals):
+                    mean[k] = float(np.mean(vals))
+            worst = dict(max(mine, key=lambda r: r["RMSE"]))
+            worst["frame"] = f"worst ({worst['frame']})"
+            out += [mean, worst]
+    return out
+
+
+def compare(args):
+    labels = labels_of(args, args.tests)
+    if not sequences.is_sequence(args.reference):
+        if args.frames:
+            raise CompareError("--frames needs a sequence: a pattern such as 'gt.%04d.exr' or a directory")
+        return compare_images(args, args.reference, args.tests, labels)
+    frames = sequences.parse_frames(args.frames) if args.frames else None
+    rows, maps = [], []
+    for frame, ref, tests in sequences.pairs(args.reference, args.tests, frames):
+        r, m = compare_images(args, ref, tests, labels, frame)
+        rows += r
+        maps += m
+    return rows + summarize(rows, labels), maps
 
 
 def main(argv=None):

@@ -13,9 +13,11 @@ import numpy as np
 import flip
 
 
-def _name(path, window):
-    stem = os.path.splitext(os.path.basename(path))[0]
-    return re.sub(r"[^A-Za-z0-9_.-]+", "_", f"{stem}_{window}")
+def _name(label, window):
+    """A file name from the test's label (unique among the inputs) and the
+    window: the label's extension, if any, is dropped."""
+    stem = re.sub(r"\.(exr|png|tiff?|jpe?g|hdr)$", "", label, flags=re.IGNORECASE)
+    return re.sub(r"[^A-Za-z0-9_.-]+", "_", f"{stem}_{window}").strip("_")
 
 
 def _save_map(values, cmap, vmin, vmax, title, label, path):
@@ -44,8 +46,8 @@ def _contact_sheet(ref, test, flip_map, title, path):
 
 
 def write_all(maps, out_dir):
-    """maps: (test path, window name, (x, y, w, h), ref, test, flip map of the
-    window). Returns one dict of written file names per entry."""
+    """maps: (test label, window name, (x, y, w, h), ref, test, flip map of
+    the window). Returns one dict of written file names per entry."""
     os.makedirs(out_dir, exist_ok=True)
     written = []
     for path, window, (x, y, w, h), ref, test, flip_map in maps:
@@ -53,7 +55,7 @@ def write_all(maps, out_dir):
         r, t = np.where(np.isfinite(r), r, 0), np.where(np.isfinite(t), t, 0)
         base = _name(path, window)
         files = {"flip": f"{base}_flip.png", "diff": f"{base}_diff.png", "sheet": f"{base}_sheet.png"}
-        title = f"{os.path.basename(path)} [{window}]"
+        title = f"{path} [{window}]"
         _save_map(flip_map, "magma", 0.0, 1.0, f"LDR-FLIP, {title}", "FLIP", os.path.join(out_dir, files["flip"]))
         diff = (t - r).mean(axis=-1)
         lim = float(np.max(np.abs(diff))) or 1.0
