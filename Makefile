@@ -30,14 +30,15 @@ LDLIBS   := -lassimp -lembree3 -lOpenEXRCore -lxml2 -lOpenImageIO -lOpenImageIO_
 LIB_SRCS := common inputfile atomicfile kbuffer splat pointmodel ply shapes surfelize meshload curve animation animfile camera shutter sampler scene \
             scene_xml scene_xml_util scene_xml_anim accel accel_build accel_collide exact exact_integrate shade film render exr output render_attrs cli
 LIB_OBJS := $(LIB_SRCS:%=$(BUILD)/%.o) $(BUILD)/preview.o
-APP_OBJS := $(BUILD)/cmd/main.o $(BUILD)/cmd/gen_cmd.o $(BUILD)/cmd/merge_cmd.o $(BUILD)/cmd/surfels_cmd.o
+APP_OBJS := $(BUILD)/cmd/main.o $(BUILD)/cmd/gen_cmd.o $(BUILD)/cmd/merge_cmd.o $(BUILD)/cmd/surfels_cmd.o \
+            $(BUILD)/cmd/export_cmd.o
 TEST_SRCS := $(wildcard tests/test_*.c)
 TEST_OBJS := $(TEST_SRCS:tests/%.c=$(BUILD)/tests/%.o) $(BUILD)/tests/harness.o
 
 BIN      := $(BUILD)/refrender
 TESTBIN  := $(BUILD)/unit_tests
 
-.PHONY: all deps demo test test-c test-py test-fuzz fuzz bench clean clean-models scenes references gallery
+.PHONY: all deps demo test test-c test-py test-fuzz fuzz bench bench-time clean clean-models scenes references gallery
 all: $(BIN) $(BUILD)/refrender-bench
 
 # An object without its .d file (built before dependency tracking, or the
@@ -142,6 +143,13 @@ fuzz: $(FUZZ_TARGETS:%=$(FUZZ_DIR)/fuzz_%)
 bench: $(BUILD)/refrender-bench
 	mkdir -p out
 	$(BUILD)/refrender-bench out/bench.csv $(BENCH_ARGS)
+	@if [ "$(BENCH_ARGS)" != quick ]; then $(MAKE) --no-print-directory bench-time; fi
+
+# Time to equal error, --time-integration exact against sampled time (README,
+# Exact time integration); part of `make bench` except in quick mode.
+TTE_SCENES ?= default,diagonal,rotation,towards_camera,crossing,camera_pan,large
+bench-time: $(BIN) scenes
+	$(PYTHON) scripts/time_to_error.py --scenes $(TTE_SCENES) --out out/time_to_error
 
 # The scene suite (scenes/*.xml; README "Scene suite"). Scanned models come
 # from Debian packages and are converted into scenes/models/ (not committed).

@@ -8,6 +8,7 @@
 #include "animation.h"
 #include "camera.h"
 #include "pointmodel.h"
+#include "shapes.h"
 #include "shutter.h"
 
 typedef enum { SHADING_PHONG, SHADING_UNLIT } shading_kind;
@@ -32,6 +33,11 @@ typedef struct {
     object_kind kind;
     char name[64];
     pointmodel model;  /* OBJECT_POINTS */
+    /* where the splats came from, for 'refrender export' (any of the three) */
+    char model_file[8192];   /* the PLY read, resolved; "" if none */
+    int generated;           /* 1: splats from the generator with these parameters */
+    shape_params generator;
+    size_t inline_splats;    /* <splat> children */
     vec3 sphere_center;/* OBJECT_SPHERE, object space */
     double sphere_radius;
     vec3 sphere_color;

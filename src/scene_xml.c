@@ -230,8 +230,9 @@ static int point_model_path(xmlNodePtr n, char *buf, size_t size)
     return xml_attr_text(n, "file", buf, size) || xml_element_text(n, buf, size);
 }
 
-static int generate_shape(xml_ctx *c, xmlNodePtr n, const char *kind, pointmodel *m)
+static int generate_shape(xml_ctx *c, xmlNodePtr n, const char *kind, scene_object *o)
 {
+    pointmodel *m = &o->model;
     shape_params p;
     shape_params_default(&p);
     snprintf(p.kind, sizeof p.kind, "%s", kind);
@@ -245,6 +246,8 @@ static int generate_shape(xml_ctx *c, xmlNodePtr n, const char *kind, pointmodel
     if (count < 1 || count > SCENE_MAX_GENERATED || count != floor(count))
         return xml_fail(c, n, "attribute 'count' must be an integer in [1, %g]", (double)SCENE_MAX_GENERATED);
     p.count = (size_t)count;
+    o->generated = 1;
+    o->generator = p;
     surfel *s;
     size_t ns;
     rr_error sub;
@@ -276,8 +279,9 @@ static int parse_point_model(xml_ctx *c, xmlNodePtr n, scene_object *o)
             return rr_fail(c->err, "%s (point model of %s:%ld)", sub.msg, c->name, xmlGetLineNo(n));
         if (scene_add_input(c->sc, path))
             return xml_fail(c, n, "out of memory");
+        snprintf(o->model_file, sizeof o->model_file, "%s", path);
     }
-    if (xml_attr_text(n, "generate", kind, sizeof kind) && generate_shape(c, n, kind, &o->model))
+    if (xml_attr_text(n, "generate", kind, sizeof kind) && generate_shape(c, n, kind, o))
         return -1;
     for (xmlNodePtr k = n->children; k; k = k->next) {
         if (!xml_is_element(k))
@@ -286,6 +290,7 @@ static int parse_point_model(xml_ctx *c, xmlNodePtr n, scene_object *o)
             return xml_fail(c, k, "unknown element inside <pointModel> (expected splat)");
         if (parse_splat(c, k, &o->model, default_color))
             return -1;
+        o->inline_splats++;
     }
     if (o->model.count == 0)
         return xml_fail(c, n, "point model has no splats: give a PLY path, 'generate', or "

@@ -9,7 +9,7 @@ from conftest import run, read_full
 
 DISC = """<scene><camera position="0.3 0.2 4" lookat="0 0 0" up="0.1 1 0" fov="40" width="{w}" height="{h}"/>
 <frames rate="24"/>
-<object position="{x} {y} {z}"><pointModel><splat center="0 0 0" normal="{nx} {ny} {nz}" radius="0.03"/>
+<object position="{x} {y} {z}"><pointModel><splat center="0 0 0" normal="{nx} {ny} {nz}" radius="0.06"/>
 </pointModel><material shading="unlit"/></object></scene>"""
 
 

@@ -28,6 +28,7 @@ static void usage(FILE *f)
 "       refrender merge STATE.exr [STATE.exr ...] -o OUT.exr   (see 'refrender merge --help')\n"
 "       refrender gen SHAPE [options] -o FILE.ply              (see 'refrender gen --help')\n"
 "       refrender surfels MESH|CLOUD [options] -o FILE.ply     (see 'refrender surfels --help')\n"
+"       refrender export SCENE.xml [options] -o SCENE.json     (see 'refrender export --help')\n"
 "\n"
 "Renders a ground-truth motion-blurred image of a point-based scene by Monte\n"
 "Carlo ray tracing (Wolf 2008, sec. 4.5) and writes a 32-bit float EXR.\n"
@@ -591,6 +592,8 @@ int cmd_render(int argc, char **argv)
 
 int main(int argc, char **argv)
 {
+    if (argc > 1 && !strcmp(argv[1], "export"))
+        return cmd_export(argc - 1, argv + 1);
     if (argc > 1 && !strcmp(argv[1], "gen"))
         return cmd_gen(argc - 1, argv + 1);
     if (argc > 1 && !strcmp(argv[1], "merge"))

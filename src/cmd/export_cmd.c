@@ -1,0 +1,378 @@
+/* 'refrender export': everything another renderer needs to render what
+ * refrender renders, as JSON, with no refrender code: camera intrinsics and
+ * matrices, each object's model source and object-to-world matrices at
+ * sample times of each frame's shutter, a(t), lights, materials. The
+ * conventions are written into the file and README (Exporting scenes). */
+#include <getopt.h>
+#include <limits.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "atomicfile.h"
+#include "cli.h"
+#include "commands.h"
+#include "scene_xml.h"
+
+static void export_usage(FILE *f)
+{
+    fputs(
+"usage: refrender export SCENE.xml [--frame N | --frames A-B] [--times K] -o SCENE.json\n"
+"\n"
+"Writes the scene as another renderer needs it (README, Exporting scenes):\n"
+"resolution, camera intrinsics, and per frame the world-to-camera matrix,\n"
+"camera-to-raster matrix and each object's object-to-world matrix at the\n"
+"shutter's open and close times and K times between; each object's model\n"
+"source (PLY file, generator parameters, inline splat count), material,\n"
+"the temporal weight a(t) as parameters and sampled, lights, background.\n"
+"  --frame N       frame N of a scene with <frames rate> (default: the\n"
+"                  scene's shutter as given)\n"
+"  --frames A-B    frames A to B\n"
+"  --times K       sample times per shutter besides open and close (default 8)\n"
+"  -o, --output F  output JSON file (required); written atomically\n", f);
+}
+
+typedef struct {
+    const char *scene, *output;
+    int frames, first, last, times;
+} export_options;
+
+static void json_string(FILE *f, const char *s)
+{
+    fputc('"', f);
+    for (; *s; s++) {
+        unsigned char c = (unsigned char)*s;
+        if (c == '"' || c == '\\')
+            fprintf(f, "\\%c", c);
+        else if (c < 0x20)
+            fprintf(f, "\\u%04x", c);
+        else
+            fputc(c, f);
+    }
+    fputc('"', f);
+}
+
+static void json_vec3(FILE *f, vec3 v) { fprintf(f, "[%.17g, %.17g, %.17g]", v.x, v.y, v.z); }
+
+/* Row-major nested lists for column vectors: p' = M p. */
+static void json_matrix(FILE *f, double m[4][4])
+{
+    fputc('[', f);
+    for (int r = 0; r < 4; r++)
+        fprintf(f, "%s[%.17g, %.17g, %.17g, %.17g]", r ? ", " : "", m[r][0], m[r][1], m[r][2], m[r][3]);
+    fputc(']', f);
+}
+
+static void xform_matrix(const xform *x, double m[4][4])
+{
+    double t[3] = {x->t.x, x->t.y, x->t.z};
+    memset(m, 0, 16 * sizeof m[0][0]);
+    for (int r = 0; r < 3; r++) {
+        for (int c = 0; c < 3; c++)
+            m[r][c] = x->r[r][c];
+        m[r][3] = t[r];
+    }
+    m[3][3] = 1;
+}
+
+static void matmul(double a[4][4], double b[4][4], double out[4][4])
+{
+    for (int r = 0; r < 4; r++)
+        for (int c = 0; c < 4; c++)
+            out[r][c] = a[r][0] * b[0][c] + a[r][1] * b[1][c] + a[r][2] * b[2][c] + a[r][3] * b[3][c];
+}
+
+/* World to camera space at time t: the inverse of (camera motion at t) after
+ * the rest pose, whose axes are right, up and forward. */
+static void world_to_camera(const scene *s, double t, double out[4][4])
+{
+    const camera *c = &s->cam;
+    vec3 axes[3] = {c->right, c->image_up, c->forward};
+    double rest_inv[4][4] = {{0}}, motion_inv[4][4] = {{0}};
+    for (int r = 0; r < 3; r++) {
+        rest_inv[r][0] = axes[r].x, rest_inv[r][1] = axes[r].y, rest_inv[r][2] = axes[r].z;
+        rest_inv[r][3] = -v3_dot(axes[r], c->position);
+    }
+    rest_inv[3][3] = 1;
+    xform m = animation_at(&s->camera_motion, t);
+    vec3 back = xform_inverse_point(&m, v3(0, 0, 0));
+    double b[3] = {back.x, back.y, back.z};
+    for (int r = 0; r < 3; r++) {
+        for (int k = 0; k < 3; k++)
+            motion_inv[r][k] = m.ri[r][k];
+        motion_inv[r][3] = b[r];
+    }
+    motion_inv[3][3] = 1;
+    matmul(rest_inv, motion_inv, out);
+}
+
+/* Camera space to raster: (X / W, Y / W) is the raster position, Z / W = 1 / depth. */
+static void camera_to_raster(const camera *c, double m[4][4])
+{
+    double t = c->tan_half_fov, aspect = (double)c->width / c->height;
+    memset(m, 0, 16 * sizeof m[0][0]);
+    m[0][0] = c->width / (2 * t * aspect), m[0][2] = c->width * 0.5;
+    m[1][1] = -c->height / (2 * t), m[1][2] = c->height * 0.5;
+    m[2][3] = 1;
+    m[3][2] = 1;
+}
+
+static int sample_times(const shutter *sh, int k, double *times)
+{
+    int n = 0;
+    times[n++] = sh->open;
+    for (int i = 0; i < k; i++)
+        times[n++] = sh->open + (sh->close - sh->open) * (i + 0.5) / k;
+    times[n++] = sh->close;
+    return n;
+}
+
+static void write_weight(FILE *f, const shutter *sh)
+{
+    fprintf(f, "{\"kind\": \"%s\", \"center\": %.17g, \"rate\": %.17g, \"table\": [", shutter_weight_name(sh->kind),
+            sh->center, sh->rate);
+    for (int i = 0; i < sh->table_size; i++)
+        fprintf(f, "%s[%.17g, %.17g]", i ? ", " : "", sh->table_t[i], sh->table_w[i]);
+    fputs("], \"samples\": [", f);
+    for (int i = 0; i <= 256; i++) {
+        double t = sh->open + (sh->close - sh->open) * i / 256.0;
+        fprintf(f, "%s[%.17g, %.17g]", i ? ", " : "", t, shutter_weight(sh, t));
+    }
+    fputs("]}", f);
+}
+
+static void write_frame(FILE *f, const scene *s, long long frame, int numbered, const shutter *sh, int k)
+{
+    double times[1026], m[4][4];
+    int n = sample_times(sh, k, times);
+    fputs("    {\"frame\": ", f);
+    numbered ? fprintf(f, "%lld", frame) : fputs("null", f);
+    fprintf(f, ", \"open\": %.17g, \"close\": %.17g, \"times\": [", sh->open, sh->close);
+    for (int i = 0; i < n; i++)
+        fprintf(f, "%s%.17g", i ? ", " : "", times[i]);
+    fputs("],\n     \"weight\": ", f);
+    write_weight(f, sh);
+    fputs(",\n     \"world_to_camera\": [", f);
+    for (int i = 0; i < n; i++) {
+        world_to_camera(s, times[i], m);
+        fputs(i ? ", " : "", f);
+        json_matrix(f, m);
+    }
+    fputs("],\n     \"object_to_world\": {", f);
+    for (int o = 0; o < s->nobjects; o++) {
+        fputs(o ? ", " : "", f);
+        json_string(f, s->objects[o].name);
+        fputs(": [", f);
+        for (int i = 0; i < n; i++) {
+            xform x = animation_at(&s->objects[o].anim, times[i]);
+            xform_matrix(&x, m);
+            fputs(i ? ", " : "", f);
+            json_matrix(f, m);
+        }
+        fputc(']', f);
+    }
+    fputs("}}", f);
+}
+
+static void write_model(FILE *f, const scene_object *o)
+{
+    if (o->kind == OBJECT_SPHERE) {
+        fputs("{\"sphere\": {\"center\": ", f);
+        json_vec3(f, o->sphere_center);
+        fprintf(f, ", \"radius\": %.17g, \"color\": ", o->sphere_radius);
+        json_vec3(f, o->sphere_color);
+        fputs("}}", f);
+        return;
+    }
+    fputs("{\"file\": ", f);
+    o->model_file[0] ? json_string(f, o->model_file) : fputs("null", f);
+    fputs(", \"generator\": ", f);
+    if (o->generated) {
+        const shape_params *g = &o->generator;
+        fputs("{\"shape\": ", f);
+        json_string(f, g->kind);
+        fprintf(f, ", \"count\": %zu, \"radius\": %.17g, \"minor_radius\": %.17g, \"checker\": %d, "
+                   "\"overlap\": %.17g, \"color\": ", g->count, g->radius, g->minor_radius, g->checker, g->overlap);
+        json_vec3(f, g->color);
+        fputs(", \"color2\": ", f);
+        json_vec3(f, g->color2);
+        fputs("}", f);
+    } else
+        fputs("null", f);
+    fprintf(f, ", \"inline_splats\": %zu, \"splats\": %zu}", o->inline_splats, o->model.count);
+}
+
+static void write_objects(FILE *f, const scene *s)
+{
+    fputs("  \"objects\": [\n", f);
+    for (int i = 0; i < s->nobjects; i++) {
+        const scene_object *o = &s->objects[i];
+        fputs(i ? ",\n    {\"name\": " : "    {\"name\": ", f);
+        json_string(f, o->name);
+        fputs(", \"rest_offset\": ", f);
+        json_vec3(f, o->anim.offset);
+        fputs(", \"model\": ", f);
+        write_model(f, o);
+        fprintf(f, ",\n     \"material\": {\"shading\": \"%s\", \"diffuse\": %.17g, \"specular\": %.17g, "
+                   "\"shininess\": %.17g}}",
+                o->mat.shading == SHADING_PHONG ? "phong" : "unlit", o->mat.diffuse, o->mat.specular,
+                o->mat.shininess);
+    }
+    fputs("\n  ],\n", f);
+}
+
+static void write_lights(FILE *f, const scene *s)
+{
+    fputs("  \"lights\": [", f);
+    for (int i = 0; i < s->nlights; i++) {
+        const light *l = &s->lights[i];
+        fprintf(f, "%s{\"type\": \"%s\", \"%s\": ", i ? ", " : "", l->kind == LIGHT_POINT ? "point" : "directional",
+                l->kind == LIGHT_POINT ? "position" : "direction");
+        json_vec3(f, l->kind == LIGHT_POINT ? l->position : l->direction);
+        fputs(", \"color\": ", f);
+        json_vec3(f, l->color);
+        fputc('}', f);
+    }
+    fputs("],\n", f);
+}
+
+static const char *const CONVENTIONS =
+    "  \"conventions\": {\n"
+    "    \"matrices\": \"4x4, row-major nested lists, for column vectors: p' = M p with p = [x, y, z, 1]\",\n"
+    "    \"world\": \"the scene file's coordinates; times in scene time units\",\n"
+    "    \"camera_space\": \"x right, y up, z forward along the view direction (left-handed)\",\n"
+    "    \"raster\": \"(0, 0) is the image's top-left corner, x right, y down; pixel (i, j) covers "
+    "[i, i+1] x [j, j+1], its center at (i + 0.5, j + 0.5)\",\n"
+    "    \"camera_to_raster\": \"[X, Y, Z, W] = M [x, y, z, 1]: raster (X / W, Y / W); Z / W = 1 / depth\",\n"
+    "    \"object_to_world\": \"maps the model's own coordinates (PLY file, generator output centered at the "
+    "origin, inline splats) to world; rest_offset is included\",\n"
+    "    \"weight\": \"a(t); a pixel is the integral of a(t) color(t) over [open, close] divided by the "
+    "integral of a(t); samples are [t, a(t)]\"\n"
+    "  },\n";
+
+static int write_json(FILE *f, const scene *s, const export_options *o, rr_error *err)
+{
+    const camera *c = &s->cam;
+    double m[4][4];
+    fprintf(f, "{\n  \"refrender\": \"%s\",\n  \"scene\": ", RR_VERSION);
+    json_string(f, s->path);
+    fprintf(f, ",\n  \"inputs_hash\": \"%016llx\",\n%s", (unsigned long long)s->inputs_hash, CONVENTIONS);
+    fprintf(f, "  \"resolution\": [%d, %d],\n  \"camera\": {\"fov_y_degrees\": %.17g, \"position\": ", c->width,
+            c->height, c->fov_degrees);
+    json_vec3(f, c->position);
+    fputs(", \"lookat\": ", f);
+    json_vec3(f, c->lookat);
+    fputs(", \"up\": ", f);
+    json_vec3(f, c->up);
+    fprintf(f, ", \"moves\": %s, \"camera_to_raster\": ", scene_camera_moves(s) ? "true" : "false");
+    camera_to_raster(c, m);
+    json_matrix(f, m);
+    fprintf(f, "},\n  \"epsilon\": %.17g,\n  \"kernel_sigma\": %.17g,\n  \"background\": ", s->epsilon,
+            s->kernel_sigma);
+    json_vec3(f, s->background);
+    fputs(",\n  \"ambient\": ", f);
+    json_vec3(f, s->ambient);
+    fputs(",\n", f);
+    write_lights(f, s);
+    write_objects(f, s);
+    fputs("  \"frames\": [\n", f);
+    for (long long fr = o->first; fr <= o->last; fr++) {
+        shutter sh = s->shut;
+        if (o->frames && scene_frame_shutter(s, (int)fr, &sh, err))
+            return -1;
+        if (fr > o->first)
+            fputs(",\n", f);
+        write_frame(f, s, fr, o->frames, &sh, o->times);
+    }
+    fputs("\n  ]\n}\n", f);
+    return 0;
+}
+
+static int write_file(const char *path, const char *text, size_t len, rr_error *err)
+{
+    char tmp[PATH_MAX + 64];
+    if (atomic_create(path, "", tmp, sizeof tmp, err))
+        return -1;
+    FILE *f = fopen(tmp, "wb");
+    int ok = f && fwrite(text, 1, len, f) == len;
+    ok = (f && fclose(f) == 0) && ok;
+    if (!ok) {
+        atomic_discard(tmp);
+        return rr_fail(err, "%s: cannot write", path);
+    }
+    return atomic_commit(tmp, path, err);
+}
+
+static int export_scene(const export_options *o, rr_error *err)
+{
+    scene s;
+    if (cli_check_writable(o->output, err) || scene_load_file(o->scene, &s, err))
+        return -1;
+    for (int i = 0; i < s.ninputs; i++)
+        if (cli_same_file(o->output, s.inputs[i])) {
+            scene_free(&s);
+            return rr_fail(err, "%s: is an input of this scene", o->output);
+        }
+    char *text = NULL;
+    size_t len = 0;
+    FILE *mem = open_memstream(&text, &len);
+    int rc = mem ? write_json(mem, &s, o, err) : rr_fail(err, "out of memory");
+    if (mem && fclose(mem) && !rc)
+        rc = rr_fail(err, "out of memory");
+    if (!rc)
+        rc = write_file(o->output, text, len, err);
+    free(text);
+    scene_free(&s);
+    return rc;
+}
+
+static int parse_export_args(int argc, char **argv, export_options *o, rr_error *err)
+{
+    static const struct option longopts[] = {{"frame", required_argument, 0, 'f'}, {"frames", required_argument, 0, 'F'},
+                                             {"times", required_argument, 0, 't'}, {"output", required_argument, 0, 'o'},
+                                             {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
+    int c;
+    char extra;
+    while ((c = getopt_long(argc, argv, "ho:", longopts, NULL)) != -1) {
+        if (c == 'h')
+            return 1;
+        if (c == 'f' && cli_int("--frame", optarg, INT_MIN, INT_MAX, &o->first, err))
+            return -1;
+        if (c == 'f')
+            o->last = o->first, o->frames = 1;
+        if (c == 'F' && (sscanf(optarg, "%d-%d%c", &o->first, &o->last, &extra) != 2 || o->last < o->first))
+            return rr_fail(err, "--frames: expected A-B with A <= B, got '%s'", optarg);
+        if (c == 'F')
+            o->frames = 1;
+        if (c == 't' && cli_int("--times", optarg, 0, 1024, &o->times, err))
+            return -1;
+        if (c == 'o')
+            o->output = optarg;
+        if (c == '?')
+            return rr_fail(err, "unknown option (see 'refrender export --help')");
+    }
+    if (optind != argc - 1 || !o->output)
+        return rr_fail(err, "expected one SCENE.xml and -o FILE.json (see 'refrender export --help')");
+    o->scene = argv[optind];
+    return 0;
+}
+
+int cmd_export(int argc, char **argv)
+{
+    export_options o = {NULL, NULL, 0, 0, 0, 8};
+    rr_error err;
+    int rc = parse_export_args(argc, argv, &o, &err);
+    if (rc == 1) {
+        export_usage(stdout);
+        return 0;
+    }
+    if (rc) {
+        fprintf(stderr, "refrender export: %s\n", err.msg);
+        return 2;
+    }
+    if (export_scene(&o, &err)) {
+        fprintf(stderr, "refrender export: %s\n", err.msg);
+        return 1;
+    }
+    return 0;
+}
