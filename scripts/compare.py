@@ -75,6 +75,19 @@ def parse_args(argv):
     p.add_argument("--json", metavar="FILE", help="write results as JSON ('-' for stdout)")
     p.add_argument("--csv", metavar="FILE", help="write results as CSV ('-' for stdout)")
     p.add_argument("--heatmaps", metavar="DIR", help="write error maps and contact sheets as PNG")
+    p.add_argument("--maps", metavar="DIR",
+                   help="write figure-ready maps at native resolution: LDR-FLIP, signed difference and (when "
+                        "computed) HDR-FLIP as coloured PNG and float EXR, and with --crop the test image with "
+                        "the windows outlined plus a zoomed inset per window")
+    p.add_argument("--map-scale", type=int, default=1, metavar="N",
+                   help="upscale the PNG maps by the integer N, nearest neighbour (default 1)")
+    p.add_argument("--inset-scale", type=int, default=4, metavar="N", help="zoom of the crop insets (default 4)")
+    p.add_argument("--diff-range", type=float, metavar="X",
+                   help="signed difference maps span [-X, X] (default: one range for all inputs, their "
+                        "largest |difference|)")
+    p.add_argument("--flip-range", default="0,1", metavar="LO,HI",
+                   help="colour range of the FLIP maps, the same for all inputs (default 0,1)")
+    p.add_argument("--latex", metavar="FILE", help="write a booktabs LaTeX table, best value per column in bold")
     p.add_argument("--report", metavar="DIR", help="write an offline HTML report with the images")
     return p.parse_args(argv)
 
@@ -128,11 +141,13 @@ def evaluate(ref_img, ref, test, valid, window, args, test_se=None, test_se_sour
     res["FLIP"] = float(flip_map[v].mean())
     res["FLIP p50w"] = flip.weighted_percentile(flip_map[v], 50)
     res["FLIP p95w"] = flip.weighted_percentile(flip_map[v], 95)
+    hdr_map = None
     try:
         exposures = parse_floats(args.hdr_exposures, 2, "--hdr-exposures") if args.hdr_exposures else None
-        res["HDR-FLIP"] = float(flip.hdr_flip(r0, t0, args.ppd, exposures)[v].mean())
+        hdr_map = flip.hdr_flip(r0, t0, args.ppd, exposures)
+        res["HDR-FLIP"] = float(hdr_map[v].mean())
     except ValueError as e:
-        res["HDR-FLIP"], res["HDR-FLIP note"] = None, str(e)
+        res["HDR-FLIP"], res["notes"] = None, f"HDR-FLIP n/a: {e}"
     res["pixels"] = int(v.sum())
     if ref_img.stderr is not None:
         se = ref_img.stderr[sl] ** 2
@@ -141,7 +156,7 @@ def evaluate(ref_img, ref, test, valid, window, args, test_se=None, test_se_sour
         se = np.maximum(np.sqrt(se), args.se_floor)
         res[f">{args.k_sigma:g}SE"] = stderr_fraction(se, r0, t0, v, args.k_sigma)
         res["SE source"] = "reference" + ("" if test_se is None else f" and {test_se_source}")
-    return res, flip_map
+    return res, flip_map, hdr_map
 
 
 def format_value(v):
@@ -163,12 +178,21 @@ def print_table(rows, out=sys.stdout):
         print("  ".join(c.rjust(w) if i >= left else c.ljust(w) for i, (c, w) in enumerate(zip(row, widths))),
               file=out)
     for r in rows:
-        if r.get("HDR-FLIP note"):
-            print(f"note: {r['image']} [{r['window']}]: HDR-FLIP n/a: {r['HDR-FLIP note']}", file=out)
+        if r.get("notes"):
+            print(f"note: {r['image']} [{r['window']}]: {r['notes']}", file=out)
             break
 
 
-def write_machine_readable(rows, json_path, csv_path):
+def schema(args):
+    """The columns of the CSV and the keys of every JSON row, the same in every
+    run: empty (CSV) or null (JSON) where a value does not apply; reasons in
+    'notes'."""
+    return (["image", "frame", "window", "pixels", "nonfinite"] + COLUMNS[:7] + ["FLIP p50w", "FLIP p95w",
+            "HDR-FLIP", f">{args.k_sigma:g}SE", "SE source", "notes"])
+
+
+def write_machine_readable(rows, json_path, csv_path, columns):
+    rows = [{c: r.get(c) for c in columns} for r in rows]
     if json_path:
         # strict JSON has no Infinity: an infinite PSNR (identical images) is "inf"
         clean = [{k: ("inf" if isinstance(v, float) and math.isinf(v) else v) for k, v in r.items()} for r in rows]
@@ -179,11 +203,10 @@ def write_machine_readable(rows, json_path, csv_path):
             with open(json_path, "w") as f:
                 f.write(text + "\n")
     if csv_path:
-        keys = list(dict.fromkeys(k for r in rows for k in r))
         f = sys.stdout if csv_path == "-" else open(csv_path, "w", newline="")
-        w = csv.DictWriter(f, fieldnames=keys)
+        w = csv.DictWriter(f, fieldnames=columns)
         w.writeheader()
-        w.writerows(rows)
+        w.writerows([{k: ("" if v is None else v) for k, v in r.items()} for r in rows])
         if f is not sys.stdout:
             f.close()
 
@@ -236,13 +259,13 @@ def compare_images(args, reference, tests, labels, frame=None):
         finite = np.isfinite(ref).all(axis=-1) & np.isfinite(test).all(axis=-1)
         for name, win in windows:
             x, y, w, h = win
-            res, flip_map = evaluate(ref_img, ref, test, finite & mask, win, args, se, source)
+            res, flip_map, hdr_map = evaluate(ref_img, ref, test, finite & mask, win, args, se, source)
             head = {"image": label, "window": name} if frame is None else {"image": label, "frame": frame,
                                                                            "window": name}
             res = {**head, "nonfinite": int((~finite[y:y + h, x:x + w]).sum()), **res}
             rows.append(res)
             picture = label if frame is None else f"{label}_f{frame}"
-            maps.append((picture, name, win, ref, test, flip_map))
+            maps.append((picture, name, win, ref, test, flip_map, hdr_map))
     return rows, maps
 
 
@@ -286,14 +309,61 @@ def main(argv=None):
         print(f"compare.py: {e}", file=sys.stderr)
         return 2
     print_table(rows)
-    write_machine_readable(rows, args.json, args.csv)
+    write_machine_readable(rows, args.json, args.csv, schema(args))
+    if args.latex:
+        import figures  # matplotlib only when figures are asked for
+        figures.latex_table([r for r in rows if not str(r.get("frame", "")).startswith("worst")],
+                            COLUMNS + [f">{args.k_sigma:g}SE"], args.latex)
+    try:
+        write_pictures(args, rows, maps)
+    except CompareError as e:
+        print(f"compare.py: {e}", file=sys.stderr)
+        return 2
+    return 0
+
+
+def shared_diff_range(args, maps):
+    """--diff-range, else the largest |mean RGB difference| over every input and window."""
+    if args.diff_range:
+        return args.diff_range
+    lim = 0.0
+    for _, _, (x, y, w, h), ref, test, _, _ in maps:
+        d = np.nan_to_num((test[y:y + h, x:x + w] - ref[y:y + h, x:x + w]).mean(axis=-1))
+        lim = max(lim, float(np.max(np.abs(d))))
+    return lim or 1.0
+
+
+def write_native_maps(args, maps, diff_range):
+    import figures
+    flip_lo, flip_hi = parse_floats(args.flip_range, 2, "--flip-range")
+    if args.map_scale < 1 or args.inset_scale < 1:
+        raise CompareError("--map-scale and --inset-scale must be positive integers")
+    os.makedirs(args.maps, exist_ok=True)
+    crops = [(c, parse_crop(c, maps[0][3].shape[1], maps[0][3].shape[0])) for c in args.crop] if maps else []
+    done = set()
+    for label, window, (x, y, w, h), ref, test, flip_map, hdr_map in maps:
+        base = figures._name(label, window)
+        figures.write_map(args.maps, base + "_flip", flip_map, "magma", flip_lo, flip_hi, args.map_scale)
+        diff = (test[y:y + h, x:x + w] - ref[y:y + h, x:x + w]).mean(axis=-1)
+        figures.write_map(args.maps, base + "_diff", diff, "RdBu_r", -diff_range, diff_range, args.map_scale)
+        if hdr_map is not None:
+            figures.write_map(args.maps, base + "_hdrflip", hdr_map, "magma", flip_lo, flip_hi, args.map_scale)
+        if crops and label not in done:
+            figures.write_crops(args.maps, label, test, crops, args.inset_scale)
+            done.add(label)
+
+
+def write_pictures(args, rows, maps):
+    diff_range = shared_diff_range(args, maps)
+    if args.maps:
+        write_native_maps(args, maps, diff_range)
     if args.heatmaps or args.report:
         import heatmaps  # matplotlib only when pictures are asked for
         if args.heatmaps:
-            heatmaps.write_all(maps, args.heatmaps)
+            heatmaps.write_all(maps, args.heatmaps, diff_range)
         if args.report:  # the report folder holds its own pictures, viewable offline
-            heatmaps.write_report(rows, heatmaps.write_all(maps, args.report), args.report, args.reference)
-    return 0
+            heatmaps.write_report(rows, heatmaps.write_all(maps, args.report, diff_range), args.report,
+                                  args.reference)
 
 
 if __name__ == "__main__":

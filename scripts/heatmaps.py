@@ -45,12 +45,14 @@ def _contact_sheet(ref, test, flip_map, title, path):
     plt.close(fig)
 
 
-def write_all(maps, out_dir):
-    """maps: (test label, window name, (x, y, w, h), ref, test, flip map of
-    the window). Returns one dict of written file names per entry."""
+def write_all(maps, out_dir, diff_range):
+    """maps: (test label, window name, (x, y, w, h), ref, test, LDR-FLIP map
+    and HDR-FLIP map (or None) of the window); difference maps span
+    [-diff_range, diff_range], the same for every input. Returns one dict of
+    written file names per entry."""
     os.makedirs(out_dir, exist_ok=True)
     written = []
-    for path, window, (x, y, w, h), ref, test, flip_map in maps:
+    for path, window, (x, y, w, h), ref, test, flip_map, _ in maps:
         r, t = ref[y:y + h, x:x + w], test[y:y + h, x:x + w]
         r, t = np.where(np.isfinite(r), r, 0), np.where(np.isfinite(t), t, 0)
         base = _name(path, window)
@@ -58,8 +60,7 @@ def write_all(maps, out_dir):
         title = f"{path} [{window}]"
         _save_map(flip_map, "magma", 0.0, 1.0, f"LDR-FLIP, {title}", "FLIP", os.path.join(out_dir, files["flip"]))
         diff = (t - r).mean(axis=-1)
-        lim = float(np.max(np.abs(diff))) or 1.0
-        _save_map(diff, "RdBu_r", -lim, lim, f"test - reference (mean of RGB), {title}", "signed difference",
+        _save_map(diff, "RdBu_r", -diff_range, diff_range, f"test - reference (mean of RGB), {title}", "signed difference",
                   os.path.join(out_dir, files["diff"]))
         _contact_sheet(r, t, flip_map, title, os.path.join(out_dir, files["sheet"]))
         written.append(files)
@@ -76,10 +77,12 @@ LEGEND = {
     "FLIP": "mean LDR-FLIP (Andersson et al. 2020), 0 = identical, 1 = most different",
     "FLIP p50w": "error-weighted median of the LDR-FLIP map",
     "FLIP p95w": "error-weighted 95th percentile of the LDR-FLIP map",
-    "HDR-FLIP": "mean HDR-FLIP (Andersson et al. 2021); n/a: the reason is given below the table",
+    "HDR-FLIP": "mean HDR-FLIP (Andersson et al. 2021); n/a: the reason is in notes, below the table",
     "pixels": "valid pixels compared (finite in both images, inside --mask)",
     "nonfinite": "pixels left out because either image is NaN or infinite there",
     "SE source": "the standard errors >KSE divides by",
+    "frame": "the frame of a sequence; 'mean' over frames, 'worst (N)': the frame with the largest RMSE",
+    "notes": "why a value is n/a",
 }
 
 
@@ -99,8 +102,8 @@ def _legend(cols):
 
 def write_report(rows, pictures, out_dir, reference):
     cols = [k for k in dict.fromkeys(k for r in rows for k in r) if not k.endswith("note")]
-    notes = "".join(f"<p>HDR-FLIP n/a for {html.escape(r['image'])} [{html.escape(r['window'])}]: "
-                    f"{html.escape(r['HDR-FLIP note'])}</p>\n" for r in rows if r.get("HDR-FLIP note"))
+    notes = "".join(f"<p>{html.escape(str(r['image']))} [{html.escape(str(r['window']))}]: "
+                    f"{html.escape(r['notes'])}</p>\n" for r in rows if r.get("notes"))
     head = "".join(f"<th>{html.escape(c)}</th>" for c in cols)
     body = ""
     for r in rows:

@@ -135,8 +135,9 @@ def basic_metrics(ref, test, valid, peak=1.0):
 
 def ssim_map(ref, test, peak=1.0):
     r, t = np.clip(ref, 0, peak), np.clip(test, 0, peak)
-    if min(r.shape[:2]) < 7:
-        raise CompareError("SSIM needs images (or crops) of at least 7x7 pixels")
+    # scikit-image's Gaussian window (sigma 1.5, truncated at 3.5 sigma) is 11 pixels wide
+    if min(r.shape[:2]) < 11:
+        raise CompareError("SSIM needs images (or crops) of at least 11x11 pixels")
     _, full = structural_similarity(r, t, channel_axis=-1, data_range=peak, gaussian_weights=True,
                                     sigma=1.5, use_sample_covariance=False, full=True)
     return full.mean(axis=-1)

@@ -1,0 +1,119 @@
+"""Figure-ready outputs for compare.py: error maps at the images' native
+resolution (PNG, optionally upscaled by an integer with nearest neighbour,
+and float EXR), crop windows drawn on the full image with zoomed insets,
+and a booktabs LaTeX table with the best value of each column in bold.
+
+Colour maps are applied by lookup, never by resampling a plotted figure, so
+one map pixel is one image pixel. Every method's maps share one range
+(compare.py passes it), so their colours compare across methods."""
+import os
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+import OpenImageIO as oiio  # noqa: E402
+
+import flip  # noqa: E402
+from heatmaps import _name  # noqa: E402
+
+# per column: True when a higher value is better
+HIGHER_IS_BETTER = {"PSNR": True, "SSIM": True}
+
+
+def _write(path, pixels, fmt):
+    pixels = np.ascontiguousarray(pixels)
+    if pixels.ndim == 2:
+        pixels = pixels[:, :, None]
+    spec = oiio.ImageSpec(pixels.shape[1], pixels.shape[0], pixels.shape[2], fmt)
+    out = oiio.ImageOutput.create(path)
+    if not out or not out.open(path, spec) or not out.write_image(pixels):
+        raise OSError(f"{path}: cannot write: {oiio.geterror()}")
+    out.close()
+
+
+def _upscale(img, scale):
+    return np.repeat(np.repeat(img, scale, axis=0), scale, axis=1) if scale > 1 else img
+
+
+def colorize(values, cmap, lo, hi):
+    """8-bit RGB of values through a matplotlib colour map over [lo, hi]."""
+    norm = np.clip((np.nan_to_num(values) - lo) / (hi - lo if hi > lo else 1.0), 0.0, 1.0)
+    return (plt.get_cmap(cmap)(norm)[..., :3] * 255 + 0.5).astype(np.uint8)
+
+
+def write_map(out_dir, base, values, cmap, lo, hi, scale):
+    """base.png (coloured, native resolution x scale) and base.exr (the float values)."""
+    _write(os.path.join(out_dir, base + ".png"), _upscale(colorize(values, cmap, lo, hi), scale), oiio.UINT8)
+    _write(os.path.join(out_dir, base + ".exr"), values.astype(np.float32), oiio.FLOAT)
+    return [base + ".png", base + ".exr"]
+
+
+def srgb8(rgb):
+    return (flip.linear_to_srgb(np.nan_to_num(rgb)) * 255 + 0.5).astype(np.uint8)
+
+
+def draw_rectangles(img, windows, color=(255, 64, 32)):
+    """The crop windows outlined (one pixel wide, inside the window) on an 8-bit image."""
+    out = img.copy()
+    for x, y, w, h in windows:
+        out[y, x:x + w] = color
+        out[y + h - 1, x:x + w] = color
+        out[y:y + h, x] = color
+        out[y:y + h, x + w - 1] = color
+    return out
+
+
+def write_crops(out_dir, label, test, crops, inset_scale):
+    """label_crops.png: the test image with every crop outlined; one zoomed
+    inset per crop."""
+    files = []
+    full = srgb8(test)
+    name = _name(label, "crops") + ".png"
+    _write(os.path.join(out_dir, name), draw_rectangles(full, [w for _, w in crops]), oiio.UINT8)
+    files.append(name)
+    for crop, (x, y, w, h) in crops:
+        inset = _name(label, crop) + "_inset.png"
+        _write(os.path.join(out_dir, inset), _upscale(full[y:y + h, x:x + w], inset_scale), oiio.UINT8)
+        files.append(inset)
+    return files
+
+
+def best_values(rows, columns):
+    """Per column, the best value among the rows (None if none is numeric)."""
+    best = {}
+    for c in columns:
+        vals = [r.get(c) for r in rows if isinstance(r.get(c), (int, float))]
+        if vals:
+            best[c] = max(vals) if HIGHER_IS_BETTER.get(c) else min(vals)
+    return best
+
+
+def _tex(text):
+    for a, b in [("\\", r"\textbackslash{}"), ("_", r"\_"), ("%", r"\%"), ("&", r"\&"), ("#", r"\#"),
+                 ("$", r"\$"), (">", r"$>$")]:
+        text = text.replace(a, b)
+    return text
+
+
+def latex_table(rows, columns, path):
+    """A booktabs table: one row per input row (image, window), the best value
+    of each column in bold (lowest error; highest PSNR and SSIM)."""
+    best = best_values(rows, columns)
+    lines = [r"\begin{tabular}{ll" + "r" * len(columns) + "}", r"\toprule",
+             "Method & Window & " + " & ".join(_tex(c) for c in columns) + r" \\", r"\midrule"]
+    for r in rows:
+        cells = []
+        for c in columns:
+            v = r.get(c)
+            if not isinstance(v, (int, float)):
+                cells.append("--")
+                continue
+            text = "$\\infty$" if isinstance(v, float) and np.isinf(v) else f"{v:.4g}"
+            cells.append(r"\textbf{" + text + "}" if best.get(c) == v else text)
+        head = _tex(str(r["image"])) + " & " + _tex(str(r["window"]))
+        lines.append(head + " & " + " & ".join(cells) + r" \\")
+    lines += [r"\bottomrule", r"\end{tabular}"]
+    with open(path, "w") as f:
+        f.write("% refrender compare.py; requires \\usepackage{booktabs}\n" + "\n".join(lines) + "\n")
