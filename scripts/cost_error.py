@@ -1,0 +1,132 @@
+#!/usr/bin/python3
+"""Error against cost for any method: RMSE and LDR-FLIP of each image
+against a reference, plotted against its cost (seconds or samples) on log
+axes, one curve per method label, with refrender's own samplers as
+reference curves (the CSV scripts/convergence.py writes).
+
+usage: cost_error.py REFERENCE --entry LABEL,IMAGE,COST [--entry ...]
+                     [--entries FILE.csv] [--cost-unit seconds|samples]
+                     [--refrender-curves out/convergence/convergence.csv]
+                     [--out DIR]
+
+Writes DIR/cost_error.csv (label, image, cost, rmse, flip) and
+DIR/cost_error.png; prints the table. Images are read as compare.py reads
+them (scripts/imagecompare.py)."""
+import argparse
+import csv
+import os
+import sys
+
+import numpy as np
+
+import flip
+from imagecompare import CompareError, basic_metrics, read_image
+
+
+def parse_args(argv):
+    p = argparse.ArgumentParser(prog="cost_error.py", description=__doc__.split("\n\n")[0])
+    p.add_argument("reference", help="the ground truth image (e.g. a long refrender render)")
+    p.add_argument("--entry", action="append", default=[], metavar="LABEL,IMAGE,COST",
+                   help="one image of a method and its cost (repeatable)")
+    p.add_argument("--entries", metavar="FILE.csv",
+                   help="more entries from a CSV file with columns label, image, cost")
+    p.add_argument("--cost-unit", choices=["seconds", "samples"], default="seconds",
+                   help="what COST counts, for the axis label (default seconds)")
+    p.add_argument("--refrender-curves", metavar="CSV",
+                   help="convergence.csv from scripts/convergence.py: its samplers are drawn as reference "
+                        "curves (cost from its 'seconds' or 'samples' column, as --cost-unit says)")
+    p.add_argument("--out", default="out/cost_error", help="output directory (default: %(default)s)")
+    return p.parse_args(argv)
+
+
+def entries_of(args):
+    rows = []
+    for e in args.entry:
+        parts = e.rsplit(",", 2)
+        if len(parts) != 3:
+            raise CompareError(f"--entry {e}: expected LABEL,IMAGE,COST")
+        rows.append(parts)
+    if args.entries:
+        with open(args.entries, newline="") as f:
+            for r in csv.DictReader(f):
+                rows.append([r["label"], r["image"], r["cost"]])
+    out = []
+    for label, image, cost in rows:
+        try:
+            c = float(cost)
+        except ValueError:
+            c = -1.0
+        if not c > 0:
+            raise CompareError(f"{image}: cost must be a positive number, got '{cost}'")
+        out.append((label, image, c))
+    if not out:
+        raise CompareError("no entries: give --entry LABEL,IMAGE,COST or --entries FILE.csv")
+    return out
+
+
+def measure(reference, entries):
+    ref = read_image(reference).rgb
+    results = []
+    for label, image, cost in entries:
+        test = read_image(image).rgb
+        if test.shape != ref.shape:
+            raise CompareError(f"{image}: size differs from the reference's")
+        valid = np.isfinite(ref) & np.isfinite(test)
+        rmse = basic_metrics(np.nan_to_num(ref), np.nan_to_num(test), valid)["RMSE"]
+        fl = float(flip.ldr_flip(np.nan_to_num(ref), np.nan_to_num(test)).mean())
+        results.append((label, image, cost, rmse, fl))
+    return results
+
+
+def reference_curves(path, unit):
+    curves = {}
+    with open(path, newline="") as f:
+        for r in csv.DictReader(f):
+            curves.setdefault(f"refrender {r['sampler']}", []).append((float(r[unit]), float(r["rmse"])))
+    return {k: sorted(v) for k, v in curves.items()}
+
+
+def plot(results, curves, unit, path):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2))
+    for k, (name, col) in enumerate([("RMSE", 3), ("LDR-FLIP", 4)]):
+        ax = axes[k]
+        for label in dict.fromkeys(r[0] for r in results):
+            pts = sorted((r[2], r[col]) for r in results if r[0] == label)
+            ax.loglog(*zip(*pts), "o-", label=label)
+        if name == "RMSE":
+            for label, pts in curves.items():
+                ax.loglog(*zip(*pts), "--", color="grey", alpha=0.7, label=label)
+        ax.set_xlabel(unit)
+        ax.set_ylabel(name)
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def main(argv=None):
+    args = parse_args(argv if argv is not None else sys.argv[1:])
+    try:
+        results = measure(args.reference, entries_of(args))
+        curves = reference_curves(args.refrender_curves, args.cost_unit) if args.refrender_curves else {}
+    except (CompareError, OSError, KeyError) as e:
+        print(f"cost_error.py: {e}", file=sys.stderr)
+        return 2
+    os.makedirs(args.out, exist_ok=True)
+    with open(os.path.join(args.out, "cost_error.csv"), "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(["label", "image", args.cost_unit, "rmse", "flip"])
+        w.writerows(results)
+    plot(results, curves, args.cost_unit, os.path.join(args.out, "cost_error.png"))
+    print(f"{'label':16s} {args.cost_unit:>10s} {'RMSE':>10s} {'FLIP':>8s}  image")
+    for label, image, cost, rmse, fl in results:
+        print(f"{label:16s} {cost:10.4g} {rmse:10.4g} {fl:8.4f}  {image}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
