@@ -308,6 +308,7 @@ def main(argv=None):
     except CompareError as e:
         print(f"compare.py: {e}", file=sys.stderr)
         return 2
+    print(f"metrics space: {args.metrics_space} (FLIP: linear)")
     print_table(rows)
     write_machine_readable(rows, args.json, args.csv, schema(args))
     if args.latex:
@@ -363,7 +364,7 @@ def write_pictures(args, rows, maps):
             heatmaps.write_all(maps, args.heatmaps, diff_range)
         if args.report:  # the report folder holds its own pictures, viewable offline
             heatmaps.write_report(rows, heatmaps.write_all(maps, args.report, diff_range), args.report,
-                                  args.reference)
+                                  args.reference, args.metrics_space)
 
 
 if __name__ == "__main__":

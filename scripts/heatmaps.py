@@ -100,7 +100,7 @@ def _legend(cols):
     return "<ul>" + "".join(items) + "</ul>"
 
 
-def write_report(rows, pictures, out_dir, reference):
+def write_report(rows, pictures, out_dir, reference, metrics_space="linear"):
     cols = [k for k in dict.fromkeys(k for r in rows for k in r) if not k.endswith("note")]
     notes = "".join(f"<p>{html.escape(str(r['image']))} [{html.escape(str(r['window']))}]: "
                     f"{html.escape(r['notes'])}</p>\n" for r in rows if r.get("notes"))
@@ -118,6 +118,8 @@ def write_report(rows, pictures, out_dir, reference):
 <style>body{{font-family:sans-serif}} table{{border-collapse:collapse}}
 td,th{{border:1px solid #999;padding:2px 6px;text-align:right}} img{{max-width:48%;margin:4px}}</style>
 </head><body><h1>Comparison against {html.escape(reference)}</h1>
+<p>MAE, MSE, RMSE, PSNR, relMSE and SSIM computed on {html.escape(metrics_space)} values
+(--metrics-space); FLIP on linear values.</p>
 <table><tr>{head}</tr>
 {body}</table>
 {notes}<h2>Columns</h2>

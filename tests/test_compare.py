@@ -208,7 +208,8 @@ def test_crops_and_outputs(tmp_path):
     proc = compare(ref, t1, t2, "--crop", "0,0,20,20", "--crop", "10,5,30,30", "--csv", tmp_path / "r.csv",
                    "--heatmaps", tmp_path / "maps", "--report", tmp_path / "rep")
     assert proc.returncode == 0, proc.stderr
-    assert proc.stdout.splitlines()[0].split()[:3] == ["image", "window", "pixels"]
+    assert proc.stdout.splitlines()[0] == "metrics space: linear (FLIP: linear)"
+    assert proc.stdout.splitlines()[1].split()[:3] == ["image", "window", "pixels"]
     rows = list(csv.DictReader(open(tmp_path / "r.csv")))
     assert [(r["window"], r["pixels"]) for r in rows[:3]] == [("full", "2000"), ("0,0,20,20", "400"),
                                                                 ("10,5,30,30", "900")]
@@ -218,6 +219,7 @@ def test_crops_and_outputs(tmp_path):
     for name in ["t1_full_flip.png", "t2_10_5_30_30_sheet.png"]:
         assert name in page and (tmp_path / "rep" / name).exists()
     assert "<b>RMSE</b>" in page and "<b>FLIP</b>" in page  # every column has its legend
+    assert "computed on linear values" in page
 
 
 def test_bad_inputs_give_clear_errors(tmp_path):
