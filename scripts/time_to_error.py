@@ -4,7 +4,7 @@
 on the same machine (`make bench` runs it; README, Speed).
 
 usage: time_to_error.py [--scenes default,diagonal,...] [--res WxH] [--out DIR]
-                        [--targets 0.01,0.002] [--threads N]
+                        [--targets 0.01,0.002] [--threads N] [--max-seconds S]
 
 For each scene: a reference (sobol 256 x 64, another seed), then renders of
 increasing cost with each method; RMSE over RGB against the reference and
@@ -71,11 +71,17 @@ def measure_scene(name, args, writer):
     runs = [("sampled", s, t, ["--sampler", "sobol", "--spp", s, "--tspp", t]) for s, t in SAMPLED]
     runs += [("exact", s, 1, ["--time-integration", "exact", "--spp", s]) for s in EXACT]
     for method, spp, tspp, extra in runs:
+        slowest = max((r[0] for r in results[method]), default=0.0)
+        if slowest * 4 > args.max_seconds:  # the next render costs about 4x: skip, say so
+            print(f"time_to_error: {name}: {method} {spp}x{tspp} skipped (the previous took {slowest:.0f} s)",
+                  file=sys.stderr)
+            continue
         out = os.path.join(args.out, f"{name}_{method}_{spp}x{tspp}.exr")
         seconds = render(scene, out, extra, args.res, args.threads)
         rmse = float(np.sqrt(np.mean((rgb(out) - reference) ** 2)))
         results[method].append((seconds, rmse))
         writer.writerow([name, method, spp, tspp, f"{seconds:.3f}", f"{rmse:.6g}"])
+        args.csv_file.flush()  # a run cut short keeps what it measured
     return results
 
 
@@ -89,12 +95,15 @@ def main():
     ap.add_argument("--res", default="48x36", help="image size of every render (default: %(default)s)")
     ap.add_argument("--targets", default="0.01,0.002", help="target RMSEs (default: %(default)s)")
     ap.add_argument("--threads", type=int, default=os.cpu_count() or 1, help="render threads (default: all cores)")
+    ap.add_argument("--max-seconds", type=float, default=120.0,
+                    help="skip a method's costlier renders once the next would take longer (default: %(default)s)")
     ap.add_argument("--out", default="out/time_to_error", help="directory for renders and CSV (default: %(default)s)")
     args = ap.parse_args()
     os.makedirs(args.out, exist_ok=True)
     targets = [float(t) for t in args.targets.split(",")]
     rows = []
     with open(os.path.join(args.out, "time_to_error.csv"), "w", newline="") as f:
+        args.csv_file = f
         writer = csv.writer(f)
         writer.writerow(["scene", "method", "spp", "tspp", "seconds", "rmse"])
         for name in args.scenes.split(","):
@@ -109,6 +118,7 @@ def main():
             best = lambda m: min(r[1] for r in res[m])  # noqa: E731
             print(f"time_to_error: {name}: lowest RMSE sampled {best('sampled'):.5f}, exact {best('exact'):.5f}",
                   file=sys.stderr)
+            print("\n".join(rows[-len(targets):]), file=sys.stderr)
     print(f"\nTime to equal error at {args.res} ({args.threads} threads; seconds, sobol sampled vs exact)\n")
     print("| scene | target RMSE | sampled s | exact s | sampled / exact |")
     print("| --- | --- | --- | --- | --- |")
