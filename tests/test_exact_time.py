@@ -82,3 +82,17 @@ def test_no_temporal_noise_and_analytic_coverage(tmp_path):
     low, high = math.sqrt(0.25 - y_extent ** 2), 0.5
     assert np.all(ch["A"] >= low - 1e-6) and np.all(ch["A"] <= high + 1e-6)
     assert np.all(np.abs(ch["R"] - ch["A"]) < 1e-6)  # white where covered, black background
+
+
+def test_time_samples_do_not_matter_to_exact_renders(tmp_path):
+    """The thesis sampler's positions do not depend on its time strata
+    (--time-factor changes only the times): exact renders that differ only
+    in it are identical, sampled ones are not (temporal noise)."""
+    args = ["--sampler", "thesis", "--spp", 4, "--quiet"]
+    e1, _ = render_to(tmp_path, "e1.exr", "--time-integration", "exact", "--time-factor", 1, *args)
+    e8, _ = render_to(tmp_path, "e8.exr", "--time-integration", "exact", "--time-factor", 8, *args)
+    s1, _ = render_to(tmp_path, "s1.exr", "--tspp", 4, "--time-factor", 1, *args)
+    s8, _ = render_to(tmp_path, "s8.exr", "--tspp", 4, "--time-factor", 8, *args)
+    for c in "RGBA":
+        assert np.array_equal(e1[c], e8[c])
+    assert not np.array_equal(s1["R"], s8["R"])
