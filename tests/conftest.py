@@ -51,6 +51,15 @@ def render(tmp_path):
     return _render
 
 
+def coverage_centroid(alpha):
+    """Raster position (x, y) of the centroid of a coverage image (pixel
+    centers at +0.5): where a small disc's center is rendered."""
+    a = np.asarray(alpha, dtype=np.float64)
+    rows, cols = np.indices(a.shape)
+    assert a.sum() > 0
+    return (a * (cols + 0.5)).sum() / a.sum(), (a * (rows + 0.5)).sum() / a.sum()
+
+
 def focal_pixels(height, fov_degrees):
     """Pixels per unit of image-plane distance at depth 1 (square pixels)."""
     return (height / 2) / np.tan(np.radians(fov_degrees) / 2)

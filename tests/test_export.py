@@ -8,7 +8,7 @@ import json
 
 import numpy as np
 
-from conftest import run, read_full
+from conftest import coverage_centroid, read_full, run
 
 CAMERA = '<camera position="0.4 0.3 4" lookat="0 0 0" up="0 1 0" fov="40" width="96" height="64"{anim}'
 STILL = "/>"
@@ -34,14 +34,6 @@ def project(data, point):
     return x / w, y / w
 
 
-def rendered_center(path):
-    ch, _ = read_full(path)
-    a = ch["A"].astype(np.float64)
-    rows, cols = np.indices(a.shape)
-    assert a.sum() > 0
-    return (a * (cols + 0.5)).sum() / a.sum(), (a * (rows + 0.5)).sum() / a.sum()
-
-
 def test_exported_matrices_reproject_onto_the_render(tmp_path):
     cases = {"still": (STILL, ""), "keyframed": (STILL, KEYED), "moving_camera": (MOVING, ""),
              "both": (MOVING, KEYED)}
@@ -54,7 +46,7 @@ def test_exported_matrices_reproject_onto_the_render(tmp_path):
         data = json.loads(js.read_text())
         assert data["frames"][0]["times"][0] == 0.4 and len(data["frames"][0]["times"]) == 4
         px, py = project(data, [0.5, 0.3, 0.1])
-        cx, cy = rendered_center(exr)
+        cx, cy = coverage_centroid(read_full(exr)[0]["A"])
         assert abs(px - cx) < 0.1 and abs(py - cy) < 0.1, (name, px, py, cx, cy)
 
 

@@ -5,7 +5,7 @@ are checked by projecting a small disc's center and finding it where the
 render puts it (the centroid of its coverage), to a tenth of a pixel."""
 import numpy as np
 
-from conftest import run, read_full
+from conftest import coverage_centroid, read_full, run
 
 DISC = """<scene><camera position="0.3 0.2 4" lookat="0 0 0" up="0.1 1 0" fov="40" width="{w}" height="{h}"/>
 <frames rate="24"/>
@@ -44,9 +44,7 @@ def test_world_to_ndc_projects_onto_the_rendered_position(tmp_path):
         ch, h = read_full(out)
         ndc = np.array([x, y, z, 1.0]) @ matrix(h, "worldToNDC")
         px, py = ndc[0] / ndc[3] * width, ndc[1] / ndc[3] * height
-        a = ch["A"].astype(np.float64)
-        rows, cols = np.indices(a.shape)
-        cx, cy = (a * (cols + 0.5)).sum() / a.sum(), (a * (rows + 0.5)).sum() / a.sum()
+        cx, cy = coverage_centroid(ch["A"])
         assert abs(px - cx) < 0.1 and abs(py - cy) < 0.1, (px, py, cx, cy)
         cam = np.array([x, y, z, 1.0]) @ matrix(h, "worldToCamera")
         forward = -np.array([0.3, 0.2, 4.0]) / np.linalg.norm([0.3, 0.2, 4.0])
