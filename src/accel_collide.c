@@ -61,8 +61,10 @@ static int cmp_unsigned(const void *a, const void *b)
  * on the order in which Embree's tasks report pairs. */
 static void prims_sort_unique(accel_prims *p, size_t from)
 {
-    unsigned *ids = p->ids + from;
     size_t n = p->count - from, m = 0;
+    if (n == 0)
+        return;
+    unsigned *ids = p->ids + from;
     qsort(ids, n, sizeof *ids, cmp_unsigned);
     for (size_t i = 0; i < n; i++)
         if (m == 0 || ids[i] != ids[m - 1])

@@ -291,7 +291,8 @@ int exact_gather(const sample_ctx *c)
     for (int i = 0; i < c->p->sc->nobjects; i++)
         if (c->p->obj[i].gathered && gather_moving(c, (unsigned)i))
             return -1;
-    qsort(scr->keys, scr->nkeys, sizeof *scr->keys, cmp_u64);
+    if (scr->nkeys > 1)
+        qsort(scr->keys, scr->nkeys, sizeof *scr->keys, cmp_u64);
     return 0;
 }
 
@@ -523,14 +524,16 @@ static void window_at(const cand_eval *ev, int n, double eps, int *set, int *nse
 static int emit_piece(exact_scratch *scr, double a, double b, const int *set, int n)
 {
     piece *last = scr->npieces ? &scr->leaves[scr->npieces - 1] : NULL;
-    if (last && last->b == a && last->count == n && !memcmp(scr->sets + last->first, set, (size_t)n * sizeof *set)) {
+    if (last && last->b == a && last->count == n &&
+        (n == 0 || !memcmp(scr->sets + last->first, set, (size_t)n * sizeof *set))) {
         last->b = b;
         return 0;
     }
     if (grow((void **)&scr->leaves, &scr->leaves_cap, scr->npieces + 1, sizeof *scr->leaves) ||
         grow((void **)&scr->sets, &scr->sets_cap, scr->nsets + (size_t)n, sizeof *scr->sets))
         return -1;
-    memcpy(scr->sets + scr->nsets, set, (size_t)n * sizeof *set);
+    if (n > 0) /* sets may still be unallocated (NULL) for empty sets */
+        memcpy(scr->sets + scr->nsets, set, (size_t)n * sizeof *set);
     scr->leaves[scr->npieces++] = (piece){a, b, scr->nsets, n};
     scr->nsets += (size_t)n;
     return 0;
