@@ -1,5 +1,5 @@
 """Issue 18.8: write faults. Every output (final EXR, render state, merge,
-preview, frames, gen and surfels PLY) either completes or leaves the previous
+preview, frames, gen and surfels PLY, scene export) either completes or leaves the previous
 file untouched, and the exit status says which: the LD_PRELOAD shim
 tests/faultinject.c makes the Nth write to a regular file (and every later
 one: a disk that stays full) or the Nth rename fail, for every N until a run
@@ -142,3 +142,15 @@ def test_failed_periodic_checkpoint_keeps_the_previous_and_the_render_goes_on(tm
     assert "checkpoint not written, the previous one is kept" in proc.stderr
     assert out.exists()
     assert [p.name for p in tmp_path.iterdir() if ".tmp-" in p.name] == []
+
+
+@pytest.mark.parametrize("op", ["write", "rename"])
+def test_scene_export(tmp_path, scene, op):
+    good = tmp_path / "good"
+    good.mkdir()
+    assert run(["export", scene, "--frames", "0-2", "-o", good / "s.json"]).returncode == 0
+    out = tmp_path / "s.json"
+
+    def complete(path):
+        return path.read_bytes() == (good / "s.json").read_bytes()
+    assert check_every_fault(tmp_path, ["export", scene, "--frames", "0-2", "-o", out], [out], complete, op) >= 1
