@@ -9,7 +9,7 @@ int tangent_from_name(const char *name, tangent_kind *k)
         const char *name;
         tangent_kind kind;
     } names[] = {{"linear", TAN_LINEAR}, {"flat", TAN_FLAT},       {"spline", TAN_SPLINE},
-                 {"clamped", TAN_CLAMPED}, {"plateau", TAN_CLAMPED}, {"auto", TAN_CLAMPED},
+                 {"clamped", TAN_CLAMPED}, {"plateau", TAN_CLAMPED}, {"auto", TAN_AUTO},
                  {"fixed", TAN_FIXED},   {"step", TAN_STEP},       {"stepnext", TAN_STEPNEXT}};
     for (size_t i = 0; i < sizeof names / sizeof names[0]; i++)
         if (!strcmp(name, names[i].name)) {
@@ -80,6 +80,8 @@ static double tangent_slope(const curve *c, int i, tangent_kind kind, double ang
         return spline_slope(c, i);
     case TAN_CLAMPED:
         return clamped_slope(c, i);
+    case TAN_AUTO: /* animx autoTangent: a key without a neighbour on either side is flat */
+        return i == 0 || i == n - 1 ? 0.0 : clamped_slope(c, i);
     case TAN_FIXED:
         return tan(angle);
     default: /* flat, step, stepnext */

@@ -9,10 +9,13 @@
  *   flat     0
  *   spline   (v_n - v_p) / (t_n - t_p)  (Catmull-Rom; C1 across the key);
  *            at the first/last key the one-sided secant
- *   clamped, plateau, auto
+ *   clamped, plateau
  *            the spline slope, but 0 at a local extremum (or next to an equal
  *            value), and at most 3x the smaller adjacent secant so the
  *            segment never overshoots its keys (Fritsch-Carlson)
+ *   auto     as clamped between keys, but flat (0) at the first and the last
+ *            key (Autodesk animx's autoTangent, which computes auto tangents
+ *            "in the exact same way as Maya")
  *   fixed    tan(angle), the angle given with the key
  *   step     out: the segment keeps the first key's value up to the next key
  *   stepnext out: the segment takes the next key's value right away
@@ -25,7 +28,7 @@
 #include "common.h"
 
 typedef enum {
-    TAN_LINEAR, TAN_FLAT, TAN_SPLINE, TAN_CLAMPED, TAN_FIXED, TAN_STEP, TAN_STEPNEXT
+    TAN_LINEAR, TAN_FLAT, TAN_SPLINE, TAN_CLAMPED, TAN_FIXED, TAN_STEP, TAN_STEPNEXT, TAN_AUTO
 } tangent_kind;
 
 typedef enum { INF_CONSTANT, INF_LINEAR, INF_CYCLE, INF_CYCLE_RELATIVE, INF_OSCILLATE } infinity_kind;
@@ -44,7 +47,7 @@ typedef struct {
 } curve;
 
 /* Parses a tangent or infinity name (as in .anim files and the scene XML).
- * "plateau" and "auto" map to TAN_CLAMPED. Returns -1 if unknown. */
+ * "plateau" maps to TAN_CLAMPED. Returns -1 if unknown. */
 int tangent_from_name(const char *name, tangent_kind *k);
 int infinity_from_name(const char *name, infinity_kind *k);
 

@@ -135,5 +135,29 @@ TEST(bad_keys_are_rejected)
     keys[1].time = 2, keys[1].value = NAN;
     CHECK(curve_prepare(&c, &e) == -1 && strstr(e.msg, "NaN"));
     tangent_kind t;
-    CHECK(tangent_from_name("slow", &t) == -1 && tangent_from_name("auto", &t) == 0 && t == TAN_CLAMPED);
+    CHECK(tangent_from_name("slow", &t) == -1 && tangent_from_name("auto", &t) == 0 && t == TAN_AUTO);
+}
+
+/* Keys (0, 0), (1, 1), (2, 0). auto (animx's autoTangent): flat at both
+ * ends, flat at the peak, so each segment is 3u^2 - 2u^3 and the value at
+ * t = 0.5 is 0.5. clamped keeps the one-sided secant (slope 1) at the first
+ * key: Hermite 0.125 * 1 + 0.5 * 1 = 0.625. */
+TEST(auto_tangents_are_flat_at_the_ends_as_animx_computes_them)
+{
+    const double tv[] = {0, 0, 1, 1, 2, 0};
+    curve c = make(3, tv, TAN_AUTO, TAN_AUTO, INF_CONSTANT, INF_CONSTANT);
+    CHECK_NEAR(curve_eval(&c, 0.5), 0.5, 1e-15);
+    CHECK_NEAR(curve_eval(&c, 1.5), 0.5, 1e-15);
+    curve_free(&c);
+    c = make(3, tv, TAN_CLAMPED, TAN_CLAMPED, INF_CONSTANT, INF_CONSTANT);
+    CHECK_NEAR(curve_eval(&c, 0.5), 0.625, 1e-15);
+    curve_free(&c);
+    /* rising keys (0, 0), (1, 1), (2, 3): between, as clamped: spline slope
+     * 1.5, within 3x the smaller secant (3) */
+    const double up[] = {0, 0, 1, 1, 2, 3};
+    c = make(3, up, TAN_AUTO, TAN_AUTO, INF_CONSTANT, INF_CONSTANT);
+    curve d = make(3, up, TAN_CLAMPED, TAN_CLAMPED, INF_CONSTANT, INF_CONSTANT);
+    CHECK(c.keys[1].in_slope == 1.5 && c.keys[1].out_slope == d.keys[1].out_slope);
+    CHECK(c.keys[0].out_slope == 0.0 && c.keys[2].in_slope == 0.0);
+    curve_free(&c), curve_free(&d);
 }
