@@ -276,3 +276,17 @@ TEST(exact_matches_sampled_keyframes_camera_spheres)
                            "</scene>",
                            12, 6000) == 0);
 }
+
+TEST(exact_matches_sampled_animated_scale_point_light_exp_weight)
+{
+    CHECK(exact_vs_sampled("<scene><camera position='0 0 5' lookat='0 0 0' fov='40' width='64' height='64'/>"
+                           "<shutter open='0' close='1' weight='exp' center='0.7' rate='3'/>"
+                           "<light type='point' position='-2 2 4'/><render epsilon='0.03'/>"
+                           "<object><pointModel generate='plane' count='2500' radius='1' checker='5'/>"
+                           "<material specular='0.5' shininess='20'/>"
+                           "<animation><keyframes interpolation='spline'>"
+                           "<key time='0' translate='-0.6 0 0' rotate='0 60 0' scale='1.6 0.3 1'/>"
+                           "<key time='1' translate='0.6 0.2 0' rotate='20 75 10' scale='0.8 0.6 1'/>"
+                           "</keyframes></animation></object></scene>",
+                           12, 6000) == 0);
+}
