@@ -140,6 +140,7 @@ void exact_scratch_free(exact_scratch *scr)
     if (!scr)
         return;
     free(scr->keys);
+    free(scr->info);
     free(scr->prims.ids);
     free(scr->boxes);
     free(scr->lists);
@@ -178,6 +179,32 @@ const object_ray *exact_object_ray(const sample_ctx *c, unsigned obj, double t)
     r->world_org = org, r->world_dir = dir;
     r->time = t, r->valid = 1;
     return r;
+}
+
+/* ---- geometry of a candidate ---------------------------------------------- */
+
+static vec3 f3(const float *a) { return v3(a[0], a[1], a[2]); }
+
+/* The largest factor by which the ellipse coordinates (du.q, dv.q) stretch
+ * an in-plane displacement q: the spectral norm of the 2x3 map, from the
+ * larger eigenvalue of its 2x2 Gram matrix (1 / the smaller radius). */
+static double dual_norm(const splat_geom *g)
+{
+    vec3 du = f3(g->dual_u), dv = f3(g->dual_v);
+    double a = v3_dot(du, du), b = v3_dot(du, dv), c = v3_dot(dv, dv);
+    double lambda = 0.5 * (a + c) + sqrt(0.25 * (a - c) * (a - c) + b * b);
+    return sqrt(lambda) * (1 + 1e-12);
+}
+
+/* The farthest a point of the primitive is from the model-space point c. */
+static double primitive_reach(const scene_object *o, unsigned prim, vec3 c)
+{
+    if (o->kind == OBJECT_SPHERE)
+        return v3_len(v3_sub(o->sphere_center, c)) + o->sphere_radius;
+    const float *e = &o->model.extent[3 * (size_t)prim];
+    /* twice the splat's radius: a plane crossing within the slack of the
+     * ellipse (splat_eval, slack < 1) is inside it */
+    return v3_len(v3_sub(f3(o->model.geom[prim].center), c)) + 2.0 * sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
 }
 
 /* ---- step 1: candidates --------------------------------------------------- */
@@ -282,6 +309,32 @@ static int gather_static(const sample_ctx *c)
     return 0;
 }
 
+static void describe(const exact_plan *p, uint64_t key, cand_info *info)
+{
+    unsigned obj = (unsigned)(key >> 32), prim = (unsigned)key;
+    const scene_object *o = &p->sc->objects[obj];
+    info->obj = obj, info->prim = prim;
+    info->reach = primitive_reach(o, prim, p->obj[obj].center);
+    if (o->kind == OBJECT_SPHERE)
+        return;
+    const splat_geom *g = &o->model.geom[prim];
+    info->center = f3(g->center), info->normal = f3(g->plane_normal);
+    info->dual_u = f3(g->dual_u), info->dual_v = f3(g->dual_v);
+    info->dual_norm = dual_norm(g);
+    info->shading_normal = f3(pointmodel_normal(&o->model, prim));
+}
+
+/* The certificates' per-candidate constants (exact_internal.h). */
+static int describe_candidates(const sample_ctx *c)
+{
+    exact_scratch *scr = c->scr;
+    if (grow((void **)&scr->info, &scr->info_cap, scr->nkeys + 1, sizeof *scr->info))
+        return -1;
+    for (size_t i = 0; i < scr->nkeys; i++)
+        describe(c->p, scr->keys[i], &scr->info[i]);
+    return 0;
+}
+
 int exact_gather(const sample_ctx *c)
 {
     exact_scratch *scr = c->scr;
@@ -293,7 +346,7 @@ int exact_gather(const sample_ctx *c)
             return -1;
     if (scr->nkeys > 1)
         qsort(scr->keys, scr->nkeys, sizeof *scr->keys, cmp_u64);
-    return 0;
+    return describe_candidates(c);
 }
 
 int exact_candidates(const exact_plan *p, exact_scratch *scr, double x, double y, const unsigned **objs,
@@ -325,19 +378,6 @@ int exact_context(const exact_plan *p, exact_scratch *scr, double x, double y, e
 
 /* ---- step 2: certified pieces -------------------------------------------- */
 
-static vec3 f3(const float *a) { return v3(a[0], a[1], a[2]); }
-
-/* The largest factor by which the ellipse coordinates (du.q, dv.q) stretch
- * an in-plane displacement q: the spectral norm of the 2x3 map, from the
- * larger eigenvalue of its 2x2 Gram matrix (1 / the smaller radius). */
-static double dual_norm(const splat_geom *g)
-{
-    vec3 du = f3(g->dual_u), dv = f3(g->dual_v);
-    double a = v3_dot(du, du), b = v3_dot(du, dv), c = v3_dot(dv, dv);
-    double lambda = 0.5 * (a + c) + sqrt(0.25 * (a - c) * (a - c) + b * b);
-    return sqrt(lambda) * (1 + 1e-12);
-}
-
 /* A splat at the piece's middle, and whether its state holds over the piece.
  * Hit plane crossing P (depth s), ellipse radius r. Over the piece:
  * - the crossing moves by at most sigma = delta / (|D.n| - eps_d) in depth
@@ -350,17 +390,16 @@ static double dual_norm(const splat_geom *g)
  * so r > 1 + kappa move: never covered; r < 1 - kappa move and s > sigma:
  * always covered. D moves by at most eps_d (its turn rate). The same argument run backwards from a hit at another
  * time gives the first (a hit then puts P within move of the ellipse). */
-static cand_eval splat_eval(const scene_object *o, unsigned prim, const object_ray *r, double delta, double eps_d)
+static cand_eval splat_eval(const cand_info *g, const object_ray *r, double delta, double eps_d)
 {
-    const splat_geom *g = &o->model.geom[prim];
-    vec3 n = f3(g->plane_normal), co = v3_sub(f3(g->center), r->org);
+    vec3 n = g->normal, co = v3_sub(g->center, r->org);
     double denom = v3_dot(r->dir, n);
     cand_eval e = {0, 1, INFINITY, 0.0};
     double radius = INFINITY;
     if (denom != 0) {
         e.s = v3_dot(co, n) / denom;
         vec3 q = v3_sub(v3_scale(r->dir, e.s), co);
-        double a = v3_dot(f3(g->dual_u), q), b = v3_dot(f3(g->dual_v), q);
+        double a = v3_dot(g->dual_u, q), b = v3_dot(g->dual_v, q);
         radius = sqrt(a * a + b * b);
     }
     e.hit = denom != 0 && e.s >= 0 && radius <= 1;
@@ -373,9 +412,9 @@ static cand_eval splat_eval(const scene_object *o, unsigned prim, const object_r
         return e;
     e.sigma = delta / (cabs - eps_d);
     double move = e.sigma * (v3_len(r->dir) + eps_d);
-    double slack = dual_norm(g) * move;
+    double slack = g->dual_norm * move;
     /* which side of the shading normal faces the eye must not change either */
-    double side = fabs(v3_dot(f3(pointmodel_normal(&o->model, prim)), r->dir));
+    double side = fabs(v3_dot(g->shading_normal, r->dir));
     e.sure = radius > 1 + slack || (e.s < -e.sigma && slack < 1) || (radius < 1 - slack && e.s > e.sigma && side > eps_d);
     return e;
 }
@@ -410,28 +449,17 @@ static cand_eval sphere_eval(const scene_object *o, const object_ray *r, double 
     return e;
 }
 
-/* The farthest a point of the primitive is from the model-space point c. */
-static double primitive_reach(const scene_object *o, unsigned prim, vec3 c)
-{
-    if (o->kind == OBJECT_SPHERE)
-        return v3_len(v3_sub(o->sphere_center, c)) + o->sphere_radius;
-    const float *e = &o->model.extent[3 * (size_t)prim];
-    /* twice the splat's radius: a plane crossing within the slack of the
-     * ellipse (splat_eval, slack < 1) is inside it */
-    return v3_len(v3_sub(f3(o->model.geom[prim].center), c)) + 2.0 * sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
-}
-
 /* One candidate at the middle of [a, b]: its state, and whether that
  * state holds over the whole piece. */
-static cand_eval evaluate_one(const sample_ctx *c, uint64_t key, double a, double b)
+static cand_eval evaluate_one(const sample_ctx *c, int index, double a, double b)
 {
-    unsigned obj = (unsigned)(key >> 32), prim = (unsigned)key;
-    const object_plan *op = &c->p->obj[obj];
-    const scene_object *o = &c->p->sc->objects[obj];
+    const cand_info *info = &c->scr->info[index];
+    const object_plan *op = &c->p->obj[info->obj];
+    const scene_object *o = &c->p->sc->objects[info->obj];
     double h = b - a;
-    const object_ray *r = exact_object_ray(c, obj, 0.5 * (a + b));
-    double delta = reach_delta(op, primitive_reach(o, prim, op->center), h);
-    return o->kind == OBJECT_SPHERE ? sphere_eval(o, r, delta) : splat_eval(o, prim, r, delta, op->dir_rate * h * 0.5);
+    const object_ray *r = exact_object_ray(c, info->obj, 0.5 * (a + b));
+    double delta = reach_delta(op, info->reach, h);
+    return o->kind == OBJECT_SPHERE ? sphere_eval(o, r, delta) : splat_eval(info, r, delta, op->dir_rate * h * 0.5);
 }
 
 /* Evaluates list[0..n) on [a, b] into ev. A candidate whose state was
@@ -441,7 +469,7 @@ static void evaluate(const sample_ctx *c, const int *list, const cand_eval *inhe
                      cand_eval *ev)
 {
     for (int i = 0; i < n; i++)
-        ev[i] = inherited && inherited[i].sure ? inherited[i] : evaluate_one(c, c->scr->keys[list[i]], a, b);
+        ev[i] = inherited && inherited[i].sure ? inherited[i] : evaluate_one(c, list[i], a, b);
 }
 
 /* Re-evaluates the inherited hits on [a, b] itself: their depth ranges
@@ -451,7 +479,7 @@ static void refresh(const sample_ctx *c, const int *list, int n, double a, doubl
 {
     for (int i = 0; i < n; i++)
         if (ev[i].hit)
-            ev[i] = evaluate_one(c, c->scr->keys[list[i]], a, b);
+            ev[i] = evaluate_one(c, list[i], a, b);
 }
 
 static int cmp_depth(const void *a, const void *b)

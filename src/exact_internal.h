@@ -45,6 +45,15 @@ typedef struct {
     vec3 world_org, world_dir;
 } object_ray;
 
+/* What the certificates need of a candidate, computed once per sample. */
+typedef struct {
+    unsigned obj, prim;
+    vec3 center, normal, dual_u, dual_v; /* splat (model space) */
+    vec3 shading_normal;
+    double dual_norm; /* splat: spectral norm of [du; dv] */
+    double reach;     /* farthest point from the object's motion center */
+} cand_info;
+
 typedef struct {
     int hit, sure;   /* covered at the middle; state certain over the piece */
     double s, sigma; /* depth at the middle and how far it can move */
@@ -59,6 +68,8 @@ typedef struct {
 struct exact_scratch {
     uint64_t *keys; /* candidates: object << 32 | primitive, sorted */
     size_t nkeys, keys_cap;
+    cand_info *info; /* one per key */
+    size_t info_cap;
     accel_prims prims;
     aabb *boxes;
     size_t boxes_cap;
