@@ -96,3 +96,29 @@ def test_time_samples_do_not_matter_to_exact_renders(tmp_path):
     for c in "RGBA":
         assert np.array_equal(e1[c], e8[c])
     assert not np.array_equal(s1["R"], s8["R"])
+
+
+def test_shutter_override(tmp_path):
+    """--shutter 0,0.4 on the disc of the test above: a ray at (x, y) is
+    covered for t in [0.5 + (x - w) / 2, 0.5 + (x + w) / 2], w =
+    sqrt(0.25 - y^2), so within [0, 0.4] for (w / 2 - 0.1 - x / 2) / 0.4 of
+    the shutter; each pixel column's x range bounds its coverage. The header
+    names the interval."""
+    scene = tmp_path / "d.xml"
+    scene.write_text("""<scene><camera position="0 0 4" lookat="0 0 0" fov="1" width="4" height="4"/>
+<shutter open="0" close="1"/><object position="-1 0 0"><pointModel>
+<splat center="0 0 0" normal="0 0 1" radius="0.5" color="1 1 1"/></pointModel>
+<material shading="unlit"/><animation><linear velocity="2 0 0"/></animation></object></scene>""")
+    out = tmp_path / "d.exr"
+    proc = run([scene, "-o", out, "--time-integration", "exact", "--spp", 1, "--shutter", "0,0.4", "--quiet"])
+    assert proc.returncode == 0, proc.stderr
+    ch, h = read_full(out)
+    assert h["refrender:shutter"] == "0 0.40000000000000002" and h["refrender:shutterClose"] == 0.4
+    half = 4 * math.tan(math.radians(0.5))  # the image spans x, y in [-half, half] at the disc
+    w_min = math.sqrt(0.25 - half ** 2)
+    for j in range(4):
+        x_lo, x_hi = half * (2 * j / 4 - 1), half * (2 * (j + 1) / 4 - 1)
+        low, high = (w_min / 2 - 0.1 - x_hi / 2) / 0.4, (0.25 - 0.1 - x_lo / 2) / 0.4
+        assert np.all(ch["A"][:, j] >= low - 1e-6) and np.all(ch["A"][:, j] <= high + 1e-6), (j, low, high)
+    bad = run([scene, "-o", out, "--shutter", "1,0.5"])
+    assert bad.returncode == 2 and "OPEN < CLOSE" in bad.stderr

@@ -63,6 +63,8 @@ static void usage(FILE *f)
 "  --res WxH        image size (default: scene <camera width height>)\n"
 "  --eps X          epsilon-blending distance in world units (default: scene, else 0.01)\n"
 "  --sigma X        Gaussian kernel sigma in splat radii (default: scene, else 0.5)\n"
+"  --shutter O,C    shutter interval [O, C] (frame 0's with <frames>); a(t)'s\n"
+"                   center and table stay as the scene gives them\n"
 "Frames (scenes with <frames rate>; frame N starts at time N / rate):\n"
 "  --frame N        render frame N (default: the scene's shutter as given, frame 0)\n"
 "  --frames A-B     render frames A to B; -o (and --preview) must then hold one\n"
@@ -89,6 +91,8 @@ typedef struct {
     int pass, passes; /* passes > 0: --pass pass/passes */
     int no_static_reuse;
     int exact_time, tspp_given, sampler_given; /* --time-integration exact */
+    int shutter_set;                            /* --shutter OPEN,CLOSE */
+    double shutter_open, shutter_close;
     int frames, first_frame, last_frame; /* frames: 0 none, 1 --frame, 2 --frames */
     sampler_kind sampler;
     double eps, sigma, target_error, checkpoint_every; /* eps, sigma < 0: from the scene */
@@ -99,7 +103,7 @@ typedef struct {
 enum { OPT_SPP = 256, OPT_TSPP, OPT_RES, OPT_THREADS, OPT_SEED, OPT_EPS, OPT_SIGMA, OPT_TFACTOR,
        OPT_PREVIEW, OPT_QUIET, OPT_VERSION, OPT_SAMPLER, OPT_BATCHES, OPT_TARGET, OPT_MAXB, OPT_PASS,
        OPT_CKPT, OPT_CKPT_EVERY, OPT_RESUME, OPT_NO_REUSE, OPT_FRAME, OPT_FRAMES,
-       OPT_TIME_INTEGRATION };
+       OPT_TIME_INTEGRATION, OPT_SHUTTER };
 
 static int parse_pass(const char *arg, render_options *o, rr_error *err)
 {
@@ -142,6 +146,14 @@ static int parse_option(int c, const char *arg, render_options *o, rr_error *err
             return -1;
         o->last_frame = o->first_frame;
         return 0;
+    case OPT_SHUTTER: {
+        char extra;
+        if (sscanf(arg, "%lf,%lf%c", &o->shutter_open, &o->shutter_close, &extra) != 2 ||
+            !isfinite(o->shutter_open) || !isfinite(o->shutter_close) || !(o->shutter_close > o->shutter_open))
+            return rr_fail(err, "--shutter: expected OPEN,CLOSE with OPEN < CLOSE, got '%s'", arg);
+        o->shutter_set = 1;
+        return 0;
+    }
     case OPT_TIME_INTEGRATION:
         if (strcmp(arg, "sampled") && strcmp(arg, "exact"))
             return rr_fail(err, "--time-integration: expected sampled or exact, got '%s'", arg);
@@ -204,6 +216,7 @@ static int parse_args(int argc, char **argv, render_options *o)
         {"no-static-reuse", no_argument, 0, OPT_NO_REUSE}, {"frame", required_argument, 0, OPT_FRAME},
         {"frames", required_argument, 0, OPT_FRAMES},
         {"time-integration", required_argument, 0, OPT_TIME_INTEGRATION},
+        {"shutter", required_argument, 0, OPT_SHUTTER},
         {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
     int c;
     rr_error err;
@@ -276,6 +289,11 @@ static int apply_overrides(scene *s, const render_options *o, rr_error *err)
         s->kernel_sigma = o->sigma;
     if (o->time_factor > 0)
         s->time_factor = o->time_factor;
+    if (o->shutter_set) { /* a(t)'s own parameters (center, table) stay as the scene gives them */
+        s->shut.open = o->shutter_open, s->shut.close = o->shutter_close;
+        if (shutter_check(&s->shut, err))
+            return -1;
+    }
     return camera_prepare(&s->cam, err);
 }
 
