@@ -57,6 +57,18 @@ static void camera_matrices(attr_list *a, const camera *cam)
     set_matrix(a, "worldToNDC", ndc);
 }
 
+/* The scene parameters applied, "name=value ..." ("none" without any):
+ * part of the render's identity, as they change the scene. */
+static void describe_parameters(attr_list *a, const scene_params *p)
+{
+    char buf[4096];
+    size_t len = 0;
+    buf[0] = 0;
+    for (int i = 0; i < p->n && len < sizeof buf; i++)
+        len += (size_t)snprintf(buf + len, sizeof buf - len, "%s%s=%s", i ? " " : "", p->name[i], p->value[i]);
+    attrs_set(a, "refrender:parameters", "%s", p->n ? buf : "none");
+}
+
 void attrs_for_render(attr_list *a, const scene *s, const render_settings *rs, uint32_t total_batches,
                       const char *command)
 {
@@ -66,6 +78,7 @@ void attrs_for_render(attr_list *a, const scene *s, const render_settings *rs, u
     attrs_set(a, "refrender:scene", "%s", s->path);
     attrs_set(a, "refrender:sceneHash", "%016" PRIx64, s->scene_hash);
     attrs_set(a, "refrender:inputsHash", "%016" PRIx64, s->inputs_hash);
+    describe_parameters(a, &s->params);
     attrs_set(a, "refrender:resolution", "%dx%d", s->cam.width, s->cam.height);
     attrs_set(a, "refrender:sampler", "%s", sampler_name(smp->kind));
     attrs_set(a, "refrender:spp", "%d", smp->grid * smp->grid);

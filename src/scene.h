@@ -45,6 +45,18 @@ typedef struct {
     animation anim;
 } scene_object;
 
+/* Scene parameters: -D name=value on the command line, <default> in the
+ * file, $name in attribute values (scene_params.c). */
+#define SCENE_MAX_PARAMS 32
+#define SCENE_PARAM_NAME 64
+#define SCENE_PARAM_VALUE 512
+typedef struct {
+    int n;
+    char name[SCENE_MAX_PARAMS][SCENE_PARAM_NAME];
+    char value[SCENE_MAX_PARAMS][SCENE_PARAM_VALUE];
+    int used[SCENE_MAX_PARAMS];
+} scene_params;
+
 typedef enum { LIGHT_POINT, LIGHT_DIRECTIONAL } light_kind;
 
 typedef struct {
@@ -61,6 +73,7 @@ typedef struct {
     char **inputs;        /* those files' paths (owned), for refusing outputs onto them */
     int ninputs;
     rr_warnings warnings; /* from reading the scene and its files, for the caller to print */
+    scene_params params;  /* the parameters applied (given and defaults), for the render's identity */
     camera cam;
     animation camera_motion; /* the camera's rest pose moved like an object (rigid) */
     shutter shut;            /* as the file gives it: frame 0's with <frames> (scene_frame_shutter) */

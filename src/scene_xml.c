@@ -391,7 +391,8 @@ static int parse_scene(xml_ctx *c, xmlDocPtr doc, scene *s)
         return rr_fail(c->err, "%s:%ld: root element must be <scene>", c->name,
                        root ? xmlGetLineNo(root) : 1L);
     static const char *const ok[] = {NULL};
-    if (xml_check_attributes(c, root, ok) || xml_check_no_text(c, root))
+    if (xml_check_attributes(c, root, ok) || xml_check_no_text(c, root) ||
+        xml_apply_parameters(c, root, c->params, &s->params))
         return -1;
     if (camera_prepare(&s->cam, c->err))
         return -1;
@@ -430,6 +431,12 @@ static void record_xml_error(void *user, xmlErrorPtr e)
 int scene_load_memory(const char *xml, size_t len, const char *name, const char *base_dir,
                       scene *s, rr_error *err)
 {
+    return scene_load_memory_params(xml, len, name, base_dir, NULL, s, err);
+}
+
+int scene_load_memory_params(const char *xml, size_t len, const char *name, const char *base_dir,
+                             const scene_params *params, scene *s, rr_error *err)
+{
     xml_error_sink sink = {{{0}}, name};
     scene_init(s); /* on any error s is left empty, safe to scene_free */
     if (len > SCENE_MAX_BYTES)
@@ -442,7 +449,7 @@ int scene_load_memory(const char *xml, size_t len, const char *name, const char 
     if (!doc)
         return rr_fail(err, "%s", sink.first.msg[0] ? sink.first.msg : "cannot parse scene");
     snprintf(s->path, sizeof s->path, "%s", name);
-    xml_ctx c = {name, base_dir, &s->inputs_hash, s, 0, 0, 0, err};
+    xml_ctx c = {name, base_dir, &s->inputs_hash, s, 0, 0, 0, err, params};
     int rc = parse_scene(&c, doc, s);
     xmlFreeDoc(doc);
     if (rc)
@@ -451,6 +458,11 @@ int scene_load_memory(const char *xml, size_t len, const char *name, const char 
 }
 
 int scene_load_file(const char *path, scene *s, rr_error *err)
+{
+    return scene_load_file_params(path, NULL, s, err);
+}
+
+int scene_load_file_params(const char *path, const scene_params *params, scene *s, rr_error *err)
 {
     scene_init(s);
     if (strlen(path) >= sizeof s->path)
@@ -466,7 +478,7 @@ int scene_load_file(const char *path, scene *s, rr_error *err)
         *slash = 0;
     else
         strcpy(dir, ".");
-    int rc = scene_load_memory(in.data, in.len, path, dir, s, err);
+    int rc = scene_load_memory_params(in.data, in.len, path, dir, params, s, err);
     input_file_free(&in);
     if (!rc && scene_add_input(s, path)) {
         scene_free(s);

@@ -18,6 +18,7 @@ typedef struct {
     double shutter_fraction; /* of the frame interval; 0: open/close given */
     int shutter_center_given, shutter_line;
     rr_error *err;
+    const scene_params *params; /* given on the command line (may be NULL) */
 } xml_ctx;
 
 const char *xml_elname(xmlNodePtr n);
@@ -64,5 +65,9 @@ int xml_element_text(xmlNodePtr n, char *buf, size_t size);
 /* <animation> of an object or the camera: linear/rotation, keyframes or a
  * .anim file (scene_xml_anim.c). */
 int xml_parse_animation(xml_ctx *c, xmlNodePtr n, animation *a);
+
+/* Reads the scene's <default>s (removing them), then replaces every $name
+ * in every attribute; *applied receives the parameters used (scene_params.c). */
+int xml_apply_parameters(xml_ctx *c, xmlNodePtr root, const scene_params *given, scene_params *applied);
 
 #endif

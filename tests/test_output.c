@@ -21,7 +21,8 @@ static void identity(attr_list *a, int w, int h)
     static const char *const keys[] = {"refrender:sceneHash", "refrender:inputsHash", "refrender:sampler",
                                        "refrender:spp", "refrender:tspp", "refrender:seed", "refrender:epsilon",
                                        "refrender:kernelSigma", "refrender:shutter", "refrender:weightFunction",
-                                       "refrender:timeFactor", "refrender:batches", "refrender:timeIntegration", NULL};
+                                       "refrender:timeFactor", "refrender:batches", "refrender:timeIntegration",
+                                       "refrender:parameters", NULL};
     a->n = 0;
     for (const char *const *k = keys; *k; k++)
         attrs_set(a, *k, "1");
@@ -94,7 +95,7 @@ TEST(state_channels_must_have_their_types)
     attrs_set(&a, "refrender:state", "batches 0-1");
     exr_string_attr sa[ATTR_MAX];
     for (int i = 0; i < a.n; i++)
-        sa[i] = (exr_string_attr){a.key[i], a.value[i]};
+        sa[i] = (exr_string_attr){a.key[i], a.value[i], RR_ATTR_TEXT};
     exr_channel chs[1] = {{"state.batches", EXR_CHANNEL_FLOAT, words, 4}};
     rr_error e;
     const char *p = state_path("t.exr");

@@ -17,7 +17,8 @@
 static void export_usage(FILE *f)
 {
     fputs(
-"usage: refrender export SCENE.xml [--frame N | --frames A-B] [--times K] -o SCENE.json\n"
+"usage: refrender export SCENE.xml [--frame N | --frames A-B] [--times K] [-D name=value]\n"
+"                        -o SCENE.json\n"
 "\n"
 "Writes the scene as another renderer needs it (README, Exporting scenes):\n"
 "resolution, camera intrinsics, and per frame the world-to-camera matrix,\n"
@@ -29,12 +30,14 @@ static void export_usage(FILE *f)
 "                  scene's shutter as given)\n"
 "  --frames A-B    frames A to B\n"
 "  --times K       sample times per shutter besides open and close (default 8)\n"
+"  -D name=value   scene parameter, as for rendering\n"
 "  -o, --output F  output JSON file (required); written atomically\n", f);
 }
 
 typedef struct {
     const char *scene, *output;
     int frames, first, last, times;
+    scene_params params; /* -D name=value */
 } export_options;
 
 static void json_string(FILE *f, const char *s)
@@ -306,7 +309,7 @@ static int write_file(const char *path, const char *text, size_t len, rr_error *
 static int export_scene(const export_options *o, rr_error *err)
 {
     scene s;
-    if (cli_check_writable(o->output, err) || scene_load_file(o->scene, &s, err))
+    if (cli_check_writable(o->output, err) || scene_load_file_params(o->scene, &o->params, &s, err))
         return -1;
     for (int i = 0; i < s.ninputs; i++)
         if (cli_same_file(o->output, s.inputs[i])) {
@@ -333,9 +336,11 @@ static int parse_export_args(int argc, char **argv, export_options *o, rr_error 
                                              {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
     int c;
     char extra;
-    while ((c = getopt_long(argc, argv, "ho:", longopts, NULL)) != -1) {
+    while ((c = getopt_long(argc, argv, "hD:o:", longopts, NULL)) != -1) {
         if (c == 'h')
             return 1;
+        if (c == 'D' && scene_params_add(&o->params, optarg, err))
+            return -1;
         if (c == 'f' && cli_int("--frame", optarg, INT_MIN, INT_MAX, &o->first, err))
             return -1;
         if (c == 'f')
@@ -359,7 +364,8 @@ static int parse_export_args(int argc, char **argv, export_options *o, rr_error 
 
 int cmd_export(int argc, char **argv)
 {
-    export_options o = {NULL, NULL, 0, 0, 0, 8};
+    static export_options o; /* the parameters make it large: not on the stack */
+    o.times = 8;
     rr_error err;
     int rc = parse_export_args(argc, argv, &o, &err);
     if (rc == 1) {

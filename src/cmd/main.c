@@ -63,6 +63,8 @@ static void usage(FILE *f)
 "  --res WxH        image size (default: scene <camera width height>)\n"
 "  --eps X          epsilon-blending distance in world units (default: scene, else 0.01)\n"
 "  --sigma X        Gaussian kernel sigma in splat radii (default: scene, else 0.5)\n"
+"  -D name=value    scene parameter: replaces $name in the scene's attribute\n"
+"                   values (repeatable; the scene's <default>s fill the rest)\n"
 "  --shutter O,C    shutter interval [O, C] (frame 0's with <frames>); a(t)'s\n"
 "                   center and table stay as the scene gives them\n"
 "Frames (scenes with <frames rate>; frame N starts at time N / rate):\n"
@@ -92,6 +94,7 @@ typedef struct {
     int no_static_reuse;
     int exact_time, tspp_given, sampler_given; /* --time-integration exact */
     int shutter_set;                            /* --shutter OPEN,CLOSE */
+    scene_params params;                        /* -D name=value */
     double shutter_open, shutter_close;
     int frames, first_frame, last_frame; /* frames: 0 none, 1 --frame, 2 --frames */
     sampler_kind sampler;
@@ -164,6 +167,7 @@ static int parse_option(int c, const char *arg, render_options *o, rr_error *err
         return sampler_from_name(arg, &o->sampler)
                    ? rr_fail(err, "--sampler: expected thesis, jittered3d or sobol, got '%s'", arg) : 0;
     case 'o': o->output = arg; return 0;
+    case 'D': return scene_params_add(&o->params, arg, err);
     case OPT_PREVIEW: o->preview = arg; return 0;
     case OPT_CKPT: o->checkpoint = arg; return 0;
     case OPT_RESUME: o->resume = arg; return 0;
@@ -220,7 +224,7 @@ static int parse_args(int argc, char **argv, render_options *o)
         {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
     int c;
     rr_error err;
-    while ((c = getopt_long(argc, argv, "ho:", longopts, NULL)) != -1) {
+    while ((c = getopt_long(argc, argv, "hD:o:", longopts, NULL)) != -1) {
         if (c == 'h') { usage(stdout); return 1; }
         if (c == OPT_VERSION) { printf("refrender %s\n", RR_VERSION); return 1; }
         if (c == '?') { fputs("Try 'refrender --help'.\n", stderr); return 2; }
@@ -594,7 +598,8 @@ int cmd_render(int argc, char **argv)
     join_args(argc, argv, cmdline, sizeof cmdline);
     if (cli_check_writable(o.output, &err) || (o.preview && cli_check_writable(o.preview, &err)) ||
         (o.preview && preview_check_format(o.preview, &err)) ||
-        (o.checkpoint && cli_check_writable(o.checkpoint, &err)) || scene_load_file(o.scene, &s, &err)) {
+        (o.checkpoint && cli_check_writable(o.checkpoint, &err)) ||
+        scene_load_file_params(o.scene, &o.params, &s, &err)) {
         fprintf(stderr, "refrender: %s\n", err.msg);
         return 1;
     }
