@@ -57,13 +57,20 @@ static exr_result_t set_attr(exr_context_t ctx, int part, const exr_string_attr 
     return exr_attr_set_string(ctx, part, a->key, a->value);
 }
 
-static exr_result_t write_header(exr_context_t ctx, int w, int h, const exr_channel *chs, int nch,
+static exr_result_t write_header(exr_context_t ctx, const exr_window *win, const exr_channel *chs, int nch,
                                  const exr_string_attr *attrs, int nattrs)
 {
     int part;
     exr_result_t rc = exr_add_part(ctx, "image", EXR_STORAGE_SCANLINE, &part);
+    exr_attr_box2i_t display, data;
+    display.min.x = 0, display.min.y = 0, display.max.x = win->full_w - 1, display.max.y = win->full_h - 1;
+    data.min.x = win->x0, data.min.y = win->y0;
+    data.max.x = win->x0 + win->w - 1, data.max.y = win->y0 + win->h - 1;
+    exr_attr_v2f_t center;
+    center.x = 0.0f, center.y = 0.0f;
     if (!rc)
-        rc = exr_initialize_required_attr_simple(ctx, part, w, h, EXR_COMPRESSION_ZIP);
+        rc = exr_initialize_required_attr(ctx, part, &display, &data, 1.0f, &center, 1.0f, EXR_LINEORDER_INCREASING_Y,
+                                          EXR_COMPRESSION_ZIP);
     for (int c = 0; c < nch && !rc; c++)
         rc = exr_add_channel(ctx, part, chs[c].name, pixel_type(chs[c].type), EXR_PERCEPTUALLY_LINEAR, 1, 1);
     for (int i = 0; i < nattrs && !rc; i++)
@@ -107,8 +114,9 @@ static exr_result_t choose_routines(exr_context_t ctx, exr_encode_pipeline_t *en
     return rc;
 }
 
-static exr_result_t write_chunks(exr_context_t ctx, int w, int h, const exr_channel *chs, int nch)
+static exr_result_t write_chunks(exr_context_t ctx, const exr_window *win, const exr_channel *chs, int nch)
 {
+    int w = win->w, h = win->h;
     int32_t lines_per_chunk;
     exr_result_t rc = exr_get_scanlines_per_chunk(ctx, 0, &lines_per_chunk);
     exr_encode_pipeline_t enc = EXR_ENCODE_PIPELINE_INITIALIZER;
@@ -119,7 +127,7 @@ static exr_result_t write_chunks(exr_context_t ctx, int w, int h, const exr_chan
             rc = EXR_ERR_INVALID_ARGUMENT; /* OpenEXRCore's line stride is 32-bit */
     for (int y = 0; y < h && !rc; y += lines_per_chunk) {
         exr_chunk_info_t cinfo;
-        rc = exr_write_scanline_chunk_info(ctx, 0, y, &cinfo);
+        rc = exr_write_scanline_chunk_info(ctx, 0, win->y0 + y, &cinfo);
         if (!rc)
             rc = initialized ? exr_encoding_update(ctx, 0, &cinfo, &enc)
                              : exr_encoding_initialize(ctx, 0, &cinfo, &enc);
@@ -148,6 +156,13 @@ static exr_result_t write_chunks(exr_context_t ctx, int w, int h, const exr_chan
 int exr_write(const char *path, int w, int h, const exr_channel *channels, int nchannels,
               const exr_string_attr *attrs, int nattrs, rr_error *err)
 {
+    exr_window whole = {w, h, 0, 0, w, h};
+    return exr_write_window(path, &whole, channels, nchannels, attrs, nattrs, err);
+}
+
+int exr_write_window(const char *path, const exr_window *win, const exr_channel *channels, int nchannels,
+                     const exr_string_attr *attrs, int nattrs, rr_error *err)
+{
     char tmp[PATH_MAX + 64];
     if (atomic_create(path, "", tmp, sizeof tmp, err))
         return -1;
@@ -159,9 +174,9 @@ int exr_write(const char *path, int w, int h, const exr_channel *channels, int n
         atomic_discard(tmp);
         return exr_fail(err, path, "cannot start writing", rc);
     }
-    rc = write_header(ctx, w, h, channels, nchannels, attrs, nattrs);
+    rc = write_header(ctx, win, channels, nchannels, attrs, nattrs);
     if (!rc)
-        rc = write_chunks(ctx, w, h, channels, nchannels);
+        rc = write_chunks(ctx, win, channels, nchannels);
     exr_result_t fin = exr_finish(&ctx);
     if (!rc)
         rc = fin;

@@ -34,6 +34,16 @@ typedef struct {
 int exr_write(const char *path, int w, int h, const exr_channel *channels, int nchannels,
               const exr_string_attr *attrs, int nattrs, rr_error *err);
 
+/* A data window (x0, y0, w, h) inside a display window full_w x full_h. */
+typedef struct {
+    int full_w, full_h, x0, y0, w, h;
+} exr_window;
+
+/* The same for an image covering only the data window (the channels hold
+ * its w x h pixels); readers see the full display window. */
+int exr_write_window(const char *path, const exr_window *win, const exr_channel *channels, int nchannels,
+                     const exr_string_attr *attrs, int nattrs, rr_error *err);
+
 /* Interleaved float RGBA (w*h*4) as channels R, G, B, A. */
 int exr_write_rgba(const char *path, int w, int h, const float *rgba, const exr_string_attr *attrs,
                    int nattrs, rr_error *err);

@@ -86,6 +86,21 @@ static exr_string_attr *string_attrs(const attr_list *a, exr_string_attr *out)
 int output_write_final(const char *path, const image *img, int samples_per_batch, const attr_list *a,
                        rr_error *err)
 {
+    exr_window whole = {img->width, img->height, 0, 0, img->width, img->height};
+    return output_write_final_window(path, img, samples_per_batch, a, &whole, err);
+}
+
+/* Moves the window's pixels (elems floats each) to the front, row after row. */
+static void compact_window(float *plane, int elems, const exr_window *win)
+{
+    size_t row = (size_t)win->w * elems;
+    for (int y = 0; y < win->h; y++)
+        memmove(plane + y * row, plane + ((size_t)(win->y0 + y) * win->full_w + win->x0) * elems, row * sizeof *plane);
+}
+
+int output_write_final_window(const char *path, const image *img, int samples_per_batch, const attr_list *a,
+                              const exr_window *win, rr_error *err)
+{
     size_t n = (size_t)img->width * img->height;
     float *rgba = malloc(n * 4 * sizeof *rgba), *var = malloc(n * 4 * sizeof *var);
     float *se = malloc(n * 4 * sizeof *se), *samples = malloc(n * sizeof *samples);
@@ -105,8 +120,11 @@ int output_write_final(const char *path, const image *img, int samples_per_batch
             for (int c = 0; c < 4; c++)
                 chs[nch++] = (exr_channel){names[k][c], EXR_CHANNEL_FLOAT, planes[k] + c, 16};
         chs[nch++] = (exr_channel){"samples", EXR_CHANNEL_FLOAT, samples, 4};
+        for (int k = 0; k < 3; k++)
+            compact_window(planes[k], 4, win);
+        compact_window(samples, 1, win);
         exr_string_attr sa[ATTR_MAX];
-        rc = exr_write(path, img->width, img->height, chs, nch, string_attrs(a, sa), a->n, err);
+        rc = exr_write_window(path, win, chs, nch, string_attrs(a, sa), a->n, err);
     } else {
         rr_fail(err, "out of memory");
     }

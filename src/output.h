@@ -39,6 +39,10 @@ const char *attrs_get(const attr_list *a, const char *key);
 
 int output_write_final(const char *path, const image *img, int samples_per_batch, const attr_list *a,
                        rr_error *err);
+/* The same for the pixels x0 <= x < x0 + w, y0 <= y < y0 + h only, written
+ * as the EXR's data window inside the full image (a crop window). */
+int output_write_final_window(const char *path, const image *img, int samples_per_batch, const attr_list *a,
+                              const exr_window *win, rr_error *err);
 /* batch range [begin, end) is recorded in the attributes */
 int output_write_state(const char *path, const image *img, uint32_t begin, uint32_t end, attr_list *a,
                        rr_error *err);

@@ -198,6 +198,12 @@ static int pixel_wants_batch(const render_job *job, const pixel_state *p)
     return p->batches == job->round && pixel_wants_another(job->rs, p);
 }
 
+/* Is the pixel inside the crop window (all are without one)? */
+static int pixel_in_crop(const render_settings *rs, int x, int y)
+{
+    return rs->crop_x1 <= 0 || (x >= rs->crop_x0 && x < rs->crop_x1 && y >= rs->crop_y0 && y < rs->crop_y1);
+}
+
 static void render_tile(render_job *job, int tile, thread_scratch *scr)
 {
     image *img = job->img;
@@ -208,7 +214,7 @@ static void render_tile(render_job *job, int tile, thread_scratch *scr)
     for (int y = ty * TILE; y < y1; y++)
         for (int x = tx * TILE; x < x1; x++) {
             pixel_state *p = &img->px[(size_t)y * img->width + x];
-            if (!pixel_wants_batch(job, p))
+            if (!pixel_in_crop(job->rs, x, y) || !pixel_wants_batch(job, p))
                 continue;
             double est[4];
             if (job->rs->exact_time)
@@ -375,7 +381,8 @@ static int any_pixel_wants_more(const render_job *job)
     size_t n = (size_t)job->img->width * job->img->height;
     for (size_t i = 0; i < n; i++) {
         const pixel_state *p = &job->img->px[i];
-        if (p->batches >= job->round && pixel_wants_another(job->rs, p))
+        int x = (int)(i % (size_t)job->img->width), y = (int)(i / (size_t)job->img->width);
+        if (pixel_in_crop(job->rs, x, y) && p->batches >= job->round && pixel_wants_another(job->rs, p))
             return 1;
     }
     return 0;

@@ -21,6 +21,7 @@ typedef struct {
     double target_error;    /* > 0: pixels whose RGB standard error is above it get more batches */
     int exact_time;         /* 1: each spatial sample integrated over the shutter exactly (exact.h);
                                the sampler's times are not used */
+    int crop_x0, crop_y0, crop_x1, crop_y1; /* crop_x1 > 0: only pixels x0 <= x < x1, y0 <= y < y1 */
 } render_settings;
 
 

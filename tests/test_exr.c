@@ -15,7 +15,7 @@ TEST(exr_round_trip_is_exact_and_keeps_metadata)
         px[i] = (float)(i % 7) * 0.25f - 0.3f + (float)i * 1e-3f; /* distinct per channel */
     char path[128];
     snprintf(path, sizeof path, "/tmp/refrender-test-%d.exr", (int)getpid());
-    exr_string_attr attrs[1] = {{"refrender:seed", "42"}};
+    exr_string_attr attrs[1] = {{"refrender:seed", "42", RR_ATTR_TEXT}};
     rr_error e;
     CHECK(exr_write_rgba(path, w, h, px, attrs, 1, &e) == 0);
     int rw, rh;

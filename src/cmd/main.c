@@ -65,6 +65,9 @@ static void usage(FILE *f)
 "  --sigma X        Gaussian kernel sigma in splat radii (default: scene, else 0.5)\n"
 "  -D name=value    scene parameter: replaces $name in the scene's attribute\n"
 "                   values (repeatable; the scene's <default>s fill the rest)\n"
+"  --crop-window X0,X1,Y0,Y1  render only the pixels in [X0, X1) x [Y0, Y1)\n"
+"                   (fractions of the image, as pbrt's --cropwindow) into a\n"
+"                   full-size EXR whose data window is that region\n"
 "  --shutter O,C    shutter interval [O, C] (frame 0's with <frames>); a(t)'s\n"
 "                   center and table stay as the scene gives them\n"
 "Frames (scenes with <frames rate>; frame N starts at time N / rate):\n"
@@ -95,6 +98,8 @@ typedef struct {
     int exact_time, tspp_given, sampler_given; /* --time-integration exact */
     int shutter_set;                            /* --shutter OPEN,CLOSE */
     scene_params params;                        /* -D name=value */
+    int crop_set;                               /* --crop-window X0,X1,Y0,Y1 (fractions) */
+    double crop[4];
     double shutter_open, shutter_close;
     int frames, first_frame, last_frame; /* frames: 0 none, 1 --frame, 2 --frames */
     sampler_kind sampler;
@@ -106,7 +111,7 @@ typedef struct {
 enum { OPT_SPP = 256, OPT_TSPP, OPT_RES, OPT_THREADS, OPT_SEED, OPT_EPS, OPT_SIGMA, OPT_TFACTOR,
        OPT_PREVIEW, OPT_QUIET, OPT_VERSION, OPT_SAMPLER, OPT_BATCHES, OPT_TARGET, OPT_MAXB, OPT_PASS,
        OPT_CKPT, OPT_CKPT_EVERY, OPT_RESUME, OPT_NO_REUSE, OPT_FRAME, OPT_FRAMES,
-       OPT_TIME_INTEGRATION, OPT_SHUTTER };
+       OPT_TIME_INTEGRATION, OPT_SHUTTER, OPT_CROP };
 
 static int parse_pass(const char *arg, render_options *o, rr_error *err)
 {
@@ -157,6 +162,16 @@ static int parse_option(int c, const char *arg, render_options *o, rr_error *err
         o->shutter_set = 1;
         return 0;
     }
+    case OPT_CROP: {
+        char extra;
+        double *c = o->crop;
+        if (sscanf(arg, "%lf,%lf,%lf,%lf%c", &c[0], &c[1], &c[2], &c[3], &extra) != 4 || !(c[0] >= 0 && c[1] <= 1 &&
+            c[0] < c[1] && c[2] >= 0 && c[3] <= 1 && c[2] < c[3]))
+            return rr_fail(err, "--crop-window: expected X0,X1,Y0,Y1 with 0 <= X0 < X1 <= 1 and 0 <= Y0 < Y1 <= 1, "
+                                "got '%s'", arg);
+        o->crop_set = 1;
+        return 0;
+    }
     case OPT_TIME_INTEGRATION:
         if (strcmp(arg, "sampled") && strcmp(arg, "exact"))
             return rr_fail(err, "--time-integration: expected sampled or exact, got '%s'", arg);
@@ -179,6 +194,9 @@ static int parse_option(int c, const char *arg, render_options *o, rr_error *err
 
 static int check_combinations(const render_options *o, rr_error *err)
 {
+    if (o->crop_set && (o->passes || o->checkpoint || o->resume))
+        return rr_fail(err, "--crop-window renders a final image only: it cannot be combined with --pass, "
+                            "--checkpoint or --resume");
     if (o->exact_time && o->tspp_given && o->tspp != 1)
         return rr_fail(err, "--tspp %d: with --time-integration exact each spatial sample is integrated over "
                             "the whole shutter (no time samples); leave --tspp out", o->tspp);
@@ -220,7 +238,7 @@ static int parse_args(int argc, char **argv, render_options *o)
         {"no-static-reuse", no_argument, 0, OPT_NO_REUSE}, {"frame", required_argument, 0, OPT_FRAME},
         {"frames", required_argument, 0, OPT_FRAMES},
         {"time-integration", required_argument, 0, OPT_TIME_INTEGRATION},
-        {"shutter", required_argument, 0, OPT_SHUTTER},
+        {"shutter", required_argument, 0, OPT_SHUTTER}, {"crop-window", required_argument, 0, OPT_CROP},
         {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
     int c;
     rr_error err;
@@ -293,6 +311,9 @@ static int apply_overrides(scene *s, const render_options *o, rr_error *err)
         s->kernel_sigma = o->sigma;
     if (o->time_factor > 0)
         s->time_factor = o->time_factor;
+    if (o->crop_set && (ceil(o->crop[1] * s->cam.width) <= ceil(o->crop[0] * s->cam.width) ||
+                        ceil(o->crop[3] * s->cam.height) <= ceil(o->crop[2] * s->cam.height)))
+        return rr_fail(err, "--crop-window holds no whole pixel of the %dx%d image", s->cam.width, s->cam.height);
     if (o->shutter_set) { /* a(t)'s own parameters (center, table) stay as the scene gives them */
         s->shut.open = o->shutter_open, s->shut.close = o->shutter_close;
         if (shutter_check(&s->shut, err))
@@ -391,7 +412,12 @@ static void setup_run(render_run *run, const scene *s, const shutter *shut, cons
     run->total_batches = total;
     run->rs = (render_settings){
         {o->sampler, o->seed, sampler_grid_for_spp(o->spp), o->tspp, s->time_factor}, *shut,
-        o->threads, begin, end - begin, max_batches_of(o), o->target_error, o->exact_time};
+        o->threads, begin, end - begin, max_batches_of(o), o->target_error, o->exact_time, 0, 0, 0, 0};
+    if (o->crop_set) { /* pbrt's rounding: pixels whose index lies in [ceil(f0 N), ceil(f1 N)) */
+        int w = s->cam.width, h = s->cam.height;
+        run->rs.crop_x0 = (int)ceil(o->crop[0] * w), run->rs.crop_x1 = (int)ceil(o->crop[1] * w);
+        run->rs.crop_y0 = (int)ceil(o->crop[2] * h), run->rs.crop_y1 = (int)ceil(o->crop[3] * h);
+    }
     run->attrs.n = 0;
     attrs_for_render(&run->attrs, s, &run->rs, total, cmdline);
 }
@@ -450,6 +476,20 @@ static void warn_about_settings(const render_options *o, const render_settings *
         fprintf(stderr, "refrender: note: sobol works best with a power-of-two spp*tspp (now %d)\n", n);
 }
 
+/* The final image, only the crop window's pixels with --crop-window. */
+static int write_final(const char *output, const image *img, render_run *run, rr_error *err)
+{
+    const render_settings *rs = &run->rs;
+    exr_window win = {img->width, img->height, 0, 0, img->width, img->height};
+    if (rs->crop_x1 > 0) {
+        win = (exr_window){img->width, img->height, rs->crop_x0, rs->crop_y0, rs->crop_x1 - rs->crop_x0,
+                           rs->crop_y1 - rs->crop_y0};
+        const double *c = run->o->crop;
+        attrs_set(&run->attrs, "refrender:cropWindow", "%.17g %.17g %.17g %.17g", c[0], c[1], c[2], c[3]);
+    }
+    return output_write_final_window(output, img, sampler_count(&rs->smp), &run->attrs, &win, err);
+}
+
 /* Renders one shutter interval (a frame) into output (and preview). */
 static int render_one(const scene *s, const shutter *shut, long long frame, accel *acc, const render_options *o,
                       const char *cmdline, const char *output, const char *preview, rr_error *err)
@@ -477,7 +517,7 @@ static int render_one(const scene *s, const shutter *shut, long long frame, acce
         }
         rc = o->passes ? output_write_state(output, &img, run.rs.batch_begin,
                                             run.rs.batch_begin + run.rs.batches, &run.attrs, err)
-                       : output_write_final(output, &img, sampler_count(&run.rs.smp), &run.attrs, err);
+                       : write_final(output, &img, &run, err);
     }
     if (!rc && preview)
         rc = write_preview(preview, &img, err);
