@@ -551,7 +551,8 @@ static void window_at(const cand_eval *ev, int n, double eps, int *set, int *nse
  * increasing order), merged with the previous piece when the sets agree. */
 static int emit_piece(exact_scratch *scr, double a, double b, const int *set, int n)
 {
-    piece *last = scr->npieces ? &scr->leaves[scr->npieces - 1] : NULL;
+    /* never across a kink of a(t): Gauss-Kronrod needs it as a piece boundary */
+    piece *last = scr->npieces > scr->first_of_break ? &scr->leaves[scr->npieces - 1] : NULL;
     if (last && last->b == a && last->count == n &&
         (n == 0 || !memcmp(scr->sets + last->first, set, (size_t)n * sizeof *set))) {
         last->b = b;
@@ -645,8 +646,10 @@ int exact_partition(const sample_ctx *c)
     for (int i = 0; i < n; i++)
         scr->lists[i] = i;
     const exact_plan *p = c->p;
-    for (int k = 0; k + 1 < p->nbreaks; k++)
+    for (int k = 0; k + 1 < p->nbreaks; k++) {
+        scr->first_of_break = scr->npieces;
         if (classify(c, p->breaks[k], p->breaks[k + 1], n, 0))
             return -1;
+    }
     return 0;
 }

@@ -79,6 +79,7 @@ struct exact_scratch {
     size_t evals_cap, inherit_cap, sorted_cap;
     piece *leaves;
     size_t npieces, leaves_cap;
+    size_t first_of_break; /* pieces from here on lie in the current stretch between kinks of a(t) */
     int *sets;
     size_t nsets, sets_cap;
     unsigned *objs_out, *prims_out;

@@ -167,3 +167,18 @@ def test_bad_anim_file_is_reported_with_its_line(tmp_path):
     assert "bad.anim:6: unknown or unsupported tangent type 'wobbly'" in proc.stderr
     assert "s.xml:3" in proc.stderr
     assert not (tmp_path / "o.exr").exists()
+
+
+def test_animated_scene_renders_frame_0_without_frame_options(tmp_path):
+    """scenes/animated.xml's header: without the frame-range option frame 0
+    is rendered (its shutter: 24 fps, 180 degrees), the same as --frame 0."""
+    plain, alone = tmp_path / "plain.exr", tmp_path / "f0.exr"
+    assert run([ANIMATED, *SMALL, "-o", plain]).returncode == 0
+    assert run([ANIMATED, *SMALL, "--frame", 0, "-o", alone]).returncode == 0
+    a, ha = read_exr(plain)
+    b, hb = read_exr(alone)
+    assert np.array_equal(a, b)
+    opened, closed = map(float, ha["refrender:shutter"].split())
+    assert opened == 0 and abs(closed - 0.5 / 24) < 1e-12
+    text = ANIMATED.read_text()
+    assert "0-23" in text and "without it frame 0 is rendered" in text
