@@ -73,7 +73,7 @@ LEGEND = {
     "RMSE": "square root of MSE",
     "PSNR": "10 log10(peak^2 / MSE), peak from --psnr-peak (default 1)",
     "relMSE": "mean (test - reference)^2 / (reference^2 + 0.01)",
-    "SSIM": "structural similarity (Wang et al. 2004), Gaussian sigma 1.5, on RGB clamped to [0, peak]",
+    "SSIM": "structural similarity (Wang et al. 2004), Gaussian sigma 1.5, on RGB clamped to [0, --ssim-peak]",
     "FLIP": "mean LDR-FLIP (Andersson et al. 2020), 0 = identical, 1 = most different",
     "FLIP p50w": "error-weighted median of the LDR-FLIP map",
     "FLIP p95w": "error-weighted 95th percentile of the LDR-FLIP map",
@@ -111,12 +111,13 @@ def write_report(rows, pictures, out_dir, reference, metrics_space="linear"):
         body += f"<tr>{cells}</tr>\n"
     figures = ""
     for r, files in zip(rows, pictures):
-        figures += f"<h3>{html.escape(r['image'])} [{html.escape(r['window'])}]</h3>\n"
+        frame = f", frame {r['frame']}" if "frame" in r else ""
+        figures += f"<h3>{html.escape(str(r['image']))}{html.escape(frame)} [{html.escape(r['window'])}]</h3>\n"
         figures += "".join(f'<img src="{html.escape(f)}" alt="{k}">\n' for k, f in files.items())
     page = f"""<!DOCTYPE html>
 <html><head><meta charset="utf-8"><title>refrender comparison</title>
 <style>body{{font-family:sans-serif}} table{{border-collapse:collapse}}
-td,th{{border:1px solid #999;padding:2px 6px;text-align:right}} img{{max-width:48%;margin:4px}}</style>
+td,th{{border:1px solid #999;padding:2px 6px;text-align:right;white-space:nowrap;font-size:13px}} img{{max-width:48%;margin:4px}}</style>
 </head><body><h1>Comparison against {html.escape(reference)}</h1>
 <p>MAE, MSE, RMSE, PSNR, relMSE and SSIM computed on {html.escape(metrics_space)} values
 (--metrics-space); FLIP on linear values.</p>
