@@ -17,6 +17,12 @@ SCENE = """<scene><camera position="0 0 4" lookat="0 0 0" width="24" height="16"
 <object><pointModel generate="sphere" count="2000" radius="0.6" checker="4"/>
 <animation><rotation axis="0 1 0.3" center="0 0 0" degrees_per_unit_time="60"/>
 <linear velocity="0.5 0.2 0"/></animation></object></scene>"""
+# a disc of radius 0.5 crossing the view at 2 units per unit time, the pixels
+# within 0.035 of its path's center line (fov 1 degree at distance 4)
+MOVING_DISC = """<scene><camera position="0 0 4" lookat="0 0 0" fov="1" width="4" height="4"/>
+<shutter open="0" close="1"/><object position="-1 0 0"><pointModel>
+<splat center="0 0 0" normal="0 0 1" radius="0.5" color="1 1 1"/></pointModel>
+<material shading="unlit"/><animation><linear velocity="2 0 0"/></animation></object></scene>"""
 EXACT = ["--time-integration", "exact", "--spp", 2, "--batches", 2, "--quiet"]
 
 
@@ -68,10 +74,7 @@ def test_no_temporal_noise_and_analytic_coverage(tmp_path):
     between the values at the largest y and at y = 0, with no temporal
     noise to push it out."""
     scene = tmp_path / "d.xml"
-    scene.write_text("""<scene><camera position="0 0 4" lookat="0 0 0" fov="1" width="4" height="4"/>
-<shutter open="0" close="1"/><object position="-1 0 0"><pointModel>
-<splat center="0 0 0" normal="0 0 1" radius="0.5" color="1 1 1"/></pointModel>
-<material shading="unlit"/><animation><linear velocity="2 0 0"/></animation></object></scene>""")
+    scene.write_text(MOVING_DISC)
     out = tmp_path / "d.exr"
     proc = run([scene, "-o", out, "--time-integration", "exact", "--sampler", "thesis", "--spp", 1,
                 "--batches", 4, "--quiet"])
@@ -105,10 +108,7 @@ def test_shutter_override(tmp_path):
     the shutter; each pixel column's x range bounds its coverage. The header
     names the interval."""
     scene = tmp_path / "d.xml"
-    scene.write_text("""<scene><camera position="0 0 4" lookat="0 0 0" fov="1" width="4" height="4"/>
-<shutter open="0" close="1"/><object position="-1 0 0"><pointModel>
-<splat center="0 0 0" normal="0 0 1" radius="0.5" color="1 1 1"/></pointModel>
-<material shading="unlit"/><animation><linear velocity="2 0 0"/></animation></object></scene>""")
+    scene.write_text(MOVING_DISC)
     out = tmp_path / "d.exr"
     proc = run([scene, "-o", out, "--time-integration", "exact", "--spp", 1, "--shutter", "0,0.4", "--quiet"])
     assert proc.returncode == 0, proc.stderr
