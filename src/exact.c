@@ -2,12 +2,12 @@
  * bounds, candidate gathering and the certified partition of the shutter
  * into pieces of fixed blended set. Step 3 is in exact_integrate.c.
  *
- * Every bound below rests on one number per object, W: how fast (object
- * units per unit time) a point of the sample's ray can move in the object's
- * own space, where the splats stand still. Over a piece of length h about
- * its middle tm, every point X(t, s) = O(t) + s D(t) of the ray stays
- * within delta = W h / 2 of X(tm, s); the direction D moves by at most
- * delta / L (two points L apart on each side of a hit). */
+ * Every bound below rests on how fast (object units per unit time) a point
+ * of the sample's ray can move in the object's own space, where the splats
+ * stand still: at most base + angular |X - center| (object_plan). Over a
+ * piece of length h about its middle tm, every point X(t, s) = O(t) +
+ * s D(t) of the ray near a candidate stays within delta of X(tm, s)
+ * (reach_delta); the direction D moves by at most dir_rate h / 2. */
 #include "exact_internal.h"
 
 #include <stdlib.h>
@@ -16,7 +16,7 @@
 /* ---- plan --------------------------------------------------------------- */
 
 /* The part of the shutter each candidate box covers, and of the ray's
- * depth range: 8 x 4 boxes per object and sample. */
+ * depth range: 16 x 32 boxes per object and sample. */
 enum { BOX_TIME_SLICES = 16, BOX_DEPTH_SLICES = 32 };
 
 /* W for the object (exact_internal.h). A world point Y seen in model
@@ -70,7 +70,6 @@ static void plan_object(exact_plan *p, unsigned i)
     object_plan *op = &p->obj[i];
     accel_object_swept_sphere(p->acc, i, &op->swept_center, &op->swept_radius);
     op->min_scale = animation_min_scale(&o->anim, p->shut.open, p->shut.close);
-    op->max_scale = animation_max_scale(&o->anim, p->shut.open, p->shut.close);
     op->gathered = p->camera_moves || accel_object_moves(p->acc, i);
     depth_range(p, op);
     if (op->gathered)
@@ -149,8 +148,6 @@ void exact_scratch_free(exact_scratch *scr)
     free(scr->sorted);
     free(scr->leaves);
     free(scr->sets);
-    free(scr->objs_out);
-    free(scr->prims_out);
     free(scr->ray_cache);
     free(scr);
 }
@@ -205,6 +202,32 @@ static double primitive_reach(const scene_object *o, unsigned prim, vec3 c)
     /* twice the splat's radius: a plane crossing within the slack of the
      * ellipse (splat_eval, slack < 1) is inside it */
     return v3_len(v3_sub(f3(o->model.geom[prim].center), c)) + 2.0 * sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
+}
+
+plane_crossing exact_plane_crossing(const cand_info *g, const object_ray *r)
+{
+    plane_crossing pc = {v3_dot(r->dir, g->normal), INFINITY, INFINITY};
+    if (pc.denom == 0)
+        return pc;
+    vec3 co = v3_sub(g->center, r->org);
+    pc.s = v3_dot(co, g->normal) / pc.denom;
+    vec3 q = v3_sub(v3_scale(r->dir, pc.s), co);
+    double a = v3_dot(g->dual_u, q), b = v3_dot(g->dual_v, q);
+    pc.r2 = a * a + b * b;
+    return pc;
+}
+
+sphere_crossing exact_sphere_crossing(const scene_object *o, const object_ray *r)
+{
+    vec3 oc = v3_sub(r->org, o->sphere_center);
+    sphere_crossing sc;
+    sc.A = v3_dot(r->dir, r->dir), sc.B = v3_dot(oc, r->dir), sc.oc2 = v3_dot(oc, oc);
+    sc.disc = sc.B * sc.B - sc.A * (sc.oc2 - o->sphere_radius * o->sphere_radius);
+    double sq = sqrt(fmax(0.0, sc.disc));
+    sc.s = (-sc.B - sq) / sc.A;
+    if (sc.s < 0)
+        sc.s = (-sc.B + sq) / sc.A;
+    return sc;
 }
 
 /* ---- step 1: candidates --------------------------------------------------- */
@@ -349,21 +372,17 @@ int exact_gather(const sample_ctx *c)
     return describe_candidates(c);
 }
 
-int exact_candidates(const exact_plan *p, exact_scratch *scr, double x, double y, const unsigned **objs,
-                     const unsigned **prims)
+int exact_candidates(const exact_plan *p, exact_scratch *scr, double x, double y)
 {
     sample_ctx c;
     if (exact_context(p, scr, x, y, NULL, &c) || exact_gather(&c))
         return -1;
-    if (grow((void **)&scr->objs_out, &scr->objs_out_cap, scr->nkeys, sizeof *scr->objs_out) ||
-        grow((void **)&scr->prims_out, &scr->prims_out_cap, scr->nkeys, sizeof *scr->prims_out))
-        return -1;
-    for (size_t i = 0; i < scr->nkeys; i++) {
-        scr->objs_out[i] = (unsigned)(scr->keys[i] >> 32);
-        scr->prims_out[i] = (unsigned)scr->keys[i];
-    }
-    *objs = scr->objs_out, *prims = scr->prims_out;
     return (int)scr->nkeys;
+}
+
+void exact_candidate(const exact_scratch *scr, int i, unsigned *obj, unsigned *prim)
+{
+    *obj = scr->info[i].obj, *prim = scr->info[i].prim;
 }
 
 int exact_context(const exact_plan *p, exact_scratch *scr, double x, double y, exact_stats *st, sample_ctx *c)
@@ -392,16 +411,9 @@ int exact_context(const exact_plan *p, exact_scratch *scr, double x, double y, e
  * time gives the first (a hit then puts P within move of the ellipse). */
 static cand_eval splat_eval(const cand_info *g, const object_ray *r, double delta, double eps_d)
 {
-    vec3 n = g->normal, co = v3_sub(g->center, r->org);
-    double denom = v3_dot(r->dir, n);
-    cand_eval e = {0, 1, INFINITY, 0.0};
-    double radius = INFINITY;
-    if (denom != 0) {
-        e.s = v3_dot(co, n) / denom;
-        vec3 q = v3_sub(v3_scale(r->dir, e.s), co);
-        double a = v3_dot(g->dual_u, q), b = v3_dot(g->dual_v, q);
-        radius = sqrt(a * a + b * b);
-    }
+    plane_crossing pc = exact_plane_crossing(g, r);
+    double denom = pc.denom, radius = sqrt(pc.r2);
+    cand_eval e = {0, 1, pc.s, 0.0};
     e.hit = denom != 0 && e.s >= 0 && radius <= 1;
     if (delta == 0) /* nothing moves relative to the ray */
         return e;
@@ -425,13 +437,11 @@ static cand_eval splat_eval(const cand_info *g, const object_ray *r, double delt
  * back from inside): its depth stays between the shell's crossings. */
 static cand_eval sphere_eval(const scene_object *o, const object_ray *r, double delta)
 {
-    vec3 oc = v3_sub(r->org, o->sphere_center);
-    double R = o->sphere_radius, A = v3_dot(r->dir, r->dir), B = v3_dot(oc, r->dir);
-    double oc2 = v3_dot(oc, oc), disc = B * B - A * (oc2 - R * R);
+    sphere_crossing sc = exact_sphere_crossing(o, r);
+    double R = o->sphere_radius, A = sc.A, B = sc.B, oc2 = sc.oc2;
     cand_eval e = {0, 1, INFINITY, 0.0};
-    if (disc >= 0) {
-        double sq = sqrt(disc), s0 = (-B - sq) / A, s1 = (-B + sq) / A;
-        e.s = s0 >= 0 ? s0 : s1;
+    if (sc.disc >= 0) {
+        e.s = sc.s;
         e.hit = e.s >= 0;
     }
     if (delta == 0)

@@ -63,10 +63,10 @@ typedef struct {
  * shutter divided by the integral of a(t). -1 when out of memory. */
 int exact_sample(const exact_plan *p, exact_scratch *scr, double x, double y, double rgba[4], exact_stats *st);
 
-/* For tests: the candidates gathered for (x, y) as (object, primitive)
- * pairs, object-major and sorted. Returns the count (-1: out of memory);
- * *objs and *prims point into the scratch. */
-int exact_candidates(const exact_plan *p, exact_scratch *scr, double x, double y, const unsigned **objs,
-                     const unsigned **prims);
+/* For tests: gathers the candidates for (x, y) into the scratch and
+ * returns their count (-1: out of memory); exact_candidate reads the i-th
+ * as (object, primitive), object-major and sorted. */
+int exact_candidates(const exact_plan *p, exact_scratch *scr, double x, double y);
+void exact_candidate(const exact_scratch *scr, int i, unsigned *obj, unsigned *prim);
 
 #endif

@@ -11,44 +11,33 @@ enum { NCOMP = 5 };
 /* One blended candidate at time t, as accel's callbacks would report it
  * (same side rule, world normal, kernel weight). Returns 0 when the ray is
  * parallel to the splat's plane (no hit, as in splat_intersect). */
-static int candidate_hit(const sample_ctx *c, uint64_t key, double t, surface_hit *h)
+static int candidate_hit(const sample_ctx *c, int index, double t, surface_hit *h)
 {
-    unsigned obj = (unsigned)(key >> 32), prim = (unsigned)key;
-    const scene_object *o = &c->p->sc->objects[obj];
-    const object_ray *r = exact_object_ray(c, obj, t);
+    const cand_info *info = &c->scr->info[index];
+    const scene_object *o = &c->p->sc->objects[info->obj];
+    const object_ray *r = exact_object_ray(c, info->obj, t);
     vec3 normal, color;
     double s, r2 = 0.0;
     if (o->kind == OBJECT_SPHERE) {
-        vec3 oc = v3_sub(r->org, o->sphere_center);
-        double A = v3_dot(r->dir, r->dir), B = v3_dot(oc, r->dir);
-        double disc = fmax(0.0, B * B - A * (v3_dot(oc, oc) - o->sphere_radius * o->sphere_radius));
-        s = (-B - sqrt(disc)) / A;
-        if (s < 0)
-            s = (-B + sqrt(disc)) / A;
-        normal = v3_scale(v3_add(oc, v3_scale(r->dir, s)), 1.0 / o->sphere_radius);
+        sphere_crossing sc = exact_sphere_crossing(o, r);
+        s = sc.s;
+        normal = v3_scale(v3_sub(v3_add(r->org, v3_scale(r->dir, s)), o->sphere_center), 1.0 / o->sphere_radius);
         color = o->sphere_color;
     } else {
-        const splat_geom *g = &o->model.geom[prim];
-        vec3 n = v3(g->plane_normal[0], g->plane_normal[1], g->plane_normal[2]);
-        vec3 co = v3(g->center[0] - r->org.x, g->center[1] - r->org.y, g->center[2] - r->org.z);
-        double denom = v3_dot(r->dir, n);
-        if (denom == 0)
+        plane_crossing pc = exact_plane_crossing(info, r);
+        if (pc.denom == 0)
             return 0;
-        s = v3_dot(co, n) / denom;
-        vec3 q = v3_sub(v3_scale(r->dir, s), co);
-        double a = g->dual_u[0] * q.x + g->dual_u[1] * q.y + g->dual_u[2] * q.z;
-        double b = g->dual_v[0] * q.x + g->dual_v[1] * q.y + g->dual_v[2] * q.z;
-        r2 = a * a + b * b;
-        const float *sn = pointmodel_normal(&o->model, prim), *sc = pointmodel_color(&o->model, prim);
-        normal = v3(sn[0], sn[1], sn[2]);
+        s = pc.s, r2 = pc.r2;
+        const float *sc = pointmodel_color(&o->model, info->prim);
+        normal = info->shading_normal;
         color = v3(sc[0], sc[1], sc[2]);
     }
     if (v3_dot(normal, r->dir) > 0) /* two-sided: the side facing the eye (accel.c) */
         normal = v3_scale(normal, -1.0);
     vec3 wn = xform_normal(&r->xf, normal);
     double w = o->kind == OBJECT_SPHERE ? 1.0 : splat_kernel_weight(r2, c->p->sc->kernel_sigma);
-    *h = (surface_hit){(float)s, obj, prim, (float)w, (float)r2, {(float)color.x, (float)color.y, (float)color.z},
-                       {(float)wn.x, (float)wn.y, (float)wn.z}};
+    *h = (surface_hit){(float)s, info->obj, info->prim, (float)w, (float)r2,
+                       {(float)color.x, (float)color.y, (float)color.z}, {(float)wn.x, (float)wn.y, (float)wn.z}};
     return 1;
 }
 
@@ -61,7 +50,7 @@ static void integrand(const sample_ctx *c, const piece *pc, double t, double out
     kbuffer_reset(&kb, (float)s->epsilon);
     for (int k = 0; k < pc->count; k++) {
         surface_hit h;
-        if (candidate_hit(c, c->scr->keys[c->scr->sets[pc->first + (size_t)k]], t, &h))
+        if (candidate_hit(c, c->scr->sets[pc->first + (size_t)k], t, &h))
             kbuffer_insert(&kb, &h);
     }
     *overflow |= kb.dropped > 0;

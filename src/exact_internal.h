@@ -14,7 +14,7 @@
 typedef struct {
     vec3 swept_center;
     double swept_radius;      /* world sphere holding the object all shutter long */
-    double min_scale, max_scale;
+    double min_scale;
     double depth_lo, depth_hi; /* depths along the ray where it can be */
     /* W: a ray point X (model coordinates) moves at most at
      * base + angular * |X - center| in the object's space; its direction
@@ -82,8 +82,6 @@ struct exact_scratch {
     size_t first_of_break; /* pieces from here on lie in the current stretch between kinks of a(t) */
     int *sets;
     size_t nsets, sets_cap;
-    unsigned *objs_out, *prims_out;
-    size_t objs_out_cap, prims_out_cap;
     object_ray *ray_cache; /* one per object */
     size_t ray_cache_cap;
 };
@@ -95,6 +93,22 @@ typedef struct {
     vec3 dir0; /* the ray direction at rest (a still camera's at every time) */
     exact_stats *st;
 } sample_ctx;
+
+/* Where a ray crosses a candidate splat's plane: depth s and squared
+ * ellipse radius r2, both INFINITY when the ray is parallel to the plane
+ * (denom = D.n = 0: no hit, as in splat_intersect). */
+typedef struct {
+    double denom, s, r2;
+} plane_crossing;
+plane_crossing exact_plane_crossing(const cand_info *g, const object_ray *r);
+
+/* A ray against an analytic sphere: |D|^2 (A), oc.D (B), |oc|^2, the
+ * discriminant and the visible crossing's depth s (the nearer root unless
+ * it lies behind the origin; the discriminant clamped at 0 for s). */
+typedef struct {
+    double A, B, oc2, disc, s;
+} sphere_crossing;
+sphere_crossing exact_sphere_crossing(const scene_object *o, const object_ray *r);
 
 int exact_context(const exact_plan *p, exact_scratch *scr, double x, double y, exact_stats *st, sample_ctx *c);
 void exact_world_ray(const sample_ctx *c, double t, vec3 *org, vec3 *dir);

@@ -131,11 +131,14 @@ static int brute_hit(const scene *sc, int obj, size_t i, vec3 org, vec3 dir, dou
     return s >= 0 && a * a + b * b <= 1;
 }
 
-static int contains(const unsigned *objs, const unsigned *prims, int n, unsigned obj, unsigned prim)
+static int contains(const exact_scratch *scr, int n, unsigned obj, unsigned prim)
 {
-    for (int k = 0; k < n; k++)
-        if (objs[k] == obj && prims[k] == prim)
+    for (int k = 0; k < n; k++) {
+        unsigned o, p;
+        exact_candidate(scr, k, &o, &p);
+        if (o == obj && p == prim)
             return 1;
+    }
     return 0;
 }
 
@@ -149,14 +152,13 @@ static int missed_candidates(const char *xml, double box_scale, int rays, double
     for (int r = 0; r < rays; r++) {
         double x = f.s.cam.width * (0.5 + spread * (sampler_uniform(7, (uint64_t)r, 0, 0) - 0.5));
         double y = f.s.cam.height * (0.5 + spread * (sampler_uniform(7, (uint64_t)r, 0, 1) - 0.5));
-        const unsigned *objs, *prims;
-        int n = exact_candidates(f.p, f.scr, x, y, &objs, &prims);
+        int n = exact_candidates(f.p, f.scr, x, y);
         vec3 org = f.s.cam.position, dir = camera_ray_direction(&f.s.cam, x, y);
         for (size_t i = 0; i < f.s.objects[0].model.count; i++) {
             int hit = 0;
             for (int k = 0; k < 2000 && !hit; k++)
                 hit = brute_hit(&f.s, 0, i, org, dir, (k + 0.5) / 2000.0);
-            missed += hit && !contains(objs, prims, n, 0, (unsigned)i);
+            missed += hit && !contains(f.scr, n, 0, (unsigned)i);
         }
     }
     fixture_close(&f);
