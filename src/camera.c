@@ -22,6 +22,30 @@ int camera_prepare(camera *c, rr_error *err)
     return 0;
 }
 
+void camera_world_to_camera(const camera *c, double m[4][4])
+{
+    vec3 axes[3] = {c->right, c->image_up, c->forward};
+    for (int r = 0; r < 3; r++) {
+        m[r][0] = axes[r].x, m[r][1] = axes[r].y, m[r][2] = axes[r].z;
+        m[r][3] = -v3_dot(axes[r], c->position);
+    }
+    m[3][0] = m[3][1] = m[3][2] = 0, m[3][3] = 1;
+}
+
+/* The inverse of camera_ray_direction's mapping: x_cam / z_cam =
+ * (2 x / width - 1) tan aspect, y_cam / z_cam = (1 - 2 y / height) tan. */
+void camera_projection(const camera *c, double sx, double sy, double m[4][4])
+{
+    double t = c->tan_half_fov, aspect = (double)c->width / c->height;
+    for (int r = 0; r < 4; r++)
+        for (int k = 0; k < 4; k++)
+            m[r][k] = 0;
+    m[0][0] = 0.5 * sx / (t * aspect), m[0][2] = 0.5 * sx;
+    m[1][1] = -0.5 * sy / t, m[1][2] = 0.5 * sy;
+    m[2][3] = 1;
+    m[3][2] = 1;
+}
+
 vec3 camera_ray_direction(const camera *c, double x, double y)
 {
     double aspect = (double)c->width / (double)c->height;

@@ -20,6 +20,16 @@ typedef struct {
  * parallel to the view direction or fov is outside (0, 180). */
 int camera_prepare(camera *c, rr_error *err);
 
+/* The camera's matrices (4x4, row-major, for column vectors p' = M p).
+ * Camera space: x right, y up, z forward along the view direction
+ * (left-handed, as pbrt's). camera_world_to_camera: world to camera space
+ * at rest. camera_projection: camera space to [X, Y, Z, W] with
+ * (X / W, Y / W) = (raster x / width * sx, raster y / height * sy), (0, 0)
+ * the top-left image corner, and Z / W = 1 / depth: sx = sy = 1 gives
+ * normalised device coordinates, sx = width and sy = height raster ones. */
+void camera_world_to_camera(const camera *c, double m[4][4]);
+void camera_projection(const camera *c, double sx, double sy, double m[4][4]);
+
 /* Unit direction of the ray through raster position (x, y). */
 vec3 camera_ray_direction(const camera *c, double x, double y);
 

@@ -39,6 +39,9 @@ void rr_warn(rr_warnings *w, const char *fmt, ...) __attribute__((format(printf,
 /* qsort comparator for doubles, ascending. */
 int cmp_double(const void *a, const void *b);
 
+/* out = a b for 4x4 matrices (out may not alias a or b). */
+void mat4_mul(double a[4][4], double b[4][4], double out[4][4]);
+
 /* Monotonic wall-clock seconds (for progress, checkpoints and timings). */
 double rr_seconds(void);
 

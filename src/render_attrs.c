@@ -36,23 +36,10 @@ static void set_matrix(attr_list *a, const char *key, double m[4][4])
  * raster), z = 1 / depth, after dividing by w = depth. */
 static void camera_matrices(attr_list *a, const camera *cam)
 {
-    vec3 axes[3] = {cam->right, cam->image_up, cam->forward};
-    double view[4][4] = {{0}}, proj[4][4] = {{0}}, ndc[4][4];
-    for (int r = 0; r < 3; r++) {
-        double *row = view[r];
-        row[0] = axes[r].x, row[1] = axes[r].y, row[2] = axes[r].z;
-        row[3] = -v3_dot(axes[r], cam->position);
-    }
-    view[3][3] = 1;
-    double aspect = (double)cam->width / cam->height, t = cam->tan_half_fov;
-    proj[0][0] = 0.5 / (t * aspect), proj[0][2] = 0.5;
-    proj[1][1] = -0.5 / t, proj[1][2] = 0.5;
-    proj[2][3] = 1;
-    proj[3][2] = 1;
-    for (int r = 0; r < 4; r++)
-        for (int c = 0; c < 4; c++)
-            ndc[r][c] = proj[r][0] * view[0][c] + proj[r][1] * view[1][c] + proj[r][2] * view[2][c] +
-                        proj[r][3] * view[3][c];
+    double view[4][4], proj[4][4], ndc[4][4];
+    camera_world_to_camera(cam, view);
+    camera_projection(cam, 1.0, 1.0, proj);
+    mat4_mul(proj, view, ndc);
     set_matrix(a, "worldToCamera", view);
     set_matrix(a, "worldToNDC", ndc);
 }

@@ -78,25 +78,12 @@ static void xform_matrix(const xform *x, double m[4][4])
     m[3][3] = 1;
 }
 
-static void matmul(double a[4][4], double b[4][4], double out[4][4])
-{
-    for (int r = 0; r < 4; r++)
-        for (int c = 0; c < 4; c++)
-            out[r][c] = a[r][0] * b[0][c] + a[r][1] * b[1][c] + a[r][2] * b[2][c] + a[r][3] * b[3][c];
-}
-
 /* World to camera space at time t: the inverse of (camera motion at t) after
- * the rest pose, whose axes are right, up and forward. */
+ * the rest pose. */
 static void world_to_camera(const scene *s, double t, double out[4][4])
 {
-    const camera *c = &s->cam;
-    vec3 axes[3] = {c->right, c->image_up, c->forward};
-    double rest_inv[4][4] = {{0}}, motion_inv[4][4] = {{0}};
-    for (int r = 0; r < 3; r++) {
-        rest_inv[r][0] = axes[r].x, rest_inv[r][1] = axes[r].y, rest_inv[r][2] = axes[r].z;
-        rest_inv[r][3] = -v3_dot(axes[r], c->position);
-    }
-    rest_inv[3][3] = 1;
+    double rest_inv[4][4], motion_inv[4][4] = {{0}};
+    camera_world_to_camera(&s->cam, rest_inv);
     xform m = animation_at(&s->camera_motion, t);
     vec3 back = xform_inverse_point(&m, v3(0, 0, 0));
     double b[3] = {back.x, back.y, back.z};
@@ -106,18 +93,7 @@ static void world_to_camera(const scene *s, double t, double out[4][4])
         motion_inv[r][3] = b[r];
     }
     motion_inv[3][3] = 1;
-    matmul(rest_inv, motion_inv, out);
-}
-
-/* Camera space to raster: (X / W, Y / W) is the raster position, Z / W = 1 / depth. */
-static void camera_to_raster(const camera *c, double m[4][4])
-{
-    double t = c->tan_half_fov, aspect = (double)c->width / c->height;
-    memset(m, 0, 16 * sizeof m[0][0]);
-    m[0][0] = c->width / (2 * t * aspect), m[0][2] = c->width * 0.5;
-    m[1][1] = -c->height / (2 * t), m[1][2] = c->height * 0.5;
-    m[2][3] = 1;
-    m[3][2] = 1;
+    mat4_mul(rest_inv, motion_inv, out);
 }
 
 static int sample_times(const shutter *sh, int k, double *times)
@@ -268,7 +244,7 @@ static int write_json(FILE *f, const scene *s, const export_options *o, rr_error
     fputs(", \"up\": ", f);
     json_vec3(f, c->up);
     fprintf(f, ", \"moves\": %s, \"camera_to_raster\": ", scene_camera_moves(s) ? "true" : "false");
-    camera_to_raster(c, m);
+    camera_projection(c, c->width, c->height, m); /* to raster */
     json_matrix(f, m);
     fprintf(f, "},\n  \"epsilon\": %.17g,\n  \"kernel_sigma\": %.17g,\n  \"background\": ", s->epsilon,
             s->kernel_sigma);
