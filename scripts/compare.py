@@ -340,8 +340,10 @@ def write_native_maps(args, maps, diff_range):
     if args.map_scale < 1 or args.inset_scale < 1:
         raise CompareError("--map-scale and --inset-scale must be positive integers")
     os.makedirs(args.maps, exist_ok=True)
-    crops = [(c, parse_crop(c, maps[0][3].shape[1], maps[0][3].shape[0])) for c in args.crop] if maps else []
-    done = set()
+    crops = {}  # each picture's crop windows, as compare_images made them
+    for label, window, win, *_ in maps:
+        if window != "full":
+            crops.setdefault(label, []).append((window, win))
     for label, window, (x, y, w, h), ref, test, flip_map, hdr_map in maps:
         base = figures._name(label, window)
         figures.write_map(args.maps, base + "_flip", flip_map, "magma", flip_lo, flip_hi, args.map_scale)
@@ -349,9 +351,8 @@ def write_native_maps(args, maps, diff_range):
         figures.write_map(args.maps, base + "_diff", diff, "RdBu_r", -diff_range, diff_range, args.map_scale)
         if hdr_map is not None:
             figures.write_map(args.maps, base + "_hdrflip", hdr_map, "magma", flip_lo, flip_hi, args.map_scale)
-        if crops and label not in done:
-            figures.write_crops(args.maps, label, test, crops, args.inset_scale)
-            done.add(label)
+        if window == "full" and label in crops:
+            figures.write_crops(args.maps, label, test, crops[label], args.inset_scale)
 
 
 def write_pictures(args, rows, maps):
