@@ -172,8 +172,10 @@ static void render_pixel_batch_exact(render_job *job, int px, int py, uint32_t b
         est[c] = 0;
     for (int i = 0; i < count; i++) {
         double rgba[4];
-        if (exact_sample(job->exact, scr->exact, scr->x[i], scr->y[i], rgba, &st))
-            scr->failed = 1;
+        if (exact_sample(job->exact, scr->exact, scr->x[i], scr->y[i], rgba, &st)) {
+            scr->failed = 1; /* out of memory: the render fails (run_round) */
+            continue;
+        }
         for (int c = 0; c < 4; c++)
             est[c] += rgba[c] / count;
     }
