@@ -2,6 +2,8 @@
 
 #include <stdlib.h>
 
+double keyframes_clamp_flat(int ch) { return ch <= CH_TZ ? 0.05 * 0.01 : 0.05; }
+
 void animation_init_static(animation *a)
 {
     a->offset = v3(0, 0, 0);

@@ -34,6 +34,12 @@ typedef struct {
     vec3 pivot;
 } keyframes;
 
+/* How close a neighbouring key's value makes a clamped tangent flat on
+ * channel ch: Maya's 0.05 in its internal units (centimeters, radians,
+ * scale), here in scene units (translation taken as meters, as .anim files
+ * are read). */
+double keyframes_clamp_flat(int ch);
+
 typedef struct {
     vec3 offset;          /* rest position offset applied to model points */
     vec3 velocity;        /* <linear>: + velocity * t */

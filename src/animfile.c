@@ -203,11 +203,35 @@ static double scene_angle(const curve_reader *r, double file_angle)
     return atan(tan(file_angle * r->radians_per_unit) * r->value_scale / r->seconds_per_frame);
 }
 
+/* How far in time a fixed tangent's Bezier handle reaches on a weighted
+ * curve: the weight is the handle's length in the same (frames, value)
+ * plane as the angle, so it reaches weight cos(angle) frames. Autodesk's
+ * animEngine builds the tangent as 3 weight (cos, sin)(angle) with the
+ * frames over the frame rate (seconds), and animx puts the control point a
+ * third of the tangent from the key. */
+static double scene_handle(const curve_reader *r, double file_angle, double weight)
+{
+    return weight * cos(file_angle * r->radians_per_unit) * r->seconds_per_frame;
+}
+
+/* A fixed tangent's angle and weight fields. */
+static int fixed_tangent(lexer *lx, const curve_reader *r, char w[][64], double *angle, double *handle)
+{
+    double a, weight;
+    if (number(lx, w[0], &a) || number(lx, w[1], &weight))
+        return -1;
+    if (!(weight >= 0))
+        return fail(lx, "tangent weight %s is negative", w[1]);
+    *angle = scene_angle(r, a);
+    *handle = scene_handle(r, a, weight);
+    return 0;
+}
+
 static int tangent(lexer *lx, const char *name, tangent_kind *k)
 {
     if (tangent_from_name(name, k))
         return fail(lx, "unknown or unsupported tangent type '%s' (expected linear, step, stepnext, flat, "
-                        "spline, clamped, plateau, auto or fixed)", name);
+                        "spline, clamped, plateau, auto, fixed, slow or fast)", name);
     return 0;
 }
 
@@ -228,18 +252,14 @@ static int parse_key(lexer *lx, curve_reader *r, char w[][64], int n, const unit
         base = 6; /* tolerate a 1.1 file written without breakdown flags */
     if (n != base + extra)
         return fail(lx, "a key with tangents %s/%s has %d fields, expected %d", w[2], w[3], n, base + extra);
-    double angle;
     int at = base;
     if (k.in == TAN_FIXED) {
-        if (number(lx, w[at], &angle) || number(lx, w[at + 1], &(double){0}))
+        if (fixed_tangent(lx, r, w + at, &k.in_angle, &k.in_handle))
             return -1;
-        k.in_angle = scene_angle(r, angle), at += 2;
+        at += 2;
     }
-    if (k.out == TAN_FIXED) {
-        if (number(lx, w[at], &angle) || number(lx, w[at + 1], &(double){0}))
-            return -1;
-        k.out_angle = scene_angle(r, angle);
-    }
+    if (k.out == TAN_FIXED && fixed_tangent(lx, r, w + at, &k.out_angle, &k.out_handle))
+        return -1;
     k.time *= r->seconds_per_frame;
     k.value *= r->value_scale;
     return add_key(lx, r, &k);
@@ -346,7 +366,7 @@ static int parse_anim(lexer *lx, keyframes *kf, char w[][64], int n, const units
     if (!peek_is(lx, "animData"))
         return 0; /* an attribute listed without a curve */
     int ch = selected ? channel_of(leaf) : -2; /* -2: another node's curve, read and dropped */
-    curve skipped = {0, NULL, INF_CONSTANT, INF_CONSTANT};
+    curve skipped = {0, NULL, INF_CONSTANT, INF_CONSTANT, 0, 0.0};
     curve_reader r = {ch >= 0 ? &kf->ch[ch] : &skipped, ch, 1.0, u->seconds_per_frame, u->radians_per_unit, 0};
     if (ch == -1)
         rr_warn(lx->warnings, "%s:%d: skipping curve of unsupported attribute '%s'", lx->name, line, w[1]);
@@ -359,9 +379,9 @@ static int parse_anim(lexer *lx, keyframes *kf, char w[][64], int n, const units
     curve_free(&skipped);
     if (rc)
         return -1;
-    if (r.weighted && ch >= 0)
-        rr_warn(lx->warnings, "%s:%d: '%s' is a weighted curve; tangent weights are ignored", lx->name, line, leaf);
     rr_error sub;
+    r.c->weighted = r.weighted;
+    r.c->clamp_flat = ch >= 0 ? keyframes_clamp_flat(ch) : 0.0;
     if (ch >= 0 && curve_prepare(r.c, &sub))
         return rr_fail(lx->err, "%s:%d: curve '%s': %s", lx->name, line, leaf, sub.msg);
     if (ch >= CH_SX)

@@ -1,5 +1,6 @@
 #include "curve.h"
 
+#include <float.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -8,9 +9,10 @@ int tangent_from_name(const char *name, tangent_kind *k)
     static const struct {
         const char *name;
         tangent_kind kind;
-    } names[] = {{"linear", TAN_LINEAR}, {"flat", TAN_FLAT},       {"spline", TAN_SPLINE},
-                 {"clamped", TAN_CLAMPED}, {"plateau", TAN_CLAMPED}, {"auto", TAN_AUTO},
-                 {"fixed", TAN_FIXED},   {"step", TAN_STEP},       {"stepnext", TAN_STEPNEXT}};
+    } names[] = {{"linear", TAN_LINEAR},   {"flat", TAN_FLAT},       {"spline", TAN_SPLINE},
+                 {"clamped", TAN_CLAMPED}, {"plateau", TAN_PLATEAU}, {"auto", TAN_AUTO},
+                 {"fixed", TAN_FIXED},     {"step", TAN_STEP},       {"stepnext", TAN_STEPNEXT},
+                 {"slow", TAN_LINEAR},     {"fast", TAN_LINEAR}};
     for (size_t i = 0; i < sizeof names / sizeof names[0]; i++)
         if (!strcmp(name, names[i].name)) {
             *k = names[i].kind;
@@ -50,25 +52,40 @@ static double spline_slope(const curve *c, int i)
     return (q->value - p->value) / (q->time - p->time);
 }
 
-/* Spline slope that never makes the neighbouring segments overshoot:
- * flat at extrema, else limited to 3x the smaller secant (Fritsch-Carlson). */
-static double clamped_slope(const curve *c, int i)
+/* The spline slope limited to 3x the smaller adjacent secant and 0 at an
+ * extremum (animx autoTangent: the handles then stay within the
+ * neighbours' values); *limited says whether the limit applied. */
+static double limited_slope(const curve *c, int i, int *limited)
 {
-    int n = c->count;
-    if (n == 1)
-        return 0.0;
-    if (i == 0 || i == n - 1)
-        return spline_slope(c, i);
+    *limited = 1;
+    if (i == 0 || i == c->count - 1)
+        return 0.0; /* no neighbour on one side: flat */
     double a = secant(c, i - 1), b = secant(c, i);
     if (a * b <= 0)
         return 0.0;
     double m = spline_slope(c, i), limit = 3.0 * fmin(fabs(a), fabs(b));
-    return fabs(m) > limit ? copysign(limit, a) : m;
+    *limited = fabs(m) > limit;
+    return *limited ? copysign(limit, a) : m;
+}
+
+/* animEngine's clamped: flat when the key's value is within clamp_flat of
+ * a neighbour's (a missing neighbour on the tangent's own side leaves the
+ * spline slope; on the other side it counts as the same distance). */
+static double clamped_slope(const curve *c, int i, int outgoing)
+{
+    int n = c->count;
+    if (n == 1 || (outgoing ? i == n - 1 : i == 0))
+        return spline_slope(c, i);
+    double v = c->keys[i].value;
+    double near = fabs(c->keys[outgoing ? i + 1 : i - 1].value - v);
+    int other = outgoing ? i - 1 : i + 1;
+    double far = other >= 0 && other < n ? fabs(c->keys[other].value - v) : near;
+    return fmin(near, far) <= c->clamp_flat ? 0.0 : spline_slope(c, i);
 }
 
 static double tangent_slope(const curve *c, int i, tangent_kind kind, double angle, int outgoing)
 {
-    int n = c->count;
+    int n = c->count, limited;
     switch (kind) {
     case TAN_LINEAR:
         if (n == 1)
@@ -79,9 +96,13 @@ static double tangent_slope(const curve *c, int i, tangent_kind kind, double ang
     case TAN_SPLINE:
         return spline_slope(c, i);
     case TAN_CLAMPED:
-        return clamped_slope(c, i);
-    case TAN_AUTO: /* animx autoTangent: a key without a neighbour on either side is flat */
-        return i == 0 || i == n - 1 ? 0.0 : clamped_slope(c, i);
+        return clamped_slope(c, i, outgoing);
+    case TAN_AUTO:
+        return limited_slope(c, i, &limited);
+    case TAN_PLATEAU: {
+        double m = limited_slope(c, i, &limited);
+        return limited ? 0.0 : m;
+    }
     case TAN_FIXED:
         return tan(angle);
     default: /* flat, step, stepnext */
@@ -89,30 +110,116 @@ static double tangent_slope(const curve *c, int i, tangent_kind kind, double ang
     }
 }
 
+/* A computed tangent's handle on a weighted curve: a third of the interval
+ * to the neighbouring key on its side (the other side's at the ends); a
+ * step in-tangent has none (animEngine). */
+static double computed_handle(const curve *c, int i, int outgoing)
+{
+    int n = c->count;
+    if (n == 1 || (!outgoing && c->keys[i].in == TAN_STEP))
+        return 0.0;
+    int j = outgoing ? (i < n - 1 ? i : i - 1) : (i > 0 ? i - 1 : i);
+    return (c->keys[j + 1].time - c->keys[j].time) / 3.0;
+}
+
+static int check_key(const curve *c, int i, rr_error *err)
+{
+    const curve_key *k = &c->keys[i];
+    if (!isfinite(k->time) || !isfinite(k->value) || !isfinite(k->in_angle) || !isfinite(k->out_angle) ||
+        !isfinite(k->in_handle) || !isfinite(k->out_handle))
+        return rr_fail(err, "key %d has a NaN or infinite value", i + 1);
+    if (i > 0 && !(k->time > c->keys[i - 1].time))
+        return rr_fail(err, "key %d: time %g is not after the previous key's %g", i + 1, k->time,
+                       c->keys[i - 1].time);
+    if ((k->in == TAN_FIXED && fabs(k->in_angle) >= M_PI / 2) ||
+        (k->out == TAN_FIXED && fabs(k->out_angle) >= M_PI / 2))
+        return rr_fail(err, "key %d: a fixed tangent angle must lie strictly between -90 and 90 degrees", i + 1);
+    if (k->in_handle < 0 || k->out_handle < 0)
+        return rr_fail(err, "key %d: a tangent weight must not be negative", i + 1);
+    return 0;
+}
+
+static double segment_max_slope(const curve *c, int i);
+
 int curve_prepare(curve *c, rr_error *err)
 {
     if (c->count < 1)
         return rr_fail(err, "an animation curve needs at least one key");
-    for (int i = 0; i < c->count; i++) {
-        curve_key *k = &c->keys[i];
-        if (!isfinite(k->time) || !isfinite(k->value) || !isfinite(k->in_angle) || !isfinite(k->out_angle))
-            return rr_fail(err, "key %d has a NaN or infinite value", i + 1);
-        if (i > 0 && !(k->time > c->keys[i - 1].time))
-            return rr_fail(err, "key %d: time %g is not after the previous key's %g", i + 1, k->time,
-                           c->keys[i - 1].time);
-        if ((k->in == TAN_FIXED && fabs(k->in_angle) >= M_PI / 2) ||
-            (k->out == TAN_FIXED && fabs(k->out_angle) >= M_PI / 2))
-            return rr_fail(err, "key %d: a fixed tangent angle must lie strictly between -90 and 90 degrees", i + 1);
-    }
+    for (int i = 0; i < c->count; i++)
+        if (check_key(c, i, err))
+            return -1;
     for (int i = 0; i < c->count; i++) {
         curve_key *k = &c->keys[i];
         k->in_slope = tangent_slope(c, i, k->in, k->in_angle, 0);
         k->out_slope = tangent_slope(c, i, k->out, k->out_angle, 1);
+        if (k->in != TAN_FIXED)
+            k->in_handle = computed_handle(c, i, 0);
+        if (k->out != TAN_FIXED)
+            k->out_handle = computed_handle(c, i, 1);
     }
+    for (int i = 0; c->weighted && i + 1 < c->count; i++)
+        if (!(segment_max_slope(c, i) < 1e12))
+            return rr_fail(err, "keys %d and %d: the tangent weights give the segment a vertical tangent "
+                                "(its value would change infinitely fast); shorten a handle",
+                           i + 1, i + 2);
     return 0;
 }
 
-/* Segment i (keys i, i+1) at time t inside it: cubic Hermite, or held. */
+/* A weighted segment as a Bezier in the (time, value) plane, time
+ * normalized to [0, 1] over the segment: controls (0, y0) (x1, y1)
+ * (x2, y2) (1, y3). */
+typedef struct {
+    double x1, x2, y0, y1, y2, y3;
+} bezier_span;
+
+static bezier_span weighted_span(const curve *c, int i)
+{
+    const curve_key *a = &c->keys[i], *b = &c->keys[i + 1];
+    double h = b->time - a->time;
+    bezier_span z = {a->out_handle / h, 1 - b->in_handle / h, a->value, a->value + a->out_slope * a->out_handle,
+                     b->value - b->in_slope * b->in_handle, b->value};
+    return z;
+}
+
+static double bezier_at(double p0, double p1, double p2, double p3, double u)
+{
+    double v = 1 - u; /* de Casteljau */
+    double q0 = v * p0 + u * p1, q1 = v * p1 + u * p2, q2 = v * p2 + u * p3;
+    double r0 = v * q0 + u * q1, r1 = v * q1 + u * q2;
+    return v * r0 + u * r1;
+}
+
+/* The parameter u where the span's time is s: time is monotonic
+ * (curve_prepare refuses handles for which it is not), so Newton steps
+ * kept inside a shrinking bracket converge to it. */
+static double solve_time(const bezier_span *z, double s)
+{
+    double lo = 0, hi = 1, u = s;
+    for (int it = 0; it < 100 && hi - lo > 4 * DBL_EPSILON; it++) {
+        double f = bezier_at(0, z->x1, z->x2, 1, u) - s;
+        if (f == 0)
+            return u;
+        if (f < 0)
+            lo = u;
+        else
+            hi = u;
+        double v = 1 - u, d = 3 * (z->x1 * v * v + 2 * (z->x2 - z->x1) * u * v + (1 - z->x2) * u * u);
+        double next = u - f / d;
+        u = d > 0 && next > lo && next < hi ? next : 0.5 * (lo + hi);
+    }
+    return u;
+}
+
+static double bezier_value(const curve *c, int i, double t)
+{
+    const curve_key *a = &c->keys[i], *b = &c->keys[i + 1];
+    bezier_span z = weighted_span(c, i);
+    double u = solve_time(&z, (t - a->time) / (b->time - a->time));
+    return bezier_at(z.y0, z.y1, z.y2, z.y3, u);
+}
+
+/* Segment i (keys i, i+1) at time t inside it: cubic Hermite or Bezier,
+ * or held. */
 static double segment_value(const curve *c, int i, double t)
 {
     const curve_key *a = &c->keys[i], *b = &c->keys[i + 1];
@@ -123,6 +230,8 @@ static double segment_value(const curve *c, int i, double t)
     double h = b->time - a->time, u = (t - a->time) / h, u2 = u * u, u3 = u2 * u;
     if (a->out == TAN_LINEAR && b->in == TAN_LINEAR) /* the Hermite form, evaluated exactly */
         return a->value + (b->value - a->value) * u;
+    if (c->weighted)
+        return bezier_value(c, i, t);
     return (2 * u3 - 3 * u2 + 1) * a->value + (u3 - 2 * u2 + u) * h * a->out_slope +
            (-2 * u3 + 3 * u2) * b->value + (u3 - u2) * h * b->in_slope;
 }
@@ -179,28 +288,89 @@ static double eval_at(const curve *c, double t, int left)
 double curve_eval(const curve *c, double t) { return eval_at(c, t, 0); }
 double curve_eval_left(const curve *c, double t) { return eval_at(c, t, 1); }
 
+/* A quadratic c0 + c1 u + c2 u^2 and its range over [lo, hi] (at the ends
+ * or the vertex). */
+typedef struct {
+    double c0, c1, c2;
+} quadratic;
+
+static double quadratic_at(quadratic q, double u) { return q.c0 + u * (q.c1 + u * q.c2); }
+
+static void quadratic_range(quadratic q, double lo, double hi, double *min, double *max)
+{
+    double a = quadratic_at(q, lo), b = quadratic_at(q, hi);
+    *min = fmin(a, b), *max = fmax(a, b);
+    if (q.c2 != 0) {
+        double u = -q.c1 / (2 * q.c2);
+        if (u > lo && u < hi)
+            *min = fmin(*min, quadratic_at(q, u)), *max = fmax(*max, quadratic_at(q, u));
+    }
+}
+
+/* The derivative of a cubic Bezier with control steps d0, d1, d2, over 3:
+ * d0 (1-u)^2 + 2 d1 u (1-u) + d2 u^2, with a factor u (drop_u) or 1 - u
+ * (drop_v) divided out where both coordinates share it (a zero handle). */
+static quadratic bezier_slope(double d0, double d1, double d2, int drop_u, int drop_v)
+{
+    if (drop_u && drop_v)
+        return (quadratic){2 * d1, 0, 0};
+    if (drop_u)
+        return (quadratic){2 * d1, d2 - 2 * d1, 0};
+    if (drop_v)
+        return (quadratic){d0, 2 * d1 - d0, 0};
+    return (quadratic){d0, 2 * (d1 - d0), d0 - 2 * d1 + d2};
+}
+
+/* max |dv/dt| = max |Y'(u)| / (h X'(u)) over a weighted segment, bounded
+ * piece by piece by the largest |Y'| over the smallest X' on each. */
+static double bezier_max_slope(const curve *c, int i)
+{
+    enum { PIECES = 256 };
+    bezier_span z = weighted_span(c, i);
+    double h = c->keys[i + 1].time - c->keys[i].time;
+    int drop_u = z.x1 == 0 && z.y1 == z.y0, drop_v = z.x2 == 1 && z.y2 == z.y3;
+    quadratic x = bezier_slope(z.x1, z.x2 - z.x1, 1 - z.x2, drop_u, drop_v);
+    quadratic y = bezier_slope(z.y1 - z.y0, z.y2 - z.y1, z.y3 - z.y2, drop_u, drop_v);
+    double m = 0;
+    for (int p = 0; p < PIECES; p++) {
+        double xlo, xhi, ylo, yhi;
+        quadratic_range(x, (double)p / PIECES, (double)(p + 1) / PIECES, &xlo, &xhi);
+        quadratic_range(y, (double)p / PIECES, (double)(p + 1) / PIECES, &ylo, &yhi);
+        double rise = fmax(fabs(ylo), fabs(yhi));
+        if (rise > 0)
+            m = fmax(m, xlo > 0 ? rise / (h * xlo) : INFINITY);
+    }
+    return m;
+}
+
+/* An unweighted segment as a Bezier in u = (t - t_a) / h: dv/du = 3 (d0
+ * (1-u)^2 + 2 d1 u (1-u) + d2 u^2) with the control steps d_i, a quadratic
+ * whose largest magnitude on [0, 1] is at an end or at its vertex. */
+static double hermite_max_slope(const curve *c, int i)
+{
+    const curve_key *a = &c->keys[i], *b = &c->keys[i + 1];
+    double h = b->time - a->time;
+    double p1 = a->value + h * a->out_slope / 3, p2 = b->value - h * b->in_slope / 3;
+    double lo, hi;
+    quadratic_range(bezier_slope(p1 - a->value, p2 - p1, b->value - p2, 0, 0), 0, 1, &lo, &hi);
+    return 3.0 * fmax(fabs(lo), fabs(hi)) / h;
+}
+
+static double segment_max_slope(const curve *c, int i)
+{
+    const curve_key *a = &c->keys[i], *b = &c->keys[i + 1];
+    if (a->out == TAN_STEP || a->out == TAN_STEPNEXT)
+        return 0.0;
+    if (a->out == TAN_LINEAR && b->in == TAN_LINEAR)
+        return fabs(secant(c, i));
+    return (c->weighted ? bezier_max_slope(c, i) : hermite_max_slope(c, i)) * (1 + 1e-12);
+}
+
 double curve_max_slope(const curve *c)
 {
     double m = 0;
-    for (int i = 0; i + 1 < c->count; i++) {
-        const curve_key *a = &c->keys[i], *b = &c->keys[i + 1];
-        if (a->out == TAN_STEP || a->out == TAN_STEPNEXT)
-            continue;
-        /* The segment as a Bezier in u = (t - t_a) / h: dv/du = 3 (d0 (1-u)^2 +
-         * 2 d1 u (1-u) + d2 u^2) with the control steps d_i, a quadratic whose
-         * largest magnitude on [0, 1] is at an end or at its vertex. */
-        double h = b->time - a->time;
-        double p1 = a->value + h * a->out_slope / 3, p2 = b->value - h * b->in_slope / 3;
-        double d0 = p1 - a->value, d1 = p2 - p1, d2 = b->value - p2;
-        double qa = d0 - 2 * d1 + d2, qb = 2 * (d1 - d0);
-        double q = fmax(fabs(d0), fabs(d2));
-        if (qa != 0) {
-            double u = -qb / (2 * qa);
-            if (u > 0 && u < 1)
-                q = fmax(q, fabs(d0 + u * (qb + u * qa)));
-        }
-        m = fmax(m, 3.0 * q / h * (1 + 1e-12));
-    }
+    for (int i = 0; i + 1 < c->count; i++)
+        m = fmax(m, segment_max_slope(c, i));
     if (c->count > 0) {
         if (c->pre == INF_LINEAR)
             m = fmax(m, fabs(c->keys[0].in_slope));

@@ -119,6 +119,7 @@ static int parse_keyframes(xml_ctx *c, xmlNodePtr n, keyframes *kf)
     for (int i = 0; i < CH_COUNT; i++) {
         rr_error sub;
         kf->ch[i].pre = pre, kf->ch[i].post = post;
+        kf->ch[i].clamp_flat = keyframes_clamp_flat(i);
         if (kf->ch[i].count && curve_prepare(&kf->ch[i], &sub))
             return xml_fail(c, n, "%s", sub.msg);
     }

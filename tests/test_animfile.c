@@ -117,6 +117,60 @@ static const char *parse_error(const char *text)
     return e.msg;
 }
 
+/* Weighted curves (issue 17.3): a fixed tangent's weight is its Bezier
+ * handle's length in the (frames, file value) plane, along its angle; other
+ * tangents reach a third of the interval (animx). Film, cm. */
+#define WEIGHTED(keys)                                                                                    \
+    "animVersion 1.1;\ntimeUnit film;\nlinearUnit cm;\nangularUnit deg;\n"                               \
+    "anim translate.translateX translateX n 0 0 0;\nanimData {\n input time;\n output linear;\n"          \
+    " weighted 1;\n keys {\n" keys " }\n}\n"
+
+static keyframes *parse_ok(const char *text)
+{
+    keyframes *k = NULL;
+    rr_error e;
+    CHECK(animfile_parse(text, "w.anim", NULL, &k, NULL, &e) == 0);
+    return k;
+}
+
+/* Out-tangent flat with weight 16 frames (two thirds of the 24-frame
+ * interval), the last key flat with its computed 8-frame handle: time
+ * controls (0, 16, 16, 24) frames, values (0, 0, 10, 10) cm. At u = 1/2 the
+ * time is 2/8 + 2/8 + 1/8 of the interval (frame 15, 0.625 s) and the value
+ * 3/8 * 10 + 1/8 * 10 = 5 cm. Unweighted (Hermite in time) it would be
+ * 10 (3 s^2 - 2 s^3) = 6.836 cm at s = 5/8. Collinear handles at 45 degrees
+ * (1 cm per frame) whatever their weights give the straight line 24 t cm. */
+TEST(weighted_anim_curves_are_bezier_in_frames_and_values)
+{
+    keyframes *k = parse_ok(WEIGHTED("  0 0 flat fixed 1 0 0 0 16;\n  24 10 flat flat 1 1 0;\n"));
+    if (k) {
+        CHECK_NEAR(curve_eval(&k->ch[CH_TX], 0.625), 0.05, 1e-15);
+        CHECK(k->ch[CH_TX].weighted);
+        free_keys(k);
+    }
+    k = parse_ok(WEIGHTED("  0 0 fixed fixed 1 0 0 45 5 45 3;\n  24 24 fixed fixed 1 0 0 45 20 45 2;\n"));
+    if (k) {
+        for (int i = 0; i <= 8; i++)
+            CHECK_NEAR(curve_eval(&k->ch[CH_TX], i / 8.0), 0.24 * i / 8.0, 1e-15);
+        free_keys(k);
+    }
+    CHECK(strstr(parse_error(WEIGHTED("  0 0 flat fixed 1 0 0 0 -2;\n  24 10 flat flat 1 1 0;\n")),
+                 "t.anim:11: tangent weight -2 is negative"));
+    CHECK(strstr(parse_error(WEIGHTED("  0 0 flat fixed 1 0 0 0 24;\n  24 10 fixed flat 1 1 0 0 24;\n")),
+                 "keys 1 and 2: the tangent weights give the segment a vertical tangent"));
+}
+
+/* Maya's obsolete slow and fast tangents are read (animEngine gives them
+ * the secant to the neighbouring key), so the segment is straight. */
+TEST(slow_and_fast_tangents_are_read)
+{
+    keyframes *k = parse_ok(WEIGHTED("  0 0 slow slow 1 1 0;\n  24 24 fast fast 1 1 0;\n"));
+    if (k) {
+        CHECK_NEAR(curve_eval(&k->ch[CH_TX], 0.25), 0.06, 1e-15);
+        free_keys(k);
+    }
+}
+
 #define HEAD "animVersion 1.1;\ntimeUnit %s;\nlinearUnit %s;\nangularUnit %s;\n"
 #define CURVE(attr, keys) "anim " attr " " attr " n 0 0 0;\nanimData {\n input time;\n keys {\n" keys " }\n}\n"
 
