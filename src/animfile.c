@@ -398,11 +398,14 @@ typedef struct {
     char names[ANIMFILE_MAX_NODES][64];
 } node_list;
 
-/* Records the statement's node; returns whether its curve is the wanted
- * node's (node NULL: the first node named in the file). */
+/* Records the node of a statement that carries a curve; returns whether
+ * it is the wanted node's (node NULL: the first node named in the file).
+ * Autodesk's animImportExport reader: "anim <attribute> <leaf> <node> row
+ * child attr;" names the node; without the leaf and node words (an export
+ * without node names) there is none. */
 static int select_node(node_list *nodes, char w[][64], int n, const char *node)
 {
-    const char *here = n >= 4 ? w[3] : "";
+    const char *here = n >= 7 ? w[3] : "";
     int known = 0;
     for (int i = 0; i < nodes->count && !known; i++)
         known = !strcmp(nodes->names[i], here);
@@ -457,9 +460,11 @@ int animfile_parse(const char *text, const char *name, const char *node, keyfram
             goto fail;
         }
         if (!strcmp(w[0], "anim")) {
-            if (parse_anim(&lx, kf, w, n, &u, seen, select_node(&nodes, w, n, node)))
+            /* without animData: a node or attribute listed as a placeholder */
+            int with_curve = peek_is(&lx, "animData");
+            if (parse_anim(&lx, kf, w, n, &u, seen, with_curve && select_node(&nodes, w, n, node)))
                 goto fail;
-            curves++;
+            curves += with_curve;
         } else if (header_statement(&lx, w, n, &u)) {
             goto fail;
         }

@@ -279,3 +279,22 @@ TEST(multi_node_files_select_a_node)
     CHECK(animfile_parse(TWO_NODES, "rig.anim", "joint3", &k, NULL, &e) != 0 &&
           strstr(e.msg, "no curves for node 'joint3'; the file animates 'ball', 'joint2'"));
 }
+
+/* Maya lists nodes without curves as placeholders, "anim <node> row child
+ * attr;" (Autodesk's animImportExport reader): they are not animated nodes,
+ * and their numbers are not node names. */
+TEST(placeholder_lines_are_not_animated_nodes)
+{
+    const char *text = "animVersion 1.1;\nanim hips 0 1 0;\nanim spine 1 1 0;\n"
+                       "anim translate.translateX translateX hand 2 0 0;\nanimData {\n input time;\n keys {\n"
+                       "  0 0 linear linear 1 1 0;\n  24 10 linear linear 1 1 0;\n }\n}\n";
+    keyframes *k = NULL;
+    rr_error e;
+    CHECK(animfile_parse(text, "rig.anim", NULL, &k, NULL, &e) == 0);
+    if (k) {
+        CHECK_NEAR(curve_eval(&k->ch[CH_TX], 0.5), 0.05, 1e-15);
+        free_keys(k), k = NULL;
+    }
+    CHECK(animfile_parse(text, "rig.anim", "hips", &k, NULL, &e) != 0 &&
+          strstr(e.msg, "no curves for node 'hips'; the file animates 'hand'"));
+}
