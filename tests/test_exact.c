@@ -292,3 +292,16 @@ TEST(exact_matches_sampled_animated_scale_point_light_exp_weight)
                            "</keyframes></animation></object></scene>",
                            12, 6000) == 0);
 }
+
+/* A weighted Maya curve (scenes/animations/rig.anim's hand: a Bezier whose
+ * long fixed handle makes the speed vary strongly, spline y, turning in z)
+ * before its step: the motion bound covers the weighted segments. */
+TEST(exact_matches_sampled_weighted_maya_curves)
+{
+    CHECK(exact_vs_sampled("<scene><camera position='0.3 0.1 4' lookat='0.3 0.1 0' fov='40' width='64' "
+                           "height='64'/><shutter open='0' close='0.45'/>"
+                           "<light type='directional' direction='0 -0.5 -1'/><render epsilon='0.03'/>"
+                           "<object><pointModel generate='plane' count='2500' radius='0.8' checker='5'/>"
+                           "<animation file='scenes/animations/rig.anim' node='hand'/></object></scene>",
+                           12, 6000) == 0);
+}

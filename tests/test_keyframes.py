@@ -2,7 +2,7 @@
 (issue: keyframes, .anim, camera motion and frames)."""
 import numpy as np
 
-from conftest import ROOT, focal_pixels, read_exr, run
+from conftest import ROOT, coverage_centroid, focal_pixels, read_exr, read_full, run
 from test_coverage import SCENE, chord_integral
 
 W, H, FOV, D = 160, 40, 30.0, 10.0
@@ -182,3 +182,59 @@ def test_animated_scene_renders_frame_0_without_frame_options(tmp_path):
     assert opened == 0 and abs(closed - 0.5 / 24) < 1e-12
     text = ANIMATED.read_text()
     assert "0-23" in text and "without it frame 0 is rendered" in text
+
+
+RIG = ROOT / "scenes" / "animations" / "rig.anim"
+
+
+def rig_hand_position(frame):
+    """scenes/animations/rig.anim's node 'hand', evaluated from Maya's curve
+    definitions (issue 17), in meters; nothing of refrender's curve code.
+    translateX: a weighted Bezier, time controls 0, 16, 16, 24 frames (the
+    fixed flat tangent's weight 16, the auto end key's handle a third of the
+    interval) and values 0, 0, 100, 100 cm: x(u) = 24 (2u - 2u^2 + u^3),
+    solved for u. translateY: spline 0, 30, 0 cm at frames 0, 12, 24 with
+    slopes 2.5, 0, -2.5 cm/frame and handles of 4 frames (evenly spaced in
+    time, so the parameter is linear in time). translateZ: step."""
+    u = [r.real for r in np.roots([1, -2, 2, -frame / 24]) if abs(r.imag) < 1e-12 and -1e-12 <= r.real <= 1 + 1e-12]
+    assert len(u) == 1
+    x = 100 * (3 * u[0] ** 2 * (1 - u[0]) + u[0] ** 3)
+    seg, s = (0, frame / 12) if frame < 12 else (1, (frame - 12) / 12)
+    ys = [0, 10, 30, 30] if seg == 0 else [30, 30, 10, 0]
+    y = sum(c * b for c, b in zip(ys, [(1 - s) ** 3, 3 * s * (1 - s) ** 2, 3 * s * s * (1 - s), s ** 3]))
+    z = 0 if frame < 12 else -50
+    return np.array([x, y, z]) / 100
+
+
+def test_rig_hand_evaluates_in_closed_form():
+    """The worked values in rig.anim's comment: 50 cm at frame 15 (u = 1/2);
+    y 18.75 cm at frame 6 and 26.71875 cm at frame 15."""
+    assert np.allclose(rig_hand_position(15), [0.5, 0.2671875, -0.5], atol=1e-12)
+    assert abs(rig_hand_position(6)[1] - 0.1875) < 1e-12
+
+
+def test_maya_multi_node_weighted_file_renders_the_chosen_node_where_maya_puts_it(tmp_path):
+    """Issue 17's done-when: a multi-node file with weighted, fixed, auto,
+    spline and step keys renders node 'hand' at its hand-evaluated position.
+    A small unlit disc at the node's pivot, an instantaneous shutter at
+    frames 6 and 15: the centroid of its coverage is the pinhole projection
+    of rig_hand_position within 0.1 pixel (the other node's curves, or the
+    weighted curve read as Hermite, put it pixels away)."""
+    (tmp_path / "rig.anim").write_text(RIG.read_text())
+    w, h, fov, dist = 96, 64, 30.0, 10.0
+    scene = tmp_path / "rig.xml"
+    scene.write_text(f'<scene><camera position="0 0 {dist}" lookat="0 0 0" up="0 1 0" fov="{fov}" width="{w}" '
+                     f'height="{h}"/><object><pointModel><splat center="0 0 0" normal="0 0 1" radius="0.05"/>'
+                     '</pointModel><material shading="unlit"/><animation file="rig.anim" node="hand"/></object>'
+                     '</scene>')
+    f = focal_pixels(h, fov)
+    for frame in (6, 15):
+        t = frame / 24
+        out = tmp_path / f"f{frame}.exr"
+        proc = run([scene, "-o", out, "--shutter", f"{t},{t + 1e-7}", "--sampler", "sobol", "--spp", 64,
+                    "--tspp", 1, "--quiet"])
+        assert proc.returncode == 0, proc.stderr
+        x, y, z = rig_hand_position(frame)
+        px, py = w / 2 + f * x / (dist - z), h / 2 - f * y / (dist - z)
+        cx, cy = coverage_centroid(read_full(out)[0]["A"])
+        assert abs(px - cx) < 0.1 and abs(py - cy) < 0.1, (frame, px, py, cx, cy)
