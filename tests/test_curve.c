@@ -75,10 +75,15 @@ TEST(clamped_plateau_and_auto_follow_autodesk)
     curve c = make(4, tv, TAN_CLAMPED, TAN_CLAMPED, INF_CONSTANT, INF_CONSTANT);
     CHECK_NEAR(c.keys[1].out_slope, 0.5625, 1e-15); /* 0.125 apart, clamp_flat 0 */
     CHECK_NEAR(c.keys[0].out_slope, 1.0, 1e-15);    /* an end: the one-sided secant */
-    c.clamp_flat = 0.125;                           /* Maya's rule is <= */
+    /* between keys 2 and 3, slopes 0.5625 and 1: Hermite at u = 1/2 is
+     * 1/2 + 0.5625 / 8 + 1.125 / 2 - 1 / 8 */
+    CHECK_NEAR(curve_eval(&c, 1.5), 1.0078125, 1e-15);
+    c.clamp_flat = 0.125; /* Maya's rule is <= */
     reprepare(&c);
     CHECK(c.keys[1].in_slope == 0 && c.keys[1].out_slope == 0 && c.keys[2].in_slope == 0);
     CHECK_NEAR(c.keys[0].out_slope, 1.0, 1e-15);
+    CHECK_NEAR(curve_eval(&c, 1.5), 1.0625, 1e-15); /* both flat: the mean */
+    CHECK(curve_eval(&c, 2.0) == 1.125);
     curve_free(&c);
     c = make(4, tv, TAN_PLATEAU, TAN_PLATEAU, INF_CONSTANT, INF_CONSTANT);
     CHECK(c.keys[0].out_slope == 0 && c.keys[1].out_slope == 0 && c.keys[2].in_slope == 0 &&
@@ -91,6 +96,9 @@ TEST(clamped_plateau_and_auto_follow_autodesk)
     const double up[] = {0, 0, 1, 1, 2, 3}; /* spline 1.5, within 3x the smaller secant */
     c = make(3, up, TAN_PLATEAU, TAN_PLATEAU, INF_CONSTANT, INF_CONSTANT);
     CHECK(c.keys[1].in_slope == 1.5 && c.keys[1].out_slope == 1.5 && c.keys[0].out_slope == 0);
+    /* first segment, slopes 0 and 1.5: 1/2 - 1.5 / 8 at u = 1/2; the key's value at the key */
+    CHECK_NEAR(curve_eval(&c, 0.5), 0.3125, 1e-15);
+    CHECK(curve_eval(&c, 1.0) == 1.0);
     curve_free(&c);
 }
 
