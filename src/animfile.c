@@ -126,6 +126,7 @@ static int number(lexer *lx, const char *word, double *v)
 typedef struct {
     double seconds_per_frame, meters_per_unit, radians_per_unit;
     double version;
+    int maya2; /* written by Maya 2.x: tangents in seconds and internal units */
 } units;
 
 static int time_unit(const char *u, double *spf)
@@ -180,8 +181,9 @@ static int channel_of(const char *leaf)
 typedef struct {
     curve *c;
     int channel;      /* < 0: read and skip (-1 unsupported attribute, -2 another node) */
-    double value_scale, seconds_per_frame, radians_per_unit;
-    int weighted;
+    double value_scale, seconds_per_frame;
+    double tangent_radians; /* radians per unit of the tangent angles (tangentAngleUnit) */
+    int weighted, maya2;
 } curve_reader;
 
 static int add_key(lexer *lx, curve_reader *r, const curve_key *k)
@@ -194,24 +196,39 @@ static int add_key(lexer *lx, curve_reader *r, const curve_key *k)
     return rc ? fail(lx, "out of memory") : 0;
 }
 
-/* A fixed tangent's angle to an angle of the same slope in scene units.
- * Maya writes tan(angle) as the slope in the file's value units per frame of
- * its timeUnit (checked on Maya 2026 exports: the tangent of a fixed key
- * equals the per-frame secant to seven digits), not per second. */
+/* The plane a fixed tangent's angle and weight are measured in, as scene
+ * units per unit of its x (time) and y (value) axes. Maya writes them in
+ * the file's own units, per frame of its timeUnit (checked on Maya 2026
+ * exports: the tangent of a fixed key equals the per-frame secant to seven
+ * digits; Autodesk's animImportExport reader sets the UI units to the
+ * file's before reading them). Maya 2.x wrote them per second in its
+ * internal units (centimeters, radians), which that reader converts. */
+static void tangent_plane(const curve_reader *r, double *seconds, double *values)
+{
+    *seconds = r->maya2 ? 1.0 : r->seconds_per_frame;
+    *values = !r->maya2 ? r->value_scale : r->channel >= CH_TX && r->channel <= CH_TZ ? 0.01 : 1.0;
+}
+
+/* A fixed tangent's angle to an angle of the same slope in scene units. */
 static double scene_angle(const curve_reader *r, double file_angle)
 {
-    return atan(tan(file_angle * r->radians_per_unit) * r->value_scale / r->seconds_per_frame);
+    double seconds, values;
+    tangent_plane(r, &seconds, &values);
+    return atan(tan(file_angle * r->tangent_radians) * values / seconds);
 }
 
 /* How far in time a fixed tangent's Bezier handle reaches on a weighted
- * curve: the weight is the handle's length in the same (frames, value)
- * plane as the angle, so it reaches weight cos(angle) frames. Autodesk's
- * animEngine builds the tangent as 3 weight (cos, sin)(angle) with the
- * frames over the frame rate (seconds), and animx puts the control point a
- * third of the tangent from the key. */
+ * curve: the weight is the handle's length in the same plane as the angle,
+ * so it reaches weight cos(angle) along time. Autodesk's animEngine builds
+ * the tangent as 3 weight (cos, sin)(angle) with frames over the frame rate
+ * (seconds), animx puts the control point a third of the tangent from the
+ * key, and the animImportExport reader converts Maya 2.x weights between
+ * unit systems as lengths in that plane. */
 static double scene_handle(const curve_reader *r, double file_angle, double weight)
 {
-    return weight * cos(file_angle * r->radians_per_unit) * r->seconds_per_frame;
+    double seconds, values;
+    tangent_plane(r, &seconds, &values);
+    return weight * cos(file_angle * r->tangent_radians) * seconds;
 }
 
 /* A fixed tangent's angle and weight fields. */
@@ -306,12 +323,15 @@ static int anim_data_statement(lexer *lx, curve_reader *r, char w[][64], int n)
     } else if (!strcmp(key, "inputUnit")) {
         if (time_unit(val, &r->seconds_per_frame))
             return fail(lx, "unknown time unit '%s'", val);
+    } else if (!strcmp(key, "tangentAngleUnit")) {
+        if (angular_unit(val, &r->tangent_radians))
+            return fail(lx, "unknown tangent angle unit '%s'", val);
     } else if (!strcmp(key, "outputUnit") && r->channel >= 0 && r->channel < CH_SX) {
         double f;
         if (r->channel >= CH_RX && r->channel <= CH_RZ ? angular_unit(val, &f) : linear_unit(val, &f))
             return fail(lx, "unknown output unit '%s' for this curve", val);
         r->value_scale = f;
-    } /* output, tangentAngleUnit and others: nothing to do */
+    } /* output and others: nothing to do */
     return 0;
 }
 
@@ -346,6 +366,8 @@ static int header_statement(lexer *lx, char w[][64], int n, units *u)
         return 0;
     if (!strcmp(key, "animVersion"))
         return number(lx, w[1], &u->version);
+    if (!strcmp(key, "mayaVersion")) /* "2.5", not "2026" */
+        u->maya2 = !strncmp(w[1], "2.", 2);
     if (!strcmp(key, "timeUnit") && time_unit(w[1], &u->seconds_per_frame))
         return fail(lx, "unknown timeUnit '%s'", w[1]);
     if (!strcmp(key, "linearUnit") && linear_unit(w[1], &u->meters_per_unit))
@@ -367,7 +389,7 @@ static int parse_anim(lexer *lx, keyframes *kf, char w[][64], int n, const units
         return 0; /* an attribute listed without a curve */
     int ch = selected ? channel_of(leaf) : -2; /* -2: another node's curve, read and dropped */
     curve skipped = {0, NULL, INF_CONSTANT, INF_CONSTANT, 0, 0.0};
-    curve_reader r = {ch >= 0 ? &kf->ch[ch] : &skipped, ch, 1.0, u->seconds_per_frame, u->radians_per_unit, 0};
+    curve_reader r = {ch >= 0 ? &kf->ch[ch] : &skipped, ch, 1.0, u->seconds_per_frame, u->radians_per_unit, 0, u->maya2};
     if (ch == -1)
         rr_warn(lx->warnings, "%s:%d: skipping curve of unsupported attribute '%s'", lx->name, line, w[1]);
     else if (ch >= 0 && seen[ch])
@@ -444,7 +466,7 @@ int animfile_parse(const char *text, const char *name, const char *node, keyfram
     if (!kf)
         return rr_fail(err, "out of memory");
     lexer lx = {text, 1, name, err, warnings, {0}, 1};
-    units u = {1.0 / 24, 0.01, M_PI / 180, 1.1}; /* Maya's defaults: film, cm, deg */
+    units u = {1.0 / 24, 0.01, M_PI / 180, 1.1, 0}; /* Maya's defaults: film, cm, deg */
     int seen[CH_COUNT] = {0}, curves = 0, versioned = 0;
     node_list nodes = {0, {{0}}};
     char w[16][64];

@@ -160,6 +160,39 @@ TEST(weighted_anim_curves_are_bezier_in_frames_and_values)
                  "keys 1 and 2: the tangent weights give the segment a vertical tangent"));
 }
 
+/* The plane of a fixed tangent's angle and weight: a curve's
+ * tangentAngleUnit overrides the header's angularUnit for its angles, and a
+ * Maya 2.x file measured them per second in internal units (centimeters),
+ * which Autodesk's animImportExport reader converts. The same curves as
+ * above, written those ways, give the same values. */
+TEST(tangent_angle_units_and_maya_2_files)
+{
+    keyframes *k = parse_ok("animVersion 1.1;\ntimeUnit film;\nlinearUnit cm;\nangularUnit deg;\n"
+                            "anim translate.translateX translateX n 0 0 0;\nanimData {\n input time;\n"
+                            " tangentAngleUnit rad;\n keys {\n  0 0 fixed fixed 1 0 0 0.7853981633974483 1 "
+                            "0.7853981633974483 1;\n  24 24 linear linear 1 1 0;\n }\n}\n");
+    if (k) { /* 45 degrees given in radians: 1 cm per frame, the straight line */
+        CHECK_NEAR(curve_eval(&k->ch[CH_TX], 0.25), 0.06, 1e-15);
+        free_keys(k);
+    }
+    /* Maya 2.x: 45 degrees is 1 cm per second; keys (0 s, 0) and (1 s, 1 cm) */
+    k = parse_ok("animVersion 1.1;\nmayaVersion 2.5;\ntimeUnit film;\nlinearUnit cm;\n"
+                 "anim translate.translateX translateX n 0 0 0;\nanimData {\n input time;\n keys {\n"
+                 "  0 0 fixed fixed 1 0 0 45 1 45 1;\n  24 1 linear linear 1 1 0;\n }\n}\n");
+    if (k) {
+        CHECK_NEAR(curve_eval(&k->ch[CH_TX], 0.25), 0.0025, 1e-15);
+        free_keys(k);
+    }
+    /* ... and a weight of 2/3 s is the 16-frame handle of the weighted test */
+    k = parse_ok("animVersion 1.1;\nmayaVersion 2.5;\ntimeUnit film;\nlinearUnit cm;\n"
+                 "anim translate.translateX translateX n 0 0 0;\nanimData {\n input time;\n weighted 1;\n keys {\n"
+                 "  0 0 flat fixed 1 0 0 0 0.6666666666666666;\n  24 10 flat flat 1 1 0;\n }\n}\n");
+    if (k) {
+        CHECK_NEAR(curve_eval(&k->ch[CH_TX], 0.625), 0.05, 1e-15);
+        free_keys(k);
+    }
+}
+
 /* Maya's obsolete slow and fast tangents are read (animEngine gives them
  * the secant to the neighbouring key), so the segment is straight. */
 TEST(slow_and_fast_tangents_are_read)
