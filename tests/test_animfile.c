@@ -133,6 +133,16 @@ static keyframes *parse_ok(const char *text)
     return k;
 }
 
+/* The file parses and its translateX is `meters` at time t (seconds). */
+static void check_tx_at(const char *text, double t, double meters)
+{
+    keyframes *k = parse_ok(text);
+    if (k) {
+        CHECK_NEAR(curve_eval(&k->ch[CH_TX], t), meters, 1e-15);
+        free_keys(k);
+    }
+}
+
 /* Out-tangent flat with weight 16 frames (two thirds of the 24-frame
  * interval), the last key flat with its computed 8-frame handle: time
  * controls (0, 16, 16, 24) frames, values (0, 0, 10, 10) cm. At u = 1/2 the
@@ -167,41 +177,29 @@ TEST(weighted_anim_curves_are_bezier_in_frames_and_values)
  * above, written those ways, give the same values. */
 TEST(tangent_angle_units_and_maya_2_files)
 {
-    keyframes *k = parse_ok("animVersion 1.1;\ntimeUnit film;\nlinearUnit cm;\nangularUnit deg;\n"
-                            "anim translate.translateX translateX n 0 0 0;\nanimData {\n input time;\n"
-                            " tangentAngleUnit rad;\n keys {\n  0 0 fixed fixed 1 0 0 0.7853981633974483 1 "
-                            "0.7853981633974483 1;\n  24 24 linear linear 1 1 0;\n }\n}\n");
-    if (k) { /* 45 degrees given in radians: 1 cm per frame, the straight line */
-        CHECK_NEAR(curve_eval(&k->ch[CH_TX], 0.25), 0.06, 1e-15);
-        free_keys(k);
-    }
+    /* 45 degrees given in radians: 1 cm per frame, the straight line */
+    check_tx_at("animVersion 1.1;\ntimeUnit film;\nlinearUnit cm;\nangularUnit deg;\n"
+                "anim translate.translateX translateX n 0 0 0;\nanimData {\n input time;\n tangentAngleUnit rad;\n"
+                " keys {\n  0 0 fixed fixed 1 0 0 0.7853981633974483 1 0.7853981633974483 1;\n"
+                "  24 24 linear linear 1 1 0;\n }\n}\n",
+                0.25, 0.06);
     /* Maya 2.x: 45 degrees is 1 cm per second; keys (0 s, 0) and (1 s, 1 cm) */
-    k = parse_ok("animVersion 1.1;\nmayaVersion 2.5;\ntimeUnit film;\nlinearUnit cm;\n"
-                 "anim translate.translateX translateX n 0 0 0;\nanimData {\n input time;\n keys {\n"
-                 "  0 0 fixed fixed 1 0 0 45 1 45 1;\n  24 1 linear linear 1 1 0;\n }\n}\n");
-    if (k) {
-        CHECK_NEAR(curve_eval(&k->ch[CH_TX], 0.25), 0.0025, 1e-15);
-        free_keys(k);
-    }
+    check_tx_at("animVersion 1.1;\nmayaVersion 2.5;\ntimeUnit film;\nlinearUnit cm;\n"
+                "anim translate.translateX translateX n 0 0 0;\nanimData {\n input time;\n keys {\n"
+                "  0 0 fixed fixed 1 0 0 45 1 45 1;\n  24 1 linear linear 1 1 0;\n }\n}\n",
+                0.25, 0.0025);
     /* ... and a weight of 2/3 s is the 16-frame handle of the weighted test */
-    k = parse_ok("animVersion 1.1;\nmayaVersion 2.5;\ntimeUnit film;\nlinearUnit cm;\n"
-                 "anim translate.translateX translateX n 0 0 0;\nanimData {\n input time;\n weighted 1;\n keys {\n"
-                 "  0 0 flat fixed 1 0 0 0 0.6666666666666666;\n  24 10 flat flat 1 1 0;\n }\n}\n");
-    if (k) {
-        CHECK_NEAR(curve_eval(&k->ch[CH_TX], 0.625), 0.05, 1e-15);
-        free_keys(k);
-    }
+    check_tx_at("animVersion 1.1;\nmayaVersion 2.5;\ntimeUnit film;\nlinearUnit cm;\n"
+                "anim translate.translateX translateX n 0 0 0;\nanimData {\n input time;\n weighted 1;\n keys {\n"
+                "  0 0 flat fixed 1 0 0 0 0.6666666666666666;\n  24 10 flat flat 1 1 0;\n }\n}\n",
+                0.625, 0.05);
 }
 
 /* Maya's obsolete slow and fast tangents are read (animEngine gives them
  * the secant to the neighbouring key), so the segment is straight. */
 TEST(slow_and_fast_tangents_are_read)
 {
-    keyframes *k = parse_ok(WEIGHTED("  0 0 slow slow 1 1 0;\n  24 24 fast fast 1 1 0;\n"));
-    if (k) {
-        CHECK_NEAR(curve_eval(&k->ch[CH_TX], 0.25), 0.06, 1e-15);
-        free_keys(k);
-    }
+    check_tx_at(WEIGHTED("  0 0 slow slow 1 1 0;\n  24 24 fast fast 1 1 0;\n"), 0.25, 0.06);
 }
 
 #define HEAD "animVersion 1.1;\ntimeUnit %s;\nlinearUnit %s;\nangularUnit %s;\n"
