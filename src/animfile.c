@@ -183,7 +183,7 @@ typedef struct {
     int channel;      /* < 0: read and skip (-1 unsupported attribute, -2 another node) */
     double value_scale, seconds_per_frame;
     double tangent_radians; /* radians per unit of the tangent angles (tangentAngleUnit) */
-    int weighted, maya2;
+    int weighted;
 } curve_reader;
 
 static int add_key(lexer *lx, curve_reader *r, const curve_key *k)
@@ -196,51 +196,36 @@ static int add_key(lexer *lx, curve_reader *r, const curve_key *k)
     return rc ? fail(lx, "out of memory") : 0;
 }
 
-/* The plane a fixed tangent's angle and weight are measured in, as scene
- * units per unit of its x (time) and y (value) axes. Maya writes them in
- * the file's own units, per frame of its timeUnit (checked on Maya 2026
- * exports: the tangent of a fixed key equals the per-frame secant to seven
- * digits; Autodesk's animImportExport reader sets the UI units to the
- * file's before reading them). Maya 2.x wrote them per second in its
- * internal units (centimeters, radians), which that reader converts. */
-static void tangent_plane(const curve_reader *r, double *seconds, double *values)
-{
-    *seconds = r->maya2 ? 1.0 : r->seconds_per_frame;
-    *values = !r->maya2 ? r->value_scale : r->channel >= CH_TX && r->channel <= CH_TZ ? 0.01 : 1.0;
-}
-
-/* A fixed tangent's angle to an angle of the same slope in scene units. */
-static double scene_angle(const curve_reader *r, double file_angle)
-{
-    double seconds, values;
-    tangent_plane(r, &seconds, &values);
-    return atan(tan(file_angle * r->tangent_radians) * values / seconds);
-}
-
-/* How far in time a fixed tangent's Bezier handle reaches on a weighted
- * curve: the weight is the handle's length in the same plane as the angle,
- * so it reaches weight cos(angle) along time. Autodesk's animEngine builds
- * the tangent as 3 weight (cos, sin)(angle) with frames over the frame rate
- * (seconds), animx puts the control point a third of the tangent from the
- * key, and the animImportExport reader converts Maya 2.x weights between
- * unit systems as lengths in that plane. */
-static double scene_handle(const curve_reader *r, double file_angle, double weight)
-{
-    double seconds, values;
-    tangent_plane(r, &seconds, &values);
-    return weight * cos(file_angle * r->tangent_radians) * seconds;
-}
-
-/* A fixed tangent's angle and weight fields. */
-static int fixed_tangent(lexer *lx, const curve_reader *r, char w[][64], double *angle, double *handle)
+/* A fixed tangent's angle and weight fields, to an angle of the same slope
+ * in scene units and the time its Bezier handle reaches on a weighted
+ * curve.
+ *
+ * Both are measured in one plane. Maya writes them in the file's own
+ * units, per frame of its timeUnit (checked on Maya 2026 exports: the
+ * tangent of a fixed key equals the per-frame secant to seven digits;
+ * Autodesk's animImportExport reader sets the UI units to the file's before
+ * reading them). Maya 2.x wrote them per second in its internal units
+ * (centimeters, radians), which that reader converts.
+ *
+ * The weight is the handle's length in that plane, so it reaches
+ * weight cos(angle) along time: Autodesk's animEngine builds the tangent as
+ * 3 weight (cos, sin)(angle) with frames over the frame rate (seconds),
+ * animx puts the control point a third of the tangent from the key, and the
+ * animImportExport reader converts Maya 2.x weights between unit systems as
+ * lengths in that plane. */
+static int fixed_tangent(lexer *lx, const curve_reader *r, const units *u, char w[][64], double *angle,
+                         double *handle)
 {
     double a, weight;
     if (number(lx, w[0], &a) || number(lx, w[1], &weight))
         return -1;
     if (!(weight >= 0))
         return fail(lx, "tangent weight %s is negative", w[1]);
-    *angle = scene_angle(r, a);
-    *handle = scene_handle(r, a, weight);
+    double seconds = u->maya2 ? 1.0 : r->seconds_per_frame; /* scene units per unit of the plane's axes */
+    double values = !u->maya2 ? r->value_scale : r->channel >= CH_TX && r->channel <= CH_TZ ? 0.01 : 1.0;
+    a *= r->tangent_radians;
+    *angle = atan(tan(a) * values / seconds);
+    *handle = weight * cos(a) * seconds;
     return 0;
 }
 
@@ -271,11 +256,11 @@ static int parse_key(lexer *lx, curve_reader *r, char w[][64], int n, const unit
         return fail(lx, "a key with tangents %s/%s has %d fields, expected %d", w[2], w[3], n, base + extra);
     int at = base;
     if (k.in == TAN_FIXED) {
-        if (fixed_tangent(lx, r, w + at, &k.in_angle, &k.in_handle))
+        if (fixed_tangent(lx, r, u, w + at, &k.in_angle, &k.in_handle))
             return -1;
         at += 2;
     }
-    if (k.out == TAN_FIXED && fixed_tangent(lx, r, w + at, &k.out_angle, &k.out_handle))
+    if (k.out == TAN_FIXED && fixed_tangent(lx, r, u, w + at, &k.out_angle, &k.out_handle))
         return -1;
     k.time *= r->seconds_per_frame;
     k.value *= r->value_scale;
@@ -389,7 +374,7 @@ static int parse_anim(lexer *lx, keyframes *kf, char w[][64], int n, const units
         return 0; /* an attribute listed without a curve */
     int ch = selected ? channel_of(leaf) : -2; /* -2: another node's curve, read and dropped */
     curve skipped = {0, NULL, INF_CONSTANT, INF_CONSTANT, 0, 0.0};
-    curve_reader r = {ch >= 0 ? &kf->ch[ch] : &skipped, ch, 1.0, u->seconds_per_frame, u->radians_per_unit, 0, u->maya2};
+    curve_reader r = {ch >= 0 ? &kf->ch[ch] : &skipped, ch, 1.0, u->seconds_per_frame, u->radians_per_unit, 0};
     if (ch == -1)
         rr_warn(lx->warnings, "%s:%d: skipping curve of unsupported attribute '%s'", lx->name, line, w[1]);
     else if (ch >= 0 && seen[ch])
