@@ -139,30 +139,37 @@ static int check_key(const curve *c, int i, rr_error *err)
     return 0;
 }
 
-static double segment_max_slope(const curve *c, int i);
+/* A quadratic c0 + c1 u + c2 u^2 and its range over [lo, hi] (at the ends
+ * or the vertex). */
+typedef struct {
+    double c0, c1, c2;
+} quadratic;
 
-int curve_prepare(curve *c, rr_error *err)
+static double quadratic_at(quadratic q, double u) { return q.c0 + u * (q.c1 + u * q.c2); }
+
+static void quadratic_range(quadratic q, double lo, double hi, double *min, double *max)
 {
-    if (c->count < 1)
-        return rr_fail(err, "an animation curve needs at least one key");
-    for (int i = 0; i < c->count; i++)
-        if (check_key(c, i, err))
-            return -1;
-    for (int i = 0; i < c->count; i++) {
-        curve_key *k = &c->keys[i];
-        k->in_slope = tangent_slope(c, i, k->in, k->in_angle, 0);
-        k->out_slope = tangent_slope(c, i, k->out, k->out_angle, 1);
-        if (k->in != TAN_FIXED)
-            k->in_handle = computed_handle(c, i, 0);
-        if (k->out != TAN_FIXED)
-            k->out_handle = computed_handle(c, i, 1);
+    double a = quadratic_at(q, lo), b = quadratic_at(q, hi);
+    *min = fmin(a, b), *max = fmax(a, b);
+    if (q.c2 != 0) {
+        double u = -q.c1 / (2 * q.c2);
+        if (u > lo && u < hi)
+            *min = fmin(*min, quadratic_at(q, u)), *max = fmax(*max, quadratic_at(q, u));
     }
-    for (int i = 0; c->weighted && i + 1 < c->count; i++)
-        if (!(segment_max_slope(c, i) < 1e12))
-            return rr_fail(err, "keys %d and %d: the tangent weights give the segment a vertical tangent "
-                                "(its value would change infinitely fast); shorten a handle",
-                           i + 1, i + 2);
-    return 0;
+}
+
+/* The derivative of a cubic Bezier with control steps d0, d1, d2, over 3:
+ * d0 (1-u)^2 + 2 d1 u (1-u) + d2 u^2, with a factor u (drop_u) or 1 - u
+ * (drop_v) divided out where both coordinates share it (a zero handle). */
+static quadratic bezier_slope(double d0, double d1, double d2, int drop_u, int drop_v)
+{
+    if (drop_u && drop_v)
+        return (quadratic){2 * d1, 0, 0};
+    if (drop_u)
+        return (quadratic){2 * d1, d2 - 2 * d1, 0};
+    if (drop_v)
+        return (quadratic){d0, 2 * d1 - d0, 0};
+    return (quadratic){d0, 2 * (d1 - d0), d0 - 2 * d1 + d2};
 }
 
 /* A weighted segment as a Bezier in the (time, value) plane, time
@@ -203,7 +210,7 @@ static double solve_time(const bezier_span *z, double s)
             lo = u;
         else
             hi = u;
-        double v = 1 - u, d = 3 * (z->x1 * v * v + 2 * (z->x2 - z->x1) * u * v + (1 - z->x2) * u * u);
+        double d = 3 * quadratic_at(bezier_slope(z->x1, z->x2 - z->x1, 1 - z->x2, 0, 0), u);
         double next = u - f / d;
         u = d > 0 && next > lo && next < hi ? next : 0.5 * (lo + hi);
     }
@@ -227,11 +234,12 @@ static double segment_value(const curve *c, int i, double t)
         return a->value;
     if (a->out == TAN_STEPNEXT) /* the key's own value at its time only */
         return t == a->time ? a->value : b->value;
-    double h = b->time - a->time, u = (t - a->time) / h, u2 = u * u, u3 = u2 * u;
+    double h = b->time - a->time, u = (t - a->time) / h;
     if (a->out == TAN_LINEAR && b->in == TAN_LINEAR) /* the Hermite form, evaluated exactly */
         return a->value + (b->value - a->value) * u;
     if (c->weighted)
         return bezier_value(c, i, t);
+    double u2 = u * u, u3 = u2 * u;
     return (2 * u3 - 3 * u2 + 1) * a->value + (u3 - 2 * u2 + u) * h * a->out_slope +
            (-2 * u3 + 3 * u2) * b->value + (u3 - u2) * h * b->in_slope;
 }
@@ -287,39 +295,6 @@ static double eval_at(const curve *c, double t, int left)
 
 double curve_eval(const curve *c, double t) { return eval_at(c, t, 0); }
 double curve_eval_left(const curve *c, double t) { return eval_at(c, t, 1); }
-
-/* A quadratic c0 + c1 u + c2 u^2 and its range over [lo, hi] (at the ends
- * or the vertex). */
-typedef struct {
-    double c0, c1, c2;
-} quadratic;
-
-static double quadratic_at(quadratic q, double u) { return q.c0 + u * (q.c1 + u * q.c2); }
-
-static void quadratic_range(quadratic q, double lo, double hi, double *min, double *max)
-{
-    double a = quadratic_at(q, lo), b = quadratic_at(q, hi);
-    *min = fmin(a, b), *max = fmax(a, b);
-    if (q.c2 != 0) {
-        double u = -q.c1 / (2 * q.c2);
-        if (u > lo && u < hi)
-            *min = fmin(*min, quadratic_at(q, u)), *max = fmax(*max, quadratic_at(q, u));
-    }
-}
-
-/* The derivative of a cubic Bezier with control steps d0, d1, d2, over 3:
- * d0 (1-u)^2 + 2 d1 u (1-u) + d2 u^2, with a factor u (drop_u) or 1 - u
- * (drop_v) divided out where both coordinates share it (a zero handle). */
-static quadratic bezier_slope(double d0, double d1, double d2, int drop_u, int drop_v)
-{
-    if (drop_u && drop_v)
-        return (quadratic){2 * d1, 0, 0};
-    if (drop_u)
-        return (quadratic){2 * d1, d2 - 2 * d1, 0};
-    if (drop_v)
-        return (quadratic){d0, 2 * d1 - d0, 0};
-    return (quadratic){d0, 2 * (d1 - d0), d0 - 2 * d1 + d2};
-}
 
 /* max |dv/dt| = max |Y'(u)| / (h X'(u)) over a weighted segment, bounded
  * piece by piece by the largest |Y'| over the smallest X' on each. */
@@ -378,6 +353,30 @@ double curve_max_slope(const curve *c)
             m = fmax(m, fabs(c->keys[c->count - 1].out_slope));
     }
     return m;
+}
+
+int curve_prepare(curve *c, rr_error *err)
+{
+    if (c->count < 1)
+        return rr_fail(err, "an animation curve needs at least one key");
+    for (int i = 0; i < c->count; i++)
+        if (check_key(c, i, err))
+            return -1;
+    for (int i = 0; i < c->count; i++) {
+        curve_key *k = &c->keys[i];
+        k->in_slope = tangent_slope(c, i, k->in, k->in_angle, 0);
+        k->out_slope = tangent_slope(c, i, k->out, k->out_angle, 1);
+        if (k->in != TAN_FIXED)
+            k->in_handle = computed_handle(c, i, 0);
+        if (k->out != TAN_FIXED)
+            k->out_handle = computed_handle(c, i, 1);
+    }
+    for (int i = 0; c->weighted && i + 1 < c->count; i++)
+        if (!(segment_max_slope(c, i) < 1e12))
+            return rr_fail(err, "keys %d and %d: the tangent weights give the segment a vertical tangent "
+                                "(its value would change infinitely fast); shorten a handle",
+                           i + 1, i + 2);
+    return 0;
 }
 
 int curve_append(curve *c, const curve_key *k)
