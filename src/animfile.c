@@ -373,7 +373,7 @@ static int parse_anim(lexer *lx, keyframes *kf, char w[][64], int n, const units
     if (!peek_is(lx, "animData"))
         return 0; /* an attribute listed without a curve */
     int ch = selected ? channel_of(leaf) : -2; /* -2: another node's curve, read and dropped */
-    curve skipped = {0, NULL, INF_CONSTANT, INF_CONSTANT, 0, 0.0};
+    curve skipped = {0, NULL, INF_CONSTANT, INF_CONSTANT, 0, 0.0, 0.0};
     curve_reader r = {ch >= 0 ? &kf->ch[ch] : &skipped, ch, 1.0, u->seconds_per_frame, u->radians_per_unit, 0};
     if (ch == -1)
         rr_warn(lx->warnings, "%s:%d: skipping curve of unsupported attribute '%s'", lx->name, line, w[1]);

@@ -341,19 +341,26 @@ static double segment_max_slope(const curve *c, int i)
     return (c->weighted ? bezier_max_slope(c, i) : hermite_max_slope(c, i)) * (1 + 1e-12);
 }
 
-double curve_max_slope(const curve *c)
+/* The slope bound over the segments and a linear infinity's line; NAN
+ * (with *bad the segment) when a weighted segment's value changes
+ * infinitely fast. */
+static double slope_bound(const curve *c, int *bad)
 {
     double m = 0;
-    for (int i = 0; i + 1 < c->count; i++)
-        m = fmax(m, segment_max_slope(c, i));
-    if (c->count > 0) {
-        if (c->pre == INF_LINEAR)
-            m = fmax(m, fabs(c->keys[0].in_slope));
-        if (c->post == INF_LINEAR)
-            m = fmax(m, fabs(c->keys[c->count - 1].out_slope));
+    for (int i = 0; i + 1 < c->count; i++) {
+        double s = segment_max_slope(c, i);
+        if (c->weighted && !(s < 1e12))
+            return *bad = i, NAN;
+        m = fmax(m, s);
     }
+    if (c->pre == INF_LINEAR)
+        m = fmax(m, fabs(c->keys[0].in_slope));
+    if (c->post == INF_LINEAR)
+        m = fmax(m, fabs(c->keys[c->count - 1].out_slope));
     return m;
 }
+
+double curve_max_slope(const curve *c) { return c->max_slope; }
 
 int curve_prepare(curve *c, rr_error *err)
 {
@@ -371,11 +378,12 @@ int curve_prepare(curve *c, rr_error *err)
         if (k->out != TAN_FIXED)
             k->out_handle = computed_handle(c, i, 1);
     }
-    for (int i = 0; c->weighted && i + 1 < c->count; i++)
-        if (!(segment_max_slope(c, i) < 1e12))
-            return rr_fail(err, "keys %d and %d: the tangent weights give the segment a vertical tangent "
-                                "(its value would change infinitely fast); shorten a handle",
-                           i + 1, i + 2);
+    int bad = 0;
+    c->max_slope = slope_bound(c, &bad);
+    if (isnan(c->max_slope))
+        return rr_fail(err, "keys %d and %d: the tangent weights give the segment a vertical tangent "
+                            "(its value would change infinitely fast); shorten a handle",
+                       bad + 1, bad + 2);
     return 0;
 }
 

@@ -66,6 +66,7 @@ typedef struct {
     infinity_kind pre, post;
     int weighted;      /* Bezier segments with handles instead of Hermite */
     double clamp_flat; /* TAN_CLAMPED is flat next to a value this close */
+    double max_slope;  /* derived by curve_prepare (curve_max_slope) */
 } curve;
 
 /* Parses a tangent or infinity name (as in .anim files and the scene XML).
@@ -86,8 +87,8 @@ double curve_eval(const curve *c, double t);
 double curve_eval_left(const curve *c, double t);
 
 /* An upper bound on |dv/dt| wherever the curve is continuous (steps jump;
- * callers sample the key times themselves); INFINITY for a vertical
- * tangent, which curve_prepare refuses. */
+ * callers sample the key times themselves), computed once by
+ * curve_prepare; 0 for a curve without keys. */
 double curve_max_slope(const curve *c);
 
 /* Appends a key: 0, or -1 when its time is not after the last key's, or

@@ -10,7 +10,7 @@
 static curve make(int n, const double *tv, tangent_kind in, tangent_kind out, infinity_kind pre,
                   infinity_kind post)
 {
-    curve c = {n, calloc((size_t)n, sizeof(curve_key)), pre, post, 0, 0.0};
+    curve c = {n, calloc((size_t)n, sizeof(curve_key)), pre, post, 0, 0.0, 0.0};
     for (int i = 0; i < n; i++) {
         c.keys[i].time = tv[2 * i], c.keys[i].value = tv[2 * i + 1];
         c.keys[i].in = in, c.keys[i].out = out;
@@ -157,7 +157,7 @@ TEST(bad_keys_are_rejected)
     curve_key keys[2];
     memset(keys, 0, sizeof keys);
     keys[0].time = 1, keys[1].time = 1;
-    curve c = {2, keys, INF_CONSTANT, INF_CONSTANT, 0, 0.0};
+    curve c = {2, keys, INF_CONSTANT, INF_CONSTANT, 0, 0.0, 0.0};
     CHECK(curve_prepare(&c, &e) == -1 && strstr(e.msg, "key 2") && strstr(e.msg, "not after"));
     keys[1].time = 2, keys[1].value = NAN;
     CHECK(curve_prepare(&c, &e) == -1 && strstr(e.msg, "NaN"));
