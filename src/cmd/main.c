@@ -299,6 +299,14 @@ static void print_progress(void *user, double fraction, uint64_t rays, double se
     fflush(stderr);
 }
 
+/* The crop window's pixels, pbrt's rounding: indices in [ceil(f0 N),
+ * ceil(f1 N)); px = x0, x1, y0, y1. */
+static void crop_pixels(const render_options *o, int width, int height, int px[4])
+{
+    for (int k = 0; k < 4; k++)
+        px[k] = (int)ceil(o->crop[k] * (k < 2 ? width : height));
+}
+
 static int apply_overrides(scene *s, const render_options *o, rr_error *err)
 {
     if (o->width > 0) {
@@ -311,8 +319,9 @@ static int apply_overrides(scene *s, const render_options *o, rr_error *err)
         s->kernel_sigma = o->sigma;
     if (o->time_factor > 0)
         s->time_factor = o->time_factor;
-    if (o->crop_set && (ceil(o->crop[1] * s->cam.width) <= ceil(o->crop[0] * s->cam.width) ||
-                        ceil(o->crop[3] * s->cam.height) <= ceil(o->crop[2] * s->cam.height)))
+    int px[4];
+    crop_pixels(o, s->cam.width, s->cam.height, px);
+    if (o->crop_set && (px[1] <= px[0] || px[3] <= px[2]))
         return rr_fail(err, "--crop-window holds no whole pixel of the %dx%d image", s->cam.width, s->cam.height);
     if (o->shutter_set) { /* a(t)'s own parameters (center, table) stay as the scene gives them */
         s->shut.open = o->shutter_open, s->shut.close = o->shutter_close;
@@ -413,10 +422,10 @@ static void setup_run(render_run *run, const scene *s, const shutter *shut, cons
     run->rs = (render_settings){
         {o->sampler, o->seed, sampler_grid_for_spp(o->spp), o->tspp, s->time_factor}, *shut,
         o->threads, begin, end - begin, max_batches_of(o), o->target_error, o->exact_time, 0, 0, 0, 0};
-    if (o->crop_set) { /* pbrt's rounding: pixels whose index lies in [ceil(f0 N), ceil(f1 N)) */
-        int w = s->cam.width, h = s->cam.height;
-        run->rs.crop_x0 = (int)ceil(o->crop[0] * w), run->rs.crop_x1 = (int)ceil(o->crop[1] * w);
-        run->rs.crop_y0 = (int)ceil(o->crop[2] * h), run->rs.crop_y1 = (int)ceil(o->crop[3] * h);
+    if (o->crop_set) {
+        int px[4];
+        crop_pixels(o, s->cam.width, s->cam.height, px);
+        run->rs.crop_x0 = px[0], run->rs.crop_x1 = px[1], run->rs.crop_y0 = px[2], run->rs.crop_y1 = px[3];
     }
     run->attrs.n = 0;
     attrs_for_render(&run->attrs, s, &run->rs, total, cmdline);
