@@ -83,3 +83,20 @@ int atomic_commit(const char *tmp, const char *path, rr_error *err)
 }
 
 void atomic_discard(const char *tmp) { unlink(tmp); }
+
+int atomic_write_stdio(const char *path, int (*write)(FILE *f, void *ctx, rr_error *err), void *ctx,
+                       rr_error *err)
+{
+    char tmp[PATH_MAX + 64];
+    if (atomic_create(path, "", tmp, sizeof tmp, err))
+        return -1;
+    FILE *f = fopen(tmp, "wb");
+    int rc = f ? write(f, ctx, err) : 0, failed = !f || ferror(f);
+    if (f && fclose(f))
+        failed = 1;
+    if (rc || failed) {
+        atomic_discard(tmp);
+        return rc ? -1 : rr_fail(err, "%s: write failed (disk full?)", path);
+    }
+    return atomic_commit(tmp, path, err);
+}

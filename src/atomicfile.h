@@ -9,6 +9,7 @@
 #define RR_ATOMICFILE_H
 
 #include <stddef.h>
+#include <stdio.h>
 
 #include "common.h"
 
@@ -27,6 +28,13 @@ int atomic_commit(const char *tmp, const char *path, rr_error *err);
 
 /* Removes tmp after a failed write. */
 void atomic_discard(const char *tmp);
+
+/* Writes path atomically through stdio: write(f, ctx, err) returns -1
+ * with err set when its content cannot be made; a stream error (disk
+ * full...) is reported as "<path>: write failed". Either way nothing is
+ * left at path but what was there. */
+int atomic_write_stdio(const char *path, int (*write)(FILE *f, void *ctx, rr_error *err), void *ctx,
+                       rr_error *err);
 
 #ifdef __cplusplus
 }

@@ -526,18 +526,22 @@ static int check_surfels(const char *path, const surfel *s, size_t n, rr_error *
     return 0;
 }
 
+typedef struct {
+    const char *path;
+    const surfel *s;
+    size_t n;
+} surfel_list;
+
+static int write_surfel_list(FILE *f, void *ctx, rr_error *err)
+{
+    const surfel_list *l = ctx;
+    return write_surfels(f, l->s, l->n) ? 0 : rr_fail(err, "%s: write failed (disk full?)", l->path);
+}
+
 int ply_write_surfels(const char *path, const surfel *s, size_t n, rr_error *err)
 {
-    char tmp[PATH_MAX + 64];
-    if (check_surfels(path, s, n, err) || atomic_create(path, "", tmp, sizeof tmp, err))
+    surfel_list l = {path, s, n};
+    if (check_surfels(path, s, n, err))
         return -1;
-    FILE *f = fopen(tmp, "wb");
-    int ok = f && write_surfels(f, s, n);
-    if (f && fclose(f))
-        ok = 0;
-    if (!ok) {
-        atomic_discard(tmp);
-        return rr_fail(err, "%s: write failed (disk full?)", path);
-    }
-    return atomic_commit(tmp, path, err);
+    return atomic_write_stdio(path, write_surfel_list, &l, err);
 }

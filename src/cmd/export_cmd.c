@@ -267,19 +267,15 @@ static int write_json(FILE *f, const scene *s, const export_options *o, rr_error
     return 0;
 }
 
-static int write_file(const char *path, const char *text, size_t len, rr_error *err)
+typedef struct {
+    const scene *s;
+    const export_options *o;
+} export_job;
+
+static int write_export(FILE *f, void *ctx, rr_error *err)
 {
-    char tmp[PATH_MAX + 64];
-    if (atomic_create(path, "", tmp, sizeof tmp, err))
-        return -1;
-    FILE *f = fopen(tmp, "wb");
-    int ok = f && fwrite(text, 1, len, f) == len;
-    ok = (f && fclose(f) == 0) && ok;
-    if (!ok) {
-        atomic_discard(tmp);
-        return rr_fail(err, "%s: cannot write", path);
-    }
-    return atomic_commit(tmp, path, err);
+    const export_job *j = ctx;
+    return write_json(f, j->s, j->o, err);
 }
 
 static int export_scene(const export_options *o, rr_error *err)
@@ -292,15 +288,8 @@ static int export_scene(const export_options *o, rr_error *err)
             scene_free(&s);
             return rr_fail(err, "%s: is an input of this scene", o->output);
         }
-    char *text = NULL;
-    size_t len = 0;
-    FILE *mem = open_memstream(&text, &len);
-    int rc = mem ? write_json(mem, &s, o, err) : rr_fail(err, "out of memory");
-    if (mem && fclose(mem) && !rc)
-        rc = rr_fail(err, "out of memory");
-    if (!rc)
-        rc = write_file(o->output, text, len, err);
-    free(text);
+    export_job job = {&s, o};
+    int rc = atomic_write_stdio(o->output, write_export, &job, err);
     scene_free(&s);
     return rc;
 }
