@@ -6,8 +6,6 @@
 #include <getopt.h>
 #include <limits.h>
 #include <stdio.h>
-#include <stdlib.h>
-#include <string.h>
 
 #include "atomicfile.h"
 #include "cli.h"
@@ -66,33 +64,26 @@ static void json_matrix(FILE *f, double m[4][4])
     fputc(']', f);
 }
 
-static void xform_matrix(const xform *x, double m[4][4])
+/* The affine map p' = r p + t as a 4x4 matrix. */
+static void affine_matrix(const double r[3][3], vec3 t, double m[4][4])
 {
-    double t[3] = {x->t.x, x->t.y, x->t.z};
-    memset(m, 0, 16 * sizeof m[0][0]);
-    for (int r = 0; r < 3; r++) {
-        for (int c = 0; c < 3; c++)
-            m[r][c] = x->r[r][c];
-        m[r][3] = t[r];
+    double tv[3] = {t.x, t.y, t.z};
+    for (int i = 0; i < 3; i++) {
+        for (int k = 0; k < 3; k++)
+            m[i][k] = r[i][k];
+        m[i][3] = tv[i];
     }
-    m[3][3] = 1;
+    m[3][0] = m[3][1] = m[3][2] = 0, m[3][3] = 1;
 }
 
 /* World to camera space at time t: the inverse of (camera motion at t) after
  * the rest pose. */
 static void world_to_camera(const scene *s, double t, double out[4][4])
 {
-    double rest_inv[4][4], motion_inv[4][4] = {{0}};
+    double rest_inv[4][4], motion_inv[4][4];
     camera_world_to_camera(&s->cam, rest_inv);
     xform m = animation_at(&s->camera_motion, t);
-    vec3 back = xform_inverse_point(&m, v3(0, 0, 0));
-    double b[3] = {back.x, back.y, back.z};
-    for (int r = 0; r < 3; r++) {
-        for (int k = 0; k < 3; k++)
-            motion_inv[r][k] = m.ri[r][k];
-        motion_inv[r][3] = b[r];
-    }
-    motion_inv[3][3] = 1;
+    affine_matrix(m.ri, xform_inverse_point(&m, v3(0, 0, 0)), motion_inv);
     mat4_mul(rest_inv, motion_inv, out);
 }
 
@@ -144,7 +135,7 @@ static void write_frame(FILE *f, const scene *s, long long frame, int numbered, 
         fputs(": [", f);
         for (int i = 0; i < n; i++) {
             xform x = animation_at(&s->objects[o].anim, times[i]);
-            xform_matrix(&x, m);
+            affine_matrix(x.r, x.t, m);
             fputs(i ? ", " : "", f);
             json_matrix(f, m);
         }
