@@ -29,7 +29,7 @@ enum { BOX_TIME_SLICES = 16, BOX_DEPTH_SLICES = 32 };
 static void object_speed(const exact_plan *p, const scene_object *o, object_plan *op)
 {
     motion_bound m = animation_motion_bound(&o->anim, p->shut.open, p->shut.close);
-    motion_bound cam = animation_motion_bound(&p->sc->camera_motion, p->shut.open, p->shut.close);
+    const motion_bound cam = p->camera_speed;
     double cam_reach = v3_len(v3_sub(p->sc->cam.position, cam.center)) + op->depth_hi;
     double camera = cam.linear + cam.angular * cam_reach;
     op->base = (m.linear + camera) / op->min_scale;
@@ -112,6 +112,7 @@ int exact_plan_new(const scene *s, const accel *a, const shutter *shut, double b
     p->camera_moves = scene_camera_moves(s);
     aabb at_rest = {s->cam.position, s->cam.position};
     p->camera_path = animation_swept_bounds(&s->camera_motion, at_rest, shut->open, shut->close);
+    p->camera_speed = animation_motion_bound(&s->camera_motion, shut->open, shut->close);
     p->obj = calloc((size_t)s->nobjects + 1, sizeof *p->obj);
     if (!p->obj || weight_breaks(p)) {
         exact_plan_free(p);

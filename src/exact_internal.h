@@ -31,7 +31,8 @@ struct exact_plan {
     double tol;        /* EXACT_TIME_TOL of the shutter, in time units */
     double box_scale;
     int camera_moves;
-    aabb camera_path;  /* the camera position over the shutter */
+    aabb camera_path;          /* the camera position over the shutter */
+    motion_bound camera_speed; /* the camera's motion over the shutter */
     double *breaks;    /* open, a(t)'s kinks inside, close */
     int nbreaks;
     object_plan *obj;
