@@ -323,18 +323,23 @@ def main(argv=None):
     return 0
 
 
-def shared_diff_range(args, maps):
-    """--diff-range, else the largest |mean RGB difference| over every input and window."""
+def window_diffs(maps):
+    """Each map entry's signed difference, test - reference, mean of RGB over
+    its window (NaN or Inf where either image is)."""
+    return [(test[y:y + h, x:x + w] - ref[y:y + h, x:x + w]).mean(axis=-1)
+            for _, _, (x, y, w, h), ref, test, _, _ in maps]
+
+
+def shared_diff_range(args, diffs):
+    """--diff-range, else the largest finite |mean RGB difference| over every
+    input and window."""
     if args.diff_range:
         return args.diff_range
-    lim = 0.0
-    for _, _, (x, y, w, h), ref, test, _, _ in maps:
-        d = np.nan_to_num((test[y:y + h, x:x + w] - ref[y:y + h, x:x + w]).mean(axis=-1))
-        lim = max(lim, float(np.max(np.abs(d))))
+    lim = max((float(np.max(np.abs(d[np.isfinite(d)]), initial=0.0)) for d in diffs), default=0.0)
     return lim or 1.0
 
 
-def write_native_maps(args, maps, diff_range):
+def write_native_maps(args, maps, diffs, diff_range):
     import figures
     flip_lo, flip_hi = parse_floats(args.flip_range, 2, "--flip-range")
     if args.map_scale < 1 or args.inset_scale < 1:
@@ -344,10 +349,9 @@ def write_native_maps(args, maps, diff_range):
     for label, window, win, *_ in maps:
         if window != "full":
             crops.setdefault(label, []).append((window, win))
-    for label, window, (x, y, w, h), ref, test, flip_map, hdr_map in maps:
+    for (label, window, _, _, test, flip_map, hdr_map), diff in zip(maps, diffs):
         base = figures._name(label, window)
         figures.write_map(args.maps, base + "_flip", flip_map, "magma", flip_lo, flip_hi, args.map_scale)
-        diff = (test[y:y + h, x:x + w] - ref[y:y + h, x:x + w]).mean(axis=-1)
         figures.write_map(args.maps, base + "_diff", diff, "RdBu_r", -diff_range, diff_range, args.map_scale)
         if hdr_map is not None:
             figures.write_map(args.maps, base + "_hdrflip", hdr_map, "magma", flip_lo, flip_hi, args.map_scale)
@@ -356,9 +360,10 @@ def write_native_maps(args, maps, diff_range):
 
 
 def write_pictures(args, rows, maps):
-    diff_range = shared_diff_range(args, maps)
+    diffs = window_diffs(maps)
+    diff_range = shared_diff_range(args, diffs)
     if args.maps:
-        write_native_maps(args, maps, diff_range)
+        write_native_maps(args, maps, diffs, diff_range)
     if args.heatmaps or args.report:
         import heatmaps  # matplotlib only when pictures are asked for
         if args.heatmaps:

@@ -46,6 +46,19 @@ def test_native_maps_share_one_range_and_upscale_by_integers(tmp_path):
     assert (tmp_path / "m" / "A_full_flip.exr").exists() and (tmp_path / "m" / "A_full_hdrflip.png").exists()
 
 
+def test_a_non_finite_pixel_does_not_set_the_shared_range(tmp_path):
+    """The shared range is over finite differences: an Inf pixel (which the
+    metrics mask out) used to stretch it to the largest float, leaving every
+    difference map mid-grey. Here the finite 0.1 is the top of the range."""
+    ref = write_image(tmp_path / "ref.exr", np.full((20, 30, 3), 0.5, np.float32))
+    pixels = np.full((20, 30, 3), 0.6, np.float32)
+    pixels[5, 5] = np.inf
+    a = write_image(tmp_path / "a.exr", pixels)
+    assert compare(ref, a, "--maps", tmp_path / "m").returncode == 0
+    top = figures.colorize(np.array([[0.1]]), "RdBu_r", -0.1, 0.1)[0, 0] / 255.0
+    assert np.allclose(read(tmp_path / "m" / "a_full_diff.png")[0, 0, :3], top, atol=1 / 255)
+
+
 def test_crops_are_outlined_and_zoomed(tmp_path):
     ref, a, _ = three_images(tmp_path)
     assert compare(ref, a, "--maps", tmp_path / "m", "--crop", "2,3,14,12", "--inset-scale", 2).returncode == 0
