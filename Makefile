@@ -1,17 +1,23 @@
 # refrender build. `make` builds build/refrender; `make demo` installs missing
 # Debian packages, builds and renders the default scene; `make test` runs the
-# C unit tests and the pytest suite. `make SAN=1 test` does the same with
-# AddressSanitizer and UBSan in build-san/.
+# C unit tests and the pytest suite, built with RR_DCHECK invariant checks on
+# in build-check/. `make SAN=1 test` does the same with AddressSanitizer and
+# UBSan in build-san/.
 
 CC      ?= cc
 CXX     ?= c++
 PYTHON  := /usr/bin/python3
 SAN     ?= 0
+DCHECKS ?= 0
 
 ifeq ($(SAN),1)
 BUILD   := build-san
-OPT     := -O1 -g -fno-omit-frame-pointer -fsanitize=address,undefined -fno-sanitize-recover=undefined
+OPT     := -O1 -g -fno-omit-frame-pointer -fsanitize=address,undefined -fno-sanitize-recover=undefined -DRR_DCHECKS
 SANLD   := -fsanitize=address,undefined
+else ifeq ($(DCHECKS),1)
+BUILD   := build-check
+OPT     := -O2 -g -DRR_DCHECKS
+SANLD   :=
 else
 BUILD   := build
 OPT     := -O2 -g
@@ -85,10 +91,18 @@ test-c: $(TESTBIN)
 $(BUILD)/libfaultinject.so: tests/faultinject.c | $(BUILD)
 	$(CC) -O1 -g -Wall -Wextra -shared -fPIC $< -o $@ -ldl
 
-test-py: $(BIN) $(BUILD)/libfaultinject.so scenes
-	REFRENDER=$(CURDIR)/$(BIN) FAULTINJECT=$(CURDIR)/$(BUILD)/libfaultinject.so $(PYTHON) -m pytest -q tests
+test-py: $(BIN) $(TESTBIN) $(BUILD)/libfaultinject.so scenes
+	REFRENDER=$(CURDIR)/$(BIN) UNIT_TESTS=$(CURDIR)/$(TESTBIN) FAULTINJECT=$(CURDIR)/$(BUILD)/libfaultinject.so \
+	    $(PYTHON) -m pytest -q tests
 
+# Tests run with the RR_DCHECK invariant checks on (src/common.h): the plain
+# build stays the one users run, without them.
+ifeq ($(SAN)$(DCHECKS),00)
+test:
+	$(MAKE) DCHECKS=1 test
+else
 test: test-c test-fuzz test-py
+endif
 
 # Fuzz targets (tests/fuzz/): libFuzzer with ASan + UBSan, built with clang
 # in build-fuzz/. `make test` replays each target's committed corpus (a
@@ -98,7 +112,7 @@ FUZZ_TARGETS := scene ply anim state
 FUZZ_SECONDS ?= 60
 FUZZ_DIR     := build-fuzz
 FUZZ_FLAGS   := -O1 -g -fno-omit-frame-pointer -fsanitize=address,undefined -fno-sanitize-recover=undefined
-FUZZ_CFLAGS  := -std=c11 -D_GNU_SOURCE $(FUZZ_FLAGS) -fsanitize=fuzzer-no-link -Wall -Wextra $(INCLUDES) \
+FUZZ_CFLAGS  := -std=c11 -D_GNU_SOURCE -DRR_DCHECKS $(FUZZ_FLAGS) -fsanitize=fuzzer-no-link -Wall -Wextra $(INCLUDES) \
                 -DSCENE_MAX_GENERATED=1e4
 FUZZ_OBJS    := $(LIB_SRCS:%=$(FUZZ_DIR)/%.o) $(FUZZ_DIR)/preview.o
 

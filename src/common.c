@@ -2,6 +2,7 @@
 
 #include <stdarg.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <time.h>
 
 int rr_fail(rr_error *err, const char *fmt, ...)
@@ -46,4 +47,16 @@ void mat4_mul(double a[4][4], double b[4][4], double out[4][4])
     for (int r = 0; r < 4; r++)
         for (int c = 0; c < 4; c++)
             out[r][c] = a[r][0] * b[0][c] + a[r][1] * b[1][c] + a[r][2] * b[2][c] + a[r][3] * b[3][c];
+}
+
+void rr_check_failed(const char *file, int line, const char *cond)
+{
+    fprintf(stderr, "%s:%d: check failed: %s\n", file, line, cond);
+    abort();
+}
+
+void rr_check_failed_values(const char *file, int line, const char *cond, long long a, long long b)
+{
+    fprintf(stderr, "%s:%d: check failed: %s (%lld vs %lld)\n", file, line, cond, a, b);
+    abort();
 }

@@ -36,6 +36,32 @@ typedef struct {
 
 void rr_warn(rr_warnings *w, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
 
+/* Invariant checks (after pbrt-v4's util/check.h): a failed check prints
+ * "file:line: check failed: cond" (with the values, for RR_CHECK_LT/LE) and
+ * aborts, because past a broken invariant (a scratch index, a split depth, a
+ * sample count) the output can no longer be trusted. RR_CHECK is always on;
+ * RR_DCHECK only in builds with RR_DCHECKS defined (make test, SAN=1 and the
+ * fuzz targets), so it costs nothing in the renderer users run. */
+void rr_check_failed(const char *file, int line, const char *cond) __attribute__((noreturn));
+void rr_check_failed_values(const char *file, int line, const char *cond, long long a, long long b)
+    __attribute__((noreturn));
+#define RR_CHECK(cond) ((cond) ? (void)0 : rr_check_failed(__FILE__, __LINE__, #cond))
+#define RR_CHECK_OP(a, op, b)                                                                   \
+    (((long long)(a) op (long long)(b))                                                         \
+         ? (void)0                                                                              \
+         : rr_check_failed_values(__FILE__, __LINE__, #a " " #op " " #b, (long long)(a), (long long)(b)))
+#define RR_CHECK_LT(a, b) RR_CHECK_OP(a, <, b)
+#define RR_CHECK_LE(a, b) RR_CHECK_OP(a, <=, b)
+#ifdef RR_DCHECKS
+#define RR_DCHECK(cond) RR_CHECK(cond)
+#define RR_DCHECK_LT(a, b) RR_CHECK_LT(a, b)
+#define RR_DCHECK_LE(a, b) RR_CHECK_LE(a, b)
+#else
+#define RR_DCHECK(cond) ((void)0)
+#define RR_DCHECK_LT(a, b) ((void)0)
+#define RR_DCHECK_LE(a, b) ((void)0)
+#endif
+
 /* qsort comparator for doubles, ascending. */
 int cmp_double(const void *a, const void *b);
 

@@ -1,22 +1,30 @@
 #include "harness.h"
 
+#include <stdlib.h>
 #include <string.h>
 
-#define MAX_TESTS 512
-
-static struct {
+/* The list grows: a fixed table once dropped every test past its size
+ * without a word. */
+static struct test_entry {
     const char *name;
     test_fn fn;
-} tests[MAX_TESTS];
-static int ntests, current_failed;
+} *tests;
+static int ntests, capacity, current_failed;
 
 void harness_register(const char *name, test_fn fn)
 {
-    if (ntests < MAX_TESTS) {
-        tests[ntests].name = name;
-        tests[ntests].fn = fn;
-        ntests++;
+    if (ntests == capacity) {
+        capacity = capacity ? 2 * capacity : 256;
+        struct test_entry *grown = realloc(tests, (size_t)capacity * sizeof *tests);
+        if (!grown) {
+            fprintf(stderr, "harness: out of memory registering %s\n", name);
+            exit(2);
+        }
+        tests = grown;
     }
+    tests[ntests].name = name;
+    tests[ntests].fn = fn;
+    ntests++;
 }
 
 void harness_check(int ok, const char *expr, const char *file, int line)
@@ -41,6 +49,12 @@ int harness_failed_now(void) { return current_failed; }
 int main(int argc, char **argv)
 {
     int passed = 0, failed = 0;
+    if (argc > 1 && !strcmp(argv[1], "--list")) { /* tests/test_harness.py counts them */
+        for (int i = 0; i < ntests; i++)
+            printf("%s\n", tests[i].name);
+        free(tests);
+        return 0;
+    }
     for (int i = 0; i < ntests; i++) {
         if (argc > 1 && !strstr(tests[i].name, argv[1]))
             continue;
@@ -53,5 +67,11 @@ int main(int argc, char **argv)
             passed++;
     }
     printf("%d passed, %d failed\n", passed, failed);
+    free(tests);
+    /* A filter that names no test ran nothing: that is a failure, not a pass. */
+    if (passed + failed == 0) {
+        fprintf(stderr, "harness: no test matches '%s'\n", argc > 1 ? argv[1] : "");
+        return 1;
+    }
     return failed ? 1 : 0;
 }
