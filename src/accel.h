@@ -69,9 +69,12 @@ typedef struct {
 } accel_prims;
 
 /* Appends to out, sorted and unique, the primitives of object obj whose
- * BVH bounds overlap one of the object-space boxes (rtcCollide). -1 when
- * out of memory. */
-int accel_collide_boxes(const accel *a, unsigned obj, const aabb *boxes, unsigned nboxes, accel_prims *out);
+ * BVH bounds overlap one of the object-space boxes (rtcCollide). Returns 0,
+ * or one of: */
+enum { ACCEL_COLLIDE_NO_MEMORY = -1, ACCEL_COLLIDE_TOO_MANY = -2 /* more than limit primitives */,
+       ACCEL_COLLIDE_EMBREE = -3 /* Embree reported an error */ };
+int accel_collide_boxes(const accel *a, unsigned obj, const aabb *boxes, unsigned nboxes, size_t limit,
+                        accel_prims *out);
 
 /* Whether accel traces the object as moving over the current shutter (a
  * static object's hits are in accel_ray's static_hits). */

@@ -11,7 +11,8 @@
 typedef struct {
     pthread_mutex_t lock; /* Embree may call back from several of its own tasks */
     accel_prims *out;
-    int failed;
+    size_t from, limit, compact_at;
+    int failed; /* an ACCEL_COLLIDE_ status */
 } collide_sink;
 
 static void query_bounds_cb(const struct RTCBoundsFunctionArguments *args)
@@ -40,14 +41,32 @@ static int prims_push(accel_prims *p, unsigned id)
     return 0;
 }
 
+static void prims_sort_unique(accel_prims *p, size_t from);
+
+/* A primitive is reported once per box it meets, so the pairs can far
+ * outnumber the primitives (148 million ids for one pixel of a small
+ * scene): the list is made unique whenever it reaches compact_at, and the
+ * gathering fails once more than `limit` distinct primitives remain. */
+static void sink_compact(collide_sink *sink)
+{
+    prims_sort_unique(sink->out, sink->from);
+    if (sink->out->count - sink->from > sink->limit)
+        sink->failed = ACCEL_COLLIDE_TOO_MANY;
+    sink->compact_at = sink->out->count + 4 * sink->limit + 1024;
+}
+
 /* Embree reports pairs whose float bounds overlap: a superset of what the
  * double boxes meet, which is what conservative gathering needs. */
 static void collide_cb(void *user, struct RTCCollision *pairs, unsigned int n)
 {
     collide_sink *sink = user;
     pthread_mutex_lock(&sink->lock);
-    for (unsigned i = 0; i < n && !sink->failed; i++)
-        sink->failed = prims_push(sink->out, pairs[i].primID0);
+    for (unsigned i = 0; i < n && !sink->failed; i++) {
+        if (prims_push(sink->out, pairs[i].primID0))
+            sink->failed = ACCEL_COLLIDE_NO_MEMORY;
+        else if (sink->out->count >= sink->compact_at)
+            sink_compact(sink);
+    }
     pthread_mutex_unlock(&sink->lock);
 }
 
@@ -72,20 +91,25 @@ static void prims_sort_unique(accel_prims *p, size_t from)
     p->count = from + m;
 }
 
-int accel_collide_boxes(const accel *a, unsigned obj, const aabb *boxes, unsigned nboxes, accel_prims *out)
+int accel_collide_boxes(const accel *a, unsigned obj, const aabb *boxes, unsigned nboxes, size_t limit,
+                        accel_prims *out)
 {
     size_t from = out->count;
     if (nboxes == 0)
         return 0;
+    rtcGetDeviceError(a->device); /* Embree keeps an error per thread: start from none */
     RTCScene query = accel_user_scene(a->device, nboxes, (void *)boxes, query_bounds_cb, query_intersect_cb);
-    collide_sink sink = {PTHREAD_MUTEX_INITIALIZER, out, 0};
-    rtcCollide(a->object_scenes[obj], query, collide_cb, &sink);
-    rtcReleaseScene(query);
+    collide_sink sink = {PTHREAD_MUTEX_INITIALIZER, out, from, limit, from + 4 * limit + 1024, 0};
+    if (query)
+        rtcCollide(a->object_scenes[obj], query, collide_cb, &sink);
+    if (query)
+        rtcReleaseScene(query);
     pthread_mutex_destroy(&sink.lock);
-    if (sink.failed)
-        return -1;
-    prims_sort_unique(out, from);
-    return 0;
+    if (!query || rtcGetDeviceError(a->device) != RTC_ERROR_NONE)
+        return ACCEL_COLLIDE_EMBREE;
+    if (!sink.failed)
+        sink_compact(&sink);
+    return sink.failed;
 }
 
 int accel_object_moves(const accel *a, unsigned obj) { return !a->is_static[obj]; }

@@ -15,9 +15,9 @@
 
 /* ---- plan --------------------------------------------------------------- */
 
-/* The part of the shutter each candidate box covers, and of the ray's
- * depth range: 16 x 32 boxes per object and sample. */
-enum { BOX_TIME_SLICES = 16, BOX_DEPTH_SLICES = 32 };
+/* The part of the ray's depth range each candidate box covers: 32 depth
+ * slices for each time slice (object_plan.time_slices). */
+enum { BOX_DEPTH_SLICES = 32 };
 
 /* W for the object (exact_internal.h). A world point Y seen in model
  * space, X = F^-1(Y), moves at (DF)^-1 (dY/dt - v_F(X)), where v_F is the
@@ -64,6 +64,24 @@ static void depth_range(const exact_plan *p, object_plan *op)
     op->depth_hi = v3_len(v3_sub(c, far)) + op->swept_radius;
 }
 
+/* Time slices of the candidate boxes: enough that a slice's turn k =
+ * angular h / 2 stays at most 1/4 (reach_delta is finite only for k < 1/2,
+ * and 1/(1 - k) inflates the boxes by at most 4/3); 0, meaning every
+ * primitive is a candidate, past EXACT_MAX_TIME_SLICES or with no finite
+ * bound. A fixed 16 slices once made fast spins (1000 degrees a shutter)
+ * and steep scalings give infinite boxes, which Embree meets nowhere: the
+ * object vanished from exact renders. */
+static int time_slices_for(const exact_plan *p, const object_plan *op)
+{
+    double turn = op->angular * (p->shut.close - p->shut.open);
+    if (!isfinite(op->base) || !isfinite(turn))
+        return 0;
+    double need = ceil(2.0 * turn);
+    if (need > EXACT_MAX_TIME_SLICES)
+        return 0;
+    return need < EXACT_MIN_TIME_SLICES ? EXACT_MIN_TIME_SLICES : (int)need;
+}
+
 static void plan_object(exact_plan *p, unsigned i)
 {
     const scene_object *o = &p->sc->objects[i];
@@ -72,8 +90,10 @@ static void plan_object(exact_plan *p, unsigned i)
     op->min_scale = animation_min_scale(&o->anim, p->shut.open, p->shut.close);
     op->gathered = p->camera_moves || accel_object_moves(p->acc, i);
     depth_range(p, op);
-    if (op->gathered)
+    if (op->gathered) {
         object_speed(p, o, op);
+        op->time_slices = time_slices_for(p, op);
+    }
 }
 
 /* Times where a(t) has a kink or a jump: the integrand is split there. */
@@ -122,6 +142,33 @@ int exact_plan_new(const scene *s, const accel *a, const shutter *shut, double b
         plan_object(p, (unsigned)i);
     *out = p;
     return 0;
+}
+
+void exact_plan_watch(exact_plan *p, volatile sig_atomic_t *cancel) { p->cancel = cancel; }
+
+const char *exact_status_text(int status)
+{
+    switch (status) {
+    case EXACT_OK: return "ok";
+    case EXACT_NO_MEMORY: return "out of memory";
+    case EXACT_INTERRUPTED: return "interrupted";
+    case EXACT_TOO_MANY_CANDIDATES: return "more than 32768 candidate splats (EXACT_MAX_CANDIDATES)";
+    case EXACT_TOO_COSTLY: return "more than 5e7 evaluations (EXACT_MAX_EVALUATIONS)";
+    default: return "Embree failed while gathering candidates";
+    }
+}
+
+int exact_spend(const sample_ctx *c, uint64_t n)
+{
+    exact_scratch *scr = c->scr;
+    uint64_t before = scr->evaluations;
+    scr->evaluations += n;
+    if (!scr->status && scr->evaluations > EXACT_MAX_EVALUATIONS)
+        scr->status = EXACT_TOO_COSTLY;
+    if (!scr->status && before / EXACT_CANCEL_CHECK_EVERY != scr->evaluations / EXACT_CANCEL_CHECK_EVERY &&
+        c->p->cancel && *c->p->cancel)
+        scr->status = EXACT_INTERRUPTED;
+    return scr->status;
 }
 
 void exact_plan_free(exact_plan *p)
@@ -273,9 +320,9 @@ static unsigned candidate_boxes(const sample_ctx *c, unsigned obj, aabb *boxes)
 {
     const exact_plan *p = c->p;
     const object_plan *op = &p->obj[obj];
-    double t0 = p->shut.open, len = p->shut.close - t0, h = len / BOX_TIME_SLICES;
+    double t0 = p->shut.open, len = p->shut.close - t0, h = len / op->time_slices;
     unsigned n = 0;
-    for (int k = 0; k < BOX_TIME_SLICES; k++) {
+    for (int k = 0; k < op->time_slices; k++) {
         const object_ray *r = exact_object_ray(c, obj, t0 + (k + 0.5) * h);
         for (int j = 0; j < BOX_DEPTH_SLICES; j++) {
             double s0 = op->depth_lo + (op->depth_hi - op->depth_lo) * j / BOX_DEPTH_SLICES;
@@ -286,6 +333,7 @@ static unsigned candidate_boxes(const sample_ctx *c, unsigned obj, aabb *boxes)
             aabb_add_point(&b, e1);
             double dist = fmax(v3_len(v3_sub(e0, op->center)), v3_len(v3_sub(e1, op->center)));
             double delta = reach_delta(op, dist, h);
+            RR_DCHECK(isfinite(delta)); /* time_slices_for keeps the turn per slice at most 1/4 */
             vec3 mid = v3_scale(v3_add(b.lo, b.hi), 0.5);
             vec3 half = v3_add(v3_scale(v3_sub(b.hi, b.lo), 0.5), v3(delta, delta, delta));
             half = v3_scale(half, p->box_scale);
@@ -295,21 +343,44 @@ static unsigned candidate_boxes(const sample_ctx *c, unsigned obj, aabb *boxes)
     return n;
 }
 
+/* Every primitive of the object: its motion has no usable bound. */
+static int gather_all(const sample_ctx *c, unsigned obj)
+{
+    const scene_object *o = &c->p->sc->objects[obj];
+    size_t count = o->kind == OBJECT_SPHERE ? 1 : o->model.count;
+    if (c->scr->nkeys + count > EXACT_MAX_CANDIDATES)
+        return EXACT_TOO_MANY_CANDIDATES;
+    for (size_t i = 0; i < count; i++)
+        if (push_key(c->scr, obj, (unsigned)i))
+            return EXACT_NO_MEMORY;
+    return EXACT_OK;
+}
+
 static int gather_moving(const sample_ctx *c, unsigned obj)
 {
     exact_scratch *scr = c->scr;
-    if (!c->p->camera_moves && !ray_meets_swept_sphere(c, &c->p->obj[obj]))
-        return 0;
-    if (grow((void **)&scr->boxes, &scr->boxes_cap, BOX_TIME_SLICES * BOX_DEPTH_SLICES, sizeof *scr->boxes))
-        return -1;
+    const object_plan *op = &c->p->obj[obj];
+    if (!c->p->camera_moves && !ray_meets_swept_sphere(c, op))
+        return EXACT_OK;
+    if (op->time_slices == 0)
+        return gather_all(c, obj);
+    size_t nboxes = (size_t)op->time_slices * BOX_DEPTH_SLICES;
+    if (grow((void **)&scr->boxes, &scr->boxes_cap, nboxes, sizeof *scr->boxes))
+        return EXACT_NO_MEMORY;
     unsigned n = candidate_boxes(c, obj, scr->boxes);
+    RR_DCHECK_LE(n, scr->boxes_cap);
     scr->prims.count = 0;
-    if (accel_collide_boxes(c->p->acc, obj, scr->boxes, n, &scr->prims))
-        return -1;
+    int rc = accel_collide_boxes(c->p->acc, obj, scr->boxes, n, EXACT_MAX_CANDIDATES, &scr->prims);
+    if (rc)
+        return rc == ACCEL_COLLIDE_TOO_MANY ? EXACT_TOO_MANY_CANDIDATES
+               : rc == ACCEL_COLLIDE_EMBREE ? EXACT_EMBREE_ERROR
+                                            : EXACT_NO_MEMORY;
+    if (scr->nkeys + scr->prims.count > EXACT_MAX_CANDIDATES)
+        return EXACT_TOO_MANY_CANDIDATES;
     for (size_t i = 0; i < scr->prims.count; i++)
         if (push_key(scr, obj, scr->prims.ids[i]))
-            return -1;
-    return 0;
+            return EXACT_NO_MEMORY;
+    return EXACT_OK;
 }
 
 static int cmp_u64(const void *a, const void *b)
@@ -364,21 +435,26 @@ int exact_gather(const sample_ctx *c)
     exact_scratch *scr = c->scr;
     scr->nkeys = 0;
     if (!c->p->camera_moves && gather_static(c))
-        return -1;
-    for (int i = 0; i < c->p->sc->nobjects; i++)
-        if (c->p->obj[i].gathered && gather_moving(c, (unsigned)i))
-            return -1;
+        return EXACT_NO_MEMORY;
+    for (int i = 0; i < c->p->sc->nobjects; i++) {
+        int rc = c->p->obj[i].gathered ? gather_moving(c, (unsigned)i) : EXACT_OK;
+        if (rc)
+            return rc;
+    }
+    if (scr->nkeys > EXACT_MAX_CANDIDATES) /* static hits are at most KBUFFER_MAX-bounded, but count them too */
+        return EXACT_TOO_MANY_CANDIDATES;
     if (scr->nkeys > 1)
         qsort(scr->keys, scr->nkeys, sizeof *scr->keys, cmp_u64);
-    return describe_candidates(c);
+    return describe_candidates(c) ? EXACT_NO_MEMORY : EXACT_OK;
 }
 
 int exact_candidates(const exact_plan *p, exact_scratch *scr, double x, double y)
 {
     sample_ctx c;
-    if (exact_context(p, scr, x, y, NULL, &c) || exact_gather(&c))
-        return -1;
-    return (int)scr->nkeys;
+    if (exact_context(p, scr, x, y, NULL, &c))
+        return EXACT_NO_MEMORY;
+    int rc = exact_gather(&c);
+    return rc ? rc : (int)scr->nkeys;
 }
 
 void exact_candidate(const exact_scratch *scr, int i, unsigned *obj, unsigned *prim)
@@ -391,6 +467,7 @@ int exact_context(const exact_plan *p, exact_scratch *scr, double x, double y, e
     if (grow((void **)&scr->ray_cache, &scr->ray_cache_cap, (size_t)p->sc->nobjects + 1, sizeof *scr->ray_cache))
         return -1;
     memset(scr->ray_cache, 0, ((size_t)p->sc->nobjects + 1) * sizeof *scr->ray_cache);
+    scr->evaluations = 0, scr->status = EXACT_OK;
     c->p = p, c->scr = scr, c->x = x, c->y = y, c->st = st;
     c->dir0 = camera_ray_direction(&p->sc->cam, x, y);
     return 0;
@@ -479,6 +556,7 @@ static cand_eval evaluate_one(const sample_ctx *c, int index, double a, double b
 static void evaluate(const sample_ctx *c, const int *list, const cand_eval *inherited, int n, double a, double b,
                      cand_eval *ev)
 {
+    exact_spend(c, (uint64_t)n);
     for (int i = 0; i < n; i++)
         ev[i] = inherited && inherited[i].sure ? inherited[i] : evaluate_one(c, list[i], a, b);
 }
@@ -488,6 +566,7 @@ static void evaluate(const sample_ctx *c, const int *list, const cand_eval *inhe
  * middle). */
 static void refresh(const sample_ctx *c, const int *list, int n, double a, double b, cand_eval *ev)
 {
+    exact_spend(c, (uint64_t)n);
     for (int i = 0; i < n; i++)
         if (ev[i].hit)
             ev[i] = evaluate_one(c, list[i], a, b);
@@ -586,8 +665,20 @@ static void to_candidates(const int *list, int *set, int n)
         set[k] = list[set[k]];
 }
 
-/* The piece [a, b] with a certain blended set, or too short to split. */
-static int settle(const sample_ctx *c, double a, double b, const int *list, int n, cand_eval *ev, int inherited)
+/* Can [a, b] be split? Not below the time tolerance, past the piece cap
+ * or the depth the scratch holds, nor where its midpoint rounds to an end
+ * (far from t = 0, ulp(t) exceeds the tolerance: a shutter at 1e7 once
+ * split the same piece until the scratch overflowed). */
+static int can_split(const exact_scratch *scr, double a, double b, double tol, int depth)
+{
+    double mid = 0.5 * (a + b);
+    return b - a > tol && scr->npieces < EXACT_MAX_PIECES && depth < EXACT_MAX_DEPTH && a < mid && mid < b;
+}
+
+/* The piece [a, b] with a certain blended set, or one that cannot be split.
+ * Returns 1 to split, else an EXACT_ status. */
+static int settle(const sample_ctx *c, double a, double b, const int *list, int n, cand_eval *ev, int inherited,
+                  int splittable)
 {
     exact_scratch *scr = c->scr;
     int *set = scr->lists + (list - scr->lists) + n, nset = 0;
@@ -595,36 +686,40 @@ static int settle(const sample_ctx *c, double a, double b, const int *list, int 
     int window = window_sure(ev, n, eps, set, &nset, scr->sorted);
     if (window == 1) {
         to_candidates(list, set, nset);
-        return emit_piece(scr, a, b, set, nset);
+        return emit_piece(scr, a, b, set, nset) ? EXACT_NO_MEMORY : EXACT_OK;
     }
-    int short_piece = !(b - a > c->p->tol && scr->npieces < EXACT_MAX_PIECES);
-    if (inherited && (window == 0 || short_piece)) { /* tighter depth ranges may settle the window */
+    if (inherited && (window == 0 || !splittable)) { /* tighter depth ranges may settle the window */
         refresh(c, list, n, a, b, ev);
-        return settle(c, a, b, list, n, ev, 0);
+        return settle(c, a, b, list, n, ev, 0, splittable);
     }
-    if (!short_piece)
-        return 1; /* split */
+    if (splittable)
+        return 1;
     window_at(ev, n, eps, set, &nset);
     to_candidates(list, set, nset);
     if (c->st)
         c->st->unresolved += b - a;
-    return emit_piece(scr, a, b, set, nset) ? -1 : 0;
+    return emit_piece(scr, a, b, set, nset) ? EXACT_NO_MEMORY : EXACT_OK;
 }
 
 /* Splits [a, b] until every candidate's coverage and window membership is
  * certain on each piece. list (depth-first on the scratch stack, at
  * lists + top, with its inherited evaluations at inherit + top) holds the
- * candidates not yet certified absent; children get only those. */
-static int classify(const sample_ctx *c, double a, double b, int n, size_t top)
+ * candidates not yet certified absent; children get only those. Returns an
+ * EXACT_ status. */
+static int classify(const sample_ctx *c, double a, double b, int n, size_t top, int depth)
 {
     exact_scratch *scr = c->scr;
+    RR_DCHECK_LE(depth, EXACT_MAX_DEPTH);
+    RR_DCHECK_LE(top + 2 * (size_t)n, scr->lists_cap); /* reserve_stack's room */
     const int *list = scr->lists + top;
     cand_eval *ev = scr->evals + top;
     int inherited = top > 0;
     evaluate(c, list, inherited ? scr->inherit + top : NULL, n, a, b, ev);
-    int rc = settle(c, a, b, list, n, ev, inherited);
+    if (scr->status)
+        return scr->status;
+    int rc = settle(c, a, b, list, n, ev, inherited, can_split(scr, a, b, c->p->tol, depth));
     if (rc <= 0)
-        return rc;
+        return rc ? rc : scr->status;
     int *child = scr->lists + top + (size_t)n, m = 0;
     cand_eval *child_ev = scr->inherit + top + (size_t)n;
     for (int i = 0; i < n; i++)
@@ -633,11 +728,13 @@ static int classify(const sample_ctx *c, double a, double b, int n, size_t top)
             child[m++] = list[i];
         }
     double mid = 0.5 * (a + b);
-    return classify(c, a, mid, m, top + (size_t)n) || classify(c, mid, b, m, top + (size_t)n);
+    rc = classify(c, a, mid, m, top + (size_t)n, depth + 1);
+    return rc ? rc : classify(c, mid, b, m, top + (size_t)n, depth + 1);
 }
 
-/* Room on the scratch stack for the deepest recursion: each level keeps a
- * list (and set) and evaluations of at most all candidates, twice. */
+/* Room on the scratch stack for the deepest recursion (EXACT_MAX_DEPTH,
+ * can_split): each level keeps a list (and set) and evaluations of at most
+ * all candidates, twice. */
 static int reserve_stack(exact_scratch *scr)
 {
     size_t need = (size_t)(EXACT_MAX_DEPTH + 2) * (scr->nkeys + 1) * 2;
@@ -652,15 +749,16 @@ int exact_partition(const sample_ctx *c)
     exact_scratch *scr = c->scr;
     scr->npieces = 0, scr->nsets = 0;
     if (reserve_stack(scr))
-        return -1;
+        return EXACT_NO_MEMORY;
     int n = (int)scr->nkeys;
     for (int i = 0; i < n; i++)
         scr->lists[i] = i;
     const exact_plan *p = c->p;
     for (int k = 0; k + 1 < p->nbreaks; k++) {
         scr->first_of_break = scr->npieces;
-        if (classify(c, p->breaks[k], p->breaks[k + 1], n, 0))
-            return -1;
+        int rc = classify(c, p->breaks[k], p->breaks[k + 1], n, 0, 0);
+        if (rc)
+            return rc;
     }
-    return 0;
+    return EXACT_OK;
 }

@@ -23,6 +23,7 @@
 #ifndef RR_EXACT_H
 #define RR_EXACT_H
 
+#include <signal.h>
 #include <stdint.h>
 
 #include "accel.h"
@@ -58,13 +59,38 @@ typedef struct {
     double unresolved;    /* shutter time in pieces left at EXACT_TIME_TOL */
 } exact_stats;
 
+/* What exact_sample returns. A sample that did not finish gives no value:
+ * its batch is not added (render.c), so no pixel holds a partial average. */
+enum {
+    EXACT_OK = 0,
+    EXACT_NO_MEMORY = -1,
+    EXACT_INTERRUPTED = -2,     /* *cancel became non-zero during the sample */
+    EXACT_TOO_MANY_CANDIDATES = -3, /* more than EXACT_MAX_CANDIDATES */
+    EXACT_TOO_COSTLY = -4,      /* more than EXACT_MAX_EVALUATIONS */
+    EXACT_EMBREE_ERROR = -5,    /* rtcCollide reported an error */
+};
+/* Bounds on one spatial sample's work. Candidates cost about 9 KB of
+ * scratch each (a list and two evaluations per split level); evaluations
+ * (certificates and shaded nodes) take about 50 ns: 5e7 is seconds for one
+ * sample, far beyond what an image of them can afford. A scene past either
+ * is refused, naming the sample, rather than left running for hours. */
+#define EXACT_MAX_CANDIDATES 32768
+#define EXACT_MAX_EVALUATIONS 50000000ULL
+
+/* A one-line reason for a status other than EXACT_OK. */
+const char *exact_status_text(int status);
+
 /* The exact weighted time average of the color (rgb) and coverage (a) seen
  * through raster position (x, y): integral of a(t) rgba(t) over the
- * shutter divided by the integral of a(t). -1 when out of memory. */
+ * shutter divided by the integral of a(t). Returns an EXACT_ status. */
 int exact_sample(const exact_plan *p, exact_scratch *scr, double x, double y, double rgba[4], exact_stats *st);
 
+/* The flag render_image watches: a sample checks it as it goes, so an
+ * interrupt does not wait for a costly sample to end. */
+void exact_plan_watch(exact_plan *p, volatile sig_atomic_t *cancel);
+
 /* For tests: gathers the candidates for (x, y) into the scratch and
- * returns their count (-1: out of memory); exact_candidate reads the i-th
+ * returns their count (< 0: an EXACT_ status); exact_candidate reads the i-th
  * as (object, primitive), object-major and sorted. */
 int exact_candidates(const exact_plan *p, exact_scratch *scr, double x, double y);
 void exact_candidate(const exact_scratch *scr, int i, unsigned *obj, unsigned *prim);

@@ -104,39 +104,50 @@ static double gauss_kronrod(const sample_ctx *c, const piece *pc, double a, doub
     }
     if (c->st)
         c->st->nodes += 15;
+    exact_spend(c, 15 * ((uint64_t)pc->count + 1));
     return diff;
 }
 
 /* Adaptive: halves [a, b] until the two rules agree to EXACT_REL_TOL of the
  * piece's largest component (the weight integral is one, so colors near 0
  * are held to the same absolute accuracy), or the halves are shorter than
- * the time tolerance. */
-static void integrate(const sample_ctx *c, const piece *pc, double a, double b, double sum[NCOMP], int *overflow)
+ * the time tolerance, or the midpoint rounds to an end (far from t = 0),
+ * or the depth the partition allows is reached. Stops early when the
+ * sample's budget is spent or it is interrupted (scratch status). */
+static void integrate(const sample_ctx *c, const piece *pc, double a, double b, int depth, double sum[NCOMP],
+                      int *overflow)
 {
     double kron[NCOMP];
     double diff = gauss_kronrod(c, pc, a, b, kron, overflow);
-    double scale = 0;
+    double scale = 0, mid = 0.5 * (a + b);
     for (int j = 0; j < NCOMP; j++)
         scale = fmax(scale, fabs(kron[j]));
-    if (diff <= EXACT_REL_TOL * scale || b - a <= c->p->tol) {
+    if (diff <= EXACT_REL_TOL * scale || b - a <= c->p->tol || !(a < mid && mid < b) || depth >= EXACT_MAX_DEPTH ||
+        c->scr->status) {
         for (int j = 0; j < NCOMP; j++)
             sum[j] += kron[j];
         return;
     }
-    double mid = 0.5 * (a + b);
-    integrate(c, pc, a, mid, sum, overflow);
-    integrate(c, pc, mid, b, sum, overflow);
+    integrate(c, pc, a, mid, depth + 1, sum, overflow);
+    integrate(c, pc, mid, b, depth + 1, sum, overflow);
 }
 
 int exact_sample(const exact_plan *p, exact_scratch *scr, double x, double y, double rgba[4], exact_stats *st)
 {
     sample_ctx c;
-    if (exact_context(p, scr, x, y, st, &c) || exact_gather(&c) || exact_partition(&c))
-        return -1;
+    if (exact_context(p, scr, x, y, st, &c))
+        return EXACT_NO_MEMORY;
+    int rc = exact_gather(&c);
+    if (!rc)
+        rc = exact_partition(&c);
+    if (rc)
+        return rc;
     double sum[NCOMP] = {0};
     int overflow = 0;
-    for (size_t i = 0; i < scr->npieces; i++)
-        integrate(&c, &scr->leaves[i], scr->leaves[i].a, scr->leaves[i].b, sum, &overflow);
+    for (size_t i = 0; i < scr->npieces && !scr->status; i++)
+        integrate(&c, &scr->leaves[i], scr->leaves[i].a, scr->leaves[i].b, 0, sum, &overflow);
+    if (scr->status)
+        return scr->status;
     for (int j = 0; j < 4; j++)
         rgba[j] = sum[4] > 0 ? sum[j] / sum[4] : 0.0;
     if (st) {
@@ -144,5 +155,5 @@ int exact_sample(const exact_plan *p, exact_scratch *scr, double x, double y, do
         st->pieces += scr->npieces;
         st->overflows += (uint64_t)overflow;
     }
-    return 0;
+    return EXACT_OK;
 }

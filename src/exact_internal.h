@@ -8,8 +8,18 @@
 /* A sample's pieces beyond this are not split further (pathological
  * motion): the rest of the shutter counts as unresolved. */
 #define EXACT_MAX_PIECES 100000
-/* Halving a shutter down to EXACT_TIME_TOL takes 30 levels. */
+/* Halving a shutter down to EXACT_TIME_TOL takes 30 levels; far from t = 0
+ * a piece stops splitting sooner, when its midpoint rounds to an end. The
+ * recursion never goes deeper than this (its scratch is sized for it). */
 #define EXACT_MAX_DEPTH 64
+/* The candidate boxes of one object cover the shutter in at least 16 time
+ * slices, more for fast turns (reach_delta needs angular speed x slice / 2
+ * below 1/2); beyond this many, every primitive of the object is a
+ * candidate. */
+#define EXACT_MIN_TIME_SLICES 16
+#define EXACT_MAX_TIME_SLICES 1024
+/* How often (in evaluations) a sample looks at the interrupt flag. */
+#define EXACT_CANCEL_CHECK_EVERY 4096
 
 typedef struct {
     vec3 swept_center;
@@ -22,6 +32,7 @@ typedef struct {
     double base, angular, dir_rate;
     vec3 center;
     int gathered;             /* candidates from rtcCollide (moves relative to the camera) */
+    int time_slices;          /* of the candidate boxes; 0: every primitive is a candidate */
 } object_plan;
 
 struct exact_plan {
@@ -36,6 +47,7 @@ struct exact_plan {
     double *breaks;    /* open, a(t)'s kinks inside, close */
     int nbreaks;
     object_plan *obj;
+    volatile sig_atomic_t *cancel; /* NULL: never interrupted */
 };
 
 typedef struct {
@@ -85,7 +97,10 @@ struct exact_scratch {
     size_t nsets, sets_cap;
     object_ray *ray_cache; /* one per object */
     size_t ray_cache_cap;
+    uint64_t evaluations; /* this sample's certificates and shaded nodes */
+    int status;           /* EXACT_OK until the sample must stop */
 };
+
 
 typedef struct {
     const exact_plan *p;
@@ -111,6 +126,9 @@ typedef struct {
 } sphere_crossing;
 sphere_crossing exact_sphere_crossing(const scene_object *o, const object_ray *r);
 
+/* Counts n evaluations of the current sample; 0 while it may go on, else
+ * the EXACT_ status that stops it (budget spent or interrupted). */
+int exact_spend(const sample_ctx *c, uint64_t n);
 int exact_context(const exact_plan *p, exact_scratch *scr, double x, double y, exact_stats *st, sample_ctx *c);
 void exact_world_ray(const sample_ctx *c, double t, vec3 *org, vec3 *dir);
 const object_ray *exact_object_ray(const sample_ctx *c, unsigned obj, double t);

@@ -54,6 +54,8 @@ typedef struct {
     pixel_state *px;        /* width * height; may hold batches from a checkpoint */
     uint64_t rays, kbuffer_overflows, clamped;
     double seconds;
+    double exact_unresolved; /* exact time: shutter time left in pieces too short to certify,
+                                summed over spatial samples (exact.h) */
 } image;
 
 int image_alloc(image *img, int width, int height);

@@ -23,6 +23,9 @@ typedef struct {
     atomic_int next_tile, workers_left;
     atomic_uint_fast64_t rays, overflows, clamped, pixel_batches;
     atomic_int scratch_failed; /* a worker could not allocate its scratch */
+    atomic_int exact_failed;   /* an exact sample failed (see exact_status): the render stops */
+    int exact_status, exact_px, exact_py; /* under lock: the first such failure and its pixel */
+    double exact_unresolved;   /* under lock: exact_stats.unresolved summed over tiles */
     pthread_mutex_t lock;
     pthread_cond_t cond;
     int paused, active; /* under lock: pause requested; workers inside a tile */
@@ -33,7 +36,6 @@ typedef struct { /* per-thread scratch */
     sampler_scratch ss;
     double *x, *y, *t;
     exact_scratch *exact;
-    int failed; /* out of memory in exact integration */
 } thread_scratch;
 
 /* The color and coverage of a k-buffer (background when empty). */
@@ -162,9 +164,11 @@ static void render_pixel_batch(render_job *job, int px, int py, uint32_t batch, 
 }
 
 /* One batch of a pixel with exact time integration: the mean over the
- * batch's spatial positions of each one's exact time average. */
-static void render_pixel_batch_exact(render_job *job, int px, int py, uint32_t batch, thread_scratch *scr,
-                                     double est[4], uint64_t *rays, uint64_t *overflows)
+ * batch's spatial positions of each one's exact time average. Returns an
+ * EXACT_ status: a batch with a sample missing is no estimate, so on
+ * failure the pixel gets no batch at all. */
+static int render_pixel_batch_exact(render_job *job, int px, int py, uint32_t batch, thread_scratch *scr,
+                                    double est[4], uint64_t *rays, uint64_t *overflows, double *unresolved)
 {
     int count = batch_samples(job, px, py, batch, scr);
     exact_stats st = {0};
@@ -172,15 +176,29 @@ static void render_pixel_batch_exact(render_job *job, int px, int py, uint32_t b
         est[c] = 0;
     for (int i = 0; i < count; i++) {
         double rgba[4];
-        if (exact_sample(job->exact, scr->exact, scr->x[i], scr->y[i], rgba, &st)) {
-            scr->failed = 1; /* out of memory: the render fails (run_round) */
-            continue;
-        }
+        int rc = exact_sample(job->exact, scr->exact, scr->x[i], scr->y[i], rgba, &st);
+        if (rc)
+            return rc;
         for (int c = 0; c < 4; c++)
             est[c] += rgba[c] / count;
     }
     *rays += (uint64_t)count;
     *overflows += st.overflows;
+    *unresolved += st.unresolved;
+    return EXACT_OK;
+}
+
+/* Keeps the first failed exact sample (an interrupt is not a failure: the
+ * cancel flag already stops the render). */
+static void exact_failed(render_job *job, int status, int px, int py)
+{
+    if (status == EXACT_INTERRUPTED)
+        return;
+    pthread_mutex_lock(&job->lock);
+    if (!job->exact_status)
+        job->exact_status = status, job->exact_px = px, job->exact_py = py;
+    pthread_mutex_unlock(&job->lock);
+    atomic_store(&job->exact_failed, 1);
 }
 
 /* Does a pixel holding p->batches batches take another one? Every pixel
@@ -213,19 +231,30 @@ static void render_tile(render_job *job, int tile, thread_scratch *scr)
     int x1 = (tx + 1) * TILE < img->width ? (tx + 1) * TILE : img->width;
     int y1 = (ty + 1) * TILE < img->height ? (ty + 1) * TILE : img->height;
     uint64_t rays = 0, overflows = 0, clamped = 0, done = 0;
-    for (int y = ty * TILE; y < y1; y++)
-        for (int x = tx * TILE; x < x1; x++) {
+    double unresolved = 0;
+    int stop = 0;
+    for (int y = ty * TILE; y < y1 && !stop; y++)
+        for (int x = tx * TILE; x < x1 && !stop; x++) {
             pixel_state *p = &img->px[(size_t)y * img->width + x];
             if (!pixel_in_crop(job->rs, x, y) || !pixel_wants_batch(job, p))
                 continue;
             double est[4];
-            if (job->rs->exact_time)
-                render_pixel_batch_exact(job, x, y, job->rs->batch_begin + job->round, scr, est, &rays, &overflows);
-            else
-                render_pixel_batch(job, x, y, job->rs->batch_begin + job->round, scr, est, &rays, &overflows);
+            uint32_t batch = job->rs->batch_begin + job->round;
+            if (job->rs->exact_time) {
+                int rc = render_pixel_batch_exact(job, x, y, batch, scr, est, &rays, &overflows, &unresolved);
+                if (rc) { /* the pixel keeps the batches it had: a resumed render redoes this one */
+                    exact_failed(job, rc, x, y);
+                    stop = 1;
+                    break;
+                }
+            } else
+                render_pixel_batch(job, x, y, batch, scr, est, &rays, &overflows);
             clamped += (uint64_t)film_add_batch(p, est);
             done++;
         }
+    pthread_mutex_lock(&job->lock);
+    job->exact_unresolved += unresolved;
+    pthread_mutex_unlock(&job->lock);
     atomic_fetch_add(&job->rays, rays);
     atomic_fetch_add(&job->overflows, overflows);
     atomic_fetch_add(&job->clamped, clamped);
@@ -238,7 +267,7 @@ static int enter_work(render_job *job)
     pthread_mutex_lock(&job->lock);
     while (job->paused && !*job->cancel)
         pthread_cond_wait(&job->cond, &job->lock);
-    int stop = *job->cancel != 0;
+    int stop = *job->cancel != 0 || atomic_load(&job->exact_failed);
     if (!stop)
         job->active++;
     pthread_mutex_unlock(&job->lock);
@@ -260,7 +289,6 @@ static int scratch_init(thread_scratch *scr, const sampler *s)
     scr->y = malloc(n * sizeof(double));
     scr->t = malloc(n * sizeof(double));
     scr->exact = exact_scratch_new();
-    scr->failed = 0;
     return sampler_scratch_init(&scr->ss, s) || !scr->x || !scr->y || !scr->t || !scr->exact ? -1 : 0;
 }
 
@@ -288,8 +316,6 @@ static void *worker(void *arg)
             if (tile >= job->ntiles)
                 break;
         }
-    if (scr.failed)
-        atomic_store(&job->scratch_failed, 1);
     scratch_free(&scr);
     pthread_mutex_lock(&job->lock);
     atomic_fetch_sub(&job->workers_left, 1);
@@ -336,6 +362,20 @@ static void report_progress(render_job *job, const render_hooks *hooks, double s
     hooks->progress(hooks->user, fraction, atomic_load(&job->rays), rr_seconds() - start);
 }
 
+/* A failed exact sample stops the render: a pixel cannot be left with a
+ * partial average, and a sample past the candidate or evaluation bounds
+ * says the scene is beyond exact time integration. */
+static int exact_failure(const render_job *job, rr_error *err)
+{
+    const char *why = exact_status_text(job->exact_status);
+    if (job->exact_status == EXACT_NO_MEMORY || job->exact_status == EXACT_EMBREE_ERROR)
+        return rr_fail(err, "exact time integration at pixel (%d, %d): %s", job->exact_px, job->exact_py, why);
+    return rr_fail(err,
+                   "exact time integration at pixel (%d, %d): one spatial sample needs %s; exact time cannot "
+                   "finish this scene in reasonable time: render it with sampled time (the default)",
+                   job->exact_px, job->exact_py, why);
+}
+
 /* Runs one round over all tiles with the worker threads, writing periodic
  * checkpoints while they are paused. */
 static int run_round(render_job *job, const render_hooks *hooks, double start, double *last_checkpoint,
@@ -372,6 +412,8 @@ static int run_round(render_job *job, const render_hooks *hooks, double start, d
     free(tids);
     if (!rc && atomic_load(&job->scratch_failed))
         rc = rr_fail(err, "out of memory for a render thread's samples (%d per batch)", sampler_count(&job->rs->smp));
+    if (!rc && job->exact_status)
+        rc = exact_failure(job, err);
     return rc;
 }
 
@@ -418,6 +460,8 @@ int render_image(const scene *s, const accel *a, const render_settings *rs, imag
     exact_plan *plan = NULL;
     if (rs->exact_time && exact_plan_new(s, a, &rs->shut, 1.0, &plan, err))
         return -1;
+    if (plan)
+        exact_plan_watch(plan, cancel);
     job.exact = plan;
     pthread_mutex_init(&job.lock, NULL);
     pthread_cond_init(&job.cond, NULL);
@@ -436,6 +480,7 @@ int render_image(const scene *s, const accel *a, const render_settings *rs, imag
     img->rays += atomic_load(&job.rays);
     img->kbuffer_overflows += atomic_load(&job.overflows);
     img->clamped += atomic_load(&job.clamped);
+    img->exact_unresolved += job.exact_unresolved;
     if (rc)
         return -1;
     if (*cancel) {

@@ -305,3 +305,54 @@ TEST(exact_matches_sampled_weighted_maya_curves)
                            "<animation file='scenes/animations/rig.anim' node='hand'/></object></scene>",
                            12, 6000) == 0);
 }
+
+/* Issue 23, item 1: a plane of splats spinning about an axis in its plane
+ * so fast that 16 candidate time slices cannot bound the motion (angular
+ * speed x slice / 2 >= 1/2): the candidates were dropped and the pixel
+ * rendered empty. Exact must still match the sampled average, k = 5. */
+static int spinning_plane_matches(double degrees)
+{
+    char xml[1024];
+    snprintf(xml, sizeof xml,
+             "<scene><camera position='0 0 5' lookat='0 0 0' fov='30' width='64' height='64'/>"
+             "<render epsilon='0.03'/><light type='directional' direction='0 -0.5 -1'/>"
+             "<object><pointModel generate='plane' count='600' radius='1' checker='3'/>"
+             "<animation><rotation axis='0.2 1 0' center='0 0 0' degrees_per_unit_time='%g'/></animation>"
+             "</object></scene>",
+             degrees);
+    return exact_vs_sampled(xml, 6, 4000);
+}
+
+TEST(exact_matches_sampled_spinning_360_1000_5000_degrees)
+{
+    CHECK(spinning_plane_matches(360) == 0);
+    CHECK(spinning_plane_matches(1000) == 0);
+    CHECK(spinning_plane_matches(5000) == 0);
+}
+
+/* A keyframed scale from 1 to 30 over the shutter (same failure). */
+TEST(exact_matches_sampled_scale_1_to_30)
+{
+    CHECK(exact_vs_sampled("<scene><camera position='0 0 40' lookat='0 0 0' fov='40' width='64' height='64'/>"
+                           "<render epsilon='0.03'/><light type='directional' direction='0 -0.5 -1'/>"
+                           "<object><pointModel generate='plane' count='600' radius='0.5' checker='3'/>"
+                           "<animation><keyframes interpolation='linear'>"
+                           "<key time='0' translate='0 0 0' rotate='0 0 0' scale='1 1 1'/>"
+                           "<key time='1' translate='0 0 0' rotate='0 0 40' scale='30 30 1'/>"
+                           "</keyframes></animation></object></scene>",
+                           6, 4000) == 0);
+}
+
+/* Issue 23, item 9: a shutter at t = 1e7, where ulp(t) (1.9e-9) exceeds
+ * the split tolerance (1e-9 of the shutter): a piece's midpoint equals an
+ * end and splitting never stopped (a heap overflow). */
+TEST(exact_matches_sampled_on_a_shutter_at_1e7)
+{
+    CHECK(exact_vs_sampled("<scene><camera position='0 0 5' lookat='0 0 0' fov='30' width='64' height='64'/>"
+                           "<shutter open='1e7' close='10000001'/>"
+                           "<render epsilon='0.03'/><light type='directional' direction='0 -0.5 -1'/>"
+                           "<object><pointModel generate='plane' count='600' radius='1' checker='3'/>"
+                           "<animation><rotation axis='0.2 1 0' center='0 0 0' degrees_per_unit_time='100'/>"
+                           "</animation></object></scene>",
+                           6, 4000) == 0);
+}

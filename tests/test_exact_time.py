@@ -149,3 +149,47 @@ def test_cycles_flat_shutter_table_from_the_readme(tmp_path):
     assert np.all(coverage["box"] > 0.0099)
     # measured agreement 1e-5; before pieces stopped merging across a(t)'s kinks it was 3e-4 off
     assert np.allclose(coverage["table"] / coverage["box"], 0.3328982 / z, rtol=3e-5)
+
+
+# Issue 23, item 11: a small scene of many overlapping splats whose every
+# spatial sample needs more certificate evaluations than exact time allows
+# (it once ran for hours, ignoring SIGINT and SIGTERM), and one spinning so
+# fast (1e6 degrees a shutter) that every one of its 100,000 splats is a
+# candidate (148 million candidate ids were once sorted for one pixel).
+OVERLAPPING = """<scene><camera position="0 0 5" lookat="0 0 0" width="2" height="2"/>
+<object><pointModel generate="plane" count="20000" radius="1" overlap="30"/>
+<animation><rotation axis="0 1 0" center="0 0 0" degrees_per_unit_time="30"/></animation></object></scene>"""
+WHIRL = """<scene><camera position="0 0 5" lookat="0 0 0" width="2" height="2"/>
+<object><pointModel generate="plane" count="100000" radius="1"/>
+<animation><rotation axis="0 1 0" center="0 0 0" degrees_per_unit_time="1e6"/></animation></object></scene>"""
+
+
+def test_exact_refuses_samples_beyond_its_bounds(tmp_path):
+    for name, xml, why in [("o", OVERLAPPING, "evaluations"), ("w", WHIRL, "candidate splats")]:
+        scene, out = tmp_path / f"{name}.xml", tmp_path / f"{name}.exr"
+        scene.write_text(xml)
+        proc = run([scene, "--time-integration", "exact", "--spp", 1, "--batches", 1, "-o", out, "--quiet"])
+        assert proc.returncode == 1, proc.stderr
+        assert why in proc.stderr and "render it with sampled time" in proc.stderr
+        assert "pixel (0, 0)" in proc.stderr
+        assert not out.exists()
+
+
+def test_an_interrupt_stops_an_exact_sample_that_is_running(tmp_path):
+    """SIGINT half a second into a sample that would take seconds before
+    its budget refuses it: the render stops as interrupted (130), with its
+    checkpoint written, not as refused (1) at the end of the sample."""
+    import signal
+    import subprocess
+    import time
+    from conftest import BIN
+    scene, ckpt = tmp_path / "o.xml", tmp_path / "o.state.exr"
+    scene.write_text(OVERLAPPING)
+    proc = subprocess.Popen([BIN, scene, "--time-integration", "exact", "--spp", "1", "--batches", "1", "-o",
+                             tmp_path / "o.exr", "--checkpoint", ckpt, "--quiet"],
+                            stderr=subprocess.PIPE, text=True)
+    time.sleep(0.5)
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 130, err
+    assert ckpt.exists() and not (tmp_path / "o.exr").exists()
