@@ -193,3 +193,28 @@ def test_an_interrupt_stops_an_exact_sample_that_is_running(tmp_path):
     _, err = proc.communicate(timeout=60)
     assert proc.returncode == 130, err
     assert ckpt.exists() and not (tmp_path / "o.exr").exists()
+
+
+def test_unresolved_time_is_reported(tmp_path):
+    """Item 13: the time exact integration could not certify was summed and
+    dropped; it is now in the header (its share of all spatial samples'
+    shutters). The moving disc's ray meets two edge events, and bisection
+    leaves at most two pieces of at most the tolerance (1e-9 of the
+    shutter) at each: 0 < share <= 4e-9, no warning. On a shutter at 1e7,
+    ulp(t) = 1.9e-9 is above the tolerance, so no piece gets that short and
+    the share is larger than that bound."""
+    far = """<scene><camera position="0 0 5" lookat="0 0 0" fov="30" width="8" height="8"/>
+<shutter open="1e7" close="10000001"/><render epsilon="0.03"/>
+<object><pointModel generate="plane" count="600" radius="1" checker="3"/>
+<animation><rotation axis="0.2 1 0" center="0 0 0" degrees_per_unit_time="100"/></animation></object></scene>"""
+    shares = {}
+    for name, xml in [("far", far), ("near", MOVING_DISC)]:
+        scene, out = tmp_path / f"{name}.xml", tmp_path / f"{name}.exr"
+        scene.write_text(xml)
+        proc = run([scene, "-o", out, "--time-integration", "exact", "--spp", 1, "--batches", 2])
+        assert proc.returncode == 0, proc.stderr
+        shares[name] = float(read_full(out)[1]["refrender:exactUnresolvedShare"])
+        if name == "near":
+            assert "exact time left" not in proc.stderr
+    assert 0 < shares["near"] <= 4e-9, shares
+    assert shares["far"] > 4e-9, shares

@@ -9,6 +9,7 @@
 
 #include "cli.h"
 #include "commands.h"
+#include "exact.h"
 #include "output.h"
 #include "render_attrs.h"
 #include "preview.h"
@@ -461,6 +462,21 @@ static void report(const render_options *o, const scene *s, const image *img, in
                 (unsigned long long)img->clamped, FILM_LIMIT);
 }
 
+/* Exact time: the share of the shutter, over all spatial samples, left in
+ * pieces too short to certify (exact.h, EXACT_TIME_TOL): their blended set
+ * is the one at their middle. In the header always; on stderr when above
+ * 100 times the tolerance, since every coverage event leaves a few pieces
+ * of the tolerance's length. */
+static void report_unresolved(const render_options *o, const image *img, const shutter *shut, attr_list *attrs)
+{
+    double share = img->rays > 0 ? img->exact_unresolved / ((double)img->rays * (shut->close - shut->open)) : 0.0;
+    attrs_set(attrs, "refrender:exactUnresolvedShare", "%.6g", share);
+    if (share > 100 * EXACT_TIME_TOL && !o->quiet)
+        fprintf(stderr, "refrender: warning: exact time left %.3g of the shutter (over all spatial samples) in pieces "
+                        "shorter than %g of it, taken with the blended set at their middle\n",
+                share, EXACT_TIME_TOL);
+}
+
 /* --target-error: how many pixels got there (the rest hit --max-batches). */
 static void report_target(const render_options *o, const image *img, attr_list *attrs)
 {
@@ -520,6 +536,8 @@ static int render_one(const scene *s, const shutter *shut, long long frame, acce
             report_target(o, &img, &run.attrs);
         attrs_set(&run.attrs, "refrender:renderSeconds", "%.3f", img.seconds);
         attrs_set(&run.attrs, "refrender:rays", "%llu", (unsigned long long)img.rays);
+        if (run.rs.exact_time)
+            report_unresolved(o, &img, &run.rs.shut, &run.attrs);
         if (o->frames) {
             attrs_set(&run.attrs, "refrender:frameRate", "%.17g", s->frame_rate);
             attrs_set(&run.attrs, "refrender:frame", "%lld", frame);
