@@ -96,28 +96,14 @@ static void plan_object(exact_plan *p, unsigned i)
     }
 }
 
-/* Times where a(t) has a kink or a jump: the integrand is split there. */
+/* Times where a(t) has a kink or a jump (shutter_knots): the integrand is
+ * split there. */
 static int weight_breaks(exact_plan *p)
 {
-    const shutter *s = &p->shut;
-    int n = 0, cap = s->table_size + 5;
-    p->breaks = malloc((size_t)cap * sizeof *p->breaks);
+    p->breaks = malloc(SHUTTER_MAX_KNOTS * sizeof *p->breaks);
     if (!p->breaks)
         return -1;
-    double cand[3] = {s->center, s->center - (s->close - s->open), s->center + (s->close - s->open)};
-    p->breaks[n++] = s->open;
-    if (s->kind == WEIGHT_LINEAR || s->kind == WEIGHT_EXP)
-        for (int k = 0; k < (s->kind == WEIGHT_LINEAR ? 3 : 1); k++)
-            p->breaks[n++] = cand[k];
-    for (int k = 0; s->kind == WEIGHT_TABLE && k < s->table_size; k++)
-        p->breaks[n++] = s->table_t[k];
-    int m = 0;
-    qsort(p->breaks + 1, (size_t)n - 1, sizeof *p->breaks, cmp_double);
-    for (int k = 0; k < n; k++) /* inside the shutter, increasing */
-        if (p->breaks[k] >= s->open && p->breaks[k] < s->close && (m == 0 || p->breaks[k] > p->breaks[m - 1]))
-            p->breaks[m++] = p->breaks[k];
-    p->breaks[m++] = s->close;
-    p->nbreaks = m;
+    p->nbreaks = shutter_knots(&p->shut, p->breaks);
     return 0;
 }
 

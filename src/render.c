@@ -17,6 +17,7 @@ typedef struct {
     int camera_moves; /* every sample traces its own world ray */
     const render_settings *rs;
     const exact_plan *exact; /* with rs->exact_time */
+    shutter_cdf time_cdf;    /* times drawn from a(t) (not used for a box) */
     image *img;
     int tiles_x, tiles_y, ntiles;
     uint32_t round; /* pixels holding `round` batches render batch batch_begin + round */
@@ -103,10 +104,8 @@ static void sample_moving_camera(render_job *job, double x, double y, double t, 
 
 /* The next group of samples from `first`: those sharing its raster position
  * (fixed camera; the thesis sampler lists a position's times together), at
- * most ACCEL_PACKET, keeping only the times with a nonzero weight a(t).
- * Returns the index after the group. */
-static int next_group(const render_job *job, const thread_scratch *scr, int first, int count, double *t,
-                      double *w, int *n)
+ * most ACCEL_PACKET. Returns the index after the group. */
+static int next_group(const render_job *job, const thread_scratch *scr, int first, int count, double *t, int *n)
 {
     int end = first + 1;
     if (!job->camera_moves)
@@ -114,53 +113,58 @@ static int next_group(const render_job *job, const thread_scratch *scr, int firs
                scr->y[end] == scr->y[first])
             end++;
     *n = 0;
-    for (int i = first; i < end; i++) {
-        double wi = shutter_weight(&job->rs->shut, scr->t[i]);
-        if (wi != 0) /* contributes nothing to either sum */
-            t[*n] = scr->t[i], w[(*n)++] = wi;
-    }
+    for (int i = first; i < end; i++)
+        t[(*n)++] = scr->t[i];
     return end;
 }
 
 /* The positions and times of batch `batch` of pixel (px, py) into the
- * scratch; returns their count. */
+ * scratch; returns their count. The sampler's times are uniform over the
+ * shutter; unless a(t) is a box they are moved to a(t)'s own distribution
+ * (shutter_cdf), which keeps their stratification: the map is monotone. */
 static int batch_samples(const render_job *job, int px, int py, uint32_t batch, thread_scratch *scr)
 {
     const sampler *smp = &job->rs->smp;
+    const shutter *sh = &job->rs->shut;
     uint64_t pixel = (uint64_t)py * (uint64_t)job->img->width + (uint64_t)px;
-    sampler_batch(smp, job->rs->shut.open, job->rs->shut.close, pixel, px, py, batch, &scr->ss, scr->x, scr->y,
-                  scr->t);
-    return sampler_count(smp);
+    sampler_batch(smp, sh->open, sh->close, pixel, px, py, batch, &scr->ss, scr->x, scr->y, scr->t);
+    int count = sampler_count(smp);
+    if (sh->kind != WEIGHT_BOX)
+        for (int i = 0; i < count; i++)
+            scr->t[i] = shutter_cdf_time(&job->time_cdf, (scr->t[i] - sh->open) / (sh->close - sh->open));
+    return count;
 }
 
-/* One batch of a pixel (thesis sec. 4.5): each sample's color is weighted
- * by a(t) and the batch estimate is divided by the sum of the weights.
+/* One batch of a pixel (thesis sec. 4.5): the mean of its samples' colors.
+ * The thesis weights each sample by a(t) and divides by the sum of the
+ * weights; here the times are drawn from a(t) instead (batch_samples), the
+ * same expectation without the ratio, which is 0/0 for a batch that drew
+ * only times of zero weight. For a box a(t) the two are the same numbers.
  * Samples sharing a spatial position (the thesis sampler's s_t times) share
  * the static objects' hits: tracing them again would give the same hits. */
 static void render_pixel_batch(render_job *job, int px, int py, uint32_t batch, thread_scratch *scr,
                                double est[4], uint64_t *rays, uint64_t *overflows)
 {
     int count = batch_samples(job, px, py, batch, scr);
-    double acc[4] = {0, 0, 0, 0}, wsum = 0;
+    double acc[4] = {0, 0, 0, 0};
     static_cache sc;
     sc.x = sc.y = NAN;
     for (int i = 0; i < count;) {
-        double t[ACCEL_PACKET], w[ACCEL_PACKET], rgba[ACCEL_PACKET][4];
+        double t[ACCEL_PACKET], rgba[ACCEL_PACKET][4];
         int n, first = i;
-        i = next_group(job, scr, first, count, t, w, &n);
+        i = next_group(job, scr, first, count, t, &n);
         if (job->camera_moves && n)
             sample_moving_camera(job, scr->x[first], scr->y[first], t[0], rgba[0], overflows);
         else if (n)
             samples_fixed_camera(job, &sc, scr->x[first], scr->y[first], t, n, rgba, overflows);
         *rays += (uint64_t)n;
-        for (int k = 0; k < n; k++) {
+        for (int k = 0; k < n; k++)
             for (int c = 0; c < 4; c++)
-                acc[c] += w[k] * rgba[k][c];
-            wsum += w[k];
-        }
+                acc[c] += rgba[k][c];
     }
+    RR_DCHECK(count > 0);
     for (int c = 0; c < 4; c++)
-        est[c] = wsum > 0 ? acc[c] / wsum : 0.0;
+        est[c] = acc[c] / (double)count;
 }
 
 /* One batch of a pixel with exact time integration: the mean over the
@@ -457,6 +461,7 @@ int render_image(const scene *s, const accel *a, const render_settings *rs, imag
     job.tiles_x = (img->width + TILE - 1) / TILE;
     job.tiles_y = (img->height + TILE - 1) / TILE;
     job.ntiles = job.tiles_x * job.tiles_y;
+    shutter_cdf_init(&job.time_cdf, &rs->shut);
     exact_plan *plan = NULL;
     if (rs->exact_time && exact_plan_new(s, a, &rs->shut, 1.0, &plan, err))
         return -1;

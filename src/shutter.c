@@ -1,5 +1,7 @@
 #include "shutter.h"
 
+#include <stdlib.h>
+
 void shutter_default(shutter *s)
 {
     s->open = 0.0;
@@ -69,4 +71,78 @@ int shutter_check(const shutter *s, rr_error *err)
     if (!(sum > 0))
         return rr_fail(err, "temporal weight a(t) is zero over the whole shutter interval");
     return 0;
+}
+
+int shutter_knots(const shutter *s, double knots[SHUTTER_MAX_KNOTS])
+{
+    int n = 0;
+    double span = s->close - s->open;
+    knots[n++] = s->open;
+    if (s->kind == WEIGHT_LINEAR || s->kind == WEIGHT_EXP) {
+        knots[n++] = s->center;
+        if (s->kind == WEIGHT_LINEAR) /* where it reaches 0 */
+            knots[n++] = s->center - span, knots[n++] = s->center + span;
+    }
+    for (int k = 0; s->kind == WEIGHT_TABLE && k < s->table_size; k++)
+        knots[n++] = s->table_t[k];
+    qsort(knots + 1, (size_t)n - 1, sizeof *knots, cmp_double);
+    int m = 0;
+    for (int k = 0; k < n; k++) /* inside the shutter, increasing */
+        if (knots[k] >= s->open && knots[k] < s->close && (m == 0 || knots[k] > knots[m - 1]))
+            knots[m++] = knots[k];
+    knots[m++] = s->close;
+    return m;
+}
+
+/* The integral of a piece of length h starting at value a0 with the given
+ * rate, and its inverse (the length x whose integral is r). */
+static double piece_integral(int exponential, double a0, double rate, double h)
+{
+    if (exponential)
+        return rate != 0 ? a0 * expm1(rate * h) / rate : a0 * h;
+    return a0 * h + 0.5 * rate * h * h;
+}
+
+static double piece_inverse(int exponential, double a0, double rate, double r)
+{
+    if (exponential)
+        return rate != 0 ? log1p(rate * r / a0) / rate : r / a0;
+    /* a0 x + rate x^2 / 2 = r, in the form without cancellation */
+    double root = a0 + sqrt(fmax(0.0, a0 * a0 + 2.0 * rate * r));
+    return root > 0 ? 2.0 * r / root : 0.0;
+}
+
+void shutter_cdf_init(shutter_cdf *c, const shutter *s)
+{
+    int n = shutter_knots(s, c->knot);
+    c->pieces = n - 1;
+    c->exponential = s->kind == WEIGHT_EXP;
+    c->cum[0] = 0;
+    for (int i = 0; i < c->pieces; i++) {
+        double t0 = c->knot[i], t1 = c->knot[i + 1], h = t1 - t0;
+        c->start[i] = shutter_weight(s, t0);
+        if (c->exponential) /* decreasing away from the center on either side */
+            c->rate[i] = t0 >= s->center ? -s->rate : s->rate;
+        else /* a(t) is continuous inside the shutter: the slope from the two ends */
+            c->rate[i] = (shutter_weight(s, t1) - c->start[i]) / h;
+        c->cum[i + 1] = c->cum[i] + piece_integral(c->exponential, c->start[i], c->rate[i], h);
+    }
+}
+
+double shutter_cdf_time(const shutter_cdf *c, double u)
+{
+    double r = u * c->cum[c->pieces];
+    int lo = 0, hi = c->pieces - 1; /* the piece with cum[i] <= r < cum[i + 1] */
+    while (lo < hi) {
+        int mid = (lo + hi + 1) / 2;
+        if (c->cum[mid] <= r)
+            lo = mid;
+        else
+            hi = mid - 1;
+    }
+    while (lo > 0 && !(c->cum[lo + 1] > c->cum[lo])) /* never a piece of zero weight */
+        lo--;
+    double h = c->knot[lo + 1] - c->knot[lo];
+    double x = piece_inverse(c->exponential, c->start[lo], c->rate[lo], r - c->cum[lo]);
+    return c->knot[lo] + fmin(fmax(x, 0.0), h);
 }

@@ -26,4 +26,30 @@ int shutter_check(const shutter *s, rr_error *err);
 double shutter_weight(const shutter *s, double t);
 const char *shutter_weight_name(weight_kind k);
 
+/* The times where a(t) has a kink or a jump, with open first and close
+ * last, increasing: between two of them a(t) is linear (box, linear,
+ * table) or one exponential (exp). Returns how many (at most
+ * SHUTTER_MAX_KNOTS). */
+#define SHUTTER_MAX_KNOTS (SHUTTER_TABLE_MAX + 5)
+int shutter_knots(const shutter *s, double knots[SHUTTER_MAX_KNOTS]);
+
+/* Times drawn from a(t) itself: the inverse of its normalised cumulative
+ * integral, exact piece by piece (a quadratic on linear pieces, a
+ * logarithm on exponential ones). A sampler's uniform time u maps to
+ * t = A^-1(u), so the estimate of the a-weighted average (thesis eq. 3.1)
+ * is the plain mean of the samples: every sample counts, and no batch can
+ * draw only times where a(t) = 0 (the ratio sum a g / sum a was 0/0 there
+ * and such batches came out black). */
+typedef struct {
+    int pieces;
+    double knot[SHUTTER_MAX_KNOTS];
+    double start[SHUTTER_MAX_KNOTS]; /* a(t) at the piece's start */
+    double rate[SHUTTER_MAX_KNOTS];  /* linear: slope; exp: a' / a (0 for a constant piece) */
+    double cum[SHUTTER_MAX_KNOTS];   /* integral of a from open to the piece's start */
+    int exponential;                 /* the pieces are exponentials (exp weight) */
+} shutter_cdf;
+void shutter_cdf_init(shutter_cdf *c, const shutter *s);
+/* u in [0, 1) -> t in [open, close] with density a(t) / integral of a. */
+double shutter_cdf_time(const shutter_cdf *c, double u);
+
 #endif

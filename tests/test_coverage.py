@@ -118,3 +118,32 @@ def test_temporal_weight_of_disk_present_in_first_half(render):
         diff = alpha - expected
         se = diff.std(ddof=1) / np.sqrt(diff.size)
         assert abs(diff.mean()) <= 5 * se, (weight, alpha.mean(), expected.mean(), se)
+
+
+def test_weight_zero_on_98_percent_of_the_shutter_for_every_sampler(render):
+    # Issue 23, item 2. The disk of the test above, its edge crossing the
+    # image center at t = 0.5, seen through a(t) that is zero but on
+    # [0.49, 0.51]. With 8 times a batch, most batches draw no time where
+    # a(t) > 0: the ratio estimator sum a g / sum a gave those batches 0
+    # (not even the background) and the image came out far too dark. The
+    # expectation W(0.5 - x/v) / W(1) is integrated here with numpy on a
+    # fine grid, from the table alone.
+    w = h = 64
+    fov, D, R, v = 40.0, 10.0, 1000.0, 200.0
+    x0 = 0.5 * v - R
+    table = [(0, 0), (0.49, 0), (0.495, 1), (0.505, 1), (0.51, 0), (1, 0)]
+    grid = np.linspace(0, 1, 2_000_001)
+    a = np.interp(grid, [p[0] for p in table], [p[1] for p in table])
+    cum = np.concatenate([[0], np.cumsum(0.5 * (a[1:] + a[:-1]) * np.diff(grid))])
+    y, x = np.mgrid[0:h, 0:w] + 0.5
+    world_x = (x - w / 2) / focal_pixels(h, fov) * D
+    expected = (np.interp(0.5 - world_x / v, grid, cum) / cum[-1]).ravel()
+    weight = 'weight="table" table="' + " ".join(f"{t} {wt}" for t, wt in table) + '"'
+    geometry = f'<pointModel><splat center="{x0} 0 -{D}" normal="0 0 1" radius="{R}"/></pointModel>'
+    for sampler in ["thesis", "jittered3d", "sobol"]:
+        img = render(scene(geometry, w=w, h=h, fov=fov, weight=weight,
+                           animation=f'<animation><linear velocity="{-v} 0 0"/></animation>'),
+                     "--spp", 1, "--tspp", 8, "--batches", 4, "--sampler", sampler, "--seed", 5)
+        diff = img[:, :, 3].ravel() - expected
+        se = diff.std(ddof=1) / np.sqrt(diff.size)
+        assert abs(diff.mean()) <= 5 * se, (sampler, img[:, :, 3].mean(), expected.mean(), se)
