@@ -128,7 +128,7 @@ static int batch_samples(const render_job *job, int px, int py, uint32_t batch, 
     const shutter *sh = &job->rs->shut;
     uint64_t pixel = (uint64_t)py * (uint64_t)job->img->width + (uint64_t)px;
     sampler_batch(smp, sh->open, sh->close, pixel, px, py, batch, &scr->ss, scr->x, scr->y, scr->t);
-    int count = sampler_count(smp);
+    int count = (int)sampler_count(smp); /* at most SAMPLER_MAX_TIME_STRATA (check_settings) */
     if (sh->kind != WEIGHT_BOX)
         for (int i = 0; i < count; i++)
             scr->t[i] = shutter_cdf_time(&job->time_cdf, (scr->t[i] - sh->open) / (sh->close - sh->open));
@@ -415,7 +415,8 @@ static int run_round(render_job *job, const render_hooks *hooks, double start, d
         pthread_join(tids[i], NULL);
     free(tids);
     if (!rc && atomic_load(&job->scratch_failed))
-        rc = rr_fail(err, "out of memory for a render thread's samples (%d per batch)", sampler_count(&job->rs->smp));
+        rc = rr_fail(err, "out of memory for a render thread's samples (%lld per batch)",
+                    (long long)sampler_count(&job->rs->smp));
     if (!rc && job->exact_status)
         rc = exact_failure(job, err);
     return rc;
@@ -438,15 +439,11 @@ static int any_pixel_wants_more(const render_job *job)
 
 static int check_settings(const render_settings *rs, rr_error *err)
 {
-    const sampler *s = &rs->smp;
-    if (s->grid < 1 || s->tspp < 1 || s->time_factor < 1 || rs->threads < 1 || rs->batches < 1)
-        return rr_fail(err, "sample, batch and thread counts must be positive");
-    if ((int64_t)s->tspp * s->time_factor > SAMPLER_MAX_TIME_STRATA ||
-        (int64_t)sampler_count(s) > SAMPLER_MAX_TIME_STRATA)
-        return rr_fail(err, "at most %d samples per batch and time strata", SAMPLER_MAX_TIME_STRATA);
+    if (rs->threads < 1 || rs->batches < 1)
+        return rr_fail(err, "batch and thread counts must be positive");
     if (rs->target_error > 0 && rs->max_batches < rs->batches)
         return rr_fail(err, "the batch cap must be at least the batch count");
-    return 0;
+    return sampler_check(&rs->smp, render_batch_end(rs), err);
 }
 
 int render_image(const scene *s, const accel *a, const render_settings *rs, image *img,

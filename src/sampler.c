@@ -139,7 +139,7 @@ static void thesis_batch(const sampler *s, double t0, double t1, uint64_t seed, 
 static void jittered3d_batch(const sampler *s, double t0, double t1, uint64_t seed, uint64_t pixel, int px, int py,
                              double *x, double *y, double *t)
 {
-    int k = s->grid, n = sampler_count(s);
+    int k = s->grid, n = (int)sampler_count(s);
     uint64_t key = hash_key(seed, pixel);
     for (int i = 0; i < n; i++) {
         int cell = i / s->tspp, slot = i % s->tspp;
@@ -226,9 +226,12 @@ static double sobol_sample(uint32_t index, int dim, uint64_t seed, uint64_t pixe
 static void sobol_batch(const sampler *s, double t0, double t1, uint64_t pixel, int px, int py, uint32_t batch,
                         double *x, double *y, double *t)
 {
-    int n = sampler_count(s);
+    int n = (int)sampler_count(s);
+    /* sampler_check keeps every index inside the sequence: a wrapped index
+     * repeats earlier points, and batches stop being independent */
+    RR_DCHECK_LE(((uint64_t)batch + 1) * (uint64_t)n, SAMPLER_SOBOL_POINTS);
     for (int i = 0; i < n; i++) {
-        uint32_t index = batch * (uint32_t)n + (uint32_t)i;
+        uint32_t index = (uint32_t)((uint64_t)batch * (uint64_t)n + (uint64_t)i);
         x[i] = px + sobol_sample(index, 0, s->seed, pixel);
         y[i] = py + sobol_sample(index, 1, s->seed, pixel);
         t[i] = t0 + (t1 - t0) * sobol_sample(index, 2, s->seed, pixel);
@@ -251,4 +254,20 @@ void sampler_batch(const sampler *s, double t0, double t1, uint64_t pixel, int p
         sobol_batch(s, t0, t1, pixel, px, py, batch, x, y, t);
         break;
     }
+}
+
+int sampler_check(const sampler *s, uint64_t batch_end, rr_error *err)
+{
+    if (s->grid < 1 || s->tspp < 1 || s->time_factor < 1)
+        return rr_fail(err, "sample counts must be positive");
+    int64_t n = sampler_count(s);
+    if ((int64_t)s->tspp * s->time_factor > SAMPLER_MAX_TIME_STRATA || n > SAMPLER_MAX_TIME_STRATA)
+        return rr_fail(err, "%lld samples per batch (%dx%d positions x %d times), %lld time strata: at most %d of each",
+                       (long long)n, s->grid, s->grid, s->tspp, (long long)s->tspp * s->time_factor,
+                       SAMPLER_MAX_TIME_STRATA);
+    if (s->kind == SAMPLER_SOBOL && batch_end * (uint64_t)n > SAMPLER_SOBOL_POINTS)
+        return rr_fail(err, "sobol: %llu batches of %lld samples need %llu points of the Sobol' sequence, which has "
+                            "2^32: use fewer batches or samples per batch",
+                       (unsigned long long)batch_end, (long long)n, (unsigned long long)(batch_end * (uint64_t)n));
+    return 0;
 }

@@ -23,6 +23,8 @@
 
 #include <stdint.h>
 
+#include "common.h"
+
 typedef enum { SAMPLER_THESIS, SAMPLER_JITTERED3D, SAMPLER_SOBOL } sampler_kind;
 
 typedef struct {
@@ -43,7 +45,18 @@ const char *sampler_name(sampler_kind k);
 /* Returns -1 for an unknown name. */
 int sampler_from_name(const char *name, sampler_kind *k);
 
-static inline int sampler_count(const sampler *s) { return s->grid * s->grid * s->tspp; }
+/* Samples per batch, in 64 bits: K*K*tspp overflowed an int (spp 4096 and
+ * tspp 10^6 gave a negative count that passed the limit). */
+static inline int64_t sampler_count(const sampler *s) { return (int64_t)s->grid * s->grid * s->tspp; }
+
+/* Sobol' indices are 32 bits (32 direction numbers): a render may use the
+ * first 2^32 points of the sequence, no more. */
+#define SAMPLER_SOBOL_POINTS ((uint64_t)1 << 32)
+
+/* 0 if the counts are positive, within SAMPLER_MAX_TIME_STRATA, and (sobol)
+ * batches [0, batch_end) fit in the sequence; else -1 with the reason.
+ * Checked before anything is allocated from the counts. */
+int sampler_check(const sampler *s, uint64_t batch_end, rr_error *err);
 
 /* Scratch for one thread: thesis needs tspp * time_factor doubles and ints. */
 typedef struct {

@@ -213,3 +213,18 @@ TEST(uniform_numbers_are_in_unit_interval_with_mean_half)
     CHECK(ok);
     CHECK_NEAR(sum / 100000, 0.5, 5 * sqrt(1 / 12.0 / 100000));
 }
+
+/* Issue 23, items 5 and 12: counts in 64 bits, and Sobol' batches inside
+ * the 2^32 points of the sequence (batch * n was a uint32 product, so later
+ * batches repeated earlier points and the standard error shrank to 0). */
+TEST(sampler_check_refuses_counts_past_int_and_sobol_past_its_points)
+{
+    sampler s = {SAMPLER_THESIS, 1, 64, 1000000, 1}; /* spp 4096, tspp 10^6 */
+    CHECK(sampler_count(&s) == 4096000000LL);
+    CHECK(sampler_check(&s, 1, NULL) == -1);
+    sampler sob = {SAMPLER_SOBOL, 1, 1, 1 << 20, 1}; /* n = 2^20: 4096 batches fill the sequence */
+    CHECK(sampler_check(&sob, 4096, NULL) == 0);
+    CHECK(sampler_check(&sob, 4097, NULL) == -1);
+    sob.kind = SAMPLER_JITTERED3D; /* hashed streams have no such end */
+    CHECK(sampler_check(&sob, 4097, NULL) == 0);
+}

@@ -154,7 +154,7 @@ static void *baseline_worker(void *arg)
     const sampler *smp = &job->rs->smp;
     sampler_scratch ss;
     sampler_scratch_init(&ss, smp);
-    int n = sampler_count(smp);
+    int n = (int)sampler_count(smp); /* the bench sets small counts */
     double *x = malloc(n * sizeof *x), *y = malloc(n * sizeof *y), *t = malloc(n * sizeof *t);
     unsigned *prims = malloc(n * sizeof *prims);
     unsigned long long distinct = 0, covered = 0;

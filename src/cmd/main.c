@@ -492,13 +492,14 @@ static void report_target(const render_options *o, const image *img, attr_list *
 
 static void warn_about_settings(const render_options *o, const render_settings *rs)
 {
-    int k = rs->smp.grid, n = sampler_count(&rs->smp);
+    int k = rs->smp.grid;
+    int64_t n = sampler_count(&rs->smp);
     if (o->quiet)
         return;
     if (k * k != o->spp)
         fprintf(stderr, "refrender: --spp %d rounded to a %dx%d grid (%d samples)\n", o->spp, k, k, k * k);
     if (rs->smp.kind == SAMPLER_SOBOL && (n & (n - 1)))
-        fprintf(stderr, "refrender: note: sobol works best with a power-of-two spp*tspp (now %d)\n", n);
+        fprintf(stderr, "refrender: note: sobol works best with a power-of-two spp*tspp (now %lld)\n", (long long)n);
 }
 
 /* The final image, only the crop window's pixels with --crop-window. */
@@ -512,7 +513,7 @@ static int write_final(const char *output, const image *img, render_run *run, rr
         const double *c = run->o->crop;
         attrs_set(&run->attrs, "refrender:cropWindow", "%.17g %.17g %.17g %.17g", c[0], c[1], c[2], c[3]);
     }
-    return output_write_final_window(output, img, sampler_count(&rs->smp), &run->attrs, &win, err);
+    return output_write_final_window(output, img, (int)sampler_count(&rs->smp), &run->attrs, &win, err);
 }
 
 /* Renders one shutter interval (a frame) into output (and preview). */

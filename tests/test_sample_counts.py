@@ -1,0 +1,27 @@
+"""Issue 23, items 5 and 12, end to end: sample counts past an int and
+Sobol' batches past the sequence's 2^32 points are refused before anything
+is rendered or allocated, naming the counts."""
+from conftest import run
+
+SCENE = """<scene><camera position="0 0 5" lookat="0 0 0" width="1" height="1"/>
+<object><sphere center="0 0 0" radius="1"/></object></scene>"""
+
+
+def test_counts_past_an_int_are_refused(tmp_path):
+    scene = tmp_path / "s.xml"
+    scene.write_text(SCENE)
+    proc = run([scene, "--spp", 4096, "--tspp", 1000000, "--time-factor", 1, "-o", tmp_path / "o.exr"])
+    assert proc.returncode == 1 and "4096000000 samples per batch" in proc.stderr, proc.stderr
+    assert not (tmp_path / "o.exr").exists()
+
+
+def test_sobol_batches_past_the_sequence_are_refused(tmp_path):
+    scene = tmp_path / "s.xml"
+    scene.write_text(SCENE)
+    proc = run([scene, "--sampler", "sobol", "--spp", 4, "--tspp", 1 << 18, "--batches", 4097,
+                "-o", tmp_path / "o.exr"])
+    assert proc.returncode == 1 and "2^32" in proc.stderr, proc.stderr
+    # the same through passes: batches 4000..4100 of a split render
+    proc = run([scene, "--sampler", "sobol", "--spp", 4, "--tspp", 1 << 18, "--batches", 4100,
+                "--pass", "39/40", "-o", tmp_path / "p.exr"])
+    assert proc.returncode == 1 and "2^32" in proc.stderr, proc.stderr
