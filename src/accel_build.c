@@ -90,12 +90,44 @@ static void build_top_levels(accel *a, double open, double close)
             a->top[k].scene = accel_user_scene(a->device, a->top[k].count, &a->top[k], accel_object_bounds_cb, accel_object_intersect);
 }
 
+static double box_reach(aabb b)
+{
+    return fmax(fmax(fmax(fabs(b.lo.x), fabs(b.hi.x)), fmax(fabs(b.lo.y), fabs(b.hi.y))),
+                fmax(fabs(b.lo.z), fabs(b.hi.z)));
+}
+
+/* Embree's float rays must stay valid (its ray.valid() asserts every origin
+ * and direction component below about 1.8e18): a camera at 1e19, a velocity
+ * of 1e19 or a shutter of +-1e300 once aborted the render inside Embree. The
+ * object-space ray of object i starts at S^-1 R^-1 (camera - translation),
+ * at most sqrt(3) (camera reach + object reach) / min_scale from its origin
+ * in each component, and its direction is at most 1 / min_scale long. */
+static int check_reach(const accel *a, double open, double close, rr_error *err)
+{
+    const scene *s = a->sc;
+    aabb at_rest = {s->cam.position, s->cam.position};
+    double camera = box_reach(animation_swept_bounds(&s->camera_motion, at_rest, open, close));
+    if (!(camera <= ACCEL_MAX_REACH))
+        return rr_fail(err, "%s: the camera reaches %g world units from the origin during the shutter [%g, %g]; "
+                            "rays can only be traced within %g", s->path, camera, open, close, ACCEL_MAX_REACH);
+    for (int i = 0; i < s->nobjects; i++) {
+        const scene_object *o = &s->objects[i];
+        double object = box_reach(a->swept[i]), min_scale = animation_min_scale(&o->anim, open, close);
+        double ray = sqrt(3.0) * fmax(1.0, camera + object) / min_scale;
+        if (!(object <= ACCEL_MAX_REACH) || !(ray <= ACCEL_MAX_REACH))
+            return rr_fail(err, "%s: object '%s' reaches %g world units (smallest scale %g) during the shutter "
+                                "[%g, %g]; rays can only be traced within %g",
+                           s->path, o->name, object, min_scale, open, close, ACCEL_MAX_REACH);
+    }
+    return 0;
+}
+
 int accel_set_shutter(accel *a, double open, double close, rr_error *err)
 {
     build_top_levels(a, open, close);
     if (a->build_error.msg[0])
         return rr_fail(err, "%s", a->build_error.msg);
-    return 0;
+    return check_reach(a, open, close, err);
 }
 
 int accel_build(const scene *s, const accel_settings *set, accel **out, rr_error *err)
@@ -136,8 +168,9 @@ int accel_build(const scene *s, const accel_settings *set, accel **out, rr_error
     }
     a->reuse_static = set->reuse_static;
     build_top_levels(a, set->open, set->close);
-    if (a->build_error.msg[0]) {
-        rr_fail(err, "%s", a->build_error.msg);
+    if (a->build_error.msg[0] || check_reach(a, set->open, set->close, err)) {
+        if (a->build_error.msg[0])
+            rr_fail(err, "%s", a->build_error.msg);
         accel_free(a);
         return -1;
     }
