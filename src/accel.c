@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "accel_internal.h"
+#include "hitrules.h"
 
 static float *lane_f(void *rayhit, unsigned n, unsigned field, unsigned i)
 {
@@ -22,9 +23,7 @@ static unsigned *lane_u(void *rayhit, unsigned n, unsigned field, unsigned i)
 static void accept_hit(trace_context *c, const struct RTCIntersectFunctionNArguments *args, unsigned lane,
                        const float dir[3], float t, float weight, float r2, vec3 normal, const float color[3])
 {
-    if (v3_dot(normal, v3(dir[0], dir[1], dir[2])) > 0) /* two-sided surfaces: shade the side facing the eye */
-        normal = v3_scale(normal, -1.0);
-    vec3 wn = xform_normal(c->xf[lane], normal);
+    vec3 wn = xform_normal(c->xf[lane], normal_facing_eye(normal, v3(dir[0], dir[1], dir[2])));
     surface_hit h = {t, c->obj, args->primID, weight, r2, {color[0], color[1], color[2]},
                      {(float)wn.x, (float)wn.y, (float)wn.z}};
     kbuffer_insert(c->kb[lane], &h);
@@ -71,22 +70,17 @@ static void sphere_intersect_lane(trace_context *c, const struct RTCIntersectFun
     float fo[3], fd[3], tnear, tfar;
     load_lane(args, lane, fo, fd, &tnear, &tfar);
     vec3 org = v3(fo[0], fo[1], fo[2]), dir = v3(fd[0], fd[1], fd[2]);
-    vec3 oc = v3_sub(org, o->sphere_center);
-    double a = v3_dot(dir, dir), b = v3_dot(oc, dir), cc = v3_dot(oc, oc) - o->sphere_radius * o->sphere_radius;
-    double disc = b * b - a * cc;
-    if (disc < 0)
+    sphere_crossing sc = sphere_cross(org, dir, o->sphere_center, o->sphere_radius);
+    if (sc.disc < 0)
         return;
-    double sq = sqrt(disc);
-    double roots[2] = {(-b - sq) / a, (-b + sq) / a};
-    for (int i = 0; i < 2; i++) {
-        float t = (float)roots[i];
-        if (t >= tnear && t <= tfar) {
-            vec3 p = v3_add(oc, v3_scale(dir, roots[i]));
-            const float col[3] = {(float)o->sphere_color.x, (float)o->sphere_color.y, (float)o->sphere_color.z};
-            accept_hit(c, args, lane, fd, t, 1.0f, 0.0f, v3_scale(p, 1.0 / o->sphere_radius), col);
-            return;
-        }
-    }
+    double depth[2] = {(float)sc.root[0], (float)sc.root[1]}; /* compared as the float ray's t */
+    int k = sphere_visible_root(depth, tnear, tfar);
+    if (k < 0)
+        return;
+    vec3 p = v3_add(v3_sub(org, o->sphere_center), v3_scale(dir, sc.root[k]));
+    const float col[3] = {(float)o->sphere_color.x, (float)o->sphere_color.y, (float)o->sphere_color.z};
+    accept_hit(c, args, lane, fd, (float)depth[k], (float)hit_weight(1, 0.0, 0.0), 0.0f,
+               v3_scale(p, 1.0 / o->sphere_radius), col);
 }
 
 void accel_sphere_intersect(const struct RTCIntersectFunctionNArguments *args)
@@ -136,6 +130,11 @@ static int ray_meets_sphere(vec3 org, vec3 dir, const sphere_bound *b)
     if (along <= 0)
         return 0; /* sphere behind the origin */
     return oc2 - along * along / dd <= b->radius2;
+}
+
+int accel_ray_meets_swept_sphere(const accel *a, unsigned obj, vec3 org, vec3 dir)
+{
+    return ray_meets_sphere(org, dir, &a->swept_sphere[obj]);
 }
 
 /* A sphere about the object's box center holding the object (rest pose). */
@@ -194,7 +193,7 @@ void accel_object_intersect(const struct RTCIntersectFunctionNArguments *args)
     xform xf = a->is_static[obj] ? a->rest[obj] : animation_at(&a->sc->objects[obj].anim, c->time);
     c->xf[0] = &xf;
     c->obj = obj;
-    /* from the double world ray, as accel_trace_moving_times does: the
+    /* from the double world ray, as trace_object_times does: the
      * object-space rays of both paths are the same to the bit */
     vec3 org = xform_inverse_point(&xf, c->world_org);
     vec3 dir = xform_inverse_vector(&xf, c->world_dir);
@@ -224,7 +223,7 @@ static void finish_weights(const accel *a, kbuffer *kb)
 {
     for (int k = 0; k < kb->count; k++)
         if (kb->hits[k].weight < 0)
-            kb->hits[k].weight = (float)splat_kernel_weight(kb->hits[k].r2, a->sigma);
+            kb->hits[k].weight = (float)hit_weight(0, kb->hits[k].r2, a->sigma); /* splats: spheres have 1 */
 }
 
 /* A ray from 0 to tfar (no hit yet), as Embree takes it. */

@@ -81,6 +81,18 @@ enum { ACCEL_COLLIDE_NO_MEMORY = -1, ACCEL_COLLIDE_TOO_MANY = -2 /* more than li
 int accel_collide_boxes(const accel *a, unsigned obj, const aabb *boxes, unsigned nboxes, size_t limit,
                         accel_prims *out);
 
+/* Does the world ray org + t dir (t >= 0) pass within the object's swept
+ * sphere? The one test both integrators use to skip an object. */
+int accel_ray_meets_swept_sphere(const accel *a, unsigned obj, vec3 org, vec3 dir);
+
+/* The blending distance and kernel sigma accel was built with: their one
+ * owner for both integrators (epsilon as the float the k-buffer holds). */
+double accel_epsilon(const accel *a);
+double accel_sigma(const accel *a);
+
+/* The shutter the top levels (swept bounds) were built for. */
+void accel_shutter(const accel *a, double *open, double *close);
+
 /* Whether accel traces the object as moving over the current shutter (a
  * static object's hits are in accel_ray's static_hits). */
 int accel_object_moves(const accel *a, unsigned obj);

@@ -60,8 +60,9 @@ size_t accel_embree_peak_bytes(const accel *a)
 
 static void embree_error(void *user, enum RTCError code, const char *str)
 {
-    rr_error *e = user;
-    if (!e->msg[0])
+    accel *a = user;
+    rr_error *e = &a->build_error;
+    if (a->building && !e->msg[0])
         snprintf(e->msg, sizeof e->msg, "Embree error %d: %s", (int)code, str ? str : "");
 }
 
@@ -70,6 +71,7 @@ static void embree_error(void *user, enum RTCError code, const char *str)
 static void build_top_levels(accel *a, double open, double close)
 {
     const scene *s = a->sc;
+    a->open = open, a->close = close;
     for (int k = 0; k < 2; k++) {
         if (a->top[k].scene)
             rtcReleaseScene(a->top[k].scene);
@@ -124,7 +126,9 @@ static int check_reach(const accel *a, double open, double close, rr_error *err)
 
 int accel_set_shutter(accel *a, double open, double close, rr_error *err)
 {
+    a->building = 1;
     build_top_levels(a, open, close);
+    a->building = 0;
     if (a->build_error.msg[0])
         return rr_fail(err, "%s", a->build_error.msg);
     return check_reach(a, open, close, err);
@@ -138,12 +142,13 @@ int accel_build(const scene *s, const accel_settings *set, accel **out, rr_error
     a->sc = s;
     a->epsilon = (float)set->epsilon;
     a->sigma = set->sigma;
+    a->building = 1;
     a->device = rtcNewDevice(NULL);
     if (!a->device) {
         free(a);
         return rr_fail(err, "cannot create Embree device (error %d)", (int)rtcGetDeviceError(NULL));
     }
-    rtcSetDeviceErrorFunction(a->device, embree_error, &a->build_error);
+    rtcSetDeviceErrorFunction(a->device, embree_error, a);
     rtcSetDeviceMemoryMonitorFunction(a->device, embree_memory, a);
     size_t n = (size_t)s->nobjects;
     a->object_scenes = calloc(n, sizeof *a->object_scenes);
@@ -168,6 +173,7 @@ int accel_build(const scene *s, const accel_settings *set, accel **out, rr_error
     }
     a->reuse_static = set->reuse_static;
     build_top_levels(a, set->open, set->close);
+    a->building = 0;
     if (a->build_error.msg[0] || check_reach(a, set->open, set->close, err)) {
         if (a->build_error.msg[0])
             rr_fail(err, "%s", a->build_error.msg);
@@ -198,4 +204,13 @@ void accel_free(accel *a)
     free(a->is_static);
     rtcReleaseDevice(a->device);
     free(a);
+}
+
+double accel_epsilon(const accel *a) { return a->epsilon; }
+double accel_sigma(const accel *a) { return a->sigma; }
+
+void accel_shutter(const accel *a, double *open, double *close)
+{
+    *open = a->open;
+    *close = a->close;
 }

@@ -42,6 +42,9 @@ struct accel {
     const scene *sc;
     float epsilon;
     double sigma;
+    double open, close; /* the shutter the top levels were built for */
+    int building;       /* Embree's error callback records only while building (render threads
+                           check rtcGetDeviceError themselves: accel is const to them) */
     rr_error build_error; /* filled by Embree's error callback */
     long long embree_bytes, embree_peak; /* Embree's own allocations (BVHs) */
 };

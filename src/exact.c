@@ -240,27 +240,20 @@ static double primitive_reach(const scene_object *o, unsigned prim, vec3 c)
 
 plane_crossing exact_plane_crossing(const cand_info *g, const object_ray *r)
 {
-    plane_crossing pc = {v3_dot(r->dir, g->normal), INFINITY, INFINITY};
-    if (pc.denom == 0)
-        return pc;
-    vec3 co = v3_sub(g->center, r->org);
-    pc.s = v3_dot(co, g->normal) / pc.denom;
-    vec3 q = v3_sub(v3_scale(r->dir, pc.s), co);
-    double a = v3_dot(g->dual_u, q), b = v3_dot(g->dual_v, q);
-    pc.r2 = a * a + b * b;
+    plane_crossing pc = {0, INFINITY, INFINITY};
+    double o[3] = {r->org.x, r->org.y, r->org.z}, d[3] = {r->dir.x, r->dir.y, r->dir.z}, co[3];
+    if (splat_depth_d(g->center, g->normal, o, d, co, &pc.denom, &pc.s))
+        pc.r2 = splat_radius2_d(g->dual_u, g->dual_v, co, d, pc.s);
+    else
+        pc.s = INFINITY;
     return pc;
 }
 
-sphere_crossing exact_sphere_crossing(const scene_object *o, const object_ray *r)
+sphere_crossing exact_sphere_crossing(const scene_object *o, const object_ray *r, double *s)
 {
-    vec3 oc = v3_sub(r->org, o->sphere_center);
-    sphere_crossing sc;
-    sc.A = v3_dot(r->dir, r->dir), sc.B = v3_dot(oc, r->dir), sc.oc2 = v3_dot(oc, oc);
-    sc.disc = sc.B * sc.B - sc.A * (sc.oc2 - o->sphere_radius * o->sphere_radius);
-    double sq = sqrt(fmax(0.0, sc.disc));
-    sc.s = (-sc.B - sq) / sc.A;
-    if (sc.s < 0)
-        sc.s = (-sc.B + sq) / sc.A;
+    sphere_crossing sc = sphere_cross(r->org, r->dir, o->sphere_center, o->sphere_radius);
+    int k = sphere_visible_root(sc.root, 0.0, INFINITY);
+    *s = sc.root[k < 0 ? 1 : k];
     return sc;
 }
 
@@ -288,14 +281,13 @@ static int push_key(exact_scratch *scr, unsigned obj, unsigned prim)
     return 0;
 }
 
-/* Does the fixed world ray pass within the swept sphere (ahead of it)? */
-static int ray_meets_swept_sphere(const sample_ctx *c, const object_plan *op)
+/* Does the fixed world ray pass within the swept sphere (ahead of it)?
+ * The sampled path's test (accel_ray_meets_swept_sphere). */
+static int ray_meets_swept_sphere(const sample_ctx *c, unsigned obj)
 {
     vec3 org, dir;
     exact_world_ray(c, c->p->shut.open, &org, &dir);
-    vec3 oc = v3_sub(op->swept_center, org);
-    double along = v3_dot(oc, dir), oc2 = v3_dot(oc, oc), r2 = op->swept_radius * op->swept_radius;
-    return oc2 <= r2 || (along > 0 && oc2 - along * along <= r2 * (1 + 1e-9));
+    return accel_ray_meets_swept_sphere(c->p->acc, obj, org, dir);
 }
 
 /* Boxes around the object-space ray over each time slice and depth slice:
@@ -346,7 +338,7 @@ static int gather_moving(const sample_ctx *c, unsigned obj)
 {
     exact_scratch *scr = c->scr;
     const object_plan *op = &c->p->obj[obj];
-    if (!c->p->camera_moves && !ray_meets_swept_sphere(c, op))
+    if (!c->p->camera_moves && !ray_meets_swept_sphere(c, obj))
         return EXACT_OK;
     if (op->time_slices == 0)
         return gather_all(c, obj);
@@ -399,8 +391,10 @@ static void describe(const exact_plan *p, uint64_t key, cand_info *info)
     if (o->kind == OBJECT_SPHERE)
         return;
     const splat_geom *g = &o->model.geom[prim];
-    info->center = f3(g->center), info->normal = f3(g->plane_normal);
-    info->dual_u = f3(g->dual_u), info->dual_v = f3(g->dual_v);
+    for (int k = 0; k < 3; k++) {
+        info->center[k] = g->center[k], info->normal[k] = g->plane_normal[k];
+        info->dual_u[k] = g->dual_u[k], info->dual_v[k] = g->dual_v[k];
+    }
     info->dual_norm = dual_norm(g);
     info->shading_normal = f3(pointmodel_normal(&o->model, prim));
 }
@@ -501,11 +495,12 @@ static cand_eval splat_eval(const cand_info *g, const object_ray *r, double delt
  * back from inside): its depth stays between the shell's crossings. */
 static cand_eval sphere_eval(const scene_object *o, const object_ray *r, double delta)
 {
-    sphere_crossing sc = exact_sphere_crossing(o, r);
+    double s;
+    sphere_crossing sc = exact_sphere_crossing(o, r, &s);
     double R = o->sphere_radius, A = sc.A, B = sc.B, oc2 = sc.oc2;
     cand_eval e = {0, 1, INFINITY, 0.0};
     if (sc.disc >= 0) {
-        e.s = sc.s;
+        e.s = s;
         e.hit = e.s >= 0;
     }
     if (delta == 0)
@@ -668,7 +663,7 @@ static int settle(const sample_ctx *c, double a, double b, const int *list, int 
 {
     exact_scratch *scr = c->scr;
     int *set = scr->lists + (list - scr->lists) + n, nset = 0;
-    double eps = c->p->sc->epsilon;
+    double eps = accel_epsilon(c->p->acc);
     int window = window_sure(ev, n, eps, set, &nset, scr->sorted);
     if (window == 1) {
         to_candidates(list, set, nset);

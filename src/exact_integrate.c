@@ -19,8 +19,7 @@ static int candidate_hit(const sample_ctx *c, int index, double t, surface_hit *
     vec3 normal, color;
     double s, r2 = 0.0;
     if (o->kind == OBJECT_SPHERE) {
-        sphere_crossing sc = exact_sphere_crossing(o, r);
-        s = sc.s;
+        exact_sphere_crossing(o, r, &s);
         normal = v3_scale(v3_sub(v3_add(r->org, v3_scale(r->dir, s)), o->sphere_center), 1.0 / o->sphere_radius);
         color = o->sphere_color;
     } else {
@@ -32,10 +31,8 @@ static int candidate_hit(const sample_ctx *c, int index, double t, surface_hit *
         normal = info->shading_normal;
         color = v3(sc[0], sc[1], sc[2]);
     }
-    if (v3_dot(normal, r->dir) > 0) /* two-sided: the side facing the eye (accel.c) */
-        normal = v3_scale(normal, -1.0);
-    vec3 wn = xform_normal(&r->xf, normal);
-    double w = o->kind == OBJECT_SPHERE ? 1.0 : splat_kernel_weight(r2, c->p->sc->kernel_sigma);
+    vec3 wn = xform_normal(&r->xf, normal_facing_eye(normal, r->dir));
+    double w = hit_weight(o->kind == OBJECT_SPHERE, r2, accel_sigma(c->p->acc));
     *h = (surface_hit){(float)s, info->obj, info->prim, (float)w, (float)r2,
                        {(float)color.x, (float)color.y, (float)color.z}, {(float)wn.x, (float)wn.y, (float)wn.z}};
     return 1;
@@ -47,7 +44,7 @@ static void integrand(const sample_ctx *c, const piece *pc, double t, double out
     const scene *s = c->p->sc;
     double w = shutter_weight(&c->p->shut, t);
     kbuffer kb;
-    kbuffer_reset(&kb, (float)s->epsilon);
+    kbuffer_reset(&kb, (float)accel_epsilon(c->p->acc));
     for (int k = 0; k < pc->count; k++) {
         surface_hit h;
         if (candidate_hit(c, c->scr->sets[pc->first + (size_t)k], t, &h))

@@ -4,6 +4,7 @@
 #define RR_EXACT_INTERNAL_H
 
 #include "exact.h"
+#include "hitrules.h"
 
 /* A sample's pieces beyond this are not split further (pathological
  * motion): the rest of the shutter counts as unresolved. */
@@ -61,7 +62,7 @@ typedef struct {
 /* What the certificates need of a candidate, computed once per sample. */
 typedef struct {
     unsigned obj, prim;
-    vec3 center, normal, dual_u, dual_v; /* splat (model space) */
+    double center[3], normal[3], dual_u[3], dual_v[3]; /* splat (model space), for splat_depth_d */
     vec3 shading_normal;
     double dual_norm; /* splat: spectral norm of [du; dv] */
     double reach;     /* farthest point from the object's motion center */
@@ -110,7 +111,8 @@ typedef struct {
     exact_stats *st;
 } sample_ctx;
 
-/* Where a ray crosses a candidate splat's plane: depth s and squared
+/* Where a ray crosses a candidate splat's plane (splat_depth_d and
+ * splat_radius2_d, the sampled path's rule in double): depth s and squared
  * ellipse radius r2, both INFINITY when the ray is parallel to the plane
  * (denom = D.n = 0: no hit, as in splat_intersect). */
 typedef struct {
@@ -118,13 +120,10 @@ typedef struct {
 } plane_crossing;
 plane_crossing exact_plane_crossing(const cand_info *g, const object_ray *r);
 
-/* A ray against an analytic sphere: |D|^2 (A), oc.D (B), |oc|^2, the
- * discriminant and the visible crossing's depth s (the nearer root unless
- * it lies behind the origin; the discriminant clamped at 0 for s). */
-typedef struct {
-    double A, B, oc2, disc, s;
-} sphere_crossing;
-sphere_crossing exact_sphere_crossing(const scene_object *o, const object_ray *r);
+/* A ray against an analytic sphere (hitrules.h) and the depth s of its
+ * visible crossing from the origin on (the far root when neither is ahead:
+ * then s < 0, no hit). */
+sphere_crossing exact_sphere_crossing(const scene_object *o, const object_ray *r, double *s);
 
 /* Counts n evaluations of the current sample; 0 while it may go on, else
  * the EXACT_ status that stops it (budget spent or interrupted). */

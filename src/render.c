@@ -451,6 +451,11 @@ int render_image(const scene *s, const accel *a, const render_settings *rs, imag
 {
     if (check_settings(rs, err))
         return -1;
+    double open, close;
+    accel_shutter(a, &open, &close);
+    if (open != rs->shut.open || close != rs->shut.close) /* swept bounds of another shutter miss hits */
+        return rr_fail(err, "internal: accel was built for the shutter [%g, %g], the render is for [%g, %g]", open,
+                       close, rs->shut.open, rs->shut.close);
     render_job job;
     memset(&job, 0, sizeof job);
     job.sc = s, job.acc = a, job.rs = rs, job.img = img, job.cancel = cancel;

@@ -27,24 +27,38 @@ int splat_geom_init(splat_geom *s, vec3 c, vec3 u, vec3 v)
     return 0;
 }
 
-static inline float dot3f(const float a[3], const float b[3])
-{
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
+/* One body for both precisions (splat.h); the order of every operation is
+ * fixed here, so each precision gives the same numbers wherever it is used. */
+#define DOT3(a, b) ((a)[0] * (b)[0] + (a)[1] * (b)[1] + (a)[2] * (b)[2])
+#define DEFINE_SPLAT_RULES(T, suffix)                                                                  \
+    int splat_depth_##suffix(const T c[3], const T n[3], const T o[3], const T d[3], T co[3], T *denom, \
+                             T *t)                                                                     \
+    {                                                                                                  \
+        *denom = DOT3(d, n);                                                                           \
+        if (*denom == 0)                                                                               \
+            return 0;                                                                                  \
+        co[0] = c[0] - o[0], co[1] = c[1] - o[1], co[2] = c[2] - o[2];                                 \
+        *t = DOT3(co, n) / *denom;                                                                     \
+        return 1;                                                                                      \
+    }                                                                                                  \
+    T splat_radius2_##suffix(const T du[3], const T dv[3], const T co[3], const T d[3], T t)           \
+    {                                                                                                  \
+        T q[3] = {t * d[0] - co[0], t * d[1] - co[1], t * d[2] - co[2]};                               \
+        T a = DOT3(du, q), b = DOT3(dv, q);                                                            \
+        return a * a + b * b;                                                                          \
+    }
+DEFINE_SPLAT_RULES(float, f)
+DEFINE_SPLAT_RULES(double, d)
 
 int splat_intersect(const splat_geom *s, const float o[3], const float d[3],
                     float tnear, float tfar, float *t_out, float *r2_out)
 {
-    float denom = dot3f(d, s->plane_normal);
-    if (denom == 0.0f)
-        return 0; /* ray parallel to the splat plane: it has no area there */
-    float co[3] = {s->center[0] - o[0], s->center[1] - o[1], s->center[2] - o[2]};
-    float t = dot3f(co, s->plane_normal) / denom;
+    float co[3], denom, t;
+    if (!splat_depth_f(s->center, s->plane_normal, o, d, co, &denom, &t))
+        return 0;
     if (!(t >= tnear && t <= tfar))
         return 0;
-    float q[3] = {t * d[0] - co[0], t * d[1] - co[1], t * d[2] - co[2]};
-    float a = dot3f(s->dual_u, q), b = dot3f(s->dual_v, q);
-    float r2 = a * a + b * b;
+    float r2 = splat_radius2_f(s->dual_u, s->dual_v, co, d, t);
     if (!(r2 <= 1.0f))
         return 0;
     *t_out = t;

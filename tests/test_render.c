@@ -77,3 +77,21 @@ TEST(render_resumed_mid_round_equals_uninterrupted)
     accel_free(a);
     scene_free(&s);
 }
+
+/* Issue 23: accel's swept bounds hold only for the shutter it was built
+ * for; a render over another shutter would miss hits silently. */
+TEST(render_refuses_an_accel_built_for_another_shutter)
+{
+    scene s;
+    rr_error e;
+    accel *a;
+    image img;
+    CHECK(scene_load_memory(MOVING_DISK, strlen(MOVING_DISK), "mem.xml", ".", &s, &e) == 0);
+    accel_settings set = {s.shut.open, s.shut.close + 1, s.epsilon, s.kernel_sigma, 1};
+    CHECK(accel_build(&s, &set, &a, &e) == 0);
+    CHECK(image_alloc(&img, 32, 16) == 0);
+    CHECK(render_into(&s, a, 2, &img) == -1);
+    image_free(&img);
+    accel_free(a);
+    scene_free(&s);
+}
