@@ -90,3 +90,26 @@ TEST(mixed_materials_blend_lit_and_unlit_by_weight)
     CHECK(ca.x != cb.x);
     scene_free(&s);
 }
+
+/* The shininess exponent: light 60 degrees off the normal, viewer along it,
+ * so n.l = cos 60 = 0.5 and the mirrored light r = 2 (n.l) n - l makes
+ * r.v = 0.5 too (the case above has r.v = 1, where any exponent gives 1).
+ * Specular 0.25 * 0.5^2 = 0.0625 (0.125 if the exponent were ignored). */
+TEST(phong_specular_follows_the_shininess_exponent)
+{
+    static const char *const OBLIQUE =
+        "<scene><ambient color='0.1 0.1 0.1'/>"
+        "<light type='directional' direction='-0.86602540378443865 0 -0.5' color='1 1 1'/>"
+        "<object><sphere radius='1'/><material shading='phong' diffuse='0.5' specular='0.25' shininess='2'/>"
+        "</object></scene>";
+    scene s;
+    rr_error e;
+    CHECK(scene_load_memory(OBLIQUE, strlen(OBLIQUE), "mem.xml", ".", &s, &e) == 0);
+    surface_hit h[1] = {hit(2.0f, 0, 1.0f, v3(0.8, 0.6, 0.4), v3(0, 0, 1))};
+    kbuffer kb = buffer(1, h);
+    vec3 c = shade_hits(&s, &kb, v3(0, 0, 5), v3(0, 0, -1));
+    CHECK_NEAR(c.x, 0.4 * 0.1 + 0.4 * 0.5 + 0.0625, 1e-6);
+    CHECK_NEAR(c.y, 0.3 * 0.1 + 0.3 * 0.5 + 0.0625, 1e-6);
+    CHECK_NEAR(c.z, 0.2 * 0.1 + 0.2 * 0.5 + 0.0625, 1e-6);
+    scene_free(&s);
+}
