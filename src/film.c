@@ -1,11 +1,15 @@
 #include "film.h"
 
+#include "common.h"
+
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
 int film_add_batch(pixel_state *p, const double estimate[4])
 {
+    /* past the cap the 128-bit sums of squares may overflow (film_check) */
+    RR_DCHECK_LT(p->batches, FILM_MAX_BATCHES);
     int clamped = 0;
     for (int c = 0; c < 4; c++) {
         double x = estimate[c];

@@ -1,5 +1,7 @@
 #include "kbuffer.h"
 
+#include "common.h"
+
 #include <math.h>
 #include <string.h>
 
@@ -33,6 +35,7 @@ void kbuffer_insert(kbuffer *kb, const surface_hit *h)
             return;
         kb->count--; /* the farthest entry makes room */
     }
+    RR_DCHECK(pos >= 0 && pos <= kb->count && kb->count < KBUFFER_MAX); /* room for one more */
     memmove(&kb->hits[pos + 1], &kb->hits[pos], (size_t)(kb->count - pos) * sizeof *h);
     kb->hits[pos] = *h;
     kb->count++;
