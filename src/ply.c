@@ -18,6 +18,8 @@ enum { SLOT_X, SLOT_Y, SLOT_Z, SLOT_NX, SLOT_NY, SLOT_NZ, SLOT_RADIUS, SLOT_UX, 
 static const char *const slot_names[SLOT_COUNT] = {
     "x", "y", "z", "nx", "ny", "nz", "radius", "ux", "uy", "uz", "vx", "vy", "vz",
     "red", "green", "blue"};
+/* Surfels: integer colors are divided by their type's maximum. */
+static const ply_schema surfel_schema = {slot_names, SLOT_COUNT, SLOT_R};
 
 typedef struct {
     int type;       /* scalar type index into type_table */
@@ -25,11 +27,15 @@ typedef struct {
     int slot;       /* SLOT_* or -1 when ignored */
 } ply_property;
 
+/* Properties of one element: 3DGS models have 62 (degree-3 SH), and
+ * trainers add their own. */
+#define PLY_MAX_PROPERTIES 256
+
 typedef struct {
     char name[64];
     size_t count;
     int nprops;
-    ply_property props[64];
+    ply_property props[PLY_MAX_PROPERTIES];
 } ply_element;
 
 /* The file is parsed from memory (inputfile.h): cur walks from the start of
@@ -41,6 +47,7 @@ typedef struct {
     int nelements;
     ply_element elements[16];
     long line; /* current line (header and ascii body) */
+    const ply_schema *schema; /* the vertex properties read, by name */
     rr_error *err;
 } ply_reader;
 
@@ -64,10 +71,10 @@ static int type_index(const char *name)
     return -1;
 }
 
-static int slot_index(const char *name)
+static int slot_index(const ply_schema *schema, const char *name)
 {
-    for (int i = 0; i < SLOT_COUNT; i++)
-        if (!strcmp(name, slot_names[i]))
+    for (int i = 0; i < schema->count; i++)
+        if (!strcmp(name, schema->names[i]))
             return i;
     return -1;
 }
@@ -84,8 +91,8 @@ static int parse_property(ply_reader *r, ply_element *e, char *rest)
     char a[64] = "", b[64] = "", c[64] = "";
     int n = sscanf(rest, "%63s %63s %63s", a, b, c);
     (void)c;
-    if (e->nprops == 64)
-        return header_fail(r, "too many properties (at most 64)");
+    if (e->nprops == PLY_MAX_PROPERTIES)
+        return header_fail(r, "too many properties (at most 256)");
     ply_property *p = &e->props[e->nprops];
     if (n >= 1 && !strcmp(a, "list")) {
         char item[64] = "", name[64] = "";
@@ -103,10 +110,13 @@ static int parse_property(ply_reader *r, ply_element *e, char *rest)
         p->list_count = -1;
         if (p->type < 0)
             return header_fail(r, "unknown property type");
-        p->slot = strcmp(e->name, "vertex") ? -1 : slot_index(b);
+        p->slot = strcmp(e->name, "vertex") ? -1 : slot_index(r->schema, b);
         for (int i = 0; p->slot >= 0 && i < e->nprops; i++)
-            if (e->props[i].slot == p->slot)
-                return header_fail(r, "duplicate vertex property");
+            if (e->props[i].slot == p->slot) {
+                char what[128];
+                snprintf(what, sizeof what, "duplicate vertex property '%s'", b);
+                return header_fail(r, what);
+            }
     }
     e->nprops++;
     return 0;
@@ -314,8 +324,8 @@ static int read_instance(ply_reader *r, const ply_element *e, size_t index, doub
         }
         if (read_value(r, e, index, p->type, nth++, &v))
             return -1;
-        if (p->slot >= 0) {
-            if (type_table[p->type].is_int && p->slot >= SLOT_R)
+        if (p->slot >= 0 && vals) {
+            if (type_table[p->type].is_int && p->slot >= r->schema->scale_ints_from)
                 v /= type_table[p->type].max;
             vals[p->slot] = v;
         }
@@ -323,43 +333,35 @@ static int read_instance(ply_reader *r, const ply_element *e, size_t index, doub
     return r->format == PLY_ASCII ? end_ascii_line(r, e, index, nth) : 0;
 }
 
-static int has_slot(const ply_element *e, int slot)
-{
-    for (int i = 0; i < e->nprops; i++)
-        if (e->props[i].slot == slot)
-            return 1;
-    return 0;
-}
-
-static int has_slots(const ply_element *e, int first, int n)
+static int has_slots(const int *present, int first, int n)
 {
     for (int s = first; s < first + n; s++)
-        if (!has_slot(e, s))
+        if (!present[s])
             return 0;
     return 1;
 }
 
 /* Checks the vertex element declares what a splat needs. */
-static int check_vertex_properties(ply_reader *r, const ply_element *e)
+static int check_surfel_properties(void *user, const char *p, const int *present, size_t count, rr_error *err)
 {
-    const char *p = r->path;
-    if (!has_slots(e, SLOT_X, 3))
-        return rr_fail(r->err, "%s: vertex element lacks one of the required properties x y z", p);
-    int any_color = has_slot(e, SLOT_R) || has_slot(e, SLOT_G) || has_slot(e, SLOT_B);
-    if (any_color && !has_slots(e, SLOT_R, 3))
-        return rr_fail(r->err, "%s: vertex color needs all of red green blue", p);
+    (void)user, (void)count;
+    if (!has_slots(present, SLOT_X, 3))
+        return rr_fail(err, "%s: vertex element lacks one of the required properties x y z", p);
+    int any_color = present[SLOT_R] || present[SLOT_G] || present[SLOT_B];
+    if (any_color && !has_slots(present, SLOT_R, 3))
+        return rr_fail(err, "%s: vertex color needs all of red green blue", p);
     int any_axis = 0;
     for (int s = SLOT_UX; s <= SLOT_VZ; s++)
-        any_axis |= has_slot(e, s);
-    if (any_axis && !has_slots(e, SLOT_UX, 6))
-        return rr_fail(r->err, "%s: elliptical splats need all of ux uy uz vx vy vz", p);
+        any_axis |= present[s];
+    if (any_axis && !has_slots(present, SLOT_UX, 6))
+        return rr_fail(err, "%s: elliptical splats need all of ux uy uz vx vy vz", p);
     if (any_axis)
         return 0;
-    if (!has_slot(e, SLOT_RADIUS))
-        return rr_fail(r->err, "%s: vertices have no splat size: add a 'radius' property "
-                               "(with nx ny nz) or tangent axes 'ux uy uz vx vy vz'", p);
-    if (!has_slots(e, SLOT_NX, 3))
-        return rr_fail(r->err, "%s: circular splats ('radius') need normals nx ny nz", p);
+    if (!present[SLOT_RADIUS])
+        return rr_fail(err, "%s: vertices have no splat size: add a 'radius' property "
+                            "(with nx ny nz) or tangent axes 'ux uy uz vx vy vz'", p);
+    if (!has_slots(present, SLOT_NX, 3))
+        return rr_fail(err, "%s: circular splats ('radius') need normals nx ny nz", p);
     return 0;
 }
 
@@ -391,67 +393,108 @@ static int check_element_size(ply_reader *r, const ply_element *e)
     return 0;
 }
 
-static int add_vertex(ply_reader *r, const ply_element *e, size_t i, const double *v,
-                      int has_color, vec3 default_color, pointmodel *m)
+typedef struct {
+    vec3 default_color;
+    pointmodel *m;
+} surfel_sink;
+
+static int add_surfel(void *user, const double *v, const int *present, char *why, size_t why_size)
 {
+    const surfel_sink *sink = user;
     for (int s = 0; s < SLOT_COUNT; s++)
-        if (has_slot(e, s) && !isfinite(v[s]))
-            return element_fail(r, e, i, "NaN or infinite value");
+        if (present[s] && !isfinite(v[s]))
+            return snprintf(why, why_size, "NaN or infinite value"), -1;
     vec3 c = v3(v[SLOT_X], v[SLOT_Y], v[SLOT_Z]);
-    vec3 n = has_slot(e, SLOT_NX) ? v3(v[SLOT_NX], v[SLOT_NY], v[SLOT_NZ]) : v3(0, 0, 0);
-    if (has_slot(e, SLOT_NX) && v3_len(n) == 0)
-        return element_fail(r, e, i, "zero-length normal");
-    vec3 col = has_color ? v3(v[SLOT_R], v[SLOT_G], v[SLOT_B]) : default_color;
+    vec3 n = present[SLOT_NX] ? v3(v[SLOT_NX], v[SLOT_NY], v[SLOT_NZ]) : v3(0, 0, 0);
+    if (present[SLOT_NX] && v3_len(n) == 0)
+        return snprintf(why, why_size, "zero-length normal"), -1;
+    vec3 col = present[SLOT_R] ? v3(v[SLOT_R], v[SLOT_G], v[SLOT_B]) : sink->default_color;
     rr_error sub;
     int rc;
-    if (has_slot(e, SLOT_UX)) {
-        rc = pointmodel_add(m, c, v3(v[SLOT_UX], v[SLOT_UY], v[SLOT_UZ]),
+    if (present[SLOT_UX]) {
+        rc = pointmodel_add(sink->m, c, v3(v[SLOT_UX], v[SLOT_UY], v[SLOT_UZ]),
                             v3(v[SLOT_VX], v[SLOT_VY], v[SLOT_VZ]), n, col, &sub);
     } else {
         if (!(v[SLOT_RADIUS] > 0))
-            return element_fail(r, e, i, v[SLOT_RADIUS] < 0 ? "negative radius" : "zero radius");
-        rc = pointmodel_add_circle(m, c, n, v[SLOT_RADIUS], col, &sub);
+            return snprintf(why, why_size, "%s", v[SLOT_RADIUS] < 0 ? "negative radius" : "zero radius"), -1;
+        rc = pointmodel_add_circle(sink->m, c, n, v[SLOT_RADIUS], col, &sub);
     }
-    return rc ? element_fail(r, e, i, sub.msg) : 0;
+    if (rc)
+        snprintf(why, why_size, "%s", sub.msg);
+    return rc;
 }
 
-static int read_elements(ply_reader *r, vec3 default_color, pointmodel *m)
+/* Which schema slots the vertex element declares. */
+static void vertex_present(const ply_reader *r, const ply_element *e, int *present)
+{
+    memset(present, 0, (size_t)r->schema->count * sizeof *present);
+    for (int i = 0; i < e->nprops; i++)
+        if (e->props[i].slot >= 0)
+            present[e->props[i].slot] = 1;
+}
+
+static int read_vertices(ply_reader *r, const ply_element *e, const ply_visitor *v)
+{
+    int present[PLY_MAX_SLOTS];
+    vertex_present(r, e, present);
+    if (v->begin(v->user, r->path, present, e->count, r->err) || check_element_size(r, e))
+        return -1;
+    for (size_t i = 0; i < e->count; i++) {
+        double vals[PLY_MAX_SLOTS] = {0};
+        char why[512];
+        if (read_instance(r, e, i, vals))
+            return -1;
+        if (v->vertex(v->user, vals, present, why, sizeof why))
+            return element_fail(r, e, i, why);
+        r->line += r->format == PLY_ASCII; /* the next instance's line */
+    }
+    return 0; /* later elements (faces, ...) are not needed */
+}
+
+static int read_elements(ply_reader *r, const ply_visitor *v)
 {
     for (int k = 0; k < r->nelements; k++) {
         const ply_element *e = &r->elements[k];
-        int is_vertex = !strcmp(e->name, "vertex");
-        if ((is_vertex && check_vertex_properties(r, e)) || check_element_size(r, e))
+        if (!strcmp(e->name, "vertex"))
+            return read_vertices(r, e, v);
+        if (check_element_size(r, e))
             return -1;
-        int has_color = is_vertex && has_slot(e, SLOT_R);
         for (size_t i = 0; i < e->count; i++) {
-            double vals[SLOT_COUNT] = {0};
-            if (read_instance(r, e, i, vals))
+            if (read_instance(r, e, i, NULL))
                 return -1;
-            if (is_vertex && add_vertex(r, e, i, vals, has_color, default_color, m))
-                return -1;
-            r->line += r->format == PLY_ASCII; /* the next instance's line */
+            r->line += r->format == PLY_ASCII;
         }
-        if (is_vertex)
-            return 0; /* later elements (faces, ...) are not needed */
     }
     return rr_fail(r->err, "%s: no 'vertex' element", r->path);
 }
 
+int ply_parse_vertices(const char *name, const char *data, size_t len, const ply_schema *schema,
+                       const ply_visitor *v, rr_error *err)
+{
+    RR_CHECK(schema->count <= PLY_MAX_SLOTS);
+    ply_reader *r = calloc(1, sizeof *r); /* 49 KB of property tables: not on the stack */
+    if (!r)
+        return rr_fail(err, "%s: out of memory", name);
+    r->path = name;
+    r->err = err;
+    r->format = PLY_ASCII;
+    r->data = r->cur = data;
+    r->end = data + len;
+    r->schema = schema;
+    int rc = read_header(r);
+    if (!rc) {
+        r->line++; /* ascii body starts on the line after end_header */
+        rc = read_elements(r, v);
+    }
+    free(r);
+    return rc;
+}
+
 int ply_parse(const char *name, const char *data, size_t len, vec3 default_color, pointmodel *m, rr_error *err)
 {
-    ply_reader r;
-    memset(&r, 0, sizeof r);
-    r.path = name;
-    r.err = err;
-    r.format = PLY_ASCII;
-    r.data = r.cur = data;
-    r.end = data + len;
-    int rc = read_header(&r);
-    if (!rc) {
-        r.line++; /* ascii body starts on the line after end_header */
-        rc = read_elements(&r, default_color, m);
-    }
-    return rc;
+    surfel_sink sink = {default_color, m};
+    ply_visitor v = {check_surfel_properties, add_surfel, &sink};
+    return ply_parse_vertices(name, data, len, &surfel_schema, &v, err);
 }
 
 int ply_read(const char *path, vec3 default_color, pointmodel *m, uint64_t *content_hash, rr_error *err)

@@ -37,6 +37,31 @@ typedef struct {
     vec3 color;
 } surfel;
 
+/* The reader's generic layer, shared by the surfel reader above and the
+ * Gaussian-splat reader (gaussian.c): vertex properties are found by name
+ * (any order, any scalar type; others are skipped), a name declared twice
+ * is an error naming it, and the declared count is checked against the
+ * file's size before anything is read. */
+#define PLY_MAX_SLOTS 128
+typedef struct {
+    const char *const *names; /* the slots: vertex property names */
+    int count;                /* at most PLY_MAX_SLOTS */
+    int scale_ints_from;      /* slots from here on divide integer values by their type's maximum */
+} ply_schema;
+
+typedef struct {
+    /* the declared slots (present[slot] = 1) and vertex count, before any
+     * vertex is read: -1 (with err filled, naming path) refuses the file */
+    int (*begin)(void *user, const char *path, const int *present, size_t count, rr_error *err);
+    /* one vertex's slot values (0 where absent): -1 with a reason refuses
+     * it (the reader adds the file and the vertex's line or index) */
+    int (*vertex)(void *user, const double *vals, const int *present, char *why, size_t why_size);
+    void *user;
+} ply_visitor;
+
+int ply_parse_vertices(const char *name, const char *data, size_t len, const ply_schema *schema,
+                       const ply_visitor *v, rr_error *err);
+
 /* Writes circular surfels as binary little-endian PLY with float x y z nx ny
  * nz radius and uchar red green blue (the generator's output format). */
 int ply_write_surfels(const char *path, const surfel *s, size_t n, rr_error *err);
