@@ -1,0 +1,214 @@
+#include "gaussian.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "inputfile.h"
+#include "ply.h"
+
+/* ---- the PLY layout --------------------------------------------------- */
+
+enum { G_X = 0, G_NX = 3, G_DC = 6, G_REST = 9, G_OPACITY = 54, G_SCALE = 55, G_ROT = 58, G_SLOTS = 62 };
+static const char *const slot_names[G_SLOTS] = {
+    "x", "y", "z", "nx", "ny", "nz", "f_dc_0", "f_dc_1", "f_dc_2",
+    "f_rest_0", "f_rest_1", "f_rest_2", "f_rest_3", "f_rest_4", "f_rest_5", "f_rest_6", "f_rest_7", "f_rest_8", "f_rest_9", "f_rest_10", "f_rest_11", "f_rest_12", "f_rest_13", "f_rest_14", "f_rest_15", "f_rest_16", "f_rest_17", "f_rest_18", "f_rest_19", "f_rest_20", "f_rest_21", "f_rest_22", "f_rest_23", "f_rest_24", "f_rest_25", "f_rest_26", "f_rest_27", "f_rest_28", "f_rest_29", "f_rest_30", "f_rest_31", "f_rest_32", "f_rest_33", "f_rest_34", "f_rest_35", "f_rest_36", "f_rest_37", "f_rest_38", "f_rest_39", "f_rest_40", "f_rest_41", "f_rest_42", "f_rest_43", "f_rest_44",
+    "opacity", "scale_0", "scale_1", "scale_2", "rot_0", "rot_1", "rot_2", "rot_3"};
+static const ply_schema gaussian_schema = {slot_names, G_SLOTS, G_SLOTS /* no integer scaling */};
+
+/* f_rest counts of SH degrees 0..3: 3 ((d + 1)^2 - 1). */
+static const int rest_count[GAUSSIAN_MAX_SH_DEGREE + 1] = {0, 9, 24, 45};
+
+typedef struct {
+    gaussian_model *m;
+    gaussian_kind forced;
+    size_t declared, next;
+} gaussian_sink;
+
+static int require(const char *path, const int *present, int first, int n, rr_error *err)
+{
+    for (int s = first; s < first + n; s++)
+        if (!present[s])
+            return rr_fail(err, "%s: Gaussian model lacks the vertex property '%s'", path, slot_names[s]);
+    return 0;
+}
+
+/* The SH degree from the f_rest properties: a contiguous run from f_rest_0
+ * whose length is one of rest_count. */
+static int sh_degree_of(const char *path, const int *present, rr_error *err)
+{
+    int n = 0;
+    while (n < 45 && present[G_REST + n])
+        n++;
+    for (int k = n; k < 45; k++)
+        if (present[G_REST + k])
+            return rr_fail(err, "%s: property '%s' is present but '%s' is not (f_rest_* must run from f_rest_0 "
+                                "without gaps)", path, slot_names[G_REST + k], slot_names[G_REST + n]);
+    for (int d = 0; d <= GAUSSIAN_MAX_SH_DEGREE; d++)
+        if (rest_count[d] == n)
+            return d;
+    return rr_fail(err, "%s: %d f_rest properties are no SH degree (degree d has 3((d+1)^2-1): 0, 9, 24 or 45)",
+                   path, n);
+}
+
+static int begin_model(void *user, const char *path, const int *present, size_t count, rr_error *err)
+{
+    gaussian_sink *s = user;
+    gaussian_model *m = s->m;
+    if (require(path, present, G_X, 3, err) || require(path, present, G_DC, 3, err) ||
+        require(path, present, G_OPACITY, 1, err) || require(path, present, G_SCALE, 2, err) ||
+        require(path, present, G_ROT, 4, err))
+        return -1;
+    m->kind = s->forced ? s->forced : present[G_SCALE + 2] ? GAUSSIAN_3D : GAUSSIAN_2D;
+    if (m->kind == GAUSSIAN_3D && require(path, present, G_SCALE + 2, 1, err))
+        return -1;
+    int degree = sh_degree_of(path, present, err);
+    if (degree < 0)
+        return -1;
+    m->sh_degree = degree, m->sh_coeffs = (degree + 1) * (degree + 1);
+    s->declared = count, s->next = 0;
+    return 0;
+}
+
+/* Storage for every declared Gaussian, on the first one (after the reader
+ * has checked that the file can hold them all). */
+static int allocate(gaussian_sink *s)
+{
+    gaussian_model *m = s->m;
+    size_t n = s->declared ? s->declared : 1;
+    m->mean = malloc(n * 3 * sizeof *m->mean);
+    m->scale = malloc(n * 3 * sizeof *m->scale);
+    m->rotation = malloc(n * 4 * sizeof *m->rotation);
+    m->opacity = malloc(n * sizeof *m->opacity);
+    m->sh = malloc(n * 3 * (size_t)m->sh_coeffs * sizeof *m->sh);
+    return m->mean && m->scale && m->rotation && m->opacity && m->sh ? 0 : -1;
+}
+
+static int bad(char *why, size_t size, const char *fmt, const char *name, double value)
+{
+    snprintf(why, size, fmt, name, value);
+    return -1;
+}
+
+/* The activations of the official loader: exp for scales, sigmoid for
+ * opacity, the quaternion normalised (w first). */
+static int add_gaussian(void *user, const double *v, const int *present, char *why, size_t why_size)
+{
+    gaussian_sink *s = user;
+    gaussian_model *m = s->m;
+    if (!m->mean && allocate(s))
+        return snprintf(why, why_size, "out of memory for %zu Gaussians", s->declared), -1;
+    for (int k = 0; k < G_SLOTS; k++)
+        if (present[k] && !isfinite(v[k]))
+            return bad(why, why_size, "property '%s' is %g", slot_names[k], v[k]);
+    size_t i = s->next++;
+    double q2 = 0;
+    for (int k = 0; k < 4; k++)
+        q2 += v[G_ROT + k] * v[G_ROT + k];
+    if (!(q2 > 0))
+        return snprintf(why, why_size, "zero-length quaternion (rot_0..rot_3)"), -1;
+    int scales = m->kind == GAUSSIAN_3D ? 3 : 2;
+    for (int k = 0; k < 3; k++) {
+        double e = k < scales ? exp(v[G_SCALE + k]) : 0.0;
+        if (!(e <= GAUSSIAN_MAX_SCALE))
+            return bad(why, why_size, "property '%s' = %g: exp() of it is beyond 1e15 (GAUSSIAN_MAX_SCALE)", slot_names[G_SCALE + k],
+                       v[G_SCALE + k]);
+        m->mean[3 * i + k] = (float)v[G_X + k];
+        m->scale[3 * i + k] = (float)e;
+    }
+    for (int k = 0; k < 4; k++)
+        m->rotation[4 * i + k] = (float)(v[G_ROT + k] / sqrt(q2));
+    m->opacity[i] = (float)(1.0 / (1.0 + exp(-v[G_OPACITY])));
+    float *sh = m->sh + 3 * (size_t)m->sh_coeffs * i;
+    int rest = m->sh_coeffs - 1;
+    for (int c = 0; c < 3; c++) {
+        sh[c] = (float)v[G_DC + c];
+        for (int k = 1; k <= rest; k++) /* channel-major in the file */
+            sh[3 * k + c] = (float)v[G_REST + c * rest + (k - 1)];
+    }
+    m->count = s->next;
+    return 0;
+}
+
+void gaussian_model_init(gaussian_model *m) { memset(m, 0, sizeof *m); }
+
+void gaussian_model_free(gaussian_model *m)
+{
+    free(m->mean);
+    free(m->scale);
+    free(m->rotation);
+    free(m->opacity);
+    free(m->sh);
+    gaussian_model_init(m);
+}
+
+int gaussian_parse(const char *name, const char *data, size_t len, gaussian_kind kind, gaussian_model *m,
+                   rr_error *err)
+{
+    gaussian_model_free(m);
+    gaussian_sink sink = {m, kind, 0, 0};
+    ply_visitor v = {begin_model, add_gaussian, &sink};
+    if (ply_parse_vertices(name, data, len, &gaussian_schema, &v, err)) {
+        gaussian_model_free(m);
+        return -1;
+    }
+    if (m->count == 0) {
+        gaussian_model_free(m);
+        return rr_fail(err, "%s: the model has no Gaussians", name);
+    }
+    return 0;
+}
+
+int gaussian_read(const char *path, gaussian_kind kind, gaussian_model *m, uint64_t *content_hash, rr_error *err)
+{
+    input_file in;
+    if (input_file_read(path, PLY_MAX_BYTES, &in, err))
+        return -1;
+    if (content_hash)
+        *content_hash = input_hash(*content_hash, in.data, in.len);
+    int rc = gaussian_parse(path, in.data, in.len, kind, m, err);
+    input_file_free(&in);
+    return rc;
+}
+
+/* ---- spherical harmonics ---------------------------------------------- */
+
+/* Real SH normalisation constants of degrees 0 to 3, with the signs of the
+ * official sh_utils.py (its degree-1 basis is -C1 y, C1 z, -C1 x). */
+static const double C0 = 0.28209479177387814, C1 = 0.4886025119029199;
+static const double C2[5] = {1.0925484305920792, -1.0925484305920792, 0.31539156525252005, -1.0925484305920792,
+                             0.5462742152960396};
+static const double C3[7] = {-0.5900435899266435, 2.890611442640554, -0.4570457994644658, 0.3731763325901154,
+                             -0.4570457994644658, 1.445305721320277, -0.5900435899266435};
+
+/* The basis functions 0..(degree+1)^2-1 at the unit direction (x, y, z). */
+static void sh_basis(int degree, double x, double y, double z, double *b)
+{
+    b[0] = C0;
+    if (degree < 1)
+        return;
+    b[1] = -C1 * y, b[2] = C1 * z, b[3] = -C1 * x;
+    if (degree < 2)
+        return;
+    double xx = x * x, yy = y * y, zz = z * z;
+    b[4] = C2[0] * x * y, b[5] = C2[1] * y * z, b[6] = C2[2] * (2 * zz - xx - yy);
+    b[7] = C2[3] * x * z, b[8] = C2[4] * (xx - yy);
+    if (degree < 3)
+        return;
+    b[9] = C3[0] * y * (3 * xx - yy), b[10] = C3[1] * x * y * z, b[11] = C3[2] * y * (4 * zz - xx - yy);
+    b[12] = C3[3] * z * (2 * zz - 3 * xx - 3 * yy), b[13] = C3[4] * x * (4 * zz - xx - yy);
+    b[14] = C3[5] * z * (xx - yy), b[15] = C3[6] * x * (xx - 3 * yy);
+}
+
+vec3 gaussian_sh_color(const float *sh, int degree, vec3 dir)
+{
+    RR_DCHECK(degree >= 0 && degree <= GAUSSIAN_MAX_SH_DEGREE);
+    vec3 d = v3_normalize(dir);
+    double b[GAUSSIAN_MAX_SH_COEFFS], rgb[3] = {0, 0, 0};
+    sh_basis(degree, d.x, d.y, d.z, b);
+    int n = (degree + 1) * (degree + 1);
+    for (int k = 0; k < n; k++)
+        for (int c = 0; c < 3; c++)
+            rgb[c] += b[k] * sh[3 * k + c];
+    return v3(fmax(rgb[0] + 0.5, 0.0), fmax(rgb[1] + 0.5, 0.0), fmax(rgb[2] + 0.5, 0.0));
+}

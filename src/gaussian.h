@@ -1,0 +1,58 @@
+/* Gaussian-splat models as trained by 3D Gaussian Splatting (Kerbl et al.
+ * 2023) and 2D Gaussian Splatting (Huang et al. 2024), read from their PLY
+ * files (graphdeco-inria/gaussian-splatting scene/gaussian_model.py
+ * save_ply; hbb1/2d-gaussian-splatting the same with two scales), with the
+ * activations the official code applies on loading, and their colour from
+ * real spherical harmonics (utils/sh_utils.py). Pure data and math: no
+ * Embree, no scene. (Issue 24: the renderer's use of them comes next.)
+ *
+ * PLY vertex properties, found by name (ply.h): x y z, [nx ny nz: written as
+ * zeros, ignored], f_dc_0..2, f_rest_0..(3((d+1)^2 - 1) - 1), opacity,
+ * scale_0 scale_1 [scale_2], rot_0..3. The SH degree d (0 to 3) follows from
+ * the number of f_rest properties; they are channel-major: all R
+ * coefficients of bases 1..K-1, then all G, then all B. */
+#ifndef RR_GAUSSIAN_H
+#define RR_GAUSSIAN_H
+
+#include <stdint.h>
+
+#include "common.h"
+
+typedef enum { GAUSSIAN_AUTO = 0, GAUSSIAN_2D = 2, GAUSSIAN_3D = 3 } gaussian_kind;
+
+#define GAUSSIAN_MAX_SH_DEGREE 3
+#define GAUSSIAN_MAX_SH_COEFFS 16 /* (3 + 1)^2 */
+/* The largest activated scale: stored in floats, squared in ray tests. */
+#define GAUSSIAN_MAX_SCALE 1e15
+
+typedef struct {
+    size_t count;
+    gaussian_kind kind;  /* 2D: surfels (two scales), 3D: ellipsoids */
+    int sh_degree;       /* 0 to 3 */
+    int sh_coeffs;       /* (sh_degree + 1)^2 */
+    float *mean;         /* 3 per Gaussian */
+    float *scale;        /* 3 per Gaussian: exp(scale_i); a 2D Gaussian's third is 0 */
+    float *rotation;     /* 4 per Gaussian: the unit quaternion (w, x, y, z) of rot_0..3 */
+    float *opacity;      /* 1 per Gaussian: sigmoid(opacity) */
+    float *sh;           /* 3 * sh_coeffs per Gaussian: coefficient k of channel c at [3 k + c] */
+} gaussian_model;
+
+void gaussian_model_init(gaussian_model *m);
+void gaussian_model_free(gaussian_model *m);
+
+/* Reads a trained model. kind GAUSSIAN_AUTO detects it (scale_2 present:
+ * 3D, else 2D); forcing 2D reads a 3D file's first two scales; forcing 3D
+ * on a file without scale_2 is an error. Errors name the file and the
+ * property (missing or duplicated properties, an f_rest count that is no
+ * SH degree, non-finite values, zero-length quaternions, counts the file
+ * cannot hold). The bytes are folded into *content_hash unless NULL. */
+int gaussian_read(const char *path, gaussian_kind kind, gaussian_model *m, uint64_t *content_hash, rr_error *err);
+int gaussian_parse(const char *name, const char *data, size_t len, gaussian_kind kind, gaussian_model *m,
+                   rr_error *err);
+
+/* The colour of SH coefficients sh (3 per coefficient, as stored above) of
+ * the given degree seen along dir (need not be unit): the real SH series
+ * plus 0.5, clamped below at 0 (not above), as the official renderers do. */
+vec3 gaussian_sh_color(const float *sh, int degree, vec3 dir);
+
+#endif

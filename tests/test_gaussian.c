@@ -1,0 +1,213 @@
+/* gaussian.c: trained 3DGS/2DGS models read by property name with the
+ * official activations, every bad input refused naming the property, and
+ * the SH colour checked against its defining properties (orthonormal real
+ * harmonics over the sphere; the published degree-1 signs by hand). */
+#include <stdlib.h>
+#include <string.h>
+
+#include "../src/gaussian.h"
+#include "harness.h"
+
+/* A PLY of one Gaussian per row of vals, with the given property names, in
+ * binary little endian (or ascii); returns its length (buffer is malloc'ed). */
+static size_t make_ply(char **out, const char *const *names, int nprops, const double *vals, int rows, int ascii,
+                       long declared)
+{
+    size_t cap = 4096 + (size_t)rows * (size_t)nprops * 32, len = 0;
+    char *b = malloc(cap);
+    len += (size_t)sprintf(b + len, "ply\nformat %s 1.0\nelement vertex %ld\n",
+                           ascii ? "ascii" : "binary_little_endian", declared >= 0 ? declared : (long)rows);
+    for (int k = 0; k < nprops; k++)
+        len += (size_t)sprintf(b + len, "property float %s\n", names[k]);
+    len += (size_t)sprintf(b + len, "end_header\n");
+    for (int r = 0; r < rows; r++) {
+        for (int k = 0; k < nprops; k++) {
+            float f = (float)vals[r * nprops + k];
+            if (ascii)
+                len += (size_t)sprintf(b + len, "%.9g%c", vals[r * nprops + k], k + 1 < nprops ? ' ' : '\n');
+            else
+                memcpy(b + len, &f, 4), len += 4;
+        }
+    }
+    *out = b;
+    return len;
+}
+
+/* The property names of a model with `rest` f_rest properties, 2 or 3
+ * scales, in reverse order (the reader must find them by name). */
+static int names_for(char names[][16], const char **ptr, int rest, int scales)
+{
+    int n = 0;
+    const char *fixed[] = {"x", "y", "z", "nx", "ny", "nz", "f_dc_0", "f_dc_1", "f_dc_2"};
+    for (int k = 0; k < 9; k++)
+        snprintf(names[n++], 16, "%s", fixed[k]);
+    for (int k = 0; k < rest; k++)
+        snprintf(names[n++], 16, "f_rest_%d", k);
+    snprintf(names[n++], 16, "opacity");
+    for (int k = 0; k < scales; k++)
+        snprintf(names[n++], 16, "scale_%d", k);
+    for (int k = 0; k < 4; k++)
+        snprintf(names[n++], 16, "rot_%d", k);
+    for (int k = 0; k < n; k++)
+        ptr[n - 1 - k] = names[k];
+    return n;
+}
+
+/* Values in the same reverse order: the value of property name[k] is
+ * value_of(name) below. */
+static double value_of(const char *name)
+{
+    if (!strcmp(name, "x")) return 1;
+    if (!strcmp(name, "y")) return 2;
+    if (!strcmp(name, "z")) return 3;
+    if (!strncmp(name, "f_dc_", 5)) return 0.1 * (1 + atoi(name + 5));
+    if (!strncmp(name, "f_rest_", 7)) return atoi(name + 7);
+    if (!strcmp(name, "opacity")) return 0; /* sigmoid: 0.5 */
+    if (!strcmp(name, "scale_0")) return log(2);
+    if (!strcmp(name, "scale_1")) return log(3);
+    if (!strcmp(name, "scale_2")) return log(0.5);
+    if (!strcmp(name, "rot_0")) return 2; /* normalised: (1, 0, 0, 0) */
+    return 0; /* nx ny nz, rot_1..3 */
+}
+
+static int parse_model(int rest, int scales, int ascii, gaussian_kind kind, gaussian_model *m, rr_error *e)
+{
+    char names[80][16];
+    const char *ptr[80];
+    double vals[80];
+    int n = names_for(names, ptr, rest, scales);
+    for (int k = 0; k < n; k++)
+        vals[k] = value_of(ptr[k]);
+    char *buf;
+    size_t len = make_ply(&buf, ptr, n, vals, 1, ascii, -1);
+    gaussian_model_init(m);
+    int rc = gaussian_parse("g.ply", buf, len, kind, m, e);
+    free(buf);
+    return rc;
+}
+
+TEST(gaussian_3dgs_is_read_by_name_with_the_official_activations)
+{
+    gaussian_model m;
+    rr_error e;
+    CHECK(parse_model(45, 3, 0, GAUSSIAN_AUTO, &m, &e) == 0);
+    CHECK(m.count == 1 && m.kind == GAUSSIAN_3D && m.sh_degree == 3 && m.sh_coeffs == 16);
+    CHECK_NEAR(m.mean[0], 1, 0), CHECK_NEAR(m.mean[1], 2, 0), CHECK_NEAR(m.mean[2], 3, 0);
+    CHECK_NEAR(m.scale[0], 2, 1e-6), CHECK_NEAR(m.scale[1], 3, 1e-6), CHECK_NEAR(m.scale[2], 0.5, 1e-7);
+    CHECK_NEAR(m.rotation[0], 1, 0), CHECK_NEAR(m.rotation[1], 0, 0);
+    CHECK_NEAR(m.opacity[0], 0.5, 0);
+    /* DC: coefficient 0; rest channel-major: f_rest_(c 15 + k - 1) is
+     * coefficient k of channel c */
+    for (int c = 0; c < 3; c++) {
+        CHECK_NEAR(m.sh[c], 0.1 * (c + 1), 1e-7);
+        for (int k = 1; k < 16; k++)
+            CHECK_NEAR(m.sh[3 * k + c], c * 15 + k - 1, 0);
+    }
+    gaussian_model_free(&m);
+}
+
+TEST(gaussian_2dgs_is_detected_and_kinds_can_be_forced)
+{
+    gaussian_model m;
+    rr_error e;
+    CHECK(parse_model(9, 2, 1, GAUSSIAN_AUTO, &m, &e) == 0); /* ascii, degree 1 */
+    CHECK(m.kind == GAUSSIAN_2D && m.sh_degree == 1 && m.scale[2] == 0);
+    CHECK_NEAR(m.sh[3 * 3 + 2], 2 * 3 + 2, 0); /* coefficient 3 of B: f_rest_8 */
+    gaussian_model_free(&m);
+    CHECK(parse_model(9, 2, 0, GAUSSIAN_3D, &m, &e) == -1 && strstr(e.msg, "'scale_2'"));
+    CHECK(parse_model(0, 3, 0, GAUSSIAN_2D, &m, &e) == 0 && m.kind == GAUSSIAN_2D && m.scale[2] == 0);
+    CHECK(m.sh_degree == 0);
+    gaussian_model_free(&m);
+    CHECK(parse_model(24, 3, 0, GAUSSIAN_AUTO, &m, &e) == 0 && m.sh_degree == 2);
+    gaussian_model_free(&m);
+}
+
+/* Bad inputs: each refused with the file and the property. */
+static int refused(const char *const *names, int n, const double *vals, long declared, const char *expect)
+{
+    char *buf;
+    size_t len = make_ply(&buf, names, n, vals, 1, 0, declared);
+    gaussian_model m;
+    rr_error e;
+    gaussian_model_init(&m);
+    int rc = gaussian_parse("bad.ply", buf, len, GAUSSIAN_AUTO, &m, &e);
+    free(buf);
+    int ok = rc == -1 && strstr(e.msg, "bad.ply") && strstr(e.msg, expect) && m.count == 0 && !m.mean;
+    if (!ok)
+        printf("    expected '%s', got: %s\n", expect, rc ? e.msg : "success");
+    gaussian_model_free(&m);
+    return ok;
+}
+
+TEST(gaussian_bad_inputs_name_the_property)
+{
+    const char *base[] = {"x", "y", "z", "f_dc_0", "f_dc_1", "f_dc_2", "opacity", "scale_0", "scale_1", "rot_0",
+                          "rot_1", "rot_2", "rot_3"};
+    double ok[13] = {0, 0, 0, 0.1, 0.1, 0.1, 0, 0, 0, 1, 0, 0, 0};
+    CHECK(refused(base, 12, ok, -1, "lacks the vertex property 'rot_3'"));
+    const char *dup[] = {"x", "y", "z", "f_dc_0", "f_dc_1", "f_dc_2", "opacity", "scale_0", "scale_1", "rot_0",
+                         "rot_1", "rot_2", "rot_3", "opacity"};
+    double dupv[14] = {0, 0, 0, 0.1, 0.1, 0.1, 0, 0, 0, 1, 0, 0, 0, 0};
+    CHECK(refused(dup, 14, dupv, -1, "duplicate vertex property 'opacity'"));
+    double nan[13] = {0, 0, 0, 0.1, 0.1, 0.1, NAN, 0, 0, 1, 0, 0, 0};
+    CHECK(refused(base, 13, nan, -1, "property 'opacity' is nan"));
+    double zero_q[13] = {0, 0, 0, 0.1, 0.1, 0.1, 0, 0, 0, 0, 0, 0, 0};
+    CHECK(refused(base, 13, zero_q, -1, "zero-length quaternion"));
+    double huge[13] = {0, 0, 0, 0.1, 0.1, 0.1, 0, 80, 0, 1, 0, 0, 0};
+    CHECK(refused(base, 13, huge, -1, "'scale_0' = 80"));
+    CHECK(refused(base, 13, ok, 1000000000L, "declares 1000000000 'vertex' elements"));
+    /* ten f_rest properties are no degree; a gap in the run */
+    const char *rest10[23];
+    char names[10][16];
+    for (int k = 0; k < 13; k++)
+        rest10[k] = base[k];
+    for (int k = 0; k < 10; k++)
+        snprintf(names[k], 16, "f_rest_%d", k), rest10[13 + k] = names[k];
+    double v23[23] = {0, 0, 0, 0.1, 0.1, 0.1, 0, 0, 0, 1, 0, 0, 0};
+    CHECK(refused(rest10, 23, v23, -1, "10 f_rest properties are no SH degree"));
+    snprintf(names[4], 16, "f_rest_12");
+    CHECK(refused(rest10, 23, v23, -1, "'f_rest_5' is present but 'f_rest_4' is not"));
+}
+
+/* The basis function k at dir, read through gaussian_sh_color: coefficient
+ * 0.1 on basis k of the red channel (small enough that 0.5 + it is never
+ * clamped), so Y_k = (R - 0.5) / 0.1. */
+static double basis(int k, vec3 dir)
+{
+    float sh[3 * 16] = {0};
+    sh[3 * k] = 0.1f;
+    return (gaussian_sh_color(sh, 3, dir).x - 0.5) / 0.1;
+}
+
+/* Real SH are orthonormal over the sphere: the integral of Y_i Y_j is
+ * delta_ij (midpoint rule in z = cos theta, uniform in phi: both exact to
+ * well below 1e-4 for these polynomials of degree <= 6). */
+TEST(gaussian_sh_basis_is_orthonormal_with_the_published_degree_1_signs)
+{
+    enum { NZ = 400, NPHI = 32 };
+    static double y[16][NZ * NPHI];
+    for (int a = 0; a < NZ; a++)
+        for (int b = 0; b < NPHI; b++) {
+            double z = -1 + (a + 0.5) * 2.0 / NZ, phi = b * 2 * M_PI / NPHI, s = sqrt(1 - z * z);
+            for (int k = 0; k < 16; k++)
+                y[k][a * NPHI + b] = basis(k, v3(s * cos(phi), s * sin(phi), z));
+        }
+    double worst = 0, dA = (2.0 / NZ) * (2 * M_PI / NPHI);
+    for (int i = 0; i < 16; i++)
+        for (int j = 0; j < 16; j++) {
+            double sum = 0;
+            for (int p = 0; p < NZ * NPHI; p++)
+                sum += y[i][p] * y[j][p] * dA;
+            worst = fmax(worst, fabs(sum - (i == j)));
+        }
+    CHECK(worst < 2e-4);
+    /* sh_utils.py: degree 1 is -C1 y sh1 + C1 z sh2 - C1 x sh3 (C1 = sqrt(3 / (4 pi))) */
+    double c1 = sqrt(3 / (4 * M_PI));
+    CHECK_NEAR(basis(1, v3(0, 2, 0)), -c1, 1e-6);
+    CHECK_NEAR(basis(2, v3(0, 0, 1)), c1, 1e-6);
+    CHECK_NEAR(basis(3, v3(1, 0, 0)), -c1, 1e-6);
+    /* + 0.5, clamped below at 0 only */
+    float dc[3] = {-10, 0, 10};
+    vec3 c = gaussian_sh_color(dc, 0, v3(0, 0, 1));
+    CHECK(c.x == 0 && c.y == 0.5 && c.z > 3);
+}
