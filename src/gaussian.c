@@ -4,7 +4,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "inputfile.h"
 #include "ply.h"
 
 /* ---- the PLY layout --------------------------------------------------- */
@@ -142,33 +141,31 @@ void gaussian_model_free(gaussian_model *m)
     gaussian_model_init(m);
 }
 
+/* A parse's end: on failure, or with no Gaussian, the model is left empty. */
+static int finish(gaussian_model *m, int rc, const char *name, rr_error *err)
+{
+    if (!rc && m->count == 0)
+        rc = rr_fail(err, "%s: the model has no Gaussians", name);
+    if (rc)
+        gaussian_model_free(m);
+    return rc;
+}
+
 int gaussian_parse(const char *name, const char *data, size_t len, gaussian_kind kind, gaussian_model *m,
                    rr_error *err)
 {
     gaussian_model_free(m);
     gaussian_sink sink = {m, kind, 0, 0};
     ply_visitor v = {begin_model, add_gaussian, &sink};
-    if (ply_parse_vertices(name, data, len, &gaussian_schema, &v, err)) {
-        gaussian_model_free(m);
-        return -1;
-    }
-    if (m->count == 0) {
-        gaussian_model_free(m);
-        return rr_fail(err, "%s: the model has no Gaussians", name);
-    }
-    return 0;
+    return finish(m, ply_parse_vertices(name, data, len, &gaussian_schema, &v, err), name, err);
 }
 
 int gaussian_read(const char *path, gaussian_kind kind, gaussian_model *m, uint64_t *content_hash, rr_error *err)
 {
-    input_file in;
-    if (input_file_read(path, PLY_MAX_BYTES, &in, err))
-        return -1;
-    if (content_hash)
-        *content_hash = input_hash(*content_hash, in.data, in.len);
-    int rc = gaussian_parse(path, in.data, in.len, kind, m, err);
-    input_file_free(&in);
-    return rc;
+    gaussian_model_free(m);
+    gaussian_sink sink = {m, kind, 0, 0};
+    ply_visitor v = {begin_model, add_gaussian, &sink};
+    return finish(m, ply_read_vertices(path, &gaussian_schema, &v, content_hash, err), path, err);
 }
 
 /* ---- spherical harmonics ---------------------------------------------- */

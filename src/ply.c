@@ -497,16 +497,24 @@ int ply_parse(const char *name, const char *data, size_t len, vec3 default_color
     return ply_parse_vertices(name, data, len, &surfel_schema, &v, err);
 }
 
-int ply_read(const char *path, vec3 default_color, pointmodel *m, uint64_t *content_hash, rr_error *err)
+int ply_read_vertices(const char *path, const ply_schema *schema, const ply_visitor *v, uint64_t *content_hash,
+                      rr_error *err)
 {
     input_file in;
     if (input_file_read(path, PLY_MAX_BYTES, &in, err))
         return -1;
     if (content_hash)
         *content_hash = input_hash(*content_hash, in.data, in.len);
-    int rc = ply_parse(path, in.data, in.len, default_color, m, err);
+    int rc = ply_parse_vertices(path, in.data, in.len, schema, v, err);
     input_file_free(&in);
     return rc;
+}
+
+int ply_read(const char *path, vec3 default_color, pointmodel *m, uint64_t *content_hash, rr_error *err)
+{
+    surfel_sink sink = {default_color, m};
+    ply_visitor v = {check_surfel_properties, add_surfel, &sink};
+    return ply_read_vertices(path, &surfel_schema, &v, content_hash, err);
 }
 
 /* ---- writer ---------------------------------------------------------- */

@@ -61,6 +61,10 @@ typedef struct {
 
 int ply_parse_vertices(const char *name, const char *data, size_t len, const ply_schema *schema,
                        const ply_visitor *v, rr_error *err);
+/* The same from a file (inputfile.h: at most PLY_MAX_BYTES), its bytes
+ * folded into *content_hash unless it is NULL. */
+int ply_read_vertices(const char *path, const ply_schema *schema, const ply_visitor *v, uint64_t *content_hash,
+                      rr_error *err);
 
 /* Writes circular surfels as binary little-endian PLY with float x y z nx ny
  * nz radius and uchar red green blue (the generator's output format). */

@@ -4,6 +4,7 @@
  * harmonics over the sphere; the published degree-1 signs by hand). */
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "../src/gaussian.h"
 #include "harness.h"
@@ -210,4 +211,26 @@ TEST(gaussian_sh_basis_is_orthonormal_with_the_published_degree_1_signs)
     float dc[3] = {-10, 0, 10};
     vec3 c = gaussian_sh_color(dc, 0, v3(0, 0, 1));
     CHECK(c.x == 0 && c.y == 0.5 && c.z > 3);
+}
+
+TEST(gaussian_read_takes_a_file_and_hashes_its_bytes)
+{
+    const char *names[] = {"x", "y", "z", "f_dc_0", "f_dc_1", "f_dc_2", "opacity", "scale_0", "scale_1", "rot_0",
+                           "rot_1", "rot_2", "rot_3"};
+    double vals[13] = {0, 0, 0, 0.1, 0.1, 0.1, 0, 0, 0, 1, 0, 0, 0};
+    char *buf, path[] = "/tmp/rr_gaussian_XXXXXX";
+    size_t len = make_ply(&buf, names, 13, vals, 1, 0, -1);
+    int fd = mkstemp(path);
+    CHECK(fd >= 0 && write(fd, buf, len) == (ssize_t)len);
+    close(fd);
+    gaussian_model m;
+    rr_error e;
+    uint64_t h1 = 1, h2 = 1;
+    gaussian_model_init(&m);
+    CHECK(gaussian_read(path, GAUSSIAN_AUTO, &m, &h1, &e) == 0 && m.count == 1 && m.kind == GAUSSIAN_2D);
+    CHECK(gaussian_read(path, GAUSSIAN_AUTO, &m, &h2, &e) == 0 && h1 == h2 && h1 != 1);
+    gaussian_model_free(&m);
+    unlink(path);
+    free(buf);
+    CHECK(gaussian_read(path, GAUSSIAN_AUTO, &m, NULL, &e) == -1 && strstr(e.msg, path));
 }
