@@ -58,7 +58,9 @@ static void usage(FILE *f)
 "  --pass K/N       render only batches [K*B/N, (K+1)*B/N) and write a render\n"
 "                   state; 'refrender merge' combines the N states bit-exactly\n"
 "  --checkpoint F   write the render state to F every --checkpoint-every\n"
-"                   seconds (default 60) and when interrupted (SIGINT/SIGTERM)\n"
+"                   seconds and when interrupted (SIGINT/SIGTERM)\n"
+"  --checkpoint-every S  seconds between checkpoints (default 60; 0: only\n"
+"                   when interrupted)\n"
 "  --resume F       continue from the render state F (same scene and settings)\n"
 "Scene overrides:\n"
 "  --res WxH        image size (default: scene <camera width height>)\n"
@@ -529,7 +531,12 @@ static int render_one(const scene *s, const shutter *shut, long long frame, acce
         return -1;
     int tty = !o->quiet && isatty(STDERR_FILENO);
     render_hooks hooks = {tty ? print_progress : NULL, o->checkpoint ? write_checkpoint : NULL, warn_checkpoint,
-                          o->checkpoint_every > 0 ? o->checkpoint_every : 60.0, &run};
+                          o->checkpoint_every, &run};
+    if (o->checkpoint && !o->quiet && o->checkpoint_every > 0) /* render.h: 0 means only when interrupted */
+        fprintf(stderr, "refrender: checkpoint %s: every %g s and when interrupted\n", o->checkpoint,
+                o->checkpoint_every);
+    else if (o->checkpoint && !o->quiet)
+        fprintf(stderr, "refrender: checkpoint %s: only when interrupted\n", o->checkpoint);
     int rc = render_image(s, acc, &run.rs, &img, &hooks, &interrupted, err);
     if (!rc) {
         report(o, s, &img, tty);
@@ -648,7 +655,7 @@ int cmd_render(int argc, char **argv)
     render_options o;
     memset(&o, 0, sizeof o);
     o.spp = 4, o.tspp = 100, o.threads = cores > 0 ? (int)cores : 1, o.batches = 1;
-    o.eps = o.sigma = -1.0, o.seed = 1, o.output = "render.exr", o.sampler = SAMPLER_THESIS;
+    o.eps = o.sigma = -1.0, o.checkpoint_every = 60.0, o.seed = 1, o.output = "render.exr", o.sampler = SAMPLER_THESIS;
     int rc = parse_args(argc, argv, &o);
     if (rc)
         return rc == 1 ? 0 : 2;
