@@ -103,6 +103,14 @@ int cli_same_file(const char *a, const char *b)
     return !strcmp(ca, cb);
 }
 
+int cli_refuse_overwriting_inputs(const char *output, char *const *inputs, int n, rr_error *err)
+{
+    for (int i = 0; i < n; i++)
+        if (cli_same_file(output, inputs[i]))
+            return rr_fail(err, "output %s is the input %s: refusing to overwrite it", output, inputs[i]);
+    return 0;
+}
+
 /* Finds the one frame-number field "%d", "%4d" or "%04d" (width < 100). */
 static int frame_field(const char *pattern, const char **start, const char **end, int *zero, int *width)
 {

@@ -21,6 +21,10 @@ int cli_check_writable(const char *path, rr_error *err);
  * else the same absolute name (their directories resolved). */
 int cli_same_file(const char *a, const char *b);
 
+/* -1 (naming both) if the output is one of the n inputs (cli_same_file):
+ * the output is written before the inputs are all read, or over them. */
+int cli_refuse_overwriting_inputs(const char *output, char *const *inputs, int n, rr_error *err);
+
 /* Output names for frame sequences: a pattern holds exactly one field "%d",
  * "%4d" or "%04d". cli_frame_path formats it (a name without a field is
  * copied unchanged). */

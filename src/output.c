@@ -1,10 +1,12 @@
 #include "output.h"
 
+#include <errno.h>
 #include <inttypes.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 #include "exr.h"
 
@@ -234,6 +236,26 @@ static int check_state_size(const char *path, const attr_list *a, int w, int h, 
     return 0;
 }
 
+/* zlib (EXR's ZIP) compresses at most about 1032:1 (deflate's longest
+ * match, 258 bytes, coded in two bits): a file can hold no more raw state
+ * than this many times its size. */
+#define ZLIB_MAX_RATIO 1032
+
+/* A state's header declares its size: checked against the file's own size
+ * before allocating for it (a 6.5 KB file once made merge ask for 9 GB). */
+static int check_state_fits_file(const char *path, int w, int h, rr_error *err)
+{
+    struct stat st;
+    if (stat(path, &st) != 0)
+        return rr_fail(err, "%s: %s", path, strerror(errno));
+    double raw = (double)w * h * STATE_WORDS * 4;
+    if (raw > (double)st.st_size * ZLIB_MAX_RATIO)
+        return rr_fail(err, "%s: the header declares a %dx%d state (%.0f bytes of sums) but the file has only %lld "
+                            "bytes, too few even at zlib's best ratio: a damaged or crafted state",
+                       path, w, h, raw, (long long)st.st_size);
+    return 0;
+}
+
 /* Every pixel's sums must be ones a render can make (film_check). */
 static int check_state_pixels(const char *path, const image *img, rr_error *err)
 {
@@ -256,7 +278,7 @@ int output_read_state(const char *path, image *img, attr_list *a, uint32_t *begi
     if (exr_read_string_attr(path, "refrender:state", range, sizeof range, NULL) ||
         sscanf(range, "batches %u-%u%c", begin, end, &extra) != 2 || *end < *begin)
         return rr_fail(err, "%s: a final image, not a render state (write states with --pass or --checkpoint)", path);
-    if (check_state_size(path, a, w, h, err))
+    if (check_state_size(path, a, w, h, err) || check_state_fits_file(path, w, h, err))
         return -1;
     size_t n = (size_t)w * h;
     uint32_t *words = malloc(n * STATE_WORDS * sizeof *words);

@@ -55,10 +55,15 @@ static int check_ranges(batch_range *r, int n, uint32_t total, rr_error *err)
 static int check_complete(const image *img, const batch_range *r, rr_error *err)
 {
     size_t n = (size_t)img->width * img->height;
-    for (size_t i = 0; i < n; i++)
-        if (img->px[i].batches != r->end - r->begin)
+    for (size_t i = 0; i < n; i++) {
+        uint32_t has = img->px[i].batches, range = r->end - r->begin;
+        if (has > range) /* no resume can fix this: the state contradicts its own header */
+            return rr_fail(err, "%s: pixel %zu holds %u batches, more than the %u of its range %u-%u: a damaged "
+                                "or crafted state", r->path, i, has, range, r->begin, r->end);
+        if (has < range)
             return rr_fail(err, "%s is incomplete (pixel %zu has %u of %u batches): resume it first", r->path, i,
-                           img->px[i].batches, r->end - r->begin);
+                           has, range);
+    }
     return 0;
 }
 
@@ -144,7 +149,8 @@ int cmd_merge(int argc, char **argv)
         return 2;
     }
     rr_error err = {{0}};
-    if (cli_check_writable(out, &err) || merge_files(argv + optind, argc - optind, out, quiet, &err)) {
+    if (cli_check_writable(out, &err) || cli_refuse_overwriting_inputs(out, argv + optind, argc - optind, &err) ||
+        merge_files(argv + optind, argc - optind, out, quiet, &err)) {
         fprintf(stderr, "refrender merge: %s\n", err.msg);
         return 1;
     }

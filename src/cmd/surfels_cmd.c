@@ -108,7 +108,8 @@ int cmd_surfels(int argc, char **argv)
         fputs("refrender surfels: need exactly one INPUT and -o OUT.ply; try 'refrender surfels --help'\n", stderr);
         return 2;
     }
-    if (cli_check_writable(o.out, &err) || convert(argv[optind], &o, &err)) {
+    if (cli_check_writable(o.out, &err) || cli_refuse_overwriting_inputs(o.out, argv + optind, 1, &err) ||
+        convert(argv[optind], &o, &err)) {
         fprintf(stderr, "refrender surfels: %s\n", err.msg);
         return 1;
     }

@@ -1,0 +1,64 @@
+"""Issue 23, items 7 and 14 (merge): 'refrender merge' and 'refrender
+surfels' refuse to overwrite their input (the render already did); a state
+whose header declares more pixels than its file can hold is refused before
+anything is allocated for them; a state holding more batches than its own
+range is called damaged, not incomplete."""
+import struct
+
+from conftest import run
+
+EMPTY = """<scene><camera position="0 0 5" lookat="0 0 0" width="{w}" height="{h}"/>
+<background color="0.2 0.3 0.4"/><object><sphere center="100 0 0" radius="1"/></object></scene>"""
+
+
+def state(tmp_path, name, w, h, batches=2, pass_="0/1"):
+    scene = tmp_path / f"{name}.xml"
+    scene.write_text(EMPTY.format(w=w, h=h))
+    out = tmp_path / f"{name}.exr"
+    proc = run([scene, "--spp", 1, "--tspp", 1, "--batches", batches, "--pass", pass_, "-o", out, "--quiet"])
+    assert proc.returncode == 0, proc.stderr
+    return out
+
+
+def test_merge_and_surfels_refuse_to_overwrite_their_input(tmp_path):
+    st = state(tmp_path, "s", 4, 4)
+    before = st.read_bytes()
+    proc = run(["merge", st, "-o", tmp_path / "." / "s.exr"])
+    assert proc.returncode == 1 and "refusing to overwrite" in proc.stderr
+    assert st.read_bytes() == before
+    cloud = tmp_path / "c.xyz"
+    cloud.write_text("".join(f"{x} {y} 0 0 0 1\n" for x in range(4) for y in range(4)))
+    before = cloud.read_bytes()
+    proc = run(["surfels", cloud, "-o", cloud])
+    assert proc.returncode == 1 and "refusing to overwrite" in proc.stderr
+    assert cloud.read_bytes() == before
+
+
+def patch(data, old, new):
+    assert len(old) == len(new) and data.count(old) == 1
+    i = data.index(old)
+    data[i:i + len(old)] = new
+
+
+def test_a_state_larger_than_its_file_is_refused_before_allocating(tmp_path):
+    # a 1000x1000 state of one colour compresses to about 280 KB; its header
+    # is made to say 8192x8192 (7.5 GB of sums): no file that small holds it
+    data = bytearray(state(tmp_path, "big", 1000, 1000).read_bytes())
+    for name in (b"dataWindow\x00box2i\x00", b"displayWindow\x00box2i\x00"):
+        i = data.index(name) + len(name) + 4
+        data[i:i + 16] = struct.pack("<4i", 0, 0, 8191, 8191)
+    patch(data, b"1000x1000", b"8192x8192")
+    crafted = tmp_path / "crafted.exr"
+    crafted.write_bytes(bytes(data))
+    proc = run(["merge", crafted, "-o", tmp_path / "m.exr"])
+    assert proc.returncode == 1 and "too few even at zlib's best ratio" in proc.stderr, proc.stderr
+
+
+def test_a_state_with_more_batches_than_its_range_is_damaged_not_incomplete(tmp_path):
+    data = bytearray(state(tmp_path, "two", 4, 4, batches=4, pass_="0/2").read_bytes())
+    patch(data, b"batches 0-2", b"batches 0-1")
+    crafted = tmp_path / "crafted.exr"
+    crafted.write_bytes(bytes(data))
+    proc = run(["merge", crafted, "-o", tmp_path / "m.exr"])
+    assert proc.returncode == 1 and "more than the 1 of its range 0-1" in proc.stderr, proc.stderr
+    assert "resume it first" not in proc.stderr
