@@ -3,6 +3,10 @@
 int camera_prepare(camera *c, rr_error *err)
 {
     vec3 f = v3_sub(c->lookat, c->position);
+    if (!isfinite(v3_len(f))) /* its direction would come out 0 and be blamed on up */
+        return rr_fail(err, "camera position (%g %g %g) and lookat (%g %g %g) are too far apart: their distance "
+                            "overflows", c->position.x, c->position.y, c->position.z, c->lookat.x, c->lookat.y,
+                       c->lookat.z);
     if (!(v3_len(f) > 0))
         return rr_fail(err, "camera lookat equals position");
     if (!(c->fov_degrees > 0 && c->fov_degrees < 180))

@@ -55,3 +55,13 @@ TEST(camera_rejects_degenerate_frames)
     camera huge = frame(v3(0, 0, 0), v3(0, 0, -1), 45, 65536, 65536);
     CHECK(camera_prepare(&huge, &e) != 0); /* more than RR_MAX_PIXELS */
 }
+
+/* Issue 23, item 14: a camera at 1e308 was blamed on its up vector (the
+ * distance to lookat overflowed and the view direction came out 0). */
+TEST(camera_too_far_from_lookat_is_named_as_such)
+{
+    camera c = {.position = {0, 0, 1e308}, .lookat = {0, 0, -1e308}, .up = {0, 1, 0}, .fov_degrees = 40,
+                .width = 4, .height = 4};
+    rr_error e;
+    CHECK(camera_prepare(&c, &e) == -1 && strstr(e.msg, "too far apart") && !strstr(e.msg, "up"));
+}
