@@ -172,6 +172,11 @@ int surfels_from_points(const double *pos, const double *nrm, size_t np, double 
         m++;
     }
     free(g.start), free(g.items);
+    if (!m) { /* say why here: the writer would only see an empty list and blame its file */
+        free(s);
+        return rr_fail(err, "no point has a normal and a 6th nearest neighbour at a positive distance "
+                            "(all %zu points coincide or lack normals): no splat sizes can be estimated", np);
+    }
     *out = s, *n = m;
     return 0;
 }

@@ -62,3 +62,12 @@ def test_a_state_with_more_batches_than_its_range_is_damaged_not_incomplete(tmp_
     proc = run(["merge", crafted, "-o", tmp_path / "m.exr"])
     assert proc.returncode == 1 and "more than the 1 of its range 0-1" in proc.stderr, proc.stderr
     assert "resume it first" not in proc.stderr
+
+
+def test_surfels_of_coinciding_points_names_the_input_not_the_output(tmp_path):
+    cloud = tmp_path / "same.xyz"
+    cloud.write_text("0 0 0 0 0 1\n" * 10)
+    out = tmp_path / "out.ply"
+    proc = run(["surfels", cloud, "-o", out])
+    assert proc.returncode == 1 and f"{cloud}: no point has" in proc.stderr, proc.stderr
+    assert "out.ply" not in proc.stderr and not out.exists()

@@ -57,9 +57,10 @@ static int convert(const char *in, const surfels_options *o, rr_error *err)
     surfel *s = NULL;
     int points = meshload_is_point_cloud(in);
     int rc = points ? meshload_points(in, &pos, &nrm, &nv, err) : meshload_mesh(in, &pos, &nrm, &nv, &tri, &nt, err);
-    if (!rc)
-        rc = points ? surfels_from_points(pos, nrm, nv, o->overlap, &s, &n, err)
-                    : surfels_from_mesh(pos, nrm, nv, tri, nt, o->overlap, &s, &n, err);
+    rr_error sub;
+    if (!rc && (points ? surfels_from_points(pos, nrm, nv, o->overlap, &s, &n, &sub)
+                       : surfels_from_mesh(pos, nrm, nv, tri, nt, o->overlap, &s, &n, &sub)))
+        rc = rr_fail(err, "%s: %s", in, sub.msg); /* the input's fault: name it */
     free(pos), free(nrm), free(tri);
     if (rc)
         return rc;
