@@ -103,6 +103,15 @@ int cli_same_file(const char *a, const char *b)
     return !strcmp(ca, cb);
 }
 
+int cli_shutter(const char *arg, double *open, double *close, rr_error *err)
+{
+    char extra;
+    if (sscanf(arg, "%lf,%lf%c", open, close, &extra) != 2 || !isfinite(*open) || !isfinite(*close) ||
+        !(*close > *open))
+        return rr_fail(err, "--shutter: expected OPEN,CLOSE with OPEN < CLOSE, got '%s'", arg);
+    return 0;
+}
+
 int cli_refuse_overwriting_inputs(const char *output, char *const *inputs, int n, rr_error *err)
 {
     for (int i = 0; i < n; i++)

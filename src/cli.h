@@ -21,6 +21,9 @@ int cli_check_writable(const char *path, rr_error *err);
  * else the same absolute name (their directories resolved). */
 int cli_same_file(const char *a, const char *b);
 
+/* --shutter OPEN,CLOSE (the render's and export's): finite, OPEN < CLOSE. */
+int cli_shutter(const char *arg, double *open, double *close, rr_error *err);
+
 /* -1 (naming both) if the output is one of the n inputs (cli_same_file):
  * the output is written before the inputs are all read, or over them. */
 int cli_refuse_overwriting_inputs(const char *output, char *const *inputs, int n, rr_error *err);

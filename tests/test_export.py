@@ -70,3 +70,23 @@ def test_export_describes_models_weights_and_frames(tmp_path):
     bad = run(["export", scene, "-o", scene])
     assert bad.returncode == 1 and "input" in bad.stderr
     assert run(["export", "--help"]).returncode == 0
+
+
+def test_export_refuses_non_finite_transforms_and_takes_the_renders_shutter(tmp_path):
+    """Issue 23, item 14: JSON has no number for inf (a velocity of 1e308
+    wrote 'inf' into the file); and --shutter, which a render may be given,
+    is accepted by export with the same meaning: the frame's open and close
+    are the render's."""
+    scene = tmp_path / "s.xml"
+    scene.write_text("""<scene><camera position="0 0 5" lookat="0 0 0" width="8" height="8"/>
+<shutter open="0" close="10"/><object name="rocket"><sphere radius="0.5"/><animation><linear velocity="1e308 0 0"/></animation></object></scene>""")
+    out = tmp_path / "s.json"
+    proc = run(["export", scene, "--times", 1, "-o", out])
+    assert proc.returncode == 1 and "object 'rocket'" in proc.stderr and "not finite" in proc.stderr, proc.stderr
+    assert not out.exists()
+    proc = run(["export", scene, "--shutter", "-1e-300,0", "--times", 1, "-o", out])
+    assert proc.returncode == 0, proc.stderr
+    frame = json.loads(out.read_text())["frames"][0]
+    assert frame["open"] == -1e-300 and frame["close"] == 0
+    proc = run(["export", scene, "--shutter", "2,1", "-o", out])
+    assert proc.returncode == 2 and "--shutter: expected OPEN,CLOSE" in proc.stderr

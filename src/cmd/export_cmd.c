@@ -15,8 +15,8 @@
 static void export_usage(FILE *f)
 {
     fputs(
-"usage: refrender export SCENE.xml [--frame N | --frames A-B] [--times K] [-D name=value]\n"
-"                        -o SCENE.json\n"
+"usage: refrender export SCENE.xml [--frame N | --frames A-B] [--shutter O,C] [--times K]\n"
+"                        [-D name=value] -o SCENE.json\n"
 "\n"
 "Writes the scene as another renderer needs it (README, Exporting scenes):\n"
 "resolution, camera intrinsics, and per frame the world-to-camera matrix,\n"
@@ -27,6 +27,8 @@ static void export_usage(FILE *f)
 "  --frame N       frame N of a scene with <frames rate> (default: the\n"
 "                  scene's shutter as given)\n"
 "  --frames A-B    frames A to B\n"
+"  --shutter O,C   shutter interval [O, C] (frame 0's with <frames>), as for\n"
+"                  rendering: a(t)'s center and table stay as the scene gives them\n"
 "  --times K       sample times per shutter besides open and close (default 8)\n"
 "  -D name=value   scene parameter, as for rendering\n"
 "  -o, --output F  output JSON file (required); written atomically\n", f);
@@ -35,6 +37,8 @@ static void export_usage(FILE *f)
 typedef struct {
     const char *scene, *output;
     int frames, first, last, times;
+    int shutter_set; /* --shutter */
+    double shutter_open, shutter_close;
     scene_params params; /* -D name=value */
 } export_options;
 
@@ -111,10 +115,42 @@ static void write_weight(FILE *f, const shutter *sh)
     fputs("]}", f);
 }
 
-static void write_frame(FILE *f, const scene *s, long long frame, int numbered, const shutter *sh, int k)
+static int matrix_finite(double m[4][4])
+{
+    for (int r = 0; r < 4; r++)
+        for (int c = 0; c < 4; c++)
+            if (!isfinite(m[r][c]))
+                return 0;
+    return 1;
+}
+
+/* JSON has no number for inf or NaN (a velocity of 1e308 at t = 10 once
+ * wrote "inf" into the file): such a transform is refused, naming it. */
+static int check_frame(const scene *s, const double *times, int n, rr_error *err)
+{
+    double m[4][4];
+    for (int i = 0; i < n; i++) {
+        world_to_camera(s, times[i], m);
+        if (!matrix_finite(m))
+            return rr_fail(err, "the camera's transform at time %g is not finite (motion too large)", times[i]);
+        for (int o = 0; o < s->nobjects; o++) {
+            xform x = animation_at(&s->objects[o].anim, times[i]);
+            affine_matrix(x.r, x.t, m);
+            if (!matrix_finite(m))
+                return rr_fail(err, "object '%s': its transform at time %g is not finite (motion too large)",
+                               s->objects[o].name, times[i]);
+        }
+    }
+    return 0;
+}
+
+static int write_frame(FILE *f, const scene *s, long long frame, int numbered, const shutter *sh, int k,
+                       rr_error *err)
 {
     double times[1026], m[4][4];
     int n = sample_times(sh, k, times);
+    if (check_frame(s, times, n, err))
+        return -1;
     fputs("    {\"frame\": ", f);
     numbered ? fprintf(f, "%lld", frame) : fputs("null", f);
     fprintf(f, ", \"open\": %.17g, \"close\": %.17g, \"times\": [", sh->open, sh->close);
@@ -142,6 +178,7 @@ static void write_frame(FILE *f, const scene *s, long long frame, int numbered, 
         fputc(']', f);
     }
     fputs("}}", f);
+    return 0;
 }
 
 static void write_model(FILE *f, const scene_object *o)
@@ -252,7 +289,8 @@ static int write_json(FILE *f, const scene *s, const export_options *o, rr_error
             return -1;
         if (fr > o->first)
             fputs(",\n", f);
-        write_frame(f, s, fr, o->frames, &sh, o->times);
+        if (write_frame(f, s, fr, o->frames, &sh, o->times, err))
+            return -1;
     }
     fputs("\n  ]\n}\n", f);
     return 0;
@@ -274,6 +312,13 @@ static int export_scene(const export_options *o, rr_error *err)
     scene s;
     if (cli_check_writable(o->output, err) || scene_load_file_params(o->scene, &o->params, &s, err))
         return -1;
+    if (o->shutter_set) { /* as the render applies it (main.c) */
+        s.shut.open = o->shutter_open, s.shut.close = o->shutter_close;
+        if (shutter_check(&s.shut, err)) {
+            scene_free(&s);
+            return -1;
+        }
+    }
     for (int i = 0; i < s.ninputs; i++)
         if (cli_same_file(o->output, s.inputs[i])) {
             scene_free(&s);
@@ -289,6 +334,7 @@ static int parse_export_args(int argc, char **argv, export_options *o, rr_error 
 {
     static const struct option longopts[] = {{"frame", required_argument, 0, 'f'}, {"frames", required_argument, 0, 'F'},
                                              {"times", required_argument, 0, 't'}, {"output", required_argument, 0, 'o'},
+                                             {"shutter", required_argument, 0, 's'},
                                              {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
     int c;
     char extra;
@@ -309,6 +355,8 @@ static int parse_export_args(int argc, char **argv, export_options *o, rr_error 
             return -1;
         if (c == 'o')
             o->output = optarg;
+        if (c == 's' && (o->shutter_set = 1, cli_shutter(optarg, &o->shutter_open, &o->shutter_close, err)))
+            return -1;
         if (c == '?')
             return rr_fail(err, "unknown option (see 'refrender export --help')");
     }

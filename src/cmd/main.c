@@ -157,14 +157,9 @@ static int parse_option(int c, const char *arg, render_options *o, rr_error *err
             return -1;
         o->last_frame = o->first_frame;
         return 0;
-    case OPT_SHUTTER: {
-        char extra;
-        if (sscanf(arg, "%lf,%lf%c", &o->shutter_open, &o->shutter_close, &extra) != 2 ||
-            !isfinite(o->shutter_open) || !isfinite(o->shutter_close) || !(o->shutter_close > o->shutter_open))
-            return rr_fail(err, "--shutter: expected OPEN,CLOSE with OPEN < CLOSE, got '%s'", arg);
+    case OPT_SHUTTER:
         o->shutter_set = 1;
-        return 0;
-    }
+        return cli_shutter(arg, &o->shutter_open, &o->shutter_close, err);
     case OPT_CROP: {
         char extra;
         double *c = o->crop;
