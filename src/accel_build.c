@@ -104,9 +104,30 @@ static double box_reach(aabb b)
  * object-space ray of object i starts at S^-1 R^-1 (camera - translation),
  * at most sqrt(3) (camera reach + object reach) / min_scale from its origin
  * in each component, and its direction is at most 1 / min_scale long. */
+/* Swept bounds list every key time where a step may jump (animation.h):
+ * past ANIMATION_MAX_KEY_TIMES they cannot be made conservative. */
+static int check_key_times(const scene *s, const animation *anim, const char *who, double open, double close,
+                           rr_error *err)
+{
+    double n = animation_key_times(anim, open, close);
+    if (!(n <= ANIMATION_MAX_KEY_TIMES))
+        return rr_fail(err, "%s: %s's keyframes give %g key times during the shutter [%g, %g] (cycling curves over "
+                            "a long shutter), more than the %g its bounds can list: shorten the shutter",
+                       s->path, who, n, open, close, ANIMATION_MAX_KEY_TIMES);
+    return 0;
+}
+
 static int check_reach(const accel *a, double open, double close, rr_error *err)
 {
     const scene *s = a->sc;
+    if (check_key_times(s, &s->camera_motion, "the camera", open, close, err))
+        return -1;
+    for (int i = 0; i < s->nobjects; i++) {
+        char who[96];
+        snprintf(who, sizeof who, "object '%s'", s->objects[i].name);
+        if (check_key_times(s, &s->objects[i].anim, who, open, close, err))
+            return -1;
+    }
     aabb at_rest = {s->cam.position, s->cam.position};
     double camera = box_reach(animation_swept_bounds(&s->camera_motion, at_rest, open, close));
     if (!(camera <= ACCEL_MAX_REACH))

@@ -160,27 +160,54 @@ xform animation_at(const animation *a, double t) { return a->keys ? keyed_at(a, 
 /* ---- bounds over an interval ---------------------------------------------- */
 
 #define GRID_STEPS 64
-#define MAX_SAMPLES 65536
 
 static void add_sample(double *s, int *n, double t, double t0, double t1)
 {
-    if (t >= t0 && t <= t1 && *n < MAX_SAMPLES)
+    if (t >= t0 && t <= t1)
         s[(*n)++] = t;
 }
 
+/* The spans of a curve's key range that [t0, t1] meets through cycling
+ * infinities, as [m_lo, m_hi] in whole spans (0 for none). */
+static double cycle_spans(const curve *c, double t0, double t1, double *m_lo)
+{
+    double k0 = c->keys[0].time, kn = c->keys[c->count - 1].time, span = kn - k0;
+    int cycles = c->pre >= INF_CYCLE || c->post >= INF_CYCLE;
+    *m_lo = cycles ? floor((t0 - kn) / span) : 0;
+    return cycles ? ceil((t1 - k0) / span) - *m_lo : 0;
+}
+
+/* How many sample times sample_times lists (before it keeps only those
+ * inside [t0, t1]): a double, as a long shutter over a cycling curve can
+ * ask for more than any integer holds. */
+static double sample_count(const animation *a, double t0, double t1)
+{
+    double n = GRID_STEPS + 1, m_lo;
+    for (int ch = 0; a->keys && ch < CH_COUNT; ch++) {
+        const curve *c = &a->keys->ch[ch];
+        if (c->count >= 2)
+            n += (cycle_spans(c, t0, t1, &m_lo) + 1) * 2.0 * c->count;
+    }
+    return n;
+}
+
+double animation_key_times(const animation *a, double t0, double t1)
+{
+    return animation_is_static(a) ? 0 : sample_count(a, t0, t1);
+}
+
 /* Key times of a curve inside [t0, t1], repeated (and mirrored) through
- * cycling infinities, where a step may jump. The spans are counted with an
- * integer: far from the keys (a shutter at 1e18 s) m + 1 == m in doubles and
- * a loop over m would never end; more spans than samples cannot be listed. */
+ * cycling infinities, where a step may jump: every one, or the swept
+ * bounds miss a jump (a cap of 65,536 once dropped the later ones). The
+ * spans are counted with an integer: far from the keys (a shutter at
+ * 1e18 s) m + 1 == m in doubles and a loop over m would never end. */
 static void add_key_times(const curve *c, double *s, int *n, double t0, double t1)
 {
     if (c->count < 2)
         return;
-    double k0 = c->keys[0].time, kn = c->keys[c->count - 1].time, span = kn - k0;
-    int cycles = c->pre >= INF_CYCLE || c->post >= INF_CYCLE;
-    double m_lo = cycles ? floor((t0 - kn) / span) : 0, m_hi = cycles ? ceil((t1 - k0) / span) : 0;
-    long spans = (long)fmin(m_hi - m_lo, (double)MAX_SAMPLES);
-    for (long j = 0; j <= spans && *n < MAX_SAMPLES; j++) {
+    double k0 = c->keys[0].time, kn = c->keys[c->count - 1].time, span = kn - k0, m_lo;
+    long spans = (long)cycle_spans(c, t0, t1, &m_lo);
+    for (long j = 0; j <= spans; j++) {
         double m = m_lo + (double)j;
         for (int i = 0; i < c->count; i++) {
             add_sample(s, n, c->keys[i].time + m * span, t0, t1);
@@ -189,10 +216,15 @@ static void add_key_times(const curve *c, double *s, int *n, double t0, double t
     }
 }
 
-/* Sorted sample times over [t0, t1]: a grid plus every key time. */
+/* Sorted sample times over [t0, t1]: a grid plus every key time. NULL when
+ * there are more than ANIMATION_MAX_KEY_TIMES (accel refuses such a
+ * shutter, naming the object) or out of memory: callers take no bound. */
 static double *sample_times(const animation *a, double t0, double t1, int *n)
 {
-    double *s = malloc(MAX_SAMPLES * sizeof *s);
+    double count = sample_count(a, t0, t1);
+    if (!(count <= ANIMATION_MAX_KEY_TIMES))
+        return NULL;
+    double *s = malloc((size_t)count * sizeof *s);
     if (!s)
         return NULL;
     *n = 0;
@@ -201,6 +233,7 @@ static double *sample_times(const animation *a, double t0, double t1, int *n)
     if (a->keys)
         for (int c = 0; c < CH_COUNT; c++)
             add_key_times(&a->keys->ch[c], s, n, t0, t1);
+    RR_DCHECK_LE(*n, count);
     qsort(s, (size_t)*n, sizeof *s, cmp_double);
     return s;
 }

@@ -70,6 +70,13 @@ vec3 xform_normal(const xform *x, vec3 n);
 /* Rotation matrix for angle (radians) about a unit axis (Rodrigues). */
 void rotation_matrix(vec3 axis, double angle, double r[3][3]);
 
+/* The times the bounds below evaluate the motion at over [t0, t1]: a grid
+ * and every key time (repeated through cycling infinities, where steps
+ * jump). Past ANIMATION_MAX_KEY_TIMES (128 MB of times) no bound is made:
+ * accel refuses such a shutter, naming the object. */
+#define ANIMATION_MAX_KEY_TIMES ((double)(1 << 24))
+double animation_key_times(const animation *a, double t0, double t1);
+
 /* A box containing the object-space box b transformed by every transform
  * over [t0, t1]. Conservative: the transform is evaluated at steps (and at
  * every key time, from both sides) and the union padded by the farthest

@@ -248,3 +248,26 @@ TEST(cycled_swept_bounds_far_from_the_keys_terminate)
     CHECK(isfinite(animation_max_scale(&a, t0, t0 + 1e3)));
     animation_free(&a);
 }
+
+/* Issue 23, item 6: a stepped cycleRelative curve on x lists 240,000 key
+ * times over 40,000 spans, past the 65,536 once kept; after the cap the
+ * other channels' key times were dropped, so a 0.1 s step pulse of y at
+ * t = 30,000 (between two grid samples) fell out of the bounds. */
+TEST(swept_bounds_list_every_key_time_of_long_cycles)
+{
+    animation a;
+    animation_init_static(&a);
+    const double tx[] = {0, 0, 0.5, 0, 1, 1}, ty[] = {0, 0, 30000.1, 5, 30000.2, 0};
+    key_channel(&a, CH_TX, 3, tx, TAN_STEP, INF_CYCLE_RELATIVE);
+    key_channel(&a, CH_TY, 3, ty, TAN_STEP, INF_CONSTANT);
+    aabb box = {v3(-0.1, -0.1, -0.1), v3(0.1, 0.1, 0.1)};
+    double t1 = 40000;
+    aabb swept = animation_swept_bounds(&a, box, 0, t1);
+    xform end = animation_at(&a, t1), pulse = animation_at(&a, 30000.15);
+    CHECK(end.t.x >= 39999 && pulse.t.y == 5);
+    CHECK(swept.hi.x >= end.t.x + 0.1 && swept.hi.y >= 5 + 0.1);
+    CHECK(swept_box_holds(&a, box, 0, t1));
+    CHECK(animation_key_times(&a, 0, t1) > 65536 && animation_key_times(&a, 0, t1) <= ANIMATION_MAX_KEY_TIMES);
+    CHECK(!(animation_key_times(&a, 0, 1e9) <= ANIMATION_MAX_KEY_TIMES)); /* refused by accel, not cut */
+    animation_free(&a);
+}

@@ -31,3 +31,16 @@ def test_far_but_reachable_scenes_still_render(tmp_path):
     scene.write_text(SCENE.format(z="1e6", v="1"))
     proc = run([scene, "--spp", 1, "--tspp", 2, "-o", tmp_path / "o.exr", "--quiet"])
     assert proc.returncode == 0, proc.stderr
+
+
+def test_a_shutter_with_more_key_times_than_bounds_can_list_is_refused(tmp_path):
+    """Issue 23, item 6: swept bounds list every key time where a step may
+    jump; past 2^24 of them (a cycling curve over a long shutter) the render
+    is refused, naming the object, rather than bounded from a cut list."""
+    scene = tmp_path / "s.xml"
+    scene.write_text("""<scene><camera position="0 0 5" lookat="0 0 0" width="4" height="4"/>
+<shutter open="0" close="1e9"/><object name="ticker"><sphere radius="0.5"/><animation>
+<keyframes interpolation="step" post="cycleRelative"><key time="0" translate="0 0 0"/>
+<key time="1" translate="0.001 0 0"/></keyframes></animation></object></scene>""")
+    proc = run([scene, "--spp", 1, "--tspp", 2, "-o", tmp_path / "o.exr", "--quiet"])
+    assert proc.returncode == 1 and "object 'ticker'" in proc.stderr and "key times" in proc.stderr, proc.stderr
