@@ -10,13 +10,20 @@
 
 /* ---- tokens: words, ';', '{', '}'; comments // and # to end of line ------- */
 
+/* A word (number, node or attribute name) longer than this is refused,
+ * naming its line and length: words were once cut at 63 characters, so a
+ * 69-character number read as another value and two long node names as
+ * one. */
+#define ANIM_WORD 256
+
 typedef struct {
     const char *p;
     int line;
     const char *name;
     rr_error *err;
     rr_warnings *warnings; /* returned to the caller, never printed here */
-    char tok[256];
+    char tok[ANIM_WORD];
+    size_t tok_len; /* the word's full length: more than fits in tok means it is too long */
     int tok_line;
 } lexer;
 
@@ -49,10 +56,12 @@ static int next(lexer *lx)
     if (strchr(";{}", *lx->p)) {
         lx->tok[n++] = *lx->p++;
     } else {
-        while (*lx->p && !isspace((unsigned char)*lx->p) && !strchr(";{}", *lx->p) && n + 1 < sizeof lx->tok)
-            lx->tok[n++] = *lx->p++;
+        for (; *lx->p && !isspace((unsigned char)*lx->p) && !strchr(";{}", *lx->p); lx->p++, n++)
+            if (n + 1 < sizeof lx->tok)
+                lx->tok[n] = *lx->p;
     }
-    lx->tok[n] = 0;
+    lx->tok_len = n;
+    lx->tok[n < sizeof lx->tok ? n : sizeof lx->tok - 1] = 0;
     return 1;
 }
 
@@ -94,7 +103,7 @@ static int expect(lexer *lx, const char *what)
 }
 
 /* Reads the words of one statement up to ';' (at most max). */
-static int statement(lexer *lx, char words[][64], int max, int *count)
+static int statement(lexer *lx, char words[][ANIM_WORD], int max, int *count)
 {
     *count = 0;
     for (;;) {
@@ -106,7 +115,10 @@ static int statement(lexer *lx, char words[][64], int max, int *count)
             return fail(lx, "unexpected '%s' (missing ';' on the line before?)", lx->tok);
         if (*count == max)
             return fail(lx, "too many fields in this statement");
-        snprintf(words[(*count)++], 64, "%.63s", lx->tok);
+        if (lx->tok_len >= ANIM_WORD)
+            return fail(lx, "a word of %zu characters ('%.20s...'): at most %d are read", lx->tok_len, lx->tok,
+                        ANIM_WORD - 1);
+        memcpy(words[(*count)++], lx->tok, lx->tok_len + 1);
     }
 }
 
@@ -213,7 +225,7 @@ static int add_key(lexer *lx, curve_reader *r, const curve_key *k)
  * animx puts the control point a third of the tangent from the key, and the
  * animImportExport reader converts Maya 2.x weights between unit systems as
  * lengths in that plane. */
-static int fixed_tangent(lexer *lx, const curve_reader *r, const units *u, char w[][64], double *angle,
+static int fixed_tangent(lexer *lx, const curve_reader *r, const units *u, char w[][ANIM_WORD], double *angle,
                          double *handle)
 {
     double a, weight;
@@ -224,6 +236,9 @@ static int fixed_tangent(lexer *lx, const curve_reader *r, const units *u, char 
     double seconds = u->maya2 ? 1.0 : r->seconds_per_frame; /* scene units per unit of the plane's axes */
     double values = !u->maya2 ? r->value_scale : r->channel >= CH_TX && r->channel <= CH_TZ ? 0.01 : 1.0;
     a *= r->tangent_radians;
+    if (!(cos(a) > 0)) /* its handle would run backwards in time (it was reported as a negative weight) */
+        return fail(lx, "tangent angle %s points backwards in time or straight up (Maya's tangent angles lie "
+                        "strictly between -90 and 90 degrees)", w[0]);
     *angle = atan(tan(a) * values / seconds);
     *handle = weight * cos(a) * seconds;
     return 0;
@@ -239,7 +254,7 @@ static int tangent(lexer *lx, const char *name, tangent_kind *k)
 
 /* time value in out tanLocked weightLocked [breakdown] [inAngle inWeight]
  * [outAngle outWeight] */
-static int parse_key(lexer *lx, curve_reader *r, char w[][64], int n, const units *u)
+static int parse_key(lexer *lx, curve_reader *r, char w[][ANIM_WORD], int n, const units *u)
 {
     curve_key k;
     memset(&k, 0, sizeof k);
@@ -271,7 +286,7 @@ static int parse_keys(lexer *lx, curve_reader *r, const units *u)
 {
     if (expect(lx, "{"))
         return -1;
-    char w[16][64];
+    char w[16][ANIM_WORD];
     for (;;) {
         if (truncated(lx, "keys"))
             return -1;
@@ -291,7 +306,7 @@ static int infinity(lexer *lx, const char *name, infinity_kind *k)
 }
 
 /* One statement of animData: input, output, weighted, units, infinities. */
-static int anim_data_statement(lexer *lx, curve_reader *r, char w[][64], int n)
+static int anim_data_statement(lexer *lx, curve_reader *r, char w[][ANIM_WORD], int n)
 {
     if (n != 2)
         return fail(lx, "'%s' takes one value", w[0]);
@@ -324,7 +339,7 @@ static int parse_anim_data(lexer *lx, curve_reader *r, const units *u)
 {
     if (expect(lx, "animData") || expect(lx, "{"))
         return -1;
-    char w[16][64];
+    char w[16][ANIM_WORD];
     for (;;) {
         if (truncated(lx, "animData"))
             return -1;
@@ -344,7 +359,7 @@ static int parse_anim_data(lexer *lx, curve_reader *r, const units *u)
 
 /* ---- the file ---------------------------------------------------------- */
 
-static int header_statement(lexer *lx, char w[][64], int n, units *u)
+static int header_statement(lexer *lx, char w[][ANIM_WORD], int n, units *u)
 {
     const char *key = w[0];
     if (n < 2)
@@ -363,7 +378,7 @@ static int header_statement(lexer *lx, char w[][64], int n, units *u)
 }
 
 /* anim <attribute path> [<leaf> <node> <row> <child> <index>]; [animData {...}] */
-static int parse_anim(lexer *lx, keyframes *kf, char w[][64], int n, const units *u, int *seen, int selected)
+static int parse_anim(lexer *lx, keyframes *kf, char w[][ANIM_WORD], int n, const units *u, int *seen, int selected)
 {
     int line = lx->tok_line;
     if (n < 2)
@@ -401,24 +416,49 @@ static int parse_anim(lexer *lx, keyframes *kf, char w[][64], int n, const units
 /* The distinct nodes that 'anim' statements name (the 4th word: "anim
  * translate.translateX translateX joint2 0 1 0;"). */
 typedef struct {
-    int count;
-    char names[ANIMFILE_MAX_NODES][64];
+    int count, cap;
+    char **names; /* grows: a rig of any size (256 nodes were once the most recorded) */
+    int failed;   /* out of memory */
 } node_list;
+
+static void node_list_free(node_list *nodes)
+{
+    for (int i = 0; i < nodes->count; i++)
+        free(nodes->names[i]);
+    free(nodes->names);
+}
+
+static void node_list_add(node_list *nodes, const char *name)
+{
+    if (nodes->count == nodes->cap) {
+        int cap = nodes->cap ? 2 * nodes->cap : 16;
+        char **grown = realloc(nodes->names, (size_t)cap * sizeof *grown);
+        if (!grown) {
+            nodes->failed = 1;
+            return;
+        }
+        nodes->names = grown, nodes->cap = cap;
+    }
+    if (!(nodes->names[nodes->count] = strdup(name)))
+        nodes->failed = 1;
+    else
+        nodes->count++;
+}
 
 /* Records the node of a statement that carries a curve; returns whether
  * it is the wanted node's (node NULL: the first node named in the file).
  * Autodesk's animImportExport reader: "anim <attribute> <leaf> <node> row
  * child attr;" names the node; without the leaf and node words (an export
  * without node names) there is none. */
-static int select_node(node_list *nodes, char w[][64], int n, const char *node)
+static int select_node(node_list *nodes, char w[][ANIM_WORD], int n, const char *node)
 {
     const char *here = n >= 7 ? w[3] : "";
     int known = 0;
     for (int i = 0; i < nodes->count && !known; i++)
         known = !strcmp(nodes->names[i], here);
-    if (!known && nodes->count < ANIMFILE_MAX_NODES)
-        snprintf(nodes->names[nodes->count++], sizeof nodes->names[0], "%s", here);
-    return !strcmp(here, node ? node : nodes->names[0]);
+    if (!known)
+        node_list_add(nodes, here);
+    return nodes->count > 0 && !strcmp(here, node ? node : nodes->names[0]);
 }
 
 static void list_nodes(const node_list *nodes, char *buf, size_t size)
@@ -450,11 +490,11 @@ int animfile_parse(const char *text, const char *name, const char *node, keyfram
     keyframes *kf = calloc(1, sizeof *kf);
     if (!kf)
         return rr_fail(err, "out of memory");
-    lexer lx = {text, 1, name, err, warnings, {0}, 1};
+    lexer lx = {text, 1, name, err, warnings, {0}, 0, 1};
     units u = {1.0 / 24, 0.01, M_PI / 180, 1.1, 0}; /* Maya's defaults: film, cm, deg */
     int seen[CH_COUNT] = {0}, curves = 0, versioned = 0;
-    node_list nodes = {0, {{0}}};
-    char w[16][64];
+    node_list nodes = {0, 0, NULL, 0};
+    char w[16][ANIM_WORD];
     while (skip_space(&lx), *lx.p) {
         int n;
         if (statement(&lx, w, 16, &n))
@@ -471,6 +511,10 @@ int animfile_parse(const char *text, const char *name, const char *node, keyfram
             int with_curve = peek_is(&lx, "animData");
             if (parse_anim(&lx, kf, w, n, &u, seen, with_curve && select_node(&nodes, w, n, node)))
                 goto fail;
+            if (nodes.failed) {
+                rr_fail(err, "%s: out of memory for node names", name);
+                goto fail;
+            }
             curves += with_curve;
         } else if (header_statement(&lx, w, n, &u)) {
             goto fail;
@@ -489,9 +533,11 @@ int animfile_parse(const char *text, const char *name, const char *node, keyfram
         rr_fail(err, "%s: no translate, rotate or scale curve found (%d curves read)", name, curves);
         goto fail;
     }
+    node_list_free(&nodes);
     *out = kf;
     return 0;
 fail:
+    node_list_free(&nodes);
     for (int i = 0; i < CH_COUNT; i++)
         curve_free(&kf->ch[i]);
     free(kf);

@@ -5,9 +5,10 @@
  * ntsc 30, pal 25, game 15, show 48, palf 50, ntscf 60 fps; sec, millisec,
  * min, hour), translate values from linearUnit to meters, rotate values and
  * tangent angles from angularUnit to radians. Unknown attributes are
- * skipped with a warning (returned in *warnings, which may be NULL); tangent
- * weights are read and ignored (curves are evaluated unweighted), with a
- * warning for weighted curves. */
+ * skipped with a warning (returned in *warnings, which may be NULL).
+ * Weighted curves are evaluated as Bezier segments with their tangent
+ * weights (curve.h). Words longer than 255 characters are refused; nodes
+ * are not limited in number. */
 #ifndef RR_ANIMFILE_H
 #define RR_ANIMFILE_H
 
@@ -17,9 +18,6 @@
 
 /* Largest .anim file read (bytes); real exports of whole rigs are a few MB. */
 #define ANIMFILE_MAX_BYTES ((size_t)256 << 20)
-
-/* Most distinct nodes a file may animate. */
-#define ANIMFILE_MAX_NODES 256
 
 /* Reads the curves of node `node` of path into *out (allocated; free with
  * animation_free's keyframes handling). A file animating several nodes

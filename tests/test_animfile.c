@@ -328,3 +328,38 @@ TEST(placeholder_lines_are_not_animated_nodes)
     CHECK(animfile_parse(text, "rig.anim", "hips", &k, NULL, &e) != 0 &&
           strstr(e.msg, "no curves for node 'hips'; the file animates 'hand'"));
 }
+
+/* Issue 23, items 3, 4 and 14: words are kept whole up to 255 characters
+ * and refused beyond (a 69-character number was cut to 63 and read as 1;
+ * node names sharing 63 leading characters became one node); any number
+ * of nodes (the 257th was once not recorded); a tangent angle of 180
+ * degrees is named as such (it was reported as a negative weight). */
+TEST(anim_words_are_whole_nodes_unlimited_and_backward_tangents_named)
+{
+    char text[200000];
+    char number[80] = "1.", long_name[300];
+    for (int i = 0; i < 62; i++)
+        strcat(number, "0");
+    strcat(number, "e+02"); /* 68 characters: 100 */
+    snprintf(text, sizeof text, WEIGHTED("  0 0 linear linear 1 1 0;\n  24 %s linear linear 1 1 0;\n"), number);
+    check_tx_at(text, 1.0, 1.0); /* 100 cm at frame 24 */
+    memset(long_name, 'n', 299), long_name[299] = 0;
+    snprintf(text, sizeof text, "animVersion 1.1;\nanim translate.translateX translateX %s 0 0 0;\n", long_name);
+    CHECK(strstr(parse_error(text), "t.anim:2: a word of 299 characters"));
+    /* 300 nodes whose names share 70 leading characters; node299 is found */
+    size_t len = (size_t)snprintf(text, sizeof text, "animVersion 1.1;\n");
+    for (int i = 0; i < 300; i++)
+        len += (size_t)snprintf(text + len, sizeof text - len,
+                                "anim translate.translateX translateX "
+                                "%.70s%d 0 0 0;\nanimData {\n input time;\n keys {\n 0 %d linear linear 1 1 0;\n"
+                                " 24 0 linear linear 1 1 0;\n }\n}\n", long_name, i, i);
+    char node[96];
+    snprintf(node, sizeof node, "%.70s299", long_name);
+    keyframes *k = NULL;
+    rr_error e;
+    CHECK(animfile_parse(text, "rig.anim", node, &k, NULL, &e) == 0);
+    if (k)
+        CHECK_NEAR(curve_eval(&k->ch[CH_TX], 0), 2.99, 1e-12), free_keys(k);
+    CHECK(strstr(parse_error(WEIGHTED("  0 0 fixed fixed 1 1 0 180 1 0 1;\n  24 10 linear linear 1 1 0;\n")),
+                 "t.anim:11: tangent angle 180 points backwards in time"));
+}
