@@ -14,7 +14,7 @@ static const char *const identity_keys[] = {
     "refrender:sceneHash", "refrender:inputsHash", "refrender:resolution", "refrender:sampler", "refrender:spp",
     "refrender:tspp", "refrender:seed", "refrender:epsilon", "refrender:kernelSigma",
     "refrender:shutter", "refrender:weightFunction", "refrender:timeFactor", "refrender:batches",
-    "refrender:timeIntegration", "refrender:parameters", NULL};
+    "refrender:timeIntegration", "refrender:parameters", "refrender:parametersHash", "refrender:weightHash", NULL};
 
 /* The attributes stored as EXR numbers (README, Output). */
 static rr_attr_kind attr_kind(const char *key)
@@ -72,7 +72,7 @@ int attrs_check_identity(const attr_list *a, const char *a_name, const attr_list
     for (const char *const *k = identity_keys; *k; k++) {
         const char *va = attrs_get(a, *k), *vb = attrs_get(b, *k);
         if (!va || !vb || strcmp(va, vb))
-            return rr_fail(err, "%s and %s differ in %s ('%s' vs '%s'): not the same render", a_name, b_name,
+            return rr_fail(err, "%s and %s differ in %s ('%.160s' vs '%.160s'): not the same render", a_name, b_name,
                            *k, va ? va : "missing", vb ? vb : "missing");
     }
     return 0;

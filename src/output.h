@@ -22,10 +22,14 @@
  * text) and written as its kind (exr.h): the counts, distances, times and
  * camera matrices as EXR numbers, the rest as strings (attrs_set knows
  * which is which). */
+/* Longest attribute text kept (longer is cut visibly; identity texts of
+ * any length are compared by their hash, render_attrs.c). */
+#define ATTR_TEXT_MAX 4200
+
 typedef struct {
     int n;
     char key[ATTR_MAX][64];
-    char value[ATTR_MAX][4200];
+    char value[ATTR_MAX][ATTR_TEXT_MAX];
     rr_attr_kind kind[ATTR_MAX];
 } attr_list;
 

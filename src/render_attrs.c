@@ -2,20 +2,54 @@
 
 #include <inttypes.h>
 #include <stdio.h>
+#include <stdlib.h>
 
-static void describe_weight(const shutter *sh, char *buf, size_t size)
+#include "inputfile.h"
+
+static void describe_weight(FILE *f, const shutter *sh)
 {
     if (sh->kind == WEIGHT_LINEAR)
-        snprintf(buf, size, "linear center=%.17g", sh->center);
+        fprintf(f, "linear center=%.17g", sh->center);
     else if (sh->kind == WEIGHT_EXP)
-        snprintf(buf, size, "exp center=%.17g rate=%.17g", sh->center, sh->rate);
+        fprintf(f, "exp center=%.17g rate=%.17g", sh->center, sh->rate);
     else if (sh->kind == WEIGHT_TABLE) {
-        size_t len = (size_t)snprintf(buf, size, "table");
-        for (int i = 0; i < sh->table_size && len < size; i++)
-            len += (size_t)snprintf(buf + len, size - len, " %.17g %.17g", sh->table_t[i], sh->table_w[i]);
+        fputs("table", f);
+        for (int i = 0; i < sh->table_size; i++)
+            fprintf(f, " %.17g %.17g", sh->table_t[i], sh->table_w[i]);
     } else
-        snprintf(buf, size, "box");
+        fputs("box", f);
 }
+
+/* The scene parameters applied, "name=value ..." ("none" without any). */
+static void describe_parameters(FILE *f, const scene_params *p)
+{
+    for (int i = 0; i < p->n; i++)
+        fprintf(f, "%s%s=%s", i ? " " : "", p->name[i], p->value[i]);
+    if (!p->n)
+        fputs("none", f);
+}
+
+/* An identity text of any length (a 256-pair weight table, many -D
+ * parameters): the text under key, cut visibly where an EXR attribute
+ * cannot hold it, and its FNV-1a under hash_key, which is what identity
+ * checks compare whole. Cut at 4095 characters, the text alone once let
+ * passes rendered with different parameters merge. */
+static void set_identity_text(attr_list *a, const char *key, const char *hash_key,
+                              void (*describe)(FILE *, const void *), const void *what)
+{
+    char *text = NULL;
+    size_t len = 0;
+    FILE *f = open_memstream(&text, &len);
+    RR_CHECK(f != NULL); /* out of memory for a few KB: nothing sensible is left to do */
+    describe(f, what);
+    RR_CHECK(fclose(f) == 0 && text != NULL);
+    attrs_set(a, hash_key, "%016" PRIx64, input_hash(INPUT_HASH_INIT, text, len));
+    attrs_set(a, key, len < ATTR_TEXT_MAX ? "%s" : "%.4000s ... (cut: the whole text's hash is the identity)", text);
+    free(text);
+}
+
+static void weight_text(FILE *f, const void *sh) { describe_weight(f, sh); }
+static void parameters_text(FILE *f, const void *p) { describe_parameters(f, p); }
 
 /* Writes the column-vector matrix m (p' = m p) as OpenEXR stores it: for
  * Imath's row vectors (p' = p M), i.e. transposed, row after row. */
@@ -44,28 +78,16 @@ static void camera_matrices(attr_list *a, const camera *cam)
     set_matrix(a, "worldToNDC", ndc);
 }
 
-/* The scene parameters applied, "name=value ..." ("none" without any):
- * part of the render's identity, as they change the scene. */
-static void describe_parameters(attr_list *a, const scene_params *p)
-{
-    char buf[4096];
-    size_t len = 0;
-    buf[0] = 0;
-    for (int i = 0; i < p->n && len < sizeof buf; i++)
-        len += (size_t)snprintf(buf + len, sizeof buf - len, "%s%s=%s", i ? " " : "", p->name[i], p->value[i]);
-    attrs_set(a, "refrender:parameters", "%s", p->n ? buf : "none");
-}
 
 void attrs_for_render(attr_list *a, const scene *s, const render_settings *rs, uint32_t total_batches,
                       const char *command)
 {
-    char weight[4096];
-    describe_weight(&rs->shut, weight, sizeof weight);
     const sampler *smp = &rs->smp;
     attrs_set(a, "refrender:scene", "%s", s->path);
     attrs_set(a, "refrender:sceneHash", "%016" PRIx64, s->scene_hash);
     attrs_set(a, "refrender:inputsHash", "%016" PRIx64, s->inputs_hash);
-    describe_parameters(a, &s->params);
+    /* the parameters change the scene: part of the render's identity */
+    set_identity_text(a, "refrender:parameters", "refrender:parametersHash", parameters_text, &s->params);
     attrs_set(a, "refrender:resolution", "%dx%d", s->cam.width, s->cam.height);
     attrs_set(a, "refrender:sampler", "%s", sampler_name(smp->kind));
     attrs_set(a, "refrender:spp", "%d", smp->grid * smp->grid);
@@ -77,7 +99,7 @@ void attrs_for_render(attr_list *a, const scene *s, const render_settings *rs, u
     attrs_set(a, "refrender:shutterOpen", "%.17g", rs->shut.open);
     attrs_set(a, "refrender:shutterClose", "%.17g", rs->shut.close);
     camera_matrices(a, &s->cam);
-    attrs_set(a, "refrender:weightFunction", "%s", weight);
+    set_identity_text(a, "refrender:weightFunction", "refrender:weightHash", weight_text, &rs->shut);
     attrs_set(a, "refrender:timeFactor", "%d", smp->time_factor);
     attrs_set(a, "refrender:timeIntegration", "%s", rs->exact_time ? "exact" : "sampled");
     /* the convention compare.py --alpha composite relies on (README, Output) */

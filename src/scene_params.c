@@ -64,8 +64,8 @@ static int read_defaults(xml_ctx *c, xmlNodePtr root, scene_params *p, int given
         if (!xml_is_element(k) || strcmp(xml_elname(k), "default"))
             continue;
         char name[SCENE_PARAM_NAME + 8], value[SCENE_PARAM_VALUE + 8];
-        if (xml_check_attributes(c, k, ok) || !xml_attr_text(k, "name", name, sizeof name) ||
-            !xml_attr_text(k, "value", value, sizeof value))
+        if (xml_check_attributes(c, k, ok) || xml_attr_text(c, k, "name", name, sizeof name) <= 0 ||
+            xml_attr_text(c, k, "value", value, sizeof value) <= 0)
             return c->err->msg[0] ? -1 : xml_fail(c, k, "<default> needs name and value");
         int i = params_find(p, name, strlen(name));
         rr_error sub;

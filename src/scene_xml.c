@@ -65,8 +65,9 @@ static int parse_camera(xml_ctx *c, xmlNodePtr n, camera *cam, animation *motion
 static int parse_weight_kind(xml_ctx *c, xmlNodePtr n, shutter *s)
 {
     char kind[64];
-    if (!xml_attr_text(n, "weight", kind, sizeof kind))
-        return 0;
+    int got = xml_attr_text(c, n, "weight", kind, sizeof kind);
+    if (got <= 0)
+        return got;
     for (int k = WEIGHT_BOX; k <= WEIGHT_TABLE; k++)
         if (!strcmp(kind, shutter_weight_name((weight_kind)k))) {
             s->kind = (weight_kind)k;
@@ -77,14 +78,15 @@ static int parse_weight_kind(xml_ctx *c, xmlNodePtr n, shutter *s)
 
 static int parse_weight_table(xml_ctx *c, xmlNodePtr n, shutter *s)
 {
-    char buf[16384];
-    if (!xml_attr_text(n, "table", buf, sizeof buf)) {
+    double v[2 * SHUTTER_TABLE_MAX];
+    int count, got = xml_attr_number_list(c, n, "table", v, 2 * SHUTTER_TABLE_MAX, &count);
+    if (got < 0)
+        return -1;
+    if (!got) {
         if (s->kind == WEIGHT_TABLE)
             return xml_fail(c, n, "weight 'table' needs a 'table' attribute of 't w' pairs");
         return 0;
     }
-    double v[2 * SHUTTER_TABLE_MAX];
-    int count = xml_parse_numbers(buf, v, 2 * SHUTTER_TABLE_MAX);
     if (count < 2 || count % 2)
         return xml_fail(c, n, "attribute 'table' must hold 1 to 256 't w' number pairs");
     s->table_size = count / 2;
@@ -102,17 +104,16 @@ static int parse_shutter(xml_ctx *c, xmlNodePtr n, scene *sc)
 {
     static const char *const ok[] = {"open", "close", "fraction", "weight", "center", "rate", "table", NULL};
     shutter *s = &sc->shut;
-    char probe[8];
     if (xml_check_attributes(c, n, ok) || xml_attr_double(c, n, "open", &s->open, 0) ||
         xml_attr_double(c, n, "close", &s->close, 0) || xml_attr_double(c, n, "fraction", &c->shutter_fraction, 0))
         return -1;
-    if (xml_attr_text(n, "fraction", probe, sizeof probe)) {
-        if (xml_attr_text(n, "open", probe, sizeof probe) || xml_attr_text(n, "close", probe, sizeof probe))
+    if (xml_has_attr(n, "fraction")) {
+        if (xml_has_attr(n, "open") || xml_has_attr(n, "close"))
             return xml_fail(c, n, "give either open/close or fraction, not both");
         if (!(c->shutter_fraction > 0 && c->shutter_fraction <= 1))
             return xml_fail(c, n, "shutter fraction must be in (0, 1]");
         c->shutter_line = (int)xmlGetLineNo(n);
-        c->shutter_center_given = xml_attr_text(n, "center", probe, sizeof probe);
+        c->shutter_center_given = xml_has_attr(n, "center");
         s->open = 0, s->close = 1; /* placeholders until the frame rate is known */
     }
     s->center = s->close; /* thesis Figure 3.1: weighting center t_c = t1 */
@@ -148,8 +149,8 @@ static int parse_light(xml_ctx *c, xmlNodePtr n, scene *s)
     static const char *const ok[] = {"type", "position", "direction", "color", NULL};
     light l = {LIGHT_POINT, v3(0, 0, 0), v3(0, 0, -1), v3(1, 1, 1)};
     char type[64] = "point";
-    xml_attr_text(n, "type", type, sizeof type);
-    if (xml_check_attributes(c, n, ok) || xml_attr_vec3(c, n, "color", &l.color, 0))
+    if (xml_attr_text(c, n, "type", type, sizeof type) < 0 || xml_check_attributes(c, n, ok) ||
+        xml_attr_vec3(c, n, "color", &l.color, 0))
         return -1;
     if (!strcmp(type, "point")) {
         if (xml_attr_vec3(c, n, "position", &l.position, 1))
@@ -178,9 +179,10 @@ static int parse_material(xml_ctx *c, xmlNodePtr n, material *m)
 {
     static const char *const ok[] = {"shading", "diffuse", "specular", "shininess", NULL};
     char shading[64];
-    if (xml_check_attributes(c, n, ok))
+    int got;
+    if (xml_check_attributes(c, n, ok) || (got = xml_attr_text(c, n, "shading", shading, sizeof shading)) < 0)
         return -1;
-    if (xml_attr_text(n, "shading", shading, sizeof shading)) {
+    if (got) {
         if (!strcmp(shading, "phong")) m->shading = SHADING_PHONG;
         else if (!strcmp(shading, "unlit")) m->shading = SHADING_UNLIT;
         else return xml_fail(c, n, "unknown shading '%s' (expected phong or unlit)", shading);
@@ -224,10 +226,13 @@ static int parse_splat(xml_ctx *c, xmlNodePtr n, pointmodel *m, vec3 default_col
     return rc ? xml_fail(c, n, "%s (give 'normal' and 'radius', or axes 'u' and 'v')", sub.msg) : 0;
 }
 
-/* Path from the 'file' attribute or, as in thesis Figure 4.11, the text. */
-static int point_model_path(xmlNodePtr n, char *buf, size_t size)
+/* Path from the 'file' attribute or, as in thesis Figure 4.11, the text:
+ * 1 found, 0 none, -1 an error (too long: it was cut and then reported as
+ * "no splats"). */
+static int point_model_path(xml_ctx *c, xmlNodePtr n, char *buf, size_t size)
 {
-    return xml_attr_text(n, "file", buf, size) || xml_element_text(n, buf, size);
+    int got = xml_attr_text(c, n, "file", buf, size);
+    return got ? got : xml_element_text(c, n, buf, size);
 }
 
 static int generate_shape(xml_ctx *c, xmlNodePtr n, const char *kind, scene_object *o)
@@ -271,7 +276,10 @@ static int parse_point_model(xml_ctx *c, xmlNodePtr n, scene_object *o)
     if (xml_attr_vec3(c, n, "color", &default_color, 0))
         return -1;
     char rel[4096], path[8192], kind[sizeof ((shape_params *)0)->kind];
-    if (point_model_path(n, rel, sizeof rel)) {
+    int has_path = point_model_path(c, n, rel, sizeof rel), has_kind;
+    if (has_path < 0)
+        return -1;
+    if (has_path) {
         if (xml_resolve_path(c, n, rel, path, sizeof path))
             return -1;
         rr_error sub;
@@ -281,7 +289,8 @@ static int parse_point_model(xml_ctx *c, xmlNodePtr n, scene_object *o)
             return xml_fail(c, n, "out of memory");
         snprintf(o->model_file, sizeof o->model_file, "%s", path);
     }
-    if (xml_attr_text(n, "generate", kind, sizeof kind) && generate_shape(c, n, kind, o))
+    if ((has_kind = xml_attr_text(c, n, "generate", kind, sizeof kind)) < 0 ||
+        (has_kind && generate_shape(c, n, kind, o)))
         return -1;
     for (xmlNodePtr k = n->children; k; k = k->next) {
         if (!xml_is_element(k))
@@ -330,8 +339,7 @@ static int parse_object(xml_ctx *c, xmlNodePtr n, scene *s)
     o->mat = material_default();
     animation_init_static(&o->anim);
     snprintf(o->name, sizeof o->name, "object%d", s->nobjects);
-    xml_attr_text(n, "name", o->name, sizeof o->name);
-    if (xml_check_attributes(c, n, ok) || xml_attr_vec3(c, n, "position", &o->anim.offset, 0) ||
+    if (xml_attr_text(c, n, "name", o->name, sizeof o->name) < 0 || xml_check_attributes(c, n, ok) || xml_attr_vec3(c, n, "position", &o->anim.offset, 0) ||
         xml_check_no_text(c, n))
         return -1;
     int shapes = 0;

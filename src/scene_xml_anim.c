@@ -33,8 +33,9 @@ static int parse_rotation(xml_ctx *c, xmlNodePtr n, animation *a)
 static int key_interpolation(xml_ctx *c, xmlNodePtr n, tangent_kind *in, tangent_kind *out)
 {
     char name[64];
-    if (!xml_attr_text(n, "interpolation", name, sizeof name))
-        return 0;
+    int got = xml_attr_text(c, n, "interpolation", name, sizeof name);
+    if (got <= 0)
+        return got;
     if (!strcmp(name, "linear")) *in = *out = TAN_LINEAR;
     else if (!strcmp(name, "step")) *in = TAN_FLAT, *out = TAN_STEP;
     else if (!strcmp(name, "spline")) *in = *out = TAN_SPLINE;
@@ -68,8 +69,7 @@ static int parse_key(xml_ctx *c, xmlNodePtr n, keyframes *kf, tangent_kind in, t
     int any = 0;
     for (int v = 0; v < 3; v++) {
         vec3 val = v3(0, 0, 0);
-        char probe[8];
-        if (!xml_attr_text(n, vectors[v], probe, sizeof probe))
+        if (!xml_has_attr(n, vectors[v]))
             continue;
         if (xml_attr_vec3(c, n, vectors[v], &val, 1))
             return -1;
@@ -96,9 +96,8 @@ static int parse_keyframes(xml_ctx *c, xmlNodePtr n, keyframes *kf)
     tangent_kind in = TAN_LINEAR, out = TAN_LINEAR;
     char inf[2][64] = {"constant", "constant"};
     infinity_kind pre, post;
-    xml_attr_text(n, "pre", inf[0], sizeof inf[0]);
-    xml_attr_text(n, "post", inf[1], sizeof inf[1]);
-    if (xml_check_attributes(c, n, ok) || xml_check_no_text(c, n) || key_interpolation(c, n, &in, &out) ||
+    if (xml_attr_text(c, n, "pre", inf[0], sizeof inf[0]) < 0 || xml_attr_text(c, n, "post", inf[1], sizeof inf[1]) < 0 ||
+        xml_check_attributes(c, n, ok) || xml_check_no_text(c, n) || key_interpolation(c, n, &in, &out) ||
         xml_attr_vec3(c, n, "pivot", &kf->pivot, 0))
         return -1;
     if (infinity_from_name(inf[0], &pre) || infinity_from_name(inf[1], &post))
@@ -144,11 +143,16 @@ static int new_keyframes(xml_ctx *c, xmlNodePtr n, animation *a)
 static int load_anim_file(xml_ctx *c, xmlNodePtr n, animation *a)
 {
     char rel[4096], path[8192], node[64];
-    int has_file = xml_attr_text(n, "file", rel, sizeof rel), has_node = xml_attr_text(n, "node", node, sizeof node);
+    int has_file = xml_attr_text(c, n, "file", rel, sizeof rel), has_node = xml_attr_text(c, n, "node", node, sizeof node);
+    if (has_file < 0 || has_node < 0)
+        return -1;
     if (has_file && xml_has_text(n))
         return xml_fail(c, n, "give the .anim path as the 'file' attribute or as the text, not both");
-    if (!has_file && !xml_element_text(n, rel, sizeof rel))
-        return xml_fail(c, n, "animation file path is too long");
+    int has_text = has_file ? 0 : xml_element_text(c, n, rel, sizeof rel);
+    if (has_text < 0)
+        return -1;
+    if (!has_file && !has_text)
+        return xml_fail(c, n, "animation file path is empty");
     if (xml_resolve_path(c, n, rel, path, sizeof path) || new_keyframes(c, n, a))
         return -1;
     vec3 pivot = a->keys->pivot;
@@ -166,12 +170,11 @@ static int load_anim_file(xml_ctx *c, xmlNodePtr n, animation *a)
 int xml_parse_animation(xml_ctx *c, xmlNodePtr n, animation *a)
 {
     static const char *const ok[] = {"file", "node", NULL};
-    char probe[8];
     if (xml_check_attributes(c, n, ok))
         return -1;
-    if (xml_has_text(n) || xml_attr_text(n, "file", probe, sizeof probe))
+    if (xml_has_text(n) || xml_has_attr(n, "file"))
         return load_anim_file(c, n, a);
-    if (xml_attr_text(n, "node", probe, sizeof probe))
+    if (xml_has_attr(n, "node"))
         return xml_fail(c, n, "'node' selects a node of an .anim file: give the file too");
     for (xmlNodePtr k = n->children; k; k = k->next) {
         if (!xml_is_element(k))

@@ -33,8 +33,16 @@ int xml_fail(xml_ctx *c, xmlNodePtr n, const char *fmt, ...) __attribute__((form
 /* Rejects attributes not in the NULL-terminated list (catches typos). */
 int xml_check_attributes(xml_ctx *c, xmlNodePtr n, const char *const *allowed);
 
-/* Copies attribute text into buf; returns 1 if present, 0 if absent. */
-int xml_attr_text(xmlNodePtr n, const char *name, char *buf, size_t size);
+/* Copies attribute text into buf; returns 1 if present, 0 if absent, -1
+ * (with the error naming the attribute and its length) if it does not fit:
+ * a value is never cut. */
+int xml_attr_text(xml_ctx *c, xmlNodePtr n, const char *name, char *buf, size_t size);
+int xml_has_attr(xmlNodePtr n, const char *name);
+
+/* Up to max finite numbers of the attribute, read whole whatever its
+ * length: returns 1 with *count (-1: a token is not a finite number or
+ * there are more than max), 0 if absent, -1 on error. */
+int xml_attr_number_list(xml_ctx *c, xmlNodePtr n, const char *name, double *out, int max, int *count);
 
 int xml_attr_numbers(xml_ctx *c, xmlNodePtr n, const char *name, double *out, int count,
                         int required);
@@ -58,9 +66,9 @@ int xml_check_no_text(xml_ctx *c, xmlNodePtr parent);
  * an error, never silently cut. */
 int xml_resolve_path(xml_ctx *c, xmlNodePtr n, const char *rel, char *out, size_t size);
 
-/* The element's text with surrounding white space removed; 0 if empty
- * (or too long for buf). */
-int xml_element_text(xmlNodePtr n, char *buf, size_t size);
+/* The element's text with surrounding white space removed; 0 if empty,
+ * -1 (an error naming the length) if too long for buf. */
+int xml_element_text(xml_ctx *c, xmlNodePtr n, char *buf, size_t size);
 
 /* <animation> of an object or the camera: linear/rotation, keyframes or a
  * .anim file (scene_xml_anim.c). */

@@ -30,13 +30,37 @@ int xml_check_attributes(xml_ctx *c, xmlNodePtr n, const char *const *allowed)
     return 0;
 }
 
-/* Copies attribute text into buf; returns 1 if present, 0 if absent. */
-int xml_attr_text(xmlNodePtr n, const char *name, char *buf, size_t size)
+int xml_has_attr(xmlNodePtr n, const char *name) { return xmlHasProp(n, (const xmlChar *)name) != NULL; }
+
+/* An external entity in an element's text is not read (no
+ * XML_PARSE_NOENT: it could name any file), so the text would come out
+ * empty and be blamed on something else ("point model has no splats"). */
+static int text_uses_external_entity(xml_ctx *c, xmlNodePtr n)
+{
+    for (xmlNodePtr k = n->children; k; k = k->next) {
+        if (k->type != XML_ENTITY_REF_NODE)
+            continue;
+        xmlEntityPtr e = xmlGetDocEntity(n->doc, k->name);
+        if (!e || e->etype != XML_INTERNAL_GENERAL_ENTITY)
+            return xml_fail(c, n, "its text uses the external XML entity '%s': external entities are not read",
+                            (const char *)k->name);
+    }
+    return 0;
+}
+
+/* (libxml2 itself refuses external entities in attributes; internal ones
+ * expand in xmlGetProp.) */
+int xml_attr_text(xml_ctx *c, xmlNodePtr n, const char *name, char *buf, size_t size)
 {
     xmlChar *v = xmlGetProp(n, (const xmlChar *)name);
     if (!v)
         return 0;
-    snprintf(buf, size, "%s", (const char *)v);
+    size_t len = strlen((const char *)v);
+    if (len >= size) {
+        xmlFree(v);
+        return xml_fail(c, n, "attribute '%s' is %zu characters long: at most %zu are read", name, len, size - 1);
+    }
+    memcpy(buf, v, len + 1);
     xmlFree(v);
     return 1;
 }
@@ -61,15 +85,36 @@ int xml_parse_numbers(const char *text, double *out, int max)
     }
 }
 
+int xml_attr_number_list(xml_ctx *c, xmlNodePtr n, const char *name, double *out, int max, int *count)
+{
+    (void)c;
+    xmlChar *v = xmlGetProp(n, (const xmlChar *)name); /* read whole: a number list has no length limit */
+    *count = 0;
+    if (!v)
+        return 0;
+    *count = xml_parse_numbers((const char *)v, out, max);
+    xmlFree(v);
+    return 1;
+}
+
 int xml_attr_numbers(xml_ctx *c, xmlNodePtr n, const char *name, double *out, int count,
                         int required)
 {
-    char buf[4096];
-    if (!xml_attr_text(n, name, buf, sizeof buf))
-        return required ? xml_fail(c, n, "missing required attribute '%s'", name) : 0;
-    if (xml_parse_numbers(buf, out, count) != count)
-        return xml_fail(c, n, "attribute '%s' must be %d finite number%s, got '%s'", name, count,
-                         count > 1 ? "s" : "", buf);
+    double got[4];
+    int found;
+    RR_CHECK(count <= 4);
+    int rc = xml_attr_number_list(c, n, name, got, count, &found);
+    if (rc <= 0)
+        return rc < 0 ? -1 : required ? xml_fail(c, n, "missing required attribute '%s'", name) : 0;
+    if (found != count) {
+        xmlChar *v = xmlGetProp(n, (const xmlChar *)name);
+        xml_fail(c, n, "attribute '%s' must be %d finite number%s, got '%.200s'", name, count, count > 1 ? "s" : "",
+                 (const char *)v);
+        xmlFree(v);
+        return -1;
+    }
+    for (int i = 0; i < count; i++)
+        out[i] = got[i];
     return 0;
 }
 
@@ -139,10 +184,12 @@ int xml_resolve_path(xml_ctx *c, xmlNodePtr n, const char *rel, char *out, size_
     return len < 0 || (size_t)len >= size ? xml_fail(c, n, "file path is too long") : 0;
 }
 
-/* The element's text with surrounding white space removed; 0 if empty
- * (or too long for buf). */
-int xml_element_text(xmlNodePtr n, char *buf, size_t size)
+/* The element's text with surrounding white space removed; 0 if empty,
+ * -1 (an error naming the length) if too long for buf. */
+int xml_element_text(xml_ctx *c, xmlNodePtr n, char *buf, size_t size)
 {
+    if (text_uses_external_entity(c, n))
+        return -1;
     xmlChar *text = xmlNodeGetContent(n);
     int found = 0;
     if (text) {
@@ -152,7 +199,9 @@ int xml_element_text(xmlNodePtr n, char *buf, size_t size)
         size_t len = strlen(s);
         while (len && (s[len - 1] == ' ' || s[len - 1] == '\n' || s[len - 1] == '\t' || s[len - 1] == '\r'))
             len--;
-        if (len && len < size) {
+        if (len >= size)
+            found = xml_fail(c, n, "its text is %zu characters long: at most %zu are read", len, size - 1);
+        else if (len) {
             memcpy(buf, s, len);
             buf[len] = 0;
             found = 1;

@@ -22,7 +22,8 @@ static void identity(attr_list *a, int w, int h)
                                        "refrender:spp", "refrender:tspp", "refrender:seed", "refrender:epsilon",
                                        "refrender:kernelSigma", "refrender:shutter", "refrender:weightFunction",
                                        "refrender:timeFactor", "refrender:batches", "refrender:timeIntegration",
-                                       "refrender:parameters", NULL};
+                                       "refrender:parameters", "refrender:parametersHash", "refrender:weightHash",
+                                       NULL};
     a->n = 0;
     for (const char *const *k = keys; *k; k++)
         attrs_set(a, *k, "1");
