@@ -276,6 +276,19 @@ static double min_scale_over(const animation *a, const double *s, int n)
     return fmax(m - max_slope_of(a->keys, CH_SX, 3) * largest_gap(s, n) * 0.5, MIN_SCALE);
 }
 
+int animation_scale_clamped(const animation *a, double t0, double t1)
+{
+    if (!a->keys)
+        return 0;
+    int n, clamped = 0;
+    double *s = sample_times(a, t0, t1, &n);
+    for (int i = 0; s && i < n && !clamped; i++)
+        for (int c = CH_SX; c <= CH_SZ; c++)
+            clamped |= !(channel(a->keys, c, s[i], 0) > MIN_SCALE) || !(channel(a->keys, c, s[i], 1) > MIN_SCALE);
+    free(s);
+    return clamped;
+}
+
 /* The largest (or smallest) scale over [t0, t1]; out of memory: no bound. */
 static double scale_extreme(const animation *a, double t0, double t1, int largest)
 {

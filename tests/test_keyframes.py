@@ -238,3 +238,20 @@ def test_maya_multi_node_weighted_file_renders_the_chosen_node_where_maya_puts_i
         px, py = w / 2 + f * x / (dist - z), h / 2 - f * y / (dist - z)
         cx, cy = coverage_centroid(read_full(out)[0]["A"])
         assert abs(px - cx) < 0.1 and abs(py - cy) < 0.1, (frame, px, py, cx, cy)
+
+
+def test_a_scale_extrapolated_through_zero_is_warned_about(tmp_path):
+    """Issue 23, item 8: a keyframed scale extrapolated below zero is held
+    at 1e-9 and the object silently vanished; now a warning names it. A
+    scale that stays positive gives none."""
+    def scene(s1):
+        return f"""<scene><camera position="0 0 5" lookat="0 0 0" width="4" height="4"/>
+<shutter open="0" close="2"/><object name="shrinker"><sphere radius="0.5"/><animation>
+<keyframes post="linear"><key time="0" scale="1 1 1"/><key time="1" scale="{s1} {s1} {s1}"/></keyframes>
+</animation></object></scene>"""
+    for s1, warned in [("0.2", True), ("0.8", False)]:  # at t = 2: -0.6 and 0.6
+        path = tmp_path / f"k{s1}.xml"
+        path.write_text(scene(s1))
+        proc = run([path, "--spp", 1, "--tspp", 2, "-o", tmp_path / "k.exr"])
+        assert proc.returncode == 0, proc.stderr
+        assert ("object 'shrinker': its keyframed scale reaches zero" in proc.stderr) == warned, proc.stderr

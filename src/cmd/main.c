@@ -487,6 +487,17 @@ static void report_target(const render_options *o, const image *img, attr_list *
                 reached, n, o->target_error, n - reached, max_batches_of(o));
 }
 
+/* A keyframed scale through zero is held at 1e-9 (animation.h): the
+ * object all but vanishes there, which must not pass unnoticed. */
+static void warn_about_scales(const render_options *o, const scene *s, const shutter *shut)
+{
+    for (int i = 0; i < s->nobjects && !o->quiet; i++)
+        if (animation_scale_clamped(&s->objects[i].anim, shut->open, shut->close))
+            fprintf(stderr, "refrender: warning: object '%s': its keyframed scale reaches zero or below during the "
+                            "shutter [%g, %g] and is held at 1e-9 there (the object vanishes; Maya would mirror it)\n",
+                    s->objects[i].name, shut->open, shut->close);
+}
+
 static void warn_about_settings(const render_options *o, const render_settings *rs)
 {
     int k = rs->smp.grid;
@@ -520,6 +531,7 @@ static int render_one(const scene *s, const shutter *shut, long long frame, acce
     render_run run;
     setup_run(&run, s, shut, o, cmdline);
     warn_about_settings(o, &run.rs);
+    warn_about_scales(o, s, shut);
     image img;
     if (o->resume ? resume_state(&run, &img, err) : (image_alloc(&img, s->cam.width, s->cam.height)
                                                          ? rr_fail(err, "out of memory for the image") : 0))
