@@ -250,7 +250,7 @@ static int is_blank(char c) { return c == ' ' || c == '\t' || c == '\r'; }
 
 /* Reads the next number of the current ascii line (an instance is one line,
  * PLY 1.0); returns -1 at the end of the line, -2 if the token is not a
- * number. strtod reads the token in place, whatever its length. */
+ * number (or longer than 511 characters, which no PLY writer makes). */
 static int read_ascii_value(ply_reader *r, double *out)
 {
     while (r->cur < r->end && is_blank(*r->cur))
@@ -260,9 +260,18 @@ static int read_ascii_value(ply_reader *r, double *out)
     const char *tok = r->cur;
     while (r->cur < r->end && !is_blank(*r->cur) && *r->cur != '\n' && *r->cur)
         r->cur++;
+    /* strtod needs a terminated string: the data need not have one after
+     * its last token (ply_parse takes any buffer; fuzzing found the read
+     * past its end). A token too long for the copy is no PLY number. */
+    char word[512];
+    size_t len = (size_t)(r->cur - tok);
+    if (len >= sizeof word)
+        return -2;
+    memcpy(word, tok, len);
+    word[len] = 0;
     char *stop;
-    *out = strtod(tok, &stop);
-    return stop == r->cur && stop != tok ? 0 : -2;
+    *out = strtod(word, &stop);
+    return stop == word + len && len > 0 ? 0 : -2;
 }
 
 static int element_fail(ply_reader *r, const ply_element *e, size_t index, const char *what)
