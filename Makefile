@@ -153,7 +153,7 @@ fuzz: $(FUZZ_TARGETS:%=$(FUZZ_DIR)/fuzz_%)
 
 # Speed and memory against Embree's built-in disc primitive, measured in the
 # same run (a benchmark, not a test). BENCH_ARGS=quick for a short smoke run,
-# BENCH_ARGS="full SERIES" for one series (see README, Speed).
+# BENCH_ARGS="full SERIES" for one series (see src/cmd/BENCH.md).
 bench: $(BUILD)/refrender-bench
 	mkdir -p out
 	$(BUILD)/refrender-bench out/bench.csv $(BENCH_ARGS)

@@ -10,7 +10,7 @@ MSE, RMSE, PSNR, relMSE, SSIM, LDR-FLIP and HDR-FLIP for the whole image and
 for each --crop. Sequences (printf-style patterns or directories) are paired
 by frame number and reported per frame, then as the mean and the worst frame
 (by RMSE) of each test. Formulas and references: scripts/imagecompare.py,
-flip.py and README.md. Exit status: 0 success, 2 bad input (message names the
+flip.py and scripts/README.md. Exit status: 0 success, 2 bad input (message names the
 file).
 """
 import argparse

@@ -125,7 +125,7 @@ td,th{{border:1px solid #999;padding:2px 6px;text-align:right;white-space:nowrap
 {body}</table>
 {notes}<h2>Columns</h2>
 {_legend(cols)}
-<p>Full definitions: refrender's README (Comparing images).</p>
+<p>Full definitions: refrender's scripts/README.md (Comparing images).</p>
 {figures}</body></html>
 """
     with open(os.path.join(out_dir, "index.html"), "w") as f:

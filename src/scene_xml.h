@@ -1,5 +1,5 @@
 /* Scene files (XML, libxml2), close to the thesis' Figure 4.11 and
- * documented in README.md. Every error names the file and line. */
+ * documented in scenes/README.md. Every error names the file and line. */
 #ifndef RR_SCENE_XML_H
 #define RR_SCENE_XML_H
 

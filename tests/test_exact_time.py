@@ -125,7 +125,7 @@ def test_shutter_override(tmp_path):
 
 
 def test_cycles_flat_shutter_table_from_the_readme(tmp_path):
-    """README's note on Blender Cycles: its 'flat' curve, as the table weight
+    """scenes/README.md's note on Blender Cycles: its 'flat' curve, as the table weight
     README gives, holds only 255/766 of the density after t_b = 0.98831. A
     disc covering the ray for about 0.01 inside [0.9886, 0.9994] (it passes
     x = 0 at t = 0.994) then weighs 0.3329 / Z of what it weighs under a box

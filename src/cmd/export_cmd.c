@@ -2,7 +2,7 @@
  * refrender renders, as JSON, with no refrender code: camera intrinsics and
  * matrices, each object's model source and object-to-world matrices at
  * sample times of each frame's shutter, a(t), lights, materials. The
- * conventions are written into the file and README (Exporting scenes). */
+ * conventions are written into the file and scripts/README.md (Exporting scenes). */
 #include <getopt.h>
 #include <limits.h>
 #include <stdio.h>
@@ -18,7 +18,7 @@ static void export_usage(FILE *f)
 "usage: refrender export SCENE.xml [--frame N | --frames A-B] [--shutter O,C] [--times K]\n"
 "                        [-D name=value] -o SCENE.json\n"
 "\n"
-"Writes the scene as another renderer needs it (README, Exporting scenes):\n"
+"Writes the scene as another renderer needs it (scripts/README.md, Exporting):\n"
 "resolution, camera intrinsics, and per frame the world-to-camera matrix,\n"
 "camera-to-raster matrix and each object's object-to-world matrix at the\n"
 "shutter's open and close times and K times between; each object's model\n"
