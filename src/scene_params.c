@@ -64,9 +64,14 @@ static int read_defaults(xml_ctx *c, xmlNodePtr root, scene_params *p, int given
         if (!xml_is_element(k) || strcmp(xml_elname(k), "default"))
             continue;
         char name[SCENE_PARAM_NAME + 8], value[SCENE_PARAM_VALUE + 8];
-        if (xml_check_attributes(c, k, ok) || xml_attr_text(c, k, "name", name, sizeof name) <= 0 ||
-            xml_attr_text(c, k, "value", value, sizeof value) <= 0)
-            return c->err->msg[0] ? -1 : xml_fail(c, k, "<default> needs name and value");
+        if (xml_check_attributes(c, k, ok))
+            return -1;
+        int has_name = xml_attr_text(c, k, "name", name, sizeof name);
+        int has_value = has_name < 0 ? -1 : xml_attr_text(c, k, "value", value, sizeof value);
+        if (has_name < 0 || has_value < 0) /* too long: the error names it */
+            return -1;
+        if (!has_name || !has_value)
+            return xml_fail(c, k, "<default> needs name and value");
         int i = params_find(p, name, strlen(name));
         rr_error sub;
         if ((i < 0 || i >= given) && params_set(p, name, strlen(name), value, &sub))
