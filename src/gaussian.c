@@ -4,7 +4,9 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "atomicfile.h"
 #include "ply.h"
+#include "splat.h"
 
 /* ---- the PLY layout --------------------------------------------------- */
 
@@ -71,10 +73,10 @@ static int begin_model(void *user, const char *path, const int *present, size_t 
 
 /* Storage for every declared Gaussian, on the first one (after the reader
  * has checked that the file can hold them all). */
-static int allocate(gaussian_sink *s)
+static int allocate(gaussian_sink *s) { return gaussian_model_alloc(s->m, s->declared ? s->declared : 1); }
+
+int gaussian_model_alloc(gaussian_model *m, size_t n)
 {
-    gaussian_model *m = s->m;
-    size_t n = s->declared ? s->declared : 1;
     m->mean = malloc(n * 3 * sizeof *m->mean);
     m->scale = malloc(n * 3 * sizeof *m->scale);
     m->rotation = malloc(n * 4 * sizeof *m->rotation);
@@ -166,6 +168,141 @@ int gaussian_read(const char *path, gaussian_kind kind, gaussian_model *m, uint6
     gaussian_sink sink = {m, kind, 0, 0};
     ply_visitor v = {begin_model, add_gaussian, &sink};
     return finish(m, ply_read_vertices(path, &gaussian_schema, &v, content_hash, err), path, err);
+}
+
+/* ---- writing ------------------------------------------------------------ */
+
+static int put_f32(FILE *f, double v)
+{
+    float x = (float)v;
+    return fwrite(&x, 4, 1, f) == 1; /* little endian hosts only: checked in gaussian_write_ply */
+}
+
+static void write_header(FILE *f, const gaussian_model *m)
+{
+    int rest = 3 * (m->sh_coeffs - 1), scales = m->kind == GAUSSIAN_3D ? 3 : 2;
+    fprintf(f, "ply\nformat binary_little_endian 1.0\ncomment written by refrender %s (%s)\nelement vertex %zu\n",
+            RR_VERSION, m->kind == GAUSSIAN_3D ? "3DGS" : "2DGS", m->count);
+    for (int k = 0; k < G_REST; k++)
+        fprintf(f, "property float %s\n", slot_names[k]);
+    for (int k = 0; k < rest; k++)
+        fprintf(f, "property float %s\n", slot_names[G_REST + k]);
+    for (int k = G_OPACITY; k < G_SCALE + scales; k++)
+        fprintf(f, "property float %s\n", slot_names[k]);
+    for (int k = G_ROT; k < G_SLOTS; k++)
+        fprintf(f, "property float %s\n", slot_names[k]);
+    fputs("end_header\n", f);
+}
+
+/* One Gaussian as the official save_ply stores it: the activations undone
+ * (logit of the opacity, log of the scales), rest coefficients
+ * channel-major, normals zero. */
+static int write_gaussian(FILE *f, const gaussian_model *m, size_t i)
+{
+    int ok = 1, rest = m->sh_coeffs - 1, scales = m->kind == GAUSSIAN_3D ? 3 : 2;
+    const float *sh = m->sh + 3 * (size_t)m->sh_coeffs * i;
+    for (int k = 0; k < 3; k++)
+        ok &= put_f32(f, m->mean[3 * i + k]);
+    for (int k = 0; k < 3; k++)
+        ok &= put_f32(f, 0.0);
+    for (int c = 0; c < 3; c++)
+        ok &= put_f32(f, sh[c]);
+    for (int c = 0; c < 3; c++)
+        for (int k = 1; k <= rest; k++)
+            ok &= put_f32(f, sh[3 * k + c]);
+    double o = m->opacity[i];
+    ok &= put_f32(f, log(o / (1.0 - o)));
+    for (int k = 0; k < scales; k++)
+        ok &= put_f32(f, log(m->scale[3 * i + k]));
+    for (int k = 0; k < 4; k++)
+        ok &= put_f32(f, m->rotation[4 * i + k]);
+    return ok;
+}
+
+typedef struct {
+    const char *path;
+    const gaussian_model *m;
+} model_file;
+
+static int write_model(FILE *f, void *ctx, rr_error *err)
+{
+    const model_file *mf = ctx;
+    write_header(f, mf->m);
+    int ok = 1;
+    for (size_t i = 0; i < mf->m->count && ok; i++)
+        ok = write_gaussian(f, mf->m, i);
+    return ok && !ferror(f) ? 0 : rr_fail(err, "%s: write failed (disk full?)", mf->path);
+}
+
+int gaussian_write_ply(const char *path, const gaussian_model *m, rr_error *err)
+{
+    const uint16_t one = 1;
+    if (*(const uint8_t *)&one != 1)
+        return rr_fail(err, "%s: writing Gaussian PLYs needs a little-endian host", path);
+    for (size_t i = 0; i < m->count; i++) /* what would not read back is not written */
+        if (!(m->opacity[i] > 0 && m->opacity[i] < 1) || !(m->scale[3 * i] > 0 && m->scale[3 * i + 1] > 0))
+            return rr_fail(err, "%s: Gaussian %zu has an opacity outside (0, 1) or a zero scale", path, i);
+    model_file mf = {path, m};
+    return atomic_write_stdio(path, write_model, &mf, err);
+}
+
+/* The unit quaternion (w, x, y, z) of the rotation whose columns are the
+ * orthonormal frame (a, b, c) (Shepperd's method: the largest of the four
+ * squares first, for accuracy). */
+static void quaternion_of_frame(vec3 a, vec3 b, vec3 c, double q[4])
+{
+    double m[3][3] = {{a.x, b.x, c.x}, {a.y, b.y, c.y}, {a.z, b.z, c.z}};
+    double t = m[0][0] + m[1][1] + m[2][2];
+    if (t > 0) {
+        double s = 2 * sqrt(1 + t);
+        q[0] = s / 4, q[1] = (m[2][1] - m[1][2]) / s, q[2] = (m[0][2] - m[2][0]) / s, q[3] = (m[1][0] - m[0][1]) / s;
+    } else if (m[0][0] > m[1][1] && m[0][0] > m[2][2]) {
+        double s = 2 * sqrt(1 + m[0][0] - m[1][1] - m[2][2]);
+        q[0] = (m[2][1] - m[1][2]) / s, q[1] = s / 4, q[2] = (m[0][1] + m[1][0]) / s, q[3] = (m[0][2] + m[2][0]) / s;
+    } else if (m[1][1] > m[2][2]) {
+        double s = 2 * sqrt(1 + m[1][1] - m[0][0] - m[2][2]);
+        q[0] = (m[0][2] - m[2][0]) / s, q[1] = (m[0][1] + m[1][0]) / s, q[2] = s / 4, q[3] = (m[1][2] + m[2][1]) / s;
+    } else {
+        double s = 2 * sqrt(1 + m[2][2] - m[0][0] - m[1][1]);
+        q[0] = (m[1][0] - m[0][1]) / s, q[1] = (m[0][2] + m[2][0]) / s, q[2] = (m[1][2] + m[2][1]) / s, q[3] = s / 4;
+    }
+}
+
+/* Small view-dependent coefficients for the rest bases, a fixed function of
+ * the Gaussian, basis and channel: enough to exercise every SH degree. */
+static float rest_coefficient(size_t i, int k, int c) { return (float)(0.08 * sin(0.7 * (double)i + 1.3 * k + 2.1 * c)); }
+
+int gaussian_from_surfels(const surfel *s, size_t n, gaussian_kind kind, int degree, gaussian_model *m,
+                          rr_error *err)
+{
+    gaussian_model_free(m);
+    if (degree < 0 || degree > GAUSSIAN_MAX_SH_DEGREE)
+        return rr_fail(err, "SH degree %d: expected 0 to 3", degree);
+    m->kind = kind == GAUSSIAN_3D ? GAUSSIAN_3D : GAUSSIAN_2D;
+    m->sh_degree = degree, m->sh_coeffs = (degree + 1) * (degree + 1);
+    if (gaussian_model_alloc(m, n ? n : 1))
+        return rr_fail(err, "out of memory for %zu Gaussians", n);
+    for (size_t i = 0; i < n; i++) {
+        vec3 u, v, normal = v3_normalize(s[i].normal);
+        splat_axes_from_normal(normal, 1.0, &u, &v);
+        double q[4], sigma = 0.5 * s[i].radius; /* refrender's kernel: sigma = 0.5 of the splat radius */
+        quaternion_of_frame(u, v, normal, q);
+        float pos[3] = {(float)s[i].center.x, (float)s[i].center.y, (float)s[i].center.z};
+        double col[3] = {s[i].color.x, s[i].color.y, s[i].color.z};
+        for (int k = 0; k < 3; k++) {
+            m->mean[3 * i + k] = pos[k];
+            m->scale[3 * i + k] = (float)(k < 2 ? sigma : m->kind == GAUSSIAN_3D ? 0.02 * sigma : 0.0);
+            m->sh[3 * i * (size_t)m->sh_coeffs + (size_t)k] = (float)((col[k] - 0.5) / 0.28209479177387814);
+        }
+        for (int k = 0; k < 4; k++)
+            m->rotation[4 * i + k] = (float)q[k];
+        m->opacity[i] = 0.95f;
+        for (int k = 1; k < m->sh_coeffs; k++)
+            for (int c = 0; c < 3; c++)
+                m->sh[3 * i * (size_t)m->sh_coeffs + 3 * (size_t)k + (size_t)c] = rest_coefficient(i, k, c);
+    }
+    m->count = n;
+    return 0;
 }
 
 /* ---- spherical harmonics ---------------------------------------------- */

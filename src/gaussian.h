@@ -39,6 +39,8 @@ typedef struct {
 
 void gaussian_model_init(gaussian_model *m);
 void gaussian_model_free(gaussian_model *m);
+/* Storage for n Gaussians of m's kind and SH degree (count stays 0). */
+int gaussian_model_alloc(gaussian_model *m, size_t n);
 
 /* Reads a trained model. kind GAUSSIAN_AUTO detects it (scale_2 present:
  * 3D, else 2D); forcing 2D reads a 3D file's first two scales; forcing 3D
@@ -49,6 +51,21 @@ void gaussian_model_free(gaussian_model *m);
 int gaussian_read(const char *path, gaussian_kind kind, gaussian_model *m, uint64_t *content_hash, rr_error *err);
 int gaussian_parse(const char *name, const char *data, size_t len, gaussian_kind kind, gaussian_model *m,
                    rr_error *err);
+
+/* Writes m in the official layout (binary little endian; the activations
+ * undone: logit of the opacity, log of the scales; normals zero), so the
+ * official loaders and gaussian_read read it back. Atomic, as every
+ * refrender output. */
+int gaussian_write_ply(const char *path, const gaussian_model *m, rr_error *err);
+
+/* Gaussians from surfels (ply.h), for test scenes and 'refrender gen':
+ * each at the surfel's center, its frame's third axis along the normal,
+ * the two tangent scales half the radius (refrender's kernel sigma), a 3D
+ * Gaussian 2% as thick, opacity 0.95, the colour as the DC coefficient and
+ * small fixed view-dependent coefficients up to the SH degree. */
+struct surfel_s;
+int gaussian_from_surfels(const struct surfel_s *s, size_t n, gaussian_kind kind, int degree, gaussian_model *m,
+                          rr_error *err);
 
 /* The colour of SH coefficients sh (3 per coefficient, as stored above) of
  * the given degree seen along dir (need not be unit): the real SH series

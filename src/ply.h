@@ -31,7 +31,7 @@ int ply_read(const char *path, vec3 default_color, pointmodel *m, uint64_t *cont
 /* The same from len bytes in memory; name is used in messages. */
 int ply_parse(const char *name, const char *data, size_t len, vec3 default_color, pointmodel *m, rr_error *err);
 
-typedef struct {
+typedef struct surfel_s {
     vec3 center, normal;
     double radius;
     vec3 color;

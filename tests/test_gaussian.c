@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include "../src/gaussian.h"
+#include "../src/ply.h"
 #include "harness.h"
 
 /* A PLY of one Gaussian per row of vals, with the given property names, in
@@ -233,4 +234,59 @@ TEST(gaussian_read_takes_a_file_and_hashes_its_bytes)
     unlink(path);
     free(buf);
     CHECK(gaussian_read(path, GAUSSIAN_AUTO, &m, NULL, &e) == -1 && strstr(e.msg, path));
+}
+
+/* The 3x3 rotation of a unit quaternion (w, x, y, z), as the official
+ * build_rotation writes it: the test's own formula, not the writer's. */
+static void rotation_of(const float *q, double r[3][3])
+{
+    double w = q[0], x = q[1], y = q[2], z = q[3];
+    double m[3][3] = {{1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)},
+                      {2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)},
+                      {2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)}};
+    memcpy(r, m, sizeof m);
+}
+
+/* Surfels to Gaussians, written in the official layout and read back: the
+ * normal is the third axis of the rotation, the tangent scales half the
+ * radius, the DC colour the surfel's, and everything survives the file
+ * (activations undone on writing, redone on reading). */
+TEST(gaussians_from_surfels_round_trip_through_the_official_layout)
+{
+    surfel s[4] = {{{0, 0, 0}, {0, 0, 1}, 0.2, {0.9, 0.1, 0.5}},
+                   {{1, 2, 3}, {1, 1, 0}, 0.4, {0.2, 0.7, 0.3}},
+                   {{-1, 0, 2}, {0, -1, 0}, 0.1, {0.5, 0.5, 0.5}},
+                   {{0, 1, 0}, {0.3, -0.2, 0.9}, 0.3, {0.1, 0.2, 0.3}}}; /* every branch of the conversion */
+    for (int kind = 2; kind <= 3; kind++) {
+        gaussian_model m, back;
+        rr_error e;
+        gaussian_model_init(&m), gaussian_model_init(&back);
+        CHECK(gaussian_from_surfels(s, 4, (gaussian_kind)kind, 3, &m, &e) == 0);
+        char path[] = "/tmp/rr_gauss_rt_XXXXXX";
+        int fd = mkstemp(path);
+        close(fd);
+        CHECK(gaussian_write_ply(path, &m, &e) == 0);
+        CHECK(gaussian_read(path, GAUSSIAN_AUTO, &back, NULL, &e) == 0);
+        unlink(path);
+        CHECK(back.count == 4 && (int)back.kind == kind && back.sh_degree == 3);
+        for (int i = 0; i < 4 && back.count == 4; i++) {
+            double r[3][3];
+            rotation_of(back.rotation + 4 * i, r);
+            vec3 n = v3_normalize(s[i].normal);
+            CHECK_NEAR(r[0][2], n.x, 1e-6), CHECK_NEAR(r[1][2], n.y, 1e-6), CHECK_NEAR(r[2][2], n.z, 1e-6);
+            CHECK_NEAR(r[0][0] * r[0][1] + r[1][0] * r[1][1] + r[2][0] * r[2][1], 0, 1e-6);
+            CHECK_NEAR(back.scale[3 * i], 0.5 * s[i].radius, 1e-7);
+            CHECK_NEAR(back.scale[3 * i + 1], 0.5 * s[i].radius, 1e-7);
+            CHECK(kind == 2 ? back.scale[3 * i + 2] == 0 : back.scale[3 * i + 2] > 0);
+            CHECK_NEAR(back.opacity[i], 0.95, 1e-6);
+            float dc[3];
+            memcpy(dc, back.sh + 48 * i, sizeof dc);
+            vec3 c = gaussian_sh_color(dc, 0, v3(0.3, -0.2, 1));
+            CHECK_NEAR(c.x, s[i].color.x, 1e-6), CHECK_NEAR(c.y, s[i].color.y, 1e-6);
+            CHECK_NEAR(c.z, s[i].color.z, 1e-6);
+            CHECK(!memcmp(back.sh + 48 * i, m.sh + 48 * i, 48 * sizeof(float))); /* every coefficient exact */
+            CHECK(!memcmp(back.mean + 3 * i, m.mean + 3 * i, 3 * sizeof(float)));
+        }
+        gaussian_model_free(&m), gaussian_model_free(&back);
+    }
 }
