@@ -159,8 +159,8 @@ bench: $(BUILD)/refrender-bench
 	$(BUILD)/refrender-bench out/bench.csv $(BENCH_ARGS)
 	@if [ "$(BENCH_ARGS)" != quick ]; then $(MAKE) --no-print-directory bench-time; fi
 
-# Time to equal error, --time-integration exact against sampled time (README,
-# Exact time integration); part of `make bench` except in quick mode.
+# Time to equal error, --time-integration exact against sampled time
+# (src/EXACT.md); part of `make bench` except in quick mode.
 TTE_SCENES ?= default,diagonal,rotation,towards_camera,crossing,camera_pan,large
 bench-time: $(BIN) scenes
 	$(PYTHON) scripts/time_to_error.py --scenes $(TTE_SCENES) --out out/time_to_error

@@ -94,7 +94,7 @@ static inline vec3 v3_normalize(vec3 a)
     double l = v3_len(a);
     return l > 0 ? v3_scale(a, 1.0 / l) : a;
 }
-/* The color of a splat, sphere or model that gives none (README: 0.8 grey);
+/* The color of a splat, sphere or model that gives none (scenes/README.md: 0.8 grey);
  * rr_default_color2 is the second color of generated checkerboards. */
 static inline vec3 rr_default_color(void) { return v3(0.8, 0.8, 0.8); }
 static inline vec3 rr_default_color2(void) { return v3(0.2, 0.2, 0.2); }

@@ -39,7 +39,7 @@ static inline int sphere_visible_root(const double root[2], double tnear, double
     return -1;
 }
 
-/* Surfaces are two-sided: the side facing the eye is shaded (README,
+/* Surfaces are two-sided: the side facing the eye is shaded (scenes/README.md,
  * back faces), so a normal pointing along the ray is turned round. */
 static inline vec3 normal_facing_eye(vec3 normal, vec3 dir)
 {
