@@ -10,7 +10,7 @@ import OpenImageIO as oiio
 import pytest
 
 import flip
-from conftest import ROOT
+from conftest import BIN, ROOT
 from imagecompare import basic_metrics, composite, read_image
 
 COMPARE = ROOT / "scripts" / "compare.py"
@@ -146,7 +146,7 @@ def test_composite_swaps_refrender_background_for_the_new_one(tmp_path):
 <background color="0.2 0.4 0.6"/><object><sphere radius="0.6" color="0.9 0.1 0.1"/>
 <material shading="unlit"/></object></scene>""")
     out = tmp_path / "r.exr"
-    proc = subprocess.run([str(ROOT / "build" / "refrender"), str(scene), "-o", str(out), "--spp", "4", "--tspp", "1",
+    proc = subprocess.run([BIN, str(scene), "-o", str(out), "--spp", "4", "--tspp", "1",
                            "--quiet"], capture_output=True, text=True)
     assert proc.returncode == 0, proc.stderr
     img = read_image(out)
