@@ -33,11 +33,19 @@ SAMPLED = [(4, 4), (16, 4), (16, 16), (64, 16), (16, 64), (64, 64)]
 EXACT = [1, 4, 16]
 
 
+# refrender's words when exact time refuses a scene beyond its bounds
+# (src/EXACT.md, Bounds): a measurement (exact cannot do it), not a failure.
+REFUSED = "exact time cannot finish this scene"
+
+
 def render(scene, out, args, res, threads):
+    """Wall-clock seconds of the render; None when exact time refused it."""
     cmd = [BIN, scene, "--res", res, "--threads", str(threads), "-o", out, "--quiet", *map(str, args)]
     start = time.monotonic()
     proc = subprocess.run(cmd, capture_output=True, text=True)
     seconds = time.monotonic() - start
+    if proc.returncode and REFUSED in proc.stderr:
+        return None
     if proc.returncode:
         sys.exit(f"time_to_error: {' '.join(cmd)} failed:\n{proc.stderr}")
     return seconds
@@ -49,7 +57,10 @@ def rgb(path):
 
 
 def time_to(points, target):
-    """Seconds to reach target RMSE from (seconds, rmse) points, log-log."""
+    """Seconds to reach target RMSE from (seconds, rmse) points, log-log;
+    (None, None) without any point."""
+    if not points:
+        return None, None
     pts = sorted(points)
     best = min(pts, key=lambda p: p[1])
     if best[1] > target:
@@ -78,6 +89,9 @@ def measure_scene(name, args, writer):
             continue
         out = os.path.join(args.out, f"{name}_{method}_{spp}x{tspp}.exr")
         seconds = render(scene, out, extra, args.res, args.threads)
+        if seconds is None:  # more positions cannot make it finish either
+            print(f"time_to_error: {name}: exact time refused the scene (beyond its bounds)", file=sys.stderr)
+            break
         rmse = float(np.sqrt(np.mean((rgb(out) - reference) ** 2)))
         results[method].append((seconds, rmse))
         writer.writerow([name, method, spp, tspp, f"{seconds:.3f}", f"{rmse:.6g}"])
@@ -86,6 +100,8 @@ def measure_scene(name, args, writer):
 
 
 def cell(t, floor):
+    if t is None and floor is None:
+        return "refused"
     return f"{t:.2f}" if t is not None else f"> {floor:.2f}"
 
 
@@ -115,7 +131,7 @@ def main():
                 te, fe = time_to(res["exact"], target)
                 ratio = f"{ts / te:.2f}" if ts is not None and te is not None else "n/a"
                 rows.append(f"| {name} | {target:g} | {cell(ts, fs)} | {cell(te, fe)} | {ratio} |")
-            best = lambda m: min(r[1] for r in res[m])  # noqa: E731
+            best = lambda m: min((r[1] for r in res[m]), default=math.nan)  # noqa: E731
             print(f"time_to_error: {name}: lowest RMSE sampled {best('sampled'):.5f}, exact {best('exact'):.5f}",
                   file=sys.stderr)
             print("\n".join(rows[-len(targets):]), file=sys.stderr)
