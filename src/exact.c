@@ -10,6 +10,7 @@
  * (reach_delta); the direction D moves by at most dir_rate h / 2. */
 #include "exact_internal.h"
 
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -132,15 +133,19 @@ int exact_plan_new(const scene *s, const accel *a, const shutter *shut, double b
 
 void exact_plan_watch(exact_plan *p, volatile sig_atomic_t *cancel) { p->cancel = cancel; }
 
-const char *exact_status_text(int status)
+void exact_status_text(int status, char *buf, size_t size)
 {
     switch (status) {
-    case EXACT_OK: return "ok";
-    case EXACT_NO_MEMORY: return "out of memory";
-    case EXACT_INTERRUPTED: return "interrupted";
-    case EXACT_TOO_MANY_CANDIDATES: return "more than 32768 candidate splats (EXACT_MAX_CANDIDATES)";
-    case EXACT_TOO_COSTLY: return "more than 5e7 evaluations (EXACT_MAX_EVALUATIONS)";
-    default: return "Embree failed while gathering candidates";
+    case EXACT_OK: snprintf(buf, size, "ok"); break;
+    case EXACT_NO_MEMORY: snprintf(buf, size, "out of memory"); break;
+    case EXACT_INTERRUPTED: snprintf(buf, size, "interrupted"); break;
+    case EXACT_TOO_MANY_CANDIDATES:
+        snprintf(buf, size, "more than %d candidate splats (EXACT_MAX_CANDIDATES)", EXACT_MAX_CANDIDATES);
+        break;
+    case EXACT_TOO_COSTLY:
+        snprintf(buf, size, "more than %.3g evaluations (EXACT_MAX_EVALUATIONS)", (double)EXACT_MAX_EVALUATIONS);
+        break;
+    default: snprintf(buf, size, "Embree failed while gathering candidates");
     }
 }
 

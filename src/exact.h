@@ -77,8 +77,8 @@ enum {
 #define EXACT_MAX_CANDIDATES 32768
 #define EXACT_MAX_EVALUATIONS 50000000ULL
 
-/* A one-line reason for a status other than EXACT_OK. */
-const char *exact_status_text(int status);
+/* A one-line reason for a status other than EXACT_OK, into buf. */
+void exact_status_text(int status, char *buf, size_t size);
 
 /* The exact weighted time average of the color (rgb) and coverage (a) seen
  * through raster position (x, y): integral of a(t) rgba(t) over the

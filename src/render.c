@@ -371,7 +371,8 @@ static void report_progress(render_job *job, const render_hooks *hooks, double s
  * says the scene is beyond exact time integration. */
 static int exact_failure(const render_job *job, rr_error *err)
 {
-    const char *why = exact_status_text(job->exact_status);
+    char why[128];
+    exact_status_text(job->exact_status, why, sizeof why);
     if (job->exact_status == EXACT_NO_MEMORY || job->exact_status == EXACT_EMBREE_ERROR)
         return rr_fail(err, "exact time integration at pixel (%d, %d): %s", job->exact_px, job->exact_py, why);
     return rr_fail(err,
