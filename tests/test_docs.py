@@ -137,3 +137,16 @@ def test_the_researchers_workflow_runs_end_to_end(tmp_path):
     assert proc.returncode == 0, proc.stderr
     assert (tmp_path / "table.tex").exists() and (tmp_path / "report" / "index.html").exists()
     assert any((tmp_path / "figs").iterdir()) and (tmp_path / "animated.json").exists()
+
+
+def test_tests_readme_maps_every_test_file():
+    """tests/README.md is a map from topics to files: it names every test
+    file (a new one must be placed on the map), and every file it names
+    exists (a renamed one cannot linger)."""
+    text = (ROOT / "tests" / "README.md").read_text()
+    named = set(re.findall(r"`((?:tests/)?[\w./-]+\.(?:py|c))`", text))
+    missing = [n for n in named if not any((ROOT / d / n.removeprefix(f"{d}/")).exists() for d in ("tests", "scripts"))]
+    assert not missing, missing
+    files = {p.name for p in (ROOT / "tests").glob("test_*.[cp]*") if p.suffix in (".c", ".py")}
+    unmapped = sorted(files - {n.rsplit("/", 1)[-1] for n in named})
+    assert not unmapped, unmapped
