@@ -150,3 +150,21 @@ def test_tests_readme_maps_every_test_file():
     files = {p.name for p in (ROOT / "tests").glob("test_*.[cp]*") if p.suffix in (".c", ".py")}
     unmapped = sorted(files - {n.rsplit("/", 1)[-1] for n in named})
     assert not unmapped, unmapped
+
+
+
+def compare_modules():
+    """The scripts/README.md row naming the modules compare.py is made of
+    (imported, not run)."""
+    (row,) = [line for line in (ROOT / "scripts" / "README.md").read_text().splitlines()
+              if line.startswith("|") and "the modules `compare.py` is made of" in line]
+    return set(re.findall(r"`([\w-]+\.py)`", row.split("|")[1]))
+
+
+@pytest.mark.parametrize("script", sorted({p.name for p in (ROOT / "scripts").glob("*.py")} - compare_modules()))
+def test_every_script_answers_help(script):
+    """scripts/README.md promises it: each tool's own manual is its --help
+    (the modules compare.py imports, named there, are not tools)."""
+    proc = subprocess.run(["/usr/bin/python3", str(ROOT / "scripts" / script), "--help"], capture_output=True,
+                          text=True, timeout=120)
+    assert proc.returncode == 0 and "usage" in proc.stdout.lower(), (proc.stdout, proc.stderr)
