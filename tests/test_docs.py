@@ -80,11 +80,16 @@ def test_every_script_and_test_readme_names_exists():
     assert named and not [n for n in named if not (ROOT / n).exists()]
 
 
-def readme_commands(prefix):
-    """The indented code lines of README that start with prefix, with their
-    continuation lines joined and comments dropped."""
-    lines, out, cur = (ROOT / "README.md").read_text().splitlines(), [], ""
-    for line in lines:
+def readme_commands(prefix, section=None):
+    """The indented code lines of README (of one ## section, if given) that
+    start with prefix, with their continuation lines joined and comments
+    dropped."""
+    text = (ROOT / "README.md").read_text()
+    if section:
+        text = text.split(f"\n## {section}\n", 1)[1].split("\n## ", 1)[0]
+    text = re.sub(r"```.*?```", "", text, flags=re.S)  # fenced blocks are files, not commands
+    out, cur = [], ""
+    for line in text.splitlines():
         if not line.startswith("    "):
             continue
         text = line.strip()
@@ -119,8 +124,9 @@ def test_the_researchers_workflow_runs_end_to_end(tmp_path):
     (tmp_path / "build" / "refrender").symlink_to(BIN)
     (tmp_path / "scripts").symlink_to(ROOT / "scripts")
     small = ["--res", "48x28", "--spp", "1", "--tspp", "4"]
-    for cmd in readme_commands("mkdir") + readme_commands("build/refrender scenes/animated.xml") + \
-            readme_commands("build/refrender export"):
+    for cmd in readme_commands("mkdir", "Comparing a method") + \
+            readme_commands("build/refrender scenes/animated.xml", "Comparing a method") + \
+            readme_commands("build/refrender export", "Comparing a method"):
         args = shlex.split(cmd)
         if args[0] == "build/refrender" and args[1] != "export":
             args += small
@@ -131,7 +137,7 @@ def test_the_researchers_workflow_runs_end_to_end(tmp_path):
                                "--quiet", "-o", f"{method}/{method}.%04d.exr"], cwd=tmp_path, capture_output=True,
                               text=True)
         assert proc.returncode == 0, proc.stderr
-    cmd = readme_commands("scripts/compare.py '")[0]
+    (cmd,) = readme_commands("scripts/compare.py '", "Comparing a method")
     args = shlex.split(cmd.replace("--crop 90,50,64,48", "--crop 18,10,16,12"))
     proc = subprocess.run(["/usr/bin/python3", *args], cwd=tmp_path, capture_output=True, text=True)
     assert proc.returncode == 0, proc.stderr
@@ -168,3 +174,20 @@ def test_every_script_answers_help(script):
     proc = subprocess.run(["/usr/bin/python3", str(ROOT / "scripts" / script), "--help"], capture_output=True,
                           text=True, timeout=120)
     assert proc.returncode == 0 and "usage" in proc.stdout.lower(), (proc.stdout, proc.stderr)
+
+
+def test_the_scene_example_renders(tmp_path):
+    """README's scene example, saved where README says, with the model made
+    by the command README shows, renders (at a tiny size)."""
+    readme = (ROOT / "README.md").read_text()
+    xml = readme.split("\n## Scenes\n", 1)[1].split("```xml\n", 1)[1].split("```", 1)[0]
+    make_model, render = readme_commands("", "Scenes")
+    (tmp_path / "build").mkdir()
+    (tmp_path / "build" / "refrender").symlink_to(BIN)
+    proc = subprocess.run(make_model + " --count 2000", shell=True, cwd=tmp_path, capture_output=True, text=True)
+    assert proc.returncode == 0, (make_model, proc.stderr)
+    (tmp_path / "my" / "scene.xml").write_text(xml)
+    args = shlex.split(render) + ["--res", "32x32", "--spp", "1", "--tspp", "4", "--quiet"]
+    proc = subprocess.run(args, cwd=tmp_path, capture_output=True, text=True)
+    assert proc.returncode == 0, (render, proc.stderr)
+    assert (tmp_path / "my" / "scene.exr").exists() and (tmp_path / "my" / "scene.png").exists()
