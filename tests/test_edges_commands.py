@@ -2,7 +2,9 @@
 surfels' refuse to overwrite their input (the render already did); a state
 whose header declares more pixels than its file can hold is refused before
 anything is allocated for them; a state holding more batches than its own
-range is called damaged, not incomplete."""
+range, or a range beyond its render's batches, is called damaged, not
+incomplete (pixels beyond the range are what a --target-error checkpoint
+holds: the message says so)."""
 import struct
 
 from conftest import run
@@ -61,7 +63,19 @@ def test_a_state_with_more_batches_than_its_range_is_damaged_not_incomplete(tmp_
     crafted.write_bytes(bytes(data))
     proc = run(["merge", crafted, "-o", tmp_path / "m.exr"])
     assert proc.returncode == 1 and "more than the 1 of its range 0-1" in proc.stderr, proc.stderr
-    assert "resume it first" not in proc.stderr
+    # the one way a render makes such a state: a --target-error checkpoint
+    assert "--target-error" in proc.stderr and "resume it first" not in proc.stderr
+
+
+def test_a_state_beyond_its_renders_batches_is_damaged_not_incomplete(tmp_path):
+    # its pixels hold the 2 batches the render gives; its range claims 8 of 2
+    data = bytearray(state(tmp_path, "two", 4, 4, batches=2).read_bytes())
+    patch(data, b"batches 0-2", b"batches 0-8")
+    crafted = tmp_path / "crafted.exr"
+    crafted.write_bytes(bytes(data))
+    proc = run(["merge", crafted, "-o", tmp_path / "m.exr"])
+    assert proc.returncode == 1 and "beyond the 2 batches of its render" in proc.stderr, proc.stderr
+    assert "incomplete" not in proc.stderr
 
 
 def test_surfels_of_coinciding_points_names_the_input_not_the_output(tmp_path):

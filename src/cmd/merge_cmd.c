@@ -52,14 +52,27 @@ static int check_ranges(batch_range *r, int n, uint32_t total, rr_error *err)
     return 0;
 }
 
+/* A state's range lies within its own render's batches (a render writes
+ * nothing else): checked before its pixels, whose counts a resume could
+ * not bring up to a range the render never gives. */
+static int check_range_in_render(const attr_list *a, const batch_range *r, rr_error *err)
+{
+    unsigned long total = strtoul(attrs_get(a, "refrender:batches"), NULL, 10);
+    if (r->end > total)
+        return rr_fail(err, "%s holds batches %u-%u, beyond the %lu batches of its render (refrender:batches): "
+                            "a damaged or crafted state", r->path, r->begin, r->end, total);
+    return 0;
+}
+
 static int check_complete(const image *img, const batch_range *r, rr_error *err)
 {
     size_t n = (size_t)img->width * img->height;
     for (size_t i = 0; i < n; i++) {
         uint32_t has = img->px[i].batches, range = r->end - r->begin;
-        if (has > range) /* no resume can fix this: the state contradicts its own header */
-            return rr_fail(err, "%s: pixel %zu holds %u batches, more than the %u of its range %u-%u: a damaged "
-                                "or crafted state", r->path, i, has, range, r->begin, r->end);
+        if (has > range) /* a --pass state never does: --pass and --target-error exclude each other */
+            return rr_fail(err, "%s: pixel %zu holds %u batches, more than the %u of its range %u-%u: not a --pass "
+                                "state but a checkpoint of a --target-error render (finish it with --resume, which "
+                                "writes the final image) or a damaged one", r->path, i, has, range, r->begin, r->end);
         if (has < range)
             return rr_fail(err, "%s is incomplete (pixel %zu has %u of %u batches): resume it first", r->path, i,
                            has, range);
@@ -91,7 +104,9 @@ static int add_state(const char *path, image *merged, attr_list *first, const ch
     range->path = path;
     if (output_read_state(path, &img, &attrs, &range->begin, &range->end, err))
         return -1;
-    int rc = check_complete(&img, range, err);
+    int rc = check_range_in_render(&attrs, range, err);
+    if (!rc)
+        rc = check_complete(&img, range, err);
     if (!rc && !is_first)
         rc = attrs_check_identity(first, first_path, &attrs, path, err);
     if (!rc)
