@@ -1,14 +1,41 @@
 #include "camera.h"
 
+/* a / |a| without squaring the components (a length of 1e200 squared
+ * overflows to inf and its direction came out 0); 0 for a = 0. */
+static vec3 direction_of(vec3 a)
+{
+    double m = fmax(fabs(a.x), fmax(fabs(a.y), fabs(a.z)));
+    return m > 0 ? v3_normalize(v3(a.x / m, a.y / m, a.z / m)) : v3(0, 0, 0);
+}
+
+/* Position, lookat and up as directions: each failure named, none blamed
+ * on up that up did not cause. */
+static int camera_frame(camera *c, rr_error *err)
+{
+    if (!v3_finite(c->position) || !v3_finite(c->lookat) || !v3_finite(c->up))
+        return rr_fail(err, "camera position (%g %g %g), lookat (%g %g %g) and up (%g %g %g) must be finite",
+                       c->position.x, c->position.y, c->position.z, c->lookat.x, c->lookat.y, c->lookat.z, c->up.x,
+                       c->up.y, c->up.z);
+    vec3 f = v3_sub(c->lookat, c->position);
+    if (!v3_finite(f))
+        return rr_fail(err, "camera position (%g %g %g) and lookat (%g %g %g) are too far apart: their difference "
+                            "overflows double precision", c->position.x, c->position.y, c->position.z, c->lookat.x,
+                       c->lookat.y, c->lookat.z);
+    if (f.x == 0 && f.y == 0 && f.z == 0)
+        return rr_fail(err, "camera lookat equals position");
+    c->forward = direction_of(f);
+    vec3 r = v3_cross(c->forward, direction_of(c->up));
+    if (!(v3_len(r) > 1e-9)) /* the sine of the angle between up and the view direction */
+        return rr_fail(err, "camera up is zero or parallel to the view direction");
+    c->right = v3_normalize(r);
+    c->image_up = v3_cross(c->right, c->forward);
+    return 0;
+}
+
 int camera_prepare(camera *c, rr_error *err)
 {
-    vec3 f = v3_sub(c->lookat, c->position);
-    if (!isfinite(v3_len(f))) /* its direction would come out 0 and be blamed on up */
-        return rr_fail(err, "camera position (%g %g %g) and lookat (%g %g %g) are too far apart: their distance "
-                            "overflows", c->position.x, c->position.y, c->position.z, c->lookat.x, c->lookat.y,
-                       c->lookat.z);
-    if (!(v3_len(f) > 0))
-        return rr_fail(err, "camera lookat equals position");
+    if (camera_frame(c, err))
+        return -1;
     if (!(c->fov_degrees > 0 && c->fov_degrees < 180))
         return rr_fail(err, "camera fov must be in (0, 180) degrees, got %g", c->fov_degrees);
     if (c->width < 1 || c->height < 1)
@@ -16,12 +43,6 @@ int camera_prepare(camera *c, rr_error *err)
     if ((long long)c->width * c->height > RR_MAX_PIXELS)
         return rr_fail(err, "image size %dx%d has more than the %lld pixels refrender renders", c->width,
                        c->height, RR_MAX_PIXELS);
-    c->forward = v3_normalize(f);
-    vec3 r = v3_cross(c->forward, c->up);
-    if (!(v3_len(r) > 1e-9 * v3_len(c->up)))
-        return rr_fail(err, "camera up is zero or parallel to the view direction");
-    c->right = v3_normalize(r);
-    c->image_up = v3_cross(c->right, c->forward);
     c->tan_half_fov = tan(c->fov_degrees * M_PI / 360.0);
     return 0;
 }

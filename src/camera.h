@@ -16,8 +16,10 @@ typedef struct {
     double tan_half_fov;
 } camera;
 
-/* Computes the orthonormal frame; -1 if lookat == position or up is
- * parallel to the view direction or fov is outside (0, 180). */
+/* Computes the orthonormal frame; -1 if position, lookat or up is not
+ * finite, lookat - position overflows or is 0, up is parallel to the view
+ * direction, or fov is outside (0, 180). Any finite frame whose difference
+ * does not overflow is accepted here (how far rays reach is accel's limit). */
 int camera_prepare(camera *c, rr_error *err);
 
 /* The camera's matrices (4x4, row-major, for column vectors p' = M p).

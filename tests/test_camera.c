@@ -65,3 +65,28 @@ TEST(camera_too_far_from_lookat_is_named_as_such)
     rr_error e;
     CHECK(camera_prepare(&c, &e) == -1 && strstr(e.msg, "too far apart") && !strstr(e.msg, "up"));
 }
+
+/* Lengths were taken by squaring: a lookat 1e300 away (finite, but its
+ * square is not) was blamed on up, and so was an up of 1e308; a lookat
+ * 1e-200 away was called equal to the position. Directions do not depend
+ * on the scale of the vectors they come from. */
+TEST(camera_frame_does_not_depend_on_the_scale_of_its_vectors)
+{
+    const double scales[] = {1e-200, 1e300};
+    for (int i = 0; i < 2; i++) {
+        camera c = frame(v3(0, 0, 0), v3(0, 0, -scales[i]), 40, 4, 4);
+        c.up = v3(0, scales[i], 0);
+        rr_error e;
+        CHECK(camera_prepare(&c, &e) == 0);
+        CHECK_NEAR(c.forward.z, -1, 1e-15);
+        CHECK_NEAR(c.image_up.y, 1, 1e-15);
+        CHECK_NEAR(c.right.x, 1, 1e-15);
+    }
+    camera big_up = frame(v3(0, 0, 5), v3(0, 0, 0), 40, 4, 4);
+    big_up.up = v3(1e308, 1e308, 0);
+    rr_error e;
+    CHECK(camera_prepare(&big_up, &e) == 0);
+    CHECK_NEAR(big_up.image_up.x, sqrt(0.5), 1e-15);
+    camera inf = frame(v3(INFINITY, 0, 0), v3(0, 0, 0), 40, 4, 4);
+    CHECK(camera_prepare(&inf, &e) == -1 && strstr(e.msg, "must be finite"));
+}
