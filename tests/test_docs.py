@@ -1,10 +1,15 @@
 """Issue 25: the documents cannot drift from the program. Every relative
 link in the READMEs and docs names an existing file and, with #anchor, a
-heading there (GitHub's slug rule); README stays a front door (at most 400
-lines); every option README shows exists in the --help of its command;
-every scripts/ and tests/ file it names exists; and the commands README
-shows are run here: the rendering example, and the researcher's workflow
-end to end (at a tiny size: the options appended last override README's)."""
+heading there (GitHub's slug rule), and every section of the detail
+documents is one click from README; README stays a front door (at most
+400 lines); every option a document shows exists in the --help of refrender,
+its subcommands or a script, and every script tool answers --help; every
+file README names exists, and its Layout places every source file and
+script; tests/README.md maps every test file; every `make` target named
+exists; the set-up commands are the ones CI and `make demo` run; and the
+other commands README shows are run here: the rendering example, the scene
+example, and the researcher's workflow end to end (at a tiny size: the
+options appended last override README's)."""
 import re
 import shlex
 import shutil
@@ -98,7 +103,7 @@ def readme_commands(prefix, section=None):
         elif text.startswith(prefix):
             cur = text
         if cur and not cur.endswith("\\"):
-            out.append(cur.split("  #")[0])
+            out.append(cur.split("  #")[0].strip())
             cur = ""
         elif cur:
             cur = cur[:-1]
@@ -191,3 +196,66 @@ def test_the_scene_example_renders(tmp_path):
     proc = subprocess.run(args, cwd=tmp_path, capture_output=True, text=True)
     assert proc.returncode == 0, (render, proc.stderr)
     assert (tmp_path / "my" / "scene.exr").exists() and (tmp_path / "my" / "scene.png").exists()
+
+
+def test_setup_commands_are_what_ci_and_make_run():
+    """README's set-up is two commands: the first is CI's first step and
+    builds and renders the demo, the second is exactly what CI runs."""
+    cmds = readme_commands("", "Set-up (fresh Debian 12)")
+    assert cmds == ["scripts/install-deps.sh && make demo", "make test"], cmds
+    ci = [line.strip() for line in (ROOT / ".ci" / "run").read_text().splitlines()]
+    assert "scripts/install-deps.sh" in ci and "make test" in ci
+    makefile = (ROOT / "Makefile").read_text()
+    demo = makefile.split("\ndemo:", 1)[1].split("\n\n", 1)[0]
+    assert "deps" in demo.splitlines()[0] and "scenes/default.xml -o out/demo.exr --preview out/demo.png" in demo
+
+
+def test_every_make_target_the_documents_name_exists():
+    targets = set(re.findall(r"^([\w-]+)\s*:", (ROOT / "Makefile").read_text(), re.M))
+    named = set()
+    for doc in DOCS:
+        named |= set(re.findall(r"`make (?:[A-Z_]+=\S+ )*([a-z][\w-]*)", (ROOT / doc).read_text()))
+    assert named and not named - targets, named - targets
+
+
+def test_layout_places_every_source_file_and_script():
+    """README's Layout names every library, command and script file (a new
+    file must be placed), and every file it names exists."""
+    layout = (ROOT / "README.md").read_text().split("\n## Layout\n", 1)[1].split("\n## ", 1)[0]
+    named = set(re.findall(r"\b((?:src|tests|scripts)/[\w./*-]*\w/?)", layout))
+    assert not [n for n in named if not list(ROOT.glob(n.rstrip("/")))]
+    files = [p.relative_to(ROOT).as_posix() for pat in ("src/*.c", "src/*.cpp", "src/cmd/*.c", "scripts/*")
+             for p in ROOT.glob(pat) if p.is_file() and p.suffix != ".md"]
+    assert not [f for f in files if f not in named], [f for f in files if f not in named]
+
+
+def test_every_detail_section_is_one_click_from_readme():
+    """Each document the details moved to, and each of its sections, is
+    linked from README."""
+    readme = (ROOT / "README.md").read_text()
+    links = set(LINK.findall(readme))
+    unlinked = []
+    for doc in DOCS[1:]:
+        if doc not in {link.partition("#")[0] for link in links}:
+            unlinked.append(doc)
+        for line in (ROOT / doc).read_text().splitlines():
+            if line.startswith("## ") or line.startswith("### "):
+                if f"{doc}#{slug(line)}" not in links:
+                    unlinked.append(f"{doc}#{slug(line)}")
+    assert not unlinked, unlinked
+
+
+def test_every_option_the_detail_documents_show_exists():
+    """A refrender option in the scene, script, speed and exact-time documents
+    exists in refrender's --help or in a script's."""
+    known = set(re.findall(r"--[a-z][a-z0-9-]*", help_text()))
+    for script in sorted({p.name for p in (ROOT / "scripts").glob("*.py")} - compare_modules()):
+        out = subprocess.run(["/usr/bin/python3", str(ROOT / "scripts" / script), "--help"], capture_output=True,
+                             text=True, timeout=120).stdout
+        known |= set(re.findall(r"--[a-z][a-z0-9-]*", out))
+    missing = {}
+    for doc in DOCS[1:]:
+        shown = set(re.findall(r"(?<![\w-])--[a-z][a-z0-9-]*", (ROOT / doc).read_text()))
+        if shown - known - {"--cropwindow", "--sshloginfile", "--no-recommends"}:
+            missing[doc] = shown - known
+    assert not missing, missing
