@@ -7,6 +7,7 @@ rendered one."""
 import json
 
 import numpy as np
+import pytest
 
 from conftest import coverage_centroid, read_full, run
 
@@ -90,3 +91,22 @@ def test_export_refuses_non_finite_transforms_and_takes_the_renders_shutter(tmp_
     assert frame["open"] == -1e-300 and frame["close"] == 0
     proc = run(["export", scene, "--shutter", "2,1", "-o", out])
     assert proc.returncode == 2 and "--shutter: expected OPEN,CLOSE" in proc.stderr
+
+
+def test_a_long_shutter_is_sampled_without_overflow_or_named(tmp_path):
+    """Issue 23, item 14: the sample times were computed as (close - open)
+    * (i + 0.5) before dividing by K, which overflowed for a shutter 1e308
+    long, and the inf times were blamed on the still camera's transform.
+    A shutter longer than a double holds is named as such."""
+    scene = tmp_path / "s.xml"
+    scene.write_text("""<scene><camera position="0 0 5" lookat="0 0 0" width="8" height="8"/>
+<object name="ball"><sphere radius="0.5"/></object></scene>""")
+    out = tmp_path / "s.json"
+    proc = run(["export", scene, "--shutter", "0,1e308", "--times", 8, "-o", out])
+    assert proc.returncode == 0, proc.stderr
+    frame = json.loads(out.read_text(), parse_constant=lambda c: pytest.fail(f"non-finite {c} in JSON"))["frames"][0]
+    assert frame["times"][0] == 0 and frame["times"][-1] == 1e308
+    assert frame["times"] == sorted(frame["times"]) and frame["weight"]["samples"][-1][0] == 1e308
+    proc = run(["export", scene, "--shutter", "-1e308,1e308", "-o", out])
+    assert proc.returncode == 1 and "shutter [-1e+308, 1e+308] is longer" in proc.stderr, proc.stderr
+    assert "camera" not in proc.stderr

@@ -96,7 +96,7 @@ static int sample_times(const shutter *sh, int k, double *times)
     int n = 0;
     times[n++] = sh->open;
     for (int i = 0; i < k; i++)
-        times[n++] = sh->open + (sh->close - sh->open) * (i + 0.5) / k;
+        times[n++] = sh->open + (sh->close - sh->open) * ((i + 0.5) / k); /* the fraction first: no overflow */
     times[n++] = sh->close;
     return n;
 }
@@ -109,7 +109,7 @@ static void write_weight(FILE *f, const shutter *sh)
         fprintf(f, "%s[%.17g, %.17g]", i ? ", " : "", sh->table_t[i], sh->table_w[i]);
     fputs("], \"samples\": [", f);
     for (int i = 0; i <= 256; i++) {
-        double t = sh->open + (sh->close - sh->open) * i / 256.0;
+        double t = sh->open + (sh->close - sh->open) * (i / 256.0);
         fprintf(f, "%s[%.17g, %.17g]", i ? ", " : "", t, shutter_weight(sh, t));
     }
     fputs("]}", f);
@@ -148,6 +148,9 @@ static int write_frame(FILE *f, const scene *s, long long frame, int numbered, c
                        rr_error *err)
 {
     double times[1026], m[4][4];
+    if (!isfinite(sh->close - sh->open)) /* every time between would be inf or NaN, blamed on a transform */
+        return rr_fail(err, "the shutter [%g, %g] is longer than double precision holds (close - open overflows)",
+                       sh->open, sh->close);
     int n = sample_times(sh, k, times);
     if (check_frame(s, times, n, err))
         return -1;
