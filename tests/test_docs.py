@@ -9,7 +9,9 @@ script; tests/README.md maps every test file; every `make` target named
 exists; the set-up commands are the ones CI and `make demo` run; and the
 other commands README shows are run here: the rendering example, the scene
 example, and the researcher's workflow end to end (at a tiny size: the
-options appended last override README's)."""
+options appended last override README's); scripts/README.md's export
+example runs; and the commands reference_images/README.md shows are those
+in the references' own headers."""
 import re
 import shlex
 import shutil
@@ -259,3 +261,30 @@ def test_every_option_the_detail_documents_show_exists():
         if shown - known - {"--cropwindow", "--sshloginfile", "--no-recommends"}:
             missing[doc] = shown - known
     assert not missing, missing
+
+
+def test_reference_commands_are_the_ones_in_their_headers():
+    """reference_images/README.md's table shows, for each reference, the
+    command written into that EXR's header (refrender:command)."""
+    import OpenImageIO as oiio
+    rows = re.findall(r"^\| `scenes/(\w+)\.xml` \| `([^`]+)` \|", (ROOT / "reference_images" / "README.md").read_text(),
+                      re.M)
+    assert len(rows) >= 10
+    for name, command in rows:
+        inp = oiio.ImageInput.open(str(ROOT / "reference_images" / f"{name}.exr"))
+        assert inp, name
+        header = inp.spec().getattribute("refrender:command")
+        inp.close()
+        assert header == command, name
+
+
+def test_the_export_example_in_scripts_readme_runs(tmp_path):
+    (cmd,) = [line.strip() for line in (ROOT / "scripts" / "README.md").read_text().splitlines()
+              if line.startswith("    build/refrender export")]
+    args = shlex.split(cmd)
+    args[args.index("-o") + 1] = str(tmp_path / "animated.json")
+    proc = subprocess.run([BIN, *args[1:]], cwd=ROOT, capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stderr
+    import json
+    frames = json.loads((tmp_path / "animated.json").read_text())["frames"]
+    assert len(frames) == 24 and all(len(f["times"]) == 10 for f in frames)
