@@ -159,11 +159,13 @@ int surfels_from_points(const double *pos, const double *nrm, size_t np, double 
         free(s), free(g.start), free(g.items);
         return rr_fail(err, "out of memory for %zu points", np);
     }
-    size_t m = 0;
+    size_t m = 0, no_normal = 0, crowded = 0;
     for (size_t i = 0; i < np; i++) {
         vec3 normal = at(nrm, i);
         double d = kth_distance(&g, pos, i);
-        if (!(v3_len(normal) > 0) || !(d > 0))
+        int has_normal = v3_len(normal) > 0, sized = d > 0;
+        no_normal += !has_normal, crowded += has_normal && !sized; /* counted to say why none is left */
+        if (!has_normal || !sized)
             continue;
         s[m].center = at(pos, i);
         s[m].normal = v3_normalize(normal);
@@ -174,8 +176,9 @@ int surfels_from_points(const double *pos, const double *nrm, size_t np, double 
     free(g.start), free(g.items);
     if (!m) { /* say why here: the writer would only see an empty list and blame its file */
         free(s);
-        return rr_fail(err, "no point has a normal and a 6th nearest neighbour at a positive distance "
-                            "(all %zu points coincide or lack normals): no splat sizes can be estimated", np);
+        return rr_fail(err, "no splat is left of %zu points: %zu have no normal and %zu have %d or more duplicates "
+                            "(their %dth nearest neighbour is at distance 0, so no splat size can be estimated)",
+                       np, no_normal, crowded, KNN, KNN);
     }
     *out = s, *n = m;
     return 0;

@@ -83,5 +83,5 @@ def test_surfels_of_coinciding_points_names_the_input_not_the_output(tmp_path):
     cloud.write_text("0 0 0 0 0 1\n" * 10)
     out = tmp_path / "out.ply"
     proc = run(["surfels", cloud, "-o", out])
-    assert proc.returncode == 1 and f"{cloud}: no point has" in proc.stderr, proc.stderr
+    assert proc.returncode == 1 and f"{cloud}: no splat is left of 10 points" in proc.stderr, proc.stderr
     assert "out.ply" not in proc.stderr and not out.exists()

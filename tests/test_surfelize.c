@@ -1,5 +1,6 @@
 /* Mesh and point-cloud surfels: splat sizes on regular grids, worked by hand. */
 #include <stdlib.h>
+#include <string.h>
 
 #include "harness.h"
 #include "surfelize.h"
@@ -72,4 +73,21 @@ TEST(checker_colors_alternate_by_cube)
                    {v3(0.15, 0.05, 0.05), v3(0, 0, 1), 1, v3(0, 0, 0)}};
     surfels_color(s, 2, v3(1, 0, 0), v3(0, 1, 0), 0.1);
     CHECK(s[0].color.x == 1 && s[1].color.y == 1);
+}
+
+/* Issue 23, item 14: a cloud of two points, each given ten times, leaves no
+ * splat (every point's 6th nearest neighbour is a duplicate at distance 0);
+ * the reason is counted, not 'all points coincide', which they do not. */
+TEST(duplicate_points_leave_no_splat_and_say_why)
+{
+    double pos[20 * 3] = {0}, nrm[20 * 3] = {0};
+    for (int i = 0; i < 20; i++) {
+        pos[3 * i] = i % 2;        /* (0,0,0) and (1,0,0), ten times each */
+        nrm[3 * i + 2] = i != 3;   /* one copy lacks its normal */
+    }
+    surfel *s = NULL;
+    size_t n = 0;
+    rr_error e;
+    CHECK(surfels_from_points(pos, nrm, 20, 1.5, &s, &n, &e) == -1 && !s);
+    CHECK(strstr(e.msg, "no splat is left of 20 points: 1 have no normal and 19 have 6 or more duplicates") != NULL);
 }
