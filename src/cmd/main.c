@@ -503,6 +503,19 @@ static int write_final(const char *output, const image *img, render_run *run, rr
     return output_write_final_window(output, img, (int)sampler_count(&rs->smp), &run->attrs, &win, err);
 }
 
+/* Says what the render was handed, not what was asked for: the period it
+ * uses is the one stated (render.h: 0 means only when interrupted). */
+static void announce_checkpoints(const render_options *o, const render_hooks *h)
+{
+    if (!o->checkpoint || o->quiet)
+        return;
+    if (h->checkpoint_every > 0)
+        fprintf(stderr, "refrender: checkpoint %s: every %g s and when interrupted\n", o->checkpoint,
+                h->checkpoint_every);
+    else
+        fprintf(stderr, "refrender: checkpoint %s: only when interrupted\n", o->checkpoint);
+}
+
 /* Renders one shutter interval (a frame) into output (and preview). */
 static int render_one(const scene *s, const shutter *shut, long long frame, accel *acc, const render_options *o,
                       const char *cmdline, const char *output, const char *preview, rr_error *err)
@@ -518,11 +531,7 @@ static int render_one(const scene *s, const shutter *shut, long long frame, acce
     int tty = !o->quiet && isatty(STDERR_FILENO);
     render_hooks hooks = {tty ? print_progress : NULL, o->checkpoint ? write_checkpoint : NULL, warn_checkpoint,
                           o->checkpoint_every, &run};
-    if (o->checkpoint && !o->quiet && o->checkpoint_every > 0) /* render.h: 0 means only when interrupted */
-        fprintf(stderr, "refrender: checkpoint %s: every %g s and when interrupted\n", o->checkpoint,
-                o->checkpoint_every);
-    else if (o->checkpoint && !o->quiet)
-        fprintf(stderr, "refrender: checkpoint %s: only when interrupted\n", o->checkpoint);
+    announce_checkpoints(o, &hooks);
     int rc = render_image(s, acc, &run.rs, &img, &hooks, &interrupted, err);
     if (!rc) {
         report(o, s, &img, tty);
