@@ -52,6 +52,8 @@ int shutter_check(const shutter *s, rr_error *err)
 {
     if (!isfinite(s->open) || !isfinite(s->close) || !(s->close > s->open))
         return rr_fail(err, "shutter close (%g) must be greater than open (%g)", s->close, s->open);
+    if (!isfinite(s->close - s->open)) /* every time and weight computed from it would overflow */
+        return rr_fail(err, "shutter [%g, %g]: its length overflows a double", s->open, s->close);
     if (!isfinite(s->center) || !isfinite(s->rate) || s->rate < 0)
         return rr_fail(err, "shutter center must be finite and rate >= 0");
     if (s->kind == WEIGHT_TABLE) {

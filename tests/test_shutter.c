@@ -1,3 +1,4 @@
+#include <string.h>
 /* Temporal weights a(t) (thesis eq. 3.1, Figure 3.1). */
 #include "harness.h"
 #include "shutter.h"
@@ -117,4 +118,17 @@ TEST(times_drawn_from_the_weight_follow_its_integral)
     CHECK(cdf_matches(&s) == 0);
     s.open = -2, s.close = 3, s.kind = WEIGHT_LINEAR, s.center = 3; /* the default: ramp up to close */
     CHECK(cdf_matches(&s) == 0);
+}
+
+/* A shutter whose length overflows (--shutter -1e308,1e308) was accepted:
+ * every time and weight computed from close - open was then inf or NaN. */
+TEST(shutter_check_rejects_a_length_that_overflows)
+{
+    shutter s;
+    rr_error e;
+    shutter_default(&s);
+    s.open = -1e308, s.close = 1e308;
+    CHECK(shutter_check(&s, &e) != 0 && strstr(e.msg, "overflows"));
+    s.open = -1e307, s.close = 1e307;
+    CHECK(shutter_check(&s, &e) == 0);
 }
