@@ -10,11 +10,11 @@
 
 /* ---- tokens: words, ';', '{', '}'; comments // and # to end of line ------- */
 
-/* A word (number, node or attribute name) longer than this is refused,
- * naming its line and length: words were once cut at 63 characters, so a
- * 69-character number read as another value and two long node names as
- * one. */
-#define ANIM_WORD 256
+/* A word (number, node or attribute name) longer than ANIMFILE_MAX_WORD
+ * is refused, naming its line and length: words were once cut at 63
+ * characters, so a 69-character number read as another value and two long
+ * node names as one. */
+#define ANIM_WORD (ANIMFILE_MAX_WORD + 1)
 
 typedef struct {
     const char *p;

@@ -16,6 +16,11 @@
 
 #include <stdint.h>
 
+/* Longest word (number, node or attribute name) read; longer ones are
+ * refused naming file, line and length. Scenes name nodes up to this long
+ * (<animation node="...">). */
+#define ANIMFILE_MAX_WORD 255
+
 /* Largest .anim file read (bytes); real exports of whole rigs are a few MB. */
 #define ANIMFILE_MAX_BYTES ((size_t)256 << 20)
 

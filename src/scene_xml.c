@@ -339,8 +339,8 @@ static int parse_object(xml_ctx *c, xmlNodePtr n, scene *s)
     o->mat = material_default();
     animation_init_static(&o->anim);
     snprintf(o->name, sizeof o->name, "object%d", s->nobjects);
-    if (xml_attr_text(c, n, "name", o->name, sizeof o->name) < 0 || xml_check_attributes(c, n, ok) || xml_attr_vec3(c, n, "position", &o->anim.offset, 0) ||
-        xml_check_no_text(c, n))
+    if (xml_check_attributes(c, n, ok) || xml_attr_text(c, n, "name", o->name, sizeof o->name) < 0 ||
+        xml_attr_vec3(c, n, "position", &o->anim.offset, 0) || xml_check_no_text(c, n))
         return -1;
     int shapes = 0;
     for (xmlNodePtr k = n->children; k; k = k->next)

@@ -96,9 +96,9 @@ static int parse_keyframes(xml_ctx *c, xmlNodePtr n, keyframes *kf)
     tangent_kind in = TAN_LINEAR, out = TAN_LINEAR;
     char inf[2][64] = {"constant", "constant"};
     infinity_kind pre, post;
-    if (xml_attr_text(c, n, "pre", inf[0], sizeof inf[0]) < 0 || xml_attr_text(c, n, "post", inf[1], sizeof inf[1]) < 0 ||
-        xml_check_attributes(c, n, ok) || xml_check_no_text(c, n) || key_interpolation(c, n, &in, &out) ||
-        xml_attr_vec3(c, n, "pivot", &kf->pivot, 0))
+    if (xml_check_attributes(c, n, ok) || xml_attr_text(c, n, "pre", inf[0], sizeof inf[0]) < 0 ||
+        xml_attr_text(c, n, "post", inf[1], sizeof inf[1]) < 0 || xml_check_no_text(c, n) ||
+        key_interpolation(c, n, &in, &out) || xml_attr_vec3(c, n, "pivot", &kf->pivot, 0))
         return -1;
     if (infinity_from_name(inf[0], &pre) || infinity_from_name(inf[1], &post))
         return xml_fail(c, n, "unknown pre/post infinity (expected constant, linear, cycle, cycleRelative "
@@ -142,8 +142,9 @@ static int new_keyframes(xml_ctx *c, xmlNodePtr n, animation *a)
  * <animation file="path.anim" node="NAME"/> for a file of several nodes. */
 static int load_anim_file(xml_ctx *c, xmlNodePtr n, animation *a)
 {
-    char rel[4096], path[8192], node[64];
-    int has_file = xml_attr_text(c, n, "file", rel, sizeof rel), has_node = xml_attr_text(c, n, "node", node, sizeof node);
+    char rel[4096], path[8192], node[ANIMFILE_MAX_WORD + 1]; /* any node an .anim file can name */
+    int has_file = xml_attr_text(c, n, "file", rel, sizeof rel);
+    int has_node = has_file < 0 ? -1 : xml_attr_text(c, n, "node", node, sizeof node);
     if (has_file < 0 || has_node < 0)
         return -1;
     if (has_file && xml_has_text(n))

@@ -174,14 +174,15 @@ int xml_check_no_text(xml_ctx *c, xmlNodePtr parent)
  * an error, never silently cut. */
 int xml_resolve_path(xml_ctx *c, xmlNodePtr n, const char *rel, char *out, size_t size)
 {
-    char clean[4096];
-    snprintf(clean, sizeof clean, "%s", rel);
-    for (char *p = clean; *p; p++)
+    int absolute = rel[0] == '/' || rel[0] == '\\' || !c->base_dir || !c->base_dir[0];
+    int len = absolute ? snprintf(out, size, "%s", rel) : snprintf(out, size, "%s/%s", c->base_dir, rel);
+    if (len < 0 || (size_t)len >= size)
+        return xml_fail(c, n, "file path '%.60s...' resolves to %d characters: at most %zu are read",
+                        rel, len, size - 1);
+    for (char *p = out + (len - (int)strlen(rel)); *p; p++)
         if (*p == '\\')
             *p = '/'; /* thesis Figure 4.11 writes Windows paths */
-    int len = clean[0] == '/' || !c->base_dir || !c->base_dir[0] ? snprintf(out, size, "%s", clean)
-                                                                   : snprintf(out, size, "%s/%s", c->base_dir, clean);
-    return len < 0 || (size_t)len >= size ? xml_fail(c, n, "file path is too long") : 0;
+    return 0;
 }
 
 /* The element's text with surrounding white space removed; 0 if empty,

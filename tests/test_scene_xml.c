@@ -4,6 +4,7 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "animfile.h"
 #include "harness.h"
 #include "inputfile.h"
 #include "scene_xml.h"
@@ -248,5 +249,84 @@ TEST(animation_file_attribute_selects_a_node)
     snprintf(xml, sizeof xml, "<scene><object><sphere radius='1'/>\n<animation>rig.anim</animation></object></scene>");
     CHECK(scene_load_memory(xml, strlen(xml), "mem.xml", dir, &s, &e) != 0 &&
           strstr(e.msg, "animates 2 nodes ('a', 'b')") && strstr(e.msg, "mem.xml:2"));
+    unlink(path), rmdir(dir);
+}
+
+/* Issue 23, items 3 and 14: a value longer than its buffer is refused,
+ * naming file, line and length; it was cut (a cut name could match another
+ * value) or, as a <pointModel> path, reported as "point model has no
+ * splats". */
+TEST(over_long_values_are_refused_with_line_and_length)
+{
+    static const char *const cases[][2] = {
+        {"<light type='%s'/>", "<light>: attribute 'type' is 300 characters long"},
+        {"<shutter open='0' close='1' weight='%s'/>", "<shutter>: attribute 'weight' is 300 characters long"},
+        {"<object name='%s'><sphere radius='1'/></object>", "<object>: attribute 'name' is 300 characters long"},
+        {"<object><sphere radius='1'/><material shading='%s'/></object>", "attribute 'shading' is 300"},
+        {"<object><pointModel generate='%s'/></object>", "attribute 'generate' is 300 characters long"},
+        {"<object><sphere radius='1'/><animation><keyframes post='%s'><key time='0'/></keyframes></animation>"
+         "</object>", "<keyframes>: attribute 'post' is 300 characters long"},
+        {"<object><sphere radius='1'/><animation><keyframes interpolation='%s'><key time='0'/></keyframes>"
+         "</animation></object>", "attribute 'interpolation' is 300 characters long"},
+        {"<object><sphere radius='1'/><animation file='a.anim' node='%s'/></object>",
+         "<animation>: attribute 'node' is 300 characters long"}};
+    char value[301], body[1024], xml[2048];
+    memset(value, 'x', 300), value[300] = 0;
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        snprintf(body, sizeof body, cases[i][0], value);
+        snprintf(xml, sizeof xml, "<scene>\n%s</scene>", body);
+        CHECK(fails_with(xml, cases[i][1]) && fails_with(xml, "mem.xml:2:"));
+    }
+    /* a model path as the element's text (thesis Figure 4.11) */
+    char *path_xml = malloc(6000);
+    size_t len = (size_t)snprintf(path_xml, 6000, "<scene><object>\n<pointModel>");
+    memset(path_xml + len, 'p', 5000);
+    snprintf(path_xml + len + 5000, 6000 - len - 5000, "</pointModel></object></scene>");
+    CHECK(fails_with(path_xml, "mem.xml:2: <pointModel>: its text is 5000 characters long")); /* not "no splats" */
+    free(path_xml);
+}
+
+/* A path that fits its attribute but not once joined to the scene's
+ * directory is refused naming the length it reached. */
+TEST(resolved_paths_too_long_are_refused_with_their_length)
+{
+    char *dir = malloc(8200);
+    memset(dir, 'd', 8190), dir[0] = '/', dir[8190] = 0;
+    const char *xml = "<scene><object>\n<pointModel file='m.ply'/></object></scene>";
+    scene s;
+    rr_error e = {{0}};
+    CHECK(scene_load_memory(xml, strlen(xml), "mem.xml", dir, &s, &e) != 0);
+    CHECK(strstr(e.msg, "mem.xml:2: <pointModel>: file path 'm.ply...' resolves to 8196 characters") != NULL);
+    free(dir);
+}
+
+/* Issue 23, item 3: a scene selects any node an .anim file can name (its
+ * words run to ANIMFILE_MAX_WORD characters); node names were held in 63. */
+TEST(animation_node_names_as_long_as_anim_words_are_selected)
+{
+    char dir[] = "/tmp/refrender-longnode-XXXXXX";
+    CHECK(mkdtemp(dir) != NULL);
+    char path[128], node[ANIMFILE_MAX_WORD + 1], xml[1024];
+    snprintf(path, sizeof path, "%s/rig.anim", dir);
+    memset(node, 'n', ANIMFILE_MAX_WORD), node[ANIMFILE_MAX_WORD] = 0;
+    FILE *f = fopen(path, "w");
+    for (int i = 0; i < 2; i++) /* two nodes that differ in their last character */
+        fprintf(f, "%sanim translate.translateX translateX %.*s%c 0 1 0;\nanimData {\n keys {\n"
+                   "  0 %d linear linear 1 1 0;\n  24 %d linear linear 1 1 0;\n }\n}\n",
+                i ? "" : "animVersion 1.1;\ntimeUnit film;\nlinearUnit m;\n", ANIMFILE_MAX_WORD - 1, node,
+                "ab"[i], i + 1, i + 1);
+    fclose(f);
+    node[ANIMFILE_MAX_WORD - 1] = 'b';
+    snprintf(xml, sizeof xml, "<scene><object><sphere radius='1'/><animation file='rig.anim' node='%s'/></object>"
+             "</scene>", node);
+    scene s;
+    rr_error e = {{0}};
+    CHECK(scene_load_memory(xml, strlen(xml), "mem.xml", dir, &s, &e) == 0);
+    if (!e.msg[0]) {
+        xform x = animation_at(&s.objects[0].anim, 0.5);
+        CHECK_NEAR(xform_point(&x, v3(0, 0, 0)).x, 2.0, 1e-12);
+        scene_free(&s);
+    } else
+        printf("    %s\n", e.msg);
     unlink(path), rmdir(dir);
 }
