@@ -4,6 +4,8 @@
  * substitution happens on the parsed document, before anything is read
  * from it, so every attribute of every element takes parameters alike. */
 #include <ctype.h>
+#include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "scene_xml_internal.h"
@@ -32,7 +34,8 @@ static int params_set(scene_params *p, const char *name, size_t len, const char 
         return rr_fail(err, "parameter name '%.*s' must be a letter or _ followed by letters, digits or _ "
                             "(at most %d)", (int)len, name, SCENE_PARAM_NAME - 1);
     if (strlen(value) >= SCENE_PARAM_VALUE)
-        return rr_fail(err, "parameter '%.*s': value longer than %d characters", (int)len, name, SCENE_PARAM_VALUE - 1);
+        return rr_fail(err, "parameter '%.*s': its value is %zu characters long: at most %d are read", (int)len, name,
+                       strlen(value), SCENE_PARAM_VALUE - 1);
     int i = params_find(p, name, len);
     if (i < 0) {
         if (p->n == SCENE_MAX_PARAMS)
@@ -82,7 +85,8 @@ static int read_defaults(xml_ctx *c, xmlNodePtr root, scene_params *p, int given
     return 0;
 }
 
-/* Replaces every $name in one attribute value. */
+/* Replaces every $name in one attribute value; the result grows as needed
+ * (the reader of each attribute refuses what it cannot hold, naming it). */
 static int substitute(xml_ctx *c, xmlNodePtr n, xmlAttrPtr a, scene_params *p)
 {
     xmlChar *v = xmlNodeListGetString(n->doc, a->children, 1);
@@ -93,9 +97,10 @@ static int substitute(xml_ctx *c, xmlNodePtr n, xmlAttrPtr a, scene_params *p)
         xmlFree(v);
         return 0;
     }
-    char out[8192];
+    char *out = NULL;
     size_t len = 0;
-    int rc = 0;
+    FILE *f = open_memstream(&out, &len);
+    int rc = f ? 0 : xml_fail(c, n, "out of memory");
     for (size_t i = 0; s[i] && !rc;) {
         size_t j = i + 1;
         while (s[i] == '$' && (isalnum((unsigned char)s[j]) || s[j] == '_'))
@@ -104,21 +109,17 @@ static int substitute(xml_ctx *c, xmlNodePtr n, xmlAttrPtr a, scene_params *p)
         if (s[i] == '$' && k < 0)
             rc = xml_fail(c, n, "attribute '%s': unknown parameter '$%.*s' (give -D %.*s=... or a <default>)",
                           (const char *)a->name, (int)(j - i - 1), s + i + 1, (int)(j - i - 1), s + i + 1);
-        const char *piece = k >= 0 ? p->value[k] : s + i;
-        size_t plen = k >= 0 ? strlen(piece) : 1;
-        if (!rc && len + plen >= sizeof out)
-            rc = xml_fail(c, n, "attribute '%s' is too long after parameter substitution", (const char *)a->name);
-        if (!rc) {
-            memcpy(out + len, piece, plen);
-            len += plen;
-            if (k >= 0)
-                p->used[k] = 1;
-        }
+        else if (k >= 0)
+            fputs(p->value[k], f), p->used[k] = 1;
+        else
+            fputc(s[i], f);
         i = k >= 0 ? j : i + 1;
     }
-    out[len] = 0;
+    if (f && fclose(f) && !rc)
+        rc = xml_fail(c, n, "out of memory");
     if (!rc)
         xmlSetProp(n, a->name, (const xmlChar *)out);
+    free(out);
     xmlFree(v);
     return rc;
 }

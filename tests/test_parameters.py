@@ -1,6 +1,7 @@
 """Scene parameters (issue 15): -D name=value replaces $name in attribute
 values, the scene's <default> fills in what is not given, the parameters
 applied are part of the render's identity, and mistakes are named."""
+import json
 import math
 
 import numpy as np
@@ -50,3 +51,21 @@ def test_parameter_mistakes_are_named(tmp_path):
     proc, _ = render(tmp_path, "w.exr", "-D", "unused=3")
     assert proc.returncode == 0 and "parameter 'unused'" in proc.stderr and "not used" in proc.stderr
     assert not np.isnan(read_full(tmp_path / "w.exr")[0]["A"]).any()
+
+
+def test_substituted_attributes_grow_and_long_values_are_named(tmp_path):
+    """Issue 23, item 3: an attribute is whole after substitution however
+    long (it was refused past 8191 characters): a weight table whose pairs
+    are separated by a 500-character parameter of spaces, 20 times, reads
+    all 21 pairs; a -D value past its 511 characters is refused naming its
+    length."""
+    pairs = " $gap ".join(f"{i / 20} {1 + i}" for i in range(21))
+    scene = tmp_path / "t.xml"
+    scene.write_text(f"""<scene><camera position="0 0 5" lookat="0 0 0" width="4" height="4"/>
+<shutter open="0" close="1" weight="table" table="{pairs}"/><object><sphere radius="0.5"/></object></scene>""")
+    proc = run(["export", scene, "-D", "gap=" + " " * 500, "-o", tmp_path / "t.json"])
+    assert proc.returncode == 0, proc.stderr
+    table = json.loads((tmp_path / "t.json").read_text())["frames"][0]["weight"]["table"]
+    assert len(table) == 21 and table[-1] == [1.0, 21.0]
+    proc = run(["export", scene, "-D", "gap=" + " " * 600, "-o", tmp_path / "t.json"])
+    assert proc.returncode == 2 and "'gap': its value is 600 characters long: at most 511" in proc.stderr, proc.stderr
