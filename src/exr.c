@@ -377,6 +377,12 @@ int exr_read_string_attr(const char *path, const char *key, char *buf, size_t si
     const exr_attribute_t *a = NULL;
     rc = exr_get_attribute_by_name(ctx, 0, key, &a);
     int ok = !rc && a;
+    if (ok && a->type == EXR_ATTR_STRING && (size_t)a->string->length >= size) { /* never cut: refuse */
+        int length = a->string->length;
+        exr_finish(&ctx);
+        return rr_fail(err, "%s: attribute '%s' is %d characters long: at most %zu are read", path, key, length,
+                       size - 1);
+    }
     if (ok && a->type == EXR_ATTR_STRING)
         snprintf(buf, size, "%.*s", (int)a->string->length, a->string->str);
     else if (ok && a->type == EXR_ATTR_INT)
@@ -388,5 +394,5 @@ int exr_read_string_attr(const char *path, const char *key, char *buf, size_t si
     else
         ok = 0;
     exr_finish(&ctx);
-    return ok ? 0 : rr_fail(err, "%s: no string or number attribute '%s'", path, key);
+    return ok ? 0 : (rr_fail(err, "%s: no string or number attribute '%s'", path, key), 1);
 }

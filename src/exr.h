@@ -65,7 +65,9 @@ int exr_read_rgba(const char *path, int *w, int *h, float **rgba, rr_error *err)
 
 /* Reads an attribute of part 0 into buf as text: strings as they are, int
  * attributes with %d, double with %.17g and float with %.9g (the same text
- * they were written from). */
+ * they were written from). Returns 0, 1 if there is no such attribute, -1
+ * if the file cannot be read or the string does not fit in buf (never
+ * cut). */
 int exr_read_string_attr(const char *path, const char *key, char *buf, size_t size, rr_error *err);
 
 #endif

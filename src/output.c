@@ -47,7 +47,9 @@ static void attrs_vset(attr_list *a, const char *key, const char *fmt, va_list a
         snprintf(a->key[i], sizeof a->key[i], "%s", key);
     }
     a->kind[i] = attr_kind(key);
-    vsnprintf(a->value[i], sizeof a->value[i], fmt, ap);
+    int len = vsnprintf(a->value[i], sizeof a->value[i], fmt, ap);
+    if (len >= ATTR_TEXT_MAX) /* never cut silently: the value says it was cut (identity texts go by hash) */
+        snprintf(a->value[i] + ATTR_TEXT_MAX - 64, 64, " ... (cut: %d characters)", len);
 }
 
 void attrs_set(attr_list *a, const char *key, const char *fmt, ...)
@@ -209,15 +211,18 @@ static int read_attrs(const char *path, attr_list *a, rr_error *err)
     static const char *const keys[] = {"refrender:scene", "refrender:command", "software", "refrender:background",
                                        "refrender:alpha", NULL};
     a->n = 0;
+    char buf[ATTR_TEXT_MAX];
     for (const char *const *k = identity_keys; *k; k++) {
-        char buf[4200];
-        if (exr_read_string_attr(path, *k, buf, sizeof buf, err))
-            return rr_fail(err, "%s: not a refrender render state (no %s)", path, *k);
+        int rc = exr_read_string_attr(path, *k, buf, sizeof buf, err);
+        if (rc)
+            return rc > 0 ? rr_fail(err, "%s: not a refrender render state (no %s)", path, *k) : -1;
         attrs_set(a, *k, "%s", buf);
     }
     for (const char *const *k = keys; *k; k++) {
-        char buf[4200];
-        if (!exr_read_string_attr(path, *k, buf, sizeof buf, NULL))
+        int rc = exr_read_string_attr(path, *k, buf, sizeof buf, err);
+        if (rc < 0) /* longer than refrender writes: refused, not cut */
+            return -1;
+        if (!rc)
             attrs_set(a, *k, "%s", buf);
     }
     return 0;
