@@ -155,10 +155,14 @@ int xml_attr_int(xml_ctx *c, xmlNodePtr n, const char *name, int *v, int lo, int
 int xml_is_element(xmlNodePtr n) { return n->type == XML_ELEMENT_NODE; }
 
 /* Non-blank text directly inside the element (a path, as in Figure 4.11)? */
+/* Entity references and CDATA are text too: counting only text nodes
+ * once left <animation>&ext;</animation> or a CDATA path static, the
+ * animation dropped without a word. */
 int xml_has_text(xmlNodePtr n)
 {
     for (xmlNodePtr k = n->children; k; k = k->next)
-        if (k->type == XML_TEXT_NODE && !xmlIsBlankNode(k))
+        if (k->type == XML_ENTITY_REF_NODE ||
+            ((k->type == XML_TEXT_NODE || k->type == XML_CDATA_SECTION_NODE) && !xmlIsBlankNode(k)))
             return 1;
     return 0;
 }

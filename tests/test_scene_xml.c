@@ -330,3 +330,17 @@ TEST(animation_node_names_as_long_as_anim_words_are_selected)
         printf("    %s\n", e.msg);
     unlink(path), rmdir(dir);
 }
+
+/* Issue 23, item 14: an <animation> whose text is an external entity was
+ * taken for an animation without text and left the object static without a
+ * word; a CDATA path was dropped the same way. */
+TEST(animation_text_as_entity_or_cdata_is_not_dropped)
+{
+    CHECK(fails_with("<?xml version='1.0'?><!DOCTYPE scene [<!ENTITY ext SYSTEM 'rig.anim'>]>\n<scene><object>"
+                     "<sphere radius='1'/>\n<animation>&ext;</animation></object></scene>",
+                     "mem.xml:3: <animation>: its text uses the external XML entity 'ext'"));
+    CHECK(fails_with("<?xml version='1.0'?><!DOCTYPE scene [<!ENTITY ext SYSTEM 'x'>]>\n<scene>\n<object>&ext;"
+                     "<sphere radius='1'/></object></scene>", "mem.xml:3: <object>: unexpected text"));
+    CHECK(fails_with("<scene><object><sphere radius='1'/>\n<animation><![CDATA[missing.anim]]></animation>"
+                     "</object></scene>", "missing.anim"));
+}
