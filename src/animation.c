@@ -276,15 +276,42 @@ static double min_scale_over(const animation *a, const double *s, int n)
     return fmax(m - max_slope_of(a->keys, CH_SX, 3) * largest_gap(s, n) * 0.5, MIN_SCALE);
 }
 
+/* Whether channel ch reaches MIN_SCALE on (a, b), an interval holding no
+ * key time, where it is va just after a and vb just before b: its slope is
+ * at most L there, so its minimum is at least (va + vb - L (b - a)) / 2;
+ * where that does not decide, halve. A spline between positive keys can
+ * overshoot below zero between the sample times. Past the budget of
+ * evaluations the answer is yes: a scale that close to zero so long is
+ * already vanishing. */
+static int reaches_min_scale(const keyframes *k, int ch, double a, double va, double b, double vb, double L,
+                             int *budget)
+{
+    if (!(va > MIN_SCALE) || !(vb > MIN_SCALE))
+        return 1;
+    if ((va + vb - L * (b - a)) * 0.5 > MIN_SCALE)
+        return 0;
+    double m = 0.5 * (a + b);
+    if (!(m > a && m < b)) /* no time in between */
+        return 0;
+    if (--*budget < 0)
+        return 1;
+    double vm = channel(k, ch, m, 0);
+    return reaches_min_scale(k, ch, a, va, m, vm, L, budget) || reaches_min_scale(k, ch, m, vm, b, vb, L, budget);
+}
+
 int animation_scale_clamped(const animation *a, double t0, double t1)
 {
     if (!a->keys)
         return 0;
-    int n, clamped = 0;
+    int n, clamped = 0, budget = 1 << 16;
     double *s = sample_times(a, t0, t1, &n);
-    for (int i = 0; s && i < n && !clamped; i++)
-        for (int c = CH_SX; c <= CH_SZ; c++)
-            clamped |= !(channel(a->keys, c, s[i], 0) > MIN_SCALE) || !(channel(a->keys, c, s[i], 1) > MIN_SCALE);
+    for (int c = CH_SX; s && c <= CH_SZ && !clamped; c++) {
+        double L = curve_max_slope(&a->keys->ch[c]);
+        clamped = !(channel(a->keys, c, s[0], 1) > MIN_SCALE) || !(channel(a->keys, c, s[n - 1], 0) > MIN_SCALE);
+        for (int i = 0; i + 1 < n && !clamped; i++) /* between samples, and on both sides of each */
+            clamped = reaches_min_scale(a->keys, c, s[i], channel(a->keys, c, s[i], 0), s[i + 1],
+                                        channel(a->keys, c, s[i + 1], 1), L, &budget);
+    }
     free(s);
     return clamped;
 }

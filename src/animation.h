@@ -95,9 +95,10 @@ typedef struct {
 } motion_bound;
 motion_bound animation_motion_bound(const animation *a, double t0, double t1);
 
-/* Whether a keyframed scale reaches 1e-9 or below at the sampled times of
- * [t0, t1] (a curve extrapolated through zero): there it is held at 1e-9,
- * where Maya would mirror the object; the caller warns. */
+/* Whether a keyframed scale reaches 1e-9 or below anywhere in [t0, t1] (a
+ * curve extrapolated through zero, or a spline overshooting between keys):
+ * there it is held at 1e-9, where Maya would mirror the object; the caller
+ * warns. */
 int animation_scale_clamped(const animation *a, double t0, double t1);
 
 /* A lower bound on the smallest scale factor over [t0, t1] (1 if unscaled). */

@@ -271,3 +271,28 @@ TEST(swept_bounds_list_every_key_time_of_long_cycles)
     CHECK(!(animation_key_times(&a, 0, 1e9) <= ANIMATION_MAX_KEY_TIMES)); /* refused by accel, not cut */
     animation_free(&a);
 }
+
+/* Issue 23, item 8: a scale held at 1e-9 (where it goes through zero) is
+ * reported, even when a spline overshoots below zero between two positive
+ * keys and no sample time falls in the dip: over a shutter of 1000 s the
+ * grid steps 15.6 s, and the dip lies inside (1, 2) between two key times. */
+TEST(scale_through_zero_between_samples_is_reported)
+{
+    animation a;
+    animation_init_static(&a);
+    const double sx[] = {0, 1, 1, 0.01, 2, 0.01, 3, 1};
+    key_channel(&a, CH_SX, 4, sx, TAN_SPLINE, INF_CONSTANT);
+    double lowest = INFINITY; /* the independent fact: the curve goes below zero in (1, 2) */
+    for (int i = 1; i < 1000; i++)
+        lowest = fmin(lowest, curve_eval(&a.keys->ch[CH_SX], 1 + i / 1000.0));
+    CHECK(lowest < 0);
+    CHECK(animation_scale_clamped(&a, 0, 1000));
+    CHECK(animation_scale_clamped(&a, 1.2, 1.8));
+    CHECK(!animation_scale_clamped(&a, 2.5, 1000)); /* from 2.5 on it rises from 0.01 to 1 and stays */
+    animation_free(&a);
+    const double positive[] = {0, 1, 1, 0.5, 2, 0.5, 3, 1};
+    animation_init_static(&a);
+    key_channel(&a, CH_SY, 4, positive, TAN_LINEAR, INF_CONSTANT);
+    CHECK(!animation_scale_clamped(&a, 0, 1000));
+    animation_free(&a);
+}
