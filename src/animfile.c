@@ -225,22 +225,23 @@ static int add_key(lexer *lx, curve_reader *r, const curve_key *k)
  * animx puts the control point a third of the tangent from the key, and the
  * animImportExport reader converts Maya 2.x weights between unit systems as
  * lengths in that plane. */
-static int fixed_tangent(lexer *lx, const curve_reader *r, const units *u, char w[][ANIM_WORD], double *angle,
-                         double *handle)
+static int fixed_tangent(lexer *lx, const curve_reader *r, const units *u, char key[][ANIM_WORD], int at, int out,
+                         curve_key *k)
 {
     double a, weight;
-    if (number(lx, w[0], &a) || number(lx, w[1], &weight))
+    const char *side = out ? "out" : "in";
+    if (number(lx, key[at], &a) || number(lx, key[at + 1], &weight))
         return -1;
     if (!(weight >= 0))
-        return fail(lx, "tangent weight %s is negative", w[1]);
+        return fail(lx, "key at time %s: %s-tangent weight %s is negative", key[0], side, key[at + 1]);
     double seconds = u->maya2 ? 1.0 : r->seconds_per_frame; /* scene units per unit of the plane's axes */
     double values = !u->maya2 ? r->value_scale : r->channel >= CH_TX && r->channel <= CH_TZ ? 0.01 : 1.0;
     a *= r->tangent_radians;
     if (!(cos(a) > 0)) /* its handle would run backwards in time (it was reported as a negative weight) */
-        return fail(lx, "tangent angle %s points backwards in time or straight up (Maya's tangent angles lie "
-                        "strictly between -90 and 90 degrees)", w[0]);
-    *angle = atan(tan(a) * values / seconds);
-    *handle = weight * cos(a) * seconds;
+        return fail(lx, "key at time %s: %s-tangent angle %s points backwards in time or straight up (Maya's "
+                        "tangent angles lie strictly between -90 and 90 degrees)", key[0], side, key[at]);
+    *(out ? &k->out_angle : &k->in_angle) = atan(tan(a) * values / seconds);
+    *(out ? &k->out_handle : &k->in_handle) = weight * cos(a) * seconds;
     return 0;
 }
 
@@ -269,13 +270,9 @@ static int parse_key(lexer *lx, curve_reader *r, char w[][ANIM_WORD], int n, con
         base = 6; /* tolerate a 1.1 file written without breakdown flags */
     if (n != base + extra)
         return fail(lx, "a key with tangents %s/%s has %d fields, expected %d", w[2], w[3], n, base + extra);
-    int at = base;
-    if (k.in == TAN_FIXED) {
-        if (fixed_tangent(lx, r, u, w + at, &k.in_angle, &k.in_handle))
-            return -1;
-        at += 2;
-    }
-    if (k.out == TAN_FIXED && fixed_tangent(lx, r, u, w + at, &k.out_angle, &k.out_handle))
+    int in = k.in == TAN_FIXED; /* the in-tangent's fields come first */
+    if ((in && fixed_tangent(lx, r, u, w, base, 0, &k)) ||
+        (k.out == TAN_FIXED && fixed_tangent(lx, r, u, w, base + 2 * in, 1, &k)))
         return -1;
     k.time *= r->seconds_per_frame;
     k.value *= r->value_scale;

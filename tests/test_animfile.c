@@ -165,7 +165,7 @@ TEST(weighted_anim_curves_are_bezier_in_frames_and_values)
         free_keys(k);
     }
     CHECK(strstr(parse_error(WEIGHTED("  0 0 flat fixed 1 0 0 0 -2;\n  24 10 flat flat 1 1 0;\n")),
-                 "t.anim:11: tangent weight -2 is negative"));
+                 "t.anim:11: key at time 0: out-tangent weight -2 is negative"));
     CHECK(strstr(parse_error(WEIGHTED("  0 0 flat fixed 1 0 0 0 24;\n  24 10 fixed flat 1 1 0 0 24;\n")),
                  "keys 1 and 2: the tangent weights give the segment a vertical tangent"));
 }
@@ -361,5 +361,5 @@ TEST(anim_words_are_whole_nodes_unlimited_and_backward_tangents_named)
     if (k)
         CHECK_NEAR(curve_eval(&k->ch[CH_TX], 0), 2.99, 1e-12), free_keys(k);
     CHECK(strstr(parse_error(WEIGHTED("  0 0 fixed fixed 1 1 0 180 1 0 1;\n  24 10 linear linear 1 1 0;\n")),
-                 "t.anim:11: tangent angle 180 points backwards in time"));
+                 "t.anim:11: key at time 0: in-tangent angle 180 points backwards in time"));
 }
