@@ -458,19 +458,28 @@ static int select_node(node_list *nodes, char w[][ANIM_WORD], int n, const char 
     return nodes->count > 0 && !strcmp(here, node ? node : nodes->names[0]);
 }
 
+/* The node names for a message, as many as fit, then how many more: the
+ * list was cut off mid-name without a word. */
 static void list_nodes(const node_list *nodes, char *buf, size_t size)
 {
     size_t len = 0;
+    int i = 0;
     buf[0] = 0;
-    for (int i = 0; i < nodes->count && len < size; i++)
-        len += (size_t)snprintf(buf + len, size - len, "%s'%s'", i ? ", " : "", nodes->names[i]);
+    for (; i < nodes->count; i++) {
+        int w = snprintf(buf + len, size - len, "%s'%s'", i ? ", " : "", nodes->names[i]);
+        if (w < 0 || (size_t)w + 32 >= size - len) /* keep room for the count */
+            break;
+        len += (size_t)w;
+    }
+    if (i < nodes->count)
+        snprintf(buf + len, size - len, "%s and %d more", i ? "," : "", nodes->count - i);
 }
 
 /* With several nodes in the file a node must be named, and a named node
  * must be there. */
 static int check_node_choice(const node_list *nodes, const char *name, const char *node, rr_error *err)
 {
-    char names[1024];
+    char names[512]; /* with the rest of the message, within an rr_error */
     list_nodes(nodes, names, sizeof names);
     if (!node && nodes->count > 1)
         return rr_fail(err, "%s: the file animates %d nodes (%s): choose one with <animation file=\"...\" "

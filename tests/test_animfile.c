@@ -360,6 +360,13 @@ TEST(anim_words_are_whole_nodes_unlimited_and_backward_tangents_named)
     CHECK(animfile_parse(text, "rig.anim", node, &k, NULL, &e) == 0);
     if (k)
         CHECK_NEAR(curve_eval(&k->ch[CH_TX], 0), 2.99, 1e-12), free_keys(k);
+    /* a missing node lists the names that fit and counts the rest */
+    CHECK(animfile_parse(text, "rig.anim", "other", &k, NULL, &e) != 0 && strstr(e.msg, "no curves for node 'other'"));
+    int listed = 0, more = 0;
+    for (const char *q = strstr(e.msg, "animates '"); q && (q = strchr(q + 1, '\'')); q = strchr(q + 1, '\''))
+        listed++; /* each name opens and closes a quote */
+    const char *tail = strstr(e.msg, ", and ");
+    CHECK(tail && sscanf(tail, ", and %d more", &more) == 1 && listed > 0 && listed + more == 300);
     CHECK(strstr(parse_error(WEIGHTED("  0 0 fixed fixed 1 1 0 180 1 0 1;\n  24 10 linear linear 1 1 0;\n")),
                  "t.anim:11: key at time 0: in-tangent angle 180 points backwards in time"));
 }
