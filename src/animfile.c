@@ -85,7 +85,7 @@ static int peek_is(lexer *lx, const char *word)
 
 static int fail(lexer *lx, const char *fmt, ...)
 {
-    char msg[400];
+    char msg[sizeof lx->err->msg]; /* room for a whole word (ANIMFILE_MAX_WORD) quoted in the message */
     va_list ap;
     va_start(ap, fmt);
     vsnprintf(msg, sizeof msg, fmt, ap);
