@@ -36,7 +36,8 @@ int cli_double(const char *opt, const char *text, double lo, double *out, rr_err
     char *end;
     double v = strtod(text, &end);
     if (end == text || *end || !isfinite(v) || v < lo)
-        return rr_fail(err, "%s: expected a finite number >= %g, got '%s'", opt, lo, text);
+        return isinf(lo) ? rr_fail(err, "%s: expected a finite number, got '%s'", opt, text)
+                         : rr_fail(err, "%s: expected a finite number >= %g, got '%s'", opt, lo, text);
     *out = v;
     return 0;
 }

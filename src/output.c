@@ -14,7 +14,8 @@ static const char *const identity_keys[] = {
     "refrender:sceneHash", "refrender:inputsHash", "refrender:resolution", "refrender:sampler", "refrender:spp",
     "refrender:tspp", "refrender:seed", "refrender:epsilon", "refrender:kernelSigma",
     "refrender:shutter", "refrender:weightFunction", "refrender:timeFactor", "refrender:batches",
-    "refrender:timeIntegration", "refrender:parameters", "refrender:parametersHash", "refrender:weightHash", NULL};
+    "refrender:timeIntegration", "refrender:parameters", "refrender:parametersHash", "refrender:weightHash",
+    "refrender:pixelFilter", "refrender:blurSpace", NULL};
 
 /* The attributes stored as EXR numbers (README, Output). */
 static rr_attr_kind attr_kind(const char *key)

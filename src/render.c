@@ -11,6 +11,9 @@
 
 #define TILE 16
 
+const char *pixel_filter_name(pixel_filter f) { return f == PIXEL_FILTER_POINT ? "point" : "box"; }
+const char *blur_space_name(blur_space b) { return b == BLUR_SPACE_LINEAR ? "linear" : "model"; }
+
 typedef struct {
     const scene *sc;
     const accel *acc;
@@ -129,10 +132,29 @@ static int batch_samples(const render_job *job, int px, int py, uint32_t batch, 
     uint64_t pixel = (uint64_t)py * (uint64_t)job->img->width + (uint64_t)px;
     sampler_batch(smp, sh->open, sh->close, pixel, px, py, batch, &scr->ss, scr->x, scr->y, scr->t);
     int count = (int)sampler_count(smp); /* at most SAMPLER_MAX_TIME_STRATA (check_settings) */
+    if (job->rs->filter == PIXEL_FILTER_POINT)
+        for (int i = 0; i < count; i++)
+            scr->x[i] = px + 0.5, scr->y[i] = py + 0.5;
     if (sh->kind != WEIGHT_BOX)
         for (int i = 0; i < count; i++)
             scr->t[i] = shutter_cdf_time(&job->time_cdf, (scr->t[i] - sh->open) / (sh->close - sh->open));
     return count;
+}
+
+/* The sRGB transfer function's inverse (IEC 61966-2-1) of a value clamped
+ * to [0, 1], as an 8-bit frame would hold it. */
+static double srgb_to_linear(double v)
+{
+    v = fmin(fmax(v, 0.0), 1.0);
+    return v <= 0.04045 ? v / 12.92 : pow((v + 0.055) / 1.055, 2.4);
+}
+
+/* A sample's colour in the space the pixel averages (--blur-space). */
+static void to_blur_space(const render_job *job, double rgba[4])
+{
+    if (job->rs->blur == BLUR_SPACE_LINEAR)
+        for (int c = 0; c < 3; c++)
+            rgba[c] = srgb_to_linear(rgba[c]);
 }
 
 /* One batch of a pixel (thesis sec. 4.5): the mean of its samples' colors.
@@ -158,9 +180,11 @@ static void render_pixel_batch(render_job *job, int px, int py, uint32_t batch, 
         else if (n)
             samples_fixed_camera(job, &sc, scr->x[first], scr->y[first], t, n, rgba, overflows);
         *rays += (uint64_t)n;
-        for (int k = 0; k < n; k++)
+        for (int k = 0; k < n; k++) {
+            to_blur_space(job, rgba[k]);
             for (int c = 0; c < 4; c++)
                 acc[c] += rgba[k][c];
+        }
     }
     RR_DCHECK(count > 0);
     for (int c = 0; c < 4; c++)
@@ -444,6 +468,9 @@ static int check_settings(const render_settings *rs, rr_error *err)
         return rr_fail(err, "batch and thread counts must be positive");
     if (rs->target_error > 0 && rs->max_batches < rs->batches)
         return rr_fail(err, "the batch cap must be at least the batch count");
+    if (rs->exact_time && rs->blur == BLUR_SPACE_LINEAR) /* decoding must come before the time average */
+        return rr_fail(err, "--blur-space linear decodes each instant's colour before the time average: exact time "
+                            "integrates colours over time first; use sampled time");
     return sampler_check(&rs->smp, render_batch_end(rs), err);
 }
 

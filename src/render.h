@@ -11,6 +11,20 @@
 #include "sampler.h"
 #include "shutter.h"
 
+/* Where a pixel's spatial samples lie: over its area (box, the default),
+ * or all at its centre (point: the official Gaussian rasterizers evaluate
+ * a pixel there, so the render is the limit of averaging N sharp frames
+ * as N grows; issue 24). */
+typedef enum { PIXEL_FILTER_BOX, PIXEL_FILTER_POINT } pixel_filter;
+/* What a pixel averages over time: the colours as the model gives them
+ * (model), or those clamped to [0, 1] and decoded from sRGB first
+ * (linear): the two conventions deblurring benchmarks use when they
+ * average sharp frames. */
+typedef enum { BLUR_SPACE_MODEL, BLUR_SPACE_LINEAR } blur_space;
+
+const char *pixel_filter_name(pixel_filter f);
+const char *blur_space_name(blur_space b);
+
 typedef struct {
     sampler smp;            /* kind, seed, counts */
     shutter shut;           /* the interval sampled and the weight a(t) */
@@ -22,6 +36,8 @@ typedef struct {
     int exact_time;         /* 1: each spatial sample integrated over the shutter exactly (exact.h);
                                the sampler's times are not used */
     int crop_x0, crop_y0, crop_x1, crop_y1; /* crop_x1 > 0: only pixels x0 <= x < x1, y0 <= y < y1 */
+    pixel_filter filter;
+    blur_space blur;
 } render_settings;
 
 

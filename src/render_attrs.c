@@ -102,6 +102,8 @@ void attrs_for_render(attr_list *a, const scene *s, const render_settings *rs, u
     set_identity_text(a, "refrender:weightFunction", "refrender:weightHash", weight_text, &rs->shut);
     attrs_set(a, "refrender:timeFactor", "%d", smp->time_factor);
     attrs_set(a, "refrender:timeIntegration", "%s", rs->exact_time ? "exact" : "sampled");
+    attrs_set(a, "refrender:pixelFilter", "%s", pixel_filter_name(rs->filter));
+    attrs_set(a, "refrender:blurSpace", "%s", blur_space_name(rs->blur));
     /* the convention compare.py --alpha composite relies on (README, Output) */
     attrs_set(a, "refrender:background", "%.9g %.9g %.9g", s->background.x, s->background.y, s->background.z);
     attrs_set(a, "refrender:alpha", "coverage; RGB already holds refrender:background where coverage < 1");

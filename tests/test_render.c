@@ -17,7 +17,8 @@ static const char *const MOVING_DISK =
 
 static render_settings target_settings(const scene *s, uint32_t max_batches)
 {
-    render_settings rs = {{SAMPLER_THESIS, 7, 1, 4, 4}, s->shut, 2, 0, 2, max_batches, 0.03, 0, 0, 0, 0, 0};
+    render_settings rs = {{SAMPLER_THESIS, 7, 1, 4, 4}, s->shut, 2, 0, 2, max_batches, 0.03, 0, 0, 0, 0, 0,
+                          PIXEL_FILTER_BOX, BLUR_SPACE_MODEL};
     return rs;
 }
 

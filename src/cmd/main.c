@@ -37,6 +37,7 @@ static void usage(FILE *f)
 "\n"
 "Sampling:\n"
 "  --spp N            spatial samples per pixel, a KxK grid (default 4)\n"
+"  --pixel-filter F   box (default): samples over the pixel; point: at its centre\n"
 "  --tspp N           temporal samples per spatial sample (default 100)\n"
 "  --sampler S        thesis (default), jittered3d or sobol\n"
 "  --seed N           random seed: same seed, same image, any threads (default 1)\n"
@@ -49,6 +50,8 @@ static void usage(FILE *f)
 "  --shutter O,C      shutter interval (frame 0's with <frames>)\n"
 "  --frame N          render frame N of a scene with <frames rate>\n"
 "  --frames A-B       render frames A to B into -o out.%04d.exr\n"
+"  --time T           a sharp image at the instant T (default --tspp 1)\n"
+"  --blur-space S     model (default): average colours as given; linear: decode sRGB first\n"
 "Output:\n"
 "  -o, --output F     output EXR (default render.exr), written atomically\n"
 "  --preview F        also an 8-bit sRGB preview (PNG, by extension)\n"
@@ -79,6 +82,10 @@ typedef struct {
     int no_static_reuse;
     int exact_time, tspp_given, sampler_given; /* --time-integration exact */
     int shutter_set;                            /* --shutter OPEN,CLOSE */
+    int instant_set;                            /* --time T */
+    double instant;
+    pixel_filter filter;                        /* --pixel-filter */
+    blur_space blur;                            /* --blur-space */
     scene_params params;                        /* -D name=value */
     int crop_set;                               /* --crop-window X0,X1,Y0,Y1 (fractions) */
     double crop[4];
@@ -93,7 +100,7 @@ typedef struct {
 enum { OPT_SPP = 256, OPT_TSPP, OPT_RES, OPT_THREADS, OPT_SEED, OPT_EPS, OPT_SIGMA, OPT_TFACTOR,
        OPT_PREVIEW, OPT_QUIET, OPT_VERSION, OPT_SAMPLER, OPT_BATCHES, OPT_TARGET, OPT_MAXB, OPT_PASS,
        OPT_CKPT, OPT_CKPT_EVERY, OPT_RESUME, OPT_NO_REUSE, OPT_FRAME, OPT_FRAMES,
-       OPT_TIME_INTEGRATION, OPT_SHUTTER, OPT_CROP };
+       OPT_TIME_INTEGRATION, OPT_SHUTTER, OPT_CROP, OPT_TIME, OPT_PIXEL_FILTER, OPT_BLUR_SPACE };
 
 static int parse_pass(const char *arg, render_options *o, rr_error *err)
 {
@@ -149,6 +156,19 @@ static int parse_option(int c, const char *arg, render_options *o, rr_error *err
         o->crop_set = 1;
         return 0;
     }
+    case OPT_TIME:
+        o->instant_set = 1;
+        return cli_double("--time", arg, -INFINITY, &o->instant, err);
+    case OPT_PIXEL_FILTER:
+        if (strcmp(arg, "box") && strcmp(arg, "point"))
+            return rr_fail(err, "--pixel-filter: expected box or point, got '%s'", arg);
+        o->filter = strcmp(arg, "point") ? PIXEL_FILTER_BOX : PIXEL_FILTER_POINT;
+        return 0;
+    case OPT_BLUR_SPACE:
+        if (strcmp(arg, "model") && strcmp(arg, "linear"))
+            return rr_fail(err, "--blur-space: expected model or linear, got '%s'", arg);
+        o->blur = strcmp(arg, "linear") ? BLUR_SPACE_MODEL : BLUR_SPACE_LINEAR;
+        return 0;
     case OPT_TIME_INTEGRATION:
         if (strcmp(arg, "sampled") && strcmp(arg, "exact"))
             return rr_fail(err, "--time-integration: expected sampled or exact, got '%s'", arg);
@@ -177,6 +197,12 @@ static int check_combinations(const render_options *o, rr_error *err)
     if (o->exact_time && o->tspp_given && o->tspp != 1)
         return rr_fail(err, "--tspp %d: with --time-integration exact each spatial sample is integrated over "
                             "the whole shutter (no time samples); leave --tspp out", o->tspp);
+    if (o->instant_set && (o->shutter_set || o->frames || o->exact_time))
+        return rr_fail(err, "--time renders one instant: it cannot be combined with --shutter, --frame(s) or "
+                            "--time-integration exact");
+    if (o->exact_time && o->blur == BLUR_SPACE_LINEAR)
+        return rr_fail(err, "--blur-space linear decodes each instant's colour before the time average, which "
+                            "exact time cannot do (it integrates colours over time): use sampled time");
     if (o->passes && o->batches < o->passes)
         return rr_fail(err, "--pass %d/%d needs --batches >= %d (each pass renders whole batches)",
                        o->pass, o->passes, o->passes);
@@ -216,6 +242,8 @@ static int parse_args(int argc, char **argv, render_options *o)
         {"frames", required_argument, 0, OPT_FRAMES},
         {"time-integration", required_argument, 0, OPT_TIME_INTEGRATION},
         {"shutter", required_argument, 0, OPT_SHUTTER}, {"crop-window", required_argument, 0, OPT_CROP},
+        {"time", required_argument, 0, OPT_TIME}, {"pixel-filter", required_argument, 0, OPT_PIXEL_FILTER},
+        {"blur-space", required_argument, 0, OPT_BLUR_SPACE},
         {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
     int c;
     rr_error err;
@@ -305,6 +333,8 @@ static int apply_overrides(scene *s, const render_options *o, rr_error *err)
         if (shutter_check(&s->shut, err))
             return -1;
     }
+    if (o->instant_set) /* a zero-length box shutter: every sample's time is the instant */
+        s->shut.open = s->shut.close = o->instant, s->shut.kind = WEIGHT_BOX;
     return camera_prepare(&s->cam, err);
 }
 
@@ -398,7 +428,8 @@ static void setup_run(render_run *run, const scene *s, const shutter *shut, cons
     run->total_batches = total;
     run->rs = (render_settings){
         {o->sampler, o->seed, sampler_grid_for_spp(o->spp), o->tspp, s->time_factor}, *shut,
-        o->threads, begin, end - begin, max_batches_of(o), o->target_error, o->exact_time, 0, 0, 0, 0};
+        o->threads, begin, end - begin, max_batches_of(o), o->target_error, o->exact_time, 0, 0, 0, 0,
+        o->filter, o->blur};
     if (o->crop_set) {
         int px[4];
         crop_pixels(o, s->cam.width, s->cam.height, px);
@@ -654,6 +685,8 @@ int cmd_render(int argc, char **argv)
     int rc = parse_args(argc, argv, &o);
     if (rc)
         return rc == 1 ? 0 : 2;
+    if (o.instant_set && !o.tspp_given)
+        o.tspp = 1; /* one instant: more times per position would repeat it */
     if (o.exact_time) { /* time is not sampled: one time per position, Sobol' positions */
         o.tspp = 1;
         if (!o.sampler_given)
