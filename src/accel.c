@@ -140,6 +140,11 @@ int accel_ray_meets_swept_sphere(const accel *a, unsigned obj, vec3 org, vec3 di
 /* A sphere about the object's box center holding the object (rest pose). */
 static void object_sphere(const scene_object *o, vec3 *center, double *radius)
 {
+    if (o->kind == OBJECT_GAUSSIANS) { /* (accel_build.c gives the filter's footprint its own) */
+        aabb b = scene_object_bounds(o);
+        *center = v3_scale(v3_add(b.lo, b.hi), 0.5), *radius = 0.5 * v3_len(v3_sub(b.hi, b.lo));
+        return;
+    }
     if (o->kind != OBJECT_POINTS) {
         *center = o->sphere_center, *radius = o->sphere_radius;
         return;
@@ -163,8 +168,13 @@ sphere_bound accel_swept_sphere(const scene_object *o, double t0, double t1)
     vec3 c;
     double r;
     object_sphere(o, &c, &r);
-    r *= animation_max_scale(&o->anim, t0, t1);
-    aabb path = animation_swept_bounds(&o->anim, (aabb){c, c}, t0, t1);
+    return accel_swept_sphere_about(&o->anim, c, r, t0, t1);
+}
+
+sphere_bound accel_swept_sphere_about(const animation *anim, vec3 c, double r, double t0, double t1)
+{
+    r *= animation_max_scale(anim, t0, t1);
+    aabb path = animation_swept_bounds(anim, (aabb){c, c}, t0, t1);
     vec3 half = v3_scale(v3_sub(path.hi, path.lo), 0.5);
     sphere_bound b;
     b.center = v3_add(path.lo, half);
@@ -489,4 +499,76 @@ void accel_ray_trace_times(const accel *a, const accel_ray *r, const double *tim
         trace_moving_times(a, r->org, r->dir, times, n, &r->static_hits, kbs, hit_moving);
     for (int i = 0; i < n; i++)
         result[i] = hit_moving[i] ? &kbs[i] : &r->static_hits;
+}
+
+/* ---- Gaussian objects ------------------------------------------------ */
+
+/* Per-traversal state of a gather: RTCIntersectContext first (Embree
+ * hands this pointer to the callbacks). */
+typedef struct {
+    struct RTCIntersectContext rtc;
+    const gaussian_ray *ray;
+    const scene_object *o;
+    unsigned obj;
+    gaussian_hits *out;
+} gather_context;
+
+void accel_gaussian_bounds_cb(const struct RTCBoundsFunctionArguments *args)
+{
+    const gaussian_footprint *f = args->geometryUserPtr;
+    const gaussian_model *m = f->acc->models[f->obj];
+    const float *mu = &m->mean[3 * args->primID];
+    /* the farthest the camera gets from the Gaussian (world), in object
+     * units; the focal length shrunk by the scale's spread */
+    vec3 at_open = xform_point(&f->at_open, v3(mu[0], mu[1], mu[2]));
+    double distance = v3_len(v3_sub(at_open, f->camera_center)) + f->camera_radius + f->travel;
+    double reach = gaussian_filter_reach(m, args->primID, distance / f->min_scale,
+                                         f->focal * f->min_scale / f->max_scale);
+    aabb b = gaussian_bounds(m, args->primID, reach);
+    struct RTCBounds *r = args->bounds_o;
+    r->lower_x = nextafterf((float)b.lo.x, -INFINITY), r->lower_y = nextafterf((float)b.lo.y, -INFINITY);
+    r->lower_z = nextafterf((float)b.lo.z, -INFINITY);
+    r->upper_x = nextafterf((float)b.hi.x, INFINITY), r->upper_y = nextafterf((float)b.hi.y, INFINITY);
+    r->upper_z = nextafterf((float)b.hi.z, INFINITY);
+}
+
+/* Every Gaussian the ray passes is evaluated and its hit kept: the ray
+ * is never shortened, so the traversal finds them all. */
+void accel_gaussian_gather(const struct RTCIntersectFunctionNArguments *args)
+{
+    if (!args->valid[0])
+        return;
+    gather_context *c = (gather_context *)args->context;
+    const gaussian_model *m = &c->o->gaussians;
+    gaussian_hit h;
+    int hit = m->kind == GAUSSIAN_3D ? gaussian_hit_3d(m, args->primID, c->ray, &h)
+                                     : gaussian_hit_2d(m, args->primID, c->o->order, c->ray, &h);
+    if (hit) {
+        h.obj = c->obj;
+        gaussian_hits_add(c->out, &h);
+    }
+}
+
+int accel_has_gaussians(const accel *a) { return a->ngaussian > 0; }
+
+const gaussian_model *const *accel_gaussian_models(const accel *a) { return a->models; }
+
+void accel_gather_gaussians(const accel *a, const camera_view *view, double x, double y, vec3 org, vec3 dir,
+                            double time, double tmax, gaussian_hits *out)
+{
+    for (unsigned k = 0; k < a->ngaussian; k++) {
+        unsigned obj = a->gaussian_ids[k];
+        if (!ray_meets_swept(a, obj, org, dir))
+            continue;
+        const scene_object *o = &a->sc->objects[obj];
+        xform xf = a->is_static[obj] ? a->rest[obj] : animation_at(&o->anim, time);
+        gaussian_ray ray;
+        gaussian_ray_init(&ray, view, &xf, x, y, org, dir, tmax);
+        gather_context c;
+        rtcInitIntersectContext(&c.rtc);
+        c.ray = &ray, c.o = o, c.obj = obj, c.out = out;
+        struct RTCRayHit rh;
+        init_rayhit1(&rh, ray.org, ray.dir, INFINITY); /* tmax is the hits' own test: their t is not the box's */
+        rtcIntersect1(a->object_scenes[obj], &c.rtc, &rh);
+    }
 }

@@ -15,6 +15,7 @@
 #ifndef RR_ACCEL_H
 #define RR_ACCEL_H
 
+#include "gaussian_hit.h"
 #include "kbuffer.h"
 #include "scene.h"
 
@@ -60,6 +61,22 @@ void accel_ray_begin(const accel *a, vec3 org, vec3 dir, accel_ray *r);
  * else &kbs[i]. */
 void accel_ray_trace_times(const accel *a, const accel_ray *r, const double *times, int n, kbuffer *kbs,
                            const kbuffer **result);
+
+/* ---- Gaussian-splat objects (gaussian_hit.h) ---- */
+
+/* Whether the scene has Gaussian objects (their hits are gathered apart
+ * from the epsilon-blended surfaces and composited over them). */
+int accel_has_gaussians(const accel *a);
+
+/* Every Gaussian hit of the world ray org + t dir (dir unit) at `time`
+ * through raster (x, y) of the camera `view` (the camera at that time)
+ * nearer than tmax (the opaque surface behind, or infinity), appended to
+ * out in no particular order. */
+void accel_gather_gaussians(const accel *a, const camera_view *view, double x, double y, vec3 org, vec3 dir,
+                            double time, double tmax, gaussian_hits *out);
+
+/* models[obj]: object obj's Gaussian model, NULL for other objects. */
+const gaussian_model *const *accel_gaussian_models(const accel *a);
 
 /* ---- for exact time integration (exact.h) ---- */
 

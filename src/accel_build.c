@@ -66,6 +66,49 @@ static void embree_error(void *user, enum RTCError code, const char *str)
         snprintf(e->msg, sizeof e->msg, "Embree error %d: %s", (int)code, str ? str : "");
 }
 
+/* A Gaussian object's footprint parameters for the shutter [open, close]. */
+static void gaussian_footprint_for(accel *a, unsigned obj, double open, double close)
+{
+    const scene *s = a->sc;
+    const scene_object *o = &s->objects[obj];
+    gaussian_footprint *f = &a->footprint[obj];
+    f->acc = a, f->obj = obj;
+    f->at_open = animation_at(&o->anim, open);
+    aabb cam = animation_swept_bounds(&s->camera_motion, (aabb){s->cam.position, s->cam.position}, open, close);
+    f->camera_center = v3_scale(v3_add(cam.lo, cam.hi), 0.5);
+    f->camera_radius = 0.5 * v3_len(v3_sub(cam.hi, cam.lo)) * (1 + 1e-6);
+    /* every point stays in the swept sphere: it moves at most its diameter */
+    f->travel = animation_is_static(&o->anim) ? 0.0 : 2.0 * sqrt(accel_swept_sphere(o, open, close).radius2);
+    f->min_scale = animation_min_scale(&o->anim, open, close);
+    f->max_scale = animation_max_scale(&o->anim, open, close);
+    camera_view v;
+    camera_view_rest(&s->cam, &v);
+    f->focal = fmin(v.fx, v.fy);
+}
+
+/* A Gaussian object's BVH depends on the shutter (the filter's footprint
+ * follows the camera's distance): rebuilt for each one, and its swept
+ * bounds are those of its BVH's. */
+static void build_gaussian_object(accel *a, unsigned obj, double open, double close)
+{
+    const scene_object *o = &a->sc->objects[obj];
+    if (a->object_scenes[obj])
+        rtcReleaseScene(a->object_scenes[obj]);
+    gaussian_footprint_for(a, obj, open, close);
+    a->object_scenes[obj] = accel_user_scene(a->device, (unsigned)o->gaussians.count, &a->footprint[obj],
+                                             accel_gaussian_bounds_cb, accel_gaussian_gather);
+    struct RTCBounds rb;
+    rtcGetSceneBounds(a->object_scenes[obj], &rb);
+    aabb box = {v3(rb.lower_x, rb.lower_y, rb.lower_z), v3(rb.upper_x, rb.upper_y, rb.upper_z)};
+    if (!o->gaussians.count || !(rb.lower_x <= rb.upper_x)) /* nothing can be seen: a point */
+        box.lo = box.hi = v3(0, 0, 0);
+    a->swept[obj] = animation_swept_bounds(&o->anim, box, open, close);
+    vec3 c = v3_scale(v3_add(box.lo, box.hi), 0.5);
+    a->swept_sphere[obj] = accel_swept_sphere_about(&o->anim, c, 0.5 * v3_len(v3_sub(box.hi, box.lo)), open, close);
+    a->is_static[obj] = a->reuse_static && animation_is_static(&o->anim);
+    a->rest[obj] = animation_at(&o->anim, open);
+}
+
 /* The top levels depend on the shutter interval (swept bounds, which
  * objects stand still); the objects' own BVHs do not. */
 static void build_top_levels(accel *a, double open, double close)
@@ -78,8 +121,14 @@ static void build_top_levels(accel *a, double open, double close)
         a->top[k].scene = NULL;
         a->top[k].count = 0;
     }
+    a->ngaussian = 0;
     for (int i = 0; i < s->nobjects; i++) {
         const scene_object *o = &s->objects[i];
+        if (o->kind == OBJECT_GAUSSIANS) {
+            build_gaussian_object(a, (unsigned)i, open, close);
+            a->gaussian_ids[a->ngaussian++] = (unsigned)i;
+            continue;
+        }
         a->swept[i] = animation_swept_bounds(&o->anim, scene_object_bounds(o), open, close);
         a->swept_sphere[i] = accel_swept_sphere(o, open, close);
         a->is_static[i] = a->reuse_static && animation_is_static(&o->anim);
@@ -178,15 +227,23 @@ int accel_build(const scene *s, const accel_settings *set, accel **out, rr_error
     a->coherent_spread = calloc(n, sizeof *a->coherent_spread);
     a->rest = calloc(n, sizeof *a->rest);
     a->is_static = calloc(n, sizeof *a->is_static);
+    a->gaussian_ids = calloc(n, sizeof *a->gaussian_ids);
+    a->footprint = calloc(n, sizeof *a->footprint);
+    a->models = calloc(n, sizeof *a->models);
     for (int k = 0; k < 2; k++)
         a->top[k] = (top_level){NULL, calloc(n, sizeof(unsigned)), 0, a};
-    if (!a->object_scenes || !a->swept || !a->swept_sphere || !a->coherent_spread || !a->rest || !a->is_static || !a->top[0].ids || !a->top[1].ids) {
+    if (!a->object_scenes || !a->swept || !a->swept_sphere || !a->coherent_spread || !a->rest || !a->is_static || !a->gaussian_ids ||
+        !a->footprint || !a->models || !a->top[0].ids || !a->top[1].ids) {
         accel_free(a);
         return rr_fail(err, "out of memory");
     }
     for (int i = 0; i < s->nobjects; i++) {
         scene_object *o = &s->objects[i];
         int points = o->kind == OBJECT_POINTS;
+        if (o->kind == OBJECT_GAUSSIANS) { /* built with the shutter (build_gaussian_object) */
+            a->models[i] = &o->gaussians;
+            continue;
+        }
         a->coherent_spread[i] = coherent_spread(o);
         a->object_scenes[i] = accel_user_scene(a->device, points ? (unsigned)o->model.count : 1u, o,
                                          points ? accel_splat_bounds_cb : accel_sphere_bounds_cb,
@@ -223,6 +280,9 @@ void accel_free(accel *a)
     free(a->coherent_spread);
     free(a->rest);
     free(a->is_static);
+    free(a->gaussian_ids);
+    free(a->footprint);
+    free(a->models);
     rtcReleaseDevice(a->device);
     free(a);
 }

@@ -29,6 +29,20 @@ typedef struct {
     double radius2;
 } sphere_bound;
 
+/* What the bounds of a Gaussian object's splats need to hold the 2DGS
+ * low-pass filter's footprint over the shutter (gaussian_filter_reach):
+ * the farthest the camera can be from each Gaussian. */
+typedef struct {
+    const struct accel *acc;
+    unsigned obj;
+    xform at_open;       /* the object's transform at the shutter's open */
+    vec3 camera_center;  /* a world sphere holding the camera over the shutter */
+    double camera_radius;
+    double travel;       /* how far any point of the object moves during the shutter (world) */
+    double min_scale, max_scale;
+    double focal;        /* the smaller focal length, pixels */
+} gaussian_footprint;
+
 struct accel {
     RTCDevice device;
     top_level top[2];
@@ -40,6 +54,10 @@ struct accel {
     int *is_static;
     int reuse_static;
     const scene *sc;
+    unsigned *gaussian_ids;  /* the Gaussian objects: traced by gathering, not in the top levels */
+    unsigned ngaussian;
+    gaussian_footprint *footprint; /* per object (used for Gaussian ones) */
+    const gaussian_model **models; /* per object: its Gaussian model, or NULL */
     float epsilon;
     double sigma;
     double open, close; /* the shutter the top levels were built for */
@@ -79,10 +97,14 @@ void accel_sphere_bounds_cb(const struct RTCBoundsFunctionArguments *args);
 void accel_no_occluded(const struct RTCOccludedFunctionNArguments *args);
 void accel_object_intersect(const struct RTCIntersectFunctionNArguments *args);
 void accel_object_bounds_cb(const struct RTCBoundsFunctionArguments *args);
+void accel_gaussian_bounds_cb(const struct RTCBoundsFunctionArguments *args);
+void accel_gaussian_gather(const struct RTCIntersectFunctionNArguments *args);
 /* A committed scene of one user geometry (accel_build.c). */
 RTCScene accel_user_scene(RTCDevice dev, unsigned nprims, void *user, RTCBoundsFunction bounds,
                           RTCIntersectFunctionN intersect);
-/* A world sphere that holds the object at every time in [t0, t1]. */
+/* A world sphere that holds the object at every time in [t0, t1]; and one
+ * holding the sphere (center, radius) of object space moved by anim. */
 sphere_bound accel_swept_sphere(const scene_object *o, double t0, double t1);
+sphere_bound accel_swept_sphere_about(const animation *anim, vec3 center, double radius, double t0, double t1);
 
 #endif

@@ -36,14 +36,24 @@ int camera_prepare(camera *c, rr_error *err)
 {
     if (camera_frame(c, err))
         return -1;
-    if (!(c->fov_degrees > 0 && c->fov_degrees < 180))
-        return rr_fail(err, "camera fov must be in (0, 180) degrees, got %g", c->fov_degrees);
     if (c->width < 1 || c->height < 1)
         return rr_fail(err, "image size must be at least 1x1, got %dx%d", c->width, c->height);
     if ((long long)c->width * c->height > RR_MAX_PIXELS)
         return rr_fail(err, "image size %dx%d has more than the %lld pixels refrender renders", c->width,
                        c->height, RR_MAX_PIXELS);
+    if (c->focal_x > 0 || c->focal_y > 0) {
+        if (!(c->focal_x > 0 && c->focal_y > 0 && isfinite(c->focal_x) && isfinite(c->focal_y)))
+            return rr_fail(err, "camera focal lengths must both be finite and > 0, got %g and %g", c->focal_x,
+                           c->focal_y);
+        c->tan_half_fov = 0.5 * c->height / c->focal_y;
+        c->tan_half_fov_x = 0.5 * c->width / c->focal_x;
+        c->fov_degrees = 360.0 / M_PI * atan(c->tan_half_fov);
+        return 0;
+    }
+    if (!(c->fov_degrees > 0 && c->fov_degrees < 180))
+        return rr_fail(err, "camera fov must be in (0, 180) degrees, got %g", c->fov_degrees);
     c->tan_half_fov = tan(c->fov_degrees * M_PI / 360.0);
+    c->tan_half_fov_x = c->tan_half_fov * c->width / c->height; /* square pixels */
     return 0;
 }
 
@@ -61,11 +71,11 @@ void camera_world_to_camera(const camera *c, double m[4][4])
  * (2 x / width - 1) tan aspect, y_cam / z_cam = (1 - 2 y / height) tan. */
 void camera_projection(const camera *c, double sx, double sy, double m[4][4])
 {
-    double t = c->tan_half_fov, aspect = (double)c->width / c->height;
+    double t = c->tan_half_fov;
     for (int r = 0; r < 4; r++)
         for (int k = 0; k < 4; k++)
             m[r][k] = 0;
-    m[0][0] = 0.5 * sx / (t * aspect), m[0][2] = 0.5 * sx;
+    m[0][0] = 0.5 * sx / c->tan_half_fov_x, m[0][2] = 0.5 * sx;
     m[1][1] = -0.5 * sy / t, m[1][2] = 0.5 * sy;
     m[2][3] = 1;
     m[3][2] = 1;
@@ -73,9 +83,19 @@ void camera_projection(const camera *c, double sx, double sy, double m[4][4])
 
 vec3 camera_ray_direction(const camera *c, double x, double y)
 {
-    double aspect = (double)c->width / (double)c->height;
-    double sx = (2.0 * x / c->width - 1.0) * c->tan_half_fov * aspect;
+    double sx = (2.0 * x / c->width - 1.0) * c->tan_half_fov_x;
     double sy = (1.0 - 2.0 * y / c->height) * c->tan_half_fov;
     vec3 d = v3_add(c->forward, v3_add(v3_scale(c->right, sx), v3_scale(c->image_up, sy)));
     return v3_normalize(d);
+}
+
+void camera_view_rest(const camera *c, camera_view *v)
+{
+    v->position = c->position;
+    v->axis[0] = c->right;
+    v->axis[1] = v3_scale(c->image_up, -1.0);
+    v->axis[2] = c->forward;
+    /* camera_ray_direction: x_cam / z_cam = (2 x / width - 1) tan_x */
+    v->fx = 0.5 * c->width / c->tan_half_fov_x, v->fy = 0.5 * c->height / c->tan_half_fov;
+    v->cx = 0.5 * c->width, v->cy = 0.5 * c->height;
 }

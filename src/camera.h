@@ -1,6 +1,6 @@
 /* Pinhole camera. Raster (0,0) is the top-left image corner; pixel (i,j)
  * covers [i,i+1] x [j,j+1]; rows go downward. fov is the vertical field of
- * view in degrees; the camera looks along lookat - position with up
+ * view in degrees (or focal lengths in pixels); the camera looks along lookat - position with up
  * projected to image up. */
 #ifndef RR_CAMERA_H
 #define RR_CAMERA_H
@@ -11,10 +11,27 @@ typedef struct {
     vec3 position, lookat, up;
     double fov_degrees;
     int width, height;
+    /* focal lengths in pixels (a trained model's cameras.json): when both
+     * are > 0 they replace fov, and pixels need not be square */
+    double focal_x, focal_y;
     /* derived by camera_prepare */
     vec3 forward, right, image_up;
-    double tan_half_fov;
+    double tan_half_fov;   /* vertical */
+    double tan_half_fov_x; /* horizontal */
 } camera;
+
+/* The camera at one instant as the Gaussian-splatting rasterizers see it
+ * (OpenCV/COLMAP axes: camera x right, y down, z forward): a point at
+ * camera coordinates (x, y, z) lies at raster (fx x / z + cx, fy y / z +
+ * cy), raster as above; the principal point is the image centre. */
+typedef struct {
+    vec3 position;
+    vec3 axis[3]; /* world directions of the camera's x, y and z */
+    double fx, fy, cx, cy;
+} camera_view;
+
+/* The prepared camera at rest. */
+void camera_view_rest(const camera *c, camera_view *v);
 
 /* Computes the orthonormal frame; -1 if position, lookat or up is not
  * finite, lookat - position overflows or is 0, up is parallel to the view

@@ -20,6 +20,13 @@
 
 typedef enum { GAUSSIAN_AUTO = 0, GAUSSIAN_2D = 2, GAUSSIAN_3D = 3 } gaussian_kind;
 
+/* The order in which a ray composites a 2D model's hits: by the view depth
+ * of each Gaussian's centre (the official rasterizer's sort; the default,
+ * so a sharp render matches it) or by the depth of the ray's own hit (the
+ * physically ordered variant). 3D models go by the distance to each
+ * Gaussian's maximum response along the ray, as 3DGRT does. */
+typedef enum { GAUSSIAN_ORDER_CENTER_DEPTH, GAUSSIAN_ORDER_HIT_DEPTH } gaussian_order;
+
 #define GAUSSIAN_MAX_SH_DEGREE 3
 #define GAUSSIAN_MAX_SH_COEFFS 16 /* (3 + 1)^2 */
 /* The largest activated scale: stored in floats, squared in ray tests. */

@@ -18,6 +18,8 @@ typedef struct {
     const scene *sc;
     const accel *acc;
     int camera_moves; /* every sample traces its own world ray */
+    int gaussians;    /* the scene has Gaussian objects: so does every sample */
+    camera_view rest_view; /* the camera at rest (Gaussian hits, still camera) */
     const render_settings *rs;
     const exact_plan *exact; /* with rs->exact_time */
     shutter_cdf time_cdf;    /* times drawn from a(t) (not used for a box) */
@@ -40,6 +42,7 @@ typedef struct { /* per-thread scratch */
     sampler_scratch ss;
     double *x, *y, *t;
     exact_scratch *exact;
+    gaussian_hits gaussian;
 } thread_scratch;
 
 /* The color and coverage of a k-buffer (background when empty). */
@@ -93,9 +96,27 @@ static void samples_fixed_camera(render_job *job, static_cache *sc, double x, do
         fixed_camera_color(job, sc, result[i], rgba[i], overflows);
 }
 
-/* A moving camera (thesis eq. 3.6): every sample has its own world ray. */
-static void sample_moving_camera(render_job *job, double x, double y, double t, double rgba[4],
-                                 uint64_t *overflows)
+/* The Gaussian objects' hits on the ray, composited over the surfaces'
+ * colour (the nearest surface hides what is behind it; issue 24). */
+static void composite_gaussians(render_job *job, double x, double y, double t, vec3 org, vec3 dir,
+                                const kbuffer *kb, gaussian_hits *scratch, double rgba[4], uint64_t *overflows)
+{
+    camera_view moved, *view = &job->rest_view;
+    if (job->camera_moves)
+        scene_camera_view(job->sc, t, view = &moved);
+    scratch->count = scratch->dropped = 0;
+    accel_gather_gaussians(job->acc, view, x, y, org, dir, t, kb->count ? kb->closest : INFINITY, scratch);
+    *overflows += scratch->dropped > 0;
+    vec3 rgb;
+    double T = gaussian_composite(scratch, accel_gaussian_models(job->acc), v3(rgba[0], rgba[1], rgba[2]), &rgb);
+    rgba[0] = rgb.x, rgba[1] = rgb.y, rgba[2] = rgb.z;
+    rgba[3] = kb->count ? 1.0 : 1.0 - T;
+}
+
+/* A moving camera (thesis eq. 3.6), or a scene with Gaussian objects:
+ * every sample has its own world ray. */
+static void sample_own_ray(render_job *job, double x, double y, double t, gaussian_hits *scratch, double rgba[4],
+                           uint64_t *overflows)
 {
     vec3 org, dir;
     kbuffer kb;
@@ -103,6 +124,8 @@ static void sample_moving_camera(render_job *job, double x, double y, double t, 
     accel_trace(job->acc, org, dir, t, &kb);
     *overflows += kb.dropped > 0;
     sample_color(job, org, dir, &kb, rgba);
+    if (job->gaussians)
+        composite_gaussians(job, x, y, t, org, dir, &kb, scratch, rgba, overflows);
 }
 
 /* The next group of samples from `first`: those sharing its raster position
@@ -111,7 +134,7 @@ static void sample_moving_camera(render_job *job, double x, double y, double t, 
 static int next_group(const render_job *job, const thread_scratch *scr, int first, int count, double *t, int *n)
 {
     int end = first + 1;
-    if (!job->camera_moves)
+    if (!job->camera_moves && !job->gaussians)
         while (end < count && end - first < ACCEL_PACKET && scr->x[end] == scr->x[first] &&
                scr->y[end] == scr->y[first])
             end++;
@@ -175,8 +198,8 @@ static void render_pixel_batch(render_job *job, int px, int py, uint32_t batch, 
         double t[ACCEL_PACKET], rgba[ACCEL_PACKET][4];
         int n, first = i;
         i = next_group(job, scr, first, count, t, &n);
-        if (job->camera_moves && n)
-            sample_moving_camera(job, scr->x[first], scr->y[first], t[0], rgba[0], overflows);
+        if ((job->camera_moves || job->gaussians) && n)
+            sample_own_ray(job, scr->x[first], scr->y[first], t[0], &scr->gaussian, rgba[0], overflows);
         else if (n)
             samples_fixed_camera(job, &sc, scr->x[first], scr->y[first], t, n, rgba, overflows);
         *rays += (uint64_t)n;
@@ -317,6 +340,7 @@ static int scratch_init(thread_scratch *scr, const sampler *s)
     scr->y = malloc(n * sizeof(double));
     scr->t = malloc(n * sizeof(double));
     scr->exact = exact_scratch_new();
+    memset(&scr->gaussian, 0, sizeof scr->gaussian);
     return sampler_scratch_init(&scr->ss, s) || !scr->x || !scr->y || !scr->t || !scr->exact ? -1 : 0;
 }
 
@@ -327,6 +351,7 @@ static void scratch_free(thread_scratch *scr)
     free(scr->y);
     free(scr->t);
     exact_scratch_free(scr->exact);
+    gaussian_hits_free(&scr->gaussian);
 }
 
 static void *worker(void *arg)
@@ -488,11 +513,15 @@ int render_image(const scene *s, const accel *a, const render_settings *rs, imag
     memset(&job, 0, sizeof job);
     job.sc = s, job.acc = a, job.rs = rs, job.img = img, job.cancel = cancel;
     job.camera_moves = scene_camera_moves(s);
+    job.gaussians = accel_has_gaussians(a);
+    camera_view_rest(&s->cam, &job.rest_view);
     job.tiles_x = (img->width + TILE - 1) / TILE;
     job.tiles_y = (img->height + TILE - 1) / TILE;
     job.ntiles = job.tiles_x * job.tiles_y;
     shutter_cdf_init(&job.time_cdf, &rs->shut);
     exact_plan *plan = NULL;
+    if (rs->exact_time && job.gaussians)
+        return rr_fail(err, "exact time integration does not integrate Gaussian-splat objects: use sampled time");
     if (rs->exact_time && exact_plan_new(s, a, &rs->shut, 1.0, &plan, err))
         return -1;
     if (plan)

@@ -3,6 +3,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "gaussian_hit.h"
+
 void scene_init(scene *s)
 {
     memset(s, 0, sizeof *s);
@@ -31,6 +33,17 @@ void scene_camera_ray(const scene *s, double x, double y, double t, vec3 *org, v
     *dir = xform_vector(&m, d);
 }
 
+void scene_camera_view(const scene *s, double t, camera_view *v)
+{
+    camera_view_rest(&s->cam, v);
+    if (!scene_camera_moves(s))
+        return;
+    xform m = animation_at(&s->camera_motion, t); /* rigid: the axes stay orthonormal */
+    v->position = xform_point(&m, v->position);
+    for (int k = 0; k < 3; k++)
+        v->axis[k] = xform_vector(&m, v->axis[k]);
+}
+
 int scene_frame_shutter(const scene *s, int frame, shutter *out, rr_error *err)
 {
     if (!(s->frame_rate > 0))
@@ -49,6 +62,7 @@ void scene_free(scene *s)
 {
     for (int i = 0; i < s->nobjects; i++) {
         pointmodel_free(&s->objects[i].model);
+        gaussian_model_free(&s->objects[i].gaussians);
         animation_free(&s->objects[i].anim);
     }
     animation_free(&s->camera_motion);
@@ -80,6 +94,12 @@ aabb scene_object_bounds(const scene_object *o)
 {
     if (o->kind == OBJECT_POINTS)
         return o->model.bounds;
+    if (o->kind == OBJECT_GAUSSIANS) {
+        aabb b = aabb_empty();
+        for (size_t i = 0; i < o->gaussians.count; i++)
+            aabb_add_box(&b, gaussian_bounds(&o->gaussians, i, 0.0));
+        return b;
+    }
     vec3 r = v3(o->sphere_radius, o->sphere_radius, o->sphere_radius);
     aabb b = {v3_sub(o->sphere_center, r), v3_add(o->sphere_center, r)};
     return b;

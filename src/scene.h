@@ -7,6 +7,7 @@
 
 #include "animation.h"
 #include "camera.h"
+#include "gaussian.h"
 #include "pointmodel.h"
 #include "shapes.h"
 #include "shutter.h"
@@ -27,7 +28,7 @@ static inline material material_default(void)
     return m;
 }
 
-typedef enum { OBJECT_POINTS, OBJECT_SPHERE } object_kind;
+typedef enum { OBJECT_POINTS, OBJECT_SPHERE, OBJECT_GAUSSIANS } object_kind;
 
 typedef struct {
     object_kind kind;
@@ -38,6 +39,8 @@ typedef struct {
     int generated;           /* 1: splats from the generator with these parameters */
     shape_params generator;
     size_t inline_splats;    /* <splat> children */
+    gaussian_model gaussians; /* OBJECT_GAUSSIANS: a trained model (alpha-composited, unlit) */
+    gaussian_order order;     /* and its 2D hits' compositing order */
     vec3 sphere_center;/* OBJECT_SPHERE, object space */
     double sphere_radius;
     vec3 sphere_color;
@@ -95,6 +98,9 @@ int scene_camera_moves(const scene *s);
  * (the camera's animation applied; callers skip this for a still camera). */
 void scene_camera_ray(const scene *s, double x, double y, double t, vec3 *org, vec3 *dir);
 
+/* The camera at time t (its animation applied to the rest pose). */
+void scene_camera_view(const scene *s, double t, camera_view *v);
+
 /* Frame N's shutter: s->shut (frame 0's) shifted by N / frame_rate.
  * Returns -1 if the scene has no frame rate. */
 int scene_frame_shutter(const scene *s, int frame, shutter *out, rr_error *err);
@@ -103,7 +109,8 @@ void scene_free(scene *s);
 /* Records an input file's path; -1 when out of memory. */
 int scene_add_input(scene *s, const char *path);
 
-/* Object-space bounds of an object (before its animation). */
+/* Object-space bounds of an object (before its animation; a Gaussian
+ * model's at the kernel radius, without its screen-space filter). */
 aabb scene_object_bounds(const scene_object *o);
 
 #endif

@@ -310,19 +310,75 @@ static int parse_point_model(xml_ctx *c, xmlNodePtr n, scene_object *o)
     return 0;
 }
 
+static int parse_gaussian_kind(xml_ctx *c, xmlNodePtr n, gaussian_kind *kind)
+{
+    char text[16];
+    int got = xml_attr_text(c, n, "kind", text, sizeof text);
+    if (got <= 0)
+        return got;
+    if (!strcmp(text, "auto") || !strcmp(text, "2dgs") || !strcmp(text, "3dgs")) {
+        *kind = !strcmp(text, "2dgs") ? GAUSSIAN_2D : !strcmp(text, "3dgs") ? GAUSSIAN_3D : GAUSSIAN_AUTO;
+        return 0;
+    }
+    return xml_fail(c, n, "gaussianModel kind must be auto, 2dgs or 3dgs, got '%s'", text);
+}
+
+static int parse_gaussian_order(xml_ctx *c, xmlNodePtr n, gaussian_order *order)
+{
+    char text[16];
+    int got = xml_attr_text(c, n, "order", text, sizeof text);
+    if (got <= 0)
+        return got;
+    if (!strcmp(text, "center-depth") || !strcmp(text, "hit-depth")) {
+        *order = !strcmp(text, "hit-depth") ? GAUSSIAN_ORDER_HIT_DEPTH : GAUSSIAN_ORDER_CENTER_DEPTH;
+        return 0;
+    }
+    return xml_fail(c, n, "gaussianModel order must be center-depth or hit-depth, got '%s'", text);
+}
+
+/* <gaussianModel file="point_cloud.ply" kind="auto|2dgs|3dgs"
+ * order="center-depth|hit-depth"/>: a trained Gaussian-splat model. */
+static int parse_gaussian_model(xml_ctx *c, xmlNodePtr n, scene_object *o)
+{
+    static const char *const ok[] = {"file", "kind", "order", NULL};
+    o->kind = OBJECT_GAUSSIANS;
+    gaussian_kind kind = GAUSSIAN_AUTO;
+    char rel[4096], path[8192];
+    int has_path;
+    if (xml_check_attributes(c, n, ok) || xml_check_no_text(c, n) || parse_gaussian_kind(c, n, &kind) ||
+        parse_gaussian_order(c, n, &o->order) || (has_path = xml_attr_text(c, n, "file", rel, sizeof rel)) < 0)
+        return -1;
+    if (!has_path)
+        return xml_fail(c, n, "gaussianModel needs a 'file' (a trained model's .ply)");
+    if (xml_resolve_path(c, n, rel, path, sizeof path))
+        return -1;
+    rr_error sub;
+    if (gaussian_read(path, kind, &o->gaussians, c->inputs_hash, &sub))
+        return rr_fail(c->err, "%s (gaussianModel of %s:%ld)", sub.msg, c->name, xmlGetLineNo(n));
+    if (o->gaussians.kind == GAUSSIAN_3D && xmlHasProp(n, (const xmlChar *)"order"))
+        return xml_fail(c, n, "'order' is for 2D Gaussian models: 3D ones (3DGRT) go by the distance to each "
+                               "Gaussian's maximum response");
+    if (scene_add_input(c->sc, path))
+        return xml_fail(c, n, "out of memory");
+    snprintf(o->model_file, sizeof o->model_file, "%s", path);
+    return 0;
+}
+
 static int parse_object_child(xml_ctx *c, xmlNodePtr k, scene_object *o, int *shapes)
 {
     const char *name = xml_elname(k);
-    if (!strcmp(name, "pointModel") || !strcmp(name, "sphere")) {
+    if (!strcmp(name, "pointModel") || !strcmp(name, "sphere") || !strcmp(name, "gaussianModel")) {
         if (++*shapes > 1)
-            return xml_fail(c, k, "an object holds exactly one pointModel or sphere");
-        return !strcmp(name, "sphere") ? parse_sphere(c, k, o) : parse_point_model(c, k, o);
+            return xml_fail(c, k, "an object holds exactly one pointModel, gaussianModel or sphere");
+        return !strcmp(name, "sphere")          ? parse_sphere(c, k, o)
+               : !strcmp(name, "gaussianModel") ? parse_gaussian_model(c, k, o)
+                                                : parse_point_model(c, k, o);
     }
     if (!strcmp(name, "material"))
         return parse_material(c, k, &o->mat);
     if (!strcmp(name, "animation"))
         return xml_parse_animation(c, k, &o->anim);
-    return xml_fail(c, k, "unknown element inside <object> (expected pointModel, sphere, "
+    return xml_fail(c, k, "unknown element inside <object> (expected pointModel, gaussianModel, sphere, "
                            "material or animation)");
 }
 
@@ -336,6 +392,7 @@ static int parse_object(xml_ctx *c, xmlNodePtr n, scene *s)
     scene_object *o = &s->objects[s->nobjects++];
     memset(o, 0, sizeof *o);
     pointmodel_init(&o->model);
+    gaussian_model_init(&o->gaussians);
     o->mat = material_default();
     animation_init_static(&o->anim);
     snprintf(o->name, sizeof o->name, "object%d", s->nobjects);
@@ -347,7 +404,7 @@ static int parse_object(xml_ctx *c, xmlNodePtr n, scene *s)
         if (xml_is_element(k) && parse_object_child(c, k, o, &shapes))
             return -1;
     if (!shapes)
-        return xml_fail(c, n, "object has no geometry: add <pointModel> or <sphere>");
+        return xml_fail(c, n, "object has no geometry: add <pointModel>, <gaussianModel> or <sphere>");
     return 0;
 }
 
