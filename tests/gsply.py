@@ -39,7 +39,8 @@ def read(path):
     col = {p: v[:, i] for i, p in enumerate(names)}
     nrest = sum(p.startswith("f_rest_") for p in names)
     k = nrest // 3 + 1
-    rest = np.stack([col[f"f_rest_{i}"] for i in range(nrest)], axis=1).reshape(count, 3, k - 1).transpose(0, 2, 1)
+    rest = np.zeros((count, 3, 0)) if not nrest else np.stack([col[f"f_rest_{i}"] for i in range(nrest)], axis=1)
+    rest = rest.reshape(count, 3, k - 1).transpose(0, 2, 1)
     dc = np.stack([col[f"f_dc_{c}"] for c in range(3)], axis=1)[:, None, :]
     q = np.stack([col[f"rot_{i}"] for i in range(4)], axis=1)
     nscale = sum(p.startswith("scale_") for p in names)
