@@ -148,3 +148,31 @@ def _hit_depth_reference(model, R, C):
                 t *= 1 - alpha
             image[j, i] = colour + t * np.asarray(BACKGROUND)
     return image
+
+
+def _one_facing(tmp_path, opacity, colour):
+    """One surfel facing the camera, centred on the middle pixel's centre at depth 4 (rho = 0 there)."""
+    m = {"mean": np.array([[0.5 * 4 / F, 0.5 * 4 / F, 0.0]]), "scale": np.array([[0.3, 0.3]]),
+         "rot": np.array([[1.0, 0, 0, 0]]), "opacity": np.array([opacity]),
+         "sh": ((np.asarray(colour) - 0.5) / ref.SH_C0).reshape(1, 1, 3), "degree": 0}
+    return _write(tmp_path, m)
+
+
+@pytest.mark.parametrize("sphere_depth", [6.0, 2.0])
+def test_a_gaussian_composites_over_the_surface_behind_it_and_hides_behind_one_in_front(tmp_path, sphere_depth):
+    """Mixed scenes: the epsilon-blended surfaces are opaque; a Gaussian in front composites over them
+    (alpha c + (1 - alpha) surface), one behind is hidden. An unlit analytic sphere shows its colour."""
+    ply = _one_facing(tmp_path, 0.7, (0.9, 0.1, 0.1))
+    sphere = (f'<object name="s" position="0 0 {sphere_depth}"><sphere radius="0.5" color="0.1 0.3 0.9"/>'
+              '<material shading="unlit"/></object>')
+    scene = tmp_path / "mixed.xml"
+    camera = gsply.camera_xml(np.eye(3), np.zeros(3), F, W, H)
+    scene.write_text(f'<scene>{camera}<background color="0 0 0"/>'
+                     f'<object name="g" position="0 0 4"><gaussianModel file="{ply}"/></object>{sphere}</scene>')
+    out = tmp_path / "mixed.exr"
+    proc = run([scene, "--pixel-filter", "point", "--time", 0, "--spp", 1, "-o", out, "--quiet"])
+    assert proc.returncode == 0, proc.stderr
+    px = read_exr(out)[0][H // 2, W // 2]
+    blue = np.array([0.1, 0.3, 0.9])
+    expect = 0.7 * np.array([0.9, 0.1, 0.1]) + 0.3 * blue if sphere_depth > 4 else blue
+    assert np.abs(px[:3] - expect).max() < 1e-5 and px[3] == 1.0

@@ -186,6 +186,17 @@ static int write_frame(FILE *f, const scene *s, long long frame, int numbered, c
 
 static void write_model(FILE *f, const scene_object *o)
 {
+    if (o->kind == OBJECT_GAUSSIANS) {
+        const gaussian_model *m = &o->gaussians;
+        fputs("{\"gaussians\": {\"file\": ", f);
+        json_string(f, o->model_file);
+        fprintf(f, ", \"kind\": \"%s\", \"order\": \"%s\", \"count\": %zu, \"sh_degree\": %d}}",
+                m->kind == GAUSSIAN_3D ? "3dgs" : "2dgs",
+                m->kind == GAUSSIAN_3D ? "max-response" : o->order == GAUSSIAN_ORDER_HIT_DEPTH ? "hit-depth"
+                                                                                           : "center-depth",
+                m->count, m->sh_degree);
+        return;
+    }
     if (o->kind == OBJECT_SPHERE) {
         fputs("{\"sphere\": {\"center\": ", f);
         json_vec3(f, o->sphere_center);
