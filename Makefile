@@ -63,7 +63,7 @@ $(BUILD)/preview.o: src/preview.cpp $(BUILD)/preview.d | $(BUILD)
 $(BUILD)/tests/%.o: tests/%.c $(BUILD)/tests/%.d | $(BUILD)
 	$(CC) $(RR_CPPFLAGS) $(RR_CFLAGS) -Isrc -c $< -o $@
 	@touch $@
-DEPFILES := $(LIB_OBJS:.o=.d) $(APP_OBJS:.o=.d) $(TEST_OBJS:.o=.d) $(BUILD)/cmd/bench.d
+DEPFILES := $(LIB_OBJS:.o=.d) $(APP_OBJS:.o=.d) $(TEST_OBJS:.o=.d) $(BUILD)/cmd/bench.d $(BUILD)/cmd/bench_gaussian.d
 $(DEPFILES):
 -include $(wildcard $(DEPFILES))
 $(BUILD):
@@ -73,7 +73,7 @@ $(BIN): $(APP_OBJS) $(LIB_OBJS)
 	$(CC) $(SANLD) -o $@ $^ $(LDLIBS)
 $(TESTBIN): $(TEST_OBJS) $(LIB_OBJS)
 	$(CC) $(SANLD) -o $@ $^ $(LDLIBS)
-$(BUILD)/refrender-bench: $(BUILD)/cmd/bench.o $(LIB_OBJS)
+$(BUILD)/refrender-bench: $(BUILD)/cmd/bench.o $(BUILD)/cmd/bench_gaussian.o $(LIB_OBJS)
 	$(CC) $(SANLD) -o $@ $^ $(LDLIBS)
 
 deps:

@@ -553,22 +553,76 @@ int accel_has_gaussians(const accel *a) { return a->ngaussian > 0; }
 
 const gaussian_model *const *accel_gaussian_models(const accel *a) { return a->models; }
 
-void accel_gather_gaussians(const accel *a, const camera_view *view, double x, double y, vec3 org, vec3 dir,
-                            double time, double tmax, gaussian_hits *out)
+/* The ray in each Gaussian object's space that it meets, with the stretch
+ * [enter, exit] where it can (its swept sphere); returns how many. */
+static size_t gaussian_rays(const accel *a, const camera_view *view, double x, double y, vec3 org, vec3 dir,
+                            double time, gaussian_hits *scratch)
 {
+    if (scratch->rays_cap < a->ngaussian) {
+        gaussian_ray *grown = realloc(scratch->rays, a->ngaussian * sizeof *grown);
+        if (!grown)
+            return 0;
+        scratch->rays = grown, scratch->rays_cap = a->ngaussian;
+    }
+    size_t n = 0;
     for (unsigned k = 0; k < a->ngaussian; k++) {
         unsigned obj = a->gaussian_ids[k];
         if (!ray_meets_swept(a, obj, org, dir))
             continue;
         const scene_object *o = &a->sc->objects[obj];
         xform xf = a->is_static[obj] ? a->rest[obj] : animation_at(&o->anim, time);
-        gaussian_ray ray;
-        gaussian_ray_init(&ray, view, &xf, x, y, org, dir, tmax);
-        gather_context c;
-        rtcInitIntersectContext(&c.rtc);
-        c.ray = &ray, c.o = o, c.obj = obj, c.out = out;
-        struct RTCRayHit rh;
-        init_rayhit1(&rh, ray.org, ray.dir, INFINITY); /* tmax is the hits' own test: their t is not the box's */
-        rtcIntersect1(a->object_scenes[obj], &c.rtc, &rh);
+        gaussian_ray *r = &scratch->rays[n++];
+        gaussian_ray_init(r, view, &xf, x, y, org, dir);
+        const sphere_bound *b = &a->swept_sphere[obj];
+        double along = v3_dot(v3_sub(b->center, org), dir), radius = sqrt(b->radius2);
+        r->obj = obj, r->enter = fmax(0.0, along - radius), r->exit = along + radius;
+        r->lead = gaussian_key_lead(&o->gaussians, o->order, a->footprint[obj].largest, r->depth_per_t);
+    }
+    return n;
+}
+
+/* The hits of one object with distance in [t0, t1), appended to out. The
+ * traversal's stretch is wider by the lead: a hit's box holds a point of
+ * the ray within that of the hit (its plane point, or for the filter, the
+ * image of a point of its unit disc). */
+static void gather_window(const accel *a, gaussian_ray *r, double t0, double t1, gaussian_hits *out)
+{
+    gather_context c;
+    rtcInitIntersectContext(&c.rtc);
+    r->tmin = t0, r->tmax = t1;
+    c.ray = r, c.o = &a->sc->objects[r->obj], c.obj = r->obj, c.out = out;
+    struct RTCRayHit rh;
+    double pad = r->lead + 1e-6 * t1;
+    init_rayhit1(&rh, r->org, r->dir, nextafterf((float)(t1 + pad), INFINITY));
+    rh.ray.tnear = fmaxf(0.0f, nextafterf((float)(t0 - pad), -INFINITY));
+    rtcIntersect1(a->object_scenes[r->obj], &c.rtc, &rh);
+}
+
+/* Windows start at 1/64 of the stretch the objects span and double while
+ * they hold few hits: a few traversals for a ray through empty space, and
+ * no evaluation far behind the hits that spend the transmittance. */
+enum { WINDOW_FRACTION = 64, WINDOW_FEW_HITS = 16 };
+
+void accel_blend_gaussians(const accel *a, const camera_view *view, double x, double y, vec3 org, vec3 dir,
+                           double time, double tmax, gaussian_hits *scratch, gaussian_blend *blend)
+{
+    size_t n = gaussian_rays(a, view, x, y, org, dir, time, scratch);
+    double start = INFINITY, end = 0, lead = 0;
+    for (size_t k = 0; k < n; k++) {
+        start = fmin(start, scratch->rays[k].enter), end = fmax(end, scratch->rays[k].exit);
+        lead = fmax(lead, scratch->rays[k].lead);
+    }
+    end = fmin(end, tmax);
+    double width = (end - start) / WINDOW_FRACTION;
+    for (double t0 = start; t0 < end && !blend->done;) {
+        double t1 = end - t0 <= width ? end : t0 + width;
+        size_t before = scratch->count;
+        for (size_t k = 0; k < n; k++)
+            if (scratch->rays[k].enter < t1 && scratch->rays[k].exit >= t0)
+                gather_window(a, &scratch->rays[k], t0, t1, scratch);
+        if (scratch->count - before < WINDOW_FEW_HITS)
+            width *= 2;
+        gaussian_blend_hits(blend, scratch, a->models, t1 < end ? t1 - lead : INFINITY);
+        t0 = t1;
     }
 }

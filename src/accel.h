@@ -68,12 +68,14 @@ void accel_ray_trace_times(const accel *a, const accel_ray *r, const double *tim
  * from the epsilon-blended surfaces and composited over them). */
 int accel_has_gaussians(const accel *a);
 
-/* Every Gaussian hit of the world ray org + t dir (dir unit) at `time`
- * through raster (x, y) of the camera `view` (the camera at that time)
- * nearer than tmax (the opaque surface behind, or infinity), appended to
- * out in no particular order. */
-void accel_gather_gaussians(const accel *a, const camera_view *view, double x, double y, vec3 org, vec3 dir,
-                            double time, double tmax, gaussian_hits *out);
+/* Composites into *blend, front to back, every Gaussian hit of the world
+ * ray org + t dir (dir unit) at `time` through raster (x, y) of the
+ * camera `view` (the camera at that time) nearer than tmax (the opaque
+ * surface behind, or infinity). The ray is gathered in windows of
+ * distance, so that once the transmittance is spent nothing behind is
+ * evaluated. */
+void accel_blend_gaussians(const accel *a, const camera_view *view, double x, double y, vec3 org, vec3 dir,
+                           double time, double tmax, gaussian_hits *scratch, gaussian_blend *blend);
 
 /* models[obj]: object obj's Gaussian model, NULL for other objects. */
 const gaussian_model *const *accel_gaussian_models(const accel *a);

@@ -1,5 +1,6 @@
 #include "gaussian_hit.h"
 
+#include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -15,16 +16,19 @@ void gaussian_hits_add(gaussian_hits *h, const gaussian_hit *hit)
         h->hits = grown, h->cap = cap;
     }
     h->hits[h->count++] = *hit;
+    h->added++;
 }
 
 void gaussian_hits_free(gaussian_hits *h)
 {
     free(h->hits);
+    free(h->order);
+    free(h->rays);
     memset(h, 0, sizeof *h);
 }
 
 void gaussian_ray_init(gaussian_ray *r, const camera_view *view, const xform *xf, double x, double y, vec3 org,
-                       vec3 dir, double tmax)
+                       vec3 dir)
 {
     for (int k = 0; k < 3; k++) {
         const vec3 a = view->axis[k];
@@ -38,7 +42,12 @@ void gaussian_ray_init(gaussian_ray *r, const camera_view *view, const xform *xf
     r->org = xform_inverse_point(xf, org);
     r->dir = xform_inverse_vector(xf, dir);
     r->depth_per_t = v3_dot(dir, view->axis[2]);
-    r->tmax = tmax;
+    r->tmin = 0.0, r->tmax = INFINITY;
+    double col2[3] = {0, 0, 0};
+    for (int j = 0; j < 3; j++)
+        for (int k = 0; k < 3; k++)
+            col2[j] += xf->r[k][j] * xf->r[k][j];
+    r->scale = sqrt(fmax(col2[0], fmax(col2[1], col2[2]))) * (1 + 1e-9);
 }
 
 /* The rotation of a unit quaternion (w, x, y, z), row-major. */
@@ -91,15 +100,31 @@ static double filter_rho2d(const gaussian_ray *r, const vec3 row[3])
 
 static double clamp_alpha(double opacity, double g) { return fmin(GAUSSIAN_ALPHA_MAX, opacity * g); }
 
+/* Can the splat (centre p in camera space, larger scale s) give the ray's
+ * pixel anything? Its kernel's reach (3.33 scales at opacity 1) projects
+ * within f k s / (z - k s) pixels of the projected mean, and the filter
+ * acts within 2.36 pixels of the image of a point of its unit disc, which
+ * lies within f s / (z - s) of it. A cheap test that the boxes of most
+ * candidates fail (they hold a ball; the pixel's ray is a line). */
+static int splat_near_pixel(const gaussian_ray *r, vec3 p, double s)
+{
+    const double k = 3.3302, filter_px = 2.3537; /* sqrt(2 ln 255), sqrt(ln 255) */
+    double f = fmax(r->fx, r->fy), dx = r->fx * p.x / p.z + r->cx - r->x, dy = r->fy * p.y / p.z + r->cy - r->y;
+    if (p.z <= k * s)
+        return 1; /* near the camera plane: no bound from the projection */
+    double reach = fmax(f * k * s / (p.z - k * s), f * s / (p.z - s) + filter_px) * (1 + 1e-6) + 1e-6;
+    return dx * dx + dy * dy <= reach * reach;
+}
+
 int gaussian_hit_2d(const gaussian_model *m, size_t i, gaussian_order order, const gaussian_ray *r,
                     gaussian_hit *h)
 {
     const float *mu = &m->mean[3 * i], *s = &m->scale[3 * i];
+    vec3 p = cam_point(r->m, v3(mu[0], mu[1], mu[2]));
+    if (p.z <= GAUSSIAN_NEAR || !splat_near_pixel(r, p, fmax(s[0], s[1]) * r->scale)) /* frustum cull, as the rasterizer */
+        return 0;
     double R[3][3];
     quaternion_matrix(&m->rotation[4 * i], R);
-    vec3 p = cam_point(r->m, v3(mu[0], mu[1], mu[2]));
-    if (p.z <= GAUSSIAN_NEAR) /* the rasterizer's frustum cull */
-        return 0;
     vec3 tu = cam_vector(r->m, v3(R[0][0] * s[0], R[1][0] * s[0], R[2][0] * s[0]));
     vec3 tv = cam_vector(r->m, v3(R[0][1] * s[1], R[1][1] * s[1], R[2][1] * s[1]));
     vec3 row[3];
@@ -113,12 +138,15 @@ int gaussian_hit_2d(const gaussian_model *m, size_t i, gaussian_order order, con
     double depth = rho3d <= rho2d ? u * row[2].x + v * row[2].y + row[2].z : row[2].z;
     if (depth < GAUSSIAN_NEAR)
         return 0;
-    double alpha = clamp_alpha(m->opacity[i], exp(-0.5 * fmin(rho3d, rho2d)));
-    double t = depth / r->depth_per_t;
-    if (alpha < GAUSSIAN_ALPHA_MIN || !(t <= r->tmax))
+    double rho = fmin(rho3d, rho2d), t = depth / r->depth_per_t;
+    if (!(rho <= 2.0 * log(m->opacity[i] / GAUSSIAN_ALPHA_MIN) + 1e-9) || !(t >= r->tmin && t < r->tmax))
+        return 0; /* alpha below 1/255 for certain (exp is the costly part; the exact test follows) */
+    double alpha = clamp_alpha(m->opacity[i], exp(-0.5 * rho));
+    if (alpha < GAUSSIAN_ALPHA_MIN)
         return 0;
     vec3 dir = v3_sub(v3(mu[0], mu[1], mu[2]), r->eye);
-    *h = (gaussian_hit){(float)(order == GAUSSIAN_ORDER_CENTER_DEPTH ? p.z : depth), (float)t, (float)alpha,
+    double key = order == GAUSSIAN_ORDER_CENTER_DEPTH ? p.z / r->depth_per_t : t;
+    *h = (gaussian_hit){(float)key, (float)t, (float)alpha,
                         {(float)dir.x, (float)dir.y, (float)dir.z}, 0, (unsigned)i};
     return 1;
 }
@@ -145,7 +173,7 @@ int gaussian_hit_3d(const gaussian_model *m, size_t i, const gaussian_ray *r, ga
     vec3 closest = v3_add(o, v3_scale(d, t));
     double response = exp(-0.5 * v3_dot(closest, closest));
     double alpha = clamp_alpha(m->opacity[i], response);
-    if (!(response > GAUSSIAN_GRT_MIN_RESPONSE) || alpha < GAUSSIAN_ALPHA_MIN || !(t >= 0 && t <= r->tmax))
+    if (!(response > GAUSSIAN_GRT_MIN_RESPONSE) || alpha < GAUSSIAN_ALPHA_MIN || !(t >= r->tmin && t < r->tmax))
         return 0;
     *h = (gaussian_hit){(float)t, (float)t, (float)alpha, {(float)r->dir.x, (float)r->dir.y, (float)r->dir.z}, 0,
                         (unsigned)i};
@@ -161,6 +189,15 @@ static double kernel_reach(const gaussian_model *m, size_t i)
     if (m->kind == GAUSSIAN_3D)
         r2 = fmin(r2, -2.0 * log(GAUSSIAN_GRT_MIN_RESPONSE));
     return r2 > 0 ? sqrt(r2) : 0.0;
+}
+
+double gaussian_key_lead(const gaussian_model *m, gaussian_order order, double s, double depth_per_t)
+{
+    if (m->kind != GAUSSIAN_2D || order != GAUSSIAN_ORDER_CENTER_DEPTH)
+        return 0.0;
+    /* the hit lies in the splat's plane within 3.33 scales of the centre
+     * (rho3d <= 2 ln 255), or has the centre's depth (the filter won) */
+    return 3.3302 * s / depth_per_t * (1 + 1e-6);
 }
 
 double gaussian_filter_reach(const gaussian_model *m, size_t i, double distance, double focal)
@@ -196,6 +233,8 @@ aabb gaussian_bounds(const gaussian_model *m, size_t i, double filter_reach)
     return b;
 }
 
+/* Compositing order: key, then object, then Gaussian (ties in key are
+ * rare but must not depend on the order the traversal found them in). */
 static int hit_before(const gaussian_hit *a, const gaussian_hit *b)
 {
     if (a->key != b->key)
@@ -205,44 +244,105 @@ static int hit_before(const gaussian_hit *a, const gaussian_hit *b)
     return a->prim < b->prim;
 }
 
-static int compare_hits(const void *a, const void *b)
+/* A float's bits as an unsigned that sorts as the float does. */
+static uint32_t sortable(float f)
 {
-    const gaussian_hit *x = a, *y = b;
-    return hit_before(x, y) ? -1 : hit_before(y, x) ? 1 : 0;
+    uint32_t u;
+    memcpy(&u, &f, sizeof u);
+    return u & 0x80000000u ? ~u : u | 0x80000000u;
 }
 
-/* Insertion sort for the few hits most rays have; qsort beyond. */
-static void sort_hits(gaussian_hits *h)
+/* Bottom-up merge sort of 64-bit words (key bits above, hit index below):
+ * rays gather tens to hundreds of hits, and sorting the hits themselves
+ * through qsort's callback took a fifth of the render (make bench). */
+static void merge_sort_u64(uint64_t *a, uint64_t *tmp, size_t n)
 {
-    if (h->count > 32) {
-        qsort(h->hits, h->count, sizeof *h->hits, compare_hits);
+    for (size_t width = 1; width < n; width *= 2) {
+        for (size_t lo = 0; lo < n; lo += 2 * width) {
+            size_t mid = lo + width < n ? lo + width : n, hi = lo + 2 * width < n ? lo + 2 * width : n;
+            size_t i = lo, j = mid, k = lo;
+            while (i < mid && j < hi)
+                tmp[k++] = a[j] < a[i] ? a[j++] : a[i++];
+            while (i < mid)
+                tmp[k++] = a[i++];
+            while (j < hi)
+                tmp[k++] = a[j++];
+        }
+        memcpy(a, tmp, n * sizeof *a);
+    }
+}
+
+/* h->order holds, per hit: its sort word, the merge sort's scratch word,
+ * and room for the hits kept for later (gaussian_blend_hits). */
+enum { ORDER_WORDS = 2 + (sizeof(gaussian_hit) + sizeof(uint64_t) - 1) / sizeof(uint64_t) };
+
+/* Puts h->order[] in compositing order (h->hits stay where they are). */
+static int sort_hits(gaussian_hits *h)
+{
+    if (h->count > h->order_cap) {
+        uint64_t *grown = realloc(h->order, ORDER_WORDS * h->count * sizeof *grown);
+        if (!grown)
+            return -1;
+        h->order = grown, h->order_cap = h->count;
+    }
+    for (size_t k = 0; k < h->count; k++)
+        h->order[k] = (uint64_t)sortable(h->hits[k].key) << 32 | (uint64_t)k;
+    merge_sort_u64(h->order, h->order + h->count, h->count);
+    for (size_t k = 1; k < h->count; k++) /* equal keys: by object and Gaussian */
+        for (size_t j = k; j > 0 && h->order[j] >> 32 == h->order[j - 1] >> 32 &&
+                           hit_before(&h->hits[(uint32_t)h->order[j]], &h->hits[(uint32_t)h->order[j - 1]]);
+             j--) {
+            uint64_t x = h->order[j];
+            h->order[j] = h->order[j - 1], h->order[j - 1] = x;
+        }
+    return 0;
+}
+
+void gaussian_blend_init(gaussian_blend *b)
+{
+    b->T = 1.0, b->sum = v3(0, 0, 0), b->composited = 0, b->done = 0;
+}
+
+static void blend_one(gaussian_blend *b, const gaussian_hit *g, const gaussian_model *m)
+{
+    double next = b->T * (1.0 - g->alpha);
+    if (next < GAUSSIAN_MIN_TRANSMITTANCE) { /* stops before it, as the rasterizer does */
+        b->done = 1;
         return;
     }
-    for (size_t k = 1; k < h->count; k++) {
-        gaussian_hit x = h->hits[k];
-        size_t j = k;
-        for (; j > 0 && hit_before(&x, &h->hits[j - 1]); j--)
-            h->hits[j] = h->hits[j - 1];
-        h->hits[j] = x;
-    }
+    vec3 c = gaussian_sh_color(&m->sh[(size_t)3 * m->sh_coeffs * g->prim], m->sh_degree,
+                               v3(g->dir[0], g->dir[1], g->dir[2]));
+    b->sum = v3_add(b->sum, v3_scale(c, g->alpha * b->T));
+    b->T = next;
+    b->composited++;
 }
 
-double gaussian_composite(gaussian_hits *h, const gaussian_model *const *models, vec3 behind, vec3 *rgb)
+void gaussian_blend_hits(gaussian_blend *b, gaussian_hits *h, const gaussian_model *const *models,
+                         double final_below)
 {
-    sort_hits(h);
-    double T = 1.0;
-    vec3 sum = v3(0, 0, 0);
-    for (size_t k = 0; k < h->count; k++) {
-        const gaussian_hit *g = &h->hits[k];
-        double next = T * (1.0 - g->alpha);
-        if (next < GAUSSIAN_MIN_TRANSMITTANCE) /* stops before it, as the rasterizer does */
-            break;
-        const gaussian_model *m = models[g->obj];
-        vec3 c = gaussian_sh_color(&m->sh[(size_t)3 * m->sh_coeffs * g->prim], m->sh_degree,
-                                   v3(g->dir[0], g->dir[1], g->dir[2]));
-        sum = v3_add(sum, v3_scale(c, g->alpha * T));
-        T = next;
+    if (sort_hits(h)) { /* no memory to order them: the hits are dropped, and counted */
+        h->dropped += h->count;
+        h->count = 0;
+        return;
     }
-    *rgb = v3_add(sum, v3_scale(behind, T));
-    return T;
+    size_t k = 0;
+    for (; k < h->count && !b->done; k++) {
+        const gaussian_hit *g = &h->hits[(uint32_t)h->order[k]];
+        if (!(g->key < final_below))
+            break;
+        blend_one(b, g, models[g->obj]);
+    }
+    if (b->done) {
+        h->count = 0;
+        return;
+    }
+    /* keep the rest, in order (gathered hits are appended after them) */
+    size_t rest = h->count - k;
+    gaussian_hit *kept = (gaussian_hit *)(h->order + 2 * h->count);
+    for (size_t j = 0; j < rest; j++)
+        kept[j] = h->hits[(uint32_t)h->order[k + j]];
+    memcpy(h->hits, kept, rest * sizeof *kept);
+    h->count = rest;
 }
+
+vec3 gaussian_blend_over(const gaussian_blend *b, vec3 behind) { return v3_add(b->sum, v3_scale(behind, b->T)); }

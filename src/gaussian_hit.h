@@ -28,6 +28,8 @@
 #ifndef RR_GAUSSIAN_HIT_H
 #define RR_GAUSSIAN_HIT_H
 
+#include <stdint.h>
+
 #include "animation.h"
 #include "camera.h"
 #include "gaussian.h"
@@ -41,7 +43,7 @@
 
 /* One Gaussian's contribution to a ray. */
 typedef struct {
-    float key;    /* compositing order (view depth or ray distance) */
+    float key;    /* compositing order, as a ray distance (a view depth / the ray's depth per unit t) */
     float t;      /* ray distance of the hit (world units) */
     float alpha;
     float dir[3]; /* the SH direction, object space */
@@ -52,27 +54,42 @@ typedef struct {
 typedef struct {
     gaussian_hit *hits;
     size_t count, cap;
-    size_t dropped; /* hits that found no memory */
+    size_t dropped;   /* hits that found no memory */
+    size_t added;     /* hits ever added (a statistic) */
+    uint64_t *order;  /* gaussian_blend_hits's sorting space */
+    size_t order_cap;
+    struct gaussian_ray_s *rays; /* accel's per-object rays of one sample */
+    size_t rays_cap;
 } gaussian_hits;
 
 void gaussian_hits_add(gaussian_hits *h, const gaussian_hit *hit);
 void gaussian_hits_free(gaussian_hits *h);
 
 /* One world ray at one time, seen in one object's space. */
-typedef struct {
+typedef struct gaussian_ray_s {
     double m[3][4];    /* object space -> camera space (camera_view's axes) */
     double fx, fy, cx, cy;
     double x, y;       /* the ray's raster position */
     vec3 eye;          /* the camera centre, object space */
     vec3 org, dir;     /* the ray, object space (dir: the world unit direction, so t is world distance) */
     double depth_per_t; /* view depth gained per unit of t (world dir . camera z) */
-    double tmax;       /* hits beyond are hidden (an opaque surface) */
+    double tmin, tmax; /* the stretch of the ray whose hits are wanted: tmin <= t < tmax */
+    double scale;      /* the object's largest scale (object lengths -> camera lengths) */
+    unsigned obj;      /* (accel's) */
+    double enter, exit, lead; /* (accel's) */
 } gaussian_ray;
 
 /* Fills r for the world ray org + t dir through raster (x, y) of view,
- * in the space of an object placed by xf. */
+ * in the space of an object placed by xf (the stretch: all of it). */
 void gaussian_ray_init(gaussian_ray *r, const camera_view *view, const xform *xf, double x, double y, vec3 org,
-                       vec3 dir, double tmax);
+                       vec3 dir);
+
+/* How far below its hit's distance t a hit's key can lie: a 2D Gaussian's
+ * key in centre-depth order is its centre's, at most its kernel reach
+ * (3.33 scales) from the hit; other keys are the hit's own distance. For
+ * the largest scale s of a model (world units) seen along a ray with
+ * depth_per_t. */
+double gaussian_key_lead(const gaussian_model *m, gaussian_order order, double s, double depth_per_t);
 
 /* Gaussian i's hit on the ray: 1 and *h filled (not obj), or 0. */
 int gaussian_hit_2d(const gaussian_model *m, size_t i, gaussian_order order, const gaussian_ray *r,
@@ -91,10 +108,26 @@ aabb gaussian_bounds(const gaussian_model *m, size_t i, double filter_reach);
  * length `focal` (pixels, the smaller of fx and fy). */
 double gaussian_filter_reach(const gaussian_model *m, size_t i, double distance, double focal);
 
-/* Front-to-back compositing of the hits (sorted here by key, then object,
- * then Gaussian: the same order whatever order they were found in) over
- * `behind` (the surface or background colour). models[obj] is the hit's
- * model. Returns the final transmittance. */
-double gaussian_composite(gaussian_hits *h, const gaussian_model *const *models, vec3 behind, vec3 *rgb);
+/* Front-to-back compositing, a stretch of the ray at a time (hits are
+ * gathered in windows of ray distance, so that a ray whose transmittance
+ * is spent early does not evaluate what lies behind). */
+typedef struct {
+    double T;          /* transmittance so far */
+    vec3 sum;          /* colour so far */
+    size_t composited; /* hits composited */
+    int done;          /* the next hit would have brought T below the minimum: stop */
+} gaussian_blend;
+
+void gaussian_blend_init(gaussian_blend *b);
+
+/* Composites, in order (key, then object, then Gaussian: the same
+ * whatever order they were found in), the hits of h whose key is below
+ * `final_below` (no hit still to be found has a smaller key), and removes
+ * them from h. models[obj] is a hit's model. */
+void gaussian_blend_hits(gaussian_blend *b, gaussian_hits *h, const gaussian_model *const *models,
+                         double final_below);
+
+/* The colour over `behind` (the surface or the background). */
+vec3 gaussian_blend_over(const gaussian_blend *b, vec3 behind);
 
 #endif

@@ -105,12 +105,13 @@ static void composite_gaussians(render_job *job, double x, double y, double t, v
     if (job->camera_moves)
         scene_camera_view(job->sc, t, view = &moved);
     scratch->count = scratch->dropped = 0;
-    accel_gather_gaussians(job->acc, view, x, y, org, dir, t, kb->count ? kb->closest : INFINITY, scratch);
+    gaussian_blend blend;
+    gaussian_blend_init(&blend);
+    accel_blend_gaussians(job->acc, view, x, y, org, dir, t, kb->count ? kb->closest : INFINITY, scratch, &blend);
     *overflows += scratch->dropped > 0;
-    vec3 rgb;
-    double T = gaussian_composite(scratch, accel_gaussian_models(job->acc), v3(rgba[0], rgba[1], rgba[2]), &rgb);
+    vec3 rgb = gaussian_blend_over(&blend, v3(rgba[0], rgba[1], rgba[2]));
     rgba[0] = rgb.x, rgba[1] = rgb.y, rgba[2] = rgb.z;
-    rgba[3] = kb->count ? 1.0 : 1.0 - T;
+    rgba[3] = kb->count ? 1.0 : 1.0 - blend.T;
 }
 
 /* A moving camera (thesis eq. 3.6), or a scene with Gaussian objects:

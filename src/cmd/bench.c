@@ -13,6 +13,7 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "bench_gaussian.h"
 #include "render.h"
 #include "shapes.h"
 
@@ -498,6 +499,8 @@ int main(int argc, char **argv)
         print_row(csv, "static80", &c80, &r);
         printf("\nstatic80: %.1f%% of the pixels' rays meet the moving object's swept bounds\n", 100 * r.moving_share);
     }
+    if (wanted(only, "gaussians") && bench_gaussians(quick, threads, csv))
+        fprintf(stderr, "bench: the gaussians case failed\n");
     fclose(csv);
     return 0;
 }

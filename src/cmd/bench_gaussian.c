@@ -1,0 +1,308 @@
+#include "bench_gaussian.h"
+
+#include <embree3/rtcore.h>
+#include <pthread.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include "render.h"
+#include "shapes.h"
+
+/* A unit sphere of 2DGS surfels (SH degree 3, as trained models have)
+ * seen from 3.5 units by a camera panning (0.3, 0.1, 0) per unit time
+ * over the shutter [0, 1]: a deblurring benchmark's camera shake. */
+typedef struct {
+    size_t count;
+    int res, threads, reps;
+} gs_case;
+
+typedef struct {
+    double build_ms, mrays, base_mrays, peak_mb, model_bytes, embree_bytes;
+    double gathered, composited, base_hits; /* per ray */
+} gs_result;
+
+static void gs_scene(const gs_case *c, scene *s)
+{
+    scene_init(s);
+    s->cam.position = v3(0, 0, 3.5);
+    s->cam.width = s->cam.height = c->res;
+    s->cam.fov_degrees = 40;
+    camera_prepare(&s->cam, NULL);
+    s->camera_motion.velocity = v3(0.3, 0.1, 0);
+    shape_params p;
+    shape_params_default(&p);
+    p.count = c->count;
+    surfel *sf;
+    size_t n;
+    rr_error err;
+    s->nobjects = 1;
+    s->objects = calloc(1, sizeof *s->objects);
+    scene_object *o = &s->objects[0];
+    o->kind = OBJECT_GAUSSIANS;
+    animation_init_static(&o->anim);
+    gaussian_model_init(&o->gaussians);
+    if (!s->objects || shape_generate(&p, &sf, &n, &err) ||
+        gaussian_from_surfels(sf, n, GAUSSIAN_2D, 3, &o->gaussians, &err)) {
+        fprintf(stderr, "bench: %s\n", err.msg);
+        exit(1);
+    }
+    free(sf);
+}
+
+/* ---- baseline: built-in oriented discs, every hit gathered ------------ */
+
+typedef struct {
+    struct RTCIntersectContext rtc; /* first: Embree passes this pointer to the filter */
+    float *t;
+    size_t count, cap;
+} all_hits;
+
+/* Keeps the hit and rejects it, so the traversal goes on to the next. */
+static void gather_filter(const struct RTCFilterFunctionNArguments *args)
+{
+    all_hits *h = (all_hits *)args->context;
+    for (unsigned i = 0; i < args->N; i++) {
+        if (!args->valid[i])
+            continue;
+        if (h->count == h->cap) {
+            h->cap = h->cap ? 2 * h->cap : 256;
+            h->t = realloc(h->t, h->cap * sizeof *h->t);
+        }
+        h->t[h->count++] = ((const float *)args->ray)[8 * args->N + i]; /* tfar: SOA field 8 (rtcore_ray.h) */
+        args->valid[i] = 0;
+    }
+}
+
+/* Discs of the radius refrender's boxes hold for each Gaussian: the
+ * kernel's 1/255 radius (3.33 scales) or the low-pass filter's footprint
+ * at the camera's farthest distance over the shutter, so both find the
+ * same candidates. */
+static RTCScene disc_scene(RTCDevice dev, const scene *sc, const gaussian_model *m)
+{
+    camera_view v;
+    camera_view_rest(&sc->cam, &v);
+    aabb cam = animation_swept_bounds(&sc->camera_motion, (aabb){sc->cam.position, sc->cam.position}, 0, 1);
+    RTCScene scene = rtcNewScene(dev);
+    RTCGeometry g = rtcNewGeometry(dev, RTC_GEOMETRY_TYPE_ORIENTED_DISC_POINT);
+    float *vtx = rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4, 16, m->count);
+    float *nrm = rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_NORMAL, 0, RTC_FORMAT_FLOAT3, 12, m->count);
+    for (size_t i = 0; i < m->count; i++) {
+        const float *q = &m->rotation[4 * i], *s = &m->scale[3 * i];
+        double w = q[0], x = q[1], y = q[2], z = q[3], k = sqrt(2.0 * log(m->opacity[i] * 255.0));
+        memcpy(&vtx[4 * i], &m->mean[3 * i], 3 * sizeof(float));
+        const float *mu = &m->mean[3 * i];
+        vec3 far = v3(fmax(fabs(mu[0] - cam.lo.x), fabs(mu[0] - cam.hi.x)),
+                      fmax(fabs(mu[1] - cam.lo.y), fabs(mu[1] - cam.hi.y)),
+                      fmax(fabs(mu[2] - cam.lo.z), fabs(mu[2] - cam.hi.z)));
+        double filter = gaussian_filter_reach(m, i, v3_len(far), fmin(v.fx, v.fy));
+        vtx[4 * i + 3] = (float)fmax(k * fmax(s[0], s[1]), filter);
+        nrm[3 * i] = (float)(2 * (x * z + w * y)), nrm[3 * i + 1] = (float)(2 * (y * z - w * x));
+        nrm[3 * i + 2] = (float)(1 - 2 * (x * x + y * y));
+    }
+    rtcSetGeometryIntersectFilterFunction(g, gather_filter);
+    rtcCommitGeometry(g);
+    rtcAttachGeometry(scene, g);
+    rtcReleaseGeometry(g);
+    rtcCommitScene(scene);
+    return scene;
+}
+
+static int cmp_float(const void *a, const void *b)
+{
+    float x = *(const float *)a, y = *(const float *)b;
+    return (x > y) - (x < y);
+}
+
+typedef struct {
+    RTCScene discs;
+    const scene *sc;
+    const render_settings *rs;
+    int next_row;
+    pthread_mutex_t lock;
+    unsigned long long hits;
+} disc_job;
+
+/* The render's own rays (sampler, times, moving camera); each ray's hits
+ * gathered and sorted by distance, as compositing needs them. */
+static void *disc_worker(void *arg)
+{
+    disc_job *job = arg;
+    const sampler *smp = &job->rs->smp;
+    sampler_scratch ss;
+    sampler_scratch_init(&ss, smp);
+    int n = (int)sampler_count(smp);
+    double *x = malloc(n * sizeof *x), *y = malloc(n * sizeof *y), *t = malloc(n * sizeof *t);
+    all_hits h = {0};
+    unsigned long long hits = 0;
+    for (int row; (pthread_mutex_lock(&job->lock), row = job->next_row++, pthread_mutex_unlock(&job->lock),
+                   row < job->sc->cam.height);)
+        for (int px = 0; px < job->sc->cam.width; px++) {
+            sampler_batch(smp, 0, 1, (uint64_t)row * job->sc->cam.width + px, px, row, 0, &ss, x, y, t);
+            for (int i = 0; i < n; i++) {
+                vec3 o, d;
+                scene_camera_ray(job->sc, x[i], y[i], t[i], &o, &d);
+                struct RTCRayHit rh;
+                memset(&rh, 0, sizeof rh);
+                rh.ray.org_x = (float)o.x, rh.ray.org_y = (float)o.y, rh.ray.org_z = (float)o.z;
+                rh.ray.dir_x = (float)d.x, rh.ray.dir_y = (float)d.y, rh.ray.dir_z = (float)d.z;
+                rh.ray.tfar = INFINITY, rh.ray.mask = 0xFFFFFFFFu, rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+                rtcInitIntersectContext(&h.rtc);
+                h.count = 0;
+                rtcIntersect1(job->discs, &h.rtc, &rh);
+                qsort(h.t, h.count, sizeof *h.t, cmp_float);
+                hits += h.count;
+            }
+        }
+    pthread_mutex_lock(&job->lock);
+    job->hits += hits;
+    pthread_mutex_unlock(&job->lock);
+    sampler_scratch_free(&ss);
+    free(x), free(y), free(t), free(h.t);
+    return NULL;
+}
+
+static double disc_seconds(RTCScene discs, const scene *s, const render_settings *rs, unsigned long long *hits)
+{
+    disc_job job = {discs, s, rs, 0, PTHREAD_MUTEX_INITIALIZER, 0};
+    pthread_t tids[64];
+    int threads = rs->threads < 64 ? rs->threads : 64;
+    double t0 = rr_seconds();
+    for (int i = 0; i < threads; i++)
+        pthread_create(&tids[i], NULL, disc_worker, &job);
+    for (int i = 0; i < threads; i++)
+        pthread_join(tids[i], NULL);
+    *hits = job.hits;
+    return rr_seconds() - t0;
+}
+
+/* ---- refrender ---------------------------------------------------------- */
+
+/* Hits evaluated and composited per ray, over the pixel centres at mid-shutter (untimed). */
+static void count_hits(const scene *s, const accel *a, gs_result *r)
+{
+    gaussian_hits h = {0};
+    double gathered = 0, composited = 0;
+    for (int y = 0; y < s->cam.height; y++)
+        for (int x = 0; x < s->cam.width; x++) {
+            vec3 o, d;
+            camera_view v;
+            scene_camera_ray(s, x + 0.5, y + 0.5, 0.5, &o, &d);
+            scene_camera_view(s, 0.5, &v);
+            h.count = h.added = 0;
+            gaussian_blend b;
+            gaussian_blend_init(&b);
+            accel_blend_gaussians(a, &v, x + 0.5, y + 0.5, o, d, 0.5, INFINITY, &h, &b);
+            gathered += (double)h.added;
+            composited += (double)b.composited;
+        }
+    double rays = (double)s->cam.width * s->cam.height;
+    r->gathered = gathered / rays, r->composited = composited / rays;
+    gaussian_hits_free(&h);
+}
+
+static double gs_render_mrays(const scene *s, const accel *a, const render_settings *rs)
+{
+    image img;
+    rr_error err;
+    volatile sig_atomic_t never = 0;
+    image_alloc(&img, s->cam.width, s->cam.height);
+    if (render_image(s, a, rs, &img, NULL, &never, &err)) {
+        fprintf(stderr, "bench: %s\n", err.msg);
+        exit(1);
+    }
+    double mrays = img.rays / img.seconds * 1e-6;
+    image_free(&img);
+    return mrays;
+}
+
+static double median3(double *v, int n)
+{
+    for (int i = 1; i < n; i++) /* n is small */
+        for (int j = i; j > 0 && v[j] < v[j - 1]; j--) {
+            double tmp = v[j];
+            v[j] = v[j - 1], v[j - 1] = tmp;
+        }
+    return v[n / 2];
+}
+
+static void gs_run(const gs_case *c, gs_result *r)
+{
+    scene s;
+    gs_scene(c, &s);
+    const gaussian_model *m = &s.objects[0].gaussians;
+    r->model_bytes = (double)(m->count * (3 + 3 + 4 + 1 + 3 * (size_t)m->sh_coeffs) * sizeof(float)) / (double)m->count;
+    render_settings rs = {{SAMPLER_THESIS, 1, 2, 4, 4}, s.shut, c->threads, 0, 1, 1, 0, 0, 0, 0, 0, 0,
+                          PIXEL_FILTER_BOX, BLUR_SPACE_MODEL};
+    accel_settings set = {s.shut.open, s.shut.close, s.epsilon, s.kernel_sigma, 1};
+    accel *a;
+    rr_error err;
+    double t0 = rr_seconds();
+    if (accel_build(&s, &set, &a, &err)) {
+        fprintf(stderr, "bench: %s\n", err.msg);
+        exit(1);
+    }
+    r->build_ms = 1e3 * (rr_seconds() - t0);
+    r->embree_bytes = (double)accel_embree_peak_bytes(a) / (double)m->count;
+    RTCDevice dev = rtcNewDevice(NULL);
+    RTCScene discs = disc_scene(dev, &s, m);
+    double ours[16], theirs[16], rays = (double)c->res * c->res * 4 * 4;
+    unsigned long long hits = 0;
+    for (int k = 0; k < c->reps; k++) {
+        ours[k] = gs_render_mrays(&s, a, &rs);
+        theirs[k] = rays / disc_seconds(discs, &s, &rs, &hits) * 1e-6;
+    }
+    r->mrays = median3(ours, c->reps), r->base_mrays = median3(theirs, c->reps);
+    r->base_hits = (double)hits / rays;
+    count_hits(&s, a, r);
+    struct rusage ru;
+    getrusage(RUSAGE_SELF, &ru);
+    r->peak_mb = ru.ru_maxrss / 1024.0;
+    rtcReleaseScene(discs);
+    rtcReleaseDevice(dev);
+    accel_free(a);
+    scene_free(&s);
+}
+
+static int gs_in_child(const gs_case *c, gs_result *r)
+{
+    int fd[2];
+    if (pipe(fd))
+        return -1;
+    pid_t pid = fork();
+    if (pid == 0) {
+        close(fd[0]);
+        gs_run(c, r);
+        _exit(write(fd[1], r, sizeof *r) == (ssize_t)sizeof *r ? 0 : 1);
+    }
+    close(fd[1]);
+    ssize_t got = read(fd[0], r, sizeof *r);
+    close(fd[0]);
+    int status;
+    waitpid(pid, &status, 0);
+    return got == (ssize_t)sizeof *r && WIFEXITED(status) && WEXITSTATUS(status) == 0 ? 0 : -1;
+}
+
+int bench_gaussians(int quick, int threads, FILE *csv)
+{
+    gs_case c = {quick ? 20000 : 1000000, quick ? 64 : 256, threads, quick ? 1 : 3};
+    gs_result r;
+    printf("\ngaussians: a 2DGS sphere (SH degree 3) under camera motion, %dx%d, 4 spatial x 4 temporal samples,\n"
+           "%d threads; 'discs': Embree's built-in oriented discs of the Gaussians' 1/255 radius (no filter\n"
+           "footprint) gathering every hit with a filter function and sorting them, on the same rays.\n\n"
+           "| Gaussians | build ms | Mrays/s | discs Mrays/s | ratio | hits gathered / composited per ray "
+           "| disc hits per ray | model B/G | Embree peak B/G | total B/G | peak RSS MB |\n"
+           "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n", c.res, c.res, c.threads);
+    if (gs_in_child(&c, &r))
+        return -1;
+    printf("| %zu | %.0f | %.2f | %.2f | %.2fx | %.1f / %.1f | %.1f | %.0f | %.0f | %.0f | %.0f |\n", c.count,
+           r.build_ms, r.mrays, r.base_mrays, r.mrays / r.base_mrays, r.gathered, r.composited, r.base_hits,
+           r.model_bytes, r.embree_bytes, r.model_bytes + r.embree_bytes, r.peak_mb);
+    fprintf(csv, "gaussians,%zu,camera,0,2dgs,4,%d,%d,%.1f,0,%.4f,%.4f,%.4f,0,0,%.1f,%.1f,%.2f,%.2f\n", c.count,
+            c.threads, c.res, r.build_ms, r.mrays, r.base_mrays, r.mrays / r.base_mrays, r.peak_mb,
+            r.model_bytes + r.embree_bytes, r.composited, r.base_hits);
+    fflush(stdout);
+    return 0;
+}
