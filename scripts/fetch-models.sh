@@ -44,3 +44,6 @@ cgal_data
 convert "$CACHE/cgal/data/meshes/armadillo.off" armadillo --fit 1 --checker 0.2 --color "0.8 0.55 0.3" --color2 "0.3 0.2 0.15"
 convert "$CACHE/cgal/data/meshes/bunny00.off" bunny00 --fit 1 --checker 0.25 --color "0.6 0.75 0.9" --color2 "0.2 0.3 0.45"
 convert "$CACHE/cgal/data/points_3/kitten.xyz" kitten --fit 1 --checker 0.2 --color "0.9 0.85 0.5" --color2 "0.4 0.3 0.2"
+# the bunny as a trained 2DGS model's PLY (SH degree 3), for scenes/gaussians.xml
+convert /usr/share/glmark2/models/bunny.obj bunny_2dgs --fit 1 --checker 0.25 --color "0.85 0.8 0.7" \
+    --color2 "0.35 0.3 0.25" --gaussians 2dgs --sh-degree 3

@@ -6,8 +6,8 @@
 
 #include "cli.h"
 #include "commands.h"
-#include "gaussian.h"
 #include "shapes.h"
+#include "surfel_output.h"
 
 static void gen_usage(FILE *f)
 {
@@ -24,30 +24,16 @@ static void gen_usage(FILE *f)
 "  --checker N       checker cells: per side (plane) or per 180 degrees\n"
 "                    (sphere, torus); 0 = plain color (default 0)\n"
 "  --overlap F       splat radius factor over the hole-free size (default 1.5)\n"
-"  --gaussians K     write Gaussian splats instead, in the official layout of\n"
-"                    K = 2dgs or 3dgs (scale = half the surfel radius, opacity\n"
-"                    0.95, the color as SH DC): a trained model's PLY for tests\n"
-"  --sh-degree D     with --gaussians: SH degree 0 to 3, with small fixed\n"
-"                    view-dependent coefficients (default 0)\n"
-"  -o, --output F    output PLY file (required)\n", f);
+"", f);
+    fputs(surfel_output_help, f);
 }
 
-typedef struct {
-    const char *out;
-    gaussian_kind gaussians; /* GAUSSIAN_AUTO: surfels */
-    int sh_degree;
-} gen_output;
-
-static int gen_option(int c, const char *arg, shape_params *p, gen_output *o, rr_error *err)
+static int gen_option(int c, const char *arg, shape_params *p, surfel_output *o, rr_error *err)
 {
-    int count;
+    int count, rc = surfel_output_option(c, arg, o, err);
+    if (rc <= 0)
+        return rc;
     switch (c) {
-    case 'g':
-        if (strcmp(arg, "2dgs") && strcmp(arg, "3dgs"))
-            return rr_fail(err, "--gaussians: expected 2dgs or 3dgs, got '%s'", arg);
-        o->gaussians = arg[0] == '2' ? GAUSSIAN_2D : GAUSSIAN_3D;
-        return 0;
-    case 's': return cli_int("--sh-degree", arg, 0, GAUSSIAN_MAX_SH_DEGREE, &o->sh_degree, err);
     case 'n':
         if (cli_int("--count", arg, 1, 100000000, &count, err))
             return -1;
@@ -59,22 +45,8 @@ static int gen_option(int c, const char *arg, shape_params *p, gen_output *o, rr
     case 'd': return cli_vec3("--color2", arg, &p->color2, err);
     case 'k': return cli_int("--checker", arg, 0, 100000, &p->checker, err);
     case 'v': return cli_double("--overlap", arg, 1e-30, &p->overlap, err);
-    case 'o': o->out = arg; return 0;
     }
     return rr_fail(err, "unknown option");
-}
-
-/* The surfels as written: surfel PLY, or Gaussians of the chosen kind. */
-static int write_output(const gen_output *o, const surfel *s, size_t n, rr_error *err)
-{
-    if (o->gaussians == GAUSSIAN_AUTO)
-        return ply_write_surfels(o->out, s, n, err);
-    gaussian_model m;
-    gaussian_model_init(&m);
-    int rc = gaussian_from_surfels(s, n, o->gaussians, o->sh_degree, &m, err) ||
-             gaussian_write_ply(o->out, &m, err);
-    gaussian_model_free(&m);
-    return rc ? -1 : 0;
 }
 
 int cmd_gen(int argc, char **argv)
@@ -88,7 +60,7 @@ int cmd_gen(int argc, char **argv)
         {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
     shape_params p;
     shape_params_default(&p);
-    gen_output o = {NULL, GAUSSIAN_AUTO, 0};
+    surfel_output o = {NULL, GAUSSIAN_AUTO, 0};
     rr_error err;
     int c;
     while ((c = getopt_long(argc, argv, "ho:", longopts, NULL)) != -1) {
@@ -110,7 +82,7 @@ int cmd_gen(int argc, char **argv)
         fprintf(stderr, "refrender gen: %s\n", err.msg);
         return 1;
     }
-    int rc = write_output(&o, s, n, &err);
+    int rc = surfel_output_write(&o, s, n, &err);
     free(s);
     if (rc)
         fprintf(stderr, "refrender gen: %s\n", err.msg);

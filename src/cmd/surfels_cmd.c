@@ -8,6 +8,7 @@
 #include "cli.h"
 #include "commands.h"
 #include "meshload.h"
+#include "surfel_output.h"
 #include "surfelize.h"
 
 static void surfels_usage(FILE *f)
@@ -25,14 +26,14 @@ static void surfels_usage(FILE *f)
 "                    half the box diagonal is R (default: keep coordinates)\n"
 "  --color \"r g b\"   color (default 0.8 0.8 0.8)\n"
 "  --color2 \"r g b\"  second color of a 3D checkerboard (default 0.2 0.2 0.2)\n"
-"  --checker S       checker cube side in output units; 0 = plain (default 0)\n"
-"  -o, --output F    output PLY file (required)\n", f);
+"  --checker S       checker cube side in output units; 0 = plain (default 0)\n", f);
+    fputs(surfel_output_help, f);
 }
 
 typedef struct {
     double overlap, fit, checker;
     vec3 color, color2;
-    const char *out;
+    surfel_output output;
 } surfels_options;
 
 /* --fit: center the box at the origin, half diagonal R. */
@@ -67,22 +68,25 @@ static int convert(const char *in, const surfels_options *o, rr_error *err)
     if (o->fit > 0)
         fit(s, n, o->fit);
     surfels_color(s, n, o->color, o->color2, o->checker);
-    rc = ply_write_surfels(o->out, s, n, err);
+    rc = surfel_output_write(&o->output, s, n, err);
     if (!rc)
-        fprintf(stderr, "refrender surfels: %s: %zu splats -> %s\n", in, n, o->out);
+        fprintf(stderr, "refrender surfels: %s: %zu %s -> %s\n", in, n,
+                o->output.gaussians == GAUSSIAN_AUTO ? "splats" : "Gaussians", o->output.out);
     free(s);
     return rc;
 }
 
 static int surfels_option(int c, const char *arg, surfels_options *o, rr_error *err)
 {
+    int rc = surfel_output_option(c, arg, &o->output, err);
+    if (rc <= 0)
+        return rc;
     switch (c) {
     case 'v': return cli_double("--overlap", arg, 1e-6, &o->overlap, err);
     case 'f': return cli_double("--fit", arg, 1e-30, &o->fit, err);
     case 'k': return cli_double("--checker", arg, 0.0, &o->checker, err);
     case 'c': return cli_vec3("--color", arg, &o->color, err);
     case 'd': return cli_vec3("--color2", arg, &o->color2, err);
-    case 'o': o->out = arg; return 0;
     }
     return rr_fail(err, "unknown option");
 }
@@ -93,8 +97,9 @@ int cmd_surfels(int argc, char **argv)
         {"overlap", required_argument, 0, 'v'}, {"fit", required_argument, 0, 'f'},
         {"checker", required_argument, 0, 'k'}, {"color", required_argument, 0, 'c'},
         {"color2", required_argument, 0, 'd'}, {"output", required_argument, 0, 'o'},
+        {"gaussians", required_argument, 0, 'g'}, {"sh-degree", required_argument, 0, 's'},
         {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
-    surfels_options o = {1.5, 0, 0, rr_default_color(), rr_default_color2(), NULL};
+    surfels_options o = {1.5, 0, 0, rr_default_color(), rr_default_color2(), {NULL, GAUSSIAN_AUTO, 0}};
     rr_error err;
     int c;
     while ((c = getopt_long(argc, argv, "ho:", longopts, NULL)) != -1) {
@@ -105,11 +110,11 @@ int cmd_surfels(int argc, char **argv)
             return 2;
         }
     }
-    if (optind != argc - 1 || !o.out) {
+    if (optind != argc - 1 || !o.output.out) {
         fputs("refrender surfels: need exactly one INPUT and -o OUT.ply; try 'refrender surfels --help'\n", stderr);
         return 2;
     }
-    if (cli_check_writable(o.out, &err) || cli_refuse_overwriting_inputs(o.out, argv + optind, 1, &err) ||
+    if (cli_check_writable(o.output.out, &err) || cli_refuse_overwriting_inputs(o.output.out, argv + optind, 1, &err) ||
         convert(argv[optind], &o, &err)) {
         fprintf(stderr, "refrender surfels: %s\n", err.msg);
         return 1;
