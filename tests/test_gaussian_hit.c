@@ -1,0 +1,148 @@
+/* gaussian_hit.c: what the windowed gathering relies on. Compositing does
+ * not depend on the order hits are found in nor on how they are split into
+ * windows; it stops before the hit that would bring transmittance below
+ * 1e-4; and every 2DGS hit, the filter's included, lies in its Gaussian's
+ * bounds near its own distance (the box a window's traversal must visit),
+ * checked over random splats and pixels; its key trails its distance by
+ * at most gaussian_key_lead. */
+#include <stdlib.h>
+#include <string.h>
+
+#include "../src/gaussian_hit.h"
+#include "harness.h"
+
+static double uniform(unsigned *state) { return (double)rand_r(state) / RAND_MAX; }
+
+/* One Gaussian of degree 0 per call slot; count n. */
+static void model_of(gaussian_model *m, size_t n, gaussian_kind kind)
+{
+    gaussian_model_init(m);
+    m->kind = kind, m->sh_degree = 0, m->sh_coeffs = 1;
+    CHECK(gaussian_model_alloc(m, n) == 0);
+    m->count = n;
+}
+
+static void random_gaussian(gaussian_model *m, size_t i, unsigned *st, double size)
+{
+    double q[4], len = 0;
+    for (int k = 0; k < 4; k++)
+        q[k] = uniform(st) - 0.5, len += q[k] * q[k];
+    for (int k = 0; k < 4; k++)
+        m->rotation[4 * i + k] = (float)(q[k] / sqrt(len));
+    for (int k = 0; k < 3; k++) {
+        m->mean[3 * i + k] = (float)(uniform(st) - 0.5);
+        m->scale[3 * i + k] = k < 2 || m->kind == GAUSSIAN_3D ? (float)(size * (0.2 + uniform(st))) : 0.0f;
+        m->sh[3 * i + k] = (float)uniform(st);
+    }
+    m->opacity[i] = (float)(0.05 + 0.95 * uniform(st));
+}
+
+static void blend_all(gaussian_hits *h, const gaussian_hit *hits, size_t n, const size_t *order, double split,
+                      const gaussian_model *const *models, gaussian_blend *b)
+{
+    gaussian_blend_init(b);
+    h->count = 0;
+    for (size_t k = 0; k < n; k++) { /* two windows: keys below `split` are final after the first */
+        if (k == n / 2)
+            gaussian_blend_hits(b, h, models, split);
+        gaussian_hits_add(h, &hits[order[k]]);
+    }
+    gaussian_blend_hits(b, h, models, INFINITY);
+}
+
+TEST(gaussian_blend_does_not_depend_on_the_order_hits_come_in)
+{
+    gaussian_model m;
+    model_of(&m, 64, GAUSSIAN_2D);
+    unsigned st = 7;
+    for (size_t i = 0; i < 64; i++)
+        random_gaussian(&m, i, &st, 0.1);
+    const gaussian_model *models[2] = {&m, &m};
+    gaussian_hit hits[64];
+    size_t fwd[64], shuffled[64], keyed[64];
+    for (size_t k = 0; k < 64; k++) { /* ties in key, broken by object then Gaussian */
+        hits[k] = (gaussian_hit){(float)(k / 4), 1.0f, (float)(0.02 + 0.1 * uniform(&st)), {0, 0, 1},
+                                 (unsigned)(k % 2), (unsigned)(63 - k)};
+        fwd[k] = shuffled[k] = k;
+    }
+    for (size_t k = 63; k > 0; k--) {
+        size_t j = (size_t)rand_r(&st) % (k + 1), t = shuffled[k];
+        shuffled[k] = shuffled[j], shuffled[j] = t;
+    }
+    /* the first half found holds every key below 4 (found first by key) */
+    for (size_t k = 0; k < 64; k++)
+        keyed[k] = k;
+    gaussian_hits h = {0};
+    gaussian_blend a, b, c;
+    blend_all(&h, hits, 64, fwd, -1.0, models, &a);
+    blend_all(&h, hits, 64, shuffled, -1.0, models, &b);
+    blend_all(&h, hits, 64, keyed, 4.0, models, &c);
+    CHECK(a.composited > 10 && a.T == b.T && a.T == c.T);
+    CHECK(a.sum.x == b.sum.x && a.sum.y == c.sum.y && a.sum.z == c.sum.z && a.composited == c.composited);
+    gaussian_hits_free(&h);
+    gaussian_model_free(&m);
+}
+
+TEST(gaussian_blend_stops_before_transmittance_would_fall_below_1e_4)
+{
+    gaussian_model m;
+    model_of(&m, 3, GAUSSIAN_2D);
+    const gaussian_model *models[1] = {&m};
+    gaussian_hits h = {0};
+    for (unsigned k = 0; k < 3; k++) {
+        gaussian_hit g = {(float)k, (float)k, k ? 0.99f : 0.9f, {0, 0, 1}, 0, k};
+        gaussian_hits_add(&h, &g);
+    }
+    gaussian_blend b;
+    gaussian_blend_init(&b);
+    gaussian_blend_hits(&b, &h, models, INFINITY);
+    /* 1 -> 0.1 -> 1e-3 -> 1e-5 (below: stops before it) */
+    CHECK(b.done && b.composited == 2);
+    CHECK_NEAR(b.T, 1e-3, 1e-8);
+    gaussian_hits_free(&h);
+    gaussian_model_free(&m);
+}
+
+static int inside(aabb b, vec3 p)
+{
+    return p.x >= b.lo.x && p.x <= b.hi.x && p.y >= b.lo.y && p.y <= b.hi.y && p.z >= b.lo.z && p.z <= b.hi.z;
+}
+
+/* Random splats of every size from far below a pixel to many pixels, seen
+ * from a camera at the origin looking down +z with focal length 100
+ * pixels, through random pixels near their centres' images. */
+TEST(gaussian_2d_hits_lie_in_their_bounds_within_the_lead_of_their_distance)
+{
+    gaussian_model m;
+    model_of(&m, 1, GAUSSIAN_2D);
+    camera_view v = {v3(0, 0, 0), {v3(1, 0, 0), v3(0, 1, 0), v3(0, 0, 1)}, 100, 100, 50, 50};
+    xform id = {{{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}, {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}, {0, 0, 0}, 0};
+    unsigned st = 11;
+    int hits = 0, filtered = 0, outside = 0, late = 0;
+    for (int trial = 0; trial < 20000; trial++) {
+        random_gaussian(&m, 0, &st, pow(10.0, -4 + 3.5 * uniform(&st)));
+        m.mean[2] += 2.0f; /* in front: depth 1.5 to 2.5 */
+        double depth = m.mean[2], cx = 100 * m.mean[0] / depth + 50, cy = 100 * m.mean[1] / depth + 50;
+        double x = cx + 8 * (uniform(&st) - 0.5), y = cy + 8 * (uniform(&st) - 0.5);
+        vec3 dir = v3_normalize(v3((x - 50) / 100, (y - 50) / 100, 1));
+        gaussian_ray r;
+        gaussian_ray_init(&r, &v, &id, x, y, v3(0, 0, 0), dir);
+        gaussian_hit h;
+        if (!gaussian_hit_2d(&m, 0, GAUSSIAN_ORDER_CENTER_DEPTH, &r, &h))
+            continue;
+        hits++;
+        double s = fmax(m.scale[0], m.scale[1]), lead = gaussian_key_lead(&m, GAUSSIAN_ORDER_CENTER_DEPTH, s, dir.z);
+        filtered += s < 1e-3; /* sub-pixel: seen through the filter */
+        /* the camera's distance bounds the view depth the footprint is taken at */
+        aabb box = gaussian_bounds(&m, 0, gaussian_filter_reach(&m, 0, v3_len(v3(m.mean[0], m.mean[1], depth)), 100));
+        int found = 0; /* a point of the ray within the lead of the hit's distance is in the box */
+        for (int k = -50; k <= 50 && !found; k++)
+            found = inside(box, v3_scale(dir, h.t + lead * k / 50.0));
+        outside += !found;
+        late += h.key < h.t - lead * (1 + 1e-5) - 1e-6;
+    }
+    CHECK(hits > 2000 && filtered > 500);
+    CHECK(outside == 0);
+    CHECK(late == 0);
+    gaussian_model_free(&m);
+}
