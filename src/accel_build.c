@@ -7,9 +7,13 @@
 #include <string.h>
 
 RTCScene accel_user_scene(RTCDevice dev, unsigned nprims, void *user, RTCBoundsFunction bounds,
-                           RTCIntersectFunctionN intersect)
+                           RTCIntersectFunctionN intersect, int compact)
 {
     RTCScene scene = rtcNewScene(dev);
+    if (compact) { /* a lower-quality, compact BVH: 110 -> 58 peak bytes per Gaussian, 0.94x the speed (make bench) */
+        rtcSetSceneFlags(scene, RTC_SCENE_FLAG_COMPACT);
+        rtcSetSceneBuildQuality(scene, RTC_BUILD_QUALITY_LOW);
+    }
     RTCGeometry g = rtcNewGeometry(dev, RTC_GEOMETRY_TYPE_USER);
     rtcSetGeometryUserPrimitiveCount(g, nprims);
     rtcSetGeometryUserData(g, user);
@@ -100,7 +104,7 @@ static void build_gaussian_object(accel *a, unsigned obj, double open, double cl
         rtcReleaseScene(a->object_scenes[obj]);
     gaussian_footprint_for(a, obj, open, close);
     a->object_scenes[obj] = accel_user_scene(a->device, (unsigned)o->gaussians.count, &a->footprint[obj],
-                                             accel_gaussian_bounds_cb, accel_gaussian_gather);
+                                             accel_gaussian_bounds_cb, accel_gaussian_gather, 1);
     struct RTCBounds rb;
     rtcGetSceneBounds(a->object_scenes[obj], &rb);
     aabb box = {v3(rb.lower_x, rb.lower_y, rb.lower_z), v3(rb.upper_x, rb.upper_y, rb.upper_z)};
@@ -142,7 +146,7 @@ static void build_top_levels(accel *a, double open, double close)
     }
     for (int k = 0; k < 2; k++)
         if (a->top[k].count)
-            a->top[k].scene = accel_user_scene(a->device, a->top[k].count, &a->top[k], accel_object_bounds_cb, accel_object_intersect);
+            a->top[k].scene = accel_user_scene(a->device, a->top[k].count, &a->top[k], accel_object_bounds_cb, accel_object_intersect, 0);
 }
 
 static double box_reach(aabb b)
@@ -251,7 +255,7 @@ int accel_build(const scene *s, const accel_settings *set, accel **out, rr_error
         a->coherent_spread[i] = coherent_spread(o);
         a->object_scenes[i] = accel_user_scene(a->device, points ? (unsigned)o->model.count : 1u, o,
                                          points ? accel_splat_bounds_cb : accel_sphere_bounds_cb,
-                                         points ? accel_splats_intersect : accel_sphere_intersect);
+                                         points ? accel_splats_intersect : accel_sphere_intersect, 0);
     }
     a->reuse_static = set->reuse_static;
     build_top_levels(a, set->open, set->close);

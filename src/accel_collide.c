@@ -98,7 +98,7 @@ int accel_collide_boxes(const accel *a, unsigned obj, const aabb *boxes, unsigne
     if (nboxes == 0)
         return 0;
     rtcGetDeviceError(a->device); /* Embree keeps an error per thread: start from none */
-    RTCScene query = accel_user_scene(a->device, nboxes, (void *)boxes, query_bounds_cb, query_intersect_cb);
+    RTCScene query = accel_user_scene(a->device, nboxes, (void *)boxes, query_bounds_cb, query_intersect_cb, 0);
     collide_sink sink = {PTHREAD_MUTEX_INITIALIZER, out, from, limit, from + 4 * limit + 1024, 0};
     if (query)
         rtcCollide(a->object_scenes[obj], query, collide_cb, &sink);

@@ -100,9 +100,10 @@ void accel_object_intersect(const struct RTCIntersectFunctionNArguments *args);
 void accel_object_bounds_cb(const struct RTCBoundsFunctionArguments *args);
 void accel_gaussian_bounds_cb(const struct RTCBoundsFunctionArguments *args);
 void accel_gaussian_gather(const struct RTCIntersectFunctionNArguments *args);
-/* A committed scene of one user geometry (accel_build.c). */
+/* A committed scene of one user geometry (accel_build.c); compact: a
+ * smaller BVH built faster, at some cost in traversal. */
 RTCScene accel_user_scene(RTCDevice dev, unsigned nprims, void *user, RTCBoundsFunction bounds,
-                          RTCIntersectFunctionN intersect);
+                          RTCIntersectFunctionN intersect, int compact);
 /* A world sphere that holds the object at every time in [t0, t1]; and one
  * holding the sphere (center, radius) of object space moved by anim. */
 sphere_bound accel_swept_sphere(const scene_object *o, double t0, double t1);
