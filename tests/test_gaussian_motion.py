@@ -101,3 +101,38 @@ def _render(tmp_path, scene, seed, sampler, tspp, batches):
                 "--sampler", sampler, "-o", out, "--quiet"])
     assert proc.returncode == 0, proc.stderr
     return read_full(out)[0]
+
+
+def srgb_to_linear(v):
+    """IEC 61966-2-1's decoding of values clamped to [0, 1]."""
+    v = np.clip(v, 0, 1)
+    return np.where(v <= 0.04045, v / 12.92, ((v + 0.055) / 1.055) ** 2.4)
+
+
+def test_blur_space_linear_decodes_each_instant_before_the_time_average(tmp_path):
+    """--blur-space linear: the pixel is the time average of the decoded colours (as benchmarks that
+    average linear frames), not the decoded average; the EXR says which."""
+    m = model(0.15)
+    ply = tmp_path / "g.ply"
+    gsply.write(ply, m)
+    scene = tmp_path / "scene.xml"
+    scene.write_text(scene_xml(ply, "gaussian"))
+    start = np.array([-TRAVEL / 2, 0.013, DEPTH])
+    read = gsply.read(ply)
+    expect = np.zeros(3)
+    for k in range(QUAD):
+        mean = start + [TRAVEL * (k + 0.5) / QUAD, 0, 0]
+        expect += srgb_to_linear(pixel_colour(read, mean, np.zeros(3), W // 2 + 0.5, H // 2 + 0.5)) / QUAD
+    out = tmp_path / "linear.exr"
+    proc = run([scene, "--pixel-filter", "point", "--spp", 1, "--tspp", 4096, "--batches", 16, "--sampler", "sobol",
+                "--blur-space", "linear", "-o", out, "--quiet"])
+    assert proc.returncode == 0, proc.stderr
+    ch, header = read_full(out)
+    assert header["refrender:blurSpace"] == "linear"
+    model_space = _render(tmp_path, scene, 1, "sobol", 4096, 16)
+    decoded_average = np.zeros(3)
+    for c, name in enumerate("RGB"):
+        got = ch[name][H // 2, W // 2]
+        assert abs(got - expect[c]) < 2e-5, (name, got, expect[c])
+        decoded_average[c] = srgb_to_linear(model_space[name][H // 2, W // 2])
+    assert np.abs(decoded_average - expect).max() > 10 * 2e-5  # decoding the average instead fails
