@@ -176,3 +176,20 @@ def test_a_gaussian_composites_over_the_surface_behind_it_and_hides_behind_one_i
     blue = np.array([0.1, 0.3, 0.9])
     expect = 0.7 * np.array([0.9, 0.1, 0.1]) + 0.3 * blue if sphere_depth > 4 else blue
     assert np.abs(px[:3] - expect).max() < 1e-5 and px[3] == 1.0
+
+
+def test_what_cannot_be_combined_is_refused_with_its_reason(tmp_path):
+    ply = _one_facing(tmp_path, 0.7, (0.9, 0.1, 0.1))
+    scene = tmp_path / "g.xml"
+    scene.write_text(f'<scene>{gsply.camera_xml(np.eye(3), np.zeros(3), F, W, H)}'
+                     f'<object name="g" position="0 0 4"><gaussianModel file="{ply}"/></object></scene>')
+    out = tmp_path / "x.exr"
+    cases = [(["--time-integration", "exact"], 1, "does not integrate Gaussian-splat objects"),
+             (["--time", 0.5, "--shutter", "0,1"], 2, "--time renders one instant"),
+             (["--blur-space", "linear", "--time-integration", "exact"], 2, "exact time cannot do"),
+             (["--pixel-filter", "gauss"], 2, "expected box or point"),
+             (["--blur-space", "srgb"], 2, "expected model or linear")]
+    for args, status, why in cases:
+        proc = run([scene, "--spp", 1, "-o", out, "--quiet", *args])
+        assert proc.returncode == status and why in proc.stderr, (args, proc.stderr)
+        assert not out.exists()

@@ -344,3 +344,40 @@ TEST(animation_text_as_entity_or_cdata_is_not_dropped)
     CHECK(fails_with("<scene><object><sphere radius='1'/>\n<animation><![CDATA[missing.anim]]></animation>"
                      "</object></scene>", "missing.anim"));
 }
+
+/* <gaussianModel>: a trained model in an object; every mistake named with
+ * the scene's line, the PLY's own errors with the file and property. */
+TEST(gaussian_model_elements_and_their_errors)
+{
+    char ply[] = "/tmp/rr_gm_XXXXXX";
+    int fd = mkstemp(ply);
+    CHECK(fd >= 0);
+    const char *text = "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
+                       "property float z\nproperty float f_dc_0\nproperty float f_dc_1\nproperty float f_dc_2\n"
+                       "property float opacity\nproperty float scale_0\nproperty float scale_1\n"
+                       "property float rot_0\nproperty float rot_1\nproperty float rot_2\nproperty float rot_3\n"
+                       "end_header\n0 0 0 0.1 0.2 0.3 0 -2 -2 1 0 0 0\n";
+    CHECK(write(fd, text, strlen(text)) == (ssize_t)strlen(text));
+    close(fd);
+    char xml[1024];
+    const char *head = "<scene>\n<object>\n";
+    snprintf(xml, sizeof xml, "%s<gaussianModel file=\"%s\" order=\"hit-depth\"/></object></scene>", head, ply);
+    scene s;
+    rr_error e = {{0}};
+    CHECK(load_text(xml, &s, &e) == 0);
+    CHECK(s.objects[0].kind == OBJECT_GAUSSIANS && s.objects[0].gaussians.kind == GAUSSIAN_2D &&
+          s.objects[0].gaussians.count == 1 && s.objects[0].order == GAUSSIAN_ORDER_HIT_DEPTH);
+    scene_free(&s);
+    snprintf(xml, sizeof xml, "%s<gaussianModel file=\"%s\" kind=\"4dgs\"/></object></scene>", head, ply);
+    CHECK(fails_with(xml, "mem.xml:3: <gaussianModel>: gaussianModel kind must be auto, 2dgs or 3dgs, got '4dgs'"));
+    snprintf(xml, sizeof xml, "%s<gaussianModel file=\"%s\" order=\"depth\"/></object></scene>", head, ply);
+    CHECK(fails_with(xml, "order must be center-depth or hit-depth"));
+    snprintf(xml, sizeof xml, "%s<gaussianModel file=\"%s\" kind=\"3dgs\"/></object></scene>", head, ply);
+    CHECK(fails_with(xml, "scale_2")); /* forced 3D on a 2D file: the reader names the property */
+    CHECK(fails_with("<scene>\n<object>\n<gaussianModel/></object></scene>", "mem.xml:3: <gaussianModel>: gaussianModel needs a 'file'"));
+    CHECK(fails_with("<scene>\n<object>\n<gaussianModel file=\"/nonexistent/m.ply\"/></object></scene>",
+                     "/nonexistent/m.ply"));
+    snprintf(xml, sizeof xml, "%s<gaussianModel file=\"%s\"/><sphere radius=\"1\"/></object></scene>", head, ply);
+    CHECK(fails_with(xml, "exactly one pointModel, gaussianModel or sphere"));
+    unlink(ply);
+}
