@@ -50,8 +50,6 @@ double shutter_weight(const shutter *s, double t)
 
 int shutter_check(const shutter *s, rr_error *err)
 {
-    if (isfinite(s->open) && s->close == s->open && s->kind == WEIGHT_BOX)
-        return 0; /* an instant (--time): a sharp render */
     if (!isfinite(s->open) || !isfinite(s->close) || !(s->close > s->open))
         return rr_fail(err, "shutter close (%g) must be greater than open (%g)", s->close, s->open);
     if (!isfinite(s->close - s->open)) /* every time and weight computed from it would overflow */
