@@ -41,19 +41,13 @@ int camera_prepare(camera *c, rr_error *err)
     if ((long long)c->width * c->height > RR_MAX_PIXELS)
         return rr_fail(err, "image size %dx%d has more than the %lld pixels refrender renders", c->width,
                        c->height, RR_MAX_PIXELS);
-    if (c->focal_x > 0 || c->focal_y > 0) {
-        if (!(c->focal_x > 0 && c->focal_y > 0 && isfinite(c->focal_x) && isfinite(c->focal_y)))
-            return rr_fail(err, "camera focal lengths must both be finite and > 0, got %g and %g", c->focal_x,
-                           c->focal_y);
-        c->tan_half_fov = 0.5 * c->height / c->focal_y;
-        c->tan_half_fov_x = 0.5 * c->width / c->focal_x;
-        c->fov_degrees = 360.0 / M_PI * atan(c->tan_half_fov);
-        return 0;
-    }
     if (!(c->fov_degrees > 0 && c->fov_degrees < 180))
         return rr_fail(err, "camera fov must be in (0, 180) degrees, got %g", c->fov_degrees);
+    if (c->fov_x_degrees != 0 && !(c->fov_x_degrees > 0 && c->fov_x_degrees < 180))
+        return rr_fail(err, "camera horizontal fov must be in (0, 180) degrees, got %g", c->fov_x_degrees);
     c->tan_half_fov = tan(c->fov_degrees * M_PI / 360.0);
-    c->tan_half_fov_x = c->tan_half_fov * c->width / c->height; /* square pixels */
+    c->tan_half_fov_x = c->fov_x_degrees > 0 ? tan(c->fov_x_degrees * M_PI / 360.0)
+                                             : c->tan_half_fov * c->width / c->height; /* square pixels */
     return 0;
 }
 

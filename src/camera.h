@@ -1,6 +1,6 @@
 /* Pinhole camera. Raster (0,0) is the top-left image corner; pixel (i,j)
  * covers [i,i+1] x [j,j+1]; rows go downward. fov is the vertical field of
- * view in degrees (or focal lengths in pixels); the camera looks along lookat - position with up
+ * view in degrees; the camera looks along lookat - position with up
  * projected to image up. */
 #ifndef RR_CAMERA_H
 #define RR_CAMERA_H
@@ -11,9 +11,10 @@ typedef struct {
     vec3 position, lookat, up;
     double fov_degrees;
     int width, height;
-    /* focal lengths in pixels (a trained model's cameras.json): when both
-     * are > 0 they replace fov, and pixels need not be square */
-    double focal_x, focal_y;
+    /* > 0: the horizontal field of view in degrees, so pixels need not be
+     * square (a trained model's cameras.json, whose fx and fy differ); 0:
+     * square pixels. Angles, so that --res keeps the view. */
+    double fov_x_degrees;
     /* derived by camera_prepare */
     vec3 forward, right, image_up;
     double tan_half_fov;   /* vertical */
