@@ -59,6 +59,49 @@ void rotation_matrix(vec3 k, double angle, double r[3][3])
     r[2][2] = c + k.z * k.z * C;
 }
 
+/* The axis and angle of the rotation r: 0 when r is (numerically) none. */
+static double rotation_axis_angle(const double r[3][3], vec3 *axis)
+{
+    vec3 s = v3(0.5 * (r[2][1] - r[1][2]), 0.5 * (r[0][2] - r[2][0]), 0.5 * (r[1][0] - r[0][1])); /* axis sin */
+    double c = 0.5 * (r[0][0] + r[1][1] + r[2][2] - 1.0), sn = v3_len(s);
+    if (!(sn > 1e-15)) {
+        *axis = v3(0, 0, 1);
+        return c > 0 ? 0.0 : M_PI; /* none, or half a turn (refused by the caller) */
+    }
+    *axis = v3_scale(s, 1.0 / sn);
+    return atan2(sn, c);
+}
+
+int animation_between_poses(vec3 pa, const double ra[3][3], vec3 pb, const double rb[3][3], double t0, double t1,
+                            animation *out, vec3 *rest_position, double rest_rotation[3][3], rr_error *err)
+{
+    if (!(t1 > t0))
+        return rr_fail(err, "the second pose's time (%g) must follow the first's (%g)", t1, t0);
+    double rel[3][3]; /* rb ra^T: the turn from a to b, in world */
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++)
+            rel[i][j] = rb[i][0] * ra[j][0] + rb[i][1] * ra[j][1] + rb[i][2] * ra[j][2];
+    vec3 axis;
+    double angle = rotation_axis_angle(rel, &axis);
+    if (angle > 170.0 * M_PI / 180.0)
+        return rr_fail(err, "the poses turn by %.1f degrees: beyond 170 the slerp between them is ambiguous",
+                       angle * 180.0 / M_PI);
+    animation_init_static(out);
+    out->velocity = v3_scale(v3_sub(pb, pa), 1.0 / (t1 - t0));
+    out->has_rotation = angle > 0;
+    out->axis = axis;
+    out->degrees_per_time = angle * 180.0 / M_PI / (t1 - t0);
+    /* at time 0 the pose is a moved back by t0: its position (the turn's
+     * centre, so that the turn leaves the position linear) and frame */
+    *rest_position = out->center = v3_sub(pa, v3_scale(out->velocity, t0));
+    double back[3][3];
+    rotation_matrix(axis, -angle * t0 / (t1 - t0), back);
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++)
+            rest_rotation[i][j] = back[i][0] * ra[0][j] + back[i][1] * ra[1][j] + back[i][2] * ra[2][j];
+    return 0;
+}
+
 vec3 xform_vector(const xform *x, vec3 v)
 {
     return v3(x->r[0][0] * v.x + x->r[0][1] * v.y + x->r[0][2] * v.z,

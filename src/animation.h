@@ -55,6 +55,16 @@ void animation_free(animation *a);
 /* 1 when the transform is the same at every time. */
 int animation_is_static(const animation *a);
 
+/* The rigid motion that takes a pose (position, rotation whose columns are
+ * the posed frame's axes) from a at time t0 to b at time t1 with the
+ * position linear and the rotation slerped (a constant turn about one
+ * axis): a <linear> plus a <rotation> animation, and the rest pose it
+ * moves (the pose it gives at time 0). -1 when the poses turn by more
+ * than 170 degrees (the turn between them is ambiguous near 180) or
+ * t1 <= t0. */
+int animation_between_poses(vec3 pa, const double ra[3][3], vec3 pb, const double rb[3][3], double t0, double t1,
+                            animation *out, vec3 *rest_position, double rest_rotation[3][3], rr_error *err);
+
 /* Transform at absolute scene time t. */
 xform animation_at(const animation *a, double t);
 

@@ -1,4 +1,6 @@
 /* Rigid transforms at time t and their exact inverses (thesis B.2.3). */
+#include <string.h>
+
 #include "animation.h"
 #include "harness.h"
 
@@ -295,4 +297,59 @@ TEST(scale_through_zero_between_samples_is_reported)
     key_channel(&a, CH_SY, 4, positive, TAN_LINEAR, INF_CONSTANT);
     CHECK(!animation_scale_clamped(&a, 0, 1000));
     animation_free(&a);
+}
+
+/* Quaternion (w, x, y, z) of a rotation matrix and back, and slerp: the
+ * textbook formulas, independent of animation.c's axis-angle route. */
+static void quat_of(const double r[3][3], double q[4])
+{
+    double tr = r[0][0] + r[1][1] + r[2][2];
+    if (tr > 0) {
+        double s = 2 * sqrt(1 + tr);
+        q[0] = s / 4, q[1] = (r[2][1] - r[1][2]) / s, q[2] = (r[0][2] - r[2][0]) / s, q[3] = (r[1][0] - r[0][1]) / s;
+    } else { /* not reached by this test's poses */
+        q[0] = 1, q[1] = q[2] = q[3] = 0;
+    }
+}
+
+static void slerp(const double a[4], const double b[4], double s, double out[4])
+{
+    double d = a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3], sign = d < 0 ? -1 : 1;
+    double th = acos(fmin(1.0, fabs(d)));
+    for (int k = 0; k < 4; k++)
+        out[k] = (sin((1 - s) * th) * a[k] + sign * sin(s * th) * b[k]) / sin(th);
+}
+
+TEST(a_camera_moves_between_two_poses_linearly_with_a_slerped_turn)
+{
+    double ra[3][3], rb[3][3], rest[3][3], qa[4], qb[4], qm[4], qgot[4];
+    rotation_matrix(v3_normalize(v3(0.2, 1, 0.3)), 0.4, ra);
+    rotation_matrix(v3_normalize(v3(-0.5, 0.7, 0.1)), 0.9, rb);
+    vec3 pa = v3(1, 2, 3), pb = v3(-0.5, 2.5, 4), rest_pos;
+    animation m;
+    rr_error e;
+    double t0 = 0.3, t1 = 1.7;
+    CHECK(animation_between_poses(pa, ra, pb, rb, t0, t1, &m, &rest_pos, rest, &e) == 0);
+    quat_of(ra, qa), quat_of(rb, qb);
+    for (int k = 0; k <= 4; k++) {
+        double s = k / 4.0, t = t0 + s * (t1 - t0);
+        xform x = animation_at(&m, t);
+        vec3 p = xform_point(&x, rest_pos), want = v3_add(pa, v3_scale(v3_sub(pb, pa), s));
+        CHECK(v3_len(v3_sub(p, want)) < 1e-12);
+        double got[3][3];
+        for (int c = 0; c < 3; c++) { /* the moved frame's axes, as columns */
+            vec3 a = xform_vector(&x, v3(rest[0][c], rest[1][c], rest[2][c]));
+            got[0][c] = a.x, got[1][c] = a.y, got[2][c] = a.z;
+        }
+        slerp(qa, qb, s, qm);
+        quat_of(got, qgot);
+        double d = fabs(qm[0] * qgot[0] + qm[1] * qgot[1] + qm[2] * qgot[2] + qm[3] * qgot[3]);
+        CHECK(d > 1 - 1e-12);
+    }
+    double turn[3][3]; /* b turned 172 degrees from a: refused */
+    rotation_matrix(v3(0, 1, 0), 3.0, turn);
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++)
+            rb[i][j] = turn[i][0] * ra[0][j] + turn[i][1] * ra[1][j] + turn[i][2] * ra[2][j];
+    CHECK(animation_between_poses(pa, ra, pb, rb, t0, t1, &m, &rest_pos, rest, &e) == -1 && strstr(e.msg, "170"));
 }
