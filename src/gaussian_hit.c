@@ -320,6 +320,8 @@ static void blend_one(gaussian_blend *b, const gaussian_hit *g, const gaussian_m
 void gaussian_blend_hits(gaussian_blend *b, gaussian_hits *h, const gaussian_model *const *models,
                          double final_below)
 {
+    if (!h->count)
+        return;
     if (sort_hits(h)) { /* no memory to order them: the hits are dropped, and counted */
         h->dropped += h->count;
         h->count = 0;
