@@ -2,7 +2,7 @@
 # Installs the Debian packages refrender needs to build, run and test.
 # Idempotent: does nothing when everything is present. Uses sudo when not root.
 set -eu
-PACKAGES="build-essential libembree-dev libtbb-dev libopenexr-dev libopenimageio-dev
+PACKAGES="build-essential libjson-c-dev libembree-dev libtbb-dev libopenexr-dev libopenimageio-dev
 openimageio-tools python3 python3-openimageio libxml2-dev python3-numpy python3-pytest
 python3-scipy python3-skimage python3-matplotlib parallel libassimp-dev glmark2-data
 clang libclang-rt-14-dev"

@@ -1,5 +1,6 @@
 #include "scene_xml.h"
 
+#include "camjson.h"
 #include "scene_xml_internal.h"
 
 #include <libxml/parser.h>
@@ -23,8 +24,72 @@
 /* ---- scene-level elements -------------------------------------------- */
 
 
+/* A camera from a trained model's cameras.json (camjson.h): its pose as
+ * the rest pose (OpenCV axes: look along z, up is -y), its field of view
+ * from fx and fy (square pixels or not), its resolution. */
+static int camera_from_pose(camera *cam, vec3 position, const double r[3][3], const camjson_camera *j)
+{
+    cam->position = position;
+    cam->lookat = v3_add(position, v3(r[0][2], r[1][2], r[2][2]));
+    cam->up = v3(-r[0][1], -r[1][1], -r[2][1]);
+    cam->width = j->width, cam->height = j->height;
+    cam->fov_degrees = 360.0 / M_PI * atan(0.5 * j->height / j->fy);
+    cam->fov_x_degrees = 360.0 / M_PI * atan(0.5 * j->width / j->fx);
+    return 0;
+}
+
+static int read_json_camera(xml_ctx *c, xmlNodePtr n, const char *path, const char *image, camjson_camera *out)
+{
+    rr_error sub;
+    if (camjson_read(path, image, out, c->inputs_hash, &sub))
+        return rr_fail(c->err, "%s (camera of %s:%ld)", sub.msg, c->name, xmlGetLineNo(n));
+    return 0;
+}
+
+/* <animation><pose time="t0" image="A"/><pose time="t1" image="B"/></animation>:
+ * from cameras.json pose A at t0 to pose B at t1, the position linear and
+ * the rotation slerped (animation_between_poses); the camera's rest pose
+ * becomes the one this motion moves. */
+static int parse_pose_motion(xml_ctx *c, xmlNodePtr anim, const char *json, camera *cam, animation *a)
+{
+    static const char *const ok[] = {"time", "image", NULL};
+    camjson_camera pose[2];
+    double t[2];
+    int k = 0;
+    for (xmlNodePtr p = anim->children; p; p = p->next) {
+        if (!xml_is_element(p))
+            continue;
+        char image[256];
+        if (strcmp(xml_elname(p), "pose") || k == 2)
+            return xml_fail(c, p, "a camera's pose motion is exactly two <pose> elements (for longer paths, "
+                                  "keyframes)");
+        if (xml_check_attributes(c, p, ok) || xml_attr_double(c, p, "time", &t[k], 1) ||
+            xml_attr_text(c, p, "image", image, sizeof image) <= 0 || read_json_camera(c, p, json, image, &pose[k]))
+            return c->err->msg[0] ? -1 : xml_fail(c, p, "<pose> needs 'image' (an img_name of the cameras.json)");
+        k++;
+    }
+    if (k != 2)
+        return xml_fail(c, anim, "a camera's pose motion is exactly two <pose> elements");
+    vec3 rest_pos;
+    double rest_rot[3][3];
+    rr_error sub;
+    animation_free(a);
+    if (animation_between_poses(pose[0].position, pose[0].c2w, pose[1].position, pose[1].c2w, t[0], t[1], a,
+                                &rest_pos, rest_rot, &sub))
+        return xml_fail(c, anim, "%s", sub.msg);
+    return camera_from_pose(cam, rest_pos, rest_rot, &pose[0]);
+}
+
+static int has_pose_child(xmlNodePtr anim)
+{
+    for (xmlNodePtr p = anim->children; p; p = p->next)
+        if (xml_is_element(p) && !strcmp(xml_elname(p), "pose"))
+            return 1;
+    return 0;
+}
+
 /* <camera ...> with an optional <animation> moving its rest pose rigidly. */
-static int parse_camera_motion(xml_ctx *c, xmlNodePtr n, const camera *cam, animation *a)
+static int parse_camera_motion(xml_ctx *c, xmlNodePtr n, camera *cam, animation *a, const char *json)
 {
     if (xml_check_no_text(c, n))
         return -1;
@@ -35,6 +100,13 @@ static int parse_camera_motion(xml_ctx *c, xmlNodePtr n, const camera *cam, anim
             return xml_fail(c, k, "unknown element inside <camera> (expected animation)");
         if (a->keys || !animation_is_static(a))
             return xml_fail(c, k, "the camera has one <animation>");
+        if (has_pose_child(k)) {
+            if (!json)
+                return xml_fail(c, k, "<pose> needs the camera's 'cameras' (a cameras.json)");
+            if (parse_pose_motion(c, k, json, cam, a))
+                return -1;
+            continue;
+        }
         animation_free(a);
         animation_init_static(a);
         a->offset = cam->position; /* the default keyframe pivot; the camera has no model offset */
@@ -47,19 +119,46 @@ static int parse_camera_motion(xml_ctx *c, xmlNodePtr n, const camera *cam, anim
     return 0;
 }
 
+/* <camera cameras="cameras.json" image="NAME"/>: a trained model's camera. */
+static int parse_json_camera(xml_ctx *c, xmlNodePtr n, camera *cam, char *path, size_t size)
+{
+    char rel[4096], image[256];
+    static const char *const exclusive[] = {"position", "lookat", "up", "fov", "width", "height", NULL};
+    for (const char *const *k = exclusive; *k; k++)
+        if (xmlHasProp(n, (const xmlChar *)*k))
+            return xml_fail(c, n, "a camera from 'cameras' takes its pose, field of view and size from the file: "
+                                  "drop '%s' (--res changes the size)", *k);
+    int got = xml_attr_text(c, n, "image", image, sizeof image);
+    if (got <= 0)
+        return got < 0 ? -1 : xml_fail(c, n, "a camera from 'cameras' needs 'image' (an img_name of the file)");
+    camjson_camera j;
+    if (xml_attr_text(c, n, "cameras", rel, sizeof rel) < 0 || xml_resolve_path(c, n, rel, path, size) ||
+        read_json_camera(c, n, path, image, &j))
+        return -1;
+    if (scene_add_input(c->sc, path))
+        return xml_fail(c, n, "out of memory");
+    return camera_from_pose(cam, j.position, j.c2w, &j);
+}
+
 static int parse_camera(xml_ctx *c, xmlNodePtr n, camera *cam, animation *motion)
 {
-    static const char *const ok[] = {"position", "lookat", "up", "fov", "width", "height", NULL};
-    if (xml_check_attributes(c, n, ok) || xml_attr_vec3(c, n, "position", &cam->position, 0) ||
-        xml_attr_vec3(c, n, "lookat", &cam->lookat, 0) || xml_attr_vec3(c, n, "up", &cam->up, 0) ||
-        xml_attr_double(c, n, "fov", &cam->fov_degrees, 0) ||
-        xml_attr_int(c, n, "width", &cam->width, 1, 65536) ||
-        xml_attr_int(c, n, "height", &cam->height, 1, 65536))
+    static const char *const ok[] = {"position", "lookat", "up", "fov", "width", "height", "cameras", "image", NULL};
+    char json[8192];
+    int from_json = xmlHasProp(n, (const xmlChar *)"cameras") != NULL;
+    if (xml_check_attributes(c, n, ok))
+        return -1;
+    if (from_json ? parse_json_camera(c, n, cam, json, sizeof json)
+                  : xml_attr_vec3(c, n, "position", &cam->position, 0) || xml_attr_vec3(c, n, "lookat", &cam->lookat, 0) ||
+                        xml_attr_vec3(c, n, "up", &cam->up, 0) || xml_attr_double(c, n, "fov", &cam->fov_degrees, 0) ||
+                        xml_attr_int(c, n, "width", &cam->width, 1, 65536) ||
+                        xml_attr_int(c, n, "height", &cam->height, 1, 65536))
+        return -1;
+    if (parse_camera_motion(c, n, cam, motion, from_json ? json : NULL))
         return -1;
     rr_error sub;
     if (camera_prepare(cam, &sub))
         return xml_fail(c, n, "%s", sub.msg);
-    return parse_camera_motion(c, n, cam, motion);
+    return 0;
 }
 
 static int parse_weight_kind(xml_ctx *c, xmlNodePtr n, shutter *s)

@@ -1,0 +1,36 @@
+/* Cameras as trained Gaussian-splat models have them: the cameras.json
+ * that 3DGS and 2DGS training write (graphdeco-inria/gaussian-splatting,
+ * utils/camera_utils.py camera_to_JSON): an array of objects with
+ * img_name, width, height, position (the camera centre, world), rotation
+ * (3x3, rows: the camera-to-world rotation, so its columns are the
+ * camera's x right, y down and z forward axes in world, OpenCV/COLMAP),
+ * fx and fy (pixels; the principal point is the image centre). Parsed
+ * with json-c. */
+#ifndef RR_CAMJSON_H
+#define RR_CAMJSON_H
+
+#include <stdint.h>
+
+#include "common.h"
+
+typedef struct {
+    char img_name[256];
+    int width, height;
+    vec3 position;
+    double c2w[3][3]; /* c2w[r][c]: column c is camera axis c in world */
+    double fx, fy;
+} camjson_camera;
+
+/* The camera named img_name in the cameras.json at path. Errors name the
+ * file and, where one is at fault, the entry (index and img_name) and its
+ * field: not JSON (with the line), not an array, a missing or mistyped
+ * field, a non-finite number, a size below 1 or above RR_MAX_PIXELS,
+ * focal lengths <= 0, a rotation that is not one (orthonormal within
+ * 1e-4, determinant 1), no camera of that name (listing a few), or two.
+ * The file's bytes are folded into *content_hash unless NULL. */
+int camjson_read(const char *path, const char *img_name, camjson_camera *out, uint64_t *content_hash,
+                 rr_error *err);
+int camjson_parse(const char *name, const char *data, size_t len, const char *img_name, camjson_camera *out,
+                  rr_error *err);
+
+#endif

@@ -1,0 +1,93 @@
+/* camjson.c: a trained model's cameras.json read by field name, and every
+ * mistake named with the file, the camera and the field. */
+#include <stdio.h>
+#include <string.h>
+
+#include "../src/camjson.h"
+#include "harness.h"
+
+#define ROT "[[0, -1, 0], [1, 0, 0], [0, 0, 1]]" /* not symmetric: rows and columns differ */
+
+static const char *one(const char *img, const char *fields)
+{
+    static char buf[2048];
+    snprintf(buf, sizeof buf, "{\"id\": 0, \"img_name\": \"%s\", %s}", img, fields);
+    return buf;
+}
+
+static int parse(const char *text, const char *img, camjson_camera *c, rr_error *e)
+{
+    return camjson_parse("cams.json", text, strlen(text), img, c, e);
+}
+
+/* The file [entry] with one field replaced (or the whole entry's fields). */
+static int fails_with(const char *fields, const char *needle)
+{
+    char text[4096];
+    snprintf(text, sizeof text, "[%s]", one("A", fields));
+    camjson_camera c;
+    rr_error e = {{0}};
+    int ok = parse(text, "A", &c, &e) != 0 && strstr(e.msg, needle) != NULL;
+    if (!ok)
+        printf("    expected an error with '%s', got '%s'\n", needle, e.msg);
+    return ok;
+}
+
+#define GOOD_POS "\"position\": [1, 2, 3]"
+#define GOOD_SIZE "\"width\": 80, \"height\": 60"
+#define GOOD_F "\"fx\": 70.5, \"fy\": 71"
+
+TEST(camjson_reads_the_named_camera_by_field_name)
+{
+    char text[4096];
+    snprintf(text, sizeof text, "[%s, ", one("B", "\"fy\": 9, \"fx\": 8, " GOOD_POS ", \"rotation\": " ROT ", "
+                                              GOOD_SIZE));
+    strcat(text, one("A", "\"fx\": 70.5, \"rotation\": " ROT ", \"width\": 80, \"height\": 60, \"position\": [1, 2, 3], "
+                          "\"fy\": 71"));
+    strcat(text, "]");
+    camjson_camera c;
+    rr_error e;
+    CHECK(parse(text, "A", &c, &e) == 0);
+    CHECK(c.width == 80 && c.height == 60 && c.fx == 70.5 && c.fy == 71 && !strcmp(c.img_name, "A"));
+    CHECK(c.position.x == 1 && c.position.y == 2 && c.position.z == 3);
+    CHECK(c.c2w[0][1] == -1 && c.c2w[1][0] == 1); /* row r, column c as written */
+}
+
+TEST(camjson_names_every_mistake)
+{
+    const char *rest = ", \"rotation\": " ROT ", " GOOD_SIZE ", " GOOD_F;
+    char f[1024];
+    snprintf(f, sizeof f, "\"position\": [1, 2]%s", rest);
+    CHECK(fails_with(f, "cams.json: camera 0 ('A'): field 'position' is missing or not a number"));
+    snprintf(f, sizeof f, "\"position\": [1, 2, 1e999]%s", rest);
+    CHECK(fails_with(f, "field 'position' is not finite"));
+    snprintf(f, sizeof f, GOOD_POS ", \"rotation\": [[1, 0, 0], [0, 1, 0], [0, 0, -1]], " GOOD_SIZE ", " GOOD_F);
+    CHECK(fails_with(f, "field 'rotation' is not a rotation")); /* a reflection */
+    snprintf(f, sizeof f, GOOD_POS ", \"rotation\": [[1, 0, 0], [0, 1.01, 0], [0, 0, 1]], " GOOD_SIZE ", " GOOD_F);
+    CHECK(fails_with(f, "field 'rotation' is not a rotation"));
+    snprintf(f, sizeof f, GOOD_POS ", \"rotation\": [[1, 0, 0], [0, 1, 0]], " GOOD_SIZE ", " GOOD_F);
+    CHECK(fails_with(f, "field 'rotation' is not a 3x3 array"));
+    snprintf(f, sizeof f, GOOD_POS ", \"rotation\": " ROT ", \"width\": 0, \"height\": 60, " GOOD_F);
+    CHECK(fails_with(f, "field 'width' must be a whole number of pixels"));
+    snprintf(f, sizeof f, GOOD_POS ", \"rotation\": " ROT ", \"width\": \"80\", \"height\": 60, " GOOD_F);
+    CHECK(fails_with(f, "field 'width' is missing or not a number"));
+    snprintf(f, sizeof f, GOOD_POS ", \"rotation\": " ROT ", " GOOD_SIZE ", \"fx\": 0, \"fy\": 71");
+    CHECK(fails_with(f, "field 'fx' must be > 0"));
+    snprintf(f, sizeof f, GOOD_POS ", \"rotation\": " ROT ", " GOOD_SIZE ", \"fx\": 70");
+    CHECK(fails_with(f, "field 'fy' is missing"));
+}
+
+TEST(camjson_names_the_file_level_mistakes)
+{
+    camjson_camera c;
+    rr_error e;
+    CHECK(parse("[\n{\"img_name\": \"A\",\n \"fx\": }]", "A", &c, &e) != 0 && strstr(e.msg, "cams.json:3: not a complete JSON"));
+    CHECK(parse("[{\"img_name\": \"A\"}", "A", &c, &e) != 0 && strstr(e.msg, "it ends early"));
+    CHECK(parse("{\"img_name\": \"A\"}", "A", &c, &e) != 0 && strstr(e.msg, "expected an array of cameras"));
+    CHECK(parse("[{\"img_name\": \"A\"}, {\"img_name\": \"A\"}]", "A", &c, &e) != 0 &&
+          strstr(e.msg, "cameras 0 and 1 are both named 'A'"));
+    CHECK(parse("[{\"img_name\": \"A\"}, {\"img_name\": \"B\"}]", "C", &c, &e) != 0 &&
+          strstr(e.msg, "no camera named 'C' (img_name); it has 'A', 'B' (2 cameras)"));
+    CHECK(parse("[{\"img_name\": 3}]", "A", &c, &e) != 0 && strstr(e.msg, "camera 0: field 'img_name'"));
+    CHECK(camjson_read("/nonexistent/cameras.json", "A", &c, NULL, &e) != 0 && strstr(e.msg, "/nonexistent/cameras.json"));
+}
