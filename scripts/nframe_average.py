@@ -13,7 +13,7 @@ RMSE in units of the reference's noise (near 1: the difference is the
 reference's noise), and the share of pixels within 3 standard errors.
 
 usage: nframe_average.py SCENE.xml [--reference GT.exr] [--n 10,16,51]
-           [--times midpoint|endpoints] [--out DIR] [--json F] [--plot F.png]
+           [--times midpoint|endpoints] [--out DIR] [--json F] [--plot F.png] [--figure F.png]
            [-- refrender options for every render, e.g. --res 128x128 -D name=v]
 
 Without --reference the reference is rendered first (--batches 16, the
@@ -141,6 +141,27 @@ def plot(rows, ref_se, path):
     fig.savefig(path)
 
 
+def figure(ref, avg, n, path):
+    """The reference, the N-frame average and the error map between them."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    import flip
+    err = np.abs(avg[..., :3] - ref[..., :3]).max(axis=-1)
+    fig, axes = plt.subplots(1, 3, figsize=(9, 3.3), dpi=110)
+    for ax, img, title in ((axes[0], ref, "time integral (refrender)"), (axes[1], avg, f"{n}-frame average")):
+        ax.imshow(flip.linear_to_srgb(np.clip(img[..., :3], 0, 1)))
+        ax.set_title(title, fontsize=9)
+    shown = axes[2].imshow(err, cmap="inferno", vmin=0, vmax=max(float(np.percentile(err, 99.5)), 1e-12))
+    axes[2].set_title(f"|{n}-frame average - integral|", fontsize=9)
+    fig.colorbar(shown, ax=axes[2], fraction=0.046, pad=0.04)
+    for ax in axes:
+        ax.axis("off")
+    fig.tight_layout()
+    fig.savefig(path)
+
+
 def parse(argv):
     extra = []
     if "--" in argv:
@@ -154,7 +175,8 @@ def parse(argv):
     p.add_argument("--out", default="nframe", help="directory for the frames and averages (average_N.exr; "
                    "default nframe/)")
     p.add_argument("--json")
-    p.add_argument("--plot")
+    p.add_argument("--plot", help="error against N, log-log (PNG)")
+    p.add_argument("--figure", help="the reference, the first N's average and its error map (PNG)")
     args = p.parse_args(argv)
     try:
         args.counts = [int(v) for v in args.n.split(",")]
@@ -185,6 +207,8 @@ def main(argv):
         avg = render_frames(args.scene, times, settings, extra, out, cache)
         write_exr(out / f"average_{n}.exr", avg)
         rows.append({"N": n, **measure(avg, ref, se)})
+        if args.figure and n == args.counts[0]:
+            figure(ref, avg, n, args.figure)
     noise = float(np.sqrt(np.mean(se ** 2)))
     print(table(rows, noise))
     if args.json:
