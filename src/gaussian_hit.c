@@ -173,7 +173,8 @@ int gaussian_hit_3d(const gaussian_model *m, size_t i, const gaussian_ray *r, ga
     vec3 closest = v3_add(o, v3_scale(d, t));
     double response = exp(-0.5 * v3_dot(closest, closest));
     double alpha = clamp_alpha(m->opacity[i], response);
-    if (!(response > GAUSSIAN_GRT_MIN_RESPONSE) || alpha < GAUSSIAN_ALPHA_MIN || !(t >= r->tmin && t < r->tmax))
+    /* both strict, as gaussianParticles.slang's hit() accepts */
+    if (!(response > GAUSSIAN_GRT_MIN_RESPONSE) || !(alpha > GAUSSIAN_ALPHA_MIN) || !(t >= r->tmin && t < r->tmax))
         return 0;
     *h = (gaussian_hit){(float)t, (float)t, (float)alpha, {(float)r->dir.x, (float)r->dir.y, (float)r->dir.z}, 0,
                         (unsigned)i};
@@ -303,13 +304,22 @@ void gaussian_blend_init(gaussian_blend *b)
     b->T = 1.0, b->sum = v3(0, 0, 0), b->composited = 0, b->done = 0;
 }
 
+/* Each model's own stopping rule (gaussian_hit.h): a 2D hit that would
+ * bring T below 1e-4 is not composited; a 3D hit is while T > 1e-3. */
+static int blend_stops(const gaussian_blend *b, const gaussian_hit *g, const gaussian_model *m)
+{
+    if (m->kind == GAUSSIAN_3D)
+        return !(b->T > GAUSSIAN_GRT_MIN_TRANSMITTANCE);
+    return b->T * (1.0 - g->alpha) < GAUSSIAN_MIN_TRANSMITTANCE;
+}
+
 static void blend_one(gaussian_blend *b, const gaussian_hit *g, const gaussian_model *m)
 {
-    double next = b->T * (1.0 - g->alpha);
-    if (next < GAUSSIAN_MIN_TRANSMITTANCE) { /* stops before it, as the rasterizer does */
+    if (blend_stops(b, g, m)) {
         b->done = 1;
         return;
     }
+    double next = b->T * (1.0 - g->alpha);
     vec3 c = gaussian_sh_color(&m->sh[(size_t)3 * m->sh_coeffs * g->prim], m->sh_degree,
                                v3(g->dir[0], g->dir[1], g->dir[2]));
     b->sum = v3_add(b->sum, v3_scale(c, g->alpha * b->T));

@@ -22,9 +22,11 @@
  * colour from SH in the ray's direction. Not the 3DGS rasterizer's image
  * (no EWA projection, no +0.3 dilation).
  *
- * Compositing, both: front to back, C += T alpha c, T *= 1 - alpha, and
- * the pass stops before the hit that would bring T below
- * GAUSSIAN_MIN_TRANSMITTANCE; what is behind gets T. */
+ * Compositing, both: front to back, C += T alpha c, T *= 1 - alpha. 2DGS
+ * stops before the hit that would bring T below 1e-4 (forward.cu); 3DGRT
+ * composites each hit while T is above 1e-3, so the hit that crosses it
+ * is composited (3dgrtTracer.cuh traceVolumetricGS, render/3dgrt.yaml
+ * min_transmittance). What is behind gets the final T. */
 #ifndef RR_GAUSSIAN_HIT_H
 #define RR_GAUSSIAN_HIT_H
 
@@ -40,6 +42,7 @@
 #define GAUSSIAN_MIN_TRANSMITTANCE 1e-4 /* 2DGS's stopping rule */
 #define GAUSSIAN_FILTER_INV_SQUARE 2.0  /* 2DGS: rho2d = 2 |d|^2 (a filter of 0.707 pixels) */
 #define GAUSSIAN_GRT_MIN_RESPONSE 0.0113 /* 3DGRT: responses at or below are no hit */
+#define GAUSSIAN_GRT_MIN_TRANSMITTANCE 1e-3 /* 3DGRT: hits are composited while T is above it */
 
 /* One Gaussian's contribution to a ray. */
 typedef struct {

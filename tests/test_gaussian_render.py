@@ -221,3 +221,53 @@ def test_a_moving_gaussian_render_is_bit_identical_for_any_threads_and_passes(tm
     assert outs[0][..., 3].max() > 0.5
     for other in outs[1:]:
         assert np.array_equal(outs[0], other)
+
+
+def random_3d_model(seed, n, degree):
+    rng = np.random.default_rng(seed)
+    q = rng.normal(size=(n, 4))
+    return {"mean": rng.uniform(-0.7, 0.7, (n, 3)), "scale": rng.uniform(0.04, 0.3, (n, 3)),
+            "rot": q / np.linalg.norm(q, axis=1)[:, None], "opacity": rng.uniform(0.2, 0.95, n),
+            "sh": rng.normal(0, 0.4, (n, (degree + 1) ** 2, 3)), "degree": degree}
+
+
+@pytest.mark.parametrize("degree", [0, 3])
+def test_a_3dgs_render_is_3dgrt_ray_tracing(tmp_path, degree):
+    """3D models follow 3DGRT (tests/gs3d_grt_reference.py, written from nv-tlabs/3dgrut's rules):
+    per pixel within 1e-4, and not the 2DGS rules on the same model's first two scales."""
+    import gs3d_grt_reference as grt
+    ply = _write(tmp_path, random_3d_model(21 + degree, 50, degree))
+    R, C = rotation(0.3, -0.2), None
+    C = -4.0 * R[:, 2]
+    scene = tmp_path / "g3.xml"
+    scene.write_text(f'<scene>{gsply.camera_xml(R, C, F, W, H)}<background color="0.1 0.2 0.3"/>'
+                     f'<object name="g"><gaussianModel file="{ply}"/></object></scene>')
+    out = tmp_path / "g3.exr"
+    proc = run([scene, "--pixel-filter", "point", "--time", 0, "--spp", 1, "-o", out, "--quiet"])
+    assert proc.returncode == 0, proc.stderr
+    img = read_exr(out)[0]
+    model = gsply.read(ply)
+    expect, final_t = grt.render(model, R, C, F, F, W, H, BACKGROUND)
+    assert np.abs(img[..., :3] - expect).max() < TOL
+    assert np.abs(img[..., 3] - (1 - final_t)).max() < TOL
+    assert (final_t < 0.5).sum() > 50
+
+
+def test_3dgrt_composites_the_hit_that_crosses_its_minimum_transmittance(tmp_path):
+    """Three opaque 3D Gaussians on the axis: 3DGRT composites while T > 0.001, so the second (T = 0.01
+    before it) is composited and the third not; 2DGS's rule (stop before T < 1e-4) would stop earlier."""
+    import gs3d_grt_reference as grt
+    m = {"mean": np.array([[0.5 * z / F, 0.5 * z / F, z - 4.0] for z in (3.0, 4.0, 5.0)]),
+         "scale": np.full((3, 3), 0.2), "rot": np.tile([1.0, 0, 0, 0], (3, 1)), "opacity": np.full(3, 0.995),
+         "sh": ((np.eye(3) - 0.5) / ref.SH_C0)[:, None, :], "degree": 0}
+    ply = _write(tmp_path, m)
+    scene = tmp_path / "axis.xml"
+    scene.write_text(f'<scene>{gsply.camera_xml(np.eye(3), [0, 0, -4.0], F, W, H)}<background color="1 1 1"/>'
+                     f'<object name="g"><gaussianModel file="{ply}" kind="3dgs"/></object></scene>')
+    out = tmp_path / "axis.exr"
+    assert run([scene, "--pixel-filter", "point", "--time", 0, "--spp", 1, "-o", out, "--quiet"]).returncode == 0
+    px = read_exr(out)[0][H // 2, W // 2, :3]
+    expect, T = grt.trace(gsply.read(ply), *grt.pixel_ray(np.eye(3), [0, 0, -4.0], F, F, W, H, W / 2 + 0.5,
+                                                          H / 2 + 0.5), (1, 1, 1))
+    assert 1e-5 < T < 1e-3 and expect[1] > 0.009  # green composited after T fell to about 0.005
+    assert np.abs(px - expect).max() < TOL
