@@ -84,6 +84,12 @@ def test_the_time_integral_of_a_moving_gaussian_is_the_quadrature(tmp_path, scal
     scene.write_text(scene_xml(ply, moving))
     expect = quadrature(gsply.read(ply), moving)
     assert np.ptp(expect[:, 0]) > 0.05  # the blur streak is there
+    _check_integral(tmp_path, scene, expect)
+
+
+def _check_integral(tmp_path, scene, expect):
+    """The middle row's pixel at mid-shutter within K standard errors for seeds 1-4 (32 batches of 256
+    times), and the whole row within 2e-5 of the quadrature at 2^18 Sobol' times."""
     row, mid = H // 2, W // 2
     for seed in range(1, 5):
         ch = _render(tmp_path, scene, seed, "thesis", 256, 32)
@@ -154,7 +160,7 @@ def test_the_time_integral_of_a_moving_3dgrt_gaussian_is_the_quadrature(tmp_path
                      f'<object name="g" position="{-TRAVEL / 2} 0.013 {DEPTH}"><gaussianModel file="{ply}"/>'
                      f'<animation><linear velocity="{TRAVEL} 0 0"/></animation></object></scene>')
     read = gsply.read(ply)
-    row, mid = H // 2, W // 2
+    row = H // 2
     expect = np.zeros((W, 3))
     for k in range(QUAD):
         moved = dict(read, mean=read["mean"] + [-TRAVEL / 2 + TRAVEL * (k + 0.5) / QUAD, 0.013, DEPTH])
@@ -162,11 +168,4 @@ def test_the_time_integral_of_a_moving_3dgrt_gaussian_is_the_quadrature(tmp_path
             org, d = grt.pixel_ray(np.eye(3), np.zeros(3), F, F, W, H, i + 0.5, row + 0.5)
             expect[i] += grt.trace(moved, org, d, BACKGROUND)[0] / QUAD
     assert np.ptp(expect[:, 1]) > 0.05
-    for seed in range(1, 5):
-        ch = _render(tmp_path, scene, seed, "thesis", 256, 32)
-        for c_, name in enumerate("RGB"):
-            got, se = ch[name][row, mid], ch[f"stderr.{name}"][row, mid]
-            assert abs(got - expect[mid, c_]) < K * se, (seed, name, got, expect[mid, c_], se)
-    ch = _render(tmp_path, scene, 1, "sobol", 4096, 64)
-    for c_, name in enumerate("RGB"):
-        assert np.abs(ch[name][row] - expect[:, c_]).max() < 2e-5, (name, ch[name][row], expect[:, c_])
+    _check_integral(tmp_path, scene, expect)

@@ -9,7 +9,6 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/resource.h>
-#include <sys/wait.h>
 #include <time.h>
 #include <unistd.h>
 
@@ -381,24 +380,11 @@ static void run_case(const bench_case *c, bench_result *r)
     free(surfels);
 }
 
+static void run_case_child(const void *in, void *out) { run_case(in, out); }
+
 static int run_in_child(const bench_case *c, bench_result *r)
 {
-    int fd[2];
-    if (pipe(fd))
-        return -1;
-    pid_t pid = fork();
-    if (pid == 0) {
-        close(fd[0]);
-        run_case(c, r);
-        ssize_t w = write(fd[1], r, sizeof *r);
-        _exit(w == (ssize_t)sizeof *r ? 0 : 1);
-    }
-    close(fd[1]);
-    ssize_t got = read(fd[0], r, sizeof *r);
-    close(fd[0]);
-    int status;
-    waitpid(pid, &status, 0);
-    return got == (ssize_t)sizeof *r && WIFEXITED(status) && WEXITSTATUS(status) == 0 ? 0 : -1;
+    return bench_in_child(run_case_child, c, r, sizeof *r);
 }
 
 static int wanted(const char *only, const char *series)

@@ -266,7 +266,7 @@ static void gs_run(const gs_case *c, gs_result *r)
     scene_free(&s);
 }
 
-static int gs_in_child(const gs_case *c, gs_result *r)
+int bench_in_child(void (*run)(const void *in, void *out), const void *in, void *out, size_t size)
 {
     int fd[2];
     if (pipe(fd))
@@ -274,16 +274,18 @@ static int gs_in_child(const gs_case *c, gs_result *r)
     pid_t pid = fork();
     if (pid == 0) {
         close(fd[0]);
-        gs_run(c, r);
-        _exit(write(fd[1], r, sizeof *r) == (ssize_t)sizeof *r ? 0 : 1);
+        run(in, out);
+        _exit(write(fd[1], out, size) == (ssize_t)size ? 0 : 1);
     }
     close(fd[1]);
-    ssize_t got = read(fd[0], r, sizeof *r);
+    ssize_t got = read(fd[0], out, size);
     close(fd[0]);
     int status;
     waitpid(pid, &status, 0);
-    return got == (ssize_t)sizeof *r && WIFEXITED(status) && WEXITSTATUS(status) == 0 ? 0 : -1;
+    return got == (ssize_t)size && WIFEXITED(status) && WEXITSTATUS(status) == 0 ? 0 : -1;
 }
+
+static void gs_run_child(const void *in, void *out) { gs_run(in, out); }
 
 int bench_gaussians(int quick, int threads, FILE *csv)
 {
@@ -295,7 +297,7 @@ int bench_gaussians(int quick, int threads, FILE *csv)
            "| Gaussians | build ms | Mrays/s | discs Mrays/s | ratio | hits gathered / composited per ray "
            "| disc hits per ray | model B/G | Embree peak B/G | total B/G | peak RSS MB |\n"
            "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n", c.res, c.res, c.threads);
-    if (gs_in_child(&c, &r))
+    if (bench_in_child(gs_run_child, &c, &r, sizeof r))
         return -1;
     printf("| %zu | %.0f | %.2f | %.2f | %.2fx | %.1f / %.1f | %.1f | %.0f | %.0f | %.0f | %.0f |\n", c.count,
            r.build_ms, r.mrays, r.base_mrays, r.mrays / r.base_mrays, r.gathered, r.composited, r.base_hits,
