@@ -135,8 +135,13 @@ int gaussian_hit_2d(const gaussian_model *m, size_t i, gaussian_order order, con
     if (c.z == 0)
         return 0;
     double u = c.x / c.z, v = c.y / c.z, rho3d = u * u + v * v, rho2d = filter_rho2d(r, row);
-    double depth = rho3d <= rho2d ? u * row[2].x + v * row[2].y + row[2].z : row[2].z;
-    if (depth < GAUSSIAN_NEAR)
+    double plane_depth = u * row[2].x + v * row[2].y + row[2].z;
+    /* the near skip takes the plane hit's depth even where the filter wins
+     * (forward.cu since e0ed020, the commit 2DGS pins); where the filter
+     * wins the hit is placed at the centre's depth (the depth of the
+     * earlier code), the point its bounds and windows hold */
+    double depth = rho3d <= rho2d ? plane_depth : row[2].z;
+    if (plane_depth < GAUSSIAN_NEAR)
         return 0;
     double rho = fmin(rho3d, rho2d), t = depth / r->depth_per_t;
     if (!(rho <= 2.0 * log(m->opacity[i] / GAUSSIAN_ALPHA_MIN) + 1e-9) || !(t >= r->tmin && t < r->tmax))

@@ -11,14 +11,16 @@ w) (computeCov3D), the projected ellipse's centre from the dual conic
 the pixel (k, l), rho3d = u^2 + v^2, the low-pass rho2d = 2 |centre -
 pixel|^2 (FilterInvSquare = 2), G = exp(-min/2), alpha = min(0.99, o G)
 skipped below 1/255, front to back by the centre's view depth, stopping
-before the Gaussian that would bring T below 1e-4. Colour: SH of the
+before the Gaussian that would bring T below 1e-4; a hit whose depth (of
+the plane intersection, also where rho2d wins: forward.cu at e0ed020, the
+commit hbb1/2d-gaussian-splatting pins) is below 0.2 is skipped. Colour: SH of the
 direction from the camera centre to the mean, + 0.5, clamped at 0.
 
 Two deliberate differences, both where the official image depends on its
 tiling and not on the model: every Gaussian is evaluated at every pixel
 (the rasterizer only at pixels of the 16x16 tiles its 3-sigma square
 touches), and the sort is global (per tile in the rasterizer; the same
-order). Near culling is as the rasterizer's: centre depth <= 0.2.
+order). Near culling is as the rasterizer's: centre depth <= 0.2, and per pixel as above.
 
 Conventions: camera-to-world rotation R (columns x right, y down, z
 forward, OpenCV/COLMAP) and centre C; pixel (i, j) is evaluated at
@@ -109,6 +111,8 @@ def shade_pixel(items, model, px, py, background):
         v = -(l[2] * k[0] - k[2] * l[0]) / det
         rho3d = u * u + v * v
         rho2d = 2.0 * ((centre[0] - px) ** 2 + (centre[1] - py) ** 2)
+        if u * T[2][0] + v * T[2][1] + T[2][2] < 0.2:  # the hit's depth, also where rho2d wins
+            continue
         alpha = min(0.99, model["opacity"][idx] * np.exp(-0.5 * min(rho3d, rho2d)))
         if alpha < 1.0 / 255.0:
             continue

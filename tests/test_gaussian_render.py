@@ -138,7 +138,8 @@ def _hit_depth_reference(model, R, C):
                 rho3d, rho2d = u * u + v * v, 2.0 * ((centre[0] - px) ** 2 + (centre[1] - py) ** 2)
                 depth = u * T[2][0] + v * T[2][1] + T[2][2] if rho3d <= rho2d else T[2][2]
                 alpha = min(0.99, model["opacity"][idx] * np.exp(-0.5 * min(rho3d, rho2d)))
-                if alpha >= 1 / 255 and depth >= 0.2:
+                plane = u * T[2][0] + v * T[2][1] + T[2][2]
+                if alpha >= 1 / 255 and plane >= 0.2:
                     hits.append((depth, idx, alpha, rgb))
             colour, t = np.zeros(3), 1.0
             for _, _, alpha, rgb in sorted(hits, key=lambda h: (h[0], h[1])):
@@ -271,3 +272,24 @@ def test_3dgrt_composites_the_hit_that_crosses_its_minimum_transmittance(tmp_pat
                                                           H / 2 + 0.5), (1, 1, 1))
     assert 1e-5 < T < 1e-3 and expect[1] > 0.009  # green composited after T fell to about 0.005
     assert np.abs(px - expect).max() < TOL
+
+
+def test_an_edge_on_surfel_seen_through_the_filter_is_skipped_where_its_plane_is_behind_the_camera(tmp_path):
+    """forward.cu (e0ed020) skips a hit whose plane intersection is nearer than 0.2, also where the
+    low-pass filter gives it its alpha: a sub-pixel surfel whose plane nearly holds the view ray shows
+    on one side of its centre only (the plane hit is behind the camera on the other)."""
+    a = np.arctan(0.01)  # plane x = 0.01 (z - 4): normal turned from x towards -z
+    m = {"mean": np.array([[0.5 * 4 / F, 0.5 * 4 / F, 4.0]]), "scale": np.array([[2e-3, 2e-3]]),
+         "rot": np.array([[np.cos((np.pi / 2 - a) / 2), 0, -np.sin((np.pi / 2 - a) / 2), 0]]),
+         "opacity": np.array([0.9]), "sh": np.full((1, 1, 3), 1.0), "degree": 0}
+    ply = _write(tmp_path, m)
+    scene = tmp_path / "edge.xml"
+    scene.write_text(f'<scene>{gsply.camera_xml(np.eye(3), np.zeros(3), F, W, H)}<background color="0 0 0"/>'
+                     f'<object name="g"><gaussianModel file="{ply}"/></object></scene>')
+    out = tmp_path / "edge.exr"
+    assert run([scene, "--pixel-filter", "point", "--time", 0, "--spp", 1, "-o", out, "--quiet"]).returncode == 0
+    img = read_exr(out)[0]
+    expect, T = ref.render(gsply.read(ply), np.eye(3), np.zeros(3), F, F, W, H, (0, 0, 0))
+    assert np.abs(img[..., :3] - expect).max() < TOL
+    row = T[H // 2, W // 2 - 2: W // 2 + 3]  # the filter reaches 2 pixels either side of the centre's pixel
+    assert row.min() < 0.5 and row.max() == 1.0  # seen on one side, skipped on the other
