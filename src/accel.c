@@ -522,9 +522,8 @@ void accel_gaussian_bounds_cb(const struct RTCBoundsFunctionArguments *args)
      * units; the focal length shrunk by the scale's spread */
     vec3 at_open = xform_point(&f->at_open, v3(mu[0], mu[1], mu[2]));
     double distance = v3_len(v3_sub(at_open, f->camera_center)) + f->camera_radius + f->travel;
-    double reach = gaussian_filter_reach(m, args->primID, distance / f->min_scale,
-                                         f->focal * f->min_scale / f->max_scale);
-    aabb b = gaussian_bounds(m, args->primID, reach);
+    gaussian_view_bound view = {distance / f->min_scale, f->focal * f->min_scale / f->max_scale, f->stretch};
+    aabb b = gaussian_bounds(m, args->primID, gaussian_view_reach(m, args->primID, &view));
     struct RTCBounds *r = args->bounds_o;
     r->lower_x = nextafterf((float)b.lo.x, -INFINITY), r->lower_y = nextafterf((float)b.lo.y, -INFINITY);
     r->lower_z = nextafterf((float)b.lo.z, -INFINITY);
@@ -541,9 +540,7 @@ void accel_gaussian_gather(const struct RTCIntersectFunctionNArguments *args)
     gather_context *c = (gather_context *)args->context;
     const gaussian_model *m = &c->o->gaussians;
     gaussian_hit h;
-    int hit = m->kind == GAUSSIAN_3D ? gaussian_hit_3d(m, args->primID, c->ray, &h)
-                                     : gaussian_hit_2d(m, args->primID, c->o->order, c->ray, &h);
-    if (hit) {
+    if (gaussian_hit_any(m, args->primID, c->o->order, c->ray, &h)) {
         h.obj = c->obj;
         gaussian_hits_add(c->out, &h);
     }
@@ -577,14 +574,14 @@ static size_t gaussian_rays(const accel *a, const camera_view *view, double x, d
         double along = v3_dot(v3_sub(b->center, org), dir), radius = sqrt(b->radius2);
         r->obj = obj, r->enter = fmax(0.0, along - radius), r->exit = along + radius;
         r->lead = gaussian_key_lead(&o->gaussians, o->order, a->footprint[obj].largest, r->depth_per_t);
+        r->pad = gaussian_traversal_pad(&o->gaussians, a->footprint[obj].largest, r->depth_per_t);
     }
     return n;
 }
 
 /* The hits of one object with distance in [t0, t1), appended to out. The
- * traversal's stretch is wider by the lead: a hit's box holds a point of
- * the ray within that of the hit (its plane point, or for the filter, the
- * image of a point of its unit disc). */
+ * traversal's stretch is wider by the pad: a hit's box holds a point of
+ * the ray within that of the hit (gaussian_traversal_pad). */
 static void gather_window(const accel *a, gaussian_ray *r, double t0, double t1, gaussian_hits *out)
 {
     gather_context c;
@@ -592,7 +589,7 @@ static void gather_window(const accel *a, gaussian_ray *r, double t0, double t1,
     r->tmin = t0, r->tmax = t1;
     c.ray = r, c.o = &a->sc->objects[r->obj], c.obj = r->obj, c.out = out;
     struct RTCRayHit rh;
-    double pad = r->lead + 1e-6 * t1;
+    double pad = r->pad + 1e-6 * t1;
     init_rayhit1(&rh, r->org, r->dir, nextafterf((float)(t1 + pad), INFINITY));
     rh.ray.tnear = fmaxf(0.0f, nextafterf((float)(t0 - pad), -INFINITY));
     rtcIntersect1(a->object_scenes[r->obj], &c.rtc, &rh);

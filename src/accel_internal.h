@@ -41,6 +41,7 @@ typedef struct {
     double travel;       /* how far any point of the object moves during the shutter (world) */
     double min_scale, max_scale;
     double focal;        /* the smaller focal length, pixels */
+    double stretch;      /* gaussian_view_stretch */
     double largest;      /* the largest scale of a Gaussian over the shutter, world units */
 } gaussian_footprint;
 

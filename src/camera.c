@@ -92,4 +92,5 @@ void camera_view_rest(const camera *c, camera_view *v)
     /* camera_ray_direction: x_cam / z_cam = (2 x / width - 1) tan_x */
     v->fx = 0.5 * c->width / c->tan_half_fov_x, v->fy = 0.5 * c->height / c->tan_half_fov;
     v->cx = 0.5 * c->width, v->cy = 0.5 * c->height;
+    v->width = c->width, v->height = c->height;
 }

@@ -29,6 +29,7 @@ typedef struct {
     vec3 position;
     vec3 axis[3]; /* world directions of the camera's x, y and z */
     double fx, fy, cx, cy;
+    int width, height; /* the image's, pixels (the rasterizers' tiles) */
 } camera_view;
 
 /* The prepared camera at rest. */

@@ -27,6 +27,21 @@ typedef enum { GAUSSIAN_AUTO = 0, GAUSSIAN_2D = 2, GAUSSIAN_3D = 3 } gaussian_ki
  * Gaussian's maximum response along the ray, as 3DGRT does. */
 typedef enum { GAUSSIAN_ORDER_CENTER_DEPTH, GAUSSIAN_ORDER_HIT_DEPTH } gaussian_order;
 
+/* How a model is imaged: the renderer it was trained with decides what it
+ * looks like, and its PLY does not say which (issue 29; src/GAUSSIANS.md).
+ * DEFAULT is the kind's rasterizer: 2DGS at e0ed020 for 2D models, the
+ * graphdeco-inria 3DGS rasterizer for 3D ones. */
+typedef enum {
+    GAUSSIAN_FORMATION_DEFAULT = 0,
+    GAUSSIAN_FORMATION_2DGS,             /* diff-surfel-rasterization e0ed020: filter about the 3-sigma circle's centre */
+    GAUSSIAN_FORMATION_2DGS_UNIT_CIRCLE, /* before 909dd85 (2024-06-28): about the unit circle's centre */
+    GAUSSIAN_FORMATION_3DGS,             /* diff-gaussian-rasterization: EWA, +0.3 dilation */
+    GAUSSIAN_FORMATION_3DGS_ANTIALIASED, /* the same with its `antialiasing` opacity compensation */
+    GAUSSIAN_FORMATION_GSPLAT,           /* nerfstudio gsplat, rasterize_mode classic */
+    GAUSSIAN_FORMATION_GSPLAT_ANTIALIASED,
+    GAUSSIAN_FORMATION_3DGRT             /* ray traced (nv-tlabs/3dgrut, kernel degree 2) */
+} gaussian_formation;
+
 #define GAUSSIAN_MAX_SH_DEGREE 3
 #define GAUSSIAN_MAX_SH_COEFFS 16 /* (3 + 1)^2 */
 /* The largest activated scale: stored in floats, squared in ray tests. */
@@ -42,7 +57,11 @@ typedef struct {
     float *rotation;     /* 4 per Gaussian: the unit quaternion (w, x, y, z) of rot_0..3 */
     float *opacity;      /* 1 per Gaussian: sigmoid(opacity) */
     float *sh;           /* 3 * sh_coeffs per Gaussian: coefficient k of channel c at [3 k + c] */
+    /* how it is imaged, set by the scene (the file does not say; gaussian_hit.h) */
+    gaussian_formation formation;
+    int tile_rule;       /* 1: only in the 16x16 tiles the rasterizer would visit */
 } gaussian_model;
+
 
 void gaussian_model_init(gaussian_model *m);
 void gaussian_model_free(gaussian_model *m);

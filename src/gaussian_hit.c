@@ -4,27 +4,86 @@
 #include <stdlib.h>
 #include <string.h>
 
-void gaussian_hits_add(gaussian_hits *h, const gaussian_hit *hit)
+static const struct {
+    gaussian_formation f;
+    gaussian_kind kind;
+    const char *name;
+} formations[] = {
+    {GAUSSIAN_FORMATION_2DGS, GAUSSIAN_2D, "2dgs"},
+    {GAUSSIAN_FORMATION_2DGS_UNIT_CIRCLE, GAUSSIAN_2D, "2dgs-unit-circle"},
+    {GAUSSIAN_FORMATION_3DGS, GAUSSIAN_3D, "3dgs"},
+    {GAUSSIAN_FORMATION_3DGS_ANTIALIASED, GAUSSIAN_3D, "3dgs-antialiased"},
+    {GAUSSIAN_FORMATION_GSPLAT, GAUSSIAN_3D, "gsplat"},
+    {GAUSSIAN_FORMATION_GSPLAT_ANTIALIASED, GAUSSIAN_3D, "gsplat-antialiased"},
+    {GAUSSIAN_FORMATION_3DGRT, GAUSSIAN_3D, "3dgrt"},
+};
+enum { FORMATIONS = sizeof formations / sizeof formations[0] };
+
+gaussian_formation gaussian_formation_of(const gaussian_model *m)
 {
-    if (h->count == h->cap) {
-        size_t cap = h->cap ? 2 * h->cap : 256;
-        gaussian_hit *grown = realloc(h->hits, cap * sizeof *grown);
-        if (!grown) {
-            h->dropped++;
-            return;
-        }
-        h->hits = grown, h->cap = cap;
-    }
-    h->hits[h->count++] = *hit;
-    h->added++;
+    if (m->formation != GAUSSIAN_FORMATION_DEFAULT)
+        return m->formation;
+    return m->kind == GAUSSIAN_3D ? GAUSSIAN_FORMATION_3DGS : GAUSSIAN_FORMATION_2DGS;
 }
 
-void gaussian_hits_free(gaussian_hits *h)
+const char *gaussian_formation_name(gaussian_formation f)
 {
-    free(h->hits);
-    free(h->order);
-    free(h->rays);
-    memset(h, 0, sizeof *h);
+    for (int k = 0; k < FORMATIONS; k++)
+        if (formations[k].f == f)
+            return formations[k].name;
+    return NULL;
+}
+
+int gaussian_formation_parse(const char *name, gaussian_kind kind, gaussian_formation *f)
+{
+    for (int k = 0; k < FORMATIONS; k++)
+        if (!strcmp(formations[k].name, name) && formations[k].kind == kind) {
+            *f = formations[k].f;
+            return 0;
+        }
+    return -1;
+}
+
+/* The 3D rasterizers' rules (issue 29), each read in its source:
+ * graphdeco-inria/diff-gaussian-rasterization cuda_rasterizer/forward.cu
+ * (59f5f77; the `antialiasing` flag of 9c5c202, dr_aa, the commit
+ * gaussian-splatting pins) and nerfstudio gsplat v1.5.3 (937e299);
+ * src/GAUSSIANS.md names the lines. */
+typedef struct {
+    double near, far;  /* a mean's view depth must be in (near, far] (in_frustum; gsplat: [0.01, 1e10]) */
+    double dilation;   /* added to cov2D's diagonal, pixels^2 (0.3; gsplat's eps2d) */
+    double alpha_max;  /* alpha = min(alpha_max, opacity G): 0.99; gsplat v1.5.3 0.999 */
+    int antialiased;   /* opacity x sqrt(max(aa_floor, det cov2D / det(cov2D + dilation I))) */
+    double aa_floor;   /* 2.5e-5 (forward.cu); 0 (gsplat) */
+    int tiles_cut;     /* the tile rule can cut a tail: inria's 3-sigma radius; gsplat's box of
+                        * sqrt(2 ln(255 o)) sigma per axis holds every alpha >= 1/255 */
+} raster_rules;
+
+static const raster_rules inria_rules = {0.2, INFINITY, 0.3, 0.99, 0, 0.0, 1};
+static const raster_rules inria_aa_rules = {0.2, INFINITY, 0.3, 0.99, 1, 2.5e-5, 1};
+static const raster_rules gsplat_rules = {0.01, 1e10, 0.3, 0.999, 0, 0.0, 0};
+static const raster_rules gsplat_aa_rules = {0.01, 1e10, 0.3, 0.999, 1, 0.0, 0};
+
+static const raster_rules *raster_rules_of(gaussian_formation f)
+{
+    switch (f) {
+    case GAUSSIAN_FORMATION_3DGS_ANTIALIASED: return &inria_aa_rules;
+    case GAUSSIAN_FORMATION_GSPLAT: return &gsplat_rules;
+    case GAUSSIAN_FORMATION_GSPLAT_ANTIALIASED: return &gsplat_aa_rules;
+    default: return &inria_rules;
+    }
+}
+
+/* The rasterizers evaluate the Jacobian of the projection at the mean's
+ * x/z and y/z clamped to 1.3 tan(fov/2) (computeCov2D's limx; gsplat's
+ * lim_x_pos/neg = (W - cx)/fx + 0.3 tan and cx/fx + 0.3 tan, the same for
+ * the centred principal point every camera here has). */
+#define RASTER_CLAMP 1.3
+
+double gaussian_view_stretch(const camera_view *v)
+{
+    double lx = RASTER_CLAMP * v->cx / v->fx, ly = RASTER_CLAMP * v->cy / v->fy;
+    return sqrt(1.0 + lx * lx + ly * ly) * fmax(v->fx, v->fy) / fmin(v->fx, v->fy);
 }
 
 void gaussian_ray_init(gaussian_ray *r, const camera_view *view, const xform *xf, double x, double y, vec3 org,
@@ -37,6 +96,7 @@ void gaussian_ray_init(gaussian_ray *r, const camera_view *view, const xform *xf
         r->m[k][3] = v3_dot(a, v3_sub(xf->t, view->position));
     }
     r->fx = view->fx, r->fy = view->fy, r->cx = view->cx, r->cy = view->cy;
+    r->width = view->width, r->height = view->height;
     r->x = x, r->y = y;
     r->eye = xform_inverse_point(xf, view->position);
     r->org = xform_inverse_point(xf, org);
@@ -48,6 +108,7 @@ void gaussian_ray_init(gaussian_ray *r, const camera_view *view, const xform *xf
         for (int k = 0; k < 3; k++)
             col2[j] += xf->r[k][j] * xf->r[k][j];
     r->scale = sqrt(fmax(col2[0], fmax(col2[1], col2[2]))) * (1 + 1e-9);
+    r->stretch = gaussian_view_stretch(view);
 }
 
 /* The rotation of a unit quaternion (w, x, y, z), row-major. */
@@ -80,39 +141,81 @@ static void splat_rows(const gaussian_ray *r, vec3 tu, vec3 tv, vec3 p, vec3 row
     row[1] = v3_add(v3_scale(v3(tu.y, tv.y, p.y), r->fy), v3_scale(row[2], r->cy));
 }
 
-/* The low-pass filter's rho2d: 2 |pixel - centre|^2, the centre of the
- * image of the unit circle from the dual conic T diag(1, 1, -1) T^T
- * (the rasterizer's computeCenter). When the circle reaches behind the
- * camera's plane its image is no ellipse and has no centre to filter
- * about: no filter then (the rasterizer would use the hyperbola's centre,
- * anywhere on screen). */
-static double filter_rho2d(const gaussian_ray *r, const vec3 row[3])
+/* The radius, in scales, of the circle whose image's centre the 2DGS
+ * low-pass filter is centred on: e0ed020's compute_aabb takes the dual
+ * conic of the circle of radius cutoff = 3 (TIGHTBBOX 0; since 909dd85,
+ * 2024-06-28), the older computeCenter the unit circle's. */
+static double filter_circle(const gaussian_model *m)
 {
-    vec3 flip = v3(1, 1, -1);
-    double d22 = v3_dot(row[2], v3(row[2].x * flip.x, row[2].y * flip.y, row[2].z * flip.z));
-    if (!(d22 < 0))
-        return INFINITY;
-    double d02 = row[0].x * row[2].x + row[0].y * row[2].y - row[0].z * row[2].z;
-    double d12 = row[1].x * row[2].x + row[1].y * row[2].y - row[1].z * row[2].z;
-    double dx = d02 / d22 - r->x, dy = d12 / d22 - r->y;
-    return GAUSSIAN_FILTER_INV_SQUARE * (dx * dx + dy * dy);
+    return gaussian_formation_of(m) == GAUSSIAN_FORMATION_2DGS_UNIT_CIRCLE ? 1.0 : 3.0;
 }
 
-static double clamp_alpha(double opacity, double g) { return fmin(GAUSSIAN_ALPHA_MAX, opacity * g); }
+/* The centre of the image of the splat's circle of radius c (scales): the
+ * last column of the dual conic T diag(c^2, c^2, -1) T^T over its last
+ * entry (compute_aabb's point_image). 0 when the circle reaches behind the
+ * camera's plane: its image is no ellipse and has no centre to filter
+ * about (the rasterizer would filter about the hyperbola's, anywhere on
+ * screen; GAUSSIANS.md). */
+static int filter_centre(const vec3 row[3], double c, double *px, double *py)
+{
+    double c2 = c * c, d22 = c2 * (row[2].x * row[2].x + row[2].y * row[2].y) - row[2].z * row[2].z;
+    if (!(d22 < 0))
+        return 0;
+    *px = (c2 * (row[0].x * row[2].x + row[0].y * row[2].y) - row[0].z * row[2].z) / d22;
+    *py = (c2 * (row[1].x * row[2].x + row[1].y * row[2].y) - row[1].z * row[2].z) / d22;
+    return 1;
+}
+
+static double clamp_alpha(double alpha_max, double opacity, double g) { return fmin(alpha_max, opacity * g); }
+
+/* The rasterizers' tile rule (getRect, auxiliary.h): a Gaussian is only
+ * evaluated at the pixels of the 16x16 tiles that the square of the given
+ * radius about `centre` (pixel-index coordinates) touches. */
+static int in_rasterizer_tiles(const gaussian_ray *r, double cx, double cy, double radius)
+{
+    enum { TILE = 16 };
+    int gx = (r->width + TILE - 1) / TILE, gy = (r->height + TILE - 1) / TILE;
+    double px = floor(r->x), py = floor(r->y);
+    /* the CUDA's (int) casts truncate toward 0; the clamps keep them defined */
+#define TILE_INDEX(v, grid) ((int)fmin((double)(grid), fmax(0.0, trunc(fmax(-1.0, fmin(1e9, (v)))))))
+    int x0 = TILE_INDEX((cx - radius) / TILE, gx), x1 = TILE_INDEX((cx + radius + TILE - 1) / TILE, gx);
+    int y0 = TILE_INDEX((cy - radius) / TILE, gy), y1 = TILE_INDEX((cy + radius + TILE - 1) / TILE, gy);
+#undef TILE_INDEX
+    return px >= (double)x0 * TILE && px < (double)x1 * TILE && py >= (double)y0 * TILE && py < (double)y1 * TILE;
+}
+
+/* 2DGS's tile radius (e0ed020 preprocessCUDA): the cutoff circle's image's
+ * half extent, at least cutoff x FilterSize (0.707106), rounded up. */
+static int in_2dgs_tiles(const gaussian_ray *r, const vec3 row[3], double c, double centre_x, double centre_y)
+{
+    double c2 = c * c, d22 = c2 * (row[2].x * row[2].x + row[2].y * row[2].y) - row[2].z * row[2].z;
+    double hx = centre_x * centre_x - (c2 * (row[0].x * row[0].x + row[0].y * row[0].y) - row[0].z * row[0].z) / d22;
+    double hy = centre_y * centre_y - (c2 * (row[1].x * row[1].x + row[1].y * row[1].y) - row[1].z * row[1].z) / d22;
+    /* the extent does not depend on where the pixel grid's origin is; the
+     * centre in pixel-index coordinates (ndc2pix's (W-1)/2) is 0.5 less */
+    double radius = ceil(fmax(sqrt(fmax(1e-4, fmax(hx, hy))), c * 0.707106f));
+    return in_rasterizer_tiles(r, centre_x - 0.5, centre_y - 0.5, radius);
+}
 
 /* Can the splat (centre p in camera space, larger scale s) give the ray's
- * pixel anything? Its kernel's reach (3.33 scales at opacity 1) projects
- * within f k s / (z - k s) pixels of the projected mean, and the filter
- * acts within 2.36 pixels of the image of a point of its unit disc, which
- * lies within f s / (z - s) of it. A cheap test that the boxes of most
- * candidates fail (they hold a ball; the pixel's ray is a line). */
-static int splat_near_pixel(const gaussian_ray *r, vec3 p, double s)
+ * pixel anything? A point p + delta, |delta| <= D < p.z, projects within
+ * f |delta| |p| / (p.z (p.z - |delta|)) pixels of p's image (the offset is
+ * f |delta_xy p.z - p_xy delta_z| / (p.z (p.z + delta_z)), and by
+ * Lagrange's identity |delta_xy p.z - p_xy delta_z| <= |delta| |p|).
+ * Hits lie within the kernel's reach (3.33 scales at opacity 1); the
+ * filter acts within 2.36 pixels of the image of a point of the filter's
+ * circle (c scales). A cheap test that the boxes of most candidates fail
+ * (they hold a ball; the pixel's ray is a line). */
+static int splat_near_pixel(const gaussian_ray *r, vec3 p, double s, double c)
 {
     const double k = 3.3302, filter_px = 2.3537; /* sqrt(2 ln 255), sqrt(ln 255) */
     double f = fmax(r->fx, r->fy), dx = r->fx * p.x / p.z + r->cx - r->x, dy = r->fy * p.y / p.z + r->cy - r->y;
-    if (p.z <= k * s)
+    double reach_k = k * s, reach_c = c * s;
+    if (p.z <= fmax(reach_k, reach_c) * (1 + 1e-9))
         return 1; /* near the camera plane: no bound from the projection */
-    double reach = fmax(f * k * s / (p.z - k * s), f * s / (p.z - s) + filter_px) * (1 + 1e-6) + 1e-6;
+    double spread = f * v3_len(p) / p.z;
+    double reach = fmax(spread * reach_k / (p.z - reach_k), spread * reach_c / (p.z - reach_c) + filter_px);
+    reach = reach * (1 + 1e-6) + 1e-6;
     return dx * dx + dy * dy <= reach * reach;
 }
 
@@ -120,8 +223,9 @@ int gaussian_hit_2d(const gaussian_model *m, size_t i, gaussian_order order, con
                     gaussian_hit *h)
 {
     const float *mu = &m->mean[3 * i], *s = &m->scale[3 * i];
+    double circle = filter_circle(m);
     vec3 p = cam_point(r->m, v3(mu[0], mu[1], mu[2]));
-    if (p.z <= GAUSSIAN_NEAR || !splat_near_pixel(r, p, fmax(s[0], s[1]) * r->scale)) /* frustum cull, as the rasterizer */
+    if (p.z <= GAUSSIAN_NEAR || !splat_near_pixel(r, p, fmax(s[0], s[1]) * r->scale, circle)) /* frustum cull, as the rasterizer */
         return 0;
     double R[3][3];
     quaternion_matrix(&m->rotation[4 * i], R);
@@ -134,7 +238,10 @@ int gaussian_hit_2d(const gaussian_model *m, size_t i, gaussian_order order, con
     vec3 c = v3_cross(k, l);
     if (c.z == 0)
         return 0;
-    double u = c.x / c.z, v = c.y / c.z, rho3d = u * u + v * v, rho2d = filter_rho2d(r, row);
+    double u = c.x / c.z, v = c.y / c.z, rho3d = u * u + v * v, rho2d = INFINITY, centre_x = 0, centre_y = 0;
+    int filtered = filter_centre(row, circle, &centre_x, &centre_y);
+    if (filtered) /* FilterInvSquare |pixel - centre|^2 */
+        rho2d = GAUSSIAN_FILTER_INV_SQUARE * ((centre_x - r->x) * (centre_x - r->x) + (centre_y - r->y) * (centre_y - r->y));
     double plane_depth = u * row[2].x + v * row[2].y + row[2].z;
     /* the near skip takes the plane hit's depth even where the filter wins
      * (forward.cu since e0ed020, the commit 2DGS pins); where the filter
@@ -146,13 +253,75 @@ int gaussian_hit_2d(const gaussian_model *m, size_t i, gaussian_order order, con
     double rho = fmin(rho3d, rho2d), t = depth / r->depth_per_t;
     if (!(rho <= 2.0 * log(m->opacity[i] / GAUSSIAN_ALPHA_MIN) + 1e-9) || !(t >= r->tmin && t < r->tmax))
         return 0; /* alpha below 1/255 for certain (exp is the costly part; the exact test follows) */
-    double alpha = clamp_alpha(m->opacity[i], exp(-0.5 * rho));
+    double alpha = clamp_alpha(GAUSSIAN_ALPHA_MAX, m->opacity[i], exp(-0.5 * rho));
     if (alpha < GAUSSIAN_ALPHA_MIN)
+        return 0;
+    if (m->tile_rule && (!filtered || !in_2dgs_tiles(r, row, circle, centre_x, centre_y)))
         return 0;
     vec3 dir = v3_sub(v3(mu[0], mu[1], mu[2]), r->eye);
     double key = order == GAUSSIAN_ORDER_CENTER_DEPTH ? p.z / r->depth_per_t : t;
     *h = (gaussian_hit){(float)key, (float)t, (float)alpha,
                         {(float)dir.x, (float)dir.y, (float)dir.z}, 0, (unsigned)i};
+    return 1;
+}
+
+/* The 3D rasterizers' image of Gaussian i at the ray's pixel (forward.cu
+ * preprocessCUDA, computeCov2D, renderCUDA): cov2D = J W Sigma W^T J^T
+ * with J at the mean's clamped x/z, y/z; + dilation on the diagonal;
+ * power = -d^T cov2D^-1 d / 2 of d = the mean's image - the pixel, skipped
+ * above 0; alpha = min(alpha_max, opacity' exp(power)). Sigma in camera
+ * space is L L^T with L = M R S (M: object -> camera). 1 and *alpha set,
+ * or 0 (culled, or alpha below 1/255). */
+static int raster_alpha(const gaussian_model *m, size_t i, const raster_rules *rules, const gaussian_ray *r,
+                        vec3 p, double *alpha)
+{
+    const float *s = &m->scale[3 * i];
+    double dx = r->fx * p.x / p.z + r->cx - r->x, dy = r->fy * p.y / p.z + r->cy - r->y, k2 = 2.0 * log(m->opacity[i] * 255.0);
+    /* cheap and sure: lambda_max(cov2D) <= (f_max / z)^2 (1 + lim^2) s_max^2 + dilation (gaussian_view_stretch) */
+    double fz = fmax(r->fx, r->fy) / p.z * fmax(s[0], fmax(s[1], s[2])) * r->scale * r->stretch;
+    if (!(dx * dx + dy * dy <= k2 * (fz * fz + rules->dilation) * (1 + 1e-6)))
+        return 0;
+    double R[3][3], limx = RASTER_CLAMP * r->cx / r->fx, limy = RASTER_CLAMP * r->cy / r->fy;
+    quaternion_matrix(&m->rotation[4 * i], R);
+    double tx = fmin(limx, fmax(-limx, p.x / p.z)), ty = fmin(limy, fmax(-limy, p.y / p.z));
+    vec3 j0 = v3(r->fx / p.z, 0, -r->fx * tx / p.z), j1 = v3(0, r->fy / p.z, -r->fy * ty / p.z);
+    double c00 = 0, c01 = 0, c11 = 0;
+    for (int a = 0; a < 3; a++) { /* column a of L = M R S, through J */
+        vec3 col = v3_scale(cam_vector(r->m, v3(R[0][a], R[1][a], R[2][a])), s[a]);
+        double ja = v3_dot(j0, col), jb = v3_dot(j1, col);
+        c00 += ja * ja, c01 += ja * jb, c11 += jb * jb;
+    }
+    double det0 = c00 * c11 - c01 * c01;
+    c00 += rules->dilation, c11 += rules->dilation;
+    double det = c00 * c11 - c01 * c01;
+    if (!(det > 0))
+        return 0;
+    double power = -0.5 * (c11 * dx * dx + c00 * dy * dy) / det + c01 * dx * dy / det;
+    if (power > 0)
+        return 0;
+    double opacity = m->opacity[i];
+    if (rules->antialiased)
+        opacity *= sqrt(fmax(rules->aa_floor, det0 / det));
+    *alpha = clamp_alpha(rules->alpha_max, opacity, exp(power));
+    if (*alpha < GAUSSIAN_ALPHA_MIN)
+        return 0;
+    if (m->tile_rule && rules->tiles_cut) { /* radius ceil(3 sqrt(lambda_max)), lambda from mid +- sqrt(max(0.1, mid^2 - det)) */
+        double mid = 0.5 * (c00 + c11), radius = ceil(3.0 * sqrt(mid + sqrt(fmax(0.1, mid * mid - det))));
+        return in_rasterizer_tiles(r, dx + r->x - 0.5, dy + r->y - 0.5, radius);
+    }
+    return 1;
+}
+
+int gaussian_hit_3d_raster(const gaussian_model *m, size_t i, const gaussian_ray *r, gaussian_hit *h)
+{
+    const raster_rules *rules = raster_rules_of(gaussian_formation_of(m));
+    const float *mu = &m->mean[3 * i];
+    vec3 p = cam_point(r->m, v3(mu[0], mu[1], mu[2]));
+    double alpha, t = p.z / r->depth_per_t; /* the centre's depth: the key and where the bounds hold the ray */
+    if (!(p.z > rules->near && p.z <= rules->far) || !(t >= r->tmin && t < r->tmax) || !raster_alpha(m, i, rules, r, p, &alpha))
+        return 0;
+    vec3 dir = v3_sub(v3(mu[0], mu[1], mu[2]), r->eye);
+    *h = (gaussian_hit){(float)t, (float)t, (float)alpha, {(float)dir.x, (float)dir.y, (float)dir.z}, 0, (unsigned)i};
     return 1;
 }
 
@@ -164,7 +333,7 @@ static vec3 canonical(const double R[3][3], const float *s, vec3 x)
               (R[0][2] * x.x + R[1][2] * x.y + R[2][2] * x.z) / s[2]);
 }
 
-int gaussian_hit_3d(const gaussian_model *m, size_t i, const gaussian_ray *r, gaussian_hit *h)
+int gaussian_hit_3dgrt(const gaussian_model *m, size_t i, const gaussian_ray *r, gaussian_hit *h)
 {
     const float *mu = &m->mean[3 * i];
     double R[3][3];
@@ -177,7 +346,7 @@ int gaussian_hit_3d(const gaussian_model *m, size_t i, const gaussian_ray *r, ga
     double t = -v3_dot(o, d) / dd; /* the closest approach: the maximum response along the ray */
     vec3 closest = v3_add(o, v3_scale(d, t));
     double response = exp(-0.5 * v3_dot(closest, closest));
-    double alpha = clamp_alpha(m->opacity[i], response);
+    double alpha = clamp_alpha(GAUSSIAN_ALPHA_MAX, m->opacity[i], response);
     /* both strict, as gaussianParticles.slang's hit() accepts */
     if (!(response > GAUSSIAN_GRT_MIN_RESPONSE) || !(alpha > GAUSSIAN_ALPHA_MIN) || !(t >= r->tmin && t < r->tmax))
         return 0;
@@ -192,35 +361,82 @@ int gaussian_hit_3d(const gaussian_model *m, size_t i, const gaussian_ray *r, ga
 static double kernel_reach(const gaussian_model *m, size_t i)
 {
     double r2 = 2.0 * log(m->opacity[i] / GAUSSIAN_ALPHA_MIN);
-    if (m->kind == GAUSSIAN_3D)
+    if (gaussian_formation_of(m) == GAUSSIAN_FORMATION_3DGRT)
         r2 = fmin(r2, -2.0 * log(GAUSSIAN_GRT_MIN_RESPONSE));
     return r2 > 0 ? sqrt(r2) : 0.0;
 }
 
-double gaussian_key_lead(const gaussian_model *m, gaussian_order order, double s, double depth_per_t)
+/* Only 2D models' hits can lie off the centre's depth (gaussian_hit.h). */
+static double hit_offset(const gaussian_model *m, double s, double depth_per_t)
 {
-    if (m->kind != GAUSSIAN_2D || order != GAUSSIAN_ORDER_CENTER_DEPTH)
+    if (m->kind != GAUSSIAN_2D)
         return 0.0;
     /* the hit lies in the splat's plane within 3.33 scales of the centre
-     * (rho3d <= 2 ln 255), or has the centre's depth (the filter won) */
+     * (rho3d <= 2 ln 255), or has the centre's depth while the filter's
+     * circle point lies within 3 scales (the filter won) */
     return 3.3302 * s / depth_per_t * (1 + 1e-6);
 }
 
-double gaussian_filter_reach(const gaussian_model *m, size_t i, double distance, double focal)
+double gaussian_key_lead(const gaussian_model *m, gaussian_order order, double s, double depth_per_t)
 {
-    /* rho2d = 2 |d|^2 <= 2 ln(255 o): the ray's pixel lies within
-     * sqrt(ln(255 o)) pixels of the centre of the image of the splat's unit
-     * circle, which is the image of a point P of its unit disc; at P's view
-     * depth (at most distance + the larger scale) a pixel spans depth / focal */
-    double px2 = log(m->opacity[i] / GAUSSIAN_ALPHA_MIN);
-    if (m->kind != GAUSSIAN_2D || !(px2 > 0))
-        return 0.0;
-    const float *s = &m->scale[3 * i];
-    double radius = fmax(s[0], s[1]);
-    return radius + sqrt(px2) * (distance + radius) / focal;
+    return order == GAUSSIAN_ORDER_CENTER_DEPTH ? hit_offset(m, s, depth_per_t) : 0.0;
 }
 
-aabb gaussian_bounds(const gaussian_model *m, size_t i, double filter_reach)
+double gaussian_traversal_pad(const gaussian_model *m, double s, double depth_per_t)
+{
+    return hit_offset(m, s, depth_per_t);
+}
+
+/* 2DGS: rho2d = 2 |d|^2 <= 2 ln(255 o): the ray's pixel lies within
+ * sqrt(ln(255 o)) pixels of the centre of the image of the filter's circle
+ * (c scales), which is the image of a point P of its disc (the pole of the
+ * vanishing line, inside the circle when its image is an ellipse); at P's
+ * view depth (at most distance + c scales) a pixel spans depth / focal. */
+static double filter_2d_reach(const gaussian_model *m, size_t i, const gaussian_view_bound *v)
+{
+    double px2 = log(m->opacity[i] / GAUSSIAN_ALPHA_MIN);
+    if (!(px2 > 0))
+        return 0.0;
+    const float *s = &m->scale[3 * i];
+    double radius = filter_circle(m) * fmax(s[0], s[1]);
+    return radius + sqrt(px2) * (v->distance + radius) / v->focal;
+}
+
+/* The 3D rasterizers: the ray through a pixel d pixels from the mean's
+ * image passes the mean's depth z within |d| z / f_min of it, and alpha >=
+ * 1/255 needs |d|^2 <= 2 ln(255 o) lambda_max(cov2D), lambda_max <=
+ * (f_max / z)^2 (1 + lim^2) s^2 + dilation: within k sqrt(stretch^2 s^2 +
+ * dilation (z / f_min)^2), z at most the distance. */
+static double footprint_3d_reach(const gaussian_model *m, size_t i, const gaussian_view_bound *v)
+{
+    double k2 = 2.0 * log(m->opacity[i] / GAUSSIAN_ALPHA_MIN);
+    if (!(k2 > 0))
+        return 0.0;
+    const float *s = &m->scale[3 * i];
+    double sigma = fmax(s[0], fmax(s[1], s[2])) * v->stretch, z = v->distance / v->focal;
+    return sqrt(k2 * (sigma * sigma + raster_rules_of(gaussian_formation_of(m))->dilation * z * z));
+}
+
+double gaussian_view_reach(const gaussian_model *m, size_t i, const gaussian_view_bound *v)
+{
+    switch (gaussian_formation_of(m)) {
+    case GAUSSIAN_FORMATION_2DGS:
+    case GAUSSIAN_FORMATION_2DGS_UNIT_CIRCLE: return filter_2d_reach(m, i, v);
+    case GAUSSIAN_FORMATION_3DGRT: return 0.0;
+    default: return footprint_3d_reach(m, i, v);
+    }
+}
+
+int gaussian_hit_any(const gaussian_model *m, size_t i, gaussian_order order, const gaussian_ray *r, gaussian_hit *h)
+{
+    if (m->kind == GAUSSIAN_2D)
+        return gaussian_hit_2d(m, i, order, r, h);
+    if (gaussian_formation_of(m) == GAUSSIAN_FORMATION_3DGRT)
+        return gaussian_hit_3dgrt(m, i, r, h);
+    return gaussian_hit_3d_raster(m, i, r, h);
+}
+
+aabb gaussian_bounds(const gaussian_model *m, size_t i, double view_reach)
 {
     const float *mu = &m->mean[3 * i], *s = &m->scale[3 * i];
     double R[3][3], k = kernel_reach(m, i);
@@ -231,7 +447,7 @@ aabb gaussian_bounds(const gaussian_model *m, size_t i, double filter_reach)
         double e2 = 0;
         for (int j = 0; j < 3; j++) /* a 2D Gaussian's third scale is 0 */
             e2 += (R[a][j] * s[j]) * (R[a][j] * s[j]);
-        double e = fmax(k * sqrt(e2), filter_reach);
+        double e = fmax(k * sqrt(e2), view_reach);
         double pad = e * 1e-5 + 1e-6 * fabs(c[a]) + 1e-30; /* float rounding never clips a Gaussian */
         lo[a] = c[a] - e - pad, hi[a] = c[a] + e + pad;
     }
@@ -239,127 +455,3 @@ aabb gaussian_bounds(const gaussian_model *m, size_t i, double filter_reach)
     return b;
 }
 
-/* Compositing order: key, then object, then Gaussian (ties in key are
- * rare but must not depend on the order the traversal found them in). */
-static int hit_before(const gaussian_hit *a, const gaussian_hit *b)
-{
-    if (a->key != b->key)
-        return a->key < b->key;
-    if (a->obj != b->obj)
-        return a->obj < b->obj;
-    return a->prim < b->prim;
-}
-
-/* A float's bits as an unsigned that sorts as the float does. */
-static uint32_t sortable(float f)
-{
-    uint32_t u;
-    memcpy(&u, &f, sizeof u);
-    return u & 0x80000000u ? ~u : u | 0x80000000u;
-}
-
-/* Bottom-up merge sort of 64-bit words (key bits above, hit index below):
- * rays gather tens to hundreds of hits, and sorting the hits themselves
- * through qsort's callback took a fifth of the render (make bench). */
-static void merge_sort_u64(uint64_t *a, uint64_t *tmp, size_t n)
-{
-    for (size_t width = 1; width < n; width *= 2) {
-        for (size_t lo = 0; lo < n; lo += 2 * width) {
-            size_t mid = lo + width < n ? lo + width : n, hi = lo + 2 * width < n ? lo + 2 * width : n;
-            size_t i = lo, j = mid, k = lo;
-            while (i < mid && j < hi)
-                tmp[k++] = a[j] < a[i] ? a[j++] : a[i++];
-            while (i < mid)
-                tmp[k++] = a[i++];
-            while (j < hi)
-                tmp[k++] = a[j++];
-        }
-        memcpy(a, tmp, n * sizeof *a);
-    }
-}
-
-/* h->order holds, per hit: its sort word, the merge sort's scratch word,
- * and room for the hits kept for later (gaussian_blend_hits). */
-enum { ORDER_WORDS = 2 + (sizeof(gaussian_hit) + sizeof(uint64_t) - 1) / sizeof(uint64_t) };
-
-/* Puts h->order[] in compositing order (h->hits stay where they are). */
-static int sort_hits(gaussian_hits *h)
-{
-    if (h->count > h->order_cap) {
-        uint64_t *grown = realloc(h->order, ORDER_WORDS * h->count * sizeof *grown);
-        if (!grown)
-            return -1;
-        h->order = grown, h->order_cap = h->count;
-    }
-    for (size_t k = 0; k < h->count; k++)
-        h->order[k] = (uint64_t)sortable(h->hits[k].key) << 32 | (uint64_t)k;
-    merge_sort_u64(h->order, h->order + h->count, h->count);
-    for (size_t k = 1; k < h->count; k++) /* equal keys: by object and Gaussian */
-        for (size_t j = k; j > 0 && h->order[j] >> 32 == h->order[j - 1] >> 32 &&
-                           hit_before(&h->hits[(uint32_t)h->order[j]], &h->hits[(uint32_t)h->order[j - 1]]);
-             j--) {
-            uint64_t x = h->order[j];
-            h->order[j] = h->order[j - 1], h->order[j - 1] = x;
-        }
-    return 0;
-}
-
-void gaussian_blend_init(gaussian_blend *b)
-{
-    b->T = 1.0, b->sum = v3(0, 0, 0), b->composited = 0, b->done = 0;
-}
-
-/* Each model's own stopping rule (gaussian_hit.h): a 2D hit that would
- * bring T below 1e-4 is not composited; a 3D hit is while T > 1e-3. */
-static int blend_stops(const gaussian_blend *b, const gaussian_hit *g, const gaussian_model *m)
-{
-    if (m->kind == GAUSSIAN_3D)
-        return !(b->T > GAUSSIAN_GRT_MIN_TRANSMITTANCE);
-    return b->T * (1.0 - g->alpha) < GAUSSIAN_MIN_TRANSMITTANCE;
-}
-
-static void blend_one(gaussian_blend *b, const gaussian_hit *g, const gaussian_model *m)
-{
-    if (blend_stops(b, g, m)) {
-        b->done = 1;
-        return;
-    }
-    double next = b->T * (1.0 - g->alpha);
-    vec3 c = gaussian_sh_color(&m->sh[(size_t)3 * m->sh_coeffs * g->prim], m->sh_degree,
-                               v3(g->dir[0], g->dir[1], g->dir[2]));
-    b->sum = v3_add(b->sum, v3_scale(c, g->alpha * b->T));
-    b->T = next;
-    b->composited++;
-}
-
-void gaussian_blend_hits(gaussian_blend *b, gaussian_hits *h, const gaussian_model *const *models,
-                         double final_below)
-{
-    if (!h->count)
-        return;
-    if (sort_hits(h)) { /* no memory to order them: the hits are dropped, and counted */
-        h->dropped += h->count;
-        h->count = 0;
-        return;
-    }
-    size_t k = 0;
-    for (; k < h->count && !b->done; k++) {
-        const gaussian_hit *g = &h->hits[(uint32_t)h->order[k]];
-        if (!(g->key < final_below))
-            break;
-        blend_one(b, g, models[g->obj]);
-    }
-    if (b->done) {
-        h->count = 0;
-        return;
-    }
-    /* keep the rest, in order (gathered hits are appended after them) */
-    size_t rest = h->count - k;
-    gaussian_hit *kept = (gaussian_hit *)(h->order + 2 * h->count);
-    for (size_t j = 0; j < rest; j++)
-        kept[j] = h->hits[(uint32_t)h->order[k + j]];
-    memcpy(h->hits, kept, rest * sizeof *kept);
-    h->count = rest;
-}
-
-vec3 gaussian_blend_over(const gaussian_blend *b, vec3 behind) { return v3_add(b->sum, v3_scale(behind, b->T)); }

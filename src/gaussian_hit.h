@@ -15,15 +15,21 @@
  * skipped below 1/255; colour from SH in the direction camera -> mean.
  * Order: the centre's view depth (the rasterizer's sort) or the hit's.
  *
+ * 3D Gaussians as their rasterizers draw them (the default; graphdeco-inria
+ * diff-gaussian-rasterization, its antialiased variant, nerfstudio gsplat):
+ * the EWA footprint cov2D = J W Sigma W^T J^T of the camera of the ray's
+ * instant, J at the mean's x/z, y/z clamped to 1.3 tan(fov/2), + 0.3 on the
+ * diagonal, evaluated at the ray's pixel; ordered by the centre's view
+ * depth; colour from SH in the direction camera -> mean.
+ *
  * 3D Gaussians as 3DGRT traces them (Moenne-Loccoz et al. 2024,
  * nv-tlabs/3dgrut, kernel degree 2): the ray in the Gaussian's canonical
  * frame S^-1 R^T (x - mu); response exp(-d^2 / 2) of its squared distance
  * of closest approach; ordered by the distance to that closest point;
- * colour from SH in the ray's direction. Not the 3DGS rasterizer's image
- * (no EWA projection, no +0.3 dilation).
+ * colour from SH in the ray's direction (formation "3dgrt").
  *
- * Compositing, both: front to back, C += T alpha c, T *= 1 - alpha. 2DGS
- * stops before the hit that would bring T below 1e-4 (forward.cu); 3DGRT
+ * Compositing, all: front to back, C += T alpha c, T *= 1 - alpha. The
+ * rasterizers stop before the hit that would bring T below 1e-4 (forward.cu); 3DGRT
  * composites each hit while T is above 1e-3, so the hit that crosses it
  * is composited (3dgrtTracer.cuh traceVolumetricGS, render/3dgrt.yaml
  * min_transmittance). What is behind gets the final T. */
@@ -43,6 +49,14 @@
 #define GAUSSIAN_FILTER_INV_SQUARE 2.0  /* 2DGS: rho2d = 2 |d|^2 (a filter of 0.707 pixels) */
 #define GAUSSIAN_GRT_MIN_RESPONSE 0.0113 /* 3DGRT: responses at or below are no hit */
 #define GAUSSIAN_GRT_MIN_TRANSMITTANCE 1e-3 /* 3DGRT: hits are composited while T is above it */
+
+/* m's formation, DEFAULT resolved by its kind. */
+gaussian_formation gaussian_formation_of(const gaussian_model *m);
+/* "2dgs", "3dgs-antialiased", ...: the scene's names; NULL if unknown. */
+const char *gaussian_formation_name(gaussian_formation f);
+/* The formation of that name for a model of that kind; -1 for a name
+ * that is none, or one for the other kind. */
+int gaussian_formation_parse(const char *name, gaussian_kind kind, gaussian_formation *f);
 
 /* One Gaussian's contribution to a ray. */
 typedef struct {
@@ -72,6 +86,8 @@ void gaussian_hits_free(gaussian_hits *h);
 typedef struct gaussian_ray_s {
     double m[3][4];    /* object space -> camera space (camera_view's axes) */
     double fx, fy, cx, cy;
+    int width, height; /* the image's (the rasterizers' tiles) */
+    double stretch;    /* gaussian_view_stretch of the camera */
     double x, y;       /* the ray's raster position */
     vec3 eye;          /* the camera centre, object space */
     vec3 org, dir;     /* the ray, object space (dir: the world unit direction, so t is world distance) */
@@ -79,7 +95,7 @@ typedef struct gaussian_ray_s {
     double tmin, tmax; /* the stretch of the ray whose hits are wanted: tmin <= t < tmax */
     double scale;      /* the object's largest scale (object lengths -> camera lengths) */
     unsigned obj;      /* (accel's) */
-    double enter, exit, lead; /* (accel's) */
+    double enter, exit, lead, pad; /* (accel's) */
 } gaussian_ray;
 
 /* Fills r for the world ray org + t dir through raster (x, y) of view,
@@ -93,23 +109,43 @@ void gaussian_ray_init(gaussian_ray *r, const camera_view *view, const xform *xf
  * the largest scale s of a model (world units) seen along a ray with
  * depth_per_t. */
 double gaussian_key_lead(const gaussian_model *m, gaussian_order order, double s, double depth_per_t);
+/* How far a hit's distance can lie from the stretch of the ray inside its
+ * Gaussian's bounds (a window's traversal is wider by this): a 2D hit where
+ * the filter wins is placed at the centre's depth, the bounds hold the ray
+ * near a point of the filter's circle. */
+double gaussian_traversal_pad(const gaussian_model *m, double s, double depth_per_t);
 
-/* Gaussian i's hit on the ray: 1 and *h filled (not obj), or 0. */
+/* Gaussian i's hit on the ray under m's formation: 1 and *h filled (not
+ * obj), or 0. The three rules it dispatches to are below. */
+int gaussian_hit_any(const gaussian_model *m, size_t i, gaussian_order order, const gaussian_ray *r, gaussian_hit *h);
 int gaussian_hit_2d(const gaussian_model *m, size_t i, gaussian_order order, const gaussian_ray *r,
                     gaussian_hit *h);
-int gaussian_hit_3d(const gaussian_model *m, size_t i, const gaussian_ray *r, gaussian_hit *h);
+int gaussian_hit_3d_raster(const gaussian_model *m, size_t i, const gaussian_ray *r, gaussian_hit *h);
+int gaussian_hit_3dgrt(const gaussian_model *m, size_t i, const gaussian_ray *r, gaussian_hit *h);
+
+/* What a Gaussian's bounds must hold of the camera over the shutter. */
+typedef struct {
+    double distance; /* the farthest the camera gets from the Gaussian (object units) */
+    double focal;    /* the smaller focal length, pixels (shrunk by the object's scale spread) */
+    double stretch;  /* gaussian_view_stretch of the camera */
+} gaussian_view_bound;
+
+/* How much farther than f / depth a length can project in a rasterizer's
+ * footprint: sqrt(1 + lim_x^2 + lim_y^2) f_max / f_min, lim the Jacobian's
+ * clamp (1.3 tan(fov / 2)). */
+double gaussian_view_stretch(const camera_view *v);
+
+/* How far from the mean (object space) a ray can pass and still get alpha
+ * >= 1/255 through a footprint drawn on the screen: 2DGS's low-pass
+ * filter, or a 3D rasterizer's EWA footprint (its dilation included); 0
+ * for 3DGRT (its ellipsoid is its reach). */
+double gaussian_view_reach(const gaussian_model *m, size_t i, const gaussian_view_bound *v);
 
 /* Object-space bounds of every point of Gaussian i that can give a ray
  * alpha >= 1/255: the splat's plane or the ellipsoid out to the kernel
- * radius where opacity G reaches 1/255, and for a 2D Gaussian also a ball
- * that holds the low-pass filter's footprint (gaussian_filter_reach). */
-aabb gaussian_bounds(const gaussian_model *m, size_t i, double filter_reach);
-
-/* 2DGS's filter footprint: how far from the mean (object space) a ray can
- * pass and still get alpha >= 1/255 from the filter, for a Gaussian whose
- * camera distance is at most `distance` (object-space units) under focal
- * length `focal` (pixels, the smaller of fx and fy). */
-double gaussian_filter_reach(const gaussian_model *m, size_t i, double distance, double focal);
+ * radius where opacity G reaches 1/255, and a ball of radius view_reach
+ * (gaussian_view_reach) about the mean. */
+aabb gaussian_bounds(const gaussian_model *m, size_t i, double view_reach);
 
 /* Front-to-back compositing, a stretch of the ray at a time (hits are
  * gathered in windows of ray distance, so that a ray whose transmittance

@@ -4,6 +4,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 
+#include "gaussian_hit.h"
 #include "inputfile.h"
 
 static void describe_weight(FILE *f, const shutter *sh)
@@ -48,7 +49,27 @@ static void set_identity_text(attr_list *a, const char *key, const char *hash_ke
     free(text);
 }
 
+/* How each Gaussian-splat object is imaged ("none" without any): its PLY
+ * does not say, and the default changed (3D models were 3DGRT's before
+ * issue 29), so it is part of a render's identity. */
+static void describe_gaussians(FILE *f, const scene *s)
+{
+    int any = 0;
+    for (int i = 0; i < s->nobjects; i++) {
+        const scene_object *o = &s->objects[i];
+        if (o->kind != OBJECT_GAUSSIANS)
+            continue;
+        const gaussian_model *m = &o->gaussians;
+        fprintf(f, "%s%s: semantics=%s tileRule=%s order=%s", any++ ? "; " : "", o->name,
+                gaussian_formation_name(gaussian_formation_of(m)), m->tile_rule ? "on" : "off",
+                o->order == GAUSSIAN_ORDER_HIT_DEPTH ? "hit-depth" : "center-depth");
+    }
+    if (!any)
+        fputs("none", f);
+}
+
 static void weight_text(FILE *f, const void *sh) { describe_weight(f, sh); }
+static void gaussians_text(FILE *f, const void *s) { describe_gaussians(f, s); }
 static void parameters_text(FILE *f, const void *p) { describe_parameters(f, p); }
 
 /* Writes the column-vector matrix m (p' = m p) as OpenEXR stores it: for
@@ -104,6 +125,7 @@ void attrs_for_render(attr_list *a, const scene *s, const render_settings *rs, u
     attrs_set(a, "refrender:timeIntegration", "%s", rs->exact_time ? "exact" : "sampled");
     attrs_set(a, "refrender:pixelFilter", "%s", pixel_filter_name(rs->filter));
     attrs_set(a, "refrender:blurSpace", "%s", blur_space_name(rs->blur));
+    set_identity_text(a, "refrender:gaussians", "refrender:gaussiansHash", gaussians_text, s);
     /* the convention compare.py --alpha composite relies on (README, Output) */
     attrs_set(a, "refrender:background", "%.9g %.9g %.9g", s->background.x, s->background.y, s->background.z);
     attrs_set(a, "refrender:alpha", "coverage; RGB already holds refrender:background where coverage < 1");

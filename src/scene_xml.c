@@ -1,6 +1,7 @@
 #include "scene_xml.h"
 
 #include "camjson.h"
+#include "gaussian_hit.h"
 #include "scene_xml_internal.h"
 
 #include <libxml/parser.h>
@@ -35,6 +36,39 @@ static int camera_from_pose(camera *cam, vec3 position, const double r[3][3], co
     cam->width = j->width, cam->height = j->height;
     cam->fov_degrees = 360.0 / M_PI * atan(0.5 * j->height / j->fy);
     cam->fov_x_degrees = 360.0 / M_PI * atan(0.5 * j->width / j->fx);
+    return 0;
+}
+
+/* The size the model was trained at (issue 29): 3DGS and 2DGS train at the
+ * loaded image's size, by utils/camera_utils.py loadCam (graphdeco-inria
+ * gaussian-splatting; the same in hbb1/2d-gaussian-splatting 1920a23):
+ * -r 1, 2, 4 or 8 divides it, rounded as Python's round (ties to even);
+ * -r -1, the default, shrinks an image wider than 1600 to 1600 wide, any
+ * other -r to that width, both truncating orig / (orig / target). The
+ * field of view stays (the camera's angles). "auto" is -1; a number is -r. */
+static int training_size(xml_ctx *c, xmlNodePtr n, int *width, int *height)
+{
+    char text[32];
+    int got = xml_attr_text(c, n, "trainingResolution", text, sizeof text), r = -1;
+    char *end;
+    if (got < 0)
+        return -1;
+    if (got && strcmp(text, "auto")) {
+        long v = strtol(text, &end, 10);
+        if (*end || end == text || v < 1 || v > 65536)
+            return xml_fail(c, n, "trainingResolution must be auto (the training's -r -1), 1, 2, 4 or 8 (-r's "
+                                  "divisors) or a width in pixels (-r WIDTH), got '%s'", text);
+        r = (int)v;
+    }
+    double w = *width, h = *height;
+    if (r == 1 || r == 2 || r == 4 || r == 8) {
+        *width = (int)nearbyint(w / r), *height = (int)nearbyint(h / r);
+    } else if (r != -1 || w > 1600) {
+        double scale = w / (r == -1 ? 1600.0 : (double)r);
+        *width = (int)(w / scale), *height = (int)(h / scale);
+    }
+    if (*width < 1 || *height < 1)
+        return xml_fail(c, n, "trainingResolution '%s' leaves a %dx%d image", got ? text : "auto", *width, *height);
     return 0;
 }
 
@@ -119,7 +153,8 @@ static int parse_camera_motion(xml_ctx *c, xmlNodePtr n, camera *cam, animation 
     return 0;
 }
 
-/* <camera cameras="cameras.json" image="NAME"/>: a trained model's camera. */
+/* <camera cameras="cameras.json" image="NAME" trainingResolution="auto"/>:
+ * a trained model's camera, at the size it was trained at. */
 static int parse_json_camera(xml_ctx *c, xmlNodePtr n, camera *cam, char *path, size_t size)
 {
     char rel[4096], image[256];
@@ -137,16 +172,21 @@ static int parse_json_camera(xml_ctx *c, xmlNodePtr n, camera *cam, char *path, 
         return -1;
     if (scene_add_input(c->sc, path))
         return xml_fail(c, n, "out of memory");
-    return camera_from_pose(cam, j.position, j.c2w, &j);
+    camera_from_pose(cam, j.position, j.c2w, &j);
+    return training_size(c, n, &cam->width, &cam->height);
 }
 
 static int parse_camera(xml_ctx *c, xmlNodePtr n, camera *cam, animation *motion)
 {
-    static const char *const ok[] = {"position", "lookat", "up", "fov", "width", "height", "cameras", "image", NULL};
+    static const char *const ok[] = {"position", "lookat", "up",    "fov",
+                                     "width",    "height", "cameras", "image", "trainingResolution", NULL};
     char json[8192];
     int from_json = xmlHasProp(n, (const xmlChar *)"cameras") != NULL;
     if (xml_check_attributes(c, n, ok))
         return -1;
+    if (!from_json && xmlHasProp(n, (const xmlChar *)"trainingResolution"))
+        return xml_fail(c, n, "trainingResolution is for a camera from 'cameras' (a cameras.json): give this one "
+                              "its width and height");
     if (from_json ? parse_json_camera(c, n, cam, json, sizeof json)
                   : xml_attr_vec3(c, n, "position", &cam->position, 0) || xml_attr_vec3(c, n, "lookat", &cam->lookat, 0) ||
                         xml_attr_vec3(c, n, "up", &cam->up, 0) || xml_attr_double(c, n, "fov", &cam->fov_degrees, 0) ||
@@ -435,11 +475,37 @@ static int parse_gaussian_order(xml_ctx *c, xmlNodePtr n, gaussian_order *order)
     return xml_fail(c, n, "gaussianModel order must be center-depth or hit-depth, got '%s'", text);
 }
 
+/* semantics="...": the renderer the model was trained with (gaussian.h's
+ * formations; the default is its kind's rasterizer); tileRule="on": only
+ * in the rasterizer's tiles. After the model is read (its kind decides). */
+static int parse_gaussian_formation(xml_ctx *c, xmlNodePtr n, gaussian_model *m)
+{
+    char text[32];
+    int got = xml_attr_text(c, n, "semantics", text, sizeof text);
+    if (got < 0)
+        return -1;
+    if (got && gaussian_formation_parse(text, m->kind, &m->formation))
+        return xml_fail(c, n, "gaussianModel semantics for a %s model must be %s, got '%s'",
+                        m->kind == GAUSSIAN_3D ? "3D" : "2D",
+                        m->kind == GAUSSIAN_3D ? "3dgs, 3dgs-antialiased, gsplat, gsplat-antialiased or 3dgrt"
+                                               : "2dgs or 2dgs-unit-circle", text);
+    got = xml_attr_text(c, n, "tileRule", text, sizeof text);
+    if (got < 0)
+        return -1;
+    if (got && strcmp(text, "on") && strcmp(text, "off"))
+        return xml_fail(c, n, "gaussianModel tileRule must be on or off, got '%s'", text);
+    m->tile_rule = got && !strcmp(text, "on");
+    if (m->tile_rule && gaussian_formation_of(m) == GAUSSIAN_FORMATION_3DGRT)
+        return xml_fail(c, n, "tileRule is a rasterizer's: 3DGRT traces rays and has no tiles");
+    return 0;
+}
+
 /* <gaussianModel file="point_cloud.ply" kind="auto|2dgs|3dgs"
- * order="center-depth|hit-depth"/>: a trained Gaussian-splat model. */
+ * order="center-depth|hit-depth" semantics="..." tileRule="on|off"/>: a
+ * trained Gaussian-splat model. */
 static int parse_gaussian_model(xml_ctx *c, xmlNodePtr n, scene_object *o)
 {
-    static const char *const ok[] = {"file", "kind", "order", NULL};
+    static const char *const ok[] = {"file", "kind", "order", "semantics", "tileRule", NULL};
     o->kind = OBJECT_GAUSSIANS;
     gaussian_kind kind = GAUSSIAN_AUTO;
     char rel[4096], path[8192];
@@ -455,8 +521,10 @@ static int parse_gaussian_model(xml_ctx *c, xmlNodePtr n, scene_object *o)
     if (gaussian_read(path, kind, &o->gaussians, c->inputs_hash, &sub))
         return rr_fail(c->err, "%s (gaussianModel of %s:%ld)", sub.msg, c->name, xmlGetLineNo(n));
     if (o->gaussians.kind == GAUSSIAN_3D && xmlHasProp(n, (const xmlChar *)"order"))
-        return xml_fail(c, n, "'order' is for 2D Gaussian models: 3D ones (3DGRT) go by the distance to each "
-                               "Gaussian's maximum response");
+        return xml_fail(c, n, "'order' is for 2D Gaussian models: 3D ones go by the centre's view depth (the "
+                               "rasterizers) or by the distance to each Gaussian's maximum response (3dgrt)");
+    if (parse_gaussian_formation(c, n, &o->gaussians))
+        return -1;
     if (scene_add_input(c->sc, path))
         return xml_fail(c, n, "out of memory");
     snprintf(o->model_file, sizeof o->model_file, "%s", path);

@@ -115,7 +115,7 @@ TEST(gaussian_2d_hits_lie_in_their_bounds_within_the_lead_of_their_distance)
 {
     gaussian_model m;
     model_of(&m, 1, GAUSSIAN_2D);
-    camera_view v = {v3(0, 0, 0), {v3(1, 0, 0), v3(0, 1, 0), v3(0, 0, 1)}, 100, 100, 50, 50};
+    camera_view v = {v3(0, 0, 0), {v3(1, 0, 0), v3(0, 1, 0), v3(0, 0, 1)}, 100, 100, 50, 50, 100, 100};
     xform id = {{{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}, {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}, {0, 0, 0}, 0};
     unsigned st = 11;
     int hits = 0, filtered = 0, outside = 0, late = 0;
@@ -134,7 +134,8 @@ TEST(gaussian_2d_hits_lie_in_their_bounds_within_the_lead_of_their_distance)
         double s = fmax(m.scale[0], m.scale[1]), lead = gaussian_key_lead(&m, GAUSSIAN_ORDER_CENTER_DEPTH, s, dir.z);
         filtered += s < 1e-3; /* sub-pixel: seen through the filter */
         /* the camera's distance bounds the view depth the footprint is taken at */
-        aabb box = gaussian_bounds(&m, 0, gaussian_filter_reach(&m, 0, v3_len(v3(m.mean[0], m.mean[1], depth)), 100));
+        gaussian_view_bound vb = {v3_len(v3(m.mean[0], m.mean[1], depth)), 100, 1};
+        aabb box = gaussian_bounds(&m, 0, gaussian_view_reach(&m, 0, &vb));
         int found = 0; /* a point of the ray within the lead of the hit's distance is in the box */
         for (int k = -50; k <= 50 && !found; k++)
             found = inside(box, v3_scale(dir, h.t + lead * k / 50.0));

@@ -157,7 +157,8 @@ def test_the_time_integral_of_a_moving_3dgrt_gaussian_is_the_quadrature(tmp_path
     camera = gsply.camera_xml(np.eye(3), np.zeros(3), F, W, H)
     scene = tmp_path / "scene3.xml"
     scene.write_text(f'<scene>{camera}<shutter open="0" close="1"/><background color="0.1 0.2 0.3"/>'
-                     f'<object name="g" position="{-TRAVEL / 2} 0.013 {DEPTH}"><gaussianModel file="{ply}"/>'
+                     f'<object name="g" position="{-TRAVEL / 2} 0.013 {DEPTH}">'
+                     f'<gaussianModel file="{ply}" semantics="3dgrt"/>'
                      f'<animation><linear velocity="{TRAVEL} 0 0"/></animation></object></scene>')
     read = gsply.read(ply)
     row = H // 2

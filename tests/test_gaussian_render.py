@@ -233,8 +233,8 @@ def random_3d_model(seed, n, degree):
 
 
 @pytest.mark.parametrize("degree", [0, 3])
-def test_a_3dgs_render_is_3dgrt_ray_tracing(tmp_path, degree):
-    """3D models follow 3DGRT (tests/gs3d_grt_reference.py, written from nv-tlabs/3dgrut's rules):
+def test_a_3dgs_render_under_3dgrt_semantics_is_3dgrt_ray_tracing(tmp_path, degree):
+    """3D models under semantics="3dgrt" follow 3DGRT (tests/gs3d_grt_reference.py, written from nv-tlabs/3dgrut's rules):
     per pixel within 1e-4, and not the 2DGS rules on the same model's first two scales."""
     import gs3d_grt_reference as grt
     ply = _write(tmp_path, random_3d_model(21 + degree, 50, degree))
@@ -242,7 +242,7 @@ def test_a_3dgs_render_is_3dgrt_ray_tracing(tmp_path, degree):
     C = -4.0 * R[:, 2]
     scene = tmp_path / "g3.xml"
     scene.write_text(f'<scene>{gsply.camera_xml(R, C, F, W, H)}<background color="0.1 0.2 0.3"/>'
-                     f'<object name="g"><gaussianModel file="{ply}"/></object></scene>')
+                     f'<object name="g"><gaussianModel file="{ply}" semantics="3dgrt"/></object></scene>')
     out = tmp_path / "g3.exr"
     proc = run([scene, "--pixel-filter", "point", "--time", 0, "--spp", 1, "-o", out, "--quiet"])
     assert proc.returncode == 0, proc.stderr
@@ -264,7 +264,7 @@ def test_3dgrt_composites_the_hit_that_crosses_its_minimum_transmittance(tmp_pat
     ply = _write(tmp_path, m)
     scene = tmp_path / "axis.xml"
     scene.write_text(f'<scene>{gsply.camera_xml(np.eye(3), [0, 0, -4.0], F, W, H)}<background color="1 1 1"/>'
-                     f'<object name="g"><gaussianModel file="{ply}" kind="3dgs"/></object></scene>')
+                     f'<object name="g"><gaussianModel file="{ply}" kind="3dgs" semantics="3dgrt"/></object></scene>')
     out = tmp_path / "axis.exr"
     assert run([scene, "--pixel-filter", "point", "--time", 0, "--spp", 1, "-o", out, "--quiet"]).returncode == 0
     px = read_exr(out)[0][H // 2, W // 2, :3]
@@ -293,3 +293,78 @@ def test_an_edge_on_surfel_seen_through_the_filter_is_skipped_where_its_plane_is
     assert np.abs(img[..., :3] - expect).max() < TOL
     row = T[H // 2, W // 2 - 2: W // 2 + 3]  # the filter reaches 2 pixels either side of the centre's pixel
     assert row.min() < 0.5 and row.max() == 1.0  # seen on one side, skipped on the other
+
+
+def _render_2d(tmp_path, model, R, C, f, w, h, attrs=""):
+    """refrender's sharp point-sampled image of a 2D model under a square-pixel camera of focal f."""
+    ply = _write(tmp_path, model)
+    scene = tmp_path / "s2.xml"
+    scene.write_text(f'<scene>{gsply.camera_xml(R, C, f, w, h)}<background color="0.1 0.2 0.3"/>'
+                     f'<object name="g"><gaussianModel file="{ply}" kind="2dgs"{attrs}/></object></scene>')
+    out = tmp_path / "s2.exr"
+    proc = run([scene, "--pixel-filter", "point", "--time", 0, "--spp", 1, "-o", out, "--quiet"])
+    assert proc.returncode == 0, proc.stderr
+    return read_exr(out)[0], gsply.read(ply)
+
+
+def _tilted_elongated(seed, n=14):
+    """Splats turned 50 to 80 degrees from the view and 4 to 8 times longer than wide."""
+    rng = np.random.default_rng(seed)
+    axis = rng.normal(size=(n, 3)) * [1, 1, 0.2]
+    axis /= np.linalg.norm(axis, axis=1)[:, None]
+    half = rng.uniform(np.radians(50), np.radians(80), n) / 2
+    q = np.concatenate([np.cos(half)[:, None], np.sin(half)[:, None] * axis], axis=1)
+    wide = rng.uniform(0.03, 0.08, n)
+    return {"mean": rng.uniform(-0.6, 0.6, (n, 3)), "scale": np.stack([wide * rng.uniform(4, 8, n), wide], axis=1),
+            "rot": q, "opacity": rng.uniform(0.3, 0.9, n), "sh": rng.normal(0, 0.4, (n, 1, 3)), "degree": 0}
+
+
+@pytest.mark.parametrize("semantics,centre", [("2dgs", "cutoff"), ("2dgs-unit-circle", "unit-circle")])
+def test_the_filter_centre_is_e0ed020s_and_the_unit_circle_variant_the_older_one(tmp_path, semantics, centre):
+    """e0ed020 (the commit 2DGS pins) centres the low-pass filter on the image of the 3-sigma circle's
+    centre (compute_aabb, since 909dd85); before, on the unit circle's. On tilted, elongated splats the
+    two differ by far more than the tolerance, and each semantics is its reference."""
+    R = rotation(0.3, -0.2)
+    C = -4.0 * R[:, 2]
+    img, model = _render_2d(tmp_path, _tilted_elongated(5), R, C, F, W, H, f' semantics="{semantics}"')
+    expect, final_t = ref.render(model, R, C, F, F, W, H, BACKGROUND, centre=centre)
+    assert np.abs(img[..., :3] - expect).max() < TOL
+    other, _ = ref.render(model, R, C, F, F, W, H, BACKGROUND,
+                          centre="unit-circle" if centre == "cutoff" else "cutoff")
+    assert np.abs(other - expect).max() > 100 * TOL
+
+
+def test_the_2dgs_tile_rule_draws_what_the_rasterizer_draws(tmp_path):
+    """tileRule="on": a splat only in the 16x16 tiles of its compute_aabb rectangle; opaque splats'
+    tails beyond it are cut, as in the official image."""
+    R, C = np.eye(3), np.array([0.0, 0.0, -4.0])
+    model = random_model(17, 30, 0, sub_pixel=0)
+    model["opacity"] = np.full(30, 0.98)
+    img, read = _render_2d(tmp_path, model, R, C, 60.0, 64, 48, ' tileRule="on"')
+    expect, _ = ref.render(read, R, C, 60.0, 60.0, 64, 48, BACKGROUND, tile_rule=True)
+    assert np.abs(img[..., :3] - expect).max() < TOL
+    untiled, _ = ref.render(read, R, C, 60.0, 60.0, 64, 48, BACKGROUND)
+    assert np.abs(untiled - expect).max() > 10 * TOL
+
+
+@pytest.mark.parametrize("fov", [60, 90, 136])
+def test_no_2dgs_splat_is_missed_by_wide_lenses_far_off_axis(tmp_path, fov):
+    """Opaque splats up to 60 degrees off the axis of a wide lens: every one whose alpha reaches 1/255
+    at a pixel is composited there (the reference evaluates every splat at every pixel). A pre-cull
+    that bounds a splat's image by its on-axis size (f |delta| / (z - |delta|)) misses their edges."""
+    w, h = 48, 32
+    f = w / (2 * np.tan(np.radians(fov) / 2))
+    rng = np.random.default_rng(fov)
+    n = 24
+    ang = np.radians(rng.uniform(-min(60, 0.48 * fov), min(60, 0.48 * fov), n))
+    z = rng.uniform(1.0, 3.0, n)
+    mean = np.stack([np.tan(ang) * z, rng.uniform(-0.3, 0.3, n) * z, z], axis=1)
+    q = rng.normal(size=(n, 4))
+    model = {"mean": mean, "scale": rng.uniform(0.02, 0.12, (n, 2)) * z[:, None],
+             "rot": q / np.linalg.norm(q, axis=1)[:, None], "opacity": np.full(n, 0.99),
+             "sh": rng.normal(0, 0.4, (n, 1, 3)), "degree": 0}
+    img, read = _render_2d(tmp_path, model, np.eye(3), np.zeros(3), f, w, h)
+    expect, final_t = ref.render(read, np.eye(3), np.zeros(3), f, f, w, h, BACKGROUND)
+    err = np.abs(img[..., :3] - expect)
+    assert err.max() < TOL, (err.max(), np.unravel_index(err.argmax(), err.shape))
+    assert (final_t < 0.5).sum() > 20
