@@ -184,8 +184,9 @@ static int in_rasterizer_tiles(const gaussian_ray *r, double cx, double cy, doub
     return px >= (double)x0 * TILE && px < (double)x1 * TILE && py >= (double)y0 * TILE && py < (double)y1 * TILE;
 }
 
-/* 2DGS's tile radius (e0ed020 preprocessCUDA): the cutoff circle's image's
- * half extent, at least cutoff x FilterSize (0.707106), rounded up. */
+/* 2DGS's tile radius: at e0ed020 (preprocessCUDA) the 3-sigma circle's
+ * image's half extent, at least 3 x FilterSize (0.707106), rounded up;
+ * up to 3a9357f, 3 times the unit circle's image's half extent. */
 static int in_2dgs_tiles(const gaussian_ray *r, const vec3 row[3], double c, double centre_x, double centre_y)
 {
     double c2 = c * c, d22 = c2 * (row[2].x * row[2].x + row[2].y * row[2].y) - row[2].z * row[2].z;
@@ -193,7 +194,8 @@ static int in_2dgs_tiles(const gaussian_ray *r, const vec3 row[3], double c, dou
     double hy = centre_y * centre_y - (c2 * (row[1].x * row[1].x + row[1].y * row[1].y) - row[1].z * row[1].z) / d22;
     /* the extent does not depend on where the pixel grid's origin is; the
      * centre in pixel-index coordinates (ndc2pix's (W-1)/2) is 0.5 less */
-    double radius = ceil(fmax(sqrt(fmax(1e-4, fmax(hx, hy))), c * 0.707106f));
+    double extent = sqrt(fmax(1e-4, fmax(hx, hy)));
+    double radius = c == 1.0 ? ceil(3.0 * extent) : ceil(fmax(extent, c * 0.707106f));
     return in_rasterizer_tiles(r, centre_x - 0.5, centre_y - 0.5, radius);
 }
 

@@ -334,16 +334,17 @@ def test_the_filter_centre_is_e0ed020s_and_the_unit_circle_variant_the_older_one
     assert np.abs(other - expect).max() > 100 * TOL
 
 
-def test_the_2dgs_tile_rule_draws_what_the_rasterizer_draws(tmp_path):
-    """tileRule="on": a splat only in the 16x16 tiles of its compute_aabb rectangle; opaque splats'
-    tails beyond it are cut, as in the official image."""
+@pytest.mark.parametrize("semantics,centre", [("2dgs", "cutoff"), ("2dgs-unit-circle", "unit-circle")])
+def test_the_2dgs_tile_rule_draws_what_the_rasterizer_draws(tmp_path, semantics, centre):
+    """tileRule="on": a splat only in the 16x16 tiles of its compute_aabb rectangle (each version's
+    radius); opaque splats' tails beyond it are cut, as in the official image."""
     R, C = np.eye(3), np.array([0.0, 0.0, -4.0])
     model = random_model(17, 30, 0, sub_pixel=0)
     model["opacity"] = np.full(30, 0.98)
-    img, read = _render_2d(tmp_path, model, R, C, 60.0, 64, 48, ' tileRule="on"')
-    expect, _ = ref.render(read, R, C, 60.0, 60.0, 64, 48, BACKGROUND, tile_rule=True)
+    img, read = _render_2d(tmp_path, model, R, C, 60.0, 64, 48, f' tileRule="on" semantics="{semantics}"')
+    expect, _ = ref.render(read, R, C, 60.0, 60.0, 64, 48, BACKGROUND, tile_rule=True, centre=centre)
     assert np.abs(img[..., :3] - expect).max() < TOL
-    untiled, _ = ref.render(read, R, C, 60.0, 60.0, 64, 48, BACKGROUND)
+    untiled, _ = ref.render(read, R, C, 60.0, 60.0, 64, 48, BACKGROUND, centre=centre)
     assert np.abs(untiled - expect).max() > 10 * TOL
 
 
