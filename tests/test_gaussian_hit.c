@@ -147,3 +147,44 @@ TEST(gaussian_2d_hits_lie_in_their_bounds_within_the_lead_of_their_distance)
     CHECK(late == 0);
     gaussian_model_free(&m);
 }
+
+/* The 3D rasterizers' hits: random ellipsoids from far below a pixel to
+ * many pixels, means from the axis to beyond the Jacobian's clamp (x/z up
+ * to 1.6 where 1.3 tan(fov/2) = 0.65), through random pixels near their
+ * images, under every rasterizer semantics: the point of the ray at the
+ * hit's distance lies in the Gaussian's bounds (the traversal's pad is 0). */
+TEST(gaussian_3d_raster_hits_lie_in_their_bounds_at_their_distance)
+{
+    gaussian_model m;
+    model_of(&m, 1, GAUSSIAN_3D);
+    camera_view v = {v3(0, 0, 0), {v3(1, 0, 0), v3(0, 1, 0), v3(0, 0, 1)}, 100, 80, 50, 50, 100, 100};
+    xform id = {{{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}, {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}, {0, 0, 0}, 0};
+    const gaussian_formation kinds[] = {GAUSSIAN_FORMATION_3DGS, GAUSSIAN_FORMATION_3DGS_ANTIALIASED,
+                                        GAUSSIAN_FORMATION_GSPLAT, GAUSSIAN_FORMATION_GSPLAT_ANTIALIASED};
+    unsigned st = 23;
+    int hits = 0, beyond_clamp = 0, outside = 0;
+    for (int trial = 0; trial < 40000; trial++) {
+        m.formation = kinds[trial % 4];
+        random_gaussian(&m, 0, &st, pow(10.0, -4 + 3.5 * uniform(&st)));
+        double depth = 0.5 + 3 * uniform(&st);
+        m.mean[0] = (float)((uniform(&st) - 0.5) * 3.2 * depth), m.mean[1] = (float)((uniform(&st) - 0.5) * 2 * depth);
+        m.mean[2] = (float)depth;
+        double cx = 100 * m.mean[0] / depth + 50, cy = 80 * m.mean[1] / depth + 50;
+        double x = cx + 40 * (uniform(&st) - 0.5), y = cy + 40 * (uniform(&st) - 0.5);
+        vec3 dir = v3_normalize(v3((x - 50) / 100, (y - 50) / 80, 1));
+        gaussian_ray r;
+        gaussian_ray_init(&r, &v, &id, x, y, v3(0, 0, 0), dir);
+        gaussian_hit h;
+        if (!gaussian_hit_any(&m, 0, GAUSSIAN_ORDER_CENTER_DEPTH, &r, &h))
+            continue;
+        hits++;
+        beyond_clamp += fabs(m.mean[0] / depth) > 0.65;
+        gaussian_view_bound vb = {v3_len(v3(m.mean[0], m.mean[1], depth)), 80, gaussian_view_stretch(&v)};
+        aabb box = gaussian_bounds(&m, 0, gaussian_view_reach(&m, 0, &vb));
+        outside += !inside(box, v3_scale(dir, h.t));
+        CHECK(h.key == h.t && gaussian_traversal_pad(&m, 1.0, dir.z) == 0.0);
+    }
+    CHECK(hits > 4000 && beyond_clamp > 500);
+    CHECK(outside == 0);
+    gaussian_model_free(&m);
+}
