@@ -109,6 +109,7 @@ def test_a_two_pose_motion_is_linear_in_position_and_slerped_in_rotation(tmp_pat
     ("", ' image="A.png" fov="30"', "drop 'fov'"),
     ("", "", "needs 'image'"),
     ('<animation><pose time="0" image="A.png"/></animation>', ' image="A.png"', "exactly two <pose>"),
+    ("", ' image="A.png" trainingResolution="3x"', "trainingResolution must be auto"),
 ])
 def test_camera_mistakes_are_named(tmp_path, inner, attrs, why):
     scene(tmp_path)
@@ -118,3 +119,34 @@ def test_camera_mistakes_are_named(tmp_path, inner, attrs, why):
                     f'<object name="g"><gaussianModel file="g.ply"/></object></scene>')
     proc = run([path, "-o", tmp_path / "x.exr", "--quiet"])
     assert proc.returncode == 1 and why in proc.stderr and ("bad.xml:2" in proc.stderr or "cameras.json" in proc.stderr), proc.stderr
+
+
+def loadcam_size(w, h, r):
+    """gaussian-splatting utils/camera_utils.py loadCam, as Python computes it (round ties to even;
+    int() truncates), for -r r (resolution_scale 1)."""
+    if r in (1, 2, 4, 8):
+        return round(w / r), round(h / r)
+    down = (w / 1600 if w > 1600 else 1) if r == -1 else w / r
+    return int(w / float(down)), int(h / float(down))
+
+
+@pytest.mark.parametrize("size, attr, r", [((4946, 3286), "", -1), ((4946, 3286), ' trainingResolution="auto"', -1),
+                                           ((1500, 1001), "", -1), ((4946, 3286), ' trainingResolution="4"', 4),
+                                           ((1002, 666), ' trainingResolution="8"', 8),
+                                           ((4946, 3286), ' trainingResolution="1237"', 1237)])
+def test_a_camera_renders_at_the_size_its_model_was_trained_at(tmp_path, size, attr, r):
+    """3DGS/2DGS train at loadCam's size (cameras.json holds COLMAP's full size): -r 1/2/4/8 divide it,
+    -1 (the default) caps the width at 1600, another -r is a width; the field of view is kept. The
+    expectation is loadCam's arithmetic written here in Python."""
+    w, h = size
+    (tmp_path / "cameras.json").write_text(json.dumps([dict(entry("A.png", np.eye(3), [0, 0, -3.0]), width=w,
+                                                            height=h, fx=0.9 * w, fy=0.9 * w)]))
+    path = tmp_path / "s.xml"
+    path.write_text(f'<scene><camera cameras="cameras.json" image="A.png"{attr}/>'
+                    f'<object name="s"><sphere radius="1"/></object></scene>')
+    proc = run(["export", path, "-o", tmp_path / "e.json"])
+    assert proc.returncode == 0, proc.stderr
+    exported = json.loads((tmp_path / "e.json").read_text())
+    assert tuple(exported["resolution"]) == loadcam_size(w, h, r)
+    fov = 2 * np.degrees(np.arctan(h / (2 * 0.9 * w)))
+    assert abs(exported["camera"]["fov_y_degrees"] - fov) < 1e-9
