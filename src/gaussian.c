@@ -102,6 +102,10 @@ static int add_gaussian(void *user, const double *v, const int *present, char *w
     for (int k = 0; k < G_SLOTS; k++)
         if (present[k] && !isfinite(v[k]))
             return bad(why, why_size, "property '%s' is %g", slot_names[k], v[k]);
+    for (int k = 0; k < 3; k++)
+        if (!(fabs(v[G_X + k]) <= GAUSSIAN_MAX_ABS))
+            return bad(why, why_size, "property '%s' = %g is beyond 1e+15 (GAUSSIAN_MAX_ABS) from the origin, "
+                       "where rays can be traced", slot_names[G_X + k], v[G_X + k]);
     size_t i = s->next++;
     double q2 = 0;
     for (int k = 0; k < 4; k++)

@@ -171,6 +171,29 @@ TEST(gaussian_bad_inputs_name_the_property)
     CHECK(refused(rest10, 23, v23, -1, "'f_rest_5' is present but 'f_rest_4' is not"));
 }
 
+/* Issue 32.1: Embree drops boxes beyond about 1.8e18, so a Gaussian far
+ * out vanished from the image with exit 0: a mean coordinate beyond
+ * GAUSSIAN_MAX_ABS (a float's 1e38 too) is refused, naming the vertex. */
+TEST(gaussian_means_beyond_the_reach_limit_are_refused)
+{
+    const char *base[] = {"x", "y", "z", "f_dc_0", "f_dc_1", "f_dc_2", "opacity", "scale_0", "scale_1", "rot_0",
+                          "rot_1", "rot_2", "rot_3"};
+    double far[13] = {0, 0, 1e19, 0.1, 0.1, 0.1, 0, 0, 0, 1, 0, 0, 0};
+    CHECK(refused(base, 13, far, -1, "vertex 0"));
+    CHECK(refused(base, 13, far, -1, "property 'z' = 1e+19 is beyond 1e+15"));
+    double flt_max[13] = {1e38, 0, 0, 0.1, 0.1, 0.1, 0, 0, 0, 1, 0, 0, 0};
+    CHECK(refused(base, 13, flt_max, -1, "property 'x' = 1e+38 is beyond 1e+15"));
+    double edge[13] = {1e15, -1e15, 0, 0.1, 0.1, 0.1, 0, 0, 0, 1, 0, 0, 0}; /* the limit itself is fine */
+    char *buf;
+    size_t len = make_ply(&buf, base, 13, edge, 1, 0, -1);
+    gaussian_model m;
+    rr_error e;
+    gaussian_model_init(&m);
+    CHECK(gaussian_parse("edge.ply", buf, len, GAUSSIAN_AUTO, &m, &e) == 0 && m.count == 1);
+    free(buf);
+    gaussian_model_free(&m);
+}
+
 /* The basis function k at dir, read through gaussian_sh_color: coefficient
  * 0.1 on basis k of the red channel (small enough that 0.5 + it is never
  * clamped), so Y_k = (R - 0.5) / 0.1. */
