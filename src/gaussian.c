@@ -91,6 +91,67 @@ static int bad(char *why, size_t size, const char *fmt, const char *name, double
     return -1;
 }
 
+/* Stores v as the float the model holds (issue 32.2): a value finite as a
+ * double but not as a float (a double property of 1e300, ascii 1e39) would
+ * be stored as inf, so it is refused naming the property and its value. */
+static int store(float *dst, double v, int slot, char *why, size_t why_size)
+{
+    *dst = (float)v;
+    return isfinite(*dst) ? 0 : bad(why, why_size, "property '%s' = %g is beyond float range (3.4e38)",
+                                    slot_names[slot], v);
+}
+
+/* The unit quaternion of rot_0..3 (issue 32.3): divided by its largest
+ * component before squaring, so that components of 1e200 do not overflow
+ * q.q and a lone 1e-170 does not underflow it; only zero is refused. */
+static int normalised_rotation(const double *v, float *q, char *why, size_t why_size)
+{
+    double big = 0, u[4], len2 = 0;
+    for (int k = 0; k < 4; k++)
+        big = fmax(big, fabs(v[G_ROT + k]));
+    if (!(big > 0))
+        return snprintf(why, why_size, "zero-length quaternion (rot_0..rot_3)"), -1;
+    for (int k = 0; k < 4; k++)
+        u[k] = v[G_ROT + k] / big, len2 += u[k] * u[k];
+    for (int k = 0; k < 4; k++)
+        q[k] = (float)(u[k] / sqrt(len2));
+    return 0;
+}
+
+/* Means within GAUSSIAN_MAX_ABS and scales, after exp, within
+ * GAUSSIAN_MAX_SCALE (gaussian.h: Embree's range). */
+static int store_geometry(gaussian_model *m, size_t i, const double *v, char *why, size_t why_size)
+{
+    int scales = m->kind == GAUSSIAN_3D ? 3 : 2;
+    for (int k = 0; k < 3; k++) {
+        if (!(fabs(v[G_X + k]) <= GAUSSIAN_MAX_ABS))
+            return bad(why, why_size, "property '%s' = %g is beyond 1e+15 (GAUSSIAN_MAX_ABS) from the origin, "
+                       "where rays can be traced", slot_names[G_X + k], v[G_X + k]);
+        double e = k < scales ? exp(v[G_SCALE + k]) : 0.0;
+        if (!(e <= GAUSSIAN_MAX_SCALE))
+            return bad(why, why_size, "property '%s' = %g: exp() of it is beyond 1e15 (GAUSSIAN_MAX_SCALE)",
+                       slot_names[G_SCALE + k], v[G_SCALE + k]);
+        m->mean[3 * i + k] = (float)v[G_X + k];
+        m->scale[3 * i + k] = (float)e;
+    }
+    return normalised_rotation(v, &m->rotation[4 * i], why, why_size);
+}
+
+/* The SH coefficients, rest channel-major in the file. */
+static int store_sh(gaussian_model *m, size_t i, const double *v, char *why, size_t why_size)
+{
+    float *sh = m->sh + 3 * (size_t)m->sh_coeffs * i;
+    int rest = m->sh_coeffs - 1;
+    for (int c = 0; c < 3; c++) {
+        if (store(&sh[c], v[G_DC + c], G_DC + c, why, why_size))
+            return -1;
+        for (int k = 1; k <= rest; k++)
+            if (store(&sh[3 * k + c], v[G_REST + c * rest + (k - 1)], G_REST + c * rest + (k - 1), why, why_size))
+                return -1;
+    }
+    return 0;
+}
+
 /* The activations of the official loader: exp for scales, sigmoid for
  * opacity, the quaternion normalised (w first). */
 static int add_gaussian(void *user, const double *v, const int *present, char *why, size_t why_size)
@@ -102,36 +163,11 @@ static int add_gaussian(void *user, const double *v, const int *present, char *w
     for (int k = 0; k < G_SLOTS; k++)
         if (present[k] && !isfinite(v[k]))
             return bad(why, why_size, "property '%s' is %g", slot_names[k], v[k]);
-    for (int k = 0; k < 3; k++)
-        if (!(fabs(v[G_X + k]) <= GAUSSIAN_MAX_ABS))
-            return bad(why, why_size, "property '%s' = %g is beyond 1e+15 (GAUSSIAN_MAX_ABS) from the origin, "
-                       "where rays can be traced", slot_names[G_X + k], v[G_X + k]);
-    size_t i = s->next++;
-    double q2 = 0;
-    for (int k = 0; k < 4; k++)
-        q2 += v[G_ROT + k] * v[G_ROT + k];
-    if (!(q2 > 0))
-        return snprintf(why, why_size, "zero-length quaternion (rot_0..rot_3)"), -1;
-    int scales = m->kind == GAUSSIAN_3D ? 3 : 2;
-    for (int k = 0; k < 3; k++) {
-        double e = k < scales ? exp(v[G_SCALE + k]) : 0.0;
-        if (!(e <= GAUSSIAN_MAX_SCALE))
-            return bad(why, why_size, "property '%s' = %g: exp() of it is beyond 1e15 (GAUSSIAN_MAX_SCALE)", slot_names[G_SCALE + k],
-                       v[G_SCALE + k]);
-        m->mean[3 * i + k] = (float)v[G_X + k];
-        m->scale[3 * i + k] = (float)e;
-    }
-    for (int k = 0; k < 4; k++)
-        m->rotation[4 * i + k] = (float)(v[G_ROT + k] / sqrt(q2));
-    m->opacity[i] = (float)(1.0 / (1.0 + exp(-v[G_OPACITY])));
-    float *sh = m->sh + 3 * (size_t)m->sh_coeffs * i;
-    int rest = m->sh_coeffs - 1;
-    for (int c = 0; c < 3; c++) {
-        sh[c] = (float)v[G_DC + c];
-        for (int k = 1; k <= rest; k++) /* channel-major in the file */
-            sh[3 * k + c] = (float)v[G_REST + c * rest + (k - 1)];
-    }
-    m->count = s->next;
+    size_t i = s->next;
+    if (store_geometry(m, i, v, why, why_size) || store_sh(m, i, v, why, why_size))
+        return -1;
+    m->opacity[i] = (float)(1.0 / (1.0 + exp(-v[G_OPACITY]))); /* in [0, 1] for any finite value */
+    m->count = ++s->next;
     return 0;
 }
 

@@ -59,8 +59,10 @@ int gaussian_model_alloc(gaussian_model *m, size_t n);
  * 3D, else 2D); forcing 2D reads a 3D file's first two scales; forcing 3D
  * on a file without scale_2 is an error. Errors name the file and the
  * property (missing or duplicated properties, an f_rest count that is no
- * SH degree, non-finite values, a mean coordinate beyond GAUSSIAN_MAX_ABS,
- * zero-length quaternions, counts the file cannot hold). The bytes are folded into *content_hash unless NULL. */
+ * SH degree, non-finite values or ones beyond float range, a mean
+ * coordinate beyond GAUSSIAN_MAX_ABS, zero quaternions (others are
+ * normalised whatever their size), counts the file cannot hold). The bytes
+ * are folded into *content_hash unless NULL. */
 int gaussian_read(const char *path, gaussian_kind kind, gaussian_model *m, uint64_t *content_hash, rr_error *err);
 int gaussian_parse(const char *name, const char *data, size_t len, gaussian_kind kind, gaussian_model *m,
                    rr_error *err);

@@ -194,6 +194,64 @@ TEST(gaussian_means_beyond_the_reach_limit_are_refused)
     gaussian_model_free(&m);
 }
 
+/* An ascii model of one Gaussian: the header's property lines (type and
+ * name) and the values' line; parsed into m. */
+static int parse_ascii(const char *props, const char *values, gaussian_model *m, rr_error *e)
+{
+    char text[4096];
+    snprintf(text, sizeof text, "ply\nformat ascii 1.0\nelement vertex 1\n%send_header\n%s\n", props, values);
+    gaussian_model_init(m);
+    return gaussian_parse("a.ply", text, strlen(text), GAUSSIAN_AUTO, m, e);
+}
+
+#define ASCII_PROPS(rest_type, x_type, rot_type)                                                                \
+    "property " x_type " x\nproperty float y\nproperty float z\nproperty float f_dc_0\nproperty float f_dc_1\n" \
+    "property float f_dc_2\nproperty " rest_type " f_rest_0\nproperty float f_rest_1\nproperty float f_rest_2\n"  \
+    "property float f_rest_3\nproperty float f_rest_4\nproperty float f_rest_5\nproperty float f_rest_6\n"       \
+    "property float f_rest_7\nproperty float f_rest_8\nproperty float opacity\nproperty float scale_0\n"        \
+    "property float scale_1\nproperty " rot_type " rot_0\nproperty " rot_type " rot_1\nproperty " rot_type       \
+    " rot_2\nproperty " rot_type " rot_3\n"
+
+/* Issue 32.2: values finite as doubles but not as floats (a double
+ * f_rest_0 of 1e300, ascii 1e39 for a float x) were stored as inf; they
+ * are refused naming the property, the value and the vertex's line. */
+TEST(gaussian_values_beyond_float_range_are_refused)
+{
+    gaussian_model m;
+    rr_error e;
+    int rc = parse_ascii(ASCII_PROPS("double", "float", "float"), "0 0 0 0.1 0.1 0.1 1e300 0 0 0 0 0 0 0 0 0 0 0 1 0 0 0",
+                         &m, &e);
+    CHECK(rc == -1 && strstr(e.msg, "a.ply:27: vertex 0") && strstr(e.msg, "'f_rest_0' = 1e+300") &&
+          strstr(e.msg, "float"));
+    gaussian_model_free(&m);
+    rc = parse_ascii(ASCII_PROPS("float", "float", "float"), "0 0 0 0.1 0.1 0.1 3.5e38 0 0 0 0 0 0 0 0 0 0 0 1 0 0 0",
+                     &m, &e);
+    CHECK(rc == -1 && strstr(e.msg, "'f_rest_0' = 3.5e+38"));
+    gaussian_model_free(&m);
+}
+
+/* Issue 32.3: the quaternion is normalised by its largest component first:
+ * components of 1e200 overflowed q.q (the rotation came out zero, later
+ * taken as the identity) and a lone 1e-170 underflowed it (refused as zero
+ * length though it is not). Only a zero quaternion is refused. */
+TEST(gaussian_quaternions_of_any_finite_size_are_normalised)
+{
+    gaussian_model m;
+    rr_error e;
+    const char *props = ASCII_PROPS("float", "float", "double");
+    CHECK(parse_ascii(props, "0 0 0 0.1 0.1 0.1 0 0 0 0 0 0 0 0 0 0 0 0 1e200 1e200 0 0", &m, &e) == 0);
+    if (m.count)
+        CHECK_NEAR(m.rotation[0], sqrt(0.5), 1e-7), CHECK_NEAR(m.rotation[1], sqrt(0.5), 1e-7);
+    gaussian_model_free(&m);
+    CHECK(parse_ascii(props, "0 0 0 0.1 0.1 0.1 0 0 0 0 0 0 0 0 0 0 0 0 0 0 -1e-170 0", &m, &e) == 0);
+    if (m.count)
+        CHECK(m.rotation[0] == 0 && m.rotation[1] == 0 && m.rotation[2] == -1 && m.rotation[3] == 0);
+    gaussian_model_free(&m);
+    CHECK(parse_ascii(props, "0 0 0 0.1 0.1 0.1 0 0 0 0 0 0 0 0 0 0 0 0 0 -0 0 0", &m, &e) == -1 &&
+          strstr(e.msg, "zero-length quaternion"));
+    gaussian_model_free(&m);
+}
+
 /* The basis function k at dir, read through gaussian_sh_color: coefficient
  * 0.1 on basis k of the red channel (small enough that 0.5 + it is never
  * clamped), so Y_k = (R - 0.5) / 0.1. */
