@@ -27,10 +27,6 @@ typedef struct {
     int slot;       /* SLOT_* or -1 when ignored */
 } ply_property;
 
-/* Properties of one element: 3DGS models have 62 (degree-3 SH), and
- * trainers add their own. */
-#define PLY_MAX_PROPERTIES 256
-
 typedef struct {
     char name[64];
     size_t count;
@@ -48,6 +44,7 @@ typedef struct {
     ply_element elements[16];
     long line; /* current line (header and ascii body) */
     const ply_schema *schema; /* the vertex properties read, by name */
+    const ply_visitor *visitor;
     rr_error *err;
 } ply_reader;
 
@@ -86,6 +83,14 @@ static int header_fail(ply_reader *r, const char *what)
     return rr_fail(r->err, "%s:%ld: %s", r->path, r->line, what);
 }
 
+/* Tells the visitor (if it asks) of a vertex property. */
+static int report_property(ply_reader *r, const ply_element *e, const char *name)
+{
+    if (strcmp(e->name, "vertex") || !r->visitor || !r->visitor->property)
+        return 0;
+    return r->visitor->property(r->visitor->user, r->path, r->line, name, r->err);
+}
+
 static int parse_property(ply_reader *r, ply_element *e, char *rest)
 {
     char a[64] = "", b[64] = "", c[64] = "";
@@ -98,6 +103,8 @@ static int parse_property(ply_reader *r, ply_element *e, char *rest)
         char item[64] = "", name[64] = "";
         if (sscanf(rest, "%*s %63s %63s %63s", a, item, name) != 3)
             return header_fail(r, "malformed 'property list <count type> <item type> <name>'");
+        if (report_property(r, e, name))
+            return -1;
         p->list_count = type_index(a);
         p->type = type_index(item);
         if (p->list_count < 0 || !type_table[p->list_count].is_int || p->type < 0)
@@ -117,6 +124,8 @@ static int parse_property(ply_reader *r, ply_element *e, char *rest)
                 snprintf(what, sizeof what, "duplicate vertex property '%s'", b);
                 return header_fail(r, what);
             }
+        if (report_property(r, e, b))
+            return -1;
     }
     e->nprops++;
     return 0;
@@ -490,6 +499,7 @@ int ply_parse_vertices(const char *name, const char *data, size_t len, const ply
     r->data = r->cur = data;
     r->end = data + len;
     r->schema = schema;
+    r->visitor = v;
     int rc = read_header(r);
     if (!rc) {
         r->line++; /* ascii body starts on the line after end_header */
@@ -502,7 +512,7 @@ int ply_parse_vertices(const char *name, const char *data, size_t len, const ply
 int ply_parse(const char *name, const char *data, size_t len, vec3 default_color, pointmodel *m, rr_error *err)
 {
     surfel_sink sink = {default_color, m};
-    ply_visitor v = {check_surfel_properties, add_surfel, &sink};
+    ply_visitor v = {check_surfel_properties, add_surfel, &sink, NULL};
     return ply_parse_vertices(name, data, len, &surfel_schema, &v, err);
 }
 
@@ -522,7 +532,7 @@ int ply_read_vertices(const char *path, const ply_schema *schema, const ply_visi
 int ply_read(const char *path, vec3 default_color, pointmodel *m, uint64_t *content_hash, rr_error *err)
 {
     surfel_sink sink = {default_color, m};
-    ply_visitor v = {check_surfel_properties, add_surfel, &sink};
+    ply_visitor v = {check_surfel_properties, add_surfel, &sink, NULL};
     return ply_read_vertices(path, &surfel_schema, &v, content_hash, err);
 }
 

@@ -252,6 +252,44 @@ TEST(gaussian_quaternions_of_any_finite_size_are_normalised)
     gaussian_model_free(&m);
 }
 
+/* A model with the 13 base properties and n f_rest properties f_rest_0..,
+ * or with extra (a name) after them, refused with expect. */
+static int refused_rest(int n, const char *extra, const char *expect)
+{
+    static char names[300][16];
+    const char *ptr[300] = {"x", "y", "z", "f_dc_0", "f_dc_1", "f_dc_2", "opacity", "scale_0", "scale_1", "rot_0",
+                            "rot_1", "rot_2", "rot_3"};
+    double vals[300] = {0, 0, 0, 0.1, 0.1, 0.1, 0, 0, 0, 1, 0, 0, 0};
+    for (int k = 0; k < n; k++)
+        snprintf(names[k], 16, "f_rest_%d", k), ptr[13 + k] = names[k];
+    if (extra)
+        ptr[13 + n++] = extra;
+    return refused(ptr, 13 + n, vals, -1, expect);
+}
+
+/* Issue 32.4: f_rest_* past f_rest_44 were ignored, so degree 4's 72 read
+ * as degree 3 with the wrong offsets and 46 or 48 as degree 3 with extras
+ * unread; every count but 0, 9, 24 and 45 is refused, naming the degree. */
+TEST(gaussian_sh_layouts_past_degree_3_are_refused)
+{
+    CHECK(refused_rest(72, NULL, "72 f_rest properties make SH degree 4"));
+    CHECK(refused_rest(72, NULL, "degrees above 3 are not supported"));
+    CHECK(refused_rest(46, NULL, "46 f_rest properties are no SH degree"));
+    CHECK(refused_rest(46, NULL, "between degree 3's 45 and degree 4's 72"));
+    CHECK(refused_rest(48, NULL, "48 f_rest properties are no SH degree"));
+    CHECK(refused_rest(45, "f_rest_50", "'f_rest_50' is present but 'f_rest_45' is not"));
+    CHECK(refused_rest(45, "f_rest_45", "degrees above 3 are not supported"));
+}
+
+/* Issue 32.6: Mip-Splatting's models carry a 3D smoothing filter (vertex
+ * property filter_3D) that changes every Gaussian's extent and opacity;
+ * rendering them without it would be silently wrong, so they are refused. */
+TEST(gaussian_mip_splatting_filter_3d_is_refused)
+{
+    CHECK(refused_rest(0, "filter_3D", "bad.ply:17: vertex property 'filter_3D'"));
+    CHECK(refused_rest(9, "filter_3D", "Mip-Splatting's 3D filter is not supported"));
+}
+
 /* The basis function k at dir, read through gaussian_sh_color: coefficient
  * 0.1 on basis k of the red channel (small enough that 0.5 + it is never
  * clamped), so Y_k = (R - 0.5) / 0.1. */
