@@ -460,6 +460,8 @@ static int read_vertices(ply_reader *r, const ply_element *e, const ply_visitor 
     for (size_t i = 0; i < e->count; i++) {
         double vals[PLY_MAX_SLOTS] = {0};
         char why[512];
+        if (i % 65536 == 0 && rr_interrupted()) /* millions of vertices take seconds */
+            return rr_fail(r->err, "%s: interrupted while reading vertex %zu of %zu", r->path, i, e->count);
         if (read_instance(r, e, i, vals))
             return -1;
         if (v->vertex(v->user, vals, present, why, sizeof why))
