@@ -23,7 +23,7 @@ static int entry_fail(rr_error *err, const char *name, size_t index, json_object
     json_object *n;
     const char *img = json_object_object_get_ex(entry, "img_name", &n) && json_object_is_type(n, json_type_string)
                           ? json_object_get_string(n) : "?";
-    char what[160];
+    char what[512]; /* the longest format here with a field name: no cut */
     snprintf(what, sizeof what, fmt, field);
     return rr_fail(err, "%s: camera %zu ('%.100s'): %s", name, index, img, what);
 }
@@ -93,6 +93,52 @@ static int read_size(json_object *entry, const char *field, int *out)
     return 0;
 }
 
+/* The camera looks along the rotation's third column from the position,
+ * and a scene takes it as lookat = position + that column (scene_xml.c):
+ * far out (1e16) the sum rounds back to the position (issue 32.8: blamed on
+ * a lookat the file does not have). The direction must survive the sum
+ * within 1e-6, which holds up to about 1e9 from the origin. */
+static int direction_survives(const double pos[3], const double r[3][3])
+{
+    for (int k = 0; k < 3; k++) {
+        volatile double lookat = pos[k] + r[k][2]; /* rounded to a double, as stored */
+        if (!(fabs((lookat - pos[k]) - r[k][2]) <= 1e-6))
+            return 0;
+    }
+    return 1;
+}
+
+/* fx, fy > 0 whose field of view 2 atan(size / (2 f)) lies inside (0, 180)
+ * degrees and gives back its tangent within 1e-6 (issue 32.8: fx = 1e-14 is
+ * a view of 180 degrees, and the render blamed the object's reach). */
+static int usable_focal(double f, int size)
+{
+    double t = 0.5 * size / f, deg = 360.0 / M_PI * atan(t);
+    return f > 0 && deg > 0 && deg < 180 && fabs(tan(deg * M_PI / 360.0) / t - 1) <= 1e-6;
+}
+
+static int read_focal(const char *name, size_t index, json_object *entry, camjson_camera *c, rr_error *err)
+{
+    static const char *const bad[] = {"", "field '%s' is missing or not a number (list)", "field '%s' is not finite"};
+    const char *focal[2] = {"fx", "fy"};
+    double *f[2] = {&c->fx, &c->fy};
+    int size[2] = {c->width, c->height}, rc;
+    for (int k = 0; k < 2; k++) {
+        if ((rc = number_field(entry, focal[k], f[k])))
+            return entry_fail(err, name, index, entry, bad[-rc], focal[k]);
+        if (!(*f[k] > 0))
+            return entry_fail(err, name, index, entry, "field '%s' must be > 0", focal[k]);
+        if (!usable_focal(*f[k], size[k])) {
+            char what[400];
+            snprintf(what, sizeof what, "field '%%s' = %g gives no usable field of view for %s %d (2 atan(%s / (2 "
+                     "%s)) must lie inside (0, 180) degrees)", *f[k], k ? "height" : "width", size[k],
+                     k ? "height" : "width", focal[k]);
+            return entry_fail(err, name, index, entry, what, focal[k]);
+        }
+    }
+    return 0;
+}
+
 static int read_camera(const char *name, size_t index, json_object *entry, camjson_camera *c, rr_error *err)
 {
     static const char *const bad[] = {"", "field '%s' is missing or not a number (list)", "field '%s' is not finite"};
@@ -114,13 +160,13 @@ static int read_camera(const char *name, size_t index, json_object *entry, camjs
                               rc == -1 ? bad[1] : "field '%s' must be a whole number of pixels in [1, 65536]", sizes[k]);
     if ((long long)c->width * c->height > RR_MAX_PIXELS)
         return entry_fail(err, name, index, entry, "%s: more pixels than refrender renders", "width x height");
-    const char *focal[2] = {"fx", "fy"};
-    double *f[2] = {&c->fx, &c->fy};
-    for (int k = 0; k < 2; k++) {
-        if ((rc = number_field(entry, focal[k], f[k])))
-            return entry_fail(err, name, index, entry, bad[-rc], focal[k]);
-        if (!(*f[k] > 0))
-            return entry_fail(err, name, index, entry, "field '%s' must be > 0", focal[k]);
+    if (read_focal(name, index, entry, c, err))
+        return -1;
+    if (!direction_survives(pos, c->c2w)) {
+        char what[400];
+        snprintf(what, sizeof what, "field '%%s' (%g %g %g) is too far out for the view direction of 'rotation' "
+                 "to survive position + direction in double precision (within 1e-6)", pos[0], pos[1], pos[2]);
+        return entry_fail(err, name, index, entry, what, "position");
     }
     c->position = v3(pos[0], pos[1], pos[2]);
     return 0;
@@ -152,7 +198,9 @@ static long find_entry(const char *name, json_object *root, const char *img_name
             return rr_fail(err, "%s: camera %zu is not an object", name, i), -2;
         if (!json_object_object_get_ex(e, "img_name", &v) || !json_object_is_type(v, json_type_string))
             return rr_fail(err, "%s: camera %zu: field 'img_name' is missing or not a string", name, i), -2;
-        if (strcmp(json_object_get_string(v), img_name))
+        /* by the JSON string's length: "A\u0000x" is not "A" (issue 32.8) */
+        if ((size_t)json_object_get_string_len(v) != strlen(img_name) ||
+            memcmp(json_object_get_string(v), img_name, strlen(img_name)))
             continue;
         if (found >= 0)
             return rr_fail(err, "%s: cameras %ld and %zu are both named '%s'", name, found, i, img_name), -2;

@@ -25,8 +25,11 @@ typedef struct {
  * file and, where one is at fault, the entry (index and img_name) and its
  * field: not JSON (with the line), not an array, a missing or mistyped
  * field, a non-finite number, a size below 1 or above RR_MAX_PIXELS,
- * focal lengths <= 0, a rotation that is not one (orthonormal within
- * 1e-4, determinant 1), no camera of that name (listing a few), or two.
+ * focal lengths <= 0 or without a field of view inside (0, 180) degrees, a
+ * rotation that is not one (orthonormal within 1e-4, determinant 1), a
+ * position too far out for position + view direction to keep the
+ * direction, no camera of that name (compared with the JSON string's whole
+ * length), or two.
  * The file's bytes are folded into *content_hash unless NULL. */
 int camjson_read(const char *path, const char *img_name, camjson_camera *out, uint64_t *content_hash,
                  rr_error *err);

@@ -60,3 +60,9 @@ void rr_check_failed_values(const char *file, int line, const char *cond, long l
     fprintf(stderr, "%s:%d: check failed: %s (%lld vs %lld)\n", file, line, cond, a, b);
     abort();
 }
+
+static volatile sig_atomic_t *interrupt_flag;
+
+void rr_interrupt_watch(volatile sig_atomic_t *flag) { interrupt_flag = flag; }
+
+int rr_interrupted(void) { return interrupt_flag && *interrupt_flag; }

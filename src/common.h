@@ -5,6 +5,7 @@
 #define RR_COMMON_H
 
 #include <math.h>
+#include <signal.h>
 #include <stddef.h>
 
 #define RR_VERSION "0.1.0"
@@ -61,6 +62,13 @@ void rr_check_failed_values(const char *file, int line, const char *cond, long l
 #define RR_DCHECK_LT(a, b) ((void)0)
 #define RR_DCHECK_LE(a, b) ((void)0)
 #endif
+
+/* The process's interrupt flag, set by a command's SIGINT/SIGTERM handler
+ * (main.c), for loaders it cannot be handed to: the PLY reader is reached
+ * through the scene loader, and a large model's load must stop on a signal
+ * (issue 32.10). Until a flag is watched, nothing is ever interrupted. */
+void rr_interrupt_watch(volatile sig_atomic_t *flag);
+int rr_interrupted(void);
 
 /* qsort comparator for doubles, ascending. */
 int cmp_double(const void *a, const void *b);

@@ -17,13 +17,14 @@ static const char *const slot_names[G_SLOTS] = {
     "opacity", "scale_0", "scale_1", "scale_2", "rot_0", "rot_1", "rot_2", "rot_3"};
 static const ply_schema gaussian_schema = {slot_names, G_SLOTS, G_SLOTS /* no integer scaling */};
 
-/* f_rest counts of SH degrees 0..3: 3 ((d + 1)^2 - 1). */
-static const int rest_count[GAUSSIAN_MAX_SH_DEGREE + 1] = {0, 9, 24, 45};
-
 typedef struct {
     gaussian_model *m;
     gaussian_kind forced;
     size_t declared, next;
+    /* every f_rest_<k> the header declares, schema slot or not (issue
+     * 32.4: those past f_rest_44 were once ignored) */
+    int rest_names, rest_max;
+    unsigned char rest_seen[PLY_MAX_PROPERTIES];
 } gaussian_sink;
 
 static int require(const char *path, const int *present, int first, int n, rr_error *err)
@@ -34,22 +35,65 @@ static int require(const char *path, const int *present, int first, int n, rr_er
     return 0;
 }
 
-/* The SH degree from the f_rest properties: a contiguous run from f_rest_0
- * whose length is one of rest_count. */
-static int sh_degree_of(const char *path, const int *present, rr_error *err)
+/* k of a property named f_rest_<k> (decimal digits), else -1. */
+static int rest_index(const char *name)
 {
-    int n = 0;
-    while (n < 45 && present[G_REST + n])
-        n++;
-    for (int k = n; k < 45; k++)
-        if (present[G_REST + k])
-            return rr_fail(err, "%s: property '%s' is present but '%s' is not (f_rest_* must run from f_rest_0 "
-                                "without gaps)", path, slot_names[G_REST + k], slot_names[G_REST + n]);
-    for (int d = 0; d <= GAUSSIAN_MAX_SH_DEGREE; d++)
-        if (rest_count[d] == n)
-            return d;
-    return rr_fail(err, "%s: %d f_rest properties are no SH degree (degree d has 3((d+1)^2-1): 0, 9, 24 or 45)",
-                   path, n);
+    if (strncmp(name, "f_rest_", 7) || name[7] < '0' || name[7] > '9')
+        return -1;
+    char *end;
+    long k = strtol(name + 7, &end, 10);
+    return *end || k > 1000000 ? -1 : (int)k;
+}
+
+/* The header's vertex properties as declared: counts every f_rest_<k>
+ * (the schema holds only degree 3's 45), and refuses Mip-Splatting's
+ * filter_3D (issue 32.6: its 3D smoothing filter changes every Gaussian's
+ * extent and opacity, so ignoring it would render another model). */
+static int see_property(void *user, const char *path, long line, const char *name, rr_error *err)
+{
+    gaussian_sink *s = user;
+    if (!strcmp(name, "filter_3D"))
+        return rr_fail(err, "%s:%ld: vertex property 'filter_3D': Mip-Splatting's 3D filter is not supported (the "
+                            "model would render without it)", path, line);
+    int k = rest_index(name);
+    if (k < 0)
+        return 0;
+    if (k < PLY_MAX_PROPERTIES && s->rest_seen[k]) /* slots below 45 were refused as duplicates already */
+        return rr_fail(err, "%s:%ld: duplicate vertex property '%s'", path, line, name);
+    if (k < PLY_MAX_PROPERTIES)
+        s->rest_seen[k] = 1;
+    s->rest_names++;
+    s->rest_max = k > s->rest_max ? k : s->rest_max;
+    return 0;
+}
+
+/* The SH degree d from the f_rest properties: a contiguous run from
+ * f_rest_0 of 3((d + 1)^2 - 1) (0, 9, 24, 45 for degrees 0 to 3); degree 4's
+ * 72 and others are refused, naming the degree they would need. */
+static int sh_degree_of(const char *path, const gaussian_sink *s, rr_error *err)
+{
+    int n = s->rest_names;
+    if (n && s->rest_max != n - 1) { /* distinct names, so a gap: the first missing and the next present */
+        int gap = 0, next;
+        while (s->rest_seen[gap])
+            gap++;
+        for (next = gap + 1; next < PLY_MAX_PROPERTIES && !s->rest_seen[next]; next++)
+            ;
+        return rr_fail(err, "%s: property 'f_rest_%d' is present but 'f_rest_%d' is not (f_rest_* must run from "
+                            "f_rest_0 without gaps)", path, next < PLY_MAX_PROPERTIES ? next : s->rest_max, gap);
+    }
+    int d = 0;
+    while (3 * ((d + 1) * (d + 1) - 1) < n)
+        d++;
+    int need = 3 * ((d + 1) * (d + 1) - 1), below = 3 * (d * d - 1);
+    if (need == n && d <= GAUSSIAN_MAX_SH_DEGREE)
+        return d;
+    if (need == n)
+        return rr_fail(err, "%s: %d f_rest properties make SH degree %d (degree d has 3((d+1)^2-1)): degrees above 3 "
+                            "are not supported", path, n, d);
+    return rr_fail(err, "%s: %d f_rest properties are no SH degree (degree d has 3((d+1)^2-1): 0, 9, 24 or 45 for "
+                        "degrees 0 to 3): %d lies between degree %d's %d and degree %d's %d%s",
+                   path, n, n, d - 1, below, d, need, d > GAUSSIAN_MAX_SH_DEGREE ? "; degrees above 3 are not supported" : "");
 }
 
 static int begin_model(void *user, const char *path, const int *present, size_t count, rr_error *err)
@@ -63,7 +107,7 @@ static int begin_model(void *user, const char *path, const int *present, size_t 
     m->kind = s->forced ? s->forced : present[G_SCALE + 2] ? GAUSSIAN_3D : GAUSSIAN_2D;
     if (m->kind == GAUSSIAN_3D && require(path, present, G_SCALE + 2, 1, err))
         return -1;
-    int degree = sh_degree_of(path, present, err);
+    int degree = sh_degree_of(path, s, err);
     if (degree < 0)
         return -1;
     m->sh_degree = degree, m->sh_coeffs = (degree + 1) * (degree + 1);
@@ -91,6 +135,67 @@ static int bad(char *why, size_t size, const char *fmt, const char *name, double
     return -1;
 }
 
+/* Stores v as the float the model holds (issue 32.2): a value finite as a
+ * double but not as a float (a double property of 1e300, ascii 1e39) would
+ * be stored as inf, so it is refused naming the property and its value. */
+static int store(float *dst, double v, int slot, char *why, size_t why_size)
+{
+    *dst = (float)v;
+    return isfinite(*dst) ? 0 : bad(why, why_size, "property '%s' = %g is beyond float range (3.4e38)",
+                                    slot_names[slot], v);
+}
+
+/* The unit quaternion of rot_0..3 (issue 32.3): divided by its largest
+ * component before squaring, so that components of 1e200 do not overflow
+ * q.q and a lone 1e-170 does not underflow it; only zero is refused. */
+static int normalised_rotation(const double *v, float *q, char *why, size_t why_size)
+{
+    double big = 0, u[4], len2 = 0;
+    for (int k = 0; k < 4; k++)
+        big = fmax(big, fabs(v[G_ROT + k]));
+    if (!(big > 0))
+        return snprintf(why, why_size, "zero-length quaternion (rot_0..rot_3)"), -1;
+    for (int k = 0; k < 4; k++)
+        u[k] = v[G_ROT + k] / big, len2 += u[k] * u[k];
+    for (int k = 0; k < 4; k++)
+        q[k] = (float)(u[k] / sqrt(len2));
+    return 0;
+}
+
+/* Means within GAUSSIAN_MAX_ABS and scales, after exp, within
+ * GAUSSIAN_MAX_SCALE (gaussian.h: Embree's range). */
+static int store_geometry(gaussian_model *m, size_t i, const double *v, char *why, size_t why_size)
+{
+    int scales = m->kind == GAUSSIAN_3D ? 3 : 2;
+    for (int k = 0; k < 3; k++) {
+        if (!(fabs(v[G_X + k]) <= GAUSSIAN_MAX_ABS))
+            return bad(why, why_size, "property '%s' = %g is beyond 1e+15 (GAUSSIAN_MAX_ABS) from the origin, "
+                       "where rays can be traced", slot_names[G_X + k], v[G_X + k]);
+        double e = k < scales ? exp(v[G_SCALE + k]) : 0.0;
+        if (!(e <= GAUSSIAN_MAX_SCALE))
+            return bad(why, why_size, "property '%s' = %g: exp() of it is beyond 1e15 (GAUSSIAN_MAX_SCALE)",
+                       slot_names[G_SCALE + k], v[G_SCALE + k]);
+        m->mean[3 * i + k] = (float)v[G_X + k];
+        m->scale[3 * i + k] = (float)e;
+    }
+    return normalised_rotation(v, &m->rotation[4 * i], why, why_size);
+}
+
+/* The SH coefficients, rest channel-major in the file. */
+static int store_sh(gaussian_model *m, size_t i, const double *v, char *why, size_t why_size)
+{
+    float *sh = m->sh + 3 * (size_t)m->sh_coeffs * i;
+    int rest = m->sh_coeffs - 1;
+    for (int c = 0; c < 3; c++) {
+        if (store(&sh[c], v[G_DC + c], G_DC + c, why, why_size))
+            return -1;
+        for (int k = 1; k <= rest; k++)
+            if (store(&sh[3 * k + c], v[G_REST + c * rest + (k - 1)], G_REST + c * rest + (k - 1), why, why_size))
+                return -1;
+    }
+    return 0;
+}
+
 /* The activations of the official loader: exp for scales, sigmoid for
  * opacity, the quaternion normalised (w first). */
 static int add_gaussian(void *user, const double *v, const int *present, char *why, size_t why_size)
@@ -102,32 +207,11 @@ static int add_gaussian(void *user, const double *v, const int *present, char *w
     for (int k = 0; k < G_SLOTS; k++)
         if (present[k] && !isfinite(v[k]))
             return bad(why, why_size, "property '%s' is %g", slot_names[k], v[k]);
-    size_t i = s->next++;
-    double q2 = 0;
-    for (int k = 0; k < 4; k++)
-        q2 += v[G_ROT + k] * v[G_ROT + k];
-    if (!(q2 > 0))
-        return snprintf(why, why_size, "zero-length quaternion (rot_0..rot_3)"), -1;
-    int scales = m->kind == GAUSSIAN_3D ? 3 : 2;
-    for (int k = 0; k < 3; k++) {
-        double e = k < scales ? exp(v[G_SCALE + k]) : 0.0;
-        if (!(e <= GAUSSIAN_MAX_SCALE))
-            return bad(why, why_size, "property '%s' = %g: exp() of it is beyond 1e15 (GAUSSIAN_MAX_SCALE)", slot_names[G_SCALE + k],
-                       v[G_SCALE + k]);
-        m->mean[3 * i + k] = (float)v[G_X + k];
-        m->scale[3 * i + k] = (float)e;
-    }
-    for (int k = 0; k < 4; k++)
-        m->rotation[4 * i + k] = (float)(v[G_ROT + k] / sqrt(q2));
-    m->opacity[i] = (float)(1.0 / (1.0 + exp(-v[G_OPACITY])));
-    float *sh = m->sh + 3 * (size_t)m->sh_coeffs * i;
-    int rest = m->sh_coeffs - 1;
-    for (int c = 0; c < 3; c++) {
-        sh[c] = (float)v[G_DC + c];
-        for (int k = 1; k <= rest; k++) /* channel-major in the file */
-            sh[3 * k + c] = (float)v[G_REST + c * rest + (k - 1)];
-    }
-    m->count = s->next;
+    size_t i = s->next;
+    if (store_geometry(m, i, v, why, why_size) || store_sh(m, i, v, why, why_size))
+        return -1;
+    m->opacity[i] = (float)(1.0 / (1.0 + exp(-v[G_OPACITY]))); /* in [0, 1] for any finite value */
+    m->count = ++s->next;
     return 0;
 }
 
@@ -153,21 +237,31 @@ static int finish(gaussian_model *m, int rc, const char *name, rr_error *err)
     return rc;
 }
 
+/* Parses from memory (data) or reads the file at name (data NULL). */
+static int load(const char *name, const char *data, size_t len, gaussian_kind kind, gaussian_model *m,
+                uint64_t *content_hash, rr_error *err)
+{
+    gaussian_model_free(m);
+    gaussian_sink *sink = calloc(1, sizeof *sink);
+    if (!sink)
+        return rr_fail(err, "%s: out of memory", name);
+    sink->m = m, sink->forced = kind;
+    ply_visitor v = {begin_model, add_gaussian, sink, see_property};
+    int rc = data ? ply_parse_vertices(name, data, len, &gaussian_schema, &v, err)
+                  : ply_read_vertices(name, &gaussian_schema, &v, content_hash, err);
+    free(sink);
+    return finish(m, rc, name, err);
+}
+
 int gaussian_parse(const char *name, const char *data, size_t len, gaussian_kind kind, gaussian_model *m,
                    rr_error *err)
 {
-    gaussian_model_free(m);
-    gaussian_sink sink = {m, kind, 0, 0};
-    ply_visitor v = {begin_model, add_gaussian, &sink};
-    return finish(m, ply_parse_vertices(name, data, len, &gaussian_schema, &v, err), name, err);
+    return load(name, data ? data : "", len, kind, m, NULL, err);
 }
 
 int gaussian_read(const char *path, gaussian_kind kind, gaussian_model *m, uint64_t *content_hash, rr_error *err)
 {
-    gaussian_model_free(m);
-    gaussian_sink sink = {m, kind, 0, 0};
-    ply_visitor v = {begin_model, add_gaussian, &sink};
-    return finish(m, ply_read_vertices(path, &gaussian_schema, &v, content_hash, err), path, err);
+    return load(path, NULL, 0, kind, m, content_hash, err);
 }
 
 /* ---- writing ------------------------------------------------------------ */

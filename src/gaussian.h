@@ -46,6 +46,12 @@ typedef enum {
 #define GAUSSIAN_MAX_SH_COEFFS 16 /* (3 + 1)^2 */
 /* The largest activated scale: stored in floats, squared in ray tests. */
 #define GAUSSIAN_MAX_SCALE 1e15
+/* The largest mean coordinate (issue 32.1). Embree drops boxes beyond about
+ * 1.8e18 without a word, so a Gaussian at 1e19 vanished from the image; with
+ * means and scales within 1e15 every box stays in Embree's range, and the
+ * renderer's reach check (ACCEL_MAX_REACH, accel.h) refuses by name a scene
+ * that reaches past 1e15. */
+#define GAUSSIAN_MAX_ABS 1e15
 
 typedef struct {
     size_t count;
@@ -72,8 +78,10 @@ int gaussian_model_alloc(gaussian_model *m, size_t n);
  * 3D, else 2D); forcing 2D reads a 3D file's first two scales; forcing 3D
  * on a file without scale_2 is an error. Errors name the file and the
  * property (missing or duplicated properties, an f_rest count that is no
- * SH degree, non-finite values, zero-length quaternions, counts the file
- * cannot hold). The bytes are folded into *content_hash unless NULL. */
+ * SH degree, non-finite values or ones beyond float range, a mean
+ * coordinate beyond GAUSSIAN_MAX_ABS, zero quaternions (others are
+ * normalised whatever their size), counts the file cannot hold). The bytes
+ * are folded into *content_hash unless NULL. */
 int gaussian_read(const char *path, gaussian_kind kind, gaussian_model *m, uint64_t *content_hash, rr_error *err);
 int gaussian_parse(const char *name, const char *data, size_t len, gaussian_kind kind, gaussian_model *m,
                    rr_error *err);

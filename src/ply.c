@@ -25,11 +25,8 @@ typedef struct {
     int type;       /* scalar type index into type_table */
     int list_count; /* for list properties: type of the count, else -1 */
     int slot;       /* SLOT_* or -1 when ignored */
+    char name[64];  /* for messages */
 } ply_property;
-
-/* Properties of one element: 3DGS models have 62 (degree-3 SH), and
- * trainers add their own. */
-#define PLY_MAX_PROPERTIES 256
 
 typedef struct {
     char name[64];
@@ -45,9 +42,10 @@ typedef struct {
     const char *data, *cur, *end;
     enum ply_format format;
     int nelements;
-    ply_element elements[16];
+    ply_element elements[16]; /* 265 KB with their property tables */
     long line; /* current line (header and ascii body) */
     const ply_schema *schema; /* the vertex properties read, by name */
+    const ply_visitor *visitor;
     rr_error *err;
 } ply_reader;
 
@@ -86,6 +84,14 @@ static int header_fail(ply_reader *r, const char *what)
     return rr_fail(r->err, "%s:%ld: %s", r->path, r->line, what);
 }
 
+/* Tells the visitor (if it asks) of a vertex property. */
+static int report_property(ply_reader *r, const ply_element *e, const char *name)
+{
+    if (strcmp(e->name, "vertex") || !r->visitor || !r->visitor->property)
+        return 0;
+    return r->visitor->property(r->visitor->user, r->path, r->line, name, r->err);
+}
+
 static int parse_property(ply_reader *r, ply_element *e, char *rest)
 {
     char a[64] = "", b[64] = "", c[64] = "";
@@ -98,6 +104,9 @@ static int parse_property(ply_reader *r, ply_element *e, char *rest)
         char item[64] = "", name[64] = "";
         if (sscanf(rest, "%*s %63s %63s %63s", a, item, name) != 3)
             return header_fail(r, "malformed 'property list <count type> <item type> <name>'");
+        memcpy(p->name, name, sizeof p->name);
+        if (report_property(r, e, name))
+            return -1;
         p->list_count = type_index(a);
         p->type = type_index(item);
         if (p->list_count < 0 || !type_table[p->list_count].is_int || p->type < 0)
@@ -108,6 +117,7 @@ static int parse_property(ply_reader *r, ply_element *e, char *rest)
             return header_fail(r, "malformed 'property <type> <name>'");
         p->type = type_index(a);
         p->list_count = -1;
+        memcpy(p->name, b, sizeof p->name);
         if (p->type < 0)
             return header_fail(r, "unknown property type");
         p->slot = strcmp(e->name, "vertex") ? -1 : slot_index(r->schema, b);
@@ -117,6 +127,8 @@ static int parse_property(ply_reader *r, ply_element *e, char *rest)
                 snprintf(what, sizeof what, "duplicate vertex property '%s'", b);
                 return header_fail(r, what);
             }
+        if (report_property(r, e, b))
+            return -1;
     }
     e->nprops++;
     return 0;
@@ -153,6 +165,12 @@ static int parse_header_line(ply_reader *r, char *line, int *done)
         char extra;
         if (sscanf(rest, "%63s %llu %c", e->name, &count, &extra) != 2 || rest[0] == '-')
             return header_fail(r, "malformed 'element <name> <count>'");
+        for (int k = 0; k < r->nelements; k++) /* a second 'vertex' would be ignored (issue 32.5) */
+            if (!strcmp(r->elements[k].name, e->name)) {
+                char what[128];
+                snprintf(what, sizeof what, "duplicate element '%s'", e->name);
+                return header_fail(r, what);
+            }
         e->count = (size_t)count;
         e->nprops = 0;
         r->nelements++;
@@ -297,6 +315,22 @@ static int end_ascii_line(ply_reader *r, const ply_element *e, size_t index, int
     return 0;
 }
 
+/* An ascii value must be one its declared integer type holds (issue
+ * 32.5: 2.5 for an int or 300 for a uchar was taken as is); binary values
+ * always are. */
+static int check_ascii_int(ply_reader *r, const ply_element *e, size_t index, const ply_property *p, int type,
+                           double v)
+{
+    double max = type_table[type].max, min = type_table[type].is_signed ? -max - 1 : 0;
+    if (r->format != PLY_ASCII || !type_table[type].is_int || (v == floor(v) && v >= min && v <= max))
+        return 0;
+    char what[256];
+    const char *t = type_table[type].name;
+    snprintf(what, sizeof what, "property '%s' = %.17g: %.17g is not a%s %s (whole numbers %.0f to %.0f)", p->name, v,
+             v, t[0] == 'i' ? "n" : "", t, min, max);
+    return element_fail(r, e, index, what);
+}
+
 static int read_value(ply_reader *r, const ply_element *e, size_t index, int type, int nth, double *out)
 {
     int rc = r->format == PLY_ASCII ? read_ascii_value(r, out) : read_binary_value(r, type, out);
@@ -320,18 +354,18 @@ static int read_instance(ply_reader *r, const ply_element *e, size_t index, doub
         const ply_property *p = &e->props[i];
         double v;
         if (p->list_count >= 0) {
-            if (read_value(r, e, index, p->list_count, nth++, &v))
+            if (read_value(r, e, index, p->list_count, nth++, &v) || check_ascii_int(r, e, index, p, p->list_count, v))
                 return -1;
             if (v < 0 || v > 1e6 || v != floor(v))
                 return element_fail(r, e, index, "list length out of range");
             for (long k = 0; k < (long)v; k++) {
                 double item;
-                if (read_value(r, e, index, p->type, nth++, &item))
+                if (read_value(r, e, index, p->type, nth++, &item) || check_ascii_int(r, e, index, p, p->type, item))
                     return -1;
             }
             continue;
         }
-        if (read_value(r, e, index, p->type, nth++, &v))
+        if (read_value(r, e, index, p->type, nth++, &v) || check_ascii_int(r, e, index, p, p->type, v))
             return -1;
         if (p->slot >= 0 && vals) {
             if (type_table[p->type].is_int && p->slot >= r->schema->scale_ints_from)
@@ -451,30 +485,49 @@ static int read_vertices(ply_reader *r, const ply_element *e, const ply_visitor 
     for (size_t i = 0; i < e->count; i++) {
         double vals[PLY_MAX_SLOTS] = {0};
         char why[512];
+        if (i % 65536 == 0 && rr_interrupted()) /* millions of vertices take seconds */
+            return rr_fail(r->err, "%s: interrupted while reading vertex %zu of %zu", r->path, i, e->count);
         if (read_instance(r, e, i, vals))
             return -1;
         if (v->vertex(v->user, vals, present, why, sizeof why))
             return element_fail(r, e, i, why);
         r->line += r->format == PLY_ASCII; /* the next instance's line */
     }
-    return 0; /* later elements (faces, ...) are not needed */
+    return 0;
 }
 
+/* Reads past an element that is not needed (faces, ...), checking it. */
+static int skip_element(ply_reader *r, const ply_element *e)
+{
+    if (check_element_size(r, e))
+        return -1;
+    for (size_t i = 0; i < e->count; i++) {
+        if (read_instance(r, e, i, NULL))
+            return -1;
+        r->line += r->format == PLY_ASCII;
+    }
+    return 0;
+}
+
+/* Every element is read, the ones after the vertices too, so that a binary
+ * file's bytes beyond the declared elements are seen (issue 32.5: two
+ * vertices' data under 'element vertex 1' read as one vertex). */
 static int read_elements(ply_reader *r, const ply_visitor *v)
 {
+    const ply_element *vertex = NULL;
     for (int k = 0; k < r->nelements; k++) {
         const ply_element *e = &r->elements[k];
-        if (!strcmp(e->name, "vertex"))
-            return read_vertices(r, e, v);
-        if (check_element_size(r, e))
+        int vert = !strcmp(e->name, "vertex");
+        vertex = vert ? e : vertex;
+        if (vert ? read_vertices(r, e, v) : skip_element(r, e))
             return -1;
-        for (size_t i = 0; i < e->count; i++) {
-            if (read_instance(r, e, i, NULL))
-                return -1;
-            r->line += r->format == PLY_ASCII;
-        }
     }
-    return rr_fail(r->err, "%s: no 'vertex' element", r->path);
+    if (!vertex)
+        return rr_fail(r->err, "%s: no 'vertex' element", r->path);
+    if (r->format != PLY_ASCII && r->cur < r->end)
+        return rr_fail(r->err, "%s: %zu bytes after the declared elements (%zu vertices): the header's counts are "
+                               "wrong or other data follows", r->path, (size_t)(r->end - r->cur), vertex->count);
+    return 0;
 }
 
 int ply_parse_vertices(const char *name, const char *data, size_t len, const ply_schema *schema,
@@ -490,6 +543,7 @@ int ply_parse_vertices(const char *name, const char *data, size_t len, const ply
     r->data = r->cur = data;
     r->end = data + len;
     r->schema = schema;
+    r->visitor = v;
     int rc = read_header(r);
     if (!rc) {
         r->line++; /* ascii body starts on the line after end_header */
@@ -502,7 +556,7 @@ int ply_parse_vertices(const char *name, const char *data, size_t len, const ply
 int ply_parse(const char *name, const char *data, size_t len, vec3 default_color, pointmodel *m, rr_error *err)
 {
     surfel_sink sink = {default_color, m};
-    ply_visitor v = {check_surfel_properties, add_surfel, &sink};
+    ply_visitor v = {check_surfel_properties, add_surfel, &sink, NULL};
     return ply_parse_vertices(name, data, len, &surfel_schema, &v, err);
 }
 
@@ -522,7 +576,7 @@ int ply_read_vertices(const char *path, const ply_schema *schema, const ply_visi
 int ply_read(const char *path, vec3 default_color, pointmodel *m, uint64_t *content_hash, rr_error *err)
 {
     surfel_sink sink = {default_color, m};
-    ply_visitor v = {check_surfel_properties, add_surfel, &sink};
+    ply_visitor v = {check_surfel_properties, add_surfel, &sink, NULL};
     return ply_read_vertices(path, &surfel_schema, &v, content_hash, err);
 }
 

@@ -43,6 +43,9 @@ typedef struct surfel_s {
  * is an error naming it, and the declared count is checked against the
  * file's size before anything is read. */
 #define PLY_MAX_SLOTS 128
+/* Properties of one element: 3DGS models have 62 (degree-3 SH), and
+ * trainers add their own. */
+#define PLY_MAX_PROPERTIES 256
 typedef struct {
     const char *const *names; /* the slots: vertex property names */
     int count;                /* at most PLY_MAX_SLOTS */
@@ -57,6 +60,11 @@ typedef struct {
      * it (the reader adds the file and the vertex's line or index) */
     int (*vertex)(void *user, const double *vals, const int *present, char *why, size_t why_size);
     void *user;
+    /* optional (NULL: none): each vertex property's name with its header
+     * line, as the header declares it, schema or not: -1 (with err filled,
+     * naming path and line) refuses the file. Lets a reader see what its
+     * schema cannot hold (properties it must refuse, runs of any length). */
+    int (*property)(void *user, const char *path, long line, const char *name, rr_error *err);
 } ply_visitor;
 
 int ply_parse_vertices(const char *name, const char *data, size_t len, const ply_schema *schema,

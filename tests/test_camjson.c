@@ -91,3 +91,27 @@ TEST(camjson_names_the_file_level_mistakes)
     CHECK(parse("[{\"img_name\": 3}]", "A", &c, &e) != 0 && strstr(e.msg, "camera 0: field 'img_name'"));
     CHECK(camjson_read("/nonexistent/cameras.json", "A", &c, NULL, &e) != 0 && strstr(e.msg, "/nonexistent/cameras.json"));
 }
+
+/* Issue 32.8: an img_name with an embedded NUL matched the name before it;
+ * a position of 1e16 (where position + view direction rounds back to the
+ * position) was blamed on a lookat the file does not have; fx = 1e-14 (a
+ * field of view of 180 degrees) on the object's reach. Each is named by
+ * entry and field. */
+TEST(camjson_names_nul_names_far_positions_and_degenerate_focal_lengths)
+{
+    const char *rest = ", \"rotation\": " ROT ", " GOOD_SIZE ", " GOOD_F;
+    char text[4096], f[1024];
+    snprintf(text, sizeof text, "[%s]", one("A\\u0000x", GOOD_POS ", \"rotation\": " ROT ", " GOOD_SIZE ", " GOOD_F));
+    camjson_camera c;
+    rr_error e = {{0}};
+    CHECK(parse(text, "A", &c, &e) != 0 && strstr(e.msg, "no camera named 'A'"));
+    snprintf(f, sizeof f, "\"position\": [0, 0, 1e16]%s", rest); /* ROT looks along z */
+    CHECK(fails_with(f, "camera 0 ('A'): field 'position' (0 0 1e+16) is too far out"));
+    snprintf(f, sizeof f, "\"position\": [1e9, -1e9, 1e9]%s", rest); /* far, but the direction survives */
+    snprintf(text, sizeof text, "[%s]", one("A", f));
+    CHECK(parse(text, "A", &c, &e) == 0);
+    snprintf(f, sizeof f, GOOD_POS ", \"rotation\": " ROT ", " GOOD_SIZE ", \"fx\": 1e-14, \"fy\": 71");
+    CHECK(fails_with(f, "camera 0 ('A'): field 'fx' = 1e-14 gives no usable field of view"));
+    snprintf(f, sizeof f, GOOD_POS ", \"rotation\": " ROT ", " GOOD_SIZE ", \"fx\": 70, \"fy\": 1e-300");
+    CHECK(fails_with(f, "field 'fy' = 1e-300 gives no usable field of view"));
+}

@@ -157,3 +157,32 @@ def test_surfels_converts_meshes_and_point_clouds(tmp_path):
     proc = run(["surfels", tmp_path / "missing.obj", "-o", tmp_path / "m.ply"])
     assert proc.returncode == 1 and "missing.obj" in proc.stderr
     assert run(["surfels", "--help"]).returncode == 0
+
+
+def test_sigterm_while_loading_a_large_model_exits_130(tmp_path):
+    """Issue 32.10: the signal handlers were installed only after the BVH
+    build, so SIGTERM while a large model loaded killed the process (exit
+    143, -15 here) instead of the documented 130. The handlers now come
+    first, the PLY reader polls the flag, and load and build stop with 130
+    and no output."""
+    n = 600_000  # about 150 MB: a few seconds of reading and parsing
+    names = ["x", "y", "z", "nx", "ny", "nz", "f_dc_0", "f_dc_1", "f_dc_2", *[f"f_rest_{i}" for i in range(45)],
+             "opacity", "scale_0", "scale_1", "scale_2", "rot_0", "rot_1", "rot_2", "rot_3"]
+    vals = np.zeros((n, len(names)), "<f4")
+    vals[:, 0] = np.linspace(-1, 1, n)
+    vals[:, -7:-4] = -3.0  # scales exp(-3)
+    vals[:, -4] = 1.0  # identity rotation
+    head = "ply\nformat binary_little_endian 1.0\nelement vertex %d\n" % n
+    head += "".join(f"property float {p}\n" for p in names) + "end_header\n"
+    (tmp_path / "big.ply").write_bytes(head.encode() + vals.tobytes())
+    scene = tmp_path / "s.xml"
+    scene.write_text('<scene><camera position="0 0 5" lookat="0 0 0" width="4" height="4"/>'
+                     '<object><gaussianModel file="big.ply"/></object></scene>')
+    proc = subprocess.Popen([BIN, str(scene), "--spp", "1", "--tspp", "1", "-o", str(tmp_path / "o.exr")],
+                            stderr=subprocess.PIPE, text=True)
+    time.sleep(0.4)
+    assert proc.poll() is None, "the load ended before the signal: make the model larger"
+    proc.send_signal(signal.SIGTERM)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 130, (proc.returncode, err)
+    assert "interrupted" in err and not (tmp_path / "o.exr").exists()

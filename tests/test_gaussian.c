@@ -171,6 +171,125 @@ TEST(gaussian_bad_inputs_name_the_property)
     CHECK(refused(rest10, 23, v23, -1, "'f_rest_5' is present but 'f_rest_4' is not"));
 }
 
+/* Issue 32.1: Embree drops boxes beyond about 1.8e18, so a Gaussian far
+ * out vanished from the image with exit 0: a mean coordinate beyond
+ * GAUSSIAN_MAX_ABS (a float's 1e38 too) is refused, naming the vertex. */
+TEST(gaussian_means_beyond_the_reach_limit_are_refused)
+{
+    const char *base[] = {"x", "y", "z", "f_dc_0", "f_dc_1", "f_dc_2", "opacity", "scale_0", "scale_1", "rot_0",
+                          "rot_1", "rot_2", "rot_3"};
+    double far[13] = {0, 0, 1e19, 0.1, 0.1, 0.1, 0, 0, 0, 1, 0, 0, 0};
+    CHECK(refused(base, 13, far, -1, "vertex 0"));
+    CHECK(refused(base, 13, far, -1, "property 'z' = 1e+19 is beyond 1e+15"));
+    double flt_max[13] = {1e38, 0, 0, 0.1, 0.1, 0.1, 0, 0, 0, 1, 0, 0, 0};
+    CHECK(refused(base, 13, flt_max, -1, "property 'x' = 1e+38 is beyond 1e+15"));
+    double edge[13] = {1e15, -1e15, 0, 0.1, 0.1, 0.1, 0, 0, 0, 1, 0, 0, 0}; /* the limit itself is fine */
+    char *buf;
+    size_t len = make_ply(&buf, base, 13, edge, 1, 0, -1);
+    gaussian_model m;
+    rr_error e;
+    gaussian_model_init(&m);
+    CHECK(gaussian_parse("edge.ply", buf, len, GAUSSIAN_AUTO, &m, &e) == 0 && m.count == 1);
+    free(buf);
+    gaussian_model_free(&m);
+}
+
+/* An ascii model of one Gaussian: the header's property lines (type and
+ * name) and the values' line; parsed into m. */
+static int parse_ascii(const char *props, const char *values, gaussian_model *m, rr_error *e)
+{
+    char text[4096];
+    snprintf(text, sizeof text, "ply\nformat ascii 1.0\nelement vertex 1\n%send_header\n%s\n", props, values);
+    gaussian_model_init(m);
+    return gaussian_parse("a.ply", text, strlen(text), GAUSSIAN_AUTO, m, e);
+}
+
+#define ASCII_PROPS(rest_type, x_type, rot_type)                                                                \
+    "property " x_type " x\nproperty float y\nproperty float z\nproperty float f_dc_0\nproperty float f_dc_1\n" \
+    "property float f_dc_2\nproperty " rest_type " f_rest_0\nproperty float f_rest_1\nproperty float f_rest_2\n"  \
+    "property float f_rest_3\nproperty float f_rest_4\nproperty float f_rest_5\nproperty float f_rest_6\n"       \
+    "property float f_rest_7\nproperty float f_rest_8\nproperty float opacity\nproperty float scale_0\n"        \
+    "property float scale_1\nproperty " rot_type " rot_0\nproperty " rot_type " rot_1\nproperty " rot_type       \
+    " rot_2\nproperty " rot_type " rot_3\n"
+
+/* Issue 32.2: values finite as doubles but not as floats (a double
+ * f_rest_0 of 1e300, ascii 1e39 for a float x) were stored as inf; they
+ * are refused naming the property, the value and the vertex's line. */
+TEST(gaussian_values_beyond_float_range_are_refused)
+{
+    gaussian_model m;
+    rr_error e;
+    int rc = parse_ascii(ASCII_PROPS("double", "float", "float"), "0 0 0 0.1 0.1 0.1 1e300 0 0 0 0 0 0 0 0 0 0 0 1 0 0 0",
+                         &m, &e);
+    CHECK(rc == -1 && strstr(e.msg, "a.ply:27: vertex 0") && strstr(e.msg, "'f_rest_0' = 1e+300") &&
+          strstr(e.msg, "float"));
+    gaussian_model_free(&m);
+    rc = parse_ascii(ASCII_PROPS("float", "float", "float"), "0 0 0 0.1 0.1 0.1 3.5e38 0 0 0 0 0 0 0 0 0 0 0 1 0 0 0",
+                     &m, &e);
+    CHECK(rc == -1 && strstr(e.msg, "'f_rest_0' = 3.5e+38"));
+    gaussian_model_free(&m);
+}
+
+/* Issue 32.3: the quaternion is normalised by its largest component first:
+ * components of 1e200 overflowed q.q (the rotation came out zero, later
+ * taken as the identity) and a lone 1e-170 underflowed it (refused as zero
+ * length though it is not). Only a zero quaternion is refused. */
+TEST(gaussian_quaternions_of_any_finite_size_are_normalised)
+{
+    gaussian_model m;
+    rr_error e;
+    const char *props = ASCII_PROPS("float", "float", "double");
+    CHECK(parse_ascii(props, "0 0 0 0.1 0.1 0.1 0 0 0 0 0 0 0 0 0 0 0 0 1e200 1e200 0 0", &m, &e) == 0);
+    if (m.count)
+        CHECK_NEAR(m.rotation[0], sqrt(0.5), 1e-7), CHECK_NEAR(m.rotation[1], sqrt(0.5), 1e-7);
+    gaussian_model_free(&m);
+    CHECK(parse_ascii(props, "0 0 0 0.1 0.1 0.1 0 0 0 0 0 0 0 0 0 0 0 0 0 0 -1e-170 0", &m, &e) == 0);
+    if (m.count)
+        CHECK(m.rotation[0] == 0 && m.rotation[1] == 0 && m.rotation[2] == -1 && m.rotation[3] == 0);
+    gaussian_model_free(&m);
+    CHECK(parse_ascii(props, "0 0 0 0.1 0.1 0.1 0 0 0 0 0 0 0 0 0 0 0 0 0 -0 0 0", &m, &e) == -1 &&
+          strstr(e.msg, "zero-length quaternion"));
+    gaussian_model_free(&m);
+}
+
+/* A model with the 13 base properties and n f_rest properties f_rest_0..,
+ * or with extra (a name) after them, refused with expect. */
+static int refused_rest(int n, const char *extra, const char *expect)
+{
+    static char names[300][16];
+    const char *ptr[300] = {"x", "y", "z", "f_dc_0", "f_dc_1", "f_dc_2", "opacity", "scale_0", "scale_1", "rot_0",
+                            "rot_1", "rot_2", "rot_3"};
+    double vals[300] = {0, 0, 0, 0.1, 0.1, 0.1, 0, 0, 0, 1, 0, 0, 0};
+    for (int k = 0; k < n; k++)
+        snprintf(names[k], 16, "f_rest_%d", k), ptr[13 + k] = names[k];
+    if (extra)
+        ptr[13 + n++] = extra;
+    return refused(ptr, 13 + n, vals, -1, expect);
+}
+
+/* Issue 32.4: f_rest_* past f_rest_44 were ignored, so degree 4's 72 read
+ * as degree 3 with the wrong offsets and 46 or 48 as degree 3 with extras
+ * unread; every count but 0, 9, 24 and 45 is refused, naming the degree. */
+TEST(gaussian_sh_layouts_past_degree_3_are_refused)
+{
+    CHECK(refused_rest(72, NULL, "72 f_rest properties make SH degree 4"));
+    CHECK(refused_rest(72, NULL, "degrees above 3 are not supported"));
+    CHECK(refused_rest(46, NULL, "46 f_rest properties are no SH degree"));
+    CHECK(refused_rest(46, NULL, "between degree 3's 45 and degree 4's 72"));
+    CHECK(refused_rest(48, NULL, "48 f_rest properties are no SH degree"));
+    CHECK(refused_rest(45, "f_rest_50", "'f_rest_50' is present but 'f_rest_45' is not"));
+    CHECK(refused_rest(45, "f_rest_45", "degrees above 3 are not supported"));
+}
+
+/* Issue 32.6: Mip-Splatting's models carry a 3D smoothing filter (vertex
+ * property filter_3D) that changes every Gaussian's extent and opacity;
+ * rendering them without it would be silently wrong, so they are refused. */
+TEST(gaussian_mip_splatting_filter_3d_is_refused)
+{
+    CHECK(refused_rest(0, "filter_3D", "bad.ply:17: vertex property 'filter_3D'"));
+    CHECK(refused_rest(9, "filter_3D", "Mip-Splatting's 3D filter is not supported"));
+}
+
 /* The basis function k at dir, read through gaussian_sh_color: coefficient
  * 0.1 on basis k of the red channel (small enough that 0.5 + it is never
  * clamped), so Y_k = (R - 0.5) / 0.1. */

@@ -48,3 +48,14 @@ def test_gen_refuses_unknown_kinds_and_degrees(tmp_path):
     proc = run(["gen", "plane", "--gaussians", "2dgs", "--sh-degree", 4, "-o", tmp_path / "x.ply"])
     assert proc.returncode == 2 and "--sh-degree" in proc.stderr
     assert not (tmp_path / "x.ply").exists()
+
+
+def test_sh_degree_without_gaussians_is_refused(tmp_path):
+    """Issue 32.9: `--sh-degree` without `--gaussians` wrote surfels and
+    ignored the degree without a word; gen and surfels refuse it."""
+    cloud = tmp_path / "c.xyz"
+    cloud.write_text("".join(f"{i % 4} {i // 4} 0 0 0 1\n" for i in range(16)))
+    for cmd in (["gen", "plane"], ["surfels", cloud]):
+        proc = run([*cmd, "--sh-degree", 2, "-o", tmp_path / "x.ply"])
+        assert proc.returncode == 2 and "--sh-degree needs --gaussians" in proc.stderr, proc.stderr
+        assert not (tmp_path / "x.ply").exists()

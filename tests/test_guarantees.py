@@ -124,3 +124,22 @@ def test_resume_refuses_pixels_with_more_batches_than_the_render_gives(tmp_path)
     resumed = run([*args, "-o", tmp_path / "out.exr", "--resume", ck])
     assert resumed.returncode == 1 and "more than the 2 this render gives a pixel" in resumed.stderr, resumed.stderr
     assert not (tmp_path / "out.exr").exists()
+
+
+def test_fifos_are_refused_without_blocking(tmp_path):
+    """Issue 32.7: a FIFO named as the scene, a Gaussian model or a
+    cameras.json blocked forever: the file was opened (which waits for a
+    writer) before its type was checked. Each is refused, named, at once."""
+    fifo = tmp_path / "pipe"
+    os.mkfifo(fifo)
+    as_model = scene(tmp_path, '<scene><camera width="8" height="6"/><object><gaussianModel file="pipe"/>'
+                               '</object></scene>', "g.xml")
+    as_cameras = scene(tmp_path, '<scene><camera cameras="pipe" image="A"/><object><sphere radius="1"/></object>'
+                                 '</scene>', "c.xml")
+    for s in (fifo, as_model, as_cameras):
+        try:
+            proc = run([s, *FAST, "-o", tmp_path / "o.exr"], timeout=20)
+        except subprocess.TimeoutExpired:
+            raise AssertionError(f"{s.name}: still blocked on the FIFO after 20 s")
+        assert proc.returncode == 1 and f"{fifo}: not a regular file" in proc.stderr, proc.stderr
+    assert not (tmp_path / "o.exr").exists()

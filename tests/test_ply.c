@@ -271,3 +271,27 @@ TEST(ply_content_hash_covers_the_bytes)
     unlink(tmp_path("h1.ply")), unlink(tmp_path("h2.ply"));
     pointmodel_free(&m);
 }
+
+/* Issue 32.5: data the header does not account for was taken silently:
+ * trailing bytes after a binary file's declared elements (two vertices'
+ * data under 'element vertex 1'), a second 'element vertex', and ascii
+ * values their declared type cannot hold (2.5 as int, 300 as uchar). */
+TEST(ply_data_the_header_does_not_declare_is_refused)
+{
+    CHECK(fails_with(write_binary("tr.ply", 0, 1, 2), "28 bytes after the declared elements"));
+    CHECK(fails_with(write_binary("tr.ply", 1, 2, 3), "28 bytes after the declared elements"));
+    CHECK(reads_ok(write_binary("ok.ply", 0, 3, 3), 3));
+    CHECK(fails_with(write_text("dup.ply", HEADER_XYZNR "element vertex 1\nproperty float x\nend_header\n"
+                                "0 0 0 0 0 1 0.5\n1 0 0 0 0 1 0.5\n2\n"),
+                     "dup.ply:11: duplicate element 'vertex'"));
+    const char *ints = HEADER_XYZNR "property uchar red\nproperty uchar green\nproperty int blue\nend_header\n";
+    char text[1024];
+    snprintf(text, sizeof text, "%s0 0 0 0 0 1 0.5 255 0 7\n1 0 0 0 0 1 0.5 300 0 7\n", ints);
+    CHECK(fails_with(write_text("u8.ply", text), "u8.ply:16: vertex 1: property 'red' = 300"));
+    CHECK(fails_with(write_text("u8.ply", text), "300 is not a uchar"));
+    snprintf(text, sizeof text, "%s0 0 0 0 0 1 0.5 255 0 2.5\n1 0 0 0 0 1 0.5 3 0 7\n", ints);
+    CHECK(fails_with(write_text("i.ply", text), "i.ply:15: vertex 0: property 'blue' = 2.5"));
+    CHECK(fails_with(write_text("i.ply", text), "2.5 is not an int"));
+    snprintf(text, sizeof text, "%s0 0 0 0 0 1 0.5 255 0 -2147483648\n1 0 0 0 0 1 0.5 0 0 2147483647\n", ints);
+    CHECK(reads_ok(write_text("i.ply", text), 2));
+}

@@ -60,7 +60,7 @@ int cmd_gen(int argc, char **argv)
         {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
     shape_params p;
     shape_params_default(&p);
-    surfel_output o = {NULL, GAUSSIAN_AUTO, 0};
+    surfel_output o = {NULL, GAUSSIAN_AUTO, 0, 0};
     rr_error err;
     int c;
     while ((c = getopt_long(argc, argv, "ho:", longopts, NULL)) != -1) {
@@ -73,6 +73,10 @@ int cmd_gen(int argc, char **argv)
     }
     if (optind != argc - 1 || !o.out) {
         fputs("refrender gen: need exactly one SHAPE and -o FILE.ply; try 'refrender gen --help'\n", stderr);
+        return 2;
+    }
+    if (surfel_output_check(&o, &err)) {
+        fprintf(stderr, "refrender gen: %s\n", err.msg);
         return 2;
     }
     snprintf(p.kind, sizeof p.kind, "%s", argv[optind]);

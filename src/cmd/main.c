@@ -648,7 +648,10 @@ static int render_and_write(const scene *s, const render_options *o, const char 
     accel_settings set = {shut.open, shut.close, s->epsilon, s->kernel_sigma, !o->no_static_reuse};
     if (accel_build(s, &set, &acc, err))
         return -1;
-    install_signal_handlers();
+    if (interrupted) { /* the build cannot be stopped midway; it is not rendered */
+        accel_free(acc);
+        return rr_fail(err, "interrupted while building the BVH");
+    }
     int rc = 0;
     /* 64-bit: --frame 2147483647 must not wrap around into more frames */
     for (long long f = o->first_frame; !rc && f <= o->last_frame; f++) {
@@ -692,6 +695,10 @@ int cmd_render(int argc, char **argv)
         if (!o.sampler_given)
             o.sampler = SAMPLER_SOBOL;
     }
+    /* before loading (issue 32.10): a signal while a large model loads or its
+     * BVH builds exits 130 as during the render, not 143 */
+    install_signal_handlers();
+    rr_interrupt_watch(&interrupted);
     char scene_buf[PATH_MAX + 64];
     if (!o.scene)
         o.scene = default_scene(scene_buf, sizeof scene_buf);
@@ -704,7 +711,12 @@ int cmd_render(int argc, char **argv)
         (o.checkpoint && cli_check_writable(o.checkpoint, &err)) ||
         scene_load_file_params(o.scene, &o.params, &s, &err)) {
         fprintf(stderr, "refrender: %s\n", err.msg);
-        return 1;
+        return interrupted ? 130 : 1;
+    }
+    if (interrupted) { /* the load ended before it saw the signal */
+        scene_free(&s);
+        fputs("refrender: interrupted while loading the scene\n", stderr);
+        return 130;
     }
     print_warnings(&s.warnings);
     rc = apply_overrides(&s, &o, &err) ? -1 : render_and_write(&s, &o, cmdline, &err);

@@ -20,10 +20,19 @@ int surfel_output_option(int c, const char *arg, surfel_output *o, rr_error *err
             return rr_fail(err, "--gaussians: expected 2dgs or 3dgs, got '%s'", arg);
         o->gaussians = arg[0] == '2' ? GAUSSIAN_2D : GAUSSIAN_3D;
         return 0;
-    case 's': return cli_int("--sh-degree", arg, 0, GAUSSIAN_MAX_SH_DEGREE, &o->sh_degree, err);
+    case 's':
+        o->sh_degree_given = 1;
+        return cli_int("--sh-degree", arg, 0, GAUSSIAN_MAX_SH_DEGREE, &o->sh_degree, err);
     case 'o': o->out = arg; return 0;
     }
     return 1;
+}
+
+int surfel_output_check(const surfel_output *o, rr_error *err)
+{
+    if (o->sh_degree_given && o->gaussians == GAUSSIAN_AUTO)
+        return rr_fail(err, "--sh-degree needs --gaussians 2dgs or 3dgs (surfels have no SH coefficients)");
+    return 0;
 }
 
 int surfel_output_write(const surfel_output *o, const surfel *s, size_t n, rr_error *err)

@@ -99,7 +99,7 @@ int cmd_surfels(int argc, char **argv)
         {"color2", required_argument, 0, 'd'}, {"output", required_argument, 0, 'o'},
         {"gaussians", required_argument, 0, 'g'}, {"sh-degree", required_argument, 0, 's'},
         {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
-    surfels_options o = {1.5, 0, 0, rr_default_color(), rr_default_color2(), {NULL, GAUSSIAN_AUTO, 0}};
+    surfels_options o = {1.5, 0, 0, rr_default_color(), rr_default_color2(), {NULL, GAUSSIAN_AUTO, 0, 0}};
     rr_error err;
     int c;
     while ((c = getopt_long(argc, argv, "ho:", longopts, NULL)) != -1) {
@@ -112,6 +112,10 @@ int cmd_surfels(int argc, char **argv)
     }
     if (optind != argc - 1 || !o.output.out) {
         fputs("refrender surfels: need exactly one INPUT and -o OUT.ply; try 'refrender surfels --help'\n", stderr);
+        return 2;
+    }
+    if (surfel_output_check(&o.output, &err)) {
+        fprintf(stderr, "refrender surfels: %s\n", err.msg);
         return 2;
     }
     if (cli_check_writable(o.output.out, &err) || cli_refuse_overwriting_inputs(o.output.out, argv + optind, 1, &err) ||
