@@ -47,3 +47,6 @@ convert "$CACHE/cgal/data/points_3/kitten.xyz" kitten --fit 1 --checker 0.2 --co
 # the bunny as a trained 2DGS model's PLY (SH degree 3), for scenes/gaussians.xml
 convert /usr/share/glmark2/models/bunny.obj bunny_2dgs --fit 1 --checker 0.25 --color "0.85 0.8 0.7" \
     --color2 "0.35 0.3 0.25" --gaussians 2dgs --sh-degree 3
+# and as a 3DGS model, for scenes/gaussian_semantics.xml
+convert /usr/share/glmark2/models/bunny.obj bunny_3dgs --fit 1 --checker 0.25 --color "0.85 0.8 0.7" \
+    --color2 "0.35 0.3 0.25" --gaussians 3dgs --sh-degree 3
