@@ -1,8 +1,10 @@
 """The command line as a user meets it: help, errors naming file and line,
 atomic output, metadata, preview, generator, default scene, interruption."""
+import os
 import signal
 import subprocess
 import time
+from pathlib import Path
 
 import numpy as np
 import OpenImageIO as oiio
@@ -180,7 +182,15 @@ def test_sigterm_while_loading_a_large_model_exits_130(tmp_path):
                      '<object><gaussianModel file="big.ply"/></object></scene>')
     proc = subprocess.Popen([BIN, str(scene), "--spp", "1", "--tspp", "1", "-o", str(tmp_path / "o.exr")],
                             stderr=subprocess.PIPE, text=True)
-    time.sleep(0.4)
+    # start-up (shared libraries) can take longer than the load: signal once the model is open
+    deadline, fds = time.time() + 30, Path(f"/proc/{proc.pid}/fd")
+    while proc.poll() is None and time.time() < deadline:
+        try:
+            if any(os.readlink(fd).endswith("big.ply") for fd in fds.iterdir()):
+                break
+        except OSError:  # an fd closed while listed
+            pass
+        time.sleep(0.001)
     assert proc.poll() is None, "the load ended before the signal: make the model larger"
     proc.send_signal(signal.SIGTERM)
     _, err = proc.communicate(timeout=60)
