@@ -108,7 +108,7 @@ endif
 # in build-fuzz/. `make test` replays each target's committed corpus (a
 # regression run of seconds); `make fuzz FUZZ_SECONDS=N` fuzzes each target
 # for N seconds, keeping what it finds in build-fuzz/corpus/.
-FUZZ_TARGETS := scene ply anim state gaussian camjson
+FUZZ_TARGETS := scene ply anim state gaussian camjson render_gaussian render_camjson
 FUZZ_SECONDS ?= 60
 FUZZ_DIR     := build-fuzz
 FUZZ_FLAGS   := -O1 -g -fno-omit-frame-pointer -fsanitize=address,undefined -fno-sanitize-recover=undefined
@@ -128,12 +128,17 @@ $(FUZZ_DIR)/fuzz_%.o: tests/fuzz/fuzz_%.c $(FUZZ_DIR)/fuzz_%.d
 	@mkdir -p $(FUZZ_DIR)
 	clang $(FUZZ_CFLAGS) -MMD -MP -Isrc -c $< -o $@
 	@touch $@
-FUZZ_DEPS := $(FUZZ_OBJS:.o=.d) $(FUZZ_TARGETS:%=$(FUZZ_DIR)/fuzz_%.d)
+# the rendering targets' shared harness (tests/fuzz/render_check.h)
+$(FUZZ_DIR)/render_check.o: tests/fuzz/render_check.c $(FUZZ_DIR)/render_check.d
+	@mkdir -p $(FUZZ_DIR)
+	clang $(FUZZ_CFLAGS) -MMD -MP -Isrc -c $< -o $@
+	@touch $@
+FUZZ_DEPS := $(FUZZ_OBJS:.o=.d) $(FUZZ_TARGETS:%=$(FUZZ_DIR)/fuzz_%.d) $(FUZZ_DIR)/render_check.d
 $(FUZZ_DEPS):
 -include $(wildcard $(FUZZ_DEPS))
-$(FUZZ_DIR)/fuzz_%: $(FUZZ_DIR)/fuzz_%.o $(FUZZ_OBJS)
+$(FUZZ_DIR)/fuzz_%: $(FUZZ_DIR)/fuzz_%.o $(FUZZ_DIR)/render_check.o $(FUZZ_OBJS)
 	clang++ $(FUZZ_FLAGS) -fsanitize=fuzzer $^ -o $@ $(LDLIBS)
-.SECONDARY: $(FUZZ_OBJS) $(FUZZ_TARGETS:%=$(FUZZ_DIR)/fuzz_%.o)
+.SECONDARY: $(FUZZ_OBJS) $(FUZZ_TARGETS:%=$(FUZZ_DIR)/fuzz_%.o) $(FUZZ_DIR)/render_check.o
 
 test-fuzz: $(FUZZ_TARGETS:%=$(FUZZ_DIR)/fuzz_%)
 	for t in $(FUZZ_TARGETS); do \

@@ -2,6 +2,7 @@
 
 #include <json-c/json.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "inputfile.h"
@@ -214,9 +215,9 @@ static long find_entry(const char *name, json_object *root, const char *img_name
     return found;
 }
 
-int camjson_parse(const char *name, const char *data, size_t len, const char *img_name, camjson_camera *out,
-                  rr_error *err)
+int camjson_load_text(const char *name, const char *data, size_t len, camjson_file *f, rr_error *err)
 {
+    memset(f, 0, sizeof *f);
     json_tokener *tok = json_tokener_new();
     if (!tok)
         return rr_fail(err, "out of memory");
@@ -232,28 +233,66 @@ int camjson_parse(const char *name, const char *data, size_t len, const char *im
         return rc;
     }
     json_tokener_free(tok);
-    int rc = -1;
-    long idx;
-    if (!json_object_is_type(root, json_type_array))
-        rr_fail(err, "%s: not a cameras.json (expected an array of cameras)", name);
-    else if ((idx = find_entry(name, root, img_name, err)) >= 0) {
-        memset(out, 0, sizeof *out);
-        snprintf(out->img_name, sizeof out->img_name, "%s", img_name);
-        rc = read_camera(name, (size_t)idx, json_object_array_get_idx(root, (size_t)idx), out, err);
+    if (!json_object_is_type(root, json_type_array)) {
+        json_object_put(root);
+        return rr_fail(err, "%s: not a cameras.json (expected an array of cameras)", name);
     }
-    json_object_put(root);
+    f->name = strdup(name);
+    if (!f->name) {
+        json_object_put(root);
+        return rr_fail(err, "out of memory");
+    }
+    f->root = root;
+    return 0;
+}
+
+int camjson_load(const char *path, camjson_file *f, uint64_t *content_hash, rr_error *err)
+{
+    input_file in;
+    if (input_file_read(path, CAMJSON_MAX_BYTES, &in, err))
+        return -1;
+    int rc = camjson_load_text(path, in.data, in.len, f, err);
+    if (!rc && content_hash)
+        *content_hash = input_hash(*content_hash, in.data, in.len);
+    input_file_free(&in);
+    return rc;
+}
+
+int camjson_find(const camjson_file *f, const char *img_name, camjson_camera *out, rr_error *err)
+{
+    long idx = find_entry(f->name, f->root, img_name, err);
+    if (idx < 0)
+        return -1;
+    memset(out, 0, sizeof *out);
+    snprintf(out->img_name, sizeof out->img_name, "%s", img_name);
+    return read_camera(f->name, (size_t)idx, json_object_array_get_idx(f->root, (size_t)idx), out, err);
+}
+
+void camjson_free(camjson_file *f)
+{
+    json_object_put(f->root);
+    free(f->name);
+    memset(f, 0, sizeof *f);
+}
+
+int camjson_parse(const char *name, const char *data, size_t len, const char *img_name, camjson_camera *out,
+                  rr_error *err)
+{
+    camjson_file f;
+    if (camjson_load_text(name, data, len, &f, err))
+        return -1;
+    int rc = camjson_find(&f, img_name, out, err);
+    camjson_free(&f);
     return rc;
 }
 
 int camjson_read(const char *path, const char *img_name, camjson_camera *out, uint64_t *content_hash,
                  rr_error *err)
 {
-    input_file f;
-    if (input_file_read(path, CAMJSON_MAX_BYTES, &f, err))
+    camjson_file f;
+    if (camjson_load(path, &f, content_hash, err))
         return -1;
-    int rc = camjson_parse(path, f.data, f.len, img_name, out, err);
-    if (!rc && content_hash)
-        *content_hash = input_hash(*content_hash, f.data, f.len);
-    input_file_free(&f);
+    int rc = camjson_find(&f, img_name, out, err);
+    camjson_free(&f);
     return rc;
 }

@@ -21,6 +21,23 @@ typedef struct {
     double fx, fy;
 } camjson_camera;
 
+/* A parsed cameras.json: parsed once, however many of its cameras a
+ * scene names (a camera and two poses took three parses of a 236 MiB
+ * file, issue 32). */
+struct json_object;
+typedef struct {
+    struct json_object *root; /* the array of cameras */
+    char *name;               /* the file's name, for errors */
+} camjson_file;
+
+/* Reads and parses the file (its bytes folded into *content_hash unless
+ * NULL); errors: not JSON (with the line), not an array. */
+int camjson_load(const char *path, camjson_file *f, uint64_t *content_hash, rr_error *err);
+int camjson_load_text(const char *name, const char *data, size_t len, camjson_file *f, rr_error *err);
+/* The camera named img_name (errors as camjson_read's). */
+int camjson_find(const camjson_file *f, const char *img_name, camjson_camera *out, rr_error *err);
+void camjson_free(camjson_file *f);
+
 /* The camera named img_name in the cameras.json at path. Errors name the
  * file and, where one is at fault, the entry (index and img_name) and its
  * field: not JSON (with the line), not an array, a missing or mistyped

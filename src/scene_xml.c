@@ -72,10 +72,10 @@ static int training_size(xml_ctx *c, xmlNodePtr n, int *width, int *height)
     return 0;
 }
 
-static int read_json_camera(xml_ctx *c, xmlNodePtr n, const char *path, const char *image, camjson_camera *out)
+static int find_json_camera(xml_ctx *c, xmlNodePtr n, const camjson_file *f, const char *image, camjson_camera *out)
 {
     rr_error sub;
-    if (camjson_read(path, image, out, c->inputs_hash, &sub))
+    if (camjson_find(f, image, out, &sub))
         return rr_fail(c->err, "%s (camera of %s:%ld)", sub.msg, c->name, xmlGetLineNo(n));
     return 0;
 }
@@ -84,7 +84,7 @@ static int read_json_camera(xml_ctx *c, xmlNodePtr n, const char *path, const ch
  * from cameras.json pose A at t0 to pose B at t1, the position linear and
  * the rotation slerped (animation_between_poses); the camera's rest pose
  * becomes the one this motion moves. */
-static int parse_pose_motion(xml_ctx *c, xmlNodePtr anim, const char *json, camera *cam, animation *a)
+static int parse_pose_motion(xml_ctx *c, xmlNodePtr anim, const camjson_file *json, camera *cam, animation *a)
 {
     static const char *const ok[] = {"time", "image", NULL};
     camjson_camera pose[2];
@@ -98,7 +98,7 @@ static int parse_pose_motion(xml_ctx *c, xmlNodePtr anim, const char *json, came
             return xml_fail(c, p, "a camera's pose motion is exactly two <pose> elements (for longer paths, "
                                   "keyframes)");
         if (xml_check_attributes(c, p, ok) || xml_attr_double(c, p, "time", &t[k], 1) ||
-            xml_attr_text(c, p, "image", image, sizeof image) <= 0 || read_json_camera(c, p, json, image, &pose[k]))
+            xml_attr_text(c, p, "image", image, sizeof image) <= 0 || find_json_camera(c, p, json, image, &pose[k]))
             return c->err->msg[0] ? -1 : xml_fail(c, p, "<pose> needs 'image' (an img_name of the cameras.json)");
         k++;
     }
@@ -123,7 +123,7 @@ static int has_pose_child(xmlNodePtr anim)
 }
 
 /* <camera ...> with an optional <animation> moving its rest pose rigidly. */
-static int parse_camera_motion(xml_ctx *c, xmlNodePtr n, camera *cam, animation *a, const char *json)
+static int parse_camera_motion(xml_ctx *c, xmlNodePtr n, camera *cam, animation *a, const camjson_file *json)
 {
     if (xml_check_no_text(c, n))
         return -1;
@@ -154,10 +154,11 @@ static int parse_camera_motion(xml_ctx *c, xmlNodePtr n, camera *cam, animation 
 }
 
 /* <camera cameras="cameras.json" image="NAME" trainingResolution="auto"/>:
- * a trained model's camera, at the size it was trained at. */
-static int parse_json_camera(xml_ctx *c, xmlNodePtr n, camera *cam, char *path, size_t size)
+ * a trained model's camera; the file, parsed once, stays in *f for the
+ * poses of its motion. */
+static int parse_json_camera(xml_ctx *c, xmlNodePtr n, camera *cam, camjson_file *f)
 {
-    char rel[4096], image[256];
+    char rel[4096], path[8192], image[256];
     static const char *const exclusive[] = {"position", "lookat", "up", "fov", "width", "height", NULL};
     for (const char *const *k = exclusive; *k; k++)
         if (xmlHasProp(n, (const xmlChar *)*k))
@@ -166,34 +167,45 @@ static int parse_json_camera(xml_ctx *c, xmlNodePtr n, camera *cam, char *path, 
     int got = xml_attr_text(c, n, "image", image, sizeof image);
     if (got <= 0)
         return got < 0 ? -1 : xml_fail(c, n, "a camera from 'cameras' needs 'image' (an img_name of the file)");
+    if (xml_attr_text(c, n, "cameras", rel, sizeof rel) < 0 || xml_resolve_path(c, n, rel, path, sizeof path))
+        return -1;
+    rr_error sub;
+    if (camjson_load(path, f, c->inputs_hash, &sub))
+        return rr_fail(c->err, "%s (camera of %s:%ld)", sub.msg, c->name, xmlGetLineNo(n));
     camjson_camera j;
-    if (xml_attr_text(c, n, "cameras", rel, sizeof rel) < 0 || xml_resolve_path(c, n, rel, path, size) ||
-        read_json_camera(c, n, path, image, &j))
+    if (find_json_camera(c, n, f, image, &j))
         return -1;
     if (scene_add_input(c->sc, path))
         return xml_fail(c, n, "out of memory");
-    camera_from_pose(cam, j.position, j.c2w, &j);
-    return training_size(c, n, &cam->width, &cam->height);
+    return camera_from_pose(cam, j.position, j.c2w, &j);
+}
+
+static int parse_plain_camera(xml_ctx *c, xmlNodePtr n, camera *cam)
+{
+    if (xmlHasProp(n, (const xmlChar *)"trainingResolution"))
+        return xml_fail(c, n, "trainingResolution is for a camera from 'cameras' (a cameras.json): give this one "
+                              "its width and height");
+    return xml_attr_vec3(c, n, "position", &cam->position, 0) || xml_attr_vec3(c, n, "lookat", &cam->lookat, 0) ||
+                   xml_attr_vec3(c, n, "up", &cam->up, 0) || xml_attr_double(c, n, "fov", &cam->fov_degrees, 0) ||
+                   xml_attr_int(c, n, "width", &cam->width, 1, 65536) ||
+                   xml_attr_int(c, n, "height", &cam->height, 1, 65536)
+               ? -1 : 0;
 }
 
 static int parse_camera(xml_ctx *c, xmlNodePtr n, camera *cam, animation *motion)
 {
     static const char *const ok[] = {"position", "lookat", "up",    "fov",
                                      "width",    "height", "cameras", "image", "trainingResolution", NULL};
-    char json[8192];
     int from_json = xmlHasProp(n, (const xmlChar *)"cameras") != NULL;
     if (xml_check_attributes(c, n, ok))
         return -1;
-    if (!from_json && xmlHasProp(n, (const xmlChar *)"trainingResolution"))
-        return xml_fail(c, n, "trainingResolution is for a camera from 'cameras' (a cameras.json): give this one "
-                              "its width and height");
-    if (from_json ? parse_json_camera(c, n, cam, json, sizeof json)
-                  : xml_attr_vec3(c, n, "position", &cam->position, 0) || xml_attr_vec3(c, n, "lookat", &cam->lookat, 0) ||
-                        xml_attr_vec3(c, n, "up", &cam->up, 0) || xml_attr_double(c, n, "fov", &cam->fov_degrees, 0) ||
-                        xml_attr_int(c, n, "width", &cam->width, 1, 65536) ||
-                        xml_attr_int(c, n, "height", &cam->height, 1, 65536))
-        return -1;
-    if (parse_camera_motion(c, n, cam, motion, from_json ? json : NULL))
+    camjson_file json = {0};
+    int rc = from_json ? parse_json_camera(c, n, cam, &json) : parse_plain_camera(c, n, cam);
+    rc = rc || parse_camera_motion(c, n, cam, motion, from_json ? &json : NULL);
+    /* after any pose motion, which takes its rest pose's size from the file */
+    rc = rc || (from_json && training_size(c, n, &cam->width, &cam->height));
+    camjson_free(&json);
+    if (rc)
         return -1;
     rr_error sub;
     if (camera_prepare(cam, &sub))

@@ -131,6 +131,7 @@ def loadcam_size(w, h, r):
 
 
 @pytest.mark.parametrize("size, attr, r", [((4946, 3286), "", -1), ((4946, 3286), ' trainingResolution="auto"', -1),
+                                           ((4946, 3286), ' trainingResolution="2" pose', 2),
                                            ((1500, 1001), "", -1), ((4946, 3286), ' trainingResolution="4"', 4),
                                            ((1002, 666), ' trainingResolution="8"', 8),
                                            ((4946, 3286), ' trainingResolution="1237"', 1237)])
@@ -142,7 +143,9 @@ def test_a_camera_renders_at_the_size_its_model_was_trained_at(tmp_path, size, a
     (tmp_path / "cameras.json").write_text(json.dumps([dict(entry("A.png", np.eye(3), [0, 0, -3.0]), width=w,
                                                             height=h, fx=0.9 * w, fy=0.9 * w)]))
     path = tmp_path / "s.xml"
-    path.write_text(f'<scene><camera cameras="cameras.json" image="A.png"{attr}/>'
+    close = "/>" if not attr.endswith(" pose") else \
+        '><animation><pose time="0" image="A.png"/><pose time="1" image="A.png"/></animation></camera>'
+    path.write_text(f'<scene><camera cameras="cameras.json" image="A.png"{attr.removesuffix(" pose")}{close}'
                     f'<object name="s"><sphere radius="1"/></object></scene>')
     proc = run(["export", path, "-o", tmp_path / "e.json"])
     assert proc.returncode == 0, proc.stderr
