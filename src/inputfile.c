@@ -5,6 +5,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/mman.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -49,7 +50,7 @@ static FILE *open_regular(const char *path, struct stat *st, rr_error *err)
 
 int input_file_read(const char *path, size_t max_bytes, input_file *f, rr_error *err)
 {
-    f->data = NULL, f->len = 0;
+    memset(f, 0, sizeof *f);
     struct stat st;
     FILE *fp = open_regular(path, &st, err);
     if (!fp)
@@ -74,7 +75,51 @@ int input_file_read(const char *path, size_t max_bytes, input_file *f, rr_error 
 
 void input_file_free(input_file *f)
 {
-    free(f->data);
-    f->data = NULL;
-    f->len = 0;
+    if (f->mapped)
+        munmap(f->data, f->len);
+    else
+        free(f->data);
+    memset(f, 0, sizeof *f);
+}
+
+/* Below this, a copy costs little; a mapping whose size is a whole number
+ * of pages would have no NUL after its end for the text parsers. */
+#define STREAM_MIN_BYTES ((size_t)64 << 20)
+
+int input_file_stream(const char *path, size_t max_bytes, input_file *f, rr_error *err)
+{
+    memset(f, 0, sizeof *f);
+    struct stat st;
+    FILE *fp = open_regular(path, &st, err);
+    if (!fp)
+        return -1;
+    size_t page = (size_t)sysconf(_SC_PAGESIZE), size = (size_t)st.st_size;
+    if ((uint64_t)st.st_size > max_bytes || size < STREAM_MIN_BYTES || size % page == 0) {
+        fclose(fp);
+        return input_file_read(path, max_bytes, f, err);
+    }
+    void *map = mmap(NULL, size, PROT_READ, MAP_PRIVATE, fileno(fp), 0);
+    fclose(fp); /* the mapping stays */
+    if (map == MAP_FAILED)
+        return input_file_read(path, max_bytes, f, err);
+    madvise(map, size, MADV_SEQUENTIAL);
+    f->data = map, f->len = size, f->mapped = 1;
+    return 0;
+}
+
+void input_file_consume(input_file *f, size_t upto)
+{
+    if (!f->mapped || upto <= f->released)
+        return;
+    size_t page = (size_t)sysconf(_SC_PAGESIZE), end = upto / page * page;
+    if (end <= f->released)
+        return;
+    f->hash = input_hash(f->hash, f->data + f->released, end - f->released);
+    madvise(f->data + f->released, end - f->released, MADV_DONTNEED);
+    f->released = end;
+}
+
+uint64_t input_file_hash(const input_file *f)
+{
+    return input_hash(f->hash, f->data + f->released, f->len - f->released);
 }

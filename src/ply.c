@@ -47,6 +47,7 @@ typedef struct {
     const ply_schema *schema; /* the vertex properties read, by name */
     const ply_visitor *visitor;
     rr_error *err;
+    input_file *src; /* the file being read, when streamed: what is read is released (inputfile.h) */
 } ply_reader;
 
 static const struct {
@@ -487,6 +488,8 @@ static int read_vertices(ply_reader *r, const ply_element *e, const ply_visitor 
         char why[512];
         if (i % 65536 == 0 && rr_interrupted()) /* millions of vertices take seconds */
             return rr_fail(r->err, "%s: interrupted while reading vertex %zu of %zu", r->path, i, e->count);
+        if (i % 65536 == 0 && r->src) /* the file need not stay in memory beside the model */
+            input_file_consume(r->src, (size_t)(r->cur - r->data));
         if (read_instance(r, e, i, vals))
             return -1;
         if (v->vertex(v->user, vals, present, why, sizeof why))
@@ -530,8 +533,8 @@ static int read_elements(ply_reader *r, const ply_visitor *v)
     return 0;
 }
 
-int ply_parse_vertices(const char *name, const char *data, size_t len, const ply_schema *schema,
-                       const ply_visitor *v, rr_error *err)
+static int parse_vertices(const char *name, const char *data, size_t len, input_file *src, const ply_schema *schema,
+                          const ply_visitor *v, rr_error *err)
 {
     RR_CHECK(schema->count <= PLY_MAX_SLOTS);
     ply_reader *r = calloc(1, sizeof *r); /* 49 KB of property tables: not on the stack */
@@ -544,6 +547,7 @@ int ply_parse_vertices(const char *name, const char *data, size_t len, const ply
     r->end = data + len;
     r->schema = schema;
     r->visitor = v;
+    r->src = src;
     int rc = read_header(r);
     if (!rc) {
         r->line++; /* ascii body starts on the line after end_header */
@@ -551,6 +555,12 @@ int ply_parse_vertices(const char *name, const char *data, size_t len, const ply
     }
     free(r);
     return rc;
+}
+
+int ply_parse_vertices(const char *name, const char *data, size_t len, const ply_schema *schema,
+                       const ply_visitor *v, rr_error *err)
+{
+    return parse_vertices(name, data, len, NULL, schema, v, err);
 }
 
 int ply_parse(const char *name, const char *data, size_t len, vec3 default_color, pointmodel *m, rr_error *err)
@@ -564,11 +574,12 @@ int ply_read_vertices(const char *path, const ply_schema *schema, const ply_visi
                       rr_error *err)
 {
     input_file in;
-    if (input_file_read(path, PLY_MAX_BYTES, &in, err))
+    if (input_file_stream(path, PLY_MAX_BYTES, &in, err))
         return -1;
+    in.hash = content_hash ? *content_hash : INPUT_HASH_INIT;
+    int rc = parse_vertices(path, in.data, in.len, &in, schema, v, err);
     if (content_hash)
-        *content_hash = input_hash(*content_hash, in.data, in.len);
-    int rc = ply_parse_vertices(path, in.data, in.len, schema, v, err);
+        *content_hash = input_file_hash(&in);
     input_file_free(&in);
     return rc;
 }

@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include "../src/gaussian.h"
+#include "../src/inputfile.h"
 #include "../src/ply.h"
 #include "harness.h"
 
@@ -408,4 +409,45 @@ TEST(gaussians_from_surfels_round_trip_through_the_official_layout)
         }
         gaussian_model_free(&m), gaussian_model_free(&back);
     }
+}
+
+/* A model larger than the streaming threshold (64 MiB) is read from a
+ * mapping released as it is parsed (issue 32: the whole file and the model
+ * were held at once): the same model and the same content hash as reading
+ * the bytes from memory. */
+TEST(gaussian_a_large_model_is_streamed_to_the_same_model_and_hash)
+{
+    gaussian_model m, back, ref;
+    rr_error err;
+    gaussian_model_init(&m), gaussian_model_init(&back), gaussian_model_init(&ref);
+    m.kind = GAUSSIAN_3D, m.sh_degree = 3, m.sh_coeffs = 16;
+    size_t n = 300000; /* 248 bytes each: 74 MB */
+    CHECK(gaussian_model_alloc(&m, n) == 0);
+    m.count = n;
+    for (size_t i = 0; i < n; i++) {
+        for (int k = 0; k < 3; k++)
+            m.mean[3 * i + k] = (float)(i % 1000) * 0.001f + (float)k, m.scale[3 * i + k] = 0.01f * (float)(k + 1);
+        m.rotation[4 * i] = 1, m.rotation[4 * i + 1] = m.rotation[4 * i + 2] = m.rotation[4 * i + 3] = 0;
+        m.opacity[i] = 0.5f;
+        for (int k = 0; k < 48; k++)
+            m.sh[48 * i + k] = (float)((i * 48 + (size_t)k) % 997) * 1e-3f;
+    }
+    char path[] = "/tmp/refrender-test-XXXXXX.ply";
+    int fd = mkstemps(path, 4);
+    CHECK(fd >= 0);
+    close(fd);
+    CHECK(gaussian_write_ply(path, &m, &err) == 0);
+    uint64_t streamed = INPUT_HASH_INIT;
+    CHECK(gaussian_read(path, GAUSSIAN_AUTO, &back, &streamed, &err) == 0);
+    input_file whole;
+    CHECK(input_file_read(path, (size_t)1 << 30, &whole, &err) == 0);
+    CHECK(whole.len > ((size_t)64 << 20));
+    CHECK(streamed == input_hash(INPUT_HASH_INIT, whole.data, whole.len));
+    CHECK(gaussian_parse(path, whole.data, whole.len, GAUSSIAN_AUTO, &ref, &err) == 0);
+    CHECK(back.count == n && ref.count == n);
+    CHECK(!memcmp(back.mean, ref.mean, 3 * n * sizeof(float)) && !memcmp(back.sh, ref.sh, 48 * n * sizeof(float)));
+    CHECK(!memcmp(back.scale, ref.scale, 3 * n * sizeof(float)) && !memcmp(back.opacity, ref.opacity, n * sizeof(float)));
+    input_file_free(&whole);
+    unlink(path);
+    gaussian_model_free(&m), gaussian_model_free(&back), gaussian_model_free(&ref);
 }

@@ -289,6 +289,76 @@ int bench_in_child(void (*run)(const void *in, void *out), const void *in, void 
 
 static void gs_run_child(const void *in, void *out) { gs_run(in, out); }
 
+/* ---- loading ------------------------------------------------------------ */
+
+typedef struct {
+    const char *path;
+    size_t count;
+} load_case;
+
+typedef struct {
+    double peak_bytes, model_bytes; /* per Gaussian */
+} load_result;
+
+static double resident_bytes(void)
+{
+    long pages = 0, resident = 0;
+    FILE *f = fopen("/proc/self/statm", "r");
+    if (f && fscanf(f, "%ld %ld", &pages, &resident) != 2)
+        resident = 0;
+    if (f)
+        fclose(f);
+    return (double)resident * (double)sysconf(_SC_PAGESIZE);
+}
+
+/* In a child: the peak resident memory gaussian_read adds, per Gaussian. */
+static void load_child(const void *in, void *out)
+{
+    const load_case *c = in;
+    load_result *r = out;
+    double before = resident_bytes();
+    gaussian_model m;
+    rr_error err;
+    uint64_t hash = 0;
+    gaussian_model_init(&m);
+    if (gaussian_read(c->path, GAUSSIAN_AUTO, &m, &hash, &err)) {
+        fprintf(stderr, "bench: %s\n", err.msg);
+        _exit(1);
+    }
+    struct rusage ru;
+    getrusage(RUSAGE_SELF, &ru);
+    r->peak_bytes = (ru.ru_maxrss * 1024.0 - before) / (double)m.count;
+    r->model_bytes = (double)(3 + 3 + 4 + 1 + 3 * (size_t)m.sh_coeffs) * sizeof(float);
+    gaussian_model_free(&m);
+}
+
+/* A 1M 3DGS model (SH degree 3) written as the official PLY, then read. */
+static int gs_load_row(size_t count)
+{
+    gs_case c = {count, 64, 1, 1, GAUSSIAN_3D};
+    scene s;
+    gs_scene(&c, &s);
+    char path[] = "/tmp/refrender-bench-XXXXXX.ply";
+    int fd = mkstemps(path, 4);
+    rr_error err;
+    if (fd < 0 || gaussian_write_ply(path, &s.objects[0].gaussians, &err)) {
+        fprintf(stderr, "bench: cannot write a model to load\n");
+        scene_free(&s);
+        return -1;
+    }
+    close(fd);
+    scene_free(&s);
+    load_case lc = {path, count};
+    load_result r;
+    int rc = bench_in_child(load_child, &lc, &r, sizeof r);
+    unlink(path);
+    if (rc)
+        return -1;
+    printf("\nloading a 3DGS PLY of %zu Gaussians (SH degree 3): peak %.0f B/Gaussian above the process "
+           "(the model itself: %.0f)\n", count, r.peak_bytes, r.model_bytes);
+    return 0;
+}
+
 static int gs_row(const gs_case *c, FILE *csv)
 {
     gs_result r;
@@ -317,5 +387,6 @@ int bench_gaussians(int quick, int threads, FILE *csv)
            "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n", c.res, c.res, c.threads);
     int failed = gs_row(&c, csv);
     c.kind = GAUSSIAN_3D;
-    return gs_row(&c, csv) || failed ? -1 : 0;
+    failed |= gs_row(&c, csv);
+    return gs_load_row(c.count) || failed ? -1 : 0;
 }
