@@ -72,7 +72,26 @@ def reference_settings(path):
         raise Failure(f"{path}: no standard errors (render the reference with --batches >= 2)")
     return {"open": float(header["refrender:shutterOpen"]), "close": float(header["refrender:shutterClose"]),
             "filter": header.get("refrender:pixelFilter", "box"), "blur": header.get("refrender:blurSpace", "model"),
-            "res": header["refrender:resolution"]}
+            "res": header["refrender:resolution"], "header": header, "path": path}
+
+
+# What must agree between the reference and a frame for the comparison to
+# mean anything: the same scene file, inputs (models, cameras), -D
+# parameters and Gaussian semantics, at the same size.
+SAME_SCENE = ("refrender:sceneHash", "refrender:inputsHash", "refrender:parametersHash", "refrender:gaussiansHash",
+              "refrender:resolution", "refrender:pixelFilter", "refrender:blurSpace")
+
+
+def check_same_scene(settings, frame_path, frame_header, frame_shape, ref_shape):
+    """A reference of another scene, model, parameters or size gives a plausible table: refuse it."""
+    for key in SAME_SCENE:
+        want, got = settings["header"].get(key), frame_header.get(key)
+        if want is not None and got is not None and str(want) != str(got):
+            raise Failure(f"{settings['path']}: its {key} is '{want}' but this scene renders '{got}' "
+                          f"({frame_path}): the reference is of another scene, model, parameters or settings")
+    if frame_shape != ref_shape:
+        raise Failure(f"{settings['path']}: {ref_shape[1]}x{ref_shape[0]} pixels (a crop window?) but the frames are "
+                      f"{frame_shape[1]}x{frame_shape[0]}: render the reference whole, at the frames' --res")
 
 
 def read_rgba(path):
@@ -80,8 +99,9 @@ def read_rgba(path):
     return np.stack([ch[c] for c in "RGBA"], axis=-1).astype(np.float64), ch
 
 
-def render_frames(scene, times, settings, extra, out_dir, cache):
-    """The sharp frames at `times`, each rendered once (cache: time -> RGBA)."""
+def render_frames(scene, times, settings, extra, out_dir, cache, ref_shape):
+    """The sharp frames at `times`, each rendered once (cache: time -> RGBA);
+    the first checked to be of the reference's scene."""
     for i, t in enumerate(times):
         if t in cache:
             continue
@@ -90,6 +110,9 @@ def render_frames(scene, times, settings, extra, out_dir, cache):
         run([scene, "--pixel-filter", settings["filter"], "--blur-space", settings["blur"], "--res", settings["res"],
              "--quiet", *extra, "--time", repr(t), "--tspp", 1, "--batches", 1, "-o", path], f"frame at t = {t}")
         cache[t] = read_rgba(path)[0]
+        if len(cache) == 1:
+            check_same_scene(settings, path, imagecompare.read_channels(path, unassociated_alpha=False)[2],
+                             cache[t].shape, ref_shape)
     return np.mean([cache[t] for t in times], axis=0)
 
 
@@ -190,6 +213,8 @@ def parse(argv):
 def main(argv):
     args, extra = parse(argv)
     out = Path(args.out)
+    if out.exists() and not out.is_dir():
+        raise Failure(f"--out {out}: exists and is not a directory (the frames and averages go into a directory)")
     out.mkdir(parents=True, exist_ok=True)
     if not Path(args.scene).is_file():
         raise Failure(f"{args.scene}: no such scene file")
@@ -204,7 +229,7 @@ def main(argv):
     cache, rows = {}, []
     for n in args.counts:
         times = frame_times(settings["open"], settings["close"], n, args.times)
-        avg = render_frames(args.scene, times, settings, extra, out, cache)
+        avg = render_frames(args.scene, times, settings, extra, out, cache, ref.shape)
         write_exr(out / f"average_{n}.exr", avg)
         rows.append({"N": n, **measure(avg, ref, se)})
         if args.figure and n == args.counts[0]:

@@ -144,16 +144,22 @@ def test_blur_space_linear_decodes_each_instant_before_the_time_average(tmp_path
     assert np.abs(decoded_average - expect).max() > 10 * 2e-5  # decoding the average instead fails
 
 
+def _write_3d(tmp_path, middle_scale):
+    """One 3D Gaussian at the origin turned 0.6 rad about y (its object places it), as g3.ply."""
+    c, s = np.cos(0.3), np.sin(0.3)
+    colour = np.array([0.3, 0.8, 0.5])
+    m = {"mean": np.zeros((1, 3)), "scale": np.array([[0.12, middle_scale, 0.2]]), "rot": np.array([[c, 0, s, 0]]),
+         "opacity": np.array([0.85]), "sh": ((colour - 0.5) / ref.SH_C0).reshape(1, 1, 3), "degree": 0}
+    ply = tmp_path / "g3.ply"
+    gsply.write(ply, m)
+    return ply
+
+
 def test_the_time_integral_of_a_moving_3dgrt_gaussian_is_the_quadrature(tmp_path):
     """The same for a 3D Gaussian with 3DGRT's rules (tests/gs3d_grt_reference.py): its object moves
     across the middle row; k = 3 standard errors for every seed, 2e-5 at 2^18 Sobol' times."""
     import gs3d_grt_reference as grt
-    c, s = np.cos(0.3), np.sin(0.3)
-    colour = np.array([0.3, 0.8, 0.5])
-    m = {"mean": np.zeros((1, 3)), "scale": np.array([[0.12, 0.07, 0.2]]), "rot": np.array([[c, 0, s, 0]]),
-         "opacity": np.array([0.85]), "sh": ((colour - 0.5) / 0.28209479177387814).reshape(1, 1, 3), "degree": 0}
-    ply = tmp_path / "g3.ply"
-    gsply.write(ply, m)
+    ply = _write_3d(tmp_path, 0.07)
     camera = gsply.camera_xml(np.eye(3), np.zeros(3), F, W, H)
     scene = tmp_path / "scene3.xml"
     scene.write_text(f'<scene>{camera}<shutter open="0" close="1"/><background color="0.1 0.2 0.3"/>'
@@ -179,12 +185,7 @@ def test_the_time_integral_of_a_moving_rasterized_3dgs_gaussian_is_the_quadratur
     dilation taken with the camera of each instant. k = 3 standard errors for every seed, 2e-5 at
     2^18 Sobol' times."""
     import gs3d_raster_reference as raster
-    c, s = np.cos(0.3), np.sin(0.3)
-    colour = np.array([0.3, 0.8, 0.5])
-    m = {"mean": np.zeros((1, 3)), "scale": np.array([[0.12, 0.05, 0.2]]), "rot": np.array([[c, 0, s, 0]]),
-         "opacity": np.array([0.85]), "sh": ((colour - 0.5) / 0.28209479177387814).reshape(1, 1, 3), "degree": 0}
-    ply = tmp_path / "g3.ply"
-    gsply.write(ply, m)
+    ply = _write_3d(tmp_path, 0.05)
     scene = tmp_path / "scene3.xml"
     scene.write_text(scene_xml(ply, moving))
     read = gsply.read(ply)

@@ -69,3 +69,40 @@ def test_what_it_cannot_compare_is_refused_by_name(tmp_path):
     proc = subprocess.run([sys.executable, str(SCRIPT), str(tmp_path / "s.xml"), "--reference", str(sharp)],
                           capture_output=True, text=True, env={**os.environ, "REFRENDER": BIN})
     assert proc.returncode == 1 and "no standard errors" in proc.stderr
+
+
+def _reference(tmp_path, scene, name, *args):
+    ref = tmp_path / name
+    proc = subprocess.run([BIN, str(scene), "--batches", "2", "--spp", "1", "--tspp", "8", "--quiet", "-o", str(ref),
+                           *map(str, args)], capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stderr
+    return ref
+
+
+def _against(tmp_path, scene, ref, *extra):
+    return subprocess.run([sys.executable, str(SCRIPT), str(scene), "--n", "2", "--reference", str(ref), "--out",
+                           str(tmp_path / "nf"), *map(str, extra)], capture_output=True, text=True,
+                          env={**os.environ, "REFRENDER": BIN})
+
+
+def test_a_reference_of_another_scene_size_or_crop_is_refused_by_name(tmp_path):
+    """A reference must be of the scene the frames are rendered from (issue 32.6): another scene, -D
+    parameters, a crop window or another --res gave a plausible table or a traceback."""
+    scene = write_scene(tmp_path, 1.0)
+    other = tmp_path / "other"
+    other.mkdir()
+    other_ref = _reference(tmp_path, write_scene(other, 0.5), "other.exr")
+    proc = _against(tmp_path, scene, other_ref)
+    assert proc.returncode == 1 and "refrender:sceneHash" in proc.stderr and "another scene" in proc.stderr, proc.stderr
+    with_param = _reference(tmp_path, scene, "param.exr", "-D", "unused=1")
+    proc = _against(tmp_path, scene, with_param)
+    assert proc.returncode == 1 and "refrender:parametersHash" in proc.stderr, proc.stderr
+    cropped = _reference(tmp_path, scene, "crop.exr", "--crop-window", "0,0.5,0,1")
+    proc = _against(tmp_path, scene, cropped)
+    assert proc.returncode == 1 and "crop window" in proc.stderr and "Traceback" not in proc.stderr, proc.stderr
+    proc = _against(tmp_path, scene, _reference(tmp_path, scene, "whole.exr"), "--", "--res", "12x6")
+    assert proc.returncode == 1 and "Traceback" not in proc.stderr, proc.stderr
+    (tmp_path / "file").write_text("x")
+    proc = subprocess.run([sys.executable, str(SCRIPT), str(scene), "--out", str(tmp_path / "file")],
+                          capture_output=True, text=True, env={**os.environ, "REFRENDER": BIN})
+    assert proc.returncode == 1 and "not a directory" in proc.stderr and "Traceback" not in proc.stderr, proc.stderr
