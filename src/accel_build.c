@@ -66,8 +66,19 @@ static void embree_error(void *user, enum RTCError code, const char *str)
 {
     accel *a = user;
     rr_error *e = &a->build_error;
-    if (a->building && !e->msg[0])
+    if (!a->building || e->msg[0])
+        return;
+    int obj = a->building_object;
+    if (obj < 0) {
         snprintf(e->msg, sizeof e->msg, "Embree error %d: %s", (int)code, str ? str : "");
+        return;
+    }
+    /* name what was being built: out of memory on a 10M-Gaussian model
+     * named nothing (issue 32.7) */
+    const scene_object *o = &a->sc->objects[obj];
+    size_t count = o->kind == OBJECT_GAUSSIANS ? o->gaussians.count : o->kind == OBJECT_POINTS ? o->model.count : 1;
+    snprintf(e->msg, sizeof e->msg, "Embree error %d: %s (building the BVH of object '%s', %zu primitives%s%.200s)",
+             (int)code, str ? str : "", o->name, count, o->model_file[0] ? ", from " : "", o->model_file);
 }
 
 /* A Gaussian object's footprint parameters for the shutter [open, close]. */
@@ -134,7 +145,9 @@ static void build_top_levels(accel *a, double open, double close)
     for (int i = 0; i < s->nobjects; i++) {
         const scene_object *o = &s->objects[i];
         if (o->kind == OBJECT_GAUSSIANS) {
+            a->building_object = i;
             build_gaussian_object(a, (unsigned)i, open, close);
+            a->building_object = -1;
             a->gaussian_ids[a->ngaussian++] = (unsigned)i;
             continue;
         }
@@ -219,6 +232,7 @@ int accel_build(const scene *s, const accel_settings *set, accel **out, rr_error
     if (!a)
         return rr_fail(err, "out of memory");
     a->sc = s;
+    a->building_object = -1;
     a->epsilon = (float)set->epsilon;
     a->sigma = set->sigma;
     a->building = 1;
@@ -254,9 +268,11 @@ int accel_build(const scene *s, const accel_settings *set, accel **out, rr_error
             continue;
         }
         a->coherent_spread[i] = coherent_spread(o);
+        a->building_object = i;
         a->object_scenes[i] = accel_user_scene(a->device, points ? (unsigned)o->model.count : 1u, o,
                                          points ? accel_splat_bounds_cb : accel_sphere_bounds_cb,
                                          points ? accel_splats_intersect : accel_sphere_intersect, 0);
+        a->building_object = -1;
     }
     a->reuse_static = set->reuse_static;
     build_top_levels(a, set->open, set->close);

@@ -65,6 +65,7 @@ struct accel {
     double open, close; /* the shutter the top levels were built for */
     int building;       /* Embree's error callback records only while building (render threads
                            check rtcGetDeviceError themselves: accel is const to them) */
+    int building_object;     /* the object whose BVH is being built (-1: the top levels), for errors */
     rr_error build_error; /* filled by Embree's error callback */
     long long embree_bytes, embree_peak; /* Embree's own allocations (BVHs) */
 };

@@ -86,8 +86,14 @@ int animation_between_poses(vec3 pa, const double ra[3][3], vec3 pb, const doubl
     if (angle > 170.0 * M_PI / 180.0)
         return rr_fail(err, "the poses turn by %.1f degrees: beyond 170 the slerp between them is ambiguous",
                        angle * 180.0 / M_PI);
+    /* a velocity or turn rate beyond the double range (poses at 0 and 1e-310)
+     * would make the camera NaN: refuse it with the poses' times */
+    vec3 velocity = v3_scale(v3_sub(pb, pa), 1.0 / (t1 - t0));
+    if (!v3_finite(velocity) || !isfinite(angle / (t1 - t0)) || !isfinite(t0 / (t1 - t0)))
+        return rr_fail(err, "the poses' times %g and %g are too close for their motion (the velocity or turn "
+                            "rate between them overflows)", t0, t1);
     animation_init_static(out);
-    out->velocity = v3_scale(v3_sub(pb, pa), 1.0 / (t1 - t0));
+    out->velocity = velocity;
     out->has_rotation = angle > 0;
     out->axis = axis;
     out->degrees_per_time = angle * 180.0 / M_PI / (t1 - t0);

@@ -109,6 +109,8 @@ def test_a_two_pose_motion_is_linear_in_position_and_slerped_in_rotation(tmp_pat
     ("", ' image="A.png" fov="30"', "drop 'fov'"),
     ("", "", "needs 'image'"),
     ('<animation><pose time="0" image="A.png"/></animation>', ' image="A.png"', "exactly two <pose>"),
+    ('<animation><pose time="0" image="A.png"/><pose time="1e-310" image="B.png"/></animation>', ' image="A.png"',
+     "too close for their motion"),
     ("", ' image="A.png" trainingResolution="3x"', "trainingResolution must be auto"),
 ])
 def test_camera_mistakes_are_named(tmp_path, inner, attrs, why):

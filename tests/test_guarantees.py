@@ -143,3 +143,27 @@ def test_fifos_are_refused_without_blocking(tmp_path):
             raise AssertionError(f"{s.name}: still blocked on the FIFO after 20 s")
         assert proc.returncode == 1 and f"{fifo}: not a regular file" in proc.stderr, proc.stderr
     assert not (tmp_path / "o.exr").exists()
+
+
+def test_embree_out_of_memory_names_the_object_and_its_model(tmp_path):
+    """A BVH build that runs out of memory (an address-space limit between what loading a 1M-Gaussian
+    model needs and what its BVH needs) names the object, its size and its file (issue 32.7: it named
+    nothing)."""
+    import resource
+    ply = tmp_path / "big.ply"
+    assert run(["gen", "sphere", "--count", 1000000, "--gaussians", "3dgs", "--sh-degree", 0, "-o", ply]).returncode == 0
+    scene = tmp_path / "oom.xml"
+    scene.write_text('<scene><camera position="0 0 3.5" lookat="0 0 0" up="0 1 0" fov="40" width="8" height="8"/>'
+                     '<object name="ball"><gaussianModel file="big.ply"/></object></scene>')
+    seen = []
+    for mb in range(500, 1200, 50):
+        limit = mb << 20
+        proc = subprocess.run([BIN, str(scene), "--time", "0", "--spp", "1", "--quiet", "-o", str(tmp_path / "o.exr")],
+                              capture_output=True, text=True,
+                              preexec_fn=lambda: resource.setrlimit(resource.RLIMIT_AS, (limit, limit)))
+        if "Embree error" in proc.stderr:
+            seen.append(mb)
+            assert proc.returncode == 1 and "object 'ball'" in proc.stderr and "big.ply" in proc.stderr, proc.stderr
+        if proc.returncode == 0:
+            break
+    assert seen, "no address-space limit made the BVH build fail"
