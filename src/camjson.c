@@ -215,6 +215,41 @@ static long find_entry(const char *name, json_object *root, const char *img_name
     return found;
 }
 
+/* The line each element of the top-level array starts on (json-c keeps no
+ * positions, and errors name the line): a scan that skips strings and
+ * counts nesting. n: the array's length, as json-c parsed it. */
+static int *entry_lines(const char *data, size_t len, size_t n)
+{
+    int *lines = calloc(n ? n : 1, sizeof *lines), line = 1, depth = 0, in_string = 0, expect = 1;
+    size_t k = 0;
+    if (!lines)
+        return NULL;
+    for (size_t i = 0; i < len && k < n; i++) {
+        char ch = data[i];
+        if (ch == '\n')
+            line++;
+        if (in_string) {
+            if (ch == '\\')
+                i += i + 1 < len && data[i + 1] != '\n';
+            else if (ch == '"')
+                in_string = 0;
+            continue;
+        }
+        if (depth == 1 && expect && ch != ' ' && ch != '\t' && ch != '\r' && ch != '\n' && ch != ',') {
+            lines[k++] = line, expect = 0;
+        }
+        if (ch == '"')
+            in_string = 1;
+        else if (ch == '[' || ch == '{')
+            depth++;
+        else if (ch == ']' || ch == '}')
+            depth--;
+        else if (ch == ',' && depth == 1)
+            expect = 1;
+    }
+    return lines;
+}
+
 int camjson_load_text(const char *name, const char *data, size_t len, camjson_file *f, rr_error *err)
 {
     memset(f, 0, sizeof *f);
@@ -238,8 +273,10 @@ int camjson_load_text(const char *name, const char *data, size_t len, camjson_fi
         return rr_fail(err, "%s: not a cameras.json (expected an array of cameras)", name);
     }
     f->name = strdup(name);
-    if (!f->name) {
+    f->lines = entry_lines(data, len, json_object_array_length(root));
+    if (!f->name || !f->lines) {
         json_object_put(root);
+        free(f->name), free(f->lines);
         return rr_fail(err, "out of memory");
     }
     f->root = root;
@@ -265,13 +302,19 @@ int camjson_find(const camjson_file *f, const char *img_name, camjson_camera *ou
         return -1;
     memset(out, 0, sizeof *out);
     snprintf(out->img_name, sizeof out->img_name, "%s", img_name);
-    return read_camera(f->name, (size_t)idx, json_object_array_get_idx(f->root, (size_t)idx), out, err);
+    char *at = NULL; /* "file:line", where the entry starts */
+    if (asprintf(&at, "%s:%d", f->name, f->lines[idx]) < 0)
+        return rr_fail(err, "out of memory");
+    int rc = read_camera(at, (size_t)idx, json_object_array_get_idx(f->root, (size_t)idx), out, err);
+    free(at);
+    return rc;
 }
 
 void camjson_free(camjson_file *f)
 {
     json_object_put(f->root);
     free(f->name);
+    free(f->lines);
     memset(f, 0, sizeof *f);
 }
 

@@ -28,6 +28,7 @@ struct json_object;
 typedef struct {
     struct json_object *root; /* the array of cameras */
     char *name;               /* the file's name, for errors */
+    int *lines;               /* the line each camera starts on, for errors */
 } camjson_file;
 
 /* Reads and parses the file (its bytes folded into *content_hash unless

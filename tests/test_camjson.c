@@ -53,12 +53,26 @@ TEST(camjson_reads_the_named_camera_by_field_name)
     CHECK(c.c2w[0][1] == -1 && c.c2w[1][0] == 1); /* row r, column c as written */
 }
 
+/* Errors name the line the camera starts on (json-c keeps no positions:
+ * camjson.c scans for them, past strings holding brackets and commas). */
+TEST(camjson_errors_name_the_line_of_the_camera)
+{
+    const char *text = "[\n  {\"img_name\": \"B, [x]{\\\"\", \"width\": 80, \"height\": 60, \"position\": [1, 2, 3],\n"
+                       "   \"rotation\": [[1, 0, 0], [0, 1, 0], [0, 0, 1]], \"fx\": 70, \"fy\": 70},\n"
+                       "\n  {\"img_name\": \"A\", \"width\": 80, \"height\": 60, \"position\": [1, 2],\n"
+                       "   \"rotation\": [[1, 0, 0], [0, 1, 0], [0, 0, 1]], \"fx\": 70, \"fy\": 70}]";
+    camjson_camera c;
+    rr_error e;
+    CHECK(parse(text, "A", &c, &e) != 0);
+    CHECK(strstr(e.msg, "cams.json:5: camera 1 ('A'): field 'position'") != NULL);
+}
+
 TEST(camjson_names_every_mistake)
 {
     const char *rest = ", \"rotation\": " ROT ", " GOOD_SIZE ", " GOOD_F;
     char f[1024];
     snprintf(f, sizeof f, "\"position\": [1, 2]%s", rest);
-    CHECK(fails_with(f, "cams.json: camera 0 ('A'): field 'position' is missing or not a number"));
+    CHECK(fails_with(f, "cams.json:1: camera 0 ('A'): field 'position' is missing or not a number"));
     snprintf(f, sizeof f, "\"position\": [1, 2, 1e999]%s", rest);
     CHECK(fails_with(f, "field 'position' is not finite"));
     snprintf(f, sizeof f, GOOD_POS ", \"rotation\": [[1, 0, 0], [0, 1, 0], [0, 0, -1]], " GOOD_SIZE ", " GOOD_F);
