@@ -34,7 +34,7 @@ RR_CXXFLAGS = -std=c++17 $(OPT) -Wall -Wextra $(CXXFLAGS)
 LDLIBS   := -ljson-c -lassimp -lembree3 -lOpenEXRCore -lxml2 -lOpenImageIO -lOpenImageIO_Util -lpthread -lm -lstdc++
 
 LIB_SRCS := common inputfile atomicfile kbuffer splat pointmodel ply gaussian gaussian_hit gaussian_blend camjson shapes surfelize meshload curve animation animfile camera shutter sampler scene \
-            scene_xml scene_xml_util scene_xml_anim scene_params accel accel_build accel_collide exact exact_integrate shade film render exr output render_attrs cli
+            scene_xml scene_xml_util scene_xml_anim scene_xml_camera scene_params accel accel_build accel_collide exact exact_integrate shade film render exr output render_attrs cli
 LIB_OBJS := $(LIB_SRCS:%=$(BUILD)/%.o) $(BUILD)/preview.o
 APP_OBJS := $(BUILD)/cmd/main.o $(BUILD)/cmd/gen_cmd.o $(BUILD)/cmd/surfel_output.o $(BUILD)/cmd/merge_cmd.o $(BUILD)/cmd/surfels_cmd.o \
             $(BUILD)/cmd/export_cmd.o

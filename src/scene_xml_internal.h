@@ -78,4 +78,7 @@ int xml_parse_animation(xml_ctx *c, xmlNodePtr n, animation *a);
  * in every attribute; *applied receives the parameters used (scene_params.c). */
 int xml_apply_parameters(xml_ctx *c, xmlNodePtr root, const scene_params *given, scene_params *applied);
 
+/* <camera> (scene_xml_camera.c). */
+int xml_parse_camera(xml_ctx *c, xmlNodePtr n, camera *cam, animation *motion);
+
 #endif

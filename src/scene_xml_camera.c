@@ -1,0 +1,198 @@
+/* <camera>: a pinhole camera given by its pose and field of view, or a
+ * trained model's camera from its cameras.json (camjson.h) at the size it
+ * was trained at, with an optional <animation> moving its rest pose
+ * rigidly (keyframes, or two cameras.json poses). scenes/README.md. */
+#include "camjson.h"
+#include "scene_xml_internal.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+/* A camera from a trained model's cameras.json (camjson.h): its pose as
+ * the rest pose (OpenCV axes: look along z, up is -y), its field of view
+ * from fx and fy (square pixels or not), its resolution. */
+static int camera_from_pose(camera *cam, vec3 position, const double r[3][3], const camjson_camera *j)
+{
+    cam->position = position;
+    cam->lookat = v3_add(position, v3(r[0][2], r[1][2], r[2][2]));
+    cam->up = v3(-r[0][1], -r[1][1], -r[2][1]);
+    cam->width = j->width, cam->height = j->height;
+    cam->fov_degrees = 360.0 / M_PI * atan(0.5 * j->height / j->fy);
+    cam->fov_x_degrees = 360.0 / M_PI * atan(0.5 * j->width / j->fx);
+    return 0;
+}
+
+/* The size the model was trained at (issue 29): 3DGS and 2DGS train at the
+ * loaded image's size, by utils/camera_utils.py loadCam (graphdeco-inria
+ * gaussian-splatting; the same in hbb1/2d-gaussian-splatting 1920a23):
+ * -r 1, 2, 4 or 8 divides it, rounded as Python's round (ties to even);
+ * -r -1, the default, shrinks an image wider than 1600 to 1600 wide, any
+ * other -r to that width, both truncating orig / (orig / target). The
+ * field of view stays (the camera's angles). "auto" is -1; a number is -r. */
+static int training_size(xml_ctx *c, xmlNodePtr n, int *width, int *height)
+{
+    char text[32];
+    int got = xml_attr_text(c, n, "trainingResolution", text, sizeof text), r = -1;
+    char *end;
+    if (got < 0)
+        return -1;
+    if (got && strcmp(text, "auto")) {
+        long v = strtol(text, &end, 10);
+        if (*end || end == text || v < 1 || v > 65536)
+            return xml_fail(c, n, "trainingResolution must be auto (the training's -r -1), 1, 2, 4 or 8 (-r's "
+                                  "divisors) or a width in pixels (-r WIDTH), got '%s'", text);
+        r = (int)v;
+    }
+    double w = *width, h = *height;
+    if (r == 1 || r == 2 || r == 4 || r == 8) {
+        *width = (int)nearbyint(w / r), *height = (int)nearbyint(h / r);
+    } else if (r != -1 || w > 1600) {
+        double scale = w / (r == -1 ? 1600.0 : (double)r);
+        *width = (int)(w / scale), *height = (int)(h / scale);
+    }
+    if (*width < 1 || *height < 1)
+        return xml_fail(c, n, "trainingResolution '%s' leaves a %dx%d image", got ? text : "auto", *width, *height);
+    return 0;
+}
+
+static int find_json_camera(xml_ctx *c, xmlNodePtr n, const camjson_file *f, const char *image, camjson_camera *out)
+{
+    rr_error sub;
+    if (camjson_find(f, image, out, &sub))
+        return rr_fail(c->err, "%s (camera of %s:%ld)", sub.msg, c->name, xmlGetLineNo(n));
+    return 0;
+}
+
+/* <animation><pose time="t0" image="A"/><pose time="t1" image="B"/></animation>:
+ * from cameras.json pose A at t0 to pose B at t1, the position linear and
+ * the rotation slerped (animation_between_poses); the camera's rest pose
+ * becomes the one this motion moves. */
+static int parse_pose_motion(xml_ctx *c, xmlNodePtr anim, const camjson_file *json, camera *cam, animation *a)
+{
+    static const char *const ok[] = {"time", "image", NULL};
+    camjson_camera pose[2];
+    double t[2];
+    int k = 0;
+    for (xmlNodePtr p = anim->children; p; p = p->next) {
+        if (!xml_is_element(p))
+            continue;
+        char image[256];
+        if (strcmp(xml_elname(p), "pose") || k == 2)
+            return xml_fail(c, p, "a camera's pose motion is exactly two <pose> elements (for longer paths, "
+                                  "keyframes)");
+        if (xml_check_attributes(c, p, ok) || xml_attr_double(c, p, "time", &t[k], 1) ||
+            xml_attr_text(c, p, "image", image, sizeof image) <= 0 || find_json_camera(c, p, json, image, &pose[k]))
+            return c->err->msg[0] ? -1 : xml_fail(c, p, "<pose> needs 'image' (an img_name of the cameras.json)");
+        k++;
+    }
+    if (k != 2)
+        return xml_fail(c, anim, "a camera's pose motion is exactly two <pose> elements");
+    vec3 rest_pos;
+    double rest_rot[3][3];
+    rr_error sub;
+    animation_free(a);
+    if (animation_between_poses(pose[0].position, pose[0].c2w, pose[1].position, pose[1].c2w, t[0], t[1], a,
+                                &rest_pos, rest_rot, &sub))
+        return xml_fail(c, anim, "%s", sub.msg);
+    return camera_from_pose(cam, rest_pos, rest_rot, &pose[0]);
+}
+
+static int has_pose_child(xmlNodePtr anim)
+{
+    for (xmlNodePtr p = anim->children; p; p = p->next)
+        if (xml_is_element(p) && !strcmp(xml_elname(p), "pose"))
+            return 1;
+    return 0;
+}
+
+/* <camera ...> with an optional <animation> moving its rest pose rigidly. */
+static int parse_camera_motion(xml_ctx *c, xmlNodePtr n, camera *cam, animation *a, const camjson_file *json)
+{
+    if (xml_check_no_text(c, n))
+        return -1;
+    for (xmlNodePtr k = n->children; k; k = k->next) {
+        if (!xml_is_element(k))
+            continue;
+        if (strcmp(xml_elname(k), "animation"))
+            return xml_fail(c, k, "unknown element inside <camera> (expected animation)");
+        if (a->keys || !animation_is_static(a))
+            return xml_fail(c, k, "the camera has one <animation>");
+        if (has_pose_child(k)) {
+            if (!json)
+                return xml_fail(c, k, "<pose> needs the camera's 'cameras' (a cameras.json)");
+            if (parse_pose_motion(c, k, json, cam, a))
+                return -1;
+            continue;
+        }
+        animation_free(a);
+        animation_init_static(a);
+        a->offset = cam->position; /* the default keyframe pivot; the camera has no model offset */
+        if (xml_parse_animation(c, k, a))
+            return -1;
+        a->offset = v3(0, 0, 0);
+        if (a->keys && (a->keys->ch[CH_SX].count || a->keys->ch[CH_SY].count || a->keys->ch[CH_SZ].count))
+            return xml_fail(c, k, "the camera cannot be scaled (its motion must be rigid)");
+    }
+    return 0;
+}
+
+/* <camera cameras="cameras.json" image="NAME" trainingResolution="auto"/>:
+ * a trained model's camera; the file, parsed once, stays in *f for the
+ * poses of its motion. */
+static int parse_json_camera(xml_ctx *c, xmlNodePtr n, camera *cam, camjson_file *f)
+{
+    char rel[4096], path[8192], image[256];
+    static const char *const exclusive[] = {"position", "lookat", "up", "fov", "width", "height", NULL};
+    for (const char *const *k = exclusive; *k; k++)
+        if (xmlHasProp(n, (const xmlChar *)*k))
+            return xml_fail(c, n, "a camera from 'cameras' takes its pose, field of view and size from the file: "
+                                  "drop '%s' (--res changes the size)", *k);
+    int got = xml_attr_text(c, n, "image", image, sizeof image);
+    if (got <= 0)
+        return got < 0 ? -1 : xml_fail(c, n, "a camera from 'cameras' needs 'image' (an img_name of the file)");
+    if (xml_attr_text(c, n, "cameras", rel, sizeof rel) < 0 || xml_resolve_path(c, n, rel, path, sizeof path))
+        return -1;
+    rr_error sub;
+    if (camjson_load(path, f, c->inputs_hash, &sub))
+        return rr_fail(c->err, "%s (camera of %s:%ld)", sub.msg, c->name, xmlGetLineNo(n));
+    camjson_camera j;
+    if (find_json_camera(c, n, f, image, &j))
+        return -1;
+    if (scene_add_input(c->sc, path))
+        return xml_fail(c, n, "out of memory");
+    return camera_from_pose(cam, j.position, j.c2w, &j);
+}
+
+static int parse_plain_camera(xml_ctx *c, xmlNodePtr n, camera *cam)
+{
+    if (xmlHasProp(n, (const xmlChar *)"trainingResolution"))
+        return xml_fail(c, n, "trainingResolution is for a camera from 'cameras' (a cameras.json): give this one "
+                              "its width and height");
+    return xml_attr_vec3(c, n, "position", &cam->position, 0) || xml_attr_vec3(c, n, "lookat", &cam->lookat, 0) ||
+                   xml_attr_vec3(c, n, "up", &cam->up, 0) || xml_attr_double(c, n, "fov", &cam->fov_degrees, 0) ||
+                   xml_attr_int(c, n, "width", &cam->width, 1, 65536) ||
+                   xml_attr_int(c, n, "height", &cam->height, 1, 65536)
+               ? -1 : 0;
+}
+
+int xml_parse_camera(xml_ctx *c, xmlNodePtr n, camera *cam, animation *motion)
+{
+    static const char *const ok[] = {"position", "lookat", "up",    "fov",
+                                     "width",    "height", "cameras", "image", "trainingResolution", NULL};
+    int from_json = xmlHasProp(n, (const xmlChar *)"cameras") != NULL;
+    if (xml_check_attributes(c, n, ok))
+        return -1;
+    camjson_file json = {0};
+    int rc = from_json ? parse_json_camera(c, n, cam, &json) : parse_plain_camera(c, n, cam);
+    rc = rc || parse_camera_motion(c, n, cam, motion, from_json ? &json : NULL);
+    /* after any pose motion, which takes its rest pose's size from the file */
+    rc = rc || (from_json && training_size(c, n, &cam->width, &cam->height));
+    camjson_free(&json);
+    if (rc)
+        return -1;
+    rr_error sub;
+    if (camera_prepare(cam, &sub))
+        return xml_fail(c, n, "%s", sub.msg);
+    return 0;
+}
+
