@@ -40,6 +40,13 @@ static int hit_before(const gaussian_hit *a, const gaussian_hit *b)
     return a->prim < b->prim;
 }
 
+/* qsort_r's order of two sort words of equal key (hit_before). */
+static int tie_order(const void *a, const void *b, void *hits)
+{
+    const gaussian_hit *h = hits, *x = &h[(uint32_t)*(const uint64_t *)a], *y = &h[(uint32_t)*(const uint64_t *)b];
+    return hit_before(x, y) ? -1 : hit_before(y, x) ? 1 : 0;
+}
+
 /* A float's bits as an unsigned that sorts as the float does. */
 static uint32_t sortable(float f)
 {
@@ -84,13 +91,14 @@ static int sort_hits(gaussian_hits *h)
     for (size_t k = 0; k < h->count; k++)
         h->order[k] = (uint64_t)sortable(h->hits[k].key) << 32 | (uint64_t)k;
     merge_sort_u64(h->order, h->order + h->count, h->count);
-    for (size_t k = 1; k < h->count; k++) /* equal keys: by object and Gaussian */
-        for (size_t j = k; j > 0 && h->order[j] >> 32 == h->order[j - 1] >> 32 &&
-                           hit_before(&h->hits[(uint32_t)h->order[j]], &h->hits[(uint32_t)h->order[j - 1]]);
-             j--) {
-            uint64_t x = h->order[j];
-            h->order[j] = h->order[j - 1], h->order[j - 1] = x;
-        }
+    /* runs of equal keys: by object and Gaussian, O(m log m) (an insertion
+     * sort took 17 s for one ray with 256k equal keys, issue 32.5) */
+    for (size_t k = 0, end; k < h->count; k = end) {
+        for (end = k + 1; end < h->count && h->order[end] >> 32 == h->order[k] >> 32; end++)
+            ;
+        if (end - k > 1)
+            qsort_r(h->order + k, end - k, sizeof *h->order, tie_order, h->hits);
+    }
     return 0;
 }
 
