@@ -16,6 +16,25 @@ sys.path.insert(0, str(ROOT / "scripts"))
 import imagecompare  # noqa: E402
 
 
+def wait_for_handlers(proc, timeout=60):
+    """Waits until the process catches SIGINT and SIGTERM (its SigCgt mask in /proc), so that a
+    signal sent next is handled, however long start-up takes on a loaded machine (a fixed sleep
+    was not always enough)."""
+    import time
+    wanted = (1 << (2 - 1)) | (1 << (15 - 1))  # SIGINT, SIGTERM
+    deadline = time.time() + timeout
+    while time.time() < deadline and proc.poll() is None:
+        try:
+            status = Path(f"/proc/{proc.pid}/status").read_text()
+        except OSError:
+            break
+        caught = int(next(l for l in status.splitlines() if l.startswith("SigCgt:")).split()[1], 16)
+        if caught & wanted == wanted:
+            return
+        time.sleep(0.01)
+    assert proc.poll() is None, "the process ended before it installed its signal handlers"
+
+
 def run(args, **kw):
     return subprocess.run([BIN, *map(str, args)], capture_output=True, text=True, **kw)
 

@@ -8,7 +8,7 @@ import time
 import numpy as np
 import pytest
 
-from conftest import BIN, ROOT, read_exr, read_full, run
+from conftest import BIN, ROOT, read_exr, read_full, run, wait_for_handlers
 
 SCENE = ROOT / "scenes" / "default.xml"
 DISK = """<scene>
@@ -177,6 +177,7 @@ def test_sigterm_writes_a_final_checkpoint(tmp_path):
     longer = [*SLOW, "--max-batches", 60]  # same identity, ~40 s of work: still running at 1.5 s
     proc = subprocess.Popen([BIN, *map(str, longer), "--batches", "60", "-o", str(tmp_path / "out.exr"),
                              "--checkpoint", str(ck), "--checkpoint-every", "1000"], stderr=subprocess.PIPE, text=True)
+    wait_for_handlers(proc)
     time.sleep(1.5)
     proc.send_signal(signal.SIGTERM)
     _, err = proc.communicate(timeout=60)

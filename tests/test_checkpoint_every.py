@@ -6,7 +6,7 @@ import signal
 import subprocess
 import time
 
-from conftest import BIN
+from conftest import BIN, wait_for_handlers
 
 SCENE = """<scene><camera position="0 0 5" lookat="0 0 0" width="64" height="64"/>
 <object><pointModel generate="sphere" count="4000" radius="1"/>
@@ -31,6 +31,7 @@ def stop(proc):
 
 def test_zero_means_only_when_interrupted(tmp_path):
     proc, ckpt = start(tmp_path, 0)
+    wait_for_handlers(proc)
     time.sleep(1.5)
     assert proc.poll() is None, "the render must outlast the wait"
     assert not ckpt.exists()  # no periodic checkpoint
@@ -47,5 +48,6 @@ def test_a_short_period_writes_while_rendering_and_60_is_the_default(tmp_path):
     assert ckpt.exists() and proc.poll() is None  # written while still rendering
     stop(proc)
     proc, _ = start(tmp_path, None)
-    time.sleep(0.5)  # past start-up, where the interrupt handler is installed
+    wait_for_handlers(proc)  # past start-up, where the interrupt handler is installed
+    time.sleep(0.5)
     assert "every 60 s and when interrupted" in stop(proc)

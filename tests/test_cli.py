@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import OpenImageIO as oiio
 
-from conftest import BIN, ROOT, read_exr, run
+from conftest import BIN, ROOT, read_exr, run, wait_for_handlers
 
 TINY = """<scene><camera width="24" height="16"/>
 <object><sphere radius="1" color="0.5 0.6 0.7"/><material shading="unlit"/></object></scene>"""
@@ -133,6 +133,7 @@ def test_interrupt_writes_nothing(tmp_path):
     out = tmp_path / "o.exr"
     proc = subprocess.Popen([BIN, ROOT / "scenes" / "default.xml", "--spp", "64", "--tspp", "400", "-o", out],
                             stderr=subprocess.PIPE, text=True)
+    wait_for_handlers(proc)
     time.sleep(1.0)
     proc.send_signal(signal.SIGINT)
     _, err = proc.communicate(timeout=60)
@@ -182,11 +183,12 @@ def test_sigterm_while_loading_a_large_model_exits_130(tmp_path):
                      '<object><gaussianModel file="big.ply"/></object></scene>')
     proc = subprocess.Popen([BIN, str(scene), "--spp", "1", "--tspp", "1", "-o", str(tmp_path / "o.exr")],
                             stderr=subprocess.PIPE, text=True)
-    # start-up (shared libraries) can take longer than the load: signal once the model is open
-    deadline, fds = time.time() + 30, Path(f"/proc/{proc.pid}/fd")
+    # start-up (shared libraries) can take longer than the load: signal once the model is open or
+    # mapped (a model this large is read from a mapping, its descriptor closed at once)
+    deadline, fds, maps = time.time() + 30, Path(f"/proc/{proc.pid}/fd"), Path(f"/proc/{proc.pid}/maps")
     while proc.poll() is None and time.time() < deadline:
         try:
-            if any(os.readlink(fd).endswith("big.ply") for fd in fds.iterdir()):
+            if "big.ply" in maps.read_text() or any(os.readlink(fd).endswith("big.ply") for fd in fds.iterdir()):
                 break
         except OSError:  # an fd closed while listed
             pass

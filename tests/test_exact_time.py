@@ -188,6 +188,8 @@ def test_an_interrupt_stops_an_exact_sample_that_is_running(tmp_path):
     proc = subprocess.Popen([BIN, scene, "--time-integration", "exact", "--spp", "1", "--batches", "1", "-o",
                              tmp_path / "o.exr", "--checkpoint", ckpt, "--quiet"],
                             stderr=subprocess.PIPE, text=True)
+    from conftest import wait_for_handlers
+    wait_for_handlers(proc)
     time.sleep(0.5)
     proc.send_signal(signal.SIGINT)
     _, err = proc.communicate(timeout=60)

@@ -7,7 +7,7 @@ import signal
 import subprocess
 import time
 
-from conftest import BIN, ROOT, run
+from conftest import BIN, ROOT, run, wait_for_handlers
 
 TINY = """<scene><camera width="8" height="6"/>
 <object><sphere radius="1" color="0.5 0.6 0.7"/><material shading="unlit"/></object></scene>"""
@@ -117,6 +117,7 @@ def test_resume_refuses_pixels_with_more_batches_than_the_render_gives(tmp_path)
     proc = subprocess.Popen([BIN, *map(str, args), "--target-error", "1e-9", "--max-batches", "60",
                              "-o", str(tmp_path / "never.exr"), "--checkpoint", str(ck), "--checkpoint-every", "1000"],
                             stderr=subprocess.PIPE, text=True)
+    wait_for_handlers(proc)
     time.sleep(2.0)
     proc.send_signal(signal.SIGTERM)
     proc.communicate(timeout=60)
