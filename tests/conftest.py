@@ -45,6 +45,19 @@ def read_exr(path):
     return np.stack([channels[c] for c in "RGBA"], axis=-1), header
 
 
+def sharp_gaussian_render(tmp_path, camera, ply, attrs="", name="scene"):
+    """The sharp image (--time 0, one sample at each pixel centre: --pixel-filter point) of one
+    Gaussian model, given its <camera> element and the gaussianModel's extra attributes, over the
+    Gaussian tests' background (0.1 0.2 0.3)."""
+    scene = tmp_path / f"{name}.xml"
+    scene.write_text(f'<scene>{camera}<background color="0.1 0.2 0.3"/>'
+                     f'<object name="g"><gaussianModel file="{ply}"{attrs}/></object></scene>')
+    out = tmp_path / f"{name}.exr"
+    proc = run([scene, "--pixel-filter", "point", "--time", 0, "--spp", 1, "--tspp", 1, "-o", out, "--quiet"])
+    assert proc.returncode == 0, proc.stderr
+    return read_exr(out)[0]
+
+
 def read_full(path):
     """All channels by name (float32 arrays) and the header."""
     channels, _, header = imagecompare.read_channels(path, unassociated_alpha=False)

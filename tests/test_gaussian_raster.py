@@ -22,7 +22,7 @@ import pytest
 
 import gs3d_raster_reference as ref
 import gsply
-from conftest import read_exr, run
+from conftest import read_exr, run, sharp_gaussian_render
 
 BACKGROUND = (0.1, 0.2, 0.3)
 TOL = 1e-4
@@ -62,16 +62,11 @@ def render_pair(tmp_path, model, R, C, fx, fy, W, H, semantics="3dgs", tile_rule
     ply = tmp_path / "model.ply"
     gsply.write(ply, model)
     camera = cameras_json(tmp_path, R, C, fx, fy, W, H)
-    attrs = f' semantics="{semantics}"' + (' tileRule="on"' if tile_rule else "") + extra
-    scene = tmp_path / "scene.xml"
-    scene.write_text(f'<scene>{camera}<background color="0.1 0.2 0.3"/>'
-                     f'<object name="g"><gaussianModel file="{ply}" kind="3dgs"{attrs}/></object></scene>')
-    out = tmp_path / "out.exr"
-    proc = run([scene, "--pixel-filter", "point", "--time", 0, "--spp", 1, "--tspp", 1, "-o", out, "--quiet"])
-    assert proc.returncode == 0, proc.stderr
+    attrs = f' kind="3dgs" semantics="{semantics}"' + (' tileRule="on"' if tile_rule else "") + extra
+    img = sharp_gaussian_render(tmp_path, camera, ply, attrs)
     read = gsply.read(ply)
     expect, final_t = ref.render(read, R, C, fx, fy, W, H, BACKGROUND, VARIANT[semantics], tile_rule)
-    return read_exr(out)[0], expect, final_t, read
+    return img, expect, final_t, read
 
 
 def assert_matches(img, expect, final_t):

@@ -15,7 +15,7 @@ import pytest
 
 import gs2d_reference as ref
 import gsply
-from conftest import read_exr, run
+from conftest import read_exr, run, sharp_gaussian_render
 
 W = H = 40
 F = 45.0
@@ -51,13 +51,7 @@ def render_pair(tmp_path, model, yaw_pitch, order="center-depth"):
     R = rotation(*yaw_pitch)
     C = -4.0 * R[:, 2]
     order_attr = "" if order == "center-depth" else f' order="{order}"'
-    scene = tmp_path / "scene.xml"
-    scene.write_text(f'<scene>{gsply.camera_xml(R, C, F, W, H)}<background color="0.1 0.2 0.3"/>'
-                     f'<object name="g"><gaussianModel file="{ply}"{order_attr}/></object></scene>')
-    out = tmp_path / "out.exr"
-    proc = run([scene, "--pixel-filter", "point", "--time", 0, "--spp", 1, "--tspp", 1, "-o", out, "--quiet"])
-    assert proc.returncode == 0, proc.stderr
-    img = read_exr(out)[0]
+    img = sharp_gaussian_render(tmp_path, gsply.camera_xml(R, C, F, W, H), ply, order_attr)
     return img, gsply.read(ply), R, C
 
 
@@ -240,13 +234,7 @@ def test_a_3dgs_render_under_3dgrt_semantics_is_3dgrt_ray_tracing(tmp_path, degr
     ply = _write(tmp_path, random_3d_model(21 + degree, 50, degree))
     R, C = rotation(0.3, -0.2), None
     C = -4.0 * R[:, 2]
-    scene = tmp_path / "g3.xml"
-    scene.write_text(f'<scene>{gsply.camera_xml(R, C, F, W, H)}<background color="0.1 0.2 0.3"/>'
-                     f'<object name="g"><gaussianModel file="{ply}" semantics="3dgrt"/></object></scene>')
-    out = tmp_path / "g3.exr"
-    proc = run([scene, "--pixel-filter", "point", "--time", 0, "--spp", 1, "-o", out, "--quiet"])
-    assert proc.returncode == 0, proc.stderr
-    img = read_exr(out)[0]
+    img = sharp_gaussian_render(tmp_path, gsply.camera_xml(R, C, F, W, H), ply, ' semantics="3dgrt"', "g3")
     model = gsply.read(ply)
     expect, final_t = grt.render(model, R, C, F, F, W, H, BACKGROUND)
     assert np.abs(img[..., :3] - expect).max() < TOL
@@ -298,13 +286,8 @@ def test_an_edge_on_surfel_seen_through_the_filter_is_skipped_where_its_plane_is
 def _render_2d(tmp_path, model, R, C, f, w, h, attrs=""):
     """refrender's sharp point-sampled image of a 2D model under a square-pixel camera of focal f."""
     ply = _write(tmp_path, model)
-    scene = tmp_path / "s2.xml"
-    scene.write_text(f'<scene>{gsply.camera_xml(R, C, f, w, h)}<background color="0.1 0.2 0.3"/>'
-                     f'<object name="g"><gaussianModel file="{ply}" kind="2dgs"{attrs}/></object></scene>')
-    out = tmp_path / "s2.exr"
-    proc = run([scene, "--pixel-filter", "point", "--time", 0, "--spp", 1, "-o", out, "--quiet"])
-    assert proc.returncode == 0, proc.stderr
-    return read_exr(out)[0], gsply.read(ply)
+    return sharp_gaussian_render(tmp_path, gsply.camera_xml(R, C, f, w, h), ply, ' kind="2dgs"' + attrs, "s2"), \
+        gsply.read(ply)
 
 
 def _tilted_elongated(seed, n=14):
