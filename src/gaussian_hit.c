@@ -34,6 +34,13 @@ const char *gaussian_formation_name(gaussian_formation f)
     return NULL;
 }
 
+const char *gaussian_order_name(const gaussian_model *m, gaussian_order order)
+{
+    if (gaussian_formation_of(m) == GAUSSIAN_FORMATION_3DGRT)
+        return "max-response";
+    return m->kind == GAUSSIAN_2D && order == GAUSSIAN_ORDER_HIT_DEPTH ? "hit-depth" : "center-depth";
+}
+
 int gaussian_formation_parse(const char *name, gaussian_kind kind, gaussian_formation *f)
 {
     for (int k = 0; k < FORMATIONS; k++)
@@ -150,6 +157,13 @@ static double filter_circle(const gaussian_model *m)
     return gaussian_formation_of(m) == GAUSSIAN_FORMATION_2DGS_UNIT_CIRCLE ? 1.0 : 3.0;
 }
 
+/* Entry (a, b) of the dual conic T diag(c^2, c^2, -1) T^T of the splat's
+ * circle of radius c (scales), from rows a and b of T. */
+static double dual_conic(vec3 a, vec3 b, double c)
+{
+    return c * c * (a.x * b.x + a.y * b.y) - a.z * b.z;
+}
+
 /* The centre of the image of the splat's circle of radius c (scales): the
  * last column of the dual conic T diag(c^2, c^2, -1) T^T over its last
  * entry (compute_aabb's point_image). 0 when the circle reaches behind the
@@ -158,29 +172,39 @@ static double filter_circle(const gaussian_model *m)
  * screen; GAUSSIANS.md). */
 static int filter_centre(const vec3 row[3], double c, double *px, double *py)
 {
-    double c2 = c * c, d22 = c2 * (row[2].x * row[2].x + row[2].y * row[2].y) - row[2].z * row[2].z;
+    double d22 = dual_conic(row[2], row[2], c);
     if (!(d22 < 0))
         return 0;
-    *px = (c2 * (row[0].x * row[2].x + row[0].y * row[2].y) - row[0].z * row[2].z) / d22;
-    *py = (c2 * (row[1].x * row[2].x + row[1].y * row[2].y) - row[1].z * row[2].z) / d22;
+    *px = dual_conic(row[0], row[2], c) / d22, *py = dual_conic(row[1], row[2], c) / d22;
     return 1;
 }
 
 static double clamp_alpha(double alpha_max, double opacity, double g) { return fmin(alpha_max, opacity * g); }
 
+/* The image of camera-space point p minus the ray's raster position. */
+static void image_offset(const gaussian_ray *r, vec3 p, double *dx, double *dy)
+{
+    *dx = r->fx * p.x / p.z + r->cx - r->x, *dy = r->fy * p.y / p.z + r->cy - r->y;
+}
+
 /* The rasterizers' tile rule (getRect, auxiliary.h): a Gaussian is only
  * evaluated at the pixels of the 16x16 tiles that the square of the given
  * radius about `centre` (pixel-index coordinates) touches. */
+enum { TILE = 16 };
+
+/* getRect's min(grid, max(0, (int)v)): the CUDA's (int) cast truncates
+ * toward 0; the clamps keep it defined for any v. */
+static int tile_index(double v, int grid)
+{
+    return (int)fmin((double)grid, fmax(0.0, trunc(fmax(-1.0, fmin(1e9, v)))));
+}
+
 static int in_rasterizer_tiles(const gaussian_ray *r, double cx, double cy, double radius)
 {
-    enum { TILE = 16 };
     int gx = (r->width + TILE - 1) / TILE, gy = (r->height + TILE - 1) / TILE;
     double px = floor(r->x), py = floor(r->y);
-    /* the CUDA's (int) casts truncate toward 0; the clamps keep them defined */
-#define TILE_INDEX(v, grid) ((int)fmin((double)(grid), fmax(0.0, trunc(fmax(-1.0, fmin(1e9, (v)))))))
-    int x0 = TILE_INDEX((cx - radius) / TILE, gx), x1 = TILE_INDEX((cx + radius + TILE - 1) / TILE, gx);
-    int y0 = TILE_INDEX((cy - radius) / TILE, gy), y1 = TILE_INDEX((cy + radius + TILE - 1) / TILE, gy);
-#undef TILE_INDEX
+    int x0 = tile_index((cx - radius) / TILE, gx), x1 = tile_index((cx + radius + TILE - 1) / TILE, gx);
+    int y0 = tile_index((cy - radius) / TILE, gy), y1 = tile_index((cy + radius + TILE - 1) / TILE, gy);
     return px >= (double)x0 * TILE && px < (double)x1 * TILE && py >= (double)y0 * TILE && py < (double)y1 * TILE;
 }
 
@@ -189,9 +213,9 @@ static int in_rasterizer_tiles(const gaussian_ray *r, double cx, double cy, doub
  * up to 3a9357f, 3 times the unit circle's image's half extent. */
 static int in_2dgs_tiles(const gaussian_ray *r, const vec3 row[3], double c, double centre_x, double centre_y)
 {
-    double c2 = c * c, d22 = c2 * (row[2].x * row[2].x + row[2].y * row[2].y) - row[2].z * row[2].z;
-    double hx = centre_x * centre_x - (c2 * (row[0].x * row[0].x + row[0].y * row[0].y) - row[0].z * row[0].z) / d22;
-    double hy = centre_y * centre_y - (c2 * (row[1].x * row[1].x + row[1].y * row[1].y) - row[1].z * row[1].z) / d22;
+    double d22 = dual_conic(row[2], row[2], c);
+    double hx = centre_x * centre_x - dual_conic(row[0], row[0], c) / d22;
+    double hy = centre_y * centre_y - dual_conic(row[1], row[1], c) / d22;
     /* the extent does not depend on where the pixel grid's origin is; the
      * centre in pixel-index coordinates (ndc2pix's (W-1)/2) is 0.5 less */
     double extent = sqrt(fmax(1e-4, fmax(hx, hy)));
@@ -211,7 +235,8 @@ static int in_2dgs_tiles(const gaussian_ray *r, const vec3 row[3], double c, dou
 static int splat_near_pixel(const gaussian_ray *r, vec3 p, double s, double c)
 {
     const double k = 3.3302, filter_px = 2.3537; /* sqrt(2 ln 255), sqrt(ln 255) */
-    double f = fmax(r->fx, r->fy), dx = r->fx * p.x / p.z + r->cx - r->x, dy = r->fy * p.y / p.z + r->cy - r->y;
+    double f = fmax(r->fx, r->fy), dx, dy;
+    image_offset(r, p, &dx, &dy);
     double reach_k = k * s, reach_c = c * s;
     if (p.z <= fmax(reach_k, reach_c) * (1 + 1e-9))
         return 1; /* near the camera plane: no bound from the projection */
@@ -278,7 +303,8 @@ static int raster_alpha(const gaussian_model *m, size_t i, const raster_rules *r
                         vec3 p, double *alpha)
 {
     const float *s = &m->scale[3 * i];
-    double dx = r->fx * p.x / p.z + r->cx - r->x, dy = r->fy * p.y / p.z + r->cy - r->y, k2 = 2.0 * log(m->opacity[i] * 255.0);
+    double dx, dy, k2 = 2.0 * log(m->opacity[i] * 255.0);
+    image_offset(r, p, &dx, &dy);
     /* cheap and sure: lambda_max(cov2D) <= (f_max / z)^2 (1 + lim^2) s_max^2 + dilation (gaussian_view_stretch) */
     double fz = fmax(r->fx, r->fy) / p.z * fmax(s[0], fmax(s[1], s[2])) * r->scale * r->stretch;
     if (!(dx * dx + dy * dy <= k2 * (fz * fz + rules->dilation) * (1 + 1e-6)))
@@ -369,7 +395,7 @@ static double kernel_reach(const gaussian_model *m, size_t i)
 }
 
 /* Only 2D models' hits can lie off the centre's depth (gaussian_hit.h). */
-static double hit_offset(const gaussian_model *m, double s, double depth_per_t)
+double gaussian_traversal_pad(const gaussian_model *m, double s, double depth_per_t)
 {
     if (m->kind != GAUSSIAN_2D)
         return 0.0;
@@ -381,12 +407,9 @@ static double hit_offset(const gaussian_model *m, double s, double depth_per_t)
 
 double gaussian_key_lead(const gaussian_model *m, gaussian_order order, double s, double depth_per_t)
 {
-    return order == GAUSSIAN_ORDER_CENTER_DEPTH ? hit_offset(m, s, depth_per_t) : 0.0;
-}
-
-double gaussian_traversal_pad(const gaussian_model *m, double s, double depth_per_t)
-{
-    return hit_offset(m, s, depth_per_t);
+    /* the same bound: a centre-depth key is the centre's, within 3.33
+     * scales of its 2D hit (gaussian_traversal_pad) */
+    return order == GAUSSIAN_ORDER_CENTER_DEPTH ? gaussian_traversal_pad(m, s, depth_per_t) : 0.0;
 }
 
 /* 2DGS: rho2d = 2 |d|^2 <= 2 ln(255 o): the ray's pixel lies within

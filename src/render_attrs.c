@@ -62,7 +62,7 @@ static void describe_gaussians(FILE *f, const scene *s)
         const gaussian_model *m = &o->gaussians;
         fprintf(f, "%s%s: semantics=%s tileRule=%s order=%s", any++ ? "; " : "", o->name,
                 gaussian_formation_name(gaussian_formation_of(m)), m->tile_rule ? "on" : "off",
-                o->order == GAUSSIAN_ORDER_HIT_DEPTH ? "hit-depth" : "center-depth");
+                gaussian_order_name(m, o->order));
     }
     if (!any)
         fputs("none", f);

@@ -191,15 +191,11 @@ static void write_model(FILE *f, const scene_object *o)
         const gaussian_model *m = &o->gaussians;
         fputs("{\"gaussians\": {\"file\": ", f);
         json_string(f, o->model_file);
-        gaussian_formation fm = gaussian_formation_of(m);
         fprintf(f,
                 ", \"kind\": \"%s\", \"semantics\": \"%s\", \"tileRule\": \"%s\", \"order\": \"%s\", "
                 "\"count\": %zu, \"sh_degree\": %d}}",
-                m->kind == GAUSSIAN_3D ? "3dgs" : "2dgs", gaussian_formation_name(fm), m->tile_rule ? "on" : "off",
-                fm == GAUSSIAN_FORMATION_3DGRT                ? "max-response"
-                : m->kind == GAUSSIAN_2D && o->order == GAUSSIAN_ORDER_HIT_DEPTH ? "hit-depth"
-                                                                                 : "center-depth",
-                m->count, m->sh_degree);
+                m->kind == GAUSSIAN_3D ? "3dgs" : "2dgs", gaussian_formation_name(gaussian_formation_of(m)),
+                m->tile_rule ? "on" : "off", gaussian_order_name(m, o->order), m->count, m->sh_degree);
         return;
     }
     if (o->kind == OBJECT_SPHERE) {
