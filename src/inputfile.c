@@ -48,29 +48,34 @@ static FILE *open_regular(const char *path, struct stat *st, rr_error *err)
     return fp;
 }
 
-int input_file_read(const char *path, size_t max_bytes, input_file *f, rr_error *err)
+/* Reads the open file fp (st: its stat) whole into f, and closes fp. */
+static int read_open_file(FILE *fp, const struct stat *st, const char *path, size_t max_bytes, input_file *f,
+                          rr_error *err)
 {
-    memset(f, 0, sizeof *f);
-    struct stat st;
-    FILE *fp = open_regular(path, &st, err);
-    if (!fp)
-        return -1;
     int rc = 0;
-    if ((uint64_t)st.st_size > max_bytes)
+    if ((uint64_t)st->st_size > max_bytes)
         rc = rr_fail(err, "%s: %lld bytes, larger than the %zu this kind of input may have", path,
-                     (long long)st.st_size, max_bytes);
-    else if (!(f->data = malloc((size_t)st.st_size + 1)))
-        rc = rr_fail(err, "%s: out of memory for %lld bytes", path, (long long)st.st_size);
+                     (long long)st->st_size, max_bytes);
+    else if (!(f->data = malloc((size_t)st->st_size + 1)))
+        rc = rr_fail(err, "%s: out of memory for %lld bytes", path, (long long)st->st_size);
     else
-        rc = read_exactly(fp, path, f->data, (size_t)st.st_size, err);
+        rc = read_exactly(fp, path, f->data, (size_t)st->st_size, err);
     fclose(fp);
     if (rc) {
         input_file_free(f);
         return -1;
     }
-    f->len = (size_t)st.st_size;
+    f->len = (size_t)st->st_size;
     f->data[f->len] = 0;
     return 0;
+}
+
+int input_file_read(const char *path, size_t max_bytes, input_file *f, rr_error *err)
+{
+    memset(f, 0, sizeof *f);
+    struct stat st;
+    FILE *fp = open_regular(path, &st, err);
+    return fp ? read_open_file(fp, &st, path, max_bytes, f, err) : -1;
 }
 
 void input_file_free(input_file *f)
@@ -94,14 +99,11 @@ int input_file_stream(const char *path, size_t max_bytes, input_file *f, rr_erro
     if (!fp)
         return -1;
     size_t page = (size_t)sysconf(_SC_PAGESIZE), size = (size_t)st.st_size;
-    if ((uint64_t)st.st_size > max_bytes || size < STREAM_MIN_BYTES || size % page == 0) {
-        fclose(fp);
-        return input_file_read(path, max_bytes, f, err);
-    }
-    void *map = mmap(NULL, size, PROT_READ, MAP_PRIVATE, fileno(fp), 0);
+    void *map = (uint64_t)st.st_size > max_bytes || size < STREAM_MIN_BYTES || size % page == 0
+                    ? MAP_FAILED : mmap(NULL, size, PROT_READ, MAP_PRIVATE, fileno(fp), 0);
+    if (map == MAP_FAILED) /* small, a whole number of pages, too large (refused there) or not mappable */
+        return read_open_file(fp, &st, path, max_bytes, f, err);
     fclose(fp); /* the mapping stays */
-    if (map == MAP_FAILED)
-        return input_file_read(path, max_bytes, f, err);
     madvise(map, size, MADV_SEQUENTIAL);
     f->data = map, f->len = size, f->mapped = 1;
     return 0;
