@@ -40,6 +40,10 @@ static int number_field(json_object *o, const char *field, double *out)
     return isfinite(*out) ? 0 : -2;
 }
 
+/* The messages of number_field's and numbers' errors, by -rc. */
+static const char *const number_errors[] = {"", "field '%s' is missing or not a number (list)",
+                                            "field '%s' is not finite"};
+
 static int numbers(json_object *arr, int n, double *out)
 {
     if (!json_object_is_type(arr, json_type_array) || (int)json_object_array_length(arr) != n)
@@ -120,13 +124,12 @@ static int usable_focal(double f, int size)
 
 static int read_focal(const char *name, size_t index, json_object *entry, camjson_camera *c, rr_error *err)
 {
-    static const char *const bad[] = {"", "field '%s' is missing or not a number (list)", "field '%s' is not finite"};
     const char *focal[2] = {"fx", "fy"};
     double *f[2] = {&c->fx, &c->fy};
     int size[2] = {c->width, c->height}, rc;
     for (int k = 0; k < 2; k++) {
         if ((rc = number_field(entry, focal[k], f[k])))
-            return entry_fail(err, name, index, entry, bad[-rc], focal[k]);
+            return entry_fail(err, name, index, entry, number_errors[-rc], focal[k]);
         if (!(*f[k] > 0))
             return entry_fail(err, name, index, entry, "field '%s' must be > 0", focal[k]);
         if (!usable_focal(*f[k], size[k])) {
@@ -142,12 +145,11 @@ static int read_focal(const char *name, size_t index, json_object *entry, camjso
 
 static int read_camera(const char *name, size_t index, json_object *entry, camjson_camera *c, rr_error *err)
 {
-    static const char *const bad[] = {"", "field '%s' is missing or not a number (list)", "field '%s' is not finite"};
     double pos[3];
     json_object *arr;
     int rc = json_object_object_get_ex(entry, "position", &arr) ? numbers(arr, 3, pos) : -1;
     if (rc)
-        return entry_fail(err, name, index, entry, bad[-rc], "position");
+        return entry_fail(err, name, index, entry, number_errors[-rc], "position");
     if ((rc = read_rotation(entry, c->c2w)))
         return entry_fail(err, name, index, entry, "field '%s' is not a 3x3 array of finite numbers", "rotation");
     if (!is_rotation(c->c2w))
@@ -158,7 +160,7 @@ static int read_camera(const char *name, size_t index, json_object *entry, camjs
     for (int k = 0; k < 2; k++)
         if ((rc = read_size(entry, sizes[k], dims[k])))
             return entry_fail(err, name, index, entry,
-                              rc == -1 ? bad[1] : "field '%s' must be a whole number of pixels in [1, 65536]", sizes[k]);
+                              rc == -1 ? number_errors[1] : "field '%s' must be a whole number of pixels in [1, 65536]", sizes[k]);
     if ((long long)c->width * c->height > RR_MAX_PIXELS)
         return entry_fail(err, name, index, entry, "%s: more pixels than refrender renders", "width x height");
     if (read_focal(name, index, entry, c, err))

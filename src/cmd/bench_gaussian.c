@@ -26,6 +26,13 @@ typedef struct {
     double gathered, composited, base_hits; /* per ray */
 } gs_result;
 
+/* A model's own bytes per Gaussian: mean, scale, quaternion, opacity and
+ * its SH coefficients, as floats (gaussian.h). */
+static double model_bytes_per_gaussian(const gaussian_model *m)
+{
+    return (double)((3 + 3 + 4 + 1 + 3 * (size_t)m->sh_coeffs) * sizeof(float));
+}
+
 static void gs_scene(const gs_case *c, scene *s)
 {
     scene_init(s);
@@ -235,7 +242,7 @@ static void gs_run(const gs_case *c, gs_result *r)
     scene s;
     gs_scene(c, &s);
     const gaussian_model *m = &s.objects[0].gaussians;
-    r->model_bytes = (double)(m->count * (3 + 3 + 4 + 1 + 3 * (size_t)m->sh_coeffs) * sizeof(float)) / (double)m->count;
+    r->model_bytes = model_bytes_per_gaussian(m);
     render_settings rs = {{SAMPLER_THESIS, 1, 2, 4, 4}, s.shut, c->threads, 0, 1, 1, 0, 0, 0, 0, 0, 0,
                           PIXEL_FILTER_BOX, BLUR_SPACE_MODEL};
     accel_settings set = {s.shut.open, s.shut.close, s.epsilon, s.kernel_sigma, 1};
@@ -328,7 +335,7 @@ static void load_child(const void *in, void *out)
     struct rusage ru;
     getrusage(RUSAGE_SELF, &ru);
     r->peak_bytes = (ru.ru_maxrss * 1024.0 - before) / (double)m.count;
-    r->model_bytes = (double)(3 + 3 + 4 + 1 + 3 * (size_t)m.sh_coeffs) * sizeof(float);
+    r->model_bytes = model_bytes_per_gaussian(&m);
     gaussian_model_free(&m);
 }
 
