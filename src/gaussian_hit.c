@@ -55,7 +55,7 @@ int gaussian_formation_parse(const char *name, gaussian_kind kind, gaussian_form
  * graphdeco-inria/diff-gaussian-rasterization cuda_rasterizer/forward.cu
  * (59f5f77; the `antialiasing` flag of 9c5c202, dr_aa, the commit
  * gaussian-splatting pins) and nerfstudio gsplat v1.5.3 (937e299);
- * src/GAUSSIANS.md names the lines. */
+ * tests/gs3d_raster_reference.py names the file and line of each rule. */
 typedef struct {
     double near, far;  /* a mean's view depth must be in (near, far] (in_frustum; gsplat: [0.01, 1e10]) */
     double dilation;   /* added to cov2D's diagonal, pixels^2 (0.3; gsplat's eps2d) */
