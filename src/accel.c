@@ -20,15 +20,25 @@ static unsigned *lane_u(void *rayhit, unsigned n, unsigned field, unsigned i)
 
 /* ---- object-level callbacks (object space) ----------------------------- */
 
+/* Which of our rays a lane of the callback's packet is: its ray ID. Embree
+ * may split a packet (rtcIntersect16 runs as two 8-wide halves on an AVX2
+ * machine, so a callback's lane 0 can be our ray 8): the lane index alone
+ * picked another ray's k-buffer and transform there. */
+static unsigned lane_ray_id(const struct RTCIntersectFunctionNArguments *args, unsigned lane)
+{
+    return *lane_u(args->rayhit, args->N, F_ID, lane); /* init_rayhit1 gives a single ray ID 0 */
+}
+
 static void accept_hit(trace_context *c, const struct RTCIntersectFunctionNArguments *args, unsigned lane,
                        const float dir[3], float t, float weight, float r2, vec3 normal, const float color[3])
 {
-    vec3 wn = xform_normal(c->xf[lane], normal_facing_eye(normal, v3(dir[0], dir[1], dir[2])));
+    unsigned id = lane_ray_id(args, lane);
+    vec3 wn = xform_normal(c->xf[id], normal_facing_eye(normal, v3(dir[0], dir[1], dir[2])));
     surface_hit h = {t, c->obj, args->primID, weight, r2, {color[0], color[1], color[2]},
                      {(float)wn.x, (float)wn.y, (float)wn.z}};
-    kbuffer_insert(c->kb[lane], &h);
-    c->accepted[lane]++;
-    *lane_f(args->rayhit, args->N, F_TFAR, lane) = kbuffer_cutoff(c->kb[lane]);
+    kbuffer_insert(c->kb[id], &h);
+    c->accepted[id]++;
+    *lane_f(args->rayhit, args->N, F_TFAR, lane) = kbuffer_cutoff(c->kb[id]);
     *lane_u(args->rayhit, args->N, F_GEOM, lane) = args->geomID;
     *lane_u(args->rayhit, args->N, F_PRIM, lane) = args->primID;
 }
