@@ -20,19 +20,24 @@ static unsigned *lane_u(void *rayhit, unsigned n, unsigned field, unsigned i)
 
 /* ---- object-level callbacks (object space) ----------------------------- */
 
-/* Which of our rays a lane of the callback's packet is: its ray ID. Embree
- * may split a packet (rtcIntersect16 runs as two 8-wide halves on an AVX2
- * machine, so a callback's lane 0 can be our ray 8): the lane index alone
- * picked another ray's k-buffer and transform there. */
-static unsigned lane_ray_id(const struct RTCIntersectFunctionNArguments *args, unsigned lane)
+/* Which of our rays a lane of the callback's packet is (its ray ID), and
+ * whether it is one of ours at all. Embree may split a packet (on an AVX2
+ * machine rtcIntersect16 runs as two 8-wide halves: a callback's lane 0
+ * can be our ray 8), and there it has been seen to call the callback for
+ * lanes the valid mask of rtcIntersect16 switched off (ray 12 of a
+ * 10-ray packet, with tfar 0): the lane index alone picked another ray's
+ * k-buffer and transform, and such a lane must be ignored. */
+static int live_lane(const trace_context *c, const struct RTCIntersectFunctionNArguments *args, unsigned lane,
+                     unsigned *id)
 {
-    return *lane_u(args->rayhit, args->N, F_ID, lane); /* init_rayhit1 gives a single ray ID 0 */
+    *id = *lane_u(args->rayhit, args->N, F_ID, lane); /* init_rayhit1 gives a single ray ID 0 */
+    return args->valid[lane] && *id < c->lanes;
 }
 
 static void accept_hit(trace_context *c, const struct RTCIntersectFunctionNArguments *args, unsigned lane,
-                       const float dir[3], float t, float weight, float r2, vec3 normal, const float color[3])
+                       unsigned id, const float dir[3], float t, float weight, float r2, vec3 normal,
+                       const float color[3])
 {
-    unsigned id = lane_ray_id(args, lane);
     vec3 wn = xform_normal(c->xf[id], normal_facing_eye(normal, v3(dir[0], dir[1], dir[2])));
     surface_hit h = {t, c->obj, args->primID, weight, r2, {color[0], color[1], color[2]},
                      {(float)wn.x, (float)wn.y, (float)wn.z}};
@@ -60,21 +65,22 @@ void accel_splats_intersect(const struct RTCIntersectFunctionNArguments *args)
     trace_context *c = (trace_context *)args->context;
     const scene_object *o = args->geometryUserPtr;
     const splat_geom *g = &o->model.geom[args->primID];
-    for (unsigned lane = 0; lane < args->N; lane++) {
+    for (unsigned lane = 0, id; lane < args->N; lane++) {
         float org[3], dir[3], tnear, tfar, t, r2;
-        if (!args->valid[lane])
+        if (!live_lane(c, args, lane, &id))
             continue;
         load_lane(args, lane, org, dir, &tnear, &tfar);
         if (!splat_intersect(g, org, dir, tnear, tfar, &t, &r2))
             continue;
         const float *n = pointmodel_normal(&o->model, args->primID);
         /* weight -1: computed after the traversal, if the hit is still in the buffer */
-        accept_hit(c, args, lane, dir, t, -1.0f, r2, v3(n[0], n[1], n[2]), pointmodel_color(&o->model, args->primID));
+        accept_hit(c, args, lane, id, dir, t, -1.0f, r2, v3(n[0], n[1], n[2]), pointmodel_color(&o->model, args->primID));
     }
 }
 
 /* The visible crossing of an opaque sphere: the nearer root in [tnear, tfar]. */
-static void sphere_intersect_lane(trace_context *c, const struct RTCIntersectFunctionNArguments *args, unsigned lane)
+static void sphere_intersect_lane(trace_context *c, const struct RTCIntersectFunctionNArguments *args, unsigned lane,
+                                  unsigned id)
 {
     const scene_object *o = args->geometryUserPtr;
     float fo[3], fd[3], tnear, tfar;
@@ -89,15 +95,16 @@ static void sphere_intersect_lane(trace_context *c, const struct RTCIntersectFun
         return;
     vec3 p = v3_add(v3_sub(org, o->sphere_center), v3_scale(dir, sc.root[k]));
     const float col[3] = {(float)o->sphere_color.x, (float)o->sphere_color.y, (float)o->sphere_color.z};
-    accept_hit(c, args, lane, fd, (float)depth[k], (float)hit_weight(1, 0.0, 0.0), 0.0f,
+    accept_hit(c, args, lane, id, fd, (float)depth[k], (float)hit_weight(1, 0.0, 0.0), 0.0f,
                v3_scale(p, 1.0 / o->sphere_radius), col);
 }
 
 void accel_sphere_intersect(const struct RTCIntersectFunctionNArguments *args)
 {
-    for (unsigned lane = 0; lane < args->N; lane++)
-        if (args->valid[lane])
-            sphere_intersect_lane((trace_context *)args->context, args, lane);
+    trace_context *c = (trace_context *)args->context;
+    for (unsigned lane = 0, id; lane < args->N; lane++)
+        if (live_lane(c, args, lane, &id))
+            sphere_intersect_lane(c, args, lane, id);
 }
 
 void accel_splat_bounds_cb(const struct RTCBoundsFunctionArguments *args)
@@ -276,6 +283,7 @@ static int trace_top(const accel *a, int which, vec3 org, vec3 dir, double time,
     c.time = time;
     c.world_org = org, c.world_dir = dir;
     c.obj = 0;
+    c.lanes = 1;
     c.kb[0] = kb;
     c.accepted[0] = 0;
     struct RTCRayHit rh;
@@ -405,6 +413,7 @@ enum { MIN_PACKET = 4 };
 static void trace_lanes(const accel *a, unsigned obj, const lane_ray *rays, int m, kbuffer **kbs, int *accepted,
                         trace_context *c)
 {
+    c->lanes = (unsigned)m;
     for (int k = 0; k < m; k++) {
         c->xf[k] = &rays[k].xf;
         c->kb[k] = kbs[k];

@@ -80,6 +80,7 @@ typedef struct {
     double time;                  /* the single ray's time (top-level path) */
     vec3 world_org, world_dir;    /* and its world ray, unrounded */
     unsigned obj;
+    unsigned lanes;                /* rays in play: ray IDs 0 .. lanes-1 */
     const xform *xf[ACCEL_PACKET]; /* each lane's object transform at its time */
     kbuffer *kb[ACCEL_PACKET];
     int accepted[ACCEL_PACKET];   /* hits offered to each lane's k-buffer */
