@@ -33,7 +33,7 @@ RR_CFLAGS   = -std=c11 $(OPT) -Wall -Wextra $(CFLAGS)
 RR_CXXFLAGS = -std=c++17 $(OPT) -Wall -Wextra $(CXXFLAGS)
 LDLIBS   := -ljson-c -lassimp -lembree3 -lOpenEXRCore -lxml2 -lOpenImageIO -lOpenImageIO_Util -lpthread -lm -lstdc++
 
-LIB_SRCS := common inputfile atomicfile kbuffer splat pointmodel ply gaussian gaussian_hit gaussian_blend camjson shapes surfelize meshload curve animation animfile camera shutter sampler scene \
+LIB_SRCS := common inputfile atomicfile kbuffer splat pointmodel ply gaussian gaussian_hit gaussian_blend camjson shapes surfelize meshload curve trajectory animation animfile camera shutter sampler scene \
             scene_xml scene_xml_util scene_xml_anim scene_xml_camera scene_params accel accel_build accel_collide exact exact_integrate shade film render exr output render_attrs cli
 LIB_OBJS := $(LIB_SRCS:%=$(BUILD)/%.o) $(BUILD)/preview.o
 APP_OBJS := $(BUILD)/cmd/main.o $(BUILD)/cmd/gen_cmd.o $(BUILD)/cmd/surfel_output.o $(BUILD)/cmd/merge_cmd.o $(BUILD)/cmd/surfels_cmd.o \
@@ -91,9 +91,12 @@ test-c: $(TESTBIN)
 $(BUILD)/libfaultinject.so: tests/faultinject.c | $(BUILD)
 	$(CC) -O1 -g -Wall -Wextra -shared -fPIC $< -o $@ -ldl
 
+# pytest-xdist workers (python3-pytest-xdist): the suite's renders are
+# single processes, so one worker a core halves its time on 2 cores
+TEST_JOBS ?= $(shell nproc)
 test-py: $(BIN) $(TESTBIN) $(BUILD)/libfaultinject.so scenes
 	REFRENDER=$(CURDIR)/$(BIN) UNIT_TESTS=$(CURDIR)/$(TESTBIN) FAULTINJECT=$(CURDIR)/$(BUILD)/libfaultinject.so \
-	    $(PYTHON) -m pytest -q tests
+	    $(PYTHON) -m pytest -q -n $(TEST_JOBS) tests
 
 # Tests run with the RR_DCHECK invariant checks on (src/common.h): the plain
 # build stays the one users run, without them.

@@ -102,11 +102,18 @@ def _check_integral(tmp_path, scene, expect):
 
 
 def _render(tmp_path, scene, seed, sampler, tspp, batches):
+    """Only the middle row, which the checks read (a crop window: a fifth of the work)."""
     out = tmp_path / f"out{seed}{sampler}.exr"
     proc = run([scene, "--pixel-filter", "point", "--spp", 1, "--tspp", tspp, "--batches", batches, "--seed", seed,
-                "--sampler", sampler, "-o", out, "--quiet"])
+                "--sampler", sampler, "--crop-window", f"0,1,{(H // 2) / H},{(H // 2 + 1) / H}", "-o", out, "--quiet"])
     assert proc.returncode == 0, proc.stderr
-    return read_full(out)[0]
+    ch, header = read_full(out)
+    # the window's row, at index H // 2 of a full-size array
+    rows = {name: np.full((H, W), np.nan, dtype=np.float32) for name in ch}
+    for name, v in ch.items():
+        assert v.shape == (1, W), v.shape
+        rows[name][H // 2] = v[0]
+    return rows
 
 
 def srgb_to_linear(v):
