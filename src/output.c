@@ -15,7 +15,8 @@ static const char *const identity_keys[] = {
     "refrender:tspp", "refrender:seed", "refrender:epsilon", "refrender:kernelSigma",
     "refrender:shutter", "refrender:weightFunction", "refrender:timeFactor", "refrender:batches",
     "refrender:timeIntegration", "refrender:parameters", "refrender:parametersHash", "refrender:weightHash",
-    "refrender:pixelFilter", "refrender:blurSpace", "refrender:gaussians", "refrender:gaussiansHash", NULL};
+    "refrender:pixelFilter", "refrender:blurSpace", "refrender:gaussians", "refrender:gaussiansHash",
+    "refrender:rollingShutter", NULL};
 
 /* The attributes stored as EXR numbers (README, Output). */
 static rr_attr_kind attr_kind(const char *key)

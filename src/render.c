@@ -162,6 +162,11 @@ static int batch_samples(const render_job *job, int px, int py, uint32_t batch, 
     if (sh->kind != WEIGHT_BOX)
         for (int i = 0; i < count; i++)
             scr->t[i] = shutter_cdf_time(&job->time_cdf, (scr->t[i] - sh->open) / (sh->close - sh->open));
+    if (sh->rolling.kind != ROLLING_OFF) { /* this pixel's line exposes at its own times */
+        int lines, line = shutter_line(sh, px, py, job->img->width, job->img->height, &lines);
+        for (int i = 0; i < count; i++)
+            scr->t[i] = shutter_line_time(sh, line, lines, scr->t[i]);
+    }
     return count;
 }
 
@@ -505,11 +510,15 @@ int render_image(const scene *s, const accel *a, const render_settings *rs, imag
 {
     if (check_settings(rs, err))
         return -1;
-    double open, close;
+    double open, close, t0, t1;
     accel_shutter(a, &open, &close);
-    if (open != rs->shut.open || close != rs->shut.close) /* swept bounds of another shutter miss hits */
-        return rr_fail(err, "internal: accel was built for the shutter [%g, %g], the render is for [%g, %g]", open,
-                       close, rs->shut.open, rs->shut.close);
+    shutter_span(&rs->shut, img->width, img->height, &t0, &t1);
+    if (open != t0 || close != t1) /* swept bounds of another shutter miss hits */
+        return rr_fail(err, "internal: accel was built for the times [%g, %g], the render is for [%g, %g]", open,
+                       close, t0, t1);
+    if (rs->exact_time && rs->shut.rolling.kind != ROLLING_OFF)
+        return rr_fail(err, "exact time integration does not integrate a rolling shutter (each line its own "
+                            "window): use sampled time");
     render_job job;
     memset(&job, 0, sizeof job);
     job.sc = s, job.acc = a, job.rs = rs, job.img = img, job.cancel = cancel;

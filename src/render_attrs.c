@@ -121,6 +121,9 @@ void attrs_for_render(attr_list *a, const scene *s, const render_settings *rs, u
     attrs_set(a, "refrender:shutterClose", "%.17g", rs->shut.close);
     camera_matrices(a, &s->cam);
     set_identity_text(a, "refrender:weightFunction", "refrender:weightHash", weight_text, &rs->shut);
+    char rolling[256];
+    shutter_rolling_text(&rs->shut, rolling, sizeof rolling);
+    attrs_set(a, "refrender:rollingShutter", "%s", rolling);
     attrs_set(a, "refrender:timeFactor", "%d", smp->time_factor);
     attrs_set(a, "refrender:timeIntegration", "%s", rs->exact_time ? "exact" : "sampled");
     attrs_set(a, "refrender:pixelFilter", "%s", pixel_filter_name(rs->filter));

@@ -62,9 +62,39 @@ static int parse_weight_table(xml_ctx *c, xmlNodePtr n, shutter *s)
 /* <shutter open close | fraction, weight ...>. With <frames>, times are
  * relative to the start of each frame; fraction is of the frame interval
  * (0.5 = a 180-degree shutter) and is resolved once the rate is known. */
+/* rolling="lines|3dgs-deblur|gsplat" readout="top-to-bottom|..."
+ * lineDelay="delta" (lines) readoutTime="t_ro" (3dgs-deblur): shutter.h. */
+static int parse_rolling(xml_ctx *c, xmlNodePtr n, rolling_shutter *r)
+{
+    char kind[32] = "off", dir[32] = "top-to-bottom";
+    if (xml_attr_text(c, n, "rolling", kind, sizeof kind) < 0 || xml_attr_text(c, n, "readout", dir, sizeof dir) < 0)
+        return -1;
+    int k = shutter_rolling_parse(kind), d = shutter_readout_parse(dir);
+    if (k < 0)
+        return xml_fail(c, n, "unknown rolling shutter '%s' (off, lines, 3dgs-deblur or gsplat)", kind);
+    if (d < 0)
+        return xml_fail(c, n, "unknown readout '%s' (top-to-bottom, bottom-to-top, left-to-right or right-to-left)",
+                        dir);
+    r->kind = (rolling_kind)k, r->readout = (readout_dir)d;
+    if (k == ROLLING_OFF && xml_has_attr(n, "readout"))
+        return xml_fail(c, n, "'readout' is for a rolling shutter (rolling=\"lines\", \"3dgs-deblur\" or \"gsplat\")");
+    if (xml_has_attr(n, "lineDelay") != (k == ROLLING_LINES))
+        return xml_fail(c, n, k == ROLLING_LINES ? "rolling=\"lines\" needs lineDelay (the time between one line's "
+                                                   "exposure and the next's)"
+                                                 : "lineDelay is for rolling=\"lines\"");
+    if (xml_has_attr(n, "readoutTime") != (k == ROLLING_3DGS_DEBLUR))
+        return xml_fail(c, n, k == ROLLING_3DGS_DEBLUR ? "rolling=\"3dgs-deblur\" needs readoutTime (its "
+                                                         "rolling_shutter_time: first line to last)"
+                                                       : "readoutTime is for rolling=\"3dgs-deblur\"");
+    return xml_attr_double(c, n, "lineDelay", &r->line_delay, 0) ||
+                   xml_attr_double(c, n, "readoutTime", &r->readout_time, 0)
+               ? -1 : 0;
+}
+
 static int parse_shutter(xml_ctx *c, xmlNodePtr n, scene *sc)
 {
-    static const char *const ok[] = {"open", "close", "fraction", "weight", "center", "rate", "table", NULL};
+    static const char *const ok[] = {"open",  "close",   "fraction",  "weight",      "center", "rate",
+                                     "table", "rolling", "readout",   "lineDelay",   "readoutTime", NULL};
     shutter *s = &sc->shut;
     if (xml_check_attributes(c, n, ok) || xml_attr_double(c, n, "open", &s->open, 0) ||
         xml_attr_double(c, n, "close", &s->close, 0) || xml_attr_double(c, n, "fraction", &c->shutter_fraction, 0))
@@ -80,7 +110,7 @@ static int parse_shutter(xml_ctx *c, xmlNodePtr n, scene *sc)
     }
     s->center = s->close; /* thesis Figure 3.1: weighting center t_c = t1 */
     if (xml_attr_double(c, n, "center", &s->center, 0) || xml_attr_double(c, n, "rate", &s->rate, 0) ||
-        parse_weight_kind(c, n, s) || parse_weight_table(c, n, s))
+        parse_weight_kind(c, n, s) || parse_weight_table(c, n, s) || parse_rolling(c, n, &s->rolling))
         return -1;
     rr_error sub;
     if (shutter_check(s, &sub))

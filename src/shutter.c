@@ -1,6 +1,8 @@
 #include "shutter.h"
 
+#include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 
 void shutter_default(shutter *s)
 {
@@ -10,6 +12,71 @@ void shutter_default(shutter *s)
     s->center = 1.0;
     s->rate = 1.0;
     s->table_size = 0;
+    s->rolling = (rolling_shutter){ROLLING_OFF, READOUT_TOP_TO_BOTTOM, 0.0, 0.0};
+}
+
+/* ---- rolling shutter ---------------------------------------------------- */
+
+static const char *const ROLLING_NAMES[] = {"off", "lines", "3dgs-deblur", "gsplat"};
+static const char *const READOUT_NAMES[] = {"top-to-bottom", "bottom-to-top", "left-to-right", "right-to-left"};
+
+const char *shutter_rolling_name(rolling_kind k) { return ROLLING_NAMES[k]; }
+const char *shutter_readout_name(readout_dir d) { return READOUT_NAMES[d]; }
+
+static int name_index(const char *const *names, int n, const char *name)
+{
+    for (int i = 0; i < n; i++)
+        if (!strcmp(names[i], name))
+            return i;
+    return -1;
+}
+
+int shutter_rolling_parse(const char *name) { return name_index(ROLLING_NAMES, 4, name); }
+int shutter_readout_parse(const char *name) { return name_index(READOUT_NAMES, 4, name); }
+
+int shutter_line(const shutter *s, int x, int y, int width, int height, int *lines)
+{
+    readout_dir d = s->rolling.readout;
+    int rows = d == READOUT_TOP_TO_BOTTOM || d == READOUT_BOTTOM_TO_TOP;
+    *lines = rows ? height : width;
+    if (rows)
+        return d == READOUT_TOP_TO_BOTTOM ? y : height - 1 - y;
+    return d == READOUT_LEFT_TO_RIGHT ? x : width - 1 - x;
+}
+
+double shutter_line_time(const shutter *s, int line, int lines, double t)
+{
+    const rolling_shutter *r = &s->rolling;
+    switch (r->kind) {
+    case ROLLING_LINES:
+        return t + r->line_delay * line;
+    case ROLLING_3DGS_DEBLUR:
+        return t + r->readout_time * ((line + 0.5) / lines - 0.5);
+    case ROLLING_GSPLAT: /* the fraction first: no overflow */
+        return lines > 1 ? s->open + (s->close - s->open) * ((double)line / (lines - 1)) : s->open;
+    default:
+        return t;
+    }
+}
+
+void shutter_span(const shutter *s, int width, int height, double *t0, double *t1)
+{
+    int lines;
+    shutter_line(s, 0, 0, width, height, &lines);
+    /* each line's time is monotone in the line: the ends bound every line */
+    double a = shutter_line_time(s, 0, lines, s->open), b = shutter_line_time(s, lines - 1, lines, s->open);
+    double c = shutter_line_time(s, 0, lines, s->close), d = shutter_line_time(s, lines - 1, lines, s->close);
+    *t0 = fmin(fmin(a, b), fmin(c, d)), *t1 = fmax(fmax(a, b), fmax(c, d));
+}
+
+void shutter_rolling_text(const shutter *s, char *buf, size_t size)
+{
+    const rolling_shutter *r = &s->rolling;
+    if (r->kind == ROLLING_OFF)
+        snprintf(buf, size, "off");
+    else
+        snprintf(buf, size, "%s %s lineDelay %.17g readoutTime %.17g", ROLLING_NAMES[r->kind],
+                 READOUT_NAMES[r->readout], r->line_delay, r->readout_time);
 }
 
 const char *shutter_weight_name(weight_kind k)
@@ -66,6 +133,12 @@ int shutter_check(const shutter *s, rr_error *err)
                 return rr_fail(err, "shutter table times must increase (entry %d)", i + 1);
         }
     }
+    const rolling_shutter *r = &s->rolling;
+    if (!isfinite(r->line_delay) || !isfinite(r->readout_time))
+        return rr_fail(err, "rolling shutter: lineDelay and readoutTime must be finite");
+    if (r->kind == ROLLING_GSPLAT && s->kind != WEIGHT_BOX)
+        return rr_fail(err, "rolling shutter 'gsplat' exposes each line at one instant: a weight a(t) has nothing "
+                            "to weigh (drop 'weight')");
     /* a(t) must not vanish on the whole interval, or no pixel is defined. */
     double sum = 0;
     for (int i = 0; i <= 1000; i++)

@@ -10,8 +10,34 @@ typedef enum { WEIGHT_BOX, WEIGHT_LINEAR, WEIGHT_EXP, WEIGHT_TABLE } weight_kind
 
 #define SHUTTER_TABLE_MAX 256
 
+/* Rolling shutter (issue 30): the sensor's lines, read in turn, are each
+ * exposed over their own window. Line r counts along the readout
+ * direction (top-to-bottom: r = pixel row y; bottom-to-top: H - 1 - y;
+ * left-to-right: column x; right-to-left: W - 1 - x), L lines in all:
+ *   lines        [open, close] + delta r, a(t) shifted with it (the general
+ *                model: line delay delta, line exposure close - open)
+ *   3dgs-deblur  [open, close] + t_ro ((r + 0.5) / L - 1/2): [open, close] is
+ *                the middle's window, readoutTime t_ro spans the frame
+ *                (3dgs-deblur's gsplat fork, rasterize_to_pixels' time)
+ *   gsplat       the single instant open + (close - open) r / (L - 1), no
+ *                exposure (gsplat's and 3DGUT's floor(y) / (H - 1) between a
+ *                start and an end pose; bottom-to-top (H - ceil(y)) / (H - 1)
+ *                is the same line count from the bottom for y off the
+ *                pixel edges)
+ * Rows and columns are the full image's, whatever the crop window. */
+typedef enum { ROLLING_OFF, ROLLING_LINES, ROLLING_3DGS_DEBLUR, ROLLING_GSPLAT } rolling_kind;
+typedef enum { READOUT_TOP_TO_BOTTOM, READOUT_BOTTOM_TO_TOP, READOUT_LEFT_TO_RIGHT, READOUT_RIGHT_TO_LEFT } readout_dir;
+
+typedef struct {
+    rolling_kind kind;
+    readout_dir readout;
+    double line_delay;   /* lines: delta */
+    double readout_time; /* 3dgs-deblur: t_ro */
+} rolling_shutter;
+
 typedef struct {
     double open, close;
+    rolling_shutter rolling;
     weight_kind kind;
     double center; /* linear, exp: weighting center t_c (default: close) */
     double rate;   /* exp: a(t) = exp(-rate |t - t_c|) */
@@ -51,5 +77,26 @@ typedef struct {
 void shutter_cdf_init(shutter_cdf *c, const shutter *s);
 /* u in [0, 1) -> t in [open, close] with density a(t) / integral of a. */
 double shutter_cdf_time(const shutter_cdf *c, double u);
+
+const char *shutter_rolling_name(rolling_kind k);
+const char *shutter_readout_name(readout_dir d);
+/* -1 for an unknown name. */
+int shutter_rolling_parse(const char *name);
+int shutter_readout_parse(const char *name);
+
+/* The line of pixel (x, y) of a width x height image, and how many. */
+int shutter_line(const shutter *s, int x, int y, int width, int height, int *lines);
+
+/* The time of a sample drawn at t in [open, close] (a(t)'s distribution)
+ * on line `line` of `lines`. Without rolling shutter, t. */
+double shutter_line_time(const shutter *s, int line, int lines, double t);
+
+/* Every time any line of a width x height image is exposed: [open, close]
+ * without rolling shutter. What the BVHs' swept bounds must cover. */
+void shutter_span(const shutter *s, int width, int height, double *t0, double *t1);
+
+/* The rolling shutter as text, for the EXR identity ("off", or the kind,
+ * readout and its parameters with every digit). */
+void shutter_rolling_text(const shutter *s, char *buf, size_t size);
 
 #endif

@@ -645,7 +645,9 @@ static int render_and_write(const scene *s, const render_options *o, const char 
     shutter shut;
     if (check_frame_outputs(s, o, err) || frame_shutter(s, o, o->first_frame, &shut, err))
         return -1;
-    accel_settings set = {shut.open, shut.close, s->epsilon, s->kernel_sigma, !o->no_static_reuse};
+    double t0, t1; /* every line's exposure (a rolling shutter's reaches past [open, close]) */
+    shutter_span(&shut, s->cam.width, s->cam.height, &t0, &t1);
+    accel_settings set = {t0, t1, s->epsilon, s->kernel_sigma, !o->no_static_reuse};
     if (accel_build(s, &set, &acc, err))
         return -1;
     if (interrupted) { /* the build cannot be stopped midway; it is not rendered */
@@ -657,7 +659,8 @@ static int render_and_write(const scene *s, const render_options *o, const char 
     for (long long f = o->first_frame; !rc && f <= o->last_frame; f++) {
         char out[PATH_MAX], prev[PATH_MAX];
         if (f > o->first_frame &&
-            (frame_shutter(s, o, f, &shut, err) || accel_set_shutter(acc, shut.open, shut.close, err))) {
+            (frame_shutter(s, o, f, &shut, err) ||
+             (shutter_span(&shut, s->cam.width, s->cam.height, &t0, &t1), accel_set_shutter(acc, t0, t1, err)))) {
             rc = -1;
             break;
         }

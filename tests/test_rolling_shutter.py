@@ -1,0 +1,202 @@
+"""Rolling shutter (issue 30) against the analytic answer.
+
+A camera translating at speed v along x sees an opaque unlit sphere (colour 1)
+over a black background. Through a pixel's centre (--pixel-filter point) the ray
+from the camera at c(t) = (v t, 0, 0) with direction d meets the sphere (centre C,
+radius R) while |w|^2 - (w.d)^2 <= R^2, w = C - c(t): a quadratic in t. So the
+pixel's expected value is the length of the part of its line's exposure window
+where that quadratic is <= 0, over the window's length: exact, independent of
+the renderer. Each line's window comes from the timing model as the sources
+state it (shutter.h cites them):
+- lines: [open, close] + delta r, r counted along the readout direction;
+- 3dgs-deblur (its gsplat fork): centre at mid + t_ro ((row + 0.5)/H - 1/2),
+  length close - open (NOTES.md: t = t_ro (py/H - 1/2) + ..., py = row + 0.5);
+- gsplat / 3DGUT: one instant open + (close - open) floor(y)/(H - 1), y the
+  pixel's row coordinate (floor of the centre = the row).
+A row with a fronto-parallel edge is thereby shifted by f v delta r / Z and
+box-blurred by f v T_e / Z, which the quadratic holds as a special case.
+
+Statistics: each row's sum over pixels and its first moment about the centre
+column (a shift moves the moment, not the sum) are compared with the analytic
+ones within K = 4 standard errors (64 comparisons, 32 batches; a false failure
+about 4e-3 by the normal tail). A wrong line index or delay fails by far, and
+3dgs-deblur's half line (0.07 pixels here) too (the planted checks below)."""
+import numpy as np
+import pytest
+
+from conftest import read_full, run
+
+W, H, FOV = 48, 32, 40.0
+V = 2.0
+CENTRE, RADIUS = np.array([0.0, 0.1, -4.0]), 1.0
+OPEN, CLOSE = 0.0, 0.1
+K = 4.0
+
+
+def pixel_directions():
+    """Unit world directions through the pixel centres of a camera at the origin looking down -z, y up."""
+    th = np.tan(np.radians(FOV) / 2)
+    i, j = np.meshgrid(np.arange(W) + 0.5, np.arange(H) + 0.5)
+    x = (2 * i / W - 1) * th * W / H
+    y = (1 - 2 * j / H) * th
+    d = np.stack([x, y, -np.ones_like(x)], axis=-1)
+    return d / np.linalg.norm(d, axis=-1, keepdims=True)
+
+
+def covered_time(t0, t1):
+    """Per pixel: how long in [t0, t1] (arrays H x W) the pixel's ray meets the sphere."""
+    d = pixel_directions()
+    e = np.array([1.0, 0, 0])
+    ed, cd, ce = d @ e, d @ CENTRE, CENTRE @ e
+    a = V * V * (1 - ed ** 2)
+    b = -2 * V * ce + 2 * V * ed * cd
+    c = CENTRE @ CENTRE - cd ** 2 - RADIUS ** 2
+    disc = b * b - 4 * a * c
+    root = np.sqrt(np.maximum(disc, 0))
+    lo, hi = (-b - root) / (2 * a), (-b + root) / (2 * a)
+    inside = np.clip(np.minimum(hi, t1) - np.maximum(lo, t0), 0, None)
+    return np.where(disc > 0, inside, 0.0)
+
+
+def line_index(readout):
+    j, i = np.meshgrid(np.arange(H), np.arange(W), indexing="ij")
+    return {"top-to-bottom": (j, H), "bottom-to-top": (H - 1 - j, H), "left-to-right": (i, W),
+            "right-to-left": (W - 1 - i, W)}[readout]
+
+
+def expected(kind, readout="top-to-bottom", delay=0.0, t_ro=0.0):
+    r, lines = line_index(readout)
+    if kind == "lines":
+        t0 = OPEN + delay * r
+        return covered_time(t0, t0 + CLOSE - OPEN) / (CLOSE - OPEN)
+    if kind == "3dgs-deblur":
+        mid = 0.5 * (OPEN + CLOSE) + t_ro * ((r + 0.5) / lines - 0.5)
+        return covered_time(mid - (CLOSE - OPEN) / 2, mid + (CLOSE - OPEN) / 2) / (CLOSE - OPEN)
+    raise ValueError(kind)
+
+
+def _no_half_line(t_ro):
+    r, lines = line_index("top-to-bottom")
+    mid = 0.5 * (OPEN + CLOSE) + t_ro * (r / lines - 0.5)
+    return covered_time(mid - (CLOSE - OPEN) / 2, mid + (CLOSE - OPEN) / 2) / (CLOSE - OPEN)
+
+
+def scene(tmp_path, shutter_attrs, name="s"):
+    xml = (f'<scene><camera position="0 0 0" lookat="0 0 -1" up="0 1 0" fov="{FOV}" width="{W}" height="{H}">'
+           f'<animation><linear velocity="{V} 0 0"/></animation></camera>'
+           f'<shutter open="{OPEN}" close="{CLOSE}" {shutter_attrs}/><background color="0 0 0"/>'
+           f'<object position="{CENTRE[0]} {CENTRE[1]} {CENTRE[2]}"><sphere radius="{RADIUS}" color="1 1 1"/>'
+           f'<material shading="unlit"/></object></scene>')
+    p = tmp_path / f"{name}.xml"
+    p.write_text(xml)
+    return p
+
+
+def render(tmp_path, shutter_attrs, *args, name="s"):
+    out = tmp_path / f"{name}.exr"
+    proc = run([scene(tmp_path, shutter_attrs, name), "--pixel-filter", "point", "--spp", 1, "--tspp", 64,
+                "--batches", 32, "--seed", 3, "-o", out, "--quiet", *args])
+    assert proc.returncode == 0, proc.stderr
+    return read_full(out)
+
+
+def rows_agree(ch, expect):
+    """Each row's sum and its first moment about the image's centre column (which a shift of the
+    row moves: a sum alone does not see it) within K standard errors of the analytic ones."""
+    got, se = ch["R"].astype(np.float64), ch["stderr.R"].astype(np.float64)
+    ok = True
+    errs = []
+    for weight in (np.ones(W), np.arange(W) + 0.5 - W / 2):
+        err = np.abs((got - expect) @ weight)
+        bound = K * np.sqrt((se ** 2) @ weight ** 2) + 1e-5
+        ok = ok and bool(np.all(err <= bound))
+        errs.append(err / bound * K)
+    return ok, errs[0], errs[1]
+
+
+@pytest.mark.parametrize("readout", ["top-to-bottom", "bottom-to-top", "left-to-right", "right-to-left"])
+def test_each_line_is_exposed_over_its_own_window(tmp_path, readout):
+    delay = 0.01  # the readout spans 0.32 (or 0.48): lines several pixels apart
+    ch, header = render(tmp_path, f'rolling="lines" readout="{readout}" lineDelay="{delay}"')
+    expect = expected("lines", readout, delay)
+    ok, sum_z, moment_z = rows_agree(ch, expect)
+    assert ok, (readout, sum_z, moment_z)
+    assert header["refrender:rollingShutter"].startswith(f"lines {readout} lineDelay 0.01")
+    # planted: the global shutter, or the lines read the other way, are far outside the bounds
+    assert not rows_agree(ch, expected("lines", readout, 0.0))[0]
+    flipped = {"top-to-bottom": "bottom-to-top", "bottom-to-top": "top-to-bottom",
+               "left-to-right": "right-to-left", "right-to-left": "left-to-right"}[readout]
+    assert not rows_agree(ch, expected("lines", flipped, delay))[0]
+
+
+def test_3dgs_deblur_preset_centres_the_readout_on_mid_exposure(tmp_path):
+    t_ro = 0.2
+    ch, header = render(tmp_path, f'rolling="3dgs-deblur" readoutTime="{t_ro}"')
+    ok, sum_z, moment_z = rows_agree(ch, expected("3dgs-deblur", t_ro=t_ro))
+    assert ok, (sum_z, moment_z)
+    # planted: the line's time without the half line (t_ro r / H - t_ro / 2) is 0.07 pixels off
+    assert not rows_agree(ch, _no_half_line(t_ro))[0]
+    # its line r is the general model's with delta = t_ro / H and the windows moved back by
+    # t_ro (1 - 1/H) / 2: three rows checked against that rewriting
+    for r in (0, H // 2, H - 1):
+        general = OPEN - t_ro * (1 - 1 / H) / 2 + (t_ro / H) * r
+        assert general + (CLOSE - OPEN) / 2 == pytest.approx(0.5 * (OPEN + CLOSE) + t_ro * ((r + 0.5) / H - 0.5))
+    assert not rows_agree(ch, expected("3dgs-deblur", t_ro=0.0))[0]
+
+
+def test_gsplat_preset_exposes_each_row_at_one_instant(tmp_path):
+    ch, _ = render(tmp_path, 'rolling="gsplat"')
+    r, _ = line_index("top-to-bottom")
+    t = OPEN + (CLOSE - OPEN) * r / (H - 1)
+    # an instant: the pixel is covered or not; a tiny window about t decides which
+    hit = covered_time(t - 1e-9, t + 1e-9) > 1e-9
+    got = ch["R"]
+    assert np.all(ch["stderr.R"] == 0)  # every sample of a pixel is the same instant
+    assert np.array_equal(got > 0.5, hit), np.argwhere((got > 0.5) != hit)
+    for row in (0, H // 2, H - 1):  # three rows: the first at open, the last at close
+        assert np.array_equal(got[row] > 0.5, covered_time(OPEN + (CLOSE - OPEN) * row / (H - 1) - 1e-9,
+                                                           OPEN + (CLOSE - OPEN) * row / (H - 1) + 1e-9)[row] > 1e-9)
+
+
+def test_rolling_shutter_composes_with_passes_crops_and_is_in_the_identity(tmp_path):
+    attrs = 'rolling="lines" lineDelay="0.01"'
+    full, _ = render(tmp_path, attrs, name="full")
+    p0 = tmp_path / "p0.exr"
+    p1 = tmp_path / "p1.exr"
+    for k, p in enumerate((p0, p1)):
+        proc = run([scene(tmp_path, attrs, "full"), "--pixel-filter", "point", "--spp", 1, "--tspp", 64,
+                    "--batches", 32, "--seed", 3, "--pass", f"{k}/2", "-o", p, "--quiet"])
+        assert proc.returncode == 0, proc.stderr
+    merged = tmp_path / "m.exr"
+    assert run(["merge", p0, p1, "-o", merged, "--quiet"]).returncode == 0
+    assert np.array_equal(read_full(merged)[0]["R"], full["R"])
+    crop, _ = render(tmp_path, attrs, "--crop-window", "0,1,0.5,1", name="crop")
+    assert np.array_equal(crop["R"], full["R"][H // 2:])
+    # a state of another rolling shutter is not merged with this one
+    other = tmp_path / "o.exr"
+    proc = run([scene(tmp_path, 'rolling="lines" lineDelay="0.02"', "other"), "--pixel-filter", "point", "--spp", 1,
+                "--tspp", 64, "--batches", 32, "--seed", 3, "--pass", "1/2", "-o", other, "--quiet"])
+    assert proc.returncode == 0, proc.stderr
+    proc = run(["merge", p0, other, "-o", tmp_path / "bad.exr", "--quiet"])
+    assert proc.returncode != 0 and "not the same render" in proc.stderr, proc.stderr
+    assert read_full(other)[1]["refrender:rollingShutter"] != read_full(p0)[1]["refrender:rollingShutter"]
+
+
+@pytest.mark.parametrize("attrs, message", [
+    ('rolling="lines"', "needs lineDelay"),
+    ('rolling="3dgs-deblur"', "needs readoutTime"),
+    ('rolling="diagonal"', "unknown rolling shutter 'diagonal'"),
+    ('rolling="lines" lineDelay="0.1" readout="sideways"', "unknown readout 'sideways'"),
+    ('readout="bottom-to-top"', "'readout' is for a rolling shutter"),
+    ('lineDelay="0.1"', "lineDelay is for"),
+    ('rolling="gsplat" weight="linear"', "nothing to weigh"),
+])
+def test_bad_rolling_shutters_are_refused_by_name(tmp_path, attrs, message):
+    proc = run([scene(tmp_path, attrs), "-o", tmp_path / "o.exr", "--quiet"])
+    assert proc.returncode != 0 and message in proc.stderr, proc.stderr
+
+
+def test_exact_time_refuses_a_rolling_shutter(tmp_path):
+    proc = run([scene(tmp_path, 'rolling="lines" lineDelay="0.01"'), "--time-integration", "exact",
+                "-o", tmp_path / "o.exr", "--quiet"])
+    assert proc.returncode != 0 and "rolling shutter" in proc.stderr, proc.stderr
