@@ -13,6 +13,7 @@ void animation_init_static(animation *a)
     a->center = v3(0, 0, 0);
     a->degrees_per_time = 0;
     a->keys = NULL;
+    a->path = NULL;
 }
 
 void animation_free(animation *a)
@@ -22,6 +23,10 @@ void animation_free(animation *a)
             curve_free(&a->keys->ch[i]);
     free(a->keys);
     a->keys = NULL;
+    if (a->path)
+        trajectory_free(a->path);
+    free(a->path);
+    a->path = NULL;
 }
 
 static int curve_is_constant(const curve *c)
@@ -34,6 +39,8 @@ static int curve_is_constant(const curve *c)
 
 int animation_is_static(const animation *a)
 {
+    if (a->path)
+        return 0;
     if (a->keys) {
         for (int i = 0; i < CH_COUNT; i++)
             if (!curve_is_constant(&a->keys->ch[i]))
@@ -204,7 +211,38 @@ static xform keyed_at(const animation *a, double t, int left)
     return x;
 }
 
-xform animation_at(const animation *a, double t) { return a->keys ? keyed_at(a, t, 0) : rigid_at(a, t); }
+/* ---- trajectory files ---------------------------------------------------- */
+
+static xform path_at(const animation *a, double t)
+{
+    xform x;
+    vec3 p;
+    double q[4];
+    trajectory_pose(a->path, t, &p, q);
+    trajectory_quat_matrix(q, x.r);
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++)
+            x.ri[i][j] = x.r[j][i];
+    x.scaled = 0;
+    x.t = v3(0, 0, 0);
+    x.t = v3_add(xform_vector(&x, a->offset), p);
+    return x;
+}
+
+void animation_pose_at(const animation *a, double t, vec3 *p, double q[4])
+{
+    xform x = animation_at(a, t);
+    if (a->path)
+        trajectory_pose(a->path, t, p, q);
+    else
+        trajectory_matrix_quat(x.r, q);
+    *p = x.t; /* a trajectory's position plus R offset (0 for a camera: exact) */
+}
+
+xform animation_at(const animation *a, double t)
+{
+    return a->path ? path_at(a, t) : a->keys ? keyed_at(a, t, 0) : rigid_at(a, t);
+}
 
 /* ---- bounds over an interval ---------------------------------------------- */
 
@@ -231,7 +269,7 @@ static double cycle_spans(const curve *c, double t0, double t1, double *m_lo)
  * ask for more than any integer holds. */
 static double sample_count(const animation *a, double t0, double t1)
 {
-    double n = GRID_STEPS + 1, m_lo;
+    double n = GRID_STEPS + 1 + (a->path ? a->path->count : 0), m_lo;
     for (int ch = 0; a->keys && ch < CH_COUNT; ch++) {
         const curve *c = &a->keys->ch[ch];
         if (c->count >= 2)
@@ -282,6 +320,8 @@ static double *sample_times(const animation *a, double t0, double t1, int *n)
     if (a->keys)
         for (int c = 0; c < CH_COUNT; c++)
             add_key_times(&a->keys->ch[c], s, n, t0, t1);
+    for (int k = 0; a->path && k < a->path->count; k++) /* where the interpolation changes segment */
+        add_sample(s, n, a->path->knots[k].t, t0, t1);
     RR_DCHECK_LE(*n, count);
     qsort(s, (size_t)*n, sizeof *s, cmp_double);
     return s;
@@ -410,6 +450,10 @@ static double box_reach(aabb b, vec3 offset, vec3 c)
 static motion_bound motion_bound_over(const animation *a, const double *s, int n) /* s: the sample times */
 {
     motion_bound m = {0, 0, v3(0, 0, 0), 0, 0};
+    if (a->path) { /* trajectory_prepare's bounds over the whole path; it turns about its origin */
+        m = (motion_bound){a->path->speed, a->path->turn_rate, v3_scale(a->offset, -1.0), a->path->turn_rate, 0.0};
+        return m;
+    }
     if (!a->keys) {
         double omega = a->has_rotation ? fabs(a->degrees_per_time) * M_PI / 180.0 : 0.0;
         m = (motion_bound){v3_len(a->velocity), omega, v3_sub(a->center, a->offset), omega, 0.0};

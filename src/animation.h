@@ -16,6 +16,7 @@
 
 #include "common.h"
 #include "curve.h"
+#include "trajectory.h"
 
 typedef struct {
     double r[3][3];  /* linear part (rotation times scale), row-major */
@@ -47,6 +48,8 @@ typedef struct {
     vec3 axis, center;    /* rotation axis (unit) through center */
     double degrees_per_time;
     keyframes *keys;      /* keyframed (owned) instead of linear/rotation */
+    trajectory *path;     /* a camera's trajectory file (owned) instead of the above:
+                           * p_world = R(t) (p_rest + offset) + p(t), the pose's OpenCV axes */
 } animation;
 
 void animation_init_static(animation *a);
@@ -67,6 +70,11 @@ int animation_between_poses(vec3 pa, const double ra[3][3], vec3 pb, const doubl
 
 /* Transform at absolute scene time t. */
 xform animation_at(const animation *a, double t);
+
+/* The rigid transform at time t as a translation and unit quaternion
+ * (w, x, y, z): a trajectory's own pose, exactly as interpolated (its
+ * knots come back bit for bit); other motions from their matrix. */
+void animation_pose_at(const animation *a, double t, vec3 *p, double q[4]);
 
 vec3 xform_point(const xform *x, vec3 p);
 vec3 xform_vector(const xform *x, vec3 v);

@@ -97,6 +97,44 @@ static int parse_pose_motion(xml_ctx *c, xmlNodePtr anim, const camjson_file *js
     return camera_from_pose(cam, rest_pos, rest_rot, &pose[0]);
 }
 
+/* <trajectory file="poses.tum" axes="opengl|opencv" interpolation="linear"/>:
+ * the camera's pose over time from a TUM file (trajectory.h), the rest
+ * pose the identity (OpenCV axes at the origin) that the path moves. */
+static int parse_trajectory(xml_ctx *c, xmlNodePtr n, camera *cam, animation *a)
+{
+    static const char *const ok[] = {"file", "axes", "interpolation", NULL};
+    char rel[4096], path[8192], axes[16], interp[16] = "linear";
+    if (xml_check_attributes(c, n, ok) || xml_check_no_text(c, n))
+        return -1;
+    if (xml_attr_text(c, n, "file", rel, sizeof rel) <= 0)
+        return c->err->msg[0] ? -1 : xml_fail(c, n, "<trajectory> needs 'file' (a TUM file: t tx ty tz qx qy qz qw)");
+    if (xml_attr_text(c, n, "axes", axes, sizeof axes) <= 0 || (strcmp(axes, "opengl") && strcmp(axes, "opencv")))
+        return c->err->msg[0] ? -1 : xml_fail(c, n, "<trajectory> needs axes=\"opengl\" (camera x right, y up, z "
+                                                   "backward: BAD-Gaussians' export, Blender) or axes=\"opencv\" (x "
+                                                   "right, y down, z forward: COLMAP, 3DGS)");
+    if (xml_attr_text(c, n, "interpolation", interp, sizeof interp) < 0)
+        return -1;
+    int kind = trajectory_interp_parse(interp);
+    if (kind < 0)
+        return xml_fail(c, n, "unknown interpolation '%s' (linear, se3, cubic, bezier or bezier-se3)", interp);
+    if (xml_resolve_path(c, n, rel, path, sizeof path))
+        return -1;
+    trajectory *tr = calloc(1, sizeof *tr);
+    if (!tr)
+        return xml_fail(c, n, "out of memory");
+    tr->interp = (trajectory_interp)kind, tr->opengl_axes = !strcmp(axes, "opengl");
+    animation_free(a);
+    animation_init_static(a);
+    a->path = tr;
+    rr_error sub;
+    if (trajectory_load_tum(path, tr, c->inputs_hash, &sub) || trajectory_prepare(tr, path, &sub))
+        return rr_fail(c->err, "%s (trajectory of %s:%ld)", sub.msg, c->name, xmlGetLineNo(n));
+    if (scene_add_input(c->sc, path))
+        return xml_fail(c, n, "out of memory");
+    cam->position = v3(0, 0, 0), cam->lookat = v3(0, 0, 1), cam->up = v3(0, -1, 0); /* OpenCV axes */
+    return 0;
+}
+
 static int has_pose_child(xmlNodePtr anim)
 {
     for (xmlNodePtr p = anim->children; p; p = p->next)
@@ -113,10 +151,20 @@ static int parse_camera_motion(xml_ctx *c, xmlNodePtr n, camera *cam, animation 
     for (xmlNodePtr k = n->children; k; k = k->next) {
         if (!xml_is_element(k))
             continue;
-        if (strcmp(xml_elname(k), "animation"))
-            return xml_fail(c, k, "unknown element inside <camera> (expected animation)");
+        int is_path = !strcmp(xml_elname(k), "trajectory");
+        if (strcmp(xml_elname(k), "animation") && !is_path)
+            return xml_fail(c, k, "unknown element inside <camera> (expected animation or trajectory)");
         if (a->keys || !animation_is_static(a))
-            return xml_fail(c, k, "the camera has one <animation>");
+            return xml_fail(c, k, "the camera has one <animation> or <trajectory>");
+        if (is_path) {
+            if (json || xmlHasProp(n, (const xmlChar *)"position") || xmlHasProp(n, (const xmlChar *)"lookat") ||
+                xmlHasProp(n, (const xmlChar *)"up"))
+                return xml_fail(c, k, "a camera with a <trajectory> takes its pose from the file: drop its "
+                                      "'position', 'lookat', 'up' and 'cameras'; keep fov, width and height");
+            if (parse_trajectory(c, k, cam, a))
+                return -1;
+            continue;
+        }
         if (has_pose_child(k)) {
             if (!json)
                 return xml_fail(c, k, "<pose> needs the camera's 'cameras' (a cameras.json)");
@@ -163,13 +211,23 @@ static int parse_json_camera(xml_ctx *c, xmlNodePtr n, camera *cam, camjson_file
     return camera_from_pose(cam, j.position, j.c2w, &j);
 }
 
+static int has_trajectory_child(xmlNodePtr n)
+{
+    for (xmlNodePtr k = n->children; k; k = k->next)
+        if (xml_is_element(k) && !strcmp(xml_elname(k), "trajectory"))
+            return 1;
+    return 0;
+}
+
 static int parse_plain_camera(xml_ctx *c, xmlNodePtr n, camera *cam)
 {
+    int path = has_trajectory_child(n); /* the pose comes from the file */
     if (xmlHasProp(n, (const xmlChar *)"trainingResolution"))
         return xml_fail(c, n, "trainingResolution is for a camera from 'cameras' (a cameras.json): give this one "
                               "its width and height");
-    return xml_attr_vec3(c, n, "position", &cam->position, 0) || xml_attr_vec3(c, n, "lookat", &cam->lookat, 0) ||
-                   xml_attr_vec3(c, n, "up", &cam->up, 0) || xml_attr_double(c, n, "fov", &cam->fov_degrees, 0) ||
+    return (!path && (xml_attr_vec3(c, n, "position", &cam->position, 0) ||
+                      xml_attr_vec3(c, n, "lookat", &cam->lookat, 0) || xml_attr_vec3(c, n, "up", &cam->up, 0))) ||
+                   xml_attr_double(c, n, "fov", &cam->fov_degrees, 0) ||
                    xml_attr_int(c, n, "width", &cam->width, 1, 65536) ||
                    xml_attr_int(c, n, "height", &cam->height, 1, 65536)
                ? -1 : 0;

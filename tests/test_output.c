@@ -23,7 +23,8 @@ static void identity(attr_list *a, int w, int h)
                                        "refrender:kernelSigma", "refrender:shutter", "refrender:weightFunction",
                                        "refrender:timeFactor", "refrender:batches", "refrender:timeIntegration",
                                        "refrender:parameters", "refrender:parametersHash", "refrender:weightHash",
-                                       "refrender:pixelFilter", "refrender:blurSpace", "refrender:gaussians", "refrender:gaussiansHash", NULL};
+                                       "refrender:pixelFilter", "refrender:blurSpace", "refrender:gaussians", "refrender:gaussiansHash",
+                                       "refrender:rollingShutter", NULL};
     a->n = 0;
     for (const char *const *k = keys; *k; k++)
         attrs_set(a, *k, "1");

@@ -6,6 +6,7 @@
 #include <getopt.h>
 #include <limits.h>
 #include <stdio.h>
+#include <string.h>
 
 #include "atomicfile.h"
 #include "gaussian_hit.h"
@@ -17,7 +18,7 @@ static void export_usage(FILE *f)
 {
     fputs(
 "usage: refrender export SCENE.xml [--frame N | --frames A-B] [--shutter O,C] [--times K]\n"
-"                        [-D name=value] -o SCENE.json\n"
+"                        [-D name=value] [--tum PATH.tum [--tum-axes opengl|opencv]] -o SCENE.json\n"
 "\n"
 "Writes the scene as another renderer needs it (scripts/README.md, Exporting):\n"
 "resolution, camera intrinsics, and per frame the world-to-camera matrix,\n"
@@ -32,11 +33,17 @@ static void export_usage(FILE *f)
 "                  rendering: a(t)'s center and table stay as the scene gives them\n"
 "  --times K       sample times per shutter besides open and close (default 8)\n"
 "  -D name=value   scene parameter, as for rendering\n"
+"  --tum F         also write the camera's path as a TUM trajectory: one line\n"
+"                  't tx ty tz qx qy qz qw' (camera-to-world) at each time above,\n"
+"                  every frame's; a <trajectory> camera's poses as interpolated\n"
+"  --tum-axes A    the camera axes of --tum: opengl (x right, y up, z back;\n"
+"                  BAD-Gaussians, the default) or opencv (x right, y down, z forward)\n"
 "  -o, --output F  output JSON file (required); written atomically\n", f);
 }
 
 typedef struct {
-    const char *scene, *output;
+    const char *scene, *output, *tum;
+    int tum_opengl; /* --tum-axes */
     int frames, first, last, times;
     int shutter_set; /* --shutter */
     double shutter_open, shutter_close;
@@ -316,6 +323,46 @@ typedef struct {
     const export_options *o;
 } export_job;
 
+/* The camera-to-world pose at t in OpenCV axes (x right, y down, z
+ * forward): the motion at t after the rest pose. A <trajectory> camera
+ * rests at the identity, so its interpolated pose comes out unchanged. */
+static void camera_pose(const scene *s, double t, vec3 *p, double q[4])
+{
+    const camera *c = &s->cam;
+    double rest[3][3], q0[4], qm[4];
+    vec3 axes[3] = {c->right, v3_scale(c->image_up, -1.0), c->forward};
+    for (int i = 0; i < 3; i++)
+        rest[0][i] = axes[i].x, rest[1][i] = axes[i].y, rest[2][i] = axes[i].z;
+    trajectory_matrix_quat(rest, q0);
+    vec3 pm;
+    animation_pose_at(&s->camera_motion, t, &pm, qm);
+    xform m = animation_at(&s->camera_motion, t);
+    *p = xform_point(&m, c->position);
+    trajectory_quat_mul(qm, q0, q);
+}
+
+static int write_tum(FILE *f, void *ctx, rr_error *err)
+{
+    const export_job *j = ctx;
+    fprintf(f, "# refrender %s camera path of %s: t tx ty tz qx qy qz qw, camera-to-world, %s axes\n", RR_VERSION,
+            j->s->path, j->o->tum_opengl ? "OpenGL (x right, y up, z backward)" : "OpenCV (x right, y down, z forward)");
+    for (long long fr = j->o->first; fr <= j->o->last; fr++) {
+        shutter sh = j->s->shut;
+        double times[1026], q[4];
+        if (j->o->frames && scene_frame_shutter(j->s, (int)fr, &sh, err))
+            return -1;
+        int n = sample_times(&sh, j->o->times, times);
+        for (int i = 0; i < n; i++) {
+            vec3 p;
+            if (i && !(times[i] > times[i - 1]))
+                continue; /* a TUM file's times increase: an instant's shutter gives one line */
+            camera_pose(j->s, times[i], &p, q);
+            trajectory_write_tum_line(f, times[i], p, q, j->o->tum_opengl);
+        }
+    }
+    return 0;
+}
+
 static int write_export(FILE *f, void *ctx, rr_error *err)
 {
     const export_job *j = ctx;
@@ -341,6 +388,8 @@ static int export_scene(const export_options *o, rr_error *err)
         }
     export_job job = {&s, o};
     int rc = atomic_write_stdio(o->output, write_export, &job, err);
+    if (!rc && o->tum)
+        rc = atomic_write_stdio(o->tum, write_tum, &job, err);
     scene_free(&s);
     return rc;
 }
@@ -350,6 +399,7 @@ static int parse_export_args(int argc, char **argv, export_options *o, rr_error 
     static const struct option longopts[] = {{"frame", required_argument, 0, 'f'}, {"frames", required_argument, 0, 'F'},
                                              {"times", required_argument, 0, 't'}, {"output", required_argument, 0, 'o'},
                                              {"shutter", required_argument, 0, 's'},
+                                             {"tum", required_argument, 0, 'T'}, {"tum-axes", required_argument, 0, 'A'},
                                              {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
     int c;
     char extra;
@@ -370,6 +420,12 @@ static int parse_export_args(int argc, char **argv, export_options *o, rr_error 
             return -1;
         if (c == 'o')
             o->output = optarg;
+        if (c == 'T')
+            o->tum = optarg;
+        if (c == 'A' && strcmp(optarg, "opengl") && strcmp(optarg, "opencv"))
+            return rr_fail(err, "--tum-axes: opengl or opencv, got '%s'", optarg);
+        if (c == 'A')
+            o->tum_opengl = !strcmp(optarg, "opengl");
         if (c == 's' && (o->shutter_set = 1, cli_shutter(optarg, &o->shutter_open, &o->shutter_close, err)))
             return -1;
         if (c == '?')
@@ -384,7 +440,7 @@ static int parse_export_args(int argc, char **argv, export_options *o, rr_error 
 int cmd_export(int argc, char **argv)
 {
     static export_options o; /* the parameters make it large: not on the stack */
-    o.times = 8;
+    o.times = 8, o.tum_opengl = 1;
     rr_error err;
     int rc = parse_export_args(argc, argv, &o, &err);
     if (rc == 1) {

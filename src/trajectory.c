@@ -1,0 +1,603 @@
+#include "trajectory.h"
+
+#include "inputfile.h"
+
+#include <errno.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* ---- rotations: unit quaternions (w, x, y, z) and rotation vectors ------- */
+
+void trajectory_quat_mul(const double a[4], const double b[4], double out[4])
+{
+    double r[4] = {a[0] * b[0] - a[1] * b[1] - a[2] * b[2] - a[3] * b[3],
+                   a[0] * b[1] + a[1] * b[0] + a[2] * b[3] - a[3] * b[2],
+                   a[0] * b[2] - a[1] * b[3] + a[2] * b[0] + a[3] * b[1],
+                   a[0] * b[3] + a[1] * b[2] - a[2] * b[1] + a[3] * b[0]};
+    memcpy(out, r, sizeof r);
+}
+
+static void quat_conj(const double q[4], double out[4])
+{
+    out[0] = q[0], out[1] = -q[1], out[2] = -q[2], out[3] = -q[3];
+}
+
+static vec3 quat_rotate(const double q[4], vec3 v)
+{
+    double r[3][3];
+    trajectory_quat_matrix(q, r);
+    return v3(r[0][0] * v.x + r[0][1] * v.y + r[0][2] * v.z, r[1][0] * v.x + r[1][1] * v.y + r[1][2] * v.z,
+              r[2][0] * v.x + r[2][1] * v.y + r[2][2] * v.z);
+}
+
+void trajectory_quat_matrix(const double q[4], double r[3][3])
+{
+    double w = q[0], x = q[1], y = q[2], z = q[3], s = 2.0 / (w * w + x * x + y * y + z * z);
+    r[0][0] = 1 - s * (y * y + z * z), r[0][1] = s * (x * y - w * z), r[0][2] = s * (x * z + w * y);
+    r[1][0] = s * (x * y + w * z), r[1][1] = 1 - s * (x * x + z * z), r[1][2] = s * (y * z - w * x);
+    r[2][0] = s * (x * z - w * y), r[2][1] = s * (y * z + w * x), r[2][2] = 1 - s * (x * x + y * y);
+}
+
+void trajectory_matrix_quat(const double r[3][3], double q[4])
+{
+    /* Shepperd's method: divide by the largest of 4 w^2, 4 x^2, 4 y^2, 4 z^2 */
+    double tr = r[0][0] + r[1][1] + r[2][2], d[4] = {tr, r[0][0], r[1][1], r[2][2]};
+    int k = 0;
+    for (int i = 1; i < 4; i++)
+        if (d[i] > d[k])
+            k = i;
+    double big = k ? sqrt(1.0 + 2.0 * d[k] - tr) * 0.5 : sqrt(1.0 + tr) * 0.5, f = 0.25 / big;
+    double wx = r[2][1] - r[1][2], wy = r[0][2] - r[2][0], wz = r[1][0] - r[0][1];
+    double xy = r[0][1] + r[1][0], xz = r[0][2] + r[2][0], yz = r[1][2] + r[2][1];
+    double all[4][4] = {{big, wx * f, wy * f, wz * f},
+                        {wx * f, big, xy * f, xz * f},
+                        {wy * f, xy * f, big, yz * f},
+                        {wz * f, xz * f, yz * f, big}};
+    memcpy(q, all[k], 4 * sizeof *q);
+    if (q[0] < 0) /* the sign with w >= 0 */
+        for (int i = 0; i < 4; i++)
+            q[i] = -q[i];
+}
+
+/* Exp: the rotation by |phi| about phi, as a unit quaternion. */
+static void quat_exp(vec3 phi, double q[4])
+{
+    double theta = v3_len(phi), half = 0.5 * theta;
+    /* sin(theta/2)/theta, by its series where the quotient loses digits */
+    double k = theta < 1e-4 ? 0.5 - theta * theta / 48.0 : sin(half) / theta;
+    q[0] = cos(half), q[1] = k * phi.x, q[2] = k * phi.y, q[3] = k * phi.z;
+}
+
+/* Log: the rotation vector of q, the short arc (|phi| <= pi: q and -q are
+ * one rotation, the sign with w >= 0 is taken). */
+static vec3 quat_log(const double q[4])
+{
+    double s = q[0] < 0 ? -1.0 : 1.0, w = s * q[0];
+    vec3 v = v3(s * q[1], s * q[2], s * q[3]);
+    double n = v3_len(v);
+    if (n == 0)
+        return v3(0, 0, 0);
+    return v3_scale(v, 2.0 * atan2(n, w) / n);
+}
+
+/* The SE(3) left Jacobian's action V(phi) rho and its inverse (Barfoot,
+ * State Estimation for Robotics, 2017, eqs. 7.86 and 7.95 with J = V):
+ * the translation of Exp((phi, rho)) is V(phi) rho. */
+static vec3 se3_v(vec3 phi, vec3 rho, int inverse)
+{
+    double th2 = v3_dot(phi, phi), th = sqrt(th2), a, b;
+    vec3 c1 = v3_cross(phi, rho), c2 = v3_cross(phi, c1);
+    if (inverse) {
+        a = -0.5;
+        b = th < 1e-4 ? 1.0 / 12.0 + th2 / 720.0 : (1.0 - th * sin(th) / (2.0 * (1.0 - cos(th)))) / th2;
+    } else {
+        a = th < 1e-4 ? 0.5 - th2 / 24.0 : (1.0 - cos(th)) / th2;
+        b = th < 1e-4 ? 1.0 / 6.0 - th2 / 120.0 : (th - sin(th)) / (th2 * th);
+    }
+    return v3_add(rho, v3_add(v3_scale(c1, a), v3_scale(c2, b)));
+}
+
+typedef struct {
+    vec3 phi, rho;
+} twist;
+
+static twist se3_log(vec3 p, const double q[4])
+{
+    twist x;
+    x.phi = quat_log(q);
+    x.rho = se3_v(x.phi, p, 1);
+    return x;
+}
+
+static void se3_exp(twist x, vec3 *p, double q[4])
+{
+    quat_exp(x.phi, q);
+    *p = se3_v(x.phi, x.rho, 0);
+}
+
+/* (p, q) = (pa, qa)^-1 (pb, qb) */
+static void relative_pose(const trajectory_knot *a, const trajectory_knot *b, vec3 *p, double q[4])
+{
+    double ca[4];
+    quat_conj(a->q, ca);
+    trajectory_quat_mul(ca, b->q, q);
+    *p = quat_rotate(ca, v3_sub(b->p, a->p));
+}
+
+/* ---- names --------------------------------------------------------------- */
+
+static const char *const INTERP_NAMES[] = {"linear", "se3", "cubic", "bezier", "bezier-se3"};
+
+int trajectory_interp_parse(const char *name)
+{
+    for (int k = 0; k < (int)(sizeof INTERP_NAMES / sizeof *INTERP_NAMES); k++)
+        if (!strcmp(name, INTERP_NAMES[k]))
+            return k;
+    return -1;
+}
+
+const char *trajectory_interp_name(trajectory_interp k) { return INTERP_NAMES[k]; }
+
+int trajectory_min_knots(trajectory_interp k) { return k == TRAJECTORY_CUBIC ? 4 : 2; }
+
+/* ---- the TUM reader -------------------------------------------------------- */
+
+static const char *const TUM_FIELDS[8] = {"t", "tx", "ty", "tz", "qx", "qy", "qz", "qw"};
+
+/* One line's fields into v; line is NUL-free and ends at end. */
+static int tum_fields(const char *line, const char *end, const char *name, long lineno, double v[8], rr_error *err)
+{
+    const char *s = line;
+    for (int f = 0; f < 8; f++) {
+        while (s < end && (*s == ' ' || *s == '\t' || *s == '\r'))
+            s++;
+        if (s == end)
+            return rr_fail(err, "%s:%ld: field '%s' is missing (a TUM line is t tx ty tz qx qy qz qw)", name, lineno,
+                           TUM_FIELDS[f]);
+        char buf[64], *stop;
+        size_t n = 0;
+        while (s + n < end && s[n] != ' ' && s[n] != '\t' && s[n] != '\r')
+            n++;
+        if (n >= sizeof buf)
+            return rr_fail(err, "%s:%ld: field '%s' is not a number ('%.20s...')", name, lineno, TUM_FIELDS[f], s);
+        memcpy(buf, s, n), buf[n] = 0;
+        errno = 0;
+        v[f] = strtod(buf, &stop);
+        if (*stop || stop == buf || !isfinite(v[f]))
+            return rr_fail(err, "%s:%ld: field '%s' is not a finite number ('%s')", name, lineno, TUM_FIELDS[f], buf);
+        s += n;
+    }
+    while (s < end && (*s == ' ' || *s == '\t' || *s == '\r'))
+        s++;
+    if (s != end)
+        return rr_fail(err, "%s:%ld: more than the 8 fields t tx ty tz qx qy qz qw ('%.*s')", name, lineno,
+                       (int)(end - s < 20 ? end - s : 20), s); /* the text need not end in a NUL */
+    return 0;
+}
+
+/* The knot of one line's values; a quaternion within 1e-14 of unit length
+ * is kept as written, so that a file this program wrote reads back bit for
+ * bit; one off by up to 1e-3 (written with few digits) is normalised. */
+static int tum_knot(const double v[8], const char *name, long lineno, trajectory_knot *k, rr_error *err)
+{
+    k->t = v[0];
+    k->p = v3(v[1], v[2], v[3]);
+    double q[4] = {v[7], v[4], v[5], v[6]};
+    double n = sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+    if (!(n > 0) || !isfinite(n))
+        return rr_fail(err, "%s:%ld: the quaternion (qx qy qz qw) = (%g %g %g %g) has no direction", name, lineno,
+                       v[4], v[5], v[6], v[7]);
+    if (fabs(n - 1.0) > 1e-3)
+        return rr_fail(err, "%s:%ld: the quaternion (qx qy qz qw) has length %.9g, not 1: is this a TUM pose?", name,
+                       lineno, n);
+    double s = fabs(n - 1.0) > 1e-14 ? 1.0 / n : 1.0;
+    for (int i = 0; i < 4; i++)
+        k->q[i] = q[i] * s;
+    for (int i = 1; i <= 3; i++) /* the renderer traces no farther (accel.h), and Log/Exp stay finite */
+        if (!(fabs(v[i]) <= TRAJECTORY_MAX_ABS))
+            return rr_fail(err, "%s:%ld: field '%s' is %g, beyond the %g a position may reach", name, lineno,
+                           TUM_FIELDS[i], v[i], TRAJECTORY_MAX_ABS);
+    return 0;
+}
+
+static int add_knot(trajectory *out, int *cap, const trajectory_knot *k, const char *name, long lineno,
+                    rr_error *err)
+{
+    if (out->count && !(k->t > out->knots[out->count - 1].t))
+        return rr_fail(err, "%s:%ld: time %.17g does not follow the previous line's %.17g (times must increase)",
+                       name, lineno, k->t, out->knots[out->count - 1].t);
+    if (out->count && !isfinite(k->t - out->knots[0].t))
+        return rr_fail(err, "%s:%ld: time %.17g is too far from the first line's %.17g (their difference overflows)",
+                       name, lineno, k->t, out->knots[0].t);
+    if (out->count == *cap) {
+        int grown = *cap ? 2 * *cap : 64;
+        trajectory_knot *m = grown > (1 << 24) ? NULL : realloc(out->knots, (size_t)grown * sizeof *m);
+        if (!m)
+            return rr_fail(err, "%s:%ld: out of memory (more than %d poses?)", name, lineno, *cap);
+        out->knots = m, *cap = grown;
+    }
+    out->knots[out->count++] = *k;
+    return 0;
+}
+
+static int blank_or_comment(const char *s, const char *end)
+{
+    while (s < end && (*s == ' ' || *s == '\t' || *s == '\r'))
+        s++;
+    return s == end || *s == '#';
+}
+
+int trajectory_parse_tum(const char *text, size_t len, const char *name, trajectory *out, rr_error *err)
+{
+    int cap = 0;
+    out->knots = NULL, out->count = 0, out->name = NULL;
+    const char *s = text, *end = text + len;
+    if (memchr(text, 0, len))
+        return rr_fail(err, "%s: contains a NUL byte: not a TUM text file", name);
+    for (long lineno = 1; s < end; lineno++) {
+        const char *nl = memchr(s, '\n', (size_t)(end - s)), *eol = nl ? nl : end;
+        if (!blank_or_comment(s, eol)) {
+            double v[8];
+            trajectory_knot k;
+            if (tum_fields(s, eol, name, lineno, v, err) || tum_knot(v, name, lineno, &k, err) ||
+                add_knot(out, &cap, &k, name, lineno, err)) {
+                trajectory_free(out);
+                return -1;
+            }
+        }
+        s = nl ? nl + 1 : end;
+    }
+    return 0;
+}
+
+int trajectory_load_tum(const char *path, trajectory *out, uint64_t *content_hash, rr_error *err)
+{
+    input_file in;
+    if (input_file_read(path, TRAJECTORY_MAX_BYTES, &in, err))
+        return -1;
+    int rc = trajectory_parse_tum(in.data, in.len, path, out, err);
+    if (!rc && !(out->name = strdup(path)))
+        rc = rr_fail(err, "out of memory"), trajectory_free(out);
+    if (!rc && content_hash)
+        *content_hash = input_hash(*content_hash, in.data, in.len);
+    input_file_free(&in);
+    return rc;
+}
+
+/* ---- checks and bounds ----------------------------------------------------- */
+
+static double rel_angle(const trajectory_knot *a, const trajectory_knot *b)
+{
+    vec3 p;
+    double q[4];
+    relative_pose(a, b, &p, q);
+    return v3_len(quat_log(q));
+}
+
+/* Linear and se3, per segment: the origin moves at |dp|/dt (linear) or
+ * |rho|/dt (a screw: point x of the camera frame moves at |phi x x + rho|
+ * / dt), and turns at |phi| / dt. */
+static void segment_bounds(trajectory *tr)
+{
+    for (int k = 0; k + 1 < tr->count; k++) {
+        const trajectory_knot *a = &tr->knots[k], *b = &tr->knots[k + 1];
+        double dt = b->t - a->t, q[4];
+        vec3 p;
+        relative_pose(a, b, &p, q);
+        twist x = se3_log(p, q);
+        double moved = tr->interp == TRAJECTORY_SE3 ? v3_len(x.rho) : v3_len(v3_sub(b->p, a->p));
+        tr->speed = fmax(tr->speed, moved / dt);
+        tr->turn_rate = fmax(tr->turn_rate, v3_len(x.phi) / dt);
+    }
+}
+
+/* Cubic: p' is the quadratic B-spline of the differences / dt (weights
+ * >= 0 summing to 1), so |p'| <= max |P_j+1 - P_j| / dt; the body rate of
+ * R_0 Exp(B1 L1) Exp(B2 L2) Exp(B3 L3) is at most sum |B_j'| |L_j| / dt,
+ * with B1' = (1-u)^2/2 <= 1/2, B2' = (1 + 2u - 2u^2)/2 <= 3/4, B3' =
+ * u^2/2 <= 1/2. */
+static void cubic_bounds(trajectory *tr)
+{
+    double dt = tr->knots[1].t - tr->knots[0].t;
+    for (int k = 0; k + 1 < tr->count; k++)
+        tr->speed = fmax(tr->speed, v3_len(v3_sub(tr->knots[k + 1].p, tr->knots[k].p)) / dt);
+    for (int k = 1; k + 2 < tr->count; k++) {
+        double l1 = rel_angle(&tr->knots[k - 1], &tr->knots[k]), l2 = rel_angle(&tr->knots[k], &tr->knots[k + 1]);
+        double l3 = rel_angle(&tr->knots[k + 1], &tr->knots[k + 2]);
+        tr->turn_rate = fmax(tr->turn_rate, (0.5 * l1 + 0.75 * l2 + 0.5 * l3) / dt);
+    }
+}
+
+/* The largest |P_i+1 - P_i| of n values, each given by get(i). */
+static double max_step(const trajectory *tr, vec3 (*get)(const trajectory *, int, int), int part)
+{
+    double m = 0;
+    for (int i = 0; i + 1 < tr->count; i++)
+        m = fmax(m, v3_len(v3_sub(get(tr, i + 1, part), get(tr, i, part))));
+    return m;
+}
+
+static vec3 knot_position(const trajectory *tr, int i, int part) { (void)part; return tr->knots[i].p; }
+
+/* the twist of knot i (absolute, in the file's axes): part 0 phi, 1 rho */
+static vec3 knot_twist(const trajectory *tr, int i, int part)
+{
+    twist x = se3_log(tr->knots[i].p, tr->knots[i].q);
+    return part ? x.rho : x.phi;
+}
+
+/* Bezier, per component: a Bezier curve of degree n moves at most at n
+ * max |P_i+1 - P_i| / span (its hodograph's control points). The
+ * quaternions, signs aligned, lie within one hemisphere about m with
+ * q_i . m >= c > 0, so |q(u)| >= c and the unit q(u)/|q(u)| turns at
+ * 2 |q'| / |q| <= 2 n max |q_i+1 - q_i| / (c span). */
+static int bezier_bounds(trajectory *tr, const char *name, rr_error *err)
+{
+    int n = tr->count - 1;
+    for (int i = 1; i <= n; i++) { /* q and -q are one rotation: blend the signs nearest their neighbours */
+        double *q = tr->knots[i].q, *prev = tr->knots[i - 1].q;
+        if (q[0] * prev[0] + q[1] * prev[1] + q[2] * prev[2] + q[3] * prev[3] < 0)
+            for (int j = 0; j < 4; j++)
+                q[j] = -q[j];
+    }
+    double span = tr->knots[n].t - tr->knots[0].t, m[4] = {0}, c = INFINITY, dq = 0;
+    tr->speed = n * max_step(tr, knot_position, 0) / span;
+    for (int i = 0; i <= n; i++)
+        for (int j = 0; j < 4; j++)
+            m[j] += tr->knots[i].q[j];
+    double mn = sqrt(m[0] * m[0] + m[1] * m[1] + m[2] * m[2] + m[3] * m[3]);
+    for (int i = 0; i <= n; i++) {
+        const double *q = tr->knots[i].q;
+        c = fmin(c, (q[0] * m[0] + q[1] * m[1] + q[2] * m[2] + q[3] * m[3]) / mn);
+        if (i)
+            for (int j = 0; j < 4; j++)
+                dq = fmax(dq, fabs(q[j] - tr->knots[i - 1].q[j]));
+    }
+    if (!(c > 1e-3))
+        return rr_fail(err, "%s: the Bezier's control rotations span more than a hemisphere of quaternions (signs "
+                            "aligned): per-component blending has no meaning there; use bezier-se3 or cubic", name);
+    tr->turn_rate = 2.0 * n * 2.0 * dq / (c * span); /* |dq| <= 2 max component step (4 components) */
+    return 0;
+}
+
+/* f'(x) for f(x) = (e^x - 1)/x = sum x^k/(k+1)!: bounds how fast V(phi)
+ * changes with phi, |dV| <= f'(|phi|) |dphi| (each power of phi^ has norm
+ * |phi|^k). */
+static double v_rate(double x) { return x < 1e-6 ? 0.5 : ((x - 1.0) * exp(x) + 1.0) / (x * x); }
+
+/* Bezier on se(3): phi(u) and rho(u) are Bezier curves of the knots'
+ * twists (|phi(u)| <= max |phi_i|, a convex combination); the rotation
+ * Exp(phi) turns at |J_l(phi) phi'| <= |phi'| (J_l's singular values are
+ * 1 and 2 |sin(th/2)| / th), and the translation V(phi) rho moves at most
+ * at |rho'| + f'(max|phi_i|) |phi'| max |rho_i|. */
+static void bezier_se3_bounds(trajectory *tr)
+{
+    int n = tr->count - 1;
+    double span = tr->knots[n].t - tr->knots[0].t, phi_max = 0, rho_max = 0;
+    for (int i = 0; i <= n; i++)
+        phi_max = fmax(phi_max, v3_len(knot_twist(tr, i, 0))), rho_max = fmax(rho_max, v3_len(knot_twist(tr, i, 1)));
+    double dphi = n * max_step(tr, knot_twist, 0) / span, drho = n * max_step(tr, knot_twist, 1) / span;
+    tr->turn_rate = dphi;
+    tr->speed = drho + v_rate(phi_max) * dphi * rho_max;
+}
+
+static int check_spacing(const trajectory *tr, const char *name, rr_error *err)
+{
+    double dt = tr->knots[1].t - tr->knots[0].t;
+    for (int k = 1; k + 1 < tr->count; k++) {
+        double d = tr->knots[k + 1].t - tr->knots[k].t;
+        if (fabs(d - dt) > 1e-9 * fmax(dt, fabs(tr->knots[k + 1].t)))
+            return rr_fail(err, "%s: a cubic B-spline needs evenly spaced times: poses %d and %d are %.17g apart, "
+                                "poses 1 and 2 %.17g", name, k + 1, k + 2, d, dt);
+    }
+    return 0;
+}
+
+/* Log is ambiguous at half a turn: neighbours (the relative forms) or the
+ * poses themselves (bezier-se3 takes Log of each) must turn by less. */
+static int check_turns(const trajectory *tr, const char *name, rr_error *err)
+{
+    const double limit = 179.0 * M_PI / 180.0;
+    for (int k = 0; k < tr->count; k++) {
+        int absolute = tr->interp == TRAJECTORY_BEZIER_SE3;
+        if (!absolute && k + 1 == tr->count)
+            break;
+        double a = absolute ? v3_len(quat_log(tr->knots[k].q)) : rel_angle(&tr->knots[k], &tr->knots[k + 1]);
+        if (a > limit)
+            return rr_fail(err, absolute ? "%s: pose %d turns by %.2f degrees from the axes: bezier-se3 takes the "
+                                           "logarithm of each pose, ambiguous beyond 179"
+                                         : "%s: poses %d and the next turn by %.2f degrees: beyond 179 the "
+                                           "logarithm between them is ambiguous (add poses in between)",
+                           name, k + 1, a * 180.0 / M_PI);
+    }
+    return 0;
+}
+
+int trajectory_prepare(trajectory *tr, const char *name, rr_error *err)
+{
+    int need = trajectory_min_knots(tr->interp);
+    if (tr->count < need)
+        return rr_fail(err, "%s: %d pose%s; %s interpolation needs at least %d", name, tr->count,
+                       tr->count == 1 ? "" : "s", trajectory_interp_name(tr->interp), need);
+    int bezier = tr->interp == TRAJECTORY_BEZIER || tr->interp == TRAJECTORY_BEZIER_SE3;
+    if (bezier && tr->count > TRAJECTORY_MAX_BEZIER)
+        return rr_fail(err, "%s: %d poses: a Bezier of more than %d control poses (degree %d) is not supported (its "
+                            "weights lose all precision): use cubic", name, tr->count, TRAJECTORY_MAX_BEZIER,
+                       TRAJECTORY_MAX_BEZIER - 1);
+    if ((tr->interp == TRAJECTORY_CUBIC && check_spacing(tr, name, err)) || check_turns(tr, name, err))
+        return -1;
+    tr->speed = tr->turn_rate = 0;
+    if (tr->interp == TRAJECTORY_CUBIC)
+        cubic_bounds(tr);
+    else if (tr->interp == TRAJECTORY_BEZIER)
+        return bezier_bounds(tr, name, err);
+    else if (tr->interp == TRAJECTORY_BEZIER_SE3)
+        bezier_se3_bounds(tr);
+    else
+        segment_bounds(tr);
+    if (!isfinite(tr->speed) || !isfinite(tr->turn_rate))
+        return rr_fail(err, "%s: poses too close in time for their motion (the speed overflows)", name);
+    return 0;
+}
+
+/* ---- evaluation ------------------------------------------------------------ */
+
+void trajectory_domain(const trajectory *tr, double *t0, double *t1)
+{
+    int inner = tr->interp == TRAJECTORY_CUBIC;
+    *t0 = tr->knots[inner].t, *t1 = tr->knots[tr->count - 1 - inner].t;
+}
+
+/* The segment [t_k, t_k+1] holding t (first..last-1) and its fraction. */
+static int segment_of(const trajectory *tr, double t, int first, int last, double *u)
+{
+    int lo = first, hi = last; /* t_lo <= t <= t_hi */
+    while (hi - lo > 1) {
+        int mid = lo + (hi - lo) / 2;
+        if (tr->knots[mid].t <= t)
+            lo = mid;
+        else
+            hi = mid;
+    }
+    *u = (t - tr->knots[lo].t) / (tr->knots[lo + 1].t - tr->knots[lo].t);
+    return lo;
+}
+
+static void pose_linear(const trajectory *tr, double t, vec3 *p, double q[4])
+{
+    double u, rq[4], e[4];
+    int k = segment_of(tr, t, 0, tr->count - 1, &u);
+    const trajectory_knot *a = &tr->knots[k], *b = &tr->knots[k + 1];
+    *p = v3_add(v3_scale(a->p, 1.0 - u), v3_scale(b->p, u));
+    quat_conj(a->q, rq);
+    trajectory_quat_mul(rq, b->q, rq);
+    quat_exp(v3_scale(quat_log(rq), u), e);
+    trajectory_quat_mul(a->q, e, q);
+}
+
+static void pose_se3(const trajectory *tr, double t, vec3 *p, double q[4])
+{
+    double u, rq[4], eq[4];
+    int k = segment_of(tr, t, 0, tr->count - 1, &u);
+    const trajectory_knot *a = &tr->knots[k];
+    vec3 rp, ep;
+    relative_pose(a, &tr->knots[k + 1], &rp, rq);
+    twist x = se3_log(rp, rq);
+    x.phi = v3_scale(x.phi, u), x.rho = v3_scale(x.rho, u);
+    se3_exp(x, &ep, eq);
+    *p = v3_add(a->p, quat_rotate(a->q, ep));
+    trajectory_quat_mul(a->q, eq, q);
+}
+
+static void pose_cubic(const trajectory *tr, double t, vec3 *p, double q[4])
+{
+    double u;
+    int k = segment_of(tr, t, 1, tr->count - 2, &u);
+    const trajectory_knot *c = &tr->knots[k - 1];
+    double u2 = u * u, u3 = u2 * u;
+    const double b[4] = {(1 - u) * (1 - u) * (1 - u) / 6.0, (3 * u3 - 6 * u2 + 4) / 6.0,
+                         (-3 * u3 + 3 * u2 + 3 * u + 1) / 6.0, u3 / 6.0};
+    const double cum[3] = {(5 + 3 * u - 3 * u2 + u3) / 6.0, (1 + 3 * u + 3 * u2 - 2 * u3) / 6.0, u3 / 6.0};
+    *p = v3(0, 0, 0);
+    for (int j = 0; j < 4; j++)
+        *p = v3_add(*p, v3_scale(c[j].p, b[j]));
+    memcpy(q, c[0].q, 4 * sizeof *q);
+    for (int j = 0; j < 3; j++) { /* products on the right, in knot order */
+        double rq[4], e[4];
+        quat_conj(c[j].q, rq);
+        trajectory_quat_mul(rq, c[j + 1].q, rq);
+        quat_exp(v3_scale(quat_log(rq), cum[j]), e);
+        trajectory_quat_mul(q, e, q);
+    }
+}
+
+/* Bernstein weights b_i(u) of degree n into w[0..n]. */
+static void bernstein(int n, double u, double *w)
+{
+    w[0] = 1.0;
+    for (int d = 1; d <= n; d++) { /* de Casteljau's recurrence on the weights */
+        w[d] = u * w[d - 1];
+        for (int i = d - 1; i > 0; i--)
+            w[i] = (1.0 - u) * w[i] + u * w[i - 1];
+        w[0] *= 1.0 - u;
+    }
+}
+
+static void pose_bezier(const trajectory *tr, double t, vec3 *p, double q[4])
+{
+    int n = tr->count - 1, se3 = tr->interp == TRAJECTORY_BEZIER_SE3;
+    double w[TRAJECTORY_MAX_BEZIER], s[4] = {0, 0, 0, 0};
+    bernstein(n, (t - tr->knots[0].t) / (tr->knots[n].t - tr->knots[0].t), w);
+    vec3 a = v3(0, 0, 0), b = v3(0, 0, 0);
+    for (int i = 0; i <= n; i++) {
+        const trajectory_knot *k = &tr->knots[i];
+        if (se3) {
+            twist x = se3_log(k->p, k->q);
+            a = v3_add(a, v3_scale(x.phi, w[i])), b = v3_add(b, v3_scale(x.rho, w[i]));
+            continue;
+        }
+        a = v3_add(a, v3_scale(k->p, w[i])); /* (signs aligned by trajectory_prepare) */
+        for (int j = 0; j < 4; j++)
+            s[j] += w[i] * k->q[j];
+    }
+    if (se3) {
+        se3_exp((twist){a, b}, p, q);
+        return;
+    }
+    double len = sqrt(s[0] * s[0] + s[1] * s[1] + s[2] * s[2] + s[3] * s[3]);
+    *p = a;
+    for (int j = 0; j < 4; j++)
+        q[j] = s[j] / len;
+}
+
+/* The file's axes to OpenCV's: R D with D = diag(1, -1, -1) for OpenGL,
+ * a half turn about x: q (x) (0, 1, 0, 0), exact (signs and order only). */
+static void to_opencv(const double q[4], double out[4], int opengl)
+{
+    if (!opengl) {
+        memcpy(out, q, 4 * sizeof *q);
+        return;
+    }
+    double r[4] = {-q[1], q[0], q[3], -q[2]};
+    memcpy(out, r, sizeof r);
+}
+
+void trajectory_pose(const trajectory *tr, double t, vec3 *p, double q[4])
+{
+    double t0, t1, fq[4];
+    trajectory_domain(tr, &t0, &t1);
+    t = fmin(fmax(t, t0), t1);
+    int through_knots = tr->interp == TRAJECTORY_LINEAR || tr->interp == TRAJECTORY_SE3;
+    if (through_knots && t == tr->knots[tr->count - 1].t) { /* u = 1 of the last segment: the knot itself */
+        *p = tr->knots[tr->count - 1].p;
+        to_opencv(tr->knots[tr->count - 1].q, q, tr->opengl_axes);
+        return;
+    }
+    if (tr->interp == TRAJECTORY_LINEAR) {
+        pose_linear(tr, t, p, fq);
+    } else if (tr->interp == TRAJECTORY_SE3) {
+        pose_se3(tr, t, p, fq);
+    } else if (tr->interp == TRAJECTORY_CUBIC) {
+        pose_cubic(tr, t, p, fq);
+    } else {
+        pose_bezier(tr, t, p, fq);
+    }
+    to_opencv(fq, q, tr->opengl_axes);
+}
+
+void trajectory_write_tum_line(FILE *f, double t, vec3 p, const double q[4], int opengl_axes)
+{
+    /* back from OpenCV: R D^-1, q (x) (0, -1, 0, 0) */
+    double w[4] = {q[0], q[1], q[2], q[3]};
+    if (opengl_axes)
+        w[0] = q[1], w[1] = -q[0], w[2] = -q[3], w[3] = q[2];
+    fprintf(f, "%.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g\n", t, p.x, p.y, p.z, w[1], w[2], w[3], w[0]);
+}
+
+void trajectory_free(trajectory *tr)
+{
+    free(tr->knots);
+    free(tr->name);
+    tr->knots = NULL, tr->name = NULL;
+    tr->count = 0;
+}

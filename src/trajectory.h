@@ -1,0 +1,109 @@
+/* A camera trajectory from a file (issue 30): knot poses at times,
+ * interpolated as the deblurring methods that exchange such files do.
+ *
+ * Knots are camera-to-world poses: position p and unit quaternion q
+ * (w, x, y, z) of the rotation whose columns are the camera's axes in
+ * world space, in the file's axis convention (OpenGL: x right, y up, z
+ * backward, as BAD-Gaussians' TUM export writes; OpenCV: x right, y down,
+ * z forward). trajectory_pose returns OpenCV axes, the renderer's rest
+ * camera frame (camera.h, camera_view).
+ *
+ * Interpolations (u is the fraction of the segment or span; the rules,
+ * with their sources' commits and lines, are in src/TRAJECTORIES.md):
+ *   linear      per segment: p lerped, q_k Exp(u Log(q_k^-1 q_k+1)), the
+ *               short arc (split R^3 x SO(3); BAD-Gaussians "linear")
+ *   se3         per segment: T_k Exp(u Log(T_k^-1 T_k+1)), a screw motion
+ *               (DeblurGS "se3")
+ *   cubic       uniform cubic B-spline over knots k-1..k+2 on [t_k, t_k+1]
+ *               (defined on [t_1, t_n-2]); p with the B-spline weights, the
+ *               rotation cumulative: R_k-1 Exp(B1 L1) Exp(B2 L2) Exp(B3 L3),
+ *               L_j = Log(R_k-2+j^-1 R_k-1+j) (BAD-Gaussians "cubic")
+ *   bezier      all knots as control points over [t_0, t_n-1]: p and q
+ *               blended per component (q signs aligned), q normalised
+ *   bezier-se3  Exp(sum_i b_i(u) Log T_i) of the absolute poses in the
+ *               file's axes (DeblurGS)
+ */
+#ifndef RR_TRAJECTORY_H
+#define RR_TRAJECTORY_H
+
+#include <stdint.h>
+#include <stdio.h>
+
+#include "common.h"
+
+typedef enum {
+    TRAJECTORY_LINEAR,
+    TRAJECTORY_SE3,
+    TRAJECTORY_CUBIC,
+    TRAJECTORY_BEZIER,
+    TRAJECTORY_BEZIER_SE3,
+} trajectory_interp;
+
+typedef struct {
+    double t;
+    vec3 p;
+    double q[4]; /* w, x, y, z; unit to 1e-14 */
+} trajectory_knot;
+
+typedef struct {
+    trajectory_interp interp;
+    int opengl_axes; /* the file's camera axes: 1 OpenGL, 0 OpenCV */
+    int count;
+    trajectory_knot *knots;
+    /* over the whole domain, set by trajectory_prepare: how fast the
+     * camera's origin moves and how fast it turns (radians) per unit time */
+    double speed, turn_rate;
+    char *name; /* the file, for messages (trajectory_load_tum) */
+} trajectory;
+
+/* The largest position coordinate accepted (the reach accel.h traces). */
+#define TRAJECTORY_MAX_ABS 1e15
+
+/* Control poses a Bezier may have (BAD-Gaussians uses up to about 10). */
+#define TRAJECTORY_MAX_BEZIER 32
+
+/* "linear", "se3", "cubic", "bezier", "bezier-se3"; -1 if unknown. */
+int trajectory_interp_parse(const char *name);
+const char *trajectory_interp_name(trajectory_interp k);
+/* Knots the interpolation needs at least. */
+int trajectory_min_knots(trajectory_interp k);
+
+/* Parses a TUM file's text (len bytes): one knot a line,
+ * `t tx ty tz qx qy qz qw`, blank lines and lines starting with '#'
+ * skipped. Refuses, naming name, the line and the field: a missing or
+ * extra field, one that is not a finite number, a position coordinate
+ * beyond TRAJECTORY_MAX_ABS, a zero quaternion or one
+ * whose length is not 1 within 1e-3 (it is normalised), times that do not
+ * increase. out->interp and out->opengl_axes are left as they are. */
+int trajectory_parse_tum(const char *text, size_t len, const char *name, trajectory *out, rr_error *err);
+
+/* Reads the TUM file at path (at most TRAJECTORY_MAX_BYTES, a regular
+ * file: inputfile.h) and folds its bytes into *content_hash. */
+#define TRAJECTORY_MAX_BYTES ((size_t)1 << 30)
+int trajectory_load_tum(const char *path, trajectory *out, uint64_t *content_hash, rr_error *err);
+
+/* Checks the knots against the interpolation (how many; cubic: evenly
+ * spaced; bezier: control quaternions within one hemisphere; every
+ * rotation between neighbours short of 180 degrees, where Log is
+ * ambiguous) and sets the motion bounds. Fails naming name. */
+int trajectory_prepare(trajectory *tr, const char *name, rr_error *err);
+
+/* The times the interpolation is defined over. */
+void trajectory_domain(const trajectory *tr, double *t0, double *t1);
+
+/* The pose at time t (clamped to the domain), OpenCV camera axes. */
+void trajectory_pose(const trajectory *tr, double t, vec3 *p, double q[4]);
+
+/* The rotation matrix of a (not necessarily unit) quaternion, and back
+ * (the sign with w >= 0), and the product a b (b applied first). */
+void trajectory_quat_matrix(const double q[4], double r[3][3]);
+void trajectory_matrix_quat(const double r[3][3], double q[4]);
+void trajectory_quat_mul(const double a[4], const double b[4], double out[4]);
+
+/* One TUM line for the OpenCV-axes pose (p, q) at time t, written in the
+ * given axes with every digit a double needs (read back bit for bit). */
+void trajectory_write_tum_line(FILE *f, double t, vec3 p, const double q[4], int opengl_axes);
+
+void trajectory_free(trajectory *tr);
+
+#endif
