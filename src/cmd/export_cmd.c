@@ -169,6 +169,10 @@ static int write_frame(FILE *f, const scene *s, long long frame, int numbered, c
         fprintf(f, "%s%.17g", i ? ", " : "", times[i]);
     fputs("],\n     \"weight\": ", f);
     write_weight(f, sh);
+    char rolling[256];
+    shutter_rolling_text(sh, rolling, sizeof rolling); /* each line's window: shutter.h */
+    fputs(",\n     \"rolling_shutter\": ", f);
+    json_string(f, rolling);
     fputs(",\n     \"world_to_camera\": [", f);
     for (int i = 0; i < n; i++) {
         world_to_camera(s, times[i], m);
