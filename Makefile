@@ -33,7 +33,7 @@ RR_CFLAGS   = -std=c11 $(OPT) -Wall -Wextra $(CFLAGS)
 RR_CXXFLAGS = -std=c++17 $(OPT) -Wall -Wextra $(CXXFLAGS)
 LDLIBS   := -ljson-c -lassimp -lembree3 -lOpenEXRCore -lxml2 -lOpenImageIO -lOpenImageIO_Util -lpthread -lm -lstdc++
 
-LIB_SRCS := common inputfile atomicfile kbuffer splat pointmodel ply gaussian gaussian_hit gaussian_blend camjson shapes surfelize meshload curve trajectory animation animfile camera shutter sampler scene \
+LIB_SRCS := common inputfile atomicfile kbuffer splat pointmodel ply gaussian gaussian_hit gaussian_blend camjson transforms shapes surfelize meshload curve trajectory animation animfile camera shutter sampler scene \
             scene_xml scene_xml_util scene_xml_anim scene_xml_camera scene_params accel accel_build accel_collide exact exact_integrate shade film render exr output render_attrs cli
 LIB_OBJS := $(LIB_SRCS:%=$(BUILD)/%.o) $(BUILD)/preview.o
 APP_OBJS := $(BUILD)/cmd/main.o $(BUILD)/cmd/gen_cmd.o $(BUILD)/cmd/surfel_output.o $(BUILD)/cmd/merge_cmd.o $(BUILD)/cmd/surfels_cmd.o \
@@ -111,7 +111,7 @@ endif
 # in build-fuzz/. `make test` replays each target's committed corpus (a
 # regression run of seconds); `make fuzz FUZZ_SECONDS=N` fuzzes each target
 # for N seconds, keeping what it finds in build-fuzz/corpus/.
-FUZZ_TARGETS := scene ply anim state gaussian camjson render_gaussian render_camjson tum
+FUZZ_TARGETS := scene ply anim state gaussian camjson render_gaussian render_camjson tum transforms
 FUZZ_SECONDS ?= 60
 FUZZ_DIR     := build-fuzz
 FUZZ_FLAGS   := -O1 -g -fno-omit-frame-pointer -fsanitize=address,undefined -fno-sanitize-recover=undefined

@@ -62,23 +62,24 @@ void camera_world_to_camera(const camera *c, double m[4][4])
 }
 
 /* The inverse of camera_ray_direction's mapping: x_cam / z_cam =
- * (2 x / width - 1) tan aspect, y_cam / z_cam = (1 - 2 y / height) tan. */
+ * (2 (x / width - dx) - 1) tan_x, y_cam / z_cam = (1 - 2 (y / height - dy)) tan,
+ * (dx, dy) the principal point's offset. */
 void camera_projection(const camera *c, double sx, double sy, double m[4][4])
 {
     double t = c->tan_half_fov;
     for (int r = 0; r < 4; r++)
         for (int k = 0; k < 4; k++)
             m[r][k] = 0;
-    m[0][0] = 0.5 * sx / c->tan_half_fov_x, m[0][2] = 0.5 * sx;
-    m[1][1] = -0.5 * sy / t, m[1][2] = 0.5 * sy;
+    m[0][0] = 0.5 * sx / c->tan_half_fov_x, m[0][2] = (0.5 + c->principal_dx) * sx;
+    m[1][1] = -0.5 * sy / t, m[1][2] = (0.5 + c->principal_dy) * sy;
     m[2][3] = 1;
     m[3][2] = 1;
 }
 
 vec3 camera_ray_direction(const camera *c, double x, double y)
 {
-    double sx = (2.0 * x / c->width - 1.0) * c->tan_half_fov_x;
-    double sy = (1.0 - 2.0 * y / c->height) * c->tan_half_fov;
+    double sx = (2.0 * (x / c->width - c->principal_dx) - 1.0) * c->tan_half_fov_x;
+    double sy = (1.0 - 2.0 * (y / c->height - c->principal_dy)) * c->tan_half_fov;
     vec3 d = v3_add(c->forward, v3_add(v3_scale(c->right, sx), v3_scale(c->image_up, sy)));
     return v3_normalize(d);
 }
@@ -89,8 +90,8 @@ void camera_view_rest(const camera *c, camera_view *v)
     v->axis[0] = c->right;
     v->axis[1] = v3_scale(c->image_up, -1.0);
     v->axis[2] = c->forward;
-    /* camera_ray_direction: x_cam / z_cam = (2 x / width - 1) tan_x */
+    /* camera_ray_direction: x_cam / z_cam = (2 (x / width - dx) - 1) tan_x */
     v->fx = 0.5 * c->width / c->tan_half_fov_x, v->fy = 0.5 * c->height / c->tan_half_fov;
-    v->cx = 0.5 * c->width, v->cy = 0.5 * c->height;
+    v->cx = (0.5 + c->principal_dx) * c->width, v->cy = (0.5 + c->principal_dy) * c->height;
     v->width = c->width, v->height = c->height;
 }

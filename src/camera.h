@@ -15,6 +15,10 @@ typedef struct {
      * square (a trained model's cameras.json, whose fx and fy differ); 0:
      * square pixels. Angles, so that --res keeps the view. */
     double fov_x_degrees;
+    /* The principal point's offset from the image centre, as fractions of
+     * the width and height (0 0: centred; a nerfstudio transforms.json's
+     * cx / w - 1/2, cy / h - 1/2). Fractions, so that --res keeps it. */
+    double principal_dx, principal_dy;
     /* derived by camera_prepare */
     vec3 forward, right, image_up;
     double tan_half_fov;   /* vertical */
@@ -24,7 +28,7 @@ typedef struct {
 /* The camera at one instant as the Gaussian-splatting rasterizers see it
  * (OpenCV/COLMAP axes: camera x right, y down, z forward): a point at
  * camera coordinates (x, y, z) lies at raster (fx x / z + cx, fy y / z +
- * cy), raster as above; the principal point is the image centre. */
+ * cy), raster as above; (cx, cy) the principal point. */
 typedef struct {
     vec3 position;
     vec3 axis[3]; /* world directions of the camera's x, y and z */

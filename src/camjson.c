@@ -30,7 +30,7 @@ static int entry_fail(rr_error *err, const char *name, size_t index, json_object
 }
 
 /* A finite number field (ints are numbers too). */
-static int number_field(json_object *o, const char *field, double *out)
+int camjson_number_field(struct json_object *o, const char *field, double *out)
 {
     json_object *v;
     if (!json_object_object_get_ex(o, field, &v) ||
@@ -44,7 +44,7 @@ static int number_field(json_object *o, const char *field, double *out)
 static const char *const number_errors[] = {"", "field '%s' is missing or not a number (list)",
                                             "field '%s' is not finite"};
 
-static int numbers(json_object *arr, int n, double *out)
+int camjson_numbers(struct json_object *arr, int n, double *out)
 {
     if (!json_object_is_type(arr, json_type_array) || (int)json_object_array_length(arr) != n)
         return -1;
@@ -66,7 +66,7 @@ static int read_rotation(json_object *entry, double r[3][3])
         json_object_array_length(rows) != 3)
         return -1;
     for (int i = 0; i < 3; i++) {
-        int rc = numbers(json_object_array_get_idx(rows, (size_t)i), 3, r[i]);
+        int rc = camjson_numbers(json_object_array_get_idx(rows, (size_t)i), 3, r[i]);
         if (rc)
             return rc;
     }
@@ -90,7 +90,7 @@ static int is_rotation(const double r[3][3])
 static int read_size(json_object *entry, const char *field, int *out)
 {
     double v;
-    if (number_field(entry, field, &v))
+    if (camjson_number_field(entry, field, &v))
         return -1;
     if (!(v >= 1 && v <= 65536 && v == floor(v)))
         return -2;
@@ -128,7 +128,7 @@ static int read_focal(const char *name, size_t index, json_object *entry, camjso
     double *f[2] = {&c->fx, &c->fy};
     int size[2] = {c->width, c->height}, rc;
     for (int k = 0; k < 2; k++) {
-        if ((rc = number_field(entry, focal[k], f[k])))
+        if ((rc = camjson_number_field(entry, focal[k], f[k])))
             return entry_fail(err, name, index, entry, number_errors[-rc], focal[k]);
         if (!(*f[k] > 0))
             return entry_fail(err, name, index, entry, "field '%s' must be > 0", focal[k]);
@@ -147,7 +147,7 @@ static int read_camera(const char *name, size_t index, json_object *entry, camjs
 {
     double pos[3];
     json_object *arr;
-    int rc = json_object_object_get_ex(entry, "position", &arr) ? numbers(arr, 3, pos) : -1;
+    int rc = json_object_object_get_ex(entry, "position", &arr) ? camjson_numbers(arr, 3, pos) : -1;
     if (rc)
         return entry_fail(err, name, index, entry, number_errors[-rc], "position");
     if ((rc = read_rotation(entry, c->c2w)))
@@ -252,9 +252,8 @@ static int *entry_lines(const char *data, size_t len, size_t n)
     return lines;
 }
 
-int camjson_load_text(const char *name, const char *data, size_t len, camjson_file *f, rr_error *err)
+int camjson_parse_document(const char *name, const char *data, size_t len, struct json_object **out, rr_error *err)
 {
-    memset(f, 0, sizeof *f);
     json_tokener *tok = json_tokener_new();
     if (!tok)
         return rr_fail(err, "out of memory");
@@ -270,6 +269,16 @@ int camjson_load_text(const char *name, const char *data, size_t len, camjson_fi
         return rc;
     }
     json_tokener_free(tok);
+    *out = root;
+    return 0;
+}
+
+int camjson_load_text(const char *name, const char *data, size_t len, camjson_file *f, rr_error *err)
+{
+    memset(f, 0, sizeof *f);
+    json_object *root;
+    if (camjson_parse_document(name, data, len, &root, err))
+        return -1;
     if (!json_object_is_type(root, json_type_array)) {
         json_object_put(root);
         return rr_fail(err, "%s: not a cameras.json (expected an array of cameras)", name);

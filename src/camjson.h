@@ -54,4 +54,12 @@ int camjson_read(const char *path, const char *img_name, camjson_camera *out, ui
 int camjson_parse(const char *name, const char *data, size_t len, const char *img_name, camjson_camera *out,
                   rr_error *err);
 
+/* The JSON helpers the trained models' other files share (transforms.h):
+ * a whole document (errors: not JSON, with the line; text after it); a
+ * finite number field (0; -1 missing or not a number, -2 not finite); an
+ * array of exactly n finite numbers (the same codes). */
+int camjson_parse_document(const char *name, const char *data, size_t len, struct json_object **out, rr_error *err);
+int camjson_number_field(struct json_object *o, const char *field, double *out);
+int camjson_numbers(struct json_object *arr, int n, double *out);
+
 #endif

@@ -3,6 +3,7 @@
  * was trained at, with an optional <animation> moving its rest pose
  * rigidly (keyframes, or two cameras.json poses). scenes/README.md. */
 #include "camjson.h"
+#include "transforms.h"
 #include "scene_xml_internal.h"
 
 #include <stdlib.h>
@@ -100,15 +101,69 @@ static int parse_pose_motion(xml_ctx *c, xmlNodePtr anim, const camjson_file *js
 /* <trajectory file="poses.tum" axes="opengl|opencv" interpolation="linear"/>:
  * the camera's pose over time from a TUM file (trajectory.h), the rest
  * pose the identity (OpenCV axes at the origin) that the path moves. */
+/* The camera of a transforms.json: its size, the field of view of its
+ * focal lengths, its principal point; the scene's <camera> gives none. */
+static int camera_from_transforms(xml_ctx *c, xmlNodePtr cam_node, const transforms_camera *t, camera *cam)
+{
+    static const char *const given[] = {"fov", "width", "height", NULL};
+    for (const char *const *k = given; *k; k++)
+        if (xmlHasProp(cam_node, (const xmlChar *)*k))
+            return xml_fail(c, cam_node, "a camera with a transforms.json trajectory takes its intrinsics from the "
+                                         "file: drop '%s' (--res changes the size)", *k);
+    cam->width = t->width, cam->height = t->height;
+    cam->fov_degrees = 360.0 / M_PI * atan(0.5 * t->height / t->fy);
+    cam->fov_x_degrees = 360.0 / M_PI * atan(0.5 * t->width / t->fx);
+    cam->principal_dx = t->cx / t->width - 0.5, cam->principal_dy = t->cy / t->height - 0.5;
+    if (isfinite(t->exposure_time) || isfinite(t->rolling_shutter_time))
+        rr_warn(&c->sc->warnings, "%s:%ld: the transforms.json's exposure_time and rolling_shutter_time are not "
+                                  "applied: give them in <shutter> (close - open, rolling=\"3dgs-deblur\" "
+                                  "readoutTime)", c->name, xmlGetLineNo(cam_node));
+    return 0;
+}
+
+/* A trajectory file: format="tum" (the default unless the name ends in
+ * .json) or "transforms" (nerfstudio, OpenGL axes, with the camera). */
+static int load_path(xml_ctx *c, xmlNodePtr n, const char *path, int transforms, trajectory_interp kind,
+                     int opengl, trajectory *tr, camera *cam)
+{
+    rr_error sub;
+    transforms_camera tc;
+    int rc = transforms ? transforms_load(path, tr, &tc, c->inputs_hash, &sub)
+                        : trajectory_load_tum(path, tr, c->inputs_hash, &sub);
+    tr->interp = kind, tr->opengl_axes = transforms || opengl;
+    if (rc || trajectory_prepare(tr, path, &sub))
+        return rr_fail(c->err, "%s (trajectory of %s:%ld)", sub.msg, c->name, xmlGetLineNo(n));
+    return transforms ? camera_from_transforms(c, n->parent, &tc, cam) : 0;
+}
+
+static int trajectory_format(xml_ctx *c, xmlNodePtr n, const char *rel, int *transforms)
+{
+    char format[16];
+    size_t len = strlen(rel);
+    int got = xml_attr_text(c, n, "format", format, sizeof format);
+    if (got < 0)
+        return -1;
+    if (got && strcmp(format, "tum") && strcmp(format, "transforms"))
+        return xml_fail(c, n, "unknown trajectory format '%s' (tum or transforms)", format);
+    *transforms = got ? !strcmp(format, "transforms") : len >= 5 && !strcmp(rel + len - 5, ".json");
+    return 0;
+}
+
 static int parse_trajectory(xml_ctx *c, xmlNodePtr n, camera *cam, animation *a)
 {
-    static const char *const ok[] = {"file", "axes", "interpolation", NULL};
-    char rel[4096], path[8192], axes[16], interp[16] = "linear";
+    static const char *const ok[] = {"file", "format", "axes", "interpolation", NULL};
+    char rel[4096], path[8192], axes[16] = "opengl", interp[16] = "linear";
+    int transforms = 0;
     if (xml_check_attributes(c, n, ok) || xml_check_no_text(c, n))
         return -1;
     if (xml_attr_text(c, n, "file", rel, sizeof rel) <= 0)
         return c->err->msg[0] ? -1 : xml_fail(c, n, "<trajectory> needs 'file' (a TUM file: t tx ty tz qx qy qz qw)");
-    if (xml_attr_text(c, n, "axes", axes, sizeof axes) <= 0 || (strcmp(axes, "opengl") && strcmp(axes, "opencv")))
+    if (trajectory_format(c, n, rel, &transforms))
+        return -1;
+    if (transforms && xmlHasProp(n, (const xmlChar *)"axes"))
+        return xml_fail(c, n, "a transforms.json's axes are nerfstudio's (OpenGL): drop 'axes'");
+    if ((!transforms && xml_attr_text(c, n, "axes", axes, sizeof axes) <= 0) ||
+        (strcmp(axes, "opengl") && strcmp(axes, "opencv")))
         return c->err->msg[0] ? -1 : xml_fail(c, n, "<trajectory> needs axes=\"opengl\" (camera x right, y up, z "
                                                    "backward: BAD-Gaussians' export, Blender) or axes=\"opencv\" (x "
                                                    "right, y down, z forward: COLMAP, 3DGS)");
@@ -122,13 +177,11 @@ static int parse_trajectory(xml_ctx *c, xmlNodePtr n, camera *cam, animation *a)
     trajectory *tr = calloc(1, sizeof *tr);
     if (!tr)
         return xml_fail(c, n, "out of memory");
-    tr->interp = (trajectory_interp)kind, tr->opengl_axes = !strcmp(axes, "opengl");
     animation_free(a);
     animation_init_static(a);
     a->path = tr;
-    rr_error sub;
-    if (trajectory_load_tum(path, tr, c->inputs_hash, &sub) || trajectory_prepare(tr, path, &sub))
-        return rr_fail(c->err, "%s (trajectory of %s:%ld)", sub.msg, c->name, xmlGetLineNo(n));
+    if (load_path(c, n, path, transforms, (trajectory_interp)kind, !strcmp(axes, "opengl"), tr, cam))
+        return -1;
     if (scene_add_input(c->sc, path))
         return xml_fail(c, n, "out of memory");
     cam->position = v3(0, 0, 0), cam->lookat = v3(0, 0, 1), cam->up = v3(0, -1, 0); /* OpenCV axes */

@@ -585,12 +585,19 @@ void trajectory_pose(const trajectory *tr, double t, vec3 *p, double q[4])
     to_opencv(fq, q, tr->opengl_axes);
 }
 
-void trajectory_write_tum_line(FILE *f, double t, vec3 p, const double q[4], int opengl_axes)
+void trajectory_quat_to_axes(const double q[4], double out[4], int opengl_axes)
 {
-    /* back from OpenCV: R D^-1, q (x) (0, -1, 0, 0) */
+    /* back from OpenCV: R D^-1, q (x) (0, -1, 0, 0), exact */
     double w[4] = {q[0], q[1], q[2], q[3]};
     if (opengl_axes)
         w[0] = q[1], w[1] = -q[0], w[2] = -q[3], w[3] = q[2];
+    memcpy(out, w, sizeof w);
+}
+
+void trajectory_write_tum_line(FILE *f, double t, vec3 p, const double q[4], int opengl_axes)
+{
+    double w[4];
+    trajectory_quat_to_axes(q, w, opengl_axes);
     fprintf(f, "%.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g\n", t, p.x, p.y, p.z, w[1], w[2], w[3], w[0]);
 }
 

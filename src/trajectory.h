@@ -100,6 +100,9 @@ void trajectory_quat_matrix(const double q[4], double r[3][3]);
 void trajectory_matrix_quat(const double r[3][3], double q[4]);
 void trajectory_quat_mul(const double a[4], const double b[4], double out[4]);
 
+/* An OpenCV-axes rotation q in the given axes (OpenGL: R diag(1, -1, -1)). */
+void trajectory_quat_to_axes(const double q[4], double out[4], int opengl_axes);
+
 /* One TUM line for the OpenCV-axes pose (p, q) at time t, written in the
  * given axes with every digit a double needs (read back bit for bit). */
 void trajectory_write_tum_line(FILE *f, double t, vec3 p, const double q[4], int opengl_axes);

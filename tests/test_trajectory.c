@@ -154,3 +154,85 @@ TEST(motion_bounds_hold_the_interpolated_path)
         trajectory_free(&tr);
     }
 }
+
+/* ---- nerfstudio transforms.json ---------------------------------------- */
+
+#include "../src/transforms.h"
+
+#define CAMERA "\"fl_x\": 50, \"fl_y\": 52, \"cx\": 20.5, \"cy\": 14, \"w\": 40, \"h\": 30"
+#define FRAME(t) "{\"file_path\": \"a.png\", " t "\"transform_matrix\": [[1,0,0,1],[0,1,0,2],[0,0,1,3],[0,0,0,1]]}"
+
+static int transforms_fail(const char *text, const char *needle)
+{
+    trajectory tr;
+    transforms_camera cam;
+    rr_error e = {{0}};
+    int ok = transforms_parse("t.json", text, strlen(text), &tr, &cam, &e) != 0 && strstr(e.msg, needle) != NULL;
+    if (!ok)
+        printf("    expected an error with '%s', got '%s'\n", needle, e.msg);
+    return ok;
+}
+
+TEST(transforms_json_mistakes_are_named)
+{
+    CHECK(transforms_fail("{\"fl_x\": 50, \"frames\": []}", "t.json: 'fl_y' is missing"));
+    CHECK(transforms_fail("{" CAMERA ", \"k1\": 0.01, \"frames\": []}", "t.json: distortion 'k1' = 0.01"));
+    CHECK(transforms_fail("{" CAMERA ", \"k2\": 0, \"p1\": 0.0, \"frames\": [" FRAME("") "], \"fl_z\": 3}",
+                          "t.json: unknown key 'fl_z'"));
+    CHECK(transforms_fail("{" CAMERA ", \"camera_model\": \"OPENCV_FISHEYE\", \"frames\": []}",
+                          "camera_model 'OPENCV_FISHEYE'"));
+    CHECK(transforms_fail("{" CAMERA ", \"frames\": [" FRAME("\"time\": 0, ") "," FRAME("") "]}",
+                          "1 of 2 frames have a 'time'"));
+    CHECK(transforms_fail("{" CAMERA ", \"frames\": [" FRAME("\"time\": 1, ") "," FRAME("\"time\": 1, ") "]}",
+                          "frames[1]: time 1 does not follow frames[0]'s 1"));
+    CHECK(transforms_fail("{" CAMERA ", \"frames\": [{\"transform_matrix\": [[2,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]]}]}",
+                          "frames[0]: 'transform_matrix' rotation is not one"));
+    CHECK(transforms_fail("{" CAMERA ", \"frames\": [{\"transform_matrix\": [[1,0,0,0],[0,1,0,0],[0,0,1,0]], "
+                          "\"fl_x\": 51}]}", "frames[0]: 'fl_x' differs from the file's"));
+    CHECK(transforms_fail("{" CAMERA ", \"frames\": [{\"file_path\": \"a\", \"mask\": 1, "
+                          "\"transform_matrix\": [[1,0,0,0],[0,1,0,0],[0,0,1,0]]}]}", "frames[0]: unknown key 'mask'"));
+    CHECK(transforms_fail("{" CAMERA ", \"frames\": [{\"transform_matrix\": [[1,0,0,0],[0,1,0,0],[0,0,1,\"x\"]]}]}",
+                          "frames[0]: 'transform_matrix' row 2 is not 4 numbers"));
+    CHECK(transforms_fail("[1]", "not a transforms.json"));
+    CHECK(transforms_fail("{" CAMERA ", \"frames\": [", "t.json:1: not a complete JSON document"));
+}
+
+/* Read, write, read: the camera exactly, the poses within 1e-15 (a
+ * rotation matrix to a quaternion and back is not exact in binary64). */
+TEST(transforms_json_reads_back_what_it_writes)
+{
+    const char *text = "{" CAMERA ", \"exposure_time\": 0.01, \"frames\": ["
+                       "{\"time\": 0.5, \"transform_matrix\": [[0.36, 0.48, -0.8, 1], [-0.8, 0.6, 0, 2], "
+                       "[0.48, 0.64, 0.6, 3], [0, 0, 0, 1]]},"
+                       "{\"time\": 1.5, \"transform_matrix\": [[1, 0, 0, -1], [0, 0, -1, 0.5], [0, 1, 0, 7], "
+                       "[0, 0, 0, 1]]}]}";
+    trajectory a, b;
+    transforms_camera ca, cb;
+    rr_error e;
+    CHECK(transforms_parse("t.json", text, strlen(text), &a, &ca, &e) == 0);
+    CHECK(a.count == 2 && ca.exposure_time == 0.01 && ca.cx == 20.5 && ca.width == 40);
+    double t[2], q[2][4];
+    vec3 p[2];
+    a.interp = TRAJECTORY_LINEAR;
+    CHECK(trajectory_prepare(&a, "t.json", &e) == 0);
+    for (int k = 0; k < 2; k++) {
+        t[k] = a.knots[k].t;
+        trajectory_pose(&a, t[k], &p[k], q[k]);
+    }
+    char buf[8192];
+    FILE *f = fmemopen(buf, sizeof buf, "w");
+    transforms_write(f, &ca, t, p, (const double(*)[4])q, 2);
+    fclose(f);
+    CHECK(transforms_parse("t2.json", buf, strlen(buf), &b, &cb, &e) == 0);
+    CHECK(cb.fx == ca.fx && cb.fy == ca.fy && cb.cx == ca.cx && cb.cy == ca.cy && cb.width == 40 && cb.height == 30);
+    CHECK(b.count == 2);
+    for (int k = 0; k < 2 && b.count == 2; k++) {
+        CHECK(b.knots[k].t == a.knots[k].t);
+        CHECK(!memcmp(&b.knots[k].p, &a.knots[k].p, sizeof(vec3)));
+        double d = 0;
+        for (int i = 0; i < 4; i++)
+            d = fmax(d, fabs(b.knots[k].q[i] - a.knots[k].q[i]));
+        CHECK(d < 1e-15);
+    }
+    trajectory_free(&a), trajectory_free(&b);
+}

@@ -186,3 +186,95 @@ def test_a_bad_tum_line_is_named_with_the_scene_line(tmp_path):
                  '</camera><object><sphere radius="1"/></object></scene>')
     proc = run([s, "-o", tmp_path / "o.exr", "--quiet"])
     assert proc.returncode != 0 and "p.tum:2: field 'qw' is missing" in proc.stderr and "s.xml:3" in proc.stderr
+
+
+# ---- nerfstudio transforms.json: its camera, principal point off the centre ----
+
+TW, TH, FX, FY, CX, CY = 64, 48, 70.0, 74.0, 40.5, 19.0  # the principal point 8.5 px right, 5 px up of centre
+
+
+def transforms_scene(tmp_path, obj, extra=""):
+    c2w_gl = np.eye(4)
+    c2w_gl[:3, :3] = Rotation.from_rotvec([0.05, -0.1, 0.02]).as_matrix()
+    c2w_gl[:3, 3] = [0.1, -0.05, 0.2]
+    doc = {"camera_model": "OPENCV", "fl_x": FX, "fl_y": FY, "cx": CX, "cy": CY, "w": TW, "h": TH, "k1": 0,
+           "k2": 0, "p1": 0, "p2": 0, "frames": [{"file_path": "a.png", "transform_matrix": c2w_gl.tolist()},
+                                                 {"file_path": "b.png", "transform_matrix": c2w_gl.tolist()}]}
+    (tmp_path / "transforms.json").write_text(json.dumps(doc))
+    s = tmp_path / "s.xml"
+    s.write_text(f'<scene><camera><trajectory file="transforms.json"/></camera>{extra}'
+                 f'<background color="0 0 0"/>{obj}</scene>')
+    return s, c2w_gl
+
+
+def projected(c2w_gl, P):
+    """The pinhole projection the file defines: OpenGL camera axes, then (fx x/z + cx, fy y/z + cy) in OpenCV's."""
+    x, y, z = (np.linalg.inv(c2w_gl) @ np.append(P, 1))[:3] * np.array([1, -1, -1])
+    return np.array([FX * x / z + CX, FY * y / z + CY])
+
+
+P_WORLD = np.array([0.4, 0.3, -3.5])
+
+
+def test_a_transforms_json_camera_projects_with_its_principal_point_everywhere(tmp_path):
+    """A small sphere, a sub-pixel 3DGS Gaussian (the rasterizer's own projection) and export's
+    camera_to_raster each put P where the file's pinhole puts it, within 0.1 pixel."""
+    sphere = f'<object position="{P_WORLD[0]} {P_WORLD[1]} {P_WORLD[2]}"><sphere radius="0.05"/></object>'
+    s, c2w = transforms_scene(tmp_path, sphere)
+    want = projected(c2w, P_WORLD)
+    assert abs(CX - TW / 2) > 8 and 5 < want[0] < TW - 5 and 5 < want[1] < TH - 5
+    out = tmp_path / "o.exr"
+    proc = run([s, "--spp", 256, "--time", 0.5, "-o", out, "--quiet"])
+    assert proc.returncode == 0, proc.stderr
+    ch, _ = read_full(out)
+    assert ch["A"].shape == (TH, TW)
+    from conftest import coverage_centroid
+    assert np.linalg.norm(np.array(coverage_centroid(ch["A"])) - want) < 0.1
+    import gsply
+    ply = tmp_path / "g.ply"
+    gsply.write(ply, {"mean": np.array([P_WORLD]), "scale": np.full((1, 3), 1e-4), "rot": np.array([[1.0, 0, 0, 0]]),
+                      "opacity": np.array([0.9]), "sh": np.full((1, 1, 3), 1.0), "degree": 0})
+    g = tmp_path / "g"
+    g.mkdir()
+    s2, _ = transforms_scene(g, f'<object><gaussianModel file="{ply}"/></object>')
+    proc = run([s2, "--spp", 64, "--time", 0.5, "-o", g / "o.exr", "--quiet"])
+    assert proc.returncode == 0, proc.stderr
+    assert np.linalg.norm(np.array(coverage_centroid(read_full(g / "o.exr")[0]["A"])) - want) < 0.1
+    proc = run(["export", s, "-o", tmp_path / "e.json", "--shutter", "0.5,0.6"])
+    assert proc.returncode == 0, proc.stderr
+    e = json.loads((tmp_path / "e.json").read_text())
+    m = np.array(e["camera"]["camera_to_raster"]) @ np.array(e["frames"][0]["world_to_camera"][0])
+    X = m @ np.append(P_WORLD, 1)
+    assert np.linalg.norm(X[:2] / X[3] - want) < 1e-9
+
+
+def test_a_transforms_json_round_trips_through_export(tmp_path):
+    """export --transforms writes the camera and poses back: read again, the exported path and intrinsics match."""
+    s, _ = transforms_scene(tmp_path, '<object><sphere radius="1"/></object>', '<shutter open="0" close="1"/>')
+    proc = run(["export", s, "-o", tmp_path / "e.json", "--tum", tmp_path / "a.tum", "--transforms",
+                tmp_path / "back.json"])
+    assert proc.returncode == 0, proc.stderr
+    back = json.loads((tmp_path / "back.json").read_text())
+    # the camera keeps fields of view (so that --res keeps the view): focal lengths to 1e-12
+    assert np.allclose([back[k] for k in ("fl_x", "fl_y", "cx", "cy")], [FX, FY, CX, CY], rtol=1e-12, atol=0)
+    assert (back["w"], back["h"]) == (TW, TH)
+    s2 = tmp_path / "s2.xml"
+    s2.write_text('<scene><camera><trajectory file="back.json"/></camera><object><sphere radius="1"/></object>'
+                  '<shutter open="0" close="1"/></scene>')
+    proc = run(["export", s2, "-o", tmp_path / "e2.json", "--tum", tmp_path / "b.tum"])
+    assert proc.returncode == 0, proc.stderr
+    a = np.loadtxt(tmp_path / "a.tum")
+    b = np.loadtxt(tmp_path / "b.tum")
+    assert np.array_equal(a[:, :4], b[:, :4])
+    assert np.abs(Rotation.from_quat(a[:, 4:]).as_matrix() - Rotation.from_quat(b[:, 4:]).as_matrix()).max() < 1e-14
+
+
+def test_transforms_json_camera_mistakes_are_named(tmp_path):
+    s, _ = transforms_scene(tmp_path, '<object><sphere radius="1"/></object>')
+    s.write_text(s.read_text().replace("<camera>", '<camera fov="40">'))
+    proc = run([s, "-o", tmp_path / "o.exr", "--quiet"])
+    assert proc.returncode != 0 and "takes its intrinsics from the file: drop 'fov'" in proc.stderr
+    s.write_text(s.read_text().replace('<camera fov="40">', "<camera>").replace(
+        'file="transforms.json"', 'file="transforms.json" axes="opencv"'))
+    proc = run([s, "-o", tmp_path / "o.exr", "--quiet"])
+    assert proc.returncode != 0 and "drop 'axes'" in proc.stderr

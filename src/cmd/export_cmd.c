@@ -6,6 +6,7 @@
 #include <getopt.h>
 #include <limits.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "atomicfile.h"
@@ -13,12 +14,14 @@
 #include "cli.h"
 #include "commands.h"
 #include "scene_xml.h"
+#include "transforms.h"
 
 static void export_usage(FILE *f)
 {
     fputs(
 "usage: refrender export SCENE.xml [--frame N | --frames A-B] [--shutter O,C] [--times K]\n"
-"                        [-D name=value] [--tum PATH.tum [--tum-axes opengl|opencv]] -o SCENE.json\n"
+"                        [-D name=value] [--tum PATH.tum [--tum-axes opengl|opencv]]\n"
+"                        [--transforms PATH.json] -o SCENE.json\n"
 "\n"
 "Writes the scene as another renderer needs it (scripts/README.md, Exporting):\n"
 "resolution, camera intrinsics, and per frame the world-to-camera matrix,\n"
@@ -38,11 +41,13 @@ static void export_usage(FILE *f)
 "                  every frame's; a <trajectory> camera's poses as interpolated\n"
 "  --tum-axes A    the camera axes of --tum: opengl (x right, y up, z back;\n"
 "                  BAD-Gaussians, the default) or opencv (x right, y down, z forward)\n"
+"  --transforms F  the same poses as a nerfstudio transforms.json, with the\n"
+"                  camera's intrinsics (one frame a time, 'time' its time)\n"
 "  -o, --output F  output JSON file (required); written atomically\n", f);
 }
 
 typedef struct {
-    const char *scene, *output, *tum;
+    const char *scene, *output, *tum, *transforms;
     int tum_opengl; /* --tum-axes */
     int frames, first, last, times;
     int shutter_set; /* --shutter */
@@ -345,26 +350,62 @@ static void camera_pose(const scene *s, double t, vec3 *p, double q[4])
     trajectory_quat_mul(qm, q0, q);
 }
 
+/* The export's times of every frame, in increasing order, each once (a
+ * TUM file's or transforms.json's times increase): at most max. */
+static int path_times(const export_job *j, double *out, int max, rr_error *err)
+{
+    int n = 0;
+    for (long long fr = j->o->first; fr <= j->o->last; fr++) {
+        shutter sh = j->s->shut;
+        double times[1026];
+        if (j->o->frames && scene_frame_shutter(j->s, (int)fr, &sh, err))
+            return -1;
+        int k = sample_times(&sh, j->o->times, times);
+        for (int i = 0; i < k; i++)
+            if (!n || times[i] > out[n - 1]) {
+                if (n == max)
+                    return rr_fail(err, "more than %d camera poses: export fewer frames or --times", max);
+                out[n++] = times[i];
+            }
+    }
+    return n;
+}
+
+enum { MAX_PATH_POSES = 1 << 20 };
+
+static int write_transforms(FILE *f, void *ctx, rr_error *err)
+{
+    const export_job *j = ctx;
+    double *t = malloc(MAX_PATH_POSES * sizeof *t), (*q)[4] = malloc(MAX_PATH_POSES * sizeof *q);
+    vec3 *p = malloc(MAX_PATH_POSES * sizeof *p);
+    int n = t && q && p ? path_times(j, t, MAX_PATH_POSES, err) : rr_fail(err, "out of memory");
+    for (int i = 0; i < n; i++)
+        camera_pose(j->s, t[i], &p[i], q[i]);
+    if (n >= 0) {
+        camera_view v;
+        camera_view_rest(&j->s->cam, &v);
+        transforms_camera cam = {v.fx, v.fy, v.cx, v.cy, v.width, v.height, NAN, NAN};
+        transforms_write(f, &cam, t, p, (const double(*)[4])q, n);
+    }
+    free(t), free(q), free(p);
+    return n < 0 ? -1 : 0;
+}
+
 static int write_tum(FILE *f, void *ctx, rr_error *err)
 {
     const export_job *j = ctx;
     fprintf(f, "# refrender %s camera path of %s: t tx ty tz qx qy qz qw, camera-to-world, %s axes\n", RR_VERSION,
             j->s->path, j->o->tum_opengl ? "OpenGL (x right, y up, z backward)" : "OpenCV (x right, y down, z forward)");
-    for (long long fr = j->o->first; fr <= j->o->last; fr++) {
-        shutter sh = j->s->shut;
-        double times[1026], q[4];
-        if (j->o->frames && scene_frame_shutter(j->s, (int)fr, &sh, err))
-            return -1;
-        int n = sample_times(&sh, j->o->times, times);
-        for (int i = 0; i < n; i++) {
-            vec3 p;
-            if (i && !(times[i] > times[i - 1]))
-                continue; /* a TUM file's times increase: an instant's shutter gives one line */
-            camera_pose(j->s, times[i], &p, q);
-            trajectory_write_tum_line(f, times[i], p, q, j->o->tum_opengl);
-        }
+    double *t = malloc(MAX_PATH_POSES * sizeof *t);
+    int n = t ? path_times(j, t, MAX_PATH_POSES, err) : rr_fail(err, "out of memory");
+    for (int i = 0; i < n; i++) {
+        vec3 p;
+        double q[4];
+        camera_pose(j->s, t[i], &p, q);
+        trajectory_write_tum_line(f, t[i], p, q, j->o->tum_opengl);
     }
-    return 0;
+    free(t);
+    return n < 0 ? -1 : 0;
 }
 
 static int write_export(FILE *f, void *ctx, rr_error *err)
@@ -394,6 +435,8 @@ static int export_scene(const export_options *o, rr_error *err)
     int rc = atomic_write_stdio(o->output, write_export, &job, err);
     if (!rc && o->tum)
         rc = atomic_write_stdio(o->tum, write_tum, &job, err);
+    if (!rc && o->transforms)
+        rc = atomic_write_stdio(o->transforms, write_transforms, &job, err);
     scene_free(&s);
     return rc;
 }
@@ -404,6 +447,7 @@ static int parse_export_args(int argc, char **argv, export_options *o, rr_error 
                                              {"times", required_argument, 0, 't'}, {"output", required_argument, 0, 'o'},
                                              {"shutter", required_argument, 0, 's'},
                                              {"tum", required_argument, 0, 'T'}, {"tum-axes", required_argument, 0, 'A'},
+                                             {"transforms", required_argument, 0, 'J'},
                                              {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
     int c;
     char extra;
@@ -426,6 +470,8 @@ static int parse_export_args(int argc, char **argv, export_options *o, rr_error 
             o->output = optarg;
         if (c == 'T')
             o->tum = optarg;
+        if (c == 'J')
+            o->transforms = optarg;
         if (c == 'A' && strcmp(optarg, "opengl") && strcmp(optarg, "opencv"))
             return rr_fail(err, "--tum-axes: opengl or opencv, got '%s'", optarg);
         if (c == 'A')
