@@ -5,7 +5,15 @@ quadrature they are: a still scene's average is the reference for every N
 smooth integrand in time, whose midpoint-rule error falls as N^-2, so 4
 times the frames must cut the error by more than 8 (a left-endpoint rule,
 times k / N, falls only as N^-1: a ratio near 4); non-box a(t) and bad
-inputs are refused by name."""
+inputs are refused by name.
+
+The blur-synthesis procedures (issue 30.3) are checked against their sources'
+formulas as written, on 8-bit frames the tests make: Deblur-NeRF's
+scripts/synthe2poses.py and BlenderCV's scripts/images_avg.py byte for byte
+(commits and lines in nframe_average.py's docstring), the sample-time rule of
+each preset against the source's own expression, and truncation's darkening of
+still regions from the float arithmetic that causes it."""
+import dataclasses
 import json
 import os
 import subprocess
@@ -15,6 +23,7 @@ import numpy as np
 import pytest
 
 import gsply
+import nframe_average as nf
 from conftest import BIN, ROOT
 
 SCRIPT = ROOT / "scripts" / "nframe_average.py"
@@ -106,3 +115,152 @@ def test_a_reference_of_another_scene_size_or_crop_is_refused_by_name(tmp_path):
     proc = subprocess.run([sys.executable, str(SCRIPT), str(scene), "--out", str(tmp_path / "file")],
                           capture_output=True, text=True, env={**os.environ, "REFRENDER": BIN})
     assert proc.returncode == 1 and "not a directory" in proc.stderr and "Traceback" not in proc.stderr, proc.stderr
+
+
+def _frames(n, seed=30):
+    """n 8-bit frames, 24x32 RGB: random values below, two still bands (white 255, grey 200) on top."""
+    rng = np.random.default_rng(seed)
+    frames = [rng.integers(0, 256, (24, 32, 3), dtype=np.uint8) for _ in range(n)]
+    for f in frames:
+        f[:4], f[4:8] = 255, 200
+    return frames
+
+
+def test_deblur_nerf_byte_for_byte():
+    """limacv/Deblur-NeRF scripts/synthe2poses.py:55-62 (aa9d6ce), its formula as written: /255,
+    ** 2.2, weights ones * (1/N) summed over axis 0, ** (1/2.2), clip, * 255, astype(uint8)."""
+    frames = _frames(10)
+    imgs = np.array([f / 255 for f in frames])
+    imgs = imgs ** 2.2
+    weight = np.ones_like(imgs) * (1 / len(imgs))
+    img = np.sum(imgs * weight, axis=0)
+    img = img ** (1 / 2.2)
+    expected = (np.clip(img, 0, 1) * 255).astype(np.uint8)
+    p = nf.PRESETS["deblur-nerf"]
+    assert p.n == 10 and len(frames) == p.n
+    got = nf.synthesize(frames, p)
+    assert got.dtype == np.uint8 and np.array_equal(got, expected)
+    # the frames tell truncation from rounding and 2.2 from another gamma: a planted change fails
+    assert (np.floor(np.clip(img, 0, 1) * 255 + 0.5) != expected).any()
+    assert ((np.mean(imgs ** (2.0 / 2.2), axis=0) ** 0.5 * 255).astype(np.uint8) != expected).any()
+
+
+def test_bad_gaussians_blendercv_byte_for_byte():
+    """LingzheZhao/BlenderCV scripts/images_avg.py (9e0b92b) as written: :29 each PNG / 255.0, :32-33
+    float32, :59 summed in frame order, :62 / blur_num, :12 (255 * clip).astype(uint8); :107 N = 31."""
+    frames = _frames(31, seed=31)
+    imgs = np.moveaxis(np.stack([f / 255.0 for f in frames], -1), -1, 0).astype(np.float32)
+    imgs_ = 0
+    for i in range(len(imgs)):
+        imgs_ += imgs[i]
+    img_blur = imgs_ / len(imgs)
+    expected = (255 * np.clip(img_blur, 0, 1)).astype(np.uint8)
+    p = nf.PRESETS["bad-gaussians"]
+    assert p.n == 31 and p.space == "gamma1"
+    got = nf.synthesize(frames, p)
+    assert got.dtype == np.uint8 and np.array_equal(got, expected)
+    # a float64 sum or a rounded result would differ: the test can tell
+    assert ((255 * np.mean(np.array(frames) / 255.0, axis=0)).astype(np.uint8) != expected).any()
+    assert (np.floor(255 * np.clip(img_blur, 0, 1) + 0.5).astype(np.uint8) != expected).any()
+
+
+def test_truncation_darkens_still_regions():
+    """A still region's frames are all equal, so its exact mean is its value. Seven weights 1/7
+    sum to 1 - 2^-52 in float64 (Python's own sum says so), whose 1/2.2 power rounds to 1 - 2^-53,
+    and 255 (1 - 2^-53) truncates to 254: Deblur-NeRF's formula makes white 254 at N = 7. Rounding
+    instead gives every still value back (the float error is far below half a level), and
+    truncation never brightens."""
+    assert sum([1 / 7] * 7) == 1 - 2 ** -52
+    white = [np.full((2, 2, 3), 255, np.uint8)] * 7
+    assert (nf.synthesize(white, nf.parse_procedure("deblur-nerf:n=7")) == 254).all()
+    assert (nf.synthesize(white, nf.parse_procedure("deblur-nerf:n=7,result=round")) == 255).all()
+    still = np.arange(256, dtype=np.uint8).reshape(16, 16, 1)
+    for spec in ("deblur-nerf", "bad-gaussians", "deblur-nerf:n=31", "bad-gaussians:n=10"):
+        p = nf.parse_procedure(spec)
+        out = nf.synthesize([still] * p.n, p).astype(int)
+        assert (out <= still).all() and (out >= still.astype(int) - 1).all(), spec
+        assert (out < still).sum() > 0, spec  # some still values lose a level
+        rounded = nf.synthesize([still] * p.n, dataclasses.replace(p, result="round"))
+        assert np.array_equal(rounded, still), spec
+    # the 200 band of BAD-Gaussians' data (N = 31, float32 sums) comes out 199
+    assert nf.synthesize([np.full((1, 1, 3), 200, np.uint8)] * 31, nf.PRESETS["bad-gaussians"])[0, 0, 0] == 199
+
+
+def test_each_preset_samples_the_times_its_source_does():
+    """Times over a shutter [0.2, 1.2], each from its source's own expression."""
+    o, c = 0.2, 1.2
+    t = nf.procedure_times(nf.PRESETS["deblur-nerf"], o, c)  # endpoints, N = 10 (assumed: see the docstring)
+    assert np.allclose(t, [o + k / 9 for k in range(10)], rtol=0, atol=1e-15) and t[0] == o and t[-1] == c
+    # BlenderCV generate_blur_trajectory_from_tum.py:38-44: start + i * T / (N - 1 + 1e-8), T = 1
+    t = nf.procedure_times(nf.PRESETS["bad-gaussians"], o, c)
+    assert len(t) == 31 and np.allclose(t, [(o + c) / 2 - 0.5 + i * 1.0 / (31 - 1 + 1e-8) for i in range(31)],
+                                        rtol=0, atol=1e-8)
+    # 3dgs-deblur's gsplat forward.cu:363: mid + (k / (n - 1) - 1/2) T_e, n = 10
+    t = nf.procedure_times(nf.PRESETS["3dgs-deblur"], o, c)
+    assert np.allclose(t, [0.7 + (k / 9 - 0.5) * 1.0 for k in range(10)], rtol=0, atol=1e-15)
+    t = nf.procedure_times(nf.PRESETS["midpoint"], o, c)
+    assert np.allclose(t, [o + (k + 0.5) / 10 for k in range(10)], rtol=0, atol=1e-15)
+    r1, r2 = (nf.procedure_times(nf.parse_procedure(f"custom:times=random,n=16,seed={s}"), o, c) for s in (1, 2))
+    assert r1 == nf.procedure_times(nf.parse_procedure("custom:times=random,n=16,seed=1"), o, c) and r1 != r2
+    assert r1 == sorted(r1) and o <= r1[0] and r1[-1] < c and len(set(r1)) == 16
+
+
+def test_3dgs_deblur_averages_gamma_2_2_floats():
+    """splatfacto.py:880 clamp(max=1) ** (1/2.2) of forward.cu's 1/n-weighted sum of colours that are
+    display ** 2.2 (splatfacto.py:222): float frames, float result, nothing quantized."""
+    frames = [f / 255 for f in _frames(10)]
+    expected = np.minimum(sum(f ** 2.2 / 10 for f in frames), 1) ** (1 / 2.2)
+    got = nf.synthesize(frames, nf.PRESETS["3dgs-deblur"])
+    assert got.dtype == np.float64 and np.allclose(got, expected, rtol=0, atol=1e-14)
+
+
+def test_procedures_measure_a_still_scene_in_both_spaces(tmp_path):
+    """A still scene: every frame is the reference (a still scene's reference has no noise), so the
+    float midpoint procedure is exact; 8-bit frames are the truth rounded (within half a level) and
+    their mean is that again up to float error, so a rounded result is within half a level, and a
+    truncated one (Deblur-NeRF) the rounded value or one level below it: within [-1.5, +0.5] levels.
+    Both comparison spaces are stated."""
+    scene = write_scene(tmp_path, 0.0)
+    ref = _reference(tmp_path, scene, "lin.exr", "--blur-space", "linear", "--pixel-filter", "point")
+    out = tmp_path / "rows.json"
+    proc = subprocess.run([sys.executable, str(SCRIPT), str(scene), "--reference", str(ref),
+                           "--out", str(tmp_path / "nf"), "--procedure", "midpoint,deblur-nerf",
+                           "--procedure", "bad-gaussians:result=round,n=4",
+                           "--json", str(out), "--", "--spp", "1"],
+                          capture_output=True, text=True, env={**os.environ, "REFRENDER": BIN})
+    assert proc.returncode == 0, proc.stderr
+    assert "comparison: display:" in proc.stdout and "linear:" in proc.stdout and "| deblur-nerf |" in proc.stdout
+    result = json.loads(out.read_text())
+    assert result["display"] == "srgb" and result["blur_space"] == "linear"
+    rows = {r["procedure"]["name"]: r for r in result["rows"]}
+    assert rows["midpoint"]["display"]["max"] < 1e-3 and rows["midpoint"]["linear"]["max"] < 1e-5
+    assert rows["bad-gaussians:result=round,n=4"]["display"]["max"] <= 0.5 + 1e-3
+    dn = rows["deblur-nerf"]["display"]
+    assert -1.5 <= dn["bias"] <= 0.5 and dn["max"] <= 1.5 + 1e-3 and dn["RMSE*"] > 0
+
+
+def test_bad_procedures_are_refused_by_name(tmp_path):
+    scene = write_scene(tmp_path, 1.0)
+    for args, message in ((["--procedure", "deblurnerf"], "unknown procedure 'deblurnerf'"),
+                          (["--procedure", "deblur-nerf:gamma=2"], "'gamma=2' is not key=value"),
+                          (["--procedure", "custom:space=model,frames=round"], "space=model averages"),
+                          (["--procedure", "custom:times=endpoints,n=1"], "too few frames"),
+                          (["--procedure", "deblur-nerf", "--n", "4"], "--n is for float averages")):
+        proc = subprocess.run([sys.executable, str(SCRIPT), str(scene), "--out", str(tmp_path / "nf"), *args],
+                              capture_output=True, text=True, env={**os.environ, "REFRENDER": BIN})
+        assert proc.returncode == 2 and message in proc.stderr and "Traceback" not in proc.stderr, proc.stderr
+
+
+def test_frames_round_half_up_as_blender():
+    """Blender writes 8-bit PNGs with unit_float_to_uchar_clamp (blenlib math_base_inline.c), in
+    float32: v <= 0 -> 0, v > 1 - 0.5/255 -> 255, else (uchar)(255 v + 0.5). Random values and the
+    float32 values whose 255 v is an exact tie k + 1/2 (where half-to-even rounding would differ)."""
+    rng = np.random.default_rng(7)
+    ties = np.float32((np.arange(255) + 0.5) / 255)
+    ties = ties[np.float32(255) * ties == np.arange(255) + np.float32(0.5)]
+    assert len(ties) > 50
+    v = np.concatenate([rng.random(200000, dtype=np.float32), ties, np.float32([0, 1, -0.1, 1.2, 1 - 0.5 / 255])])
+    one, half = np.float32(1), np.float32(0.5)
+    top = one - half / np.float32(255)
+    blender = [0 if x <= 0 else 255 if x > top else int(np.float32(255) * x + half) for x in v]
+    assert np.array_equal(nf.to_8bit(v, "round"), np.array(blender, np.uint8))
