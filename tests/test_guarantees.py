@@ -9,7 +9,7 @@ import time
 
 import pytest
 
-from conftest import BIN, ROOT, run, wait_for_handlers
+from conftest import BIN, ROOT, read_full, run, wait_for_handlers
 
 TINY = """<scene><camera width="8" height="6"/>
 <object><sphere radius="1" color="0.5 0.6 0.7"/><material shading="unlit"/></object></scene>"""
@@ -117,10 +117,20 @@ def test_resume_refuses_pixels_with_more_batches_than_the_render_gives(tmp_path)
     ck = tmp_path / "ck.exr"
     args = [s, "--res", "96x96", "--spp", 4, "--tspp", 48, "--batches", 2, "--threads", 2, "--quiet"]
     proc = subprocess.Popen([BIN, *map(str, args), "--target-error", "1e-9", "--max-batches", "60",
-                             "-o", str(tmp_path / "never.exr"), "--checkpoint", str(ck), "--checkpoint-every", "1000"],
+                             "-o", str(tmp_path / "never.exr"), "--checkpoint", str(ck), "--checkpoint-every", "0.2"],
                             stderr=subprocess.PIPE, text=True)
     wait_for_handlers(proc)
-    time.sleep(2.0)
+    # signal once a checkpoint holds a pixel past --batches (a fixed sleep was too short under the
+    # sanitizers on a loaded machine: every pixel still had its 2 batches)
+    deadline = time.time() + 120
+    while time.time() < deadline and proc.poll() is None:
+        try:
+            # OpenImageIO reads a uint channel normalised to [0, 1]: times 2^32 - 1 is the count
+            if (read_full(ck)[0]["state.batches"].astype("float64") * 4294967295.0).round().max() > 2:
+                break
+        except Exception:  # not written yet, or replaced while read
+            pass
+        time.sleep(0.1)
     proc.send_signal(signal.SIGTERM)
     proc.communicate(timeout=60)
     assert proc.returncode == 130 and ck.exists()
