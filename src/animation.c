@@ -224,19 +224,19 @@ static xform path_at(const animation *a, double t)
         for (int j = 0; j < 3; j++)
             x.ri[i][j] = x.r[j][i];
     x.scaled = 0;
-    x.t = v3(0, 0, 0);
     x.t = v3_add(xform_vector(&x, a->offset), p);
     return x;
 }
 
-void animation_pose_at(const animation *a, double t, vec3 *p, double q[4])
+xform animation_pose_at(const animation *a, double t, double q[4])
 {
     xform x = animation_at(a, t);
-    if (a->path)
-        trajectory_pose(a->path, t, p, q);
+    vec3 p;
+    if (a->path) /* the interpolated quaternion itself, not one recovered from x.r */
+        trajectory_pose(a->path, t, &p, q);
     else
         trajectory_matrix_quat(x.r, q);
-    *p = x.t; /* a trajectory's position plus R offset (0 for a camera: exact) */
+    return x;
 }
 
 xform animation_at(const animation *a, double t)

@@ -71,10 +71,10 @@ int animation_between_poses(vec3 pa, const double ra[3][3], vec3 pb, const doubl
 /* Transform at absolute scene time t. */
 xform animation_at(const animation *a, double t);
 
-/* The rigid transform at time t as a translation and unit quaternion
- * (w, x, y, z): a trajectory's own pose, exactly as interpolated (its
- * knots come back bit for bit); other motions from their matrix. */
-void animation_pose_at(const animation *a, double t, vec3 *p, double q[4]);
+/* The transform at time t (as animation_at) and its rotation as a unit
+ * quaternion (w, x, y, z): a trajectory's own, exactly as interpolated
+ * (its knots come back bit for bit); other motions' from their matrix. */
+xform animation_pose_at(const animation *a, double t, double q[4]);
 
 vec3 xform_point(const xform *x, vec3 p);
 vec3 xform_vector(const xform *x, vec3 v);

@@ -59,9 +59,6 @@ static int parse_weight_table(xml_ctx *c, xmlNodePtr n, shutter *s)
     return 0;
 }
 
-/* <shutter open close | fraction, weight ...>. With <frames>, times are
- * relative to the start of each frame; fraction is of the frame interval
- * (0.5 = a 180-degree shutter) and is resolved once the rate is known. */
 /* rolling="lines|3dgs-deblur|gsplat" readout="top-to-bottom|..."
  * lineDelay="delta" (lines) readoutTime="t_ro" (3dgs-deblur): shutter.h. */
 static int parse_rolling(xml_ctx *c, xmlNodePtr n, rolling_shutter *r)
@@ -91,6 +88,9 @@ static int parse_rolling(xml_ctx *c, xmlNodePtr n, rolling_shutter *r)
                ? -1 : 0;
 }
 
+/* <shutter open close | fraction, weight ...>. With <frames>, times are
+ * relative to the start of each frame; fraction is of the frame interval
+ * (0.5 = a 180-degree shutter) and is resolved once the rate is known. */
 static int parse_shutter(xml_ctx *c, xmlNodePtr n, scene *sc)
 {
     static const char *const ok[] = {"open",  "close",   "fraction",  "weight",      "center", "rate",

@@ -98,9 +98,6 @@ static int parse_pose_motion(xml_ctx *c, xmlNodePtr anim, const camjson_file *js
     return camera_from_pose(cam, rest_pos, rest_rot, &pose[0]);
 }
 
-/* <trajectory file="poses.tum" axes="opengl|opencv" interpolation="linear"/>:
- * the camera's pose over time from a TUM file (trajectory.h), the rest
- * pose the identity (OpenCV axes at the origin) that the path moves. */
 /* The camera of a transforms.json: its size, the field of view of its
  * focal lengths, its principal point; the scene's <camera> gives none. */
 static int camera_from_transforms(xml_ctx *c, xmlNodePtr cam_node, const transforms_camera *t, camera *cam)
@@ -149,6 +146,10 @@ static int trajectory_format(xml_ctx *c, xmlNodePtr n, const char *rel, int *tra
     return 0;
 }
 
+/* <trajectory file="poses.tum" axes="opengl|opencv" interpolation="linear"/>:
+ * the camera's pose over time from a TUM file or a transforms.json (trajectory.h,
+ * transforms.h), the rest
+ * pose the identity (OpenCV axes at the origin) that the path moves. */
 static int parse_trajectory(xml_ctx *c, xmlNodePtr n, camera *cam, animation *a)
 {
     static const char *const ok[] = {"file", "format", "axes", "interpolation", NULL};

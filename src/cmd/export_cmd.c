@@ -343,52 +343,69 @@ static void camera_pose(const scene *s, double t, vec3 *p, double q[4])
     for (int i = 0; i < 3; i++)
         rest[0][i] = axes[i].x, rest[1][i] = axes[i].y, rest[2][i] = axes[i].z;
     trajectory_matrix_quat(rest, q0);
-    vec3 pm;
-    animation_pose_at(&s->camera_motion, t, &pm, qm);
-    xform m = animation_at(&s->camera_motion, t);
+    xform m = animation_pose_at(&s->camera_motion, t, qm);
     *p = xform_point(&m, c->position);
     trajectory_quat_mul(qm, q0, q);
 }
 
+/* At most this many camera poses in a --tum or --transforms file. */
+enum { MAX_PATH_POSES = 1 << 20 };
+
 /* The export's times of every frame, in increasing order, each once (a
- * TUM file's or transforms.json's times increase): at most max. */
-static int path_times(const export_job *j, double *out, int max, rr_error *err)
+ * TUM file's or transforms.json's times increase), in an array of the
+ * size the frames and --times need; NULL with err set. */
+static double *path_times(const export_job *j, int *count, rr_error *err)
 {
+    double bound = ((double)j->o->last - j->o->first + 1) * (j->o->times + 2); /* before removing repeats */
+    int max = bound < MAX_PATH_POSES ? (int)bound : MAX_PATH_POSES;
+    double *out = malloc((size_t)max * sizeof *out);
+    if (!out) {
+        rr_fail(err, "out of memory");
+        return NULL;
+    }
     int n = 0;
     for (long long fr = j->o->first; fr <= j->o->last; fr++) {
         shutter sh = j->s->shut;
         double times[1026];
-        if (j->o->frames && scene_frame_shutter(j->s, (int)fr, &sh, err))
-            return -1;
+        if (j->o->frames && scene_frame_shutter(j->s, (int)fr, &sh, err)) {
+            free(out);
+            return NULL;
+        }
         int k = sample_times(&sh, j->o->times, times);
-        for (int i = 0; i < k; i++)
-            if (!n || times[i] > out[n - 1]) {
-                if (n == max)
-                    return rr_fail(err, "more than %d camera poses: export fewer frames or --times", max);
-                out[n++] = times[i];
+        for (int i = 0; i < k; i++) {
+            if (n && !(times[i] > out[n - 1]))
+                continue;
+            if (n == max) {
+                free(out);
+                rr_fail(err, "more than %d camera poses: export fewer frames or --times", MAX_PATH_POSES);
+                return NULL;
             }
+            out[n++] = times[i];
+        }
     }
-    return n;
+    *count = n;
+    return out;
 }
-
-enum { MAX_PATH_POSES = 1 << 20 };
 
 static int write_transforms(FILE *f, void *ctx, rr_error *err)
 {
     const export_job *j = ctx;
-    double *t = malloc(MAX_PATH_POSES * sizeof *t), (*q)[4] = malloc(MAX_PATH_POSES * sizeof *q);
-    vec3 *p = malloc(MAX_PATH_POSES * sizeof *p);
-    int n = t && q && p ? path_times(j, t, MAX_PATH_POSES, err) : rr_fail(err, "out of memory");
-    for (int i = 0; i < n; i++)
+    int n = 0;
+    double *t = path_times(j, &n, err), (*q)[4] = t ? malloc((size_t)n * sizeof *q + 1) : NULL;
+    vec3 *p = q ? malloc((size_t)n * sizeof *p + 1) : NULL;
+    int ok = p != NULL;
+    if (t && !ok)
+        rr_fail(err, "out of memory");
+    for (int i = 0; ok && i < n; i++)
         camera_pose(j->s, t[i], &p[i], q[i]);
-    if (n >= 0) {
+    if (ok) {
         camera_view v;
         camera_view_rest(&j->s->cam, &v);
         transforms_camera cam = {v.fx, v.fy, v.cx, v.cy, v.width, v.height, NAN, NAN};
         transforms_write(f, &cam, t, p, (const double(*)[4])q, n);
     }
     free(t), free(q), free(p);
-    return n < 0 ? -1 : 0;
+    return ok ? 0 : -1;
 }
 
 static int write_tum(FILE *f, void *ctx, rr_error *err)
@@ -396,8 +413,10 @@ static int write_tum(FILE *f, void *ctx, rr_error *err)
     const export_job *j = ctx;
     fprintf(f, "# refrender %s camera path of %s: t tx ty tz qx qy qz qw, camera-to-world, %s axes\n", RR_VERSION,
             j->s->path, j->o->tum_opengl ? "OpenGL (x right, y up, z backward)" : "OpenCV (x right, y down, z forward)");
-    double *t = malloc(MAX_PATH_POSES * sizeof *t);
-    int n = t ? path_times(j, t, MAX_PATH_POSES, err) : rr_fail(err, "out of memory");
+    int n = 0;
+    double *t = path_times(j, &n, err);
+    if (!t)
+        return -1;
     for (int i = 0; i < n; i++) {
         vec3 p;
         double q[4];
@@ -405,7 +424,7 @@ static int write_tum(FILE *f, void *ctx, rr_error *err)
         trajectory_write_tum_line(f, t[i], p, q, j->o->tum_opengl);
     }
     free(t);
-    return n < 0 ? -1 : 0;
+    return 0;
 }
 
 static int write_export(FILE *f, void *ctx, rr_error *err)
