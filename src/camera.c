@@ -32,6 +32,37 @@ static int camera_frame(camera *c, rr_error *err)
     return 0;
 }
 
+static double tan_half(double fov_degrees) { return tan(fov_degrees * M_PI / 360.0); }
+
+/* camera_view_rest's focal length (pixels) of a field of view over size pixels. */
+static double focal_of_fov(double size, double fov_degrees) { return 0.5 * size / tan_half(fov_degrees); }
+
+static void fov_round_trip(const double *fov, double *out, void *size)
+{
+    double s = *(const double *)size;
+    out[0] = 360.0 / M_PI * atan(0.5 * s / focal_of_fov(s, fov[0]));
+}
+
+static void principal_round_trip(const double *dx, double *out, void *size)
+{
+    double s = *(const double *)size;
+    out[0] = (0.5 + dx[0]) * s / s - 0.5;
+}
+
+double camera_fov_of_focal(double size, double focal)
+{
+    double fov = 360.0 / M_PI * atan(0.5 * size / focal);
+    rr_round_trip_representative(&fov, 1, fov_round_trip, &size);
+    return fov;
+}
+
+double camera_principal_offset(double size, double centre)
+{
+    double d = centre / size - 0.5;
+    rr_round_trip_representative(&d, 1, principal_round_trip, &size);
+    return d;
+}
+
 int camera_prepare(camera *c, rr_error *err)
 {
     if (camera_frame(c, err))
@@ -45,8 +76,8 @@ int camera_prepare(camera *c, rr_error *err)
         return rr_fail(err, "camera fov must be in (0, 180) degrees, got %g", c->fov_degrees);
     if (c->fov_x_degrees != 0 && !(c->fov_x_degrees > 0 && c->fov_x_degrees < 180))
         return rr_fail(err, "camera horizontal fov must be in (0, 180) degrees, got %g", c->fov_x_degrees);
-    c->tan_half_fov = tan(c->fov_degrees * M_PI / 360.0);
-    c->tan_half_fov_x = c->fov_x_degrees > 0 ? tan(c->fov_x_degrees * M_PI / 360.0)
+    c->tan_half_fov = tan_half(c->fov_degrees);
+    c->tan_half_fov_x = c->fov_x_degrees > 0 ? tan_half(c->fov_x_degrees)
                                              : c->tan_half_fov * c->width / c->height; /* square pixels */
     return 0;
 }

@@ -36,6 +36,14 @@ typedef struct {
     int width, height; /* the image's, pixels (the rasterizers' tiles) */
 } camera_view;
 
+/* A field of view in degrees from a focal length in pixels over size
+ * pixels, and a principal point's offset (camera.principal_dx or _dy) from
+ * its position in pixels: each the value whose camera_view_rest gives back
+ * reads back as itself (rr_round_trip_representative), so that a camera
+ * read from a file, written and read again is the same bit for bit. */
+double camera_fov_of_focal(double size, double focal);
+double camera_principal_offset(double size, double centre);
+
 /* The prepared camera at rest. */
 void camera_view_rest(const camera *c, camera_view *v);
 

@@ -1,8 +1,10 @@
 #include "common.h"
 
+#include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 #include <time.h>
 
 int rr_fail(rr_error *err, const char *fmt, ...)
@@ -33,6 +35,38 @@ int cmp_double(const void *a, const void *b)
 {
     double x = *(const double *)a, y = *(const double *)b;
     return (x > y) - (x < y);
+}
+
+/* A total order on the values' bits: by value, -0 before +0. */
+static int lex_less(const double *a, const double *b, int n)
+{
+    for (int i = 0; i < n; i++) {
+        if (a[i] != b[i])
+            return a[i] < b[i];
+        if (signbit(a[i]) != signbit(b[i]))
+            return signbit(a[i]) != 0;
+    }
+    return 0;
+}
+
+int rr_round_trip_representative(double *v, int n, void (*f)(const double *in, double *out, void *ctx), void *ctx)
+{
+    enum { STEPS = 512 };
+    double orbit[STEPS + 1][4];
+    memcpy(orbit[0], v, (size_t)n * sizeof *v);
+    for (int k = 0; k < STEPS; k++) {
+        f(orbit[k], orbit[k + 1], ctx);
+        for (int j = 0; j <= k; j++) /* bitwise: a signed zero is a different file */
+            if (!memcmp(orbit[j], orbit[k + 1], (size_t)n * sizeof *v)) {
+                int best = j;
+                for (int c = j + 1; c <= k; c++)
+                    if (lex_less(orbit[c], orbit[best], n))
+                        best = c;
+                memcpy(v, orbit[best], (size_t)n * sizeof *v);
+                return 0;
+            }
+    }
+    return -1;
 }
 
 double rr_seconds(void)

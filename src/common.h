@@ -73,6 +73,17 @@ int rr_interrupted(void);
 /* qsort comparator for doubles, ascending. */
 int cmp_double(const void *a, const void *b);
 
+/* Round trips through a lossy conversion pair (issue 30: a value read from
+ * a file, kept in another form and written back, e.g. a rotation matrix
+ * kept as a quaternion) are made exact by keeping a fixed representative:
+ * f (the write-then-read map on n <= 4 doubles) is a function on a finite
+ * set, so its orbit from v ends in a cycle; v becomes the cycle's smallest
+ * member (lexicographically), which f's orbit from any member of the cycle
+ * finds again, so read(write(v)) == v bit for bit. Returns 0, or -1 (v
+ * unchanged) if no cycle shows within 512 steps (none did in a million
+ * random rotations through transforms.c's matrices). */
+int rr_round_trip_representative(double *v, int n, void (*f)(const double *in, double *out, void *ctx), void *ctx);
+
 /* out = a b for 4x4 matrices (out may not alias a or b). */
 void mat4_mul(double a[4][4], double b[4][4], double out[4][4]);
 

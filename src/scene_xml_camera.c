@@ -108,9 +108,10 @@ static int camera_from_transforms(xml_ctx *c, xmlNodePtr cam_node, const transfo
             return xml_fail(c, cam_node, "a camera with a transforms.json trajectory takes its intrinsics from the "
                                          "file: drop '%s' (--res changes the size)", *k);
     cam->width = t->width, cam->height = t->height;
-    cam->fov_degrees = 360.0 / M_PI * atan(0.5 * t->height / t->fy);
-    cam->fov_x_degrees = 360.0 / M_PI * atan(0.5 * t->width / t->fx);
-    cam->principal_dx = t->cx / t->width - 0.5, cam->principal_dy = t->cy / t->height - 0.5;
+    cam->fov_degrees = camera_fov_of_focal(t->height, t->fy);
+    cam->fov_x_degrees = camera_fov_of_focal(t->width, t->fx);
+    cam->principal_dx = camera_principal_offset(t->width, t->cx);
+    cam->principal_dy = camera_principal_offset(t->height, t->cy);
     if (isfinite(t->exposure_time) || isfinite(t->rolling_shutter_time))
         rr_warn(&c->sc->warnings, "%s:%ld: the transforms.json's exposure_time and rolling_shutter_time are not "
                                   "applied: give them in <shutter> (close - open, rolling=\"3dgs-deblur\" "

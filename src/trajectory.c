@@ -30,33 +30,43 @@ static vec3 quat_rotate(const double q[4], vec3 v)
               r[2][0] * v.x + r[2][1] * v.y + r[2][2] * v.z);
 }
 
+/* Both conversions work in long double and round once at the end: a
+ * matrix written to a file and read back then moves the quaternion by at
+ * most about an ulp, without the drift binary64's rounding has (issue 30:
+ * transforms.c keeps the quaternion its written matrix reads back as, a
+ * fixed point this map reaches in a few steps; in binary64 it wandered on). */
 void trajectory_quat_matrix(const double q[4], double r[3][3])
 {
-    double w = q[0], x = q[1], y = q[2], z = q[3], s = 2.0 / (w * w + x * x + y * y + z * z);
-    r[0][0] = 1 - s * (y * y + z * z), r[0][1] = s * (x * y - w * z), r[0][2] = s * (x * z + w * y);
-    r[1][0] = s * (x * y + w * z), r[1][1] = 1 - s * (x * x + z * z), r[1][2] = s * (y * z - w * x);
-    r[2][0] = s * (x * z - w * y), r[2][1] = s * (y * z + w * x), r[2][2] = 1 - s * (x * x + y * y);
+    long double w = q[0], x = q[1], y = q[2], z = q[3], s = 2.0L / (w * w + x * x + y * y + z * z);
+    r[0][0] = (double)(1 - s * (y * y + z * z)), r[0][1] = (double)(s * (x * y - w * z));
+    r[0][2] = (double)(s * (x * z + w * y)), r[1][0] = (double)(s * (x * y + w * z));
+    r[1][1] = (double)(1 - s * (x * x + z * z)), r[1][2] = (double)(s * (y * z - w * x));
+    r[2][0] = (double)(s * (x * z - w * y)), r[2][1] = (double)(s * (y * z + w * x));
+    r[2][2] = (double)(1 - s * (x * x + y * y));
 }
 
 void trajectory_matrix_quat(const double r[3][3], double q[4])
 {
     /* Shepperd's method: divide by the largest of 4 w^2, 4 x^2, 4 y^2, 4 z^2 */
-    double tr = r[0][0] + r[1][1] + r[2][2], d[4] = {tr, r[0][0], r[1][1], r[2][2]};
+    long double m[3][3];
+    for (int a = 0; a < 3; a++)
+        for (int b = 0; b < 3; b++)
+            m[a][b] = r[a][b];
+    long double tr = m[0][0] + m[1][1] + m[2][2], d[4] = {tr, m[0][0], m[1][1], m[2][2]};
     int k = 0;
     for (int i = 1; i < 4; i++)
         if (d[i] > d[k])
             k = i;
-    double big = k ? sqrt(1.0 + 2.0 * d[k] - tr) * 0.5 : sqrt(1.0 + tr) * 0.5, f = 0.25 / big;
-    double wx = r[2][1] - r[1][2], wy = r[0][2] - r[2][0], wz = r[1][0] - r[0][1];
-    double xy = r[0][1] + r[1][0], xz = r[0][2] + r[2][0], yz = r[1][2] + r[2][1];
-    double all[4][4] = {{big, wx * f, wy * f, wz * f},
-                        {wx * f, big, xy * f, xz * f},
-                        {wy * f, xy * f, big, yz * f},
-                        {wz * f, xz * f, yz * f, big}};
-    memcpy(q, all[k], 4 * sizeof *q);
-    if (q[0] < 0) /* the sign with w >= 0 */
-        for (int i = 0; i < 4; i++)
-            q[i] = -q[i];
+    long double big = k ? sqrtl(1.0L + 2.0L * d[k] - tr) * 0.5L : sqrtl(1.0L + tr) * 0.5L, f = 0.25L / big;
+    long double wx = m[2][1] - m[1][2], wy = m[0][2] - m[2][0], wz = m[1][0] - m[0][1];
+    long double xy = m[0][1] + m[1][0], xz = m[0][2] + m[2][0], yz = m[1][2] + m[2][1];
+    long double all[4][4] = {{big, wx * f, wy * f, wz * f},
+                             {wx * f, big, xy * f, xz * f},
+                             {wy * f, xy * f, big, yz * f},
+                             {wz * f, xz * f, yz * f, big}};
+    int flip = all[k][0] < 0; /* the sign with w >= 0 */
+    for (int i = 0; i < 4; i++)
+        q[i] = (double)(flip ? -all[k][i] : all[k][i]);
 }
 
 /* Exp: the rotation by |phi| about phi, as a unit quaternion. */

@@ -92,6 +92,15 @@ static int read_camera(const char *name, json_object *root, json_object *frames,
     return 0;
 }
 
+/* The matrix transforms_write writes for q, read back as a quaternion. */
+static void matrix_round_trip(const double *q, double *out, void *ctx)
+{
+    (void)ctx;
+    double r[3][3];
+    trajectory_quat_matrix(q, r);
+    trajectory_matrix_quat(r, out);
+}
+
 /* A frame's transform_matrix: 4x4 (or 3x4), its last row 0 0 0 1, its
  * rotation a rotation within 1e-6. */
 static int read_pose(const char *name, size_t i, json_object *frame, trajectory_knot *k, rr_error *err)
@@ -123,6 +132,8 @@ static int read_pose(const char *name, size_t i, json_object *frame, trajectory_
         return rr_fail(err, "%s: frames[%zu]: 'transform_matrix' rotation is not one (columns orthonormal within 1e-6, "
                             "determinant 1; a scaled world is not a camera pose)", name, i);
     trajectory_matrix_quat(r, k->q);
+    /* the quaternion its written matrix reads back as (issue 30: read, write, read back bit for bit) */
+    rr_round_trip_representative(k->q, 4, matrix_round_trip, NULL);
     k->p = v3(m[0][3], m[1][3], m[2][3]);
     if (!(fabs(k->p.x) <= TRAJECTORY_MAX_ABS && fabs(k->p.y) <= TRAJECTORY_MAX_ABS &&
           fabs(k->p.z) <= TRAJECTORY_MAX_ABS))
