@@ -46,10 +46,19 @@ void scene_camera_view(const scene *s, double t, camera_view *v)
 
 int scene_frame_shutter(const scene *s, int frame, shutter *out, rr_error *err)
 {
-    if (!(s->frame_rate > 0))
-        return rr_fail(err, "%s: the scene has no frame rate; add <frames rate=\"...\"/> to render frames",
-                       s->path);
-    double shift = frame / s->frame_rate;
+    double shift;
+    if (s->frames_at_poses) {
+        const trajectory *tr = s->camera_motion.path; /* the scene reader requires it */
+        if (frame < 0 || frame >= tr->count)
+            return rr_fail(err, "%s: frame %d: the camera's trajectory has %d poses (frames 0 to %d)", s->path,
+                           frame, tr->count, tr->count - 1);
+        shift = tr->knots[frame].t - 0.5 * (s->shut.open + s->shut.close);
+    } else if (s->frame_rate > 0) {
+        shift = frame / s->frame_rate;
+    } else {
+        return rr_fail(err, "%s: the scene has no frames; add <frames rate=\"...\"/> (or at=\"trajectory\") to "
+                            "render frames", s->path);
+    }
     shutter f = s->shut;
     f.open += shift, f.close += shift, f.center += shift;
     for (int i = 0; i < f.table_size; i++)

@@ -81,6 +81,8 @@ typedef struct {
     animation camera_motion; /* the camera's rest pose moved like an object (rigid) */
     shutter shut;            /* as the file gives it: frame 0's with <frames> (scene_frame_shutter) */
     double frame_rate;       /* <frames rate>: frame N starts at time N / rate; 0: no frames */
+    int frames_at_poses;     /* <frames at="trajectory">: frame N's exposure is centred on the camera
+                                trajectory's pose N (issue 30); frame 0 is then not s->shut */
     vec3 background, ambient;
     double epsilon, kernel_sigma;
     int time_factor;
@@ -101,8 +103,10 @@ void scene_camera_ray(const scene *s, double x, double y, double t, vec3 *org, v
 /* The camera at time t (its animation applied to the rest pose). */
 void scene_camera_view(const scene *s, double t, camera_view *v);
 
-/* Frame N's shutter: s->shut (frame 0's) shifted by N / frame_rate.
- * Returns -1 if the scene has no frame rate. */
+/* Frame N's shutter: s->shut (frame 0's) shifted by N / frame_rate; with
+ * frames_at_poses, s->shut shifted so that its middle is the camera
+ * trajectory's pose N's time. Returns -1 if the scene has no frames or no
+ * pose N. Callers render s->shut itself only when neither is set. */
 int scene_frame_shutter(const scene *s, int frame, shutter *out, rr_error *err);
 void scene_free(scene *s);
 

@@ -428,17 +428,34 @@ static int parse_object(xml_ctx *c, xmlNodePtr n, scene *s)
     return 0;
 }
 
-/* <frames rate="24"/>: frame N starts at scene time N / rate. */
+/* <frames rate="24"/>: frame N starts at scene time N / rate; or
+ * <frames at="trajectory"/>: frame N's exposure is centred on the time of
+ * the camera trajectory's pose N (issue 30: a deblurring dataset's blurred
+ * frame k spans its pose k's time). */
 static int parse_frames(xml_ctx *c, xmlNodePtr n, scene *s)
 {
-    static const char *const ok[] = {"rate", NULL};
-    return xml_check_attributes(c, n, ok) || xml_check_no_text(c, n) || xml_attr_positive(c, n, "rate", &s->frame_rate, 1)
-               ? -1 : 0;
+    static const char *const ok[] = {"rate", "at", NULL};
+    char at[16] = "";
+    if (xml_check_attributes(c, n, ok) || xml_check_no_text(c, n) || xml_attr_text(c, n, "at", at, sizeof at) < 0)
+        return -1;
+    if (*at) {
+        if (strcmp(at, "trajectory"))
+            return xml_fail(c, n, "<frames at=\"%s\">: the frames can be at=\"trajectory\" (the camera's poses)", at);
+        if (xmlHasProp(n, (const xmlChar *)"rate"))
+            return xml_fail(c, n, "<frames> takes 'rate' or at=\"trajectory\", not both");
+        s->frames_at_poses = 1;
+        c->frames_line = (int)xmlGetLineNo(n);
+        return 0;
+    }
+    return xml_attr_positive(c, n, "rate", &s->frame_rate, 1) ? -1 : 0;
 }
 
 /* The fraction shutter needs the rate; frame 0's shutter is kept to shift. */
 static int finish_frames(xml_ctx *c, scene *s)
 {
+    if (s->frames_at_poses && !s->camera_motion.path)
+        return rr_fail(c->err, "%s:%d: <frames at=\"trajectory\"> needs a <camera> with a <trajectory>", c->name,
+                       c->frames_line);
     if (c->shutter_fraction > 0) {
         if (!(s->frame_rate > 0))
             return rr_fail(c->err, "%s:%d: a shutter fraction needs <frames rate=\"...\"/>", c->name,
@@ -534,7 +551,7 @@ int scene_load_memory_params(const char *xml, size_t len, const char *name, cons
     if (!doc)
         return rr_fail(err, "%s", sink.first.msg[0] ? sink.first.msg : "cannot parse scene");
     snprintf(s->path, sizeof s->path, "%s", name);
-    xml_ctx c = {name, base_dir, &s->inputs_hash, s, 0, 0, 0, err, params};
+    xml_ctx c = {.name = name, .base_dir = base_dir, .inputs_hash = &s->inputs_hash, .sc = s, .err = err, .params = params};
     int rc = parse_scene(&c, doc, s);
     xmlFreeDoc(doc);
     if (rc)

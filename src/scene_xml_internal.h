@@ -17,6 +17,7 @@ typedef struct {
     /* <shutter fraction>, resolved when the frame rate is known (finish_frames) */
     double shutter_fraction; /* of the frame interval; 0: open/close given */
     int shutter_center_given, shutter_line;
+    int frames_line; /* <frames at="trajectory">, checked once the camera is read */
     rr_error *err;
     const scene_params *params; /* given on the command line (may be NULL) */
 } xml_ctx;

@@ -312,3 +312,47 @@ def test_each_interpolation_equals_the_independent_reference(tmp_path, interpola
     for t, p, R in zip(times, pos, rot):
         p_ref, R_ref = fn(knots, t)
         assert np.abs(p - p_ref).max() < 1e-9 and np.abs(R - R_ref).max() < 1e-9, (interpolation, t)
+
+
+def frames_scene(tmp_path, frames='<frames at="trajectory"/>', camera=None):
+    """Poses at uneven times (a dataset's frames): 0, 0.5, 1, 1.7."""
+    (tmp_path / "p.tum").write_text("0 0 0 0 0 0 0 1\n0.5 0.1 0 0 0 0 0 1\n1 0.2 0 0 0 0 0 1\n1.7 0.3 0 0 0 0 0 1\n")
+    cam = camera or '<camera width="16" height="16" fov="40"><trajectory file="p.tum" axes="opencv"/></camera>'
+    s = tmp_path / "f.xml"
+    s.write_text(f'<scene>{cam}{frames}<shutter open="0" close="0.1"/>'
+                 '<object position="0 0 4"><sphere radius="1"/></object></scene>')
+    return s
+
+
+def test_frames_at_the_trajectory_centre_each_exposure_on_its_pose(tmp_path):
+    """Issue 30: a blurred frame of a dataset spans its pose's time, the exposure's length the shutter's:
+    frame k's window is centred on pose k (the middle of [open, close] is the pose's time, exactly as
+    the shift of a binary64 sum allows)."""
+    s = frames_scene(tmp_path)
+    proc = run(["export", s, "-o", tmp_path / "e.json", "--frames", "1-2"])
+    assert proc.returncode == 0, proc.stderr
+    frames = json.loads((tmp_path / "e.json").read_text())["frames"]
+    for f, pose_time in zip(frames, (0.5, 1.0)):
+        assert abs(0.5 * (f["open"] + f["close"]) - pose_time) < 1e-15
+        assert abs(f["close"] - f["open"] - 0.1) < 1e-15
+    out = tmp_path / "o.exr"
+    proc = run([s, "--frame", 2, "--spp", 1, "--tspp", 2, "-o", out, "--quiet"])
+    assert proc.returncode == 0, proc.stderr
+    header = read_full(out)[1]
+    assert header["refrender:frame"] == 2 and "refrender:frameRate" not in header
+    # frame 0 is pose 0's: centred on 0, it reaches before the first pose and is refused by name
+    proc = run([s, "--spp", 1, "--tspp", 2, "-o", out, "--quiet"])
+    assert proc.returncode != 0 and "reaches beyond the camera trajectory" in proc.stderr
+    proc = run([s, "--frame", 4, "-o", out, "--quiet"])
+    assert proc.returncode != 0 and "frame 4: the camera's trajectory has 4 poses (frames 0 to 3)" in proc.stderr
+
+
+@pytest.mark.parametrize("frames,camera,message", [
+    ('<frames at="poses"/>', None, '<frames at="poses">: the frames can be at="trajectory"'),
+    ('<frames at="trajectory" rate="24"/>', None, "'rate' or at=\"trajectory\", not both"),
+    ('<frames at="trajectory"/>', '<camera width="16" height="16" fov="40"/>', 'f.xml:1: <frames at="trajectory"> '
+     'needs a <camera> with a <trajectory>'),
+])
+def test_frames_at_the_trajectory_mistakes_are_named(tmp_path, frames, camera, message):
+    proc = run([frames_scene(tmp_path, frames, camera), "-o", tmp_path / "o.exr", "--quiet"])
+    assert proc.returncode != 0 and message in proc.stderr, proc.stderr

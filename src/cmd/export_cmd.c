@@ -316,7 +316,7 @@ static int write_json(FILE *f, const scene *s, const export_options *o, rr_error
     fputs("  \"frames\": [\n", f);
     for (long long fr = o->first; fr <= o->last; fr++) {
         shutter sh = s->shut;
-        if (o->frames && scene_frame_shutter(s, (int)fr, &sh, err))
+        if ((o->frames || s->frames_at_poses) && scene_frame_shutter(s, (int)fr, &sh, err))
             return -1;
         if (fr > o->first)
             fputs(",\n", f);
@@ -367,7 +367,7 @@ static double *path_times(const export_job *j, int *count, rr_error *err)
     for (long long fr = j->o->first; fr <= j->o->last; fr++) {
         shutter sh = j->s->shut;
         double times[1026];
-        if (j->o->frames && scene_frame_shutter(j->s, (int)fr, &sh, err)) {
+        if ((j->o->frames || j->s->frames_at_poses) && scene_frame_shutter(j->s, (int)fr, &sh, err)) {
             free(out);
             return NULL;
         }

@@ -572,10 +572,10 @@ static int render_one(const scene *s, const shutter *shut, long long frame, acce
         attrs_set(&run.attrs, "refrender:rays", "%llu", (unsigned long long)img.rays);
         if (run.rs.exact_time)
             report_unresolved(o, &img, &run.rs.shut, &run.attrs);
-        if (o->frames) {
+        if (o->frames && s->frame_rate > 0)
             attrs_set(&run.attrs, "refrender:frameRate", "%.17g", s->frame_rate);
+        if (o->frames || s->frames_at_poses)
             attrs_set(&run.attrs, "refrender:frame", "%lld", frame);
-        }
         rc = o->passes ? output_write_state(output, &img, run.rs.batch_begin,
                                             run.rs.batch_begin + run.rs.batches, &run.attrs, err)
                        : write_final(output, &img, &run, err);
@@ -630,11 +630,12 @@ static int check_frame_outputs(const scene *s, const render_options *o, rr_error
     return 0;
 }
 
-/* Frame f's shutter; without <frames> the scene's own. */
+/* Frame f's shutter; without <frames> the scene's own (frame 0 of frames
+ * at a trajectory's poses is not: it is centred on pose 0). */
 static int frame_shutter(const scene *s, const render_options *o, long long f, shutter *out, rr_error *err)
 {
     *out = s->shut;
-    return o->frames ? scene_frame_shutter(s, (int)f, out, err) : 0;
+    return o->frames || s->frames_at_poses ? scene_frame_shutter(s, (int)f, out, err) : 0;
 }
 
 /* One frame or a sequence, sharing the loaded models and their BVHs; only
