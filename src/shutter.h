@@ -18,12 +18,12 @@ typedef enum { WEIGHT_BOX, WEIGHT_LINEAR, WEIGHT_EXP, WEIGHT_TABLE } weight_kind
  *                model: line delay delta, line exposure close - open)
  *   3dgs-deblur  [open, close] + t_ro ((r + 0.5) / L - 1/2): [open, close] is
  *                the middle's window, readoutTime t_ro spans the frame
- *                (3dgs-deblur's gsplat fork, rasterize_to_pixels' time)
+ *                (3dgs-deblur's gsplat fork 64154bb, forward.cu:360-363)
  *   gsplat       the single instant open + (close - open) r / (L - 1), no
  *                exposure (gsplat's and 3DGUT's floor(y) / (H - 1) between a
- *                start and an end pose; bottom-to-top (H - ceil(y)) / (H - 1)
- *                is the same line count from the bottom for y off the
- *                pixel edges)
+ *                start and an end pose, gsplat 90d7b4b Cameras.cuh:504-528;
+ *                bottom-to-top (H - ceil(y)) / (H - 1) is the same line
+ *                count from the bottom for y off the pixel edges)
  * Rows and columns are the full image's, whatever the crop window. */
 typedef enum { ROLLING_OFF, ROLLING_LINES, ROLLING_3DGS_DEBLUR, ROLLING_GSPLAT } rolling_kind;
 typedef enum { READOUT_TOP_TO_BOTTOM, READOUT_BOTTOM_TO_TOP, READOUT_LEFT_TO_RIGHT, READOUT_RIGHT_TO_LEFT } readout_dir;

@@ -6,13 +6,14 @@ from the camera at c(t) = (v t, 0, 0) with direction d meets the sphere (centre 
 radius R) while |w|^2 - (w.d)^2 <= R^2, w = C - c(t): a quadratic in t. So the
 pixel's expected value is the length of the part of its line's exposure window
 where that quadratic is <= 0, over the window's length: exact, independent of
-the renderer. Each line's window comes from the timing model as the sources
-state it (shutter.h cites them):
-- lines: [open, close] + delta r, r counted along the readout direction;
-- 3dgs-deblur (its gsplat fork): centre at mid + t_ro ((row + 0.5)/H - 1/2),
-  length close - open (NOTES.md: t = t_ro (py/H - 1/2) + ..., py = row + 0.5);
-- gsplat / 3DGUT: one instant open + (close - open) floor(y)/(H - 1), y the
-  pixel's row coordinate (floor of the centre = the row).
+the renderer. Each line's window:
+- lines: [open, close] + delta r, r counted along the readout direction (the
+  general model, refrender's own definition);
+- 3dgs-deblur and gsplat / 3DGUT: from tests/rolling_shutter_reference.py,
+  written by a helper who had not seen refrender's C nor this test, from
+  3dgs-deblur's gsplat fork 64154bb (forward.cu:335-336, 360-363), gsplat
+  90d7b4b (Cameras.cuh:486-528) and 3dgrut a37ef72 (cameraProjections.cuh:50-65);
+  its module docstring has the lines and the conventions' differences.
 A row with a fronto-parallel edge is thereby shifted by f v delta r / Z and
 box-blurred by f v T_e / Z, which the quadratic holds as a special case.
 
@@ -24,6 +25,7 @@ about 4e-3 by the normal tail). A wrong line index or delay fails by far, and
 import numpy as np
 import pytest
 
+import rolling_shutter_reference as reference
 from conftest import read_full, run
 
 W, H, FOV = 48, 32, 40.0
@@ -69,10 +71,16 @@ def expected(kind, readout="top-to-bottom", delay=0.0, t_ro=0.0):
     if kind == "lines":
         t0 = OPEN + delay * r
         return covered_time(t0, t0 + CLOSE - OPEN) / (CLOSE - OPEN)
-    if kind == "3dgs-deblur":
-        mid = 0.5 * (OPEN + CLOSE) + t_ro * ((r + 0.5) / lines - 0.5)
-        return covered_time(mid - (CLOSE - OPEN) / 2, mid + (CLOSE - OPEN) / 2) / (CLOSE - OPEN)
+    if kind == "3dgs-deblur":  # always top to bottom in its source
+        rows = np.broadcast_to(np.arange(H)[:, None], (H, W))
+        t0, t1 = reference.deblur3dgs_row_window(rows, H, OPEN, CLOSE, t_ro)
+        return covered_time(t0, t1) / (CLOSE - OPEN)
     raise ValueError(kind)
+
+
+def gsplat_instants(readout, convention=reference.gsplat_row_instant):
+    j, i = np.meshgrid(np.arange(H), np.arange(W), indexing="ij")
+    return convention(j, i, W, H, OPEN, CLOSE, readout.replace("-", "_"))
 
 
 def _no_half_line(t_ro):
@@ -144,18 +152,21 @@ def test_3dgs_deblur_preset_centres_the_readout_on_mid_exposure(tmp_path):
     assert not rows_agree(ch, expected("3dgs-deblur", t_ro=0.0))[0]
 
 
-def test_gsplat_preset_exposes_each_row_at_one_instant(tmp_path):
-    ch, _ = render(tmp_path, 'rolling="gsplat"')
-    r, _ = line_index("top-to-bottom")
-    t = OPEN + (CLOSE - OPEN) * r / (H - 1)
+@pytest.mark.parametrize("readout", ["top-to-bottom", "right-to-left"])
+def test_gsplat_preset_exposes_each_row_at_one_instant(tmp_path, readout):
+    ch, _ = render(tmp_path, f'rolling="gsplat" readout="{readout}"')
+    t = gsplat_instants(readout)
+    # 3DGUT's per-row time is gsplat's (only their global shutters differ: 0 and 0.5)
+    assert np.array_equal(t, gsplat_instants(readout, reference.dgut_row_instant))
     # an instant: the pixel is covered or not; a tiny window about t decides which
     hit = covered_time(t - 1e-9, t + 1e-9) > 1e-9
     got = ch["R"]
     assert np.all(ch["stderr.R"] == 0)  # every sample of a pixel is the same instant
     assert np.array_equal(got > 0.5, hit), np.argwhere((got > 0.5) != hit)
-    for row in (0, H // 2, H - 1):  # three rows: the first at open, the last at close
-        assert np.array_equal(got[row] > 0.5, covered_time(OPEN + (CLOSE - OPEN) * row / (H - 1) - 1e-9,
-                                                           OPEN + (CLOSE - OPEN) * row / (H - 1) + 1e-9)[row] > 1e-9)
+    # planted: the readout the other way round differs
+    other = {"top-to-bottom": "bottom-to-top", "right-to-left": "left-to-right"}[readout]
+    assert not np.array_equal(got > 0.5, covered_time(gsplat_instants(other) - 1e-9,
+                                                      gsplat_instants(other) + 1e-9) > 1e-9)
 
 
 def test_rolling_shutter_composes_with_passes_crops_and_is_in_the_identity(tmp_path):
