@@ -56,8 +56,8 @@ int scene_frame_shutter(const scene *s, int frame, shutter *out, rr_error *err)
     } else if (s->frame_rate > 0) {
         shift = frame / s->frame_rate;
     } else {
-        return rr_fail(err, "%s: the scene has no frames; add <frames rate=\"...\"/> (or at=\"trajectory\") to "
-                            "render frames", s->path);
+        return rr_fail(err, "%s: the scene has no frame rate; add <frames rate=\"...\"/> (or at=\"trajectory\") "
+                            "to render frames", s->path);
     }
     shutter f = s->shut;
     f.open += shift, f.close += shift, f.center += shift;
