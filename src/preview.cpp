@@ -1,96 +1,57 @@
-#include "preview.h"
-
-#include "atomicfile.h"
-
+/* The preview module (refrender-preview.so): OpenImageIO's encoders behind
+ * a C interface, loaded by preview.c only when a preview is asked for.
+ * OpenImageIO links some 260 shared libraries; linked into refrender it
+ * cost every run 0.4 s of symbol lookup before main (issue 32: the test
+ * suite starts refrender over a thousand times). Depends on nothing of
+ * refrender's: errors come back as text. */
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
-#include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <string>
 #include <vector>
 
-/* IEC 61966-2-1 sRGB encoding of a linear value in [0, 1]. */
-static unsigned char srgb8(float linear)
-{
-    float c = linear < 0.f ? 0.f : (linear > 1.f ? 1.f : linear);
-    float e = c <= 0.0031308f ? 12.92f * c : 1.055f * std::pow(c, 1.f / 2.4f) - 0.055f;
-    return (unsigned char)std::lround(e * 255.f);
-}
+static void say(char *why, size_t n, const std::string &what) { std::snprintf(why, n, "%s", what.c_str()); }
 
-static int fail(rr_error *err, const std::string &what)
+/* 0: OpenImageIO writes format ext ("png", no dot) through memory; 1: no
+ * writer for it; 2: a writer that cannot write to memory. */
+extern "C" int rr_preview_format(const char *ext)
 {
-    return rr_fail(err, "%s", what.c_str());
-}
-
-static std::string extension_of(const std::string &p)
-{
-    size_t slash = p.rfind('/'), dot = p.rfind('.');
-    return dot != std::string::npos && (slash == std::string::npos || dot > slash) ? p.substr(dot) : std::string();
-}
-
-extern "C" int preview_check_format(const char *path, rr_error *err)
-{
-    std::string ext = extension_of(path);
-    auto out = OIIO::ImageOutput::create(ext.empty() ? std::string("none") : ext.substr(1));
+    auto out = OIIO::ImageOutput::create(*ext ? std::string(ext) : std::string("none"));
     if (!out)
-        return fail(err, std::string(path) + ": no image format for the extension '" + ext +
-                                       "' (use e.g. .png)");
-    if (!out->supports("ioproxy"))
-        return fail(err, std::string(path) + ": OpenImageIO cannot write '" + ext +
-                                       "' through memory, which refrender needs to check every write (use .png)");
-    return 0;
+        return 1;
+    return out->supports("ioproxy") ? 0 : 2;
 }
 
-/* Encodes the image in memory: OpenImageIO's PNG writer does not report a
- * full disk (libpng ignores fwrite's result), so the bytes are written to
- * the file by write_all below, which checks every write. */
-static bool encode(const std::string &path, int w, int h, const std::vector<unsigned char> &px,
-                   std::vector<unsigned char> &bytes, std::string &why)
+/* Encodes 8-bit RGB as the format of path's name, in memory (OpenImageIO's
+ * PNG writer does not report a full disk: libpng ignores fwrite's result,
+ * so preview.c writes the bytes and checks every write). *bytes is
+ * malloc'd; 0, or -1 with the reason in why. */
+extern "C" int rr_preview_encode(const char *path, int w, int h, const unsigned char *rgb, unsigned char **bytes,
+                                 size_t *len, char *why, size_t why_size)
 {
-    auto out = OIIO::ImageOutput::create(path); /* a format preview_check_format accepted */
+    auto out = OIIO::ImageOutput::create(path); /* a format rr_preview_format accepted */
     if (!out) {
-        why = OIIO::geterror();
-        return false;
+        say(why, why_size, OIIO::geterror());
+        return -1;
     }
-    OIIO::Filesystem::IOVecOutput memory(bytes);
+    std::vector<unsigned char> memory_bytes;
+    OIIO::Filesystem::IOVecOutput memory(memory_bytes);
     OIIO::ImageSpec spec(w, h, 3, OIIO::TypeDesc::UINT8);
     spec.attribute("oiio:ColorSpace", "sRGB");
-    bool ok = out->set_ioproxy(&memory) && out->open(path, spec) &&
-              out->write_image(OIIO::TypeDesc::UINT8, px.data());
+    bool ok = out->set_ioproxy(&memory) && out->open(path, spec) && out->write_image(OIIO::TypeDesc::UINT8, rgb);
     ok = out->close() && ok;
-    if (!ok)
-        why = out->geterror();
-    return ok;
-}
-
-static bool write_all(const char *name, const std::vector<unsigned char> &bytes)
-{
-    FILE *f = std::fopen(name, "wb");
-    if (!f)
-        return false;
-    bool ok = std::fwrite(bytes.data(), 1, bytes.size(), f) == bytes.size();
-    ok = std::fflush(f) == 0 && ok;
-    return std::fclose(f) == 0 && ok;
-}
-
-extern "C" int preview_write_srgb(const char *path, int w, int h, const float *rgba, rr_error *err)
-{
-    std::string p(path), why;
-    if (preview_check_format(path, err))
+    if (!ok) {
+        say(why, why_size, out->geterror());
         return -1;
-    std::vector<unsigned char> px((size_t)w * h * 3), bytes;
-    for (size_t i = 0; i < (size_t)w * h; i++)
-        for (int c = 0; c < 3; c++)
-            px[3 * i + c] = srgb8(rgba[4 * i + c]);
-    if (!encode(p, w, h, px, bytes, why))
-        return fail(err, p + ": cannot encode preview: " + why);
-    std::vector<char> name(p.size() + 128);
-    if (atomic_create(path, extension_of(p).c_str(), name.data(), name.size(), err))
-        return -1;
-    if (!write_all(name.data(), bytes)) {
-        atomic_discard(name.data());
-        return fail(err, p + ": cannot write preview (disk full?)");
     }
-    return atomic_commit(name.data(), path, err);
+    *bytes = (unsigned char *)std::malloc(memory_bytes.size() + 1);
+    if (!*bytes) {
+        say(why, why_size, "out of memory");
+        return -1;
+    }
+    std::memcpy(*bytes, memory_bytes.data(), memory_bytes.size());
+    *len = memory_bytes.size();
+    return 0;
 }

@@ -1,5 +1,7 @@
 /* sRGB preview PNG (or any 8-bit format OpenImageIO writes, chosen by the
- * file extension). C interface to a small C++ file using OpenImageIO. */
+ * file extension), through OpenImageIO in a module (preview.cpp built as
+ * refrender-preview.so next to the executable) opened on first use, so
+ * that a run without a preview does not load OpenImageIO at all. */
 #ifndef RR_PREVIEW_H
 #define RR_PREVIEW_H
 
@@ -16,7 +18,8 @@ extern "C" {
 int preview_write_srgb(const char *path, int w, int h, const float *rgba, rr_error *err);
 
 /* 0 if OpenImageIO can write the format of path's extension; checked before
- * a render so that a bad --preview name fails at once, naming the file. */
+ * a render so that a bad --preview name (or a missing module) fails at
+ * once, naming the file. */
 int preview_check_format(const char *path, rr_error *err);
 
 #ifdef __cplusplus
