@@ -48,7 +48,7 @@ TEST_OBJS := $(TEST_SRCS:tests/%.c=$(BUILD)/tests/%.o) $(BUILD)/tests/harness.o
 BIN      := $(BUILD)/refrender
 TESTBIN  := $(BUILD)/unit_tests
 
-.PHONY: all deps demo test test-c test-py test-fuzz fuzz bench bench-time clean clean-models scenes references gallery
+.PHONY: all deps demo test test-build test-c test-py test-fuzz fuzz bench bench-time clean clean-models scenes references gallery
 all: $(BIN) $(BUILD)/refrender-bench
 
 # An object without its .d file (built before dependency tracking, or the
@@ -108,8 +108,13 @@ ifeq ($(SAN)$(DCHECKS),00)
 test:
 	$(MAKE) DCHECKS=1 test
 else
-test: test-c test-fuzz test-py
+# Everything is built first, a job a core (a fresh clone compiles refrender,
+# the unit tests and ten fuzz targets), then the tests run in order.
+test:
+	$(MAKE) -j$(TEST_JOBS) test-build
+	$(MAKE) test-c test-fuzz test-py
 endif
+test-build: $(BIN) $(TESTBIN) $(BUILD)/libfaultinject.so $(FUZZ_TARGETS:%=$(FUZZ_DIR)/fuzz_%) scenes
 
 # Fuzz targets (tests/fuzz/): libFuzzer with ASan + UBSan, built with clang
 # in build-fuzz/. `make test` replays each target's committed corpus (a
