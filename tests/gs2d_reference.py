@@ -217,7 +217,8 @@ def shade_pixel(items, model, px, py, background, near_depth="hit"):
                 continue
         k = px * T[2] - T[0]  # the plane through pixel column px, in (u, v, 1)
         l = py * T[2] - T[1]
-        line = np.cross(k, l)
+        # k x l, written out (np.cross's own products and differences, without its array overhead)
+        line = (k[1] * l[2] - k[2] * l[1], k[2] * l[0] - k[0] * l[2], k[0] * l[1] - k[1] * l[0])
         if line[2] == 0:
             continue
         u, v = line[0] / line[2], line[1] / line[2]

@@ -39,7 +39,9 @@ def hits(model, org, d):
         dc = inv_s * (R.T @ np.asarray(d, float))
         t = -np.dot(o, dc) / np.dot(dc, dc)
         dn = dc / np.linalg.norm(dc)
-        dist2 = np.dot(np.cross(dn, o), np.cross(dn, o))
+        # dn x o, written out (np.cross's own products and differences, without its array overhead)
+        c = np.array((dn[1] * o[2] - dn[2] * o[1], dn[2] * o[0] - dn[0] * o[2], dn[0] * o[1] - dn[1] * o[0]))
+        dist2 = np.dot(c, c)
         response = np.exp(-0.5 * dist2)
         alpha = min(MAX_ALPHA, model["opacity"][i] * response)
         if response > MIN_RESPONSE and alpha > MIN_ALPHA and t > 0 and dist2 < 9:
