@@ -114,7 +114,6 @@ test:
 	$(MAKE) -j$(TEST_JOBS) test-build
 	$(MAKE) test-c test-fuzz test-py
 endif
-test-build: $(BIN) $(TESTBIN) $(BUILD)/libfaultinject.so $(FUZZ_TARGETS:%=$(FUZZ_DIR)/fuzz_%) scenes
 
 # Fuzz targets (tests/fuzz/): libFuzzer with ASan + UBSan, built with clang
 # in build-fuzz/. `make test` replays each target's committed corpus (a
@@ -148,6 +147,8 @@ $(FUZZ_DIR)/fuzz_%: $(FUZZ_DIR)/fuzz_%.o $(FUZZ_DIR)/render_check.o $(FUZZ_OBJS)
 	clang++ $(FUZZ_FLAGS) -fsanitize=fuzzer $^ -o $@ $(LDLIBS)
 .SECONDARY: $(FUZZ_OBJS) $(FUZZ_TARGETS:%=$(FUZZ_DIR)/fuzz_%.o) $(FUZZ_DIR)/render_check.o
 
+# (after FUZZ_TARGETS: a rule's prerequisites are expanded where it is read)
+test-build: $(BIN) $(TESTBIN) $(BUILD)/libfaultinject.so $(FUZZ_TARGETS:%=$(FUZZ_DIR)/fuzz_%) scenes
 test-fuzz: $(FUZZ_TARGETS:%=$(FUZZ_DIR)/fuzz_%)
 	for t in $(FUZZ_TARGETS); do \
 	    $(FUZZ_DIR)/fuzz_$$t -runs=0 -rss_limit_mb=8192 tests/fuzz/corpus/$$t 2>$(FUZZ_DIR)/replay_$$t.log \
