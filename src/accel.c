@@ -550,18 +550,50 @@ void accel_gaussian_bounds_cb(const struct RTCBoundsFunctionArguments *args)
     r->upper_z = nextafterf((float)b.hi.z, INFINITY);
 }
 
-/* Every Gaussian the ray passes is evaluated and its hit kept: the ray
- * is never shortened, so the traversal finds them all. */
+static void evaluate(const gather_context *c, unsigned prim)
+{
+    gaussian_hit h;
+    if (gaussian_hit_any(&c->o->gaussians, prim, c->o->order, c->ray, &h)) {
+        h.obj = c->obj;
+        gaussian_hits_add(c->out, &h);
+    }
+}
+
+/* Every Gaussian the ray passes is listed (evaluate_candidates evaluates
+ * them after the traversal): the ray is never shortened, so the traversal
+ * finds them all. Listing first lets their loads be prefetched ahead. */
 void accel_gaussian_gather(const struct RTCIntersectFunctionNArguments *args)
 {
     if (!args->valid[0])
         return;
     gather_context *c = (gather_context *)args->context;
-    const gaussian_model *m = &c->o->gaussians;
-    gaussian_hit h;
-    if (gaussian_hit_any(m, args->primID, c->o->order, c->ray, &h)) {
-        h.obj = c->obj;
-        gaussian_hits_add(c->out, &h);
+    gaussian_hits *h = c->out;
+    if (h->candidates_count == h->candidates_cap) {
+        size_t cap = h->candidates_cap ? 2 * h->candidates_cap : 1024;
+        unsigned *grown = realloc(h->candidates, cap * sizeof *grown);
+        if (!grown) { /* no room to list it: evaluated at once, as listed ones are */
+            evaluate(c, args->primID);
+            return;
+        }
+        h->candidates = grown, h->candidates_cap = cap;
+    }
+    gaussian_prefetch(&c->o->gaussians, args->primID);
+    h->candidates[h->candidates_count++] = args->primID;
+}
+
+/* The listed candidates in the traversal's order (so the hits are added as
+ * when each was evaluated in its callback), each model access prefetched
+ * a few candidates ahead. */
+enum { PREFETCH_AHEAD = 8 };
+static void evaluate_candidates(const gather_context *c)
+{
+    gaussian_hits *h = c->out;
+    size_t n = h->candidates_count;
+    h->candidates_count = 0;
+    for (size_t k = 0; k < n; k++) {
+        if (k + PREFETCH_AHEAD < n)
+            gaussian_prefetch(&c->o->gaussians, h->candidates[k + PREFETCH_AHEAD]);
+        evaluate(c, h->candidates[k]);
     }
 }
 
@@ -611,7 +643,9 @@ static void gather_window(const accel *a, gaussian_ray *r, double t0, double t1,
     double pad = r->pad + 1e-6 * t1;
     init_rayhit1(&rh, r->org, r->dir, nextafterf((float)(t1 + pad), INFINITY));
     rh.ray.tnear = fmaxf(0.0f, nextafterf((float)(t0 - pad), -INFINITY));
+    out->candidates_count = 0;
     rtcIntersect1(a->object_scenes[r->obj], &c.rtc, &rh);
+    evaluate_candidates(&c);
 }
 
 /* Windows start at 1/64 of the stretch the objects span and double while

@@ -26,6 +26,7 @@ void gaussian_hits_free(gaussian_hits *h)
     free(h->hits);
     free(h->order);
     free(h->rays);
+    free(h->candidates);
     memset(h, 0, sizeof *h);
 }
 
@@ -136,6 +137,8 @@ static void blend_one(gaussian_blend *b, const gaussian_hit *g, const gaussian_m
     b->composited++;
 }
 
+enum { SH_PREFETCH_AHEAD = 4 };
+
 void gaussian_blend_hits(gaussian_blend *b, gaussian_hits *h, const gaussian_model *const *models,
                          double final_below)
 {
@@ -147,7 +150,15 @@ void gaussian_blend_hits(gaussian_blend *b, gaussian_hits *h, const gaussian_mod
         return;
     }
     size_t k = 0;
+    for (size_t p = 0; p < SH_PREFETCH_AHEAD && p < h->count; p++) {
+        const gaussian_hit *g = &h->hits[(uint32_t)h->order[p]];
+        gaussian_prefetch_sh(models[g->obj], g->prim);
+    }
     for (; k < h->count && !b->done; k++) {
+        if (k + SH_PREFETCH_AHEAD < h->count) { /* the colour of a hit a few ahead (gaussian_prefetch_sh) */
+            const gaussian_hit *ahead = &h->hits[(uint32_t)h->order[k + SH_PREFETCH_AHEAD]];
+            gaussian_prefetch_sh(models[ahead->obj], ahead->prim);
+        }
         const gaussian_hit *g = &h->hits[(uint32_t)h->order[k]];
         if (!(g->key < final_below))
             break;

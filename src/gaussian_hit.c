@@ -452,6 +452,23 @@ double gaussian_view_reach(const gaussian_model *m, size_t i, const gaussian_vie
     }
 }
 
+void gaussian_prefetch(const gaussian_model *m, size_t i)
+{
+    __builtin_prefetch(&m->mean[3 * i]);
+    __builtin_prefetch(&m->scale[3 * i]);
+    __builtin_prefetch(&m->rotation[4 * i]);
+    __builtin_prefetch(&m->opacity[i]);
+}
+
+void gaussian_prefetch_sh(const gaussian_model *m, size_t i)
+{
+    const char *sh = (const char *)&m->sh[(size_t)3 * m->sh_coeffs * i];
+    size_t bytes = (size_t)3 * m->sh_coeffs * sizeof *m->sh;
+    for (size_t b = 0; b < bytes; b += 64)
+        __builtin_prefetch(sh + b);
+    __builtin_prefetch(sh + bytes - 1);
+}
+
 int gaussian_hit_any(const gaussian_model *m, size_t i, gaussian_order order, const gaussian_ray *r, gaussian_hit *h)
 {
     if (m->kind == GAUSSIAN_2D)

@@ -81,6 +81,8 @@ typedef struct {
     size_t order_cap;
     struct gaussian_ray_s *rays; /* accel's per-object rays of one sample */
     size_t rays_cap;
+    unsigned *candidates; /* a traversal's Gaussians, evaluated after it (accel.c) */
+    size_t candidates_count, candidates_cap;
 } gaussian_hits;
 
 void gaussian_hits_add(gaussian_hits *h, const gaussian_hit *hit);
@@ -118,6 +120,16 @@ double gaussian_key_lead(const gaussian_model *m, gaussian_order order, double s
  * the filter wins is placed at the centre's depth, the bounds hold the ray
  * near a point of the filter's circle. */
 double gaussian_traversal_pad(const gaussian_model *m, double s, double depth_per_t);
+
+/* Starts loading what evaluating Gaussian i reads (its mean, scale,
+ * rotation and opacity: four arrays), and what compositing it reads (its
+ * SH coefficients). A model of millions is far larger than the caches: a
+ * hit's evaluation waited on those loads one after another (issue 31's
+ * profile: most of gaussian_hit_2d's time), and evaluating a traversal's
+ * candidates a few behind their prefetches overlaps the waits. No value
+ * changes. */
+void gaussian_prefetch(const gaussian_model *m, size_t i);
+void gaussian_prefetch_sh(const gaussian_model *m, size_t i);
 
 /* Gaussian i's hit on the ray under m's formation: 1 and *h filled (not
  * obj), or 0. The three rules it dispatches to are below. */
