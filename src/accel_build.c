@@ -188,27 +188,11 @@ static int check_key_times(const scene *s, const animation *anim, const char *wh
     return 0;
 }
 
-/* A trajectory file holds poses over its own times only: a shutter
- * reaching past them would see the camera held still there. */
-static int check_trajectory_times(const scene *s, double open, double close, rr_error *err)
-{
-    const trajectory *tr = s->camera_motion.path;
-    double t0, t1;
-    if (!tr)
-        return 0;
-    trajectory_domain(tr, &t0, &t1);
-    if (open < t0 || close > t1)
-        return rr_fail(err, "%s: the shutter [%.17g, %.17g] reaches beyond the camera trajectory %s, whose %s "
-                            "interpolation covers [%.17g, %.17g]", s->path, open, close, tr->name,
-                       trajectory_interp_name(tr->interp), t0, t1);
-    return 0;
-}
-
 static int check_reach(const accel *a, double open, double close, rr_error *err)
 {
     const scene *s = a->sc;
     if (check_key_times(s, &s->camera_motion, "the camera", open, close, err) ||
-        check_trajectory_times(s, open, close, err))
+        scene_check_trajectory_times(s, open, close, err))
         return -1;
     for (int i = 0; i < s->nobjects; i++) {
         char who[96];

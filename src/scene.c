@@ -67,6 +67,20 @@ int scene_frame_shutter(const scene *s, int frame, shutter *out, rr_error *err)
     return 0;
 }
 
+int scene_check_trajectory_times(const scene *s, double open, double close, rr_error *err)
+{
+    const trajectory *tr = s->camera_motion.path;
+    double t0, t1;
+    if (!tr)
+        return 0;
+    trajectory_domain(tr, &t0, &t1);
+    if (open < t0 || close > t1)
+        return rr_fail(err, "%s: the shutter [%.17g, %.17g] reaches beyond the camera trajectory %s, whose %s "
+                            "interpolation covers [%.17g, %.17g]", s->path, open, close, tr->name,
+                       trajectory_interp_name(tr->interp), t0, t1);
+    return 0;
+}
+
 void scene_free(scene *s)
 {
     for (int i = 0; i < s->nobjects; i++) {

@@ -82,7 +82,7 @@ typedef struct {
     shutter shut;            /* as the file gives it: frame 0's with <frames> (scene_frame_shutter) */
     double frame_rate;       /* <frames rate>: frame N starts at time N / rate; 0: no frames */
     int frames_at_poses;     /* <frames at="trajectory">: frame N's exposure is centred on the camera
-                                trajectory's pose N (issue 30); frame 0 is then not s->shut */
+                                trajectory's pose N (issue 30) */
     vec3 background, ambient;
     double epsilon, kernel_sigma;
     int time_factor;
@@ -106,9 +106,14 @@ void scene_camera_view(const scene *s, double t, camera_view *v);
 /* Frame N's shutter: s->shut (frame 0's) shifted by N / frame_rate; with
  * frames_at_poses, s->shut shifted so that its middle is the camera
  * trajectory's pose N's time. Returns -1 if the scene has no frames or no
- * pose N. Callers render s->shut itself only when neither is set. */
+ * pose N. Without --frame or --frames, callers render s->shut itself. */
 int scene_frame_shutter(const scene *s, int frame, shutter *out, rr_error *err);
 void scene_free(scene *s);
+
+/* A trajectory file holds poses over its own times only: -1 (err names
+ * the file, the times and the interpolation's domain) if [open, close]
+ * reaches past them, where the camera would be held still. */
+int scene_check_trajectory_times(const scene *s, double open, double close, rr_error *err);
 
 /* Records an input file's path; -1 when out of memory. */
 int scene_add_input(scene *s, const char *path);

@@ -438,6 +438,8 @@ static int parse_frames(xml_ctx *c, xmlNodePtr n, scene *s)
     char at[16] = "";
     if (xml_check_attributes(c, n, ok) || xml_check_no_text(c, n) || xml_attr_text(c, n, "at", at, sizeof at) < 0)
         return -1;
+    if (s->frame_rate > 0 || s->frames_at_poses)
+        return xml_fail(c, n, "a second <frames>: a scene has one");
     if (*at) {
         if (strcmp(at, "trajectory"))
             return xml_fail(c, n, "<frames at=\"%s\">: the frames can be at=\"trajectory\" (the camera's poses)", at);

@@ -191,7 +191,7 @@ static int tum_fields(const char *line, const char *end, const char *name, long 
 static int tum_knot(const double v[8], const char *name, long lineno, trajectory_knot *k, rr_error *err)
 {
     k->t = v[0];
-    k->p = v3(v[1], v[2], v[3]);
+    k->p = v3(v[1] + 0.0, v[2] + 0.0, v[3] + 0.0); /* +0 for -0, as export writes them (export_cmd.c) */
     double q[4] = {v[7], v[4], v[5], v[6]};
     double n = sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
     if (!(n > 0) || !isfinite(n))
@@ -202,7 +202,7 @@ static int tum_knot(const double v[8], const char *name, long lineno, trajectory
                        lineno, n);
     double s = fabs(n - 1.0) > 1e-14 ? 1.0 / n : 1.0;
     for (int i = 0; i < 4; i++)
-        k->q[i] = q[i] * s;
+        k->q[i] = q[i] * s + 0.0;
     for (int i = 1; i <= 3; i++) /* the renderer traces no farther (accel.h), and Log/Exp stay finite */
         if (!(fabs(v[i]) <= TRAJECTORY_MAX_ABS))
             return rr_fail(err, "%s:%ld: field '%s' is %g, beyond the %g a position may reach", name, lineno,
@@ -608,6 +608,8 @@ void trajectory_write_tum_line(FILE *f, double t, vec3 p, const double q[4], int
 {
     double w[4];
     trajectory_quat_to_axes(q, w, opengl_axes);
+    for (int i = 0; i < 4; i++) /* +0 for -0: the reader keeps none (tum_knot) */
+        w[i] += 0.0;
     fprintf(f, "%.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g\n", t, p.x, p.y, p.z, w[1], w[2], w[3], w[0]);
 }
 

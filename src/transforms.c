@@ -92,13 +92,23 @@ static int read_camera(const char *name, json_object *root, json_object *frames,
     return 0;
 }
 
+/* A rotation matrix's quaternion, with +0 for -0: a zero's sign is no
+ * rotation's, and a writer's arithmetic (export composes the camera's rest
+ * pose) may flip it. */
+static void matrix_to_quat(const double r[3][3], double q[4])
+{
+    trajectory_matrix_quat(r, q);
+    for (int i = 0; i < 4; i++)
+        q[i] += 0.0;
+}
+
 /* The matrix transforms_write writes for q, read back as a quaternion. */
 static void matrix_round_trip(const double *q, double *out, void *ctx)
 {
     (void)ctx;
     double r[3][3];
     trajectory_quat_matrix(q, r);
-    trajectory_matrix_quat(r, out);
+    matrix_to_quat(r, out);
 }
 
 /* A frame's transform_matrix: 4x4 (or 3x4), its last row 0 0 0 1, its
@@ -131,10 +141,10 @@ static int read_pose(const char *name, size_t i, json_object *frame, trajectory_
     if (!(off <= 1e-6) || !(det > 0))
         return rr_fail(err, "%s: frames[%zu]: 'transform_matrix' rotation is not one (columns orthonormal within 1e-6, "
                             "determinant 1; a scaled world is not a camera pose)", name, i);
-    trajectory_matrix_quat(r, k->q);
+    matrix_to_quat(r, k->q);
     /* the quaternion its written matrix reads back as (issue 30: read, write, read back bit for bit) */
     rr_round_trip_representative(k->q, 4, matrix_round_trip, NULL);
-    k->p = v3(m[0][3], m[1][3], m[2][3]);
+    k->p = v3(m[0][3] + 0.0, m[1][3] + 0.0, m[2][3] + 0.0); /* +0 for -0 (matrix_to_quat) */
     if (!(fabs(k->p.x) <= TRAJECTORY_MAX_ABS && fabs(k->p.y) <= TRAJECTORY_MAX_ABS &&
           fabs(k->p.z) <= TRAJECTORY_MAX_ABS))
         return rr_fail(err, "%s: frames[%zu]: the position is beyond the %g a position may reach", name, i,
@@ -230,6 +240,8 @@ void transforms_write(FILE *f, const transforms_camera *cam, const double *t, co
         double r[3][3], gl[4];
         trajectory_quat_to_axes(q[i], gl, 1);
         trajectory_quat_matrix(gl, r);
+        for (int a = 0; a < 9; a++) /* +0 for -0: the reader keeps none (matrix_to_quat) */
+            r[a / 3][a % 3] += 0.0;
         vec3 pi = p[i];
         fprintf(f, "%s\n    {\"file_path\": \"frame_%05d\", \"time\": %.17g, \"transform_matrix\": [[%.17g, %.17g, "
                    "%.17g, %.17g], [%.17g, %.17g, %.17g, %.17g], [%.17g, %.17g, %.17g, %.17g], [0, 0, 0, 1]]}",

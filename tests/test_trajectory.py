@@ -193,13 +193,14 @@ def test_a_bad_tum_line_is_named_with_the_scene_line(tmp_path):
 TW, TH, FX, FY, CX, CY = 64, 48, 70.0, 74.0, 40.5, 19.0  # the principal point 8.5 px right, 5 px up of centre
 
 
-def transforms_scene(tmp_path, obj, extra=""):
+def transforms_scene(tmp_path, obj, extra="", poses=None):
     c2w_gl = np.eye(4)
     c2w_gl[:3, :3] = Rotation.from_rotvec([0.05, -0.1, 0.02]).as_matrix()
     c2w_gl[:3, 3] = [0.1, -0.05, 0.2]
+    poses = poses if poses is not None else [c2w_gl, c2w_gl]
     doc = {"camera_model": "OPENCV", "fl_x": FX, "fl_y": FY, "cx": CX, "cy": CY, "w": TW, "h": TH, "k1": 0,
-           "k2": 0, "p1": 0, "p2": 0, "frames": [{"file_path": "a.png", "transform_matrix": c2w_gl.tolist()},
-                                                 {"file_path": "b.png", "transform_matrix": c2w_gl.tolist()}]}
+           "k2": 0, "p1": 0, "p2": 0, "frames": [{"file_path": f"{i}.png", "transform_matrix": m.tolist()}
+                                                 for i, m in enumerate(poses)]}
     (tmp_path / "transforms.json").write_text(json.dumps(doc))
     s = tmp_path / "s.xml"
     s.write_text(f'<scene><camera><trajectory file="transforms.json"/></camera>{extra}'
@@ -250,8 +251,15 @@ def test_a_transforms_json_camera_projects_with_its_principal_point_everywhere(t
 
 def test_a_transforms_json_round_trips_through_export(tmp_path):
     """export --transforms writes the camera and poses back; read again and written again, the file is the same
-    byte for byte (issue 30: read, write, read back bit-identically), and its TUM path too."""
-    s, _ = transforms_scene(tmp_path, '<object><sphere radius="1"/></object>', '<shutter open="0" close="1"/>')
+    byte for byte (issue 30: read, write, read back bit-identically), and its TUM path too. The identity
+    and a quarter turn (exact zeros: a writer's arithmetic must not flip their signs) among the poses."""
+    quarter = np.eye(4)
+    quarter[:3, :3] = [[1, 0, 0], [0, 0, -1], [0, 1, 0]]
+    general = np.eye(4)
+    general[:3, :3] = Rotation.from_rotvec([0.5, -0.9, 0.2]).as_matrix()
+    general[:3, 3] = [0.1, -0.05, 0.2]
+    s, _ = transforms_scene(tmp_path, '<object><sphere radius="1"/></object>', '<shutter open="0" close="2"/>',
+                            poses=[np.eye(4), quarter, general])
     proc = run(["export", s, "-o", tmp_path / "e.json", "--tum", tmp_path / "a.tum", "--transforms",
                 tmp_path / "back.json"])
     assert proc.returncode == 0, proc.stderr
@@ -259,15 +267,23 @@ def test_a_transforms_json_round_trips_through_export(tmp_path):
     # the camera keeps fields of view (so that --res keeps the view): the first read moves a focal length by ulps
     assert np.allclose([back[k] for k in ("fl_x", "fl_y", "cx", "cy")], [FX, FY, CX, CY], rtol=1e-12, atol=0)
     assert (back["w"], back["h"]) == (TW, TH)
-    s2 = tmp_path / "s2.xml"
-    s2.write_text('<scene><camera><trajectory file="back.json"/></camera><object><sphere radius="1"/></object>'
-                  '<shutter open="0" close="1"/></scene>')
-    proc = run(["export", s2, "-o", tmp_path / "e2.json", "--tum", tmp_path / "b.tum", "--transforms",
-                tmp_path / "back2.json"])
-    assert proc.returncode == 0, proc.stderr
-    assert (tmp_path / "back2.json").read_bytes() == (tmp_path / "back.json").read_bytes()
-    a, b = (tmp_path / "a.tum").read_text().splitlines(), (tmp_path / "b.tum").read_text().splitlines()
-    assert [x for x in a if not x.startswith("#")] == [x for x in b if not x.startswith("#")]
+    # export writes poses at its times, between the knots too: read back, those are knots, and from
+    # then on reading and writing are exact: the second and third exports are the same file, and the
+    # poses read from the first and the second export are the same bits (their TUM exports agree)
+    for k in (1, 2):
+        src = "back.json" if k == 1 else f"back{k}.json"
+        (tmp_path / f"s{k}.xml").write_text(f'<scene><camera><trajectory file="{src}"/></camera><object><sphere '
+                                            'radius="1"/></object><shutter open="0" close="2"/></scene>')
+        proc = run(["export", tmp_path / f"s{k}.xml", "-o", tmp_path / f"e{k}.json", "--tum", tmp_path / f"r{k}.tum",
+                    "--transforms", tmp_path / f"back{k + 1}.json"])
+        assert proc.returncode == 0, proc.stderr
+    assert (tmp_path / "back3.json").read_bytes() == (tmp_path / "back2.json").read_bytes()
+    r1, r2 = ([x for x in (tmp_path / f"r{k}.tum").read_text().splitlines() if not x.startswith("#")] for k in (1, 2))
+    assert r1 == r2 and len(r1) == 10 and not any(" -0 " in f" {x} " for x in r1)
+    # and the identity and the quarter turn came through with their exact zeros, unsigned
+    first = json.loads((tmp_path / "back2.json").read_text())["frames"][0]["transform_matrix"]
+    assert first == [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]
+    assert "-0," not in (tmp_path / "back2.json").read_text().replace(" ", "")
 
 
 def test_transforms_json_camera_mistakes_are_named(tmp_path):
@@ -340,8 +356,16 @@ def test_frames_at_the_trajectory_centre_each_exposure_on_its_pose(tmp_path):
     assert proc.returncode == 0, proc.stderr
     header = read_full(out)[1]
     assert header["refrender:frame"] == 2 and "refrender:frameRate" not in header
-    # frame 0 is pose 0's: centred on 0, it reaches before the first pose and is refused by name
-    proc = run([s, "--spp", 1, "--tspp", 2, "-o", out, "--quiet"])
+    assert [float(v) for v in header["refrender:shutter"].split()] == pytest.approx([0.95, 1.05], abs=1e-15)
+    # without --frame the shutter as written (or as --time sets it), as with frames at a rate
+    proc = run([s, "--time", 1.7, "--spp", 1, "-o", out, "--quiet"])
+    assert proc.returncode == 0 and read_full(out)[1]["refrender:shutter"].split() == ["1.7", "1.7"], proc.stderr
+    # frame 0, centred on pose 0, reaches before it: a sequence is refused before any frame is written,
+    # and export refuses it as render does
+    proc = run([s, "--frames", "0-3", "--spp", 1, "--tspp", 2, "-o", tmp_path / "f%d.exr", "--quiet"])
+    assert proc.returncode != 0 and "reaches beyond the camera trajectory" in proc.stderr
+    assert not list(tmp_path.glob("f*.exr"))
+    proc = run(["export", s, "-o", tmp_path / "e0.json", "--frames", "0-1"])
     assert proc.returncode != 0 and "reaches beyond the camera trajectory" in proc.stderr
     proc = run([s, "--frame", 4, "-o", out, "--quiet"])
     assert proc.returncode != 0 and "frame 4: the camera's trajectory has 4 poses (frames 0 to 3)" in proc.stderr
@@ -350,6 +374,7 @@ def test_frames_at_the_trajectory_centre_each_exposure_on_its_pose(tmp_path):
 @pytest.mark.parametrize("frames,camera,message", [
     ('<frames at="poses"/>', None, '<frames at="poses">: the frames can be at="trajectory"'),
     ('<frames at="trajectory" rate="24"/>', None, "'rate' or at=\"trajectory\", not both"),
+    ('<frames rate="24"/><frames at="trajectory"/>', None, "a second <frames>: a scene has one"),
     ('<frames at="trajectory"/>', '<camera width="16" height="16" fov="40"/>', 'f.xml:1: <frames at="trajectory"> '
      'needs a <camera> with a <trajectory>'),
 ])

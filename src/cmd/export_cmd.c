@@ -141,7 +141,11 @@ static int matrix_finite(double m[4][4])
  * wrote "inf" into the file): such a transform is refused, naming it. */
 static int check_frame(const scene *s, const double *times, int n, rr_error *err)
 {
-    double m[4][4];
+    double m[4][4], first = INFINITY, last = -INFINITY;
+    for (int i = 0; i < n; i++)
+        first = fmin(first, times[i]), last = fmax(last, times[i]);
+    if (n && scene_check_trajectory_times(s, first, last, err)) /* as a render refuses them */
+        return -1;
     for (int i = 0; i < n; i++) {
         world_to_camera(s, times[i], m);
         if (!matrix_finite(m))
@@ -316,7 +320,7 @@ static int write_json(FILE *f, const scene *s, const export_options *o, rr_error
     fputs("  \"frames\": [\n", f);
     for (long long fr = o->first; fr <= o->last; fr++) {
         shutter sh = s->shut;
-        if ((o->frames || s->frames_at_poses) && scene_frame_shutter(s, (int)fr, &sh, err))
+        if (o->frames && scene_frame_shutter(s, (int)fr, &sh, err))
             return -1;
         if (fr > o->first)
             fputs(",\n", f);
@@ -344,8 +348,10 @@ static void camera_pose(const scene *s, double t, vec3 *p, double q[4])
         rest[0][i] = axes[i].x, rest[1][i] = axes[i].y, rest[2][i] = axes[i].z;
     trajectory_matrix_quat(rest, q0);
     xform m = animation_pose_at(&s->camera_motion, t, qm);
-    *p = xform_point(&m, c->position);
+    *p = v3_add(xform_point(&m, c->position), v3(0, 0, 0)); /* +0 for -0, as the readers keep them */
     trajectory_quat_mul(qm, q0, q);
+    for (int i = 0; i < 4; i++)
+        q[i] += 0.0;
 }
 
 /* At most this many camera poses in a --tum or --transforms file. */
@@ -367,7 +373,7 @@ static double *path_times(const export_job *j, int *count, rr_error *err)
     for (long long fr = j->o->first; fr <= j->o->last; fr++) {
         shutter sh = j->s->shut;
         double times[1026];
-        if ((j->o->frames || j->s->frames_at_poses) && scene_frame_shutter(j->s, (int)fr, &sh, err)) {
+        if (j->o->frames && scene_frame_shutter(j->s, (int)fr, &sh, err)) {
             free(out);
             return NULL;
         }

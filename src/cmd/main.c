@@ -574,7 +574,7 @@ static int render_one(const scene *s, const shutter *shut, long long frame, acce
             report_unresolved(o, &img, &run.rs.shut, &run.attrs);
         if (o->frames && s->frame_rate > 0)
             attrs_set(&run.attrs, "refrender:frameRate", "%.17g", s->frame_rate);
-        if (o->frames || s->frames_at_poses)
+        if (o->frames)
             attrs_set(&run.attrs, "refrender:frame", "%lld", frame);
         rc = o->passes ? output_write_state(output, &img, run.rs.batch_begin,
                                             run.rs.batch_begin + run.rs.batches, &run.attrs, err)
@@ -630,12 +630,30 @@ static int check_frame_outputs(const scene *s, const render_options *o, rr_error
     return 0;
 }
 
-/* Frame f's shutter; without <frames> the scene's own (frame 0 of frames
- * at a trajectory's poses is not: it is centred on pose 0). */
+/* Frame f's shutter; without --frame or --frames the scene's own (as
+ * written, or as --time/--shutter set it), with frames at a rate or at a
+ * trajectory's poses alike. */
 static int frame_shutter(const scene *s, const render_options *o, long long f, shutter *out, rr_error *err)
 {
     *out = s->shut;
-    return o->frames || s->frames_at_poses ? scene_frame_shutter(s, (int)f, out, err) : 0;
+    return o->frames ? scene_frame_shutter(s, (int)f, out, err) : 0;
+}
+
+/* Every frame's shutter is one the scene has, within its camera
+ * trajectory, before the first frame is rendered (a sequence must not stop
+ * after writing some frames). */
+static int check_frame_shutters(const scene *s, const render_options *o, rr_error *err)
+{
+    for (long long f = o->first_frame; f <= o->last_frame; f++) {
+        shutter shut;
+        double t0, t1;
+        if (frame_shutter(s, o, f, &shut, err))
+            return -1;
+        shutter_span(&shut, s->cam.width, s->cam.height, &t0, &t1);
+        if (scene_check_trajectory_times(s, t0, t1, err))
+            return -1;
+    }
+    return 0;
 }
 
 /* One frame or a sequence, sharing the loaded models and their BVHs; only
@@ -644,7 +662,8 @@ static int render_and_write(const scene *s, const render_options *o, const char 
 {
     accel *acc;
     shutter shut;
-    if (check_frame_outputs(s, o, err) || frame_shutter(s, o, o->first_frame, &shut, err))
+    if (check_frame_outputs(s, o, err) || check_frame_shutters(s, o, err) ||
+        frame_shutter(s, o, o->first_frame, &shut, err))
         return -1;
     double t0, t1; /* every line's exposure (a rolling shutter's reaches past [open, close]) */
     shutter_span(&shut, s->cam.width, s->cam.height, &t0, &t1);
