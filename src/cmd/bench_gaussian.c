@@ -382,6 +382,113 @@ static int gs_row(const gs_case *c, FILE *csv)
     return 0;
 }
 
+/* ---- benchmark scale (issue 31) ------------------------------------------ */
+
+/* Three concentric 2DGS spheres (radii 1, 0.75, 0.5: layers of depth
+ * behind each other, each ray meets the front one's both sides and the
+ * ones inside where the front lets light through) of `per_layer`
+ * Gaussians each, SH degree 3, the bench's camera shake, at width x height. */
+typedef struct {
+    size_t per_layer;
+    int width, height, tspp, threads;
+} scale_case;
+
+typedef struct {
+    double build_ms, seconds, mrays, model_bytes, embree_bytes, peak_mb;
+} scale_result;
+
+static void scale_scene(const scale_case *c, scene *s)
+{
+    static const double radii[3] = {1.0, 0.75, 0.5};
+    scene_init(s);
+    s->cam.position = v3(0, 0, 3.5);
+    s->cam.width = c->width, s->cam.height = c->height;
+    s->cam.fov_degrees = 40;
+    camera_prepare(&s->cam, NULL);
+    s->camera_motion.velocity = v3(0.3, 0.1, 0);
+    s->objects = calloc(3, sizeof *s->objects);
+    rr_error err;
+    for (int k = 0; k < 3; k++) {
+        shape_params p;
+        shape_params_default(&p);
+        p.count = c->per_layer, p.radius = radii[k];
+        surfel *sf;
+        size_t n;
+        scene_object *o = &s->objects[k];
+        o->kind = OBJECT_GAUSSIANS;
+        snprintf(o->name, sizeof o->name, "layer%d", k);
+        animation_init_static(&o->anim);
+        gaussian_model_init(&o->gaussians);
+        if (shape_generate(&p, &sf, &n, &err) || gaussian_from_surfels(sf, n, GAUSSIAN_2D, 3, &o->gaussians, &err)) {
+            fprintf(stderr, "bench: %s\n", err.msg);
+            exit(1);
+        }
+        free(sf);
+        s->nobjects = k + 1;
+    }
+}
+
+static void scale_run(const void *in, void *out)
+{
+    const scale_case *c = in;
+    scale_result *r = out;
+    scene s;
+    scale_scene(c, &s);
+    size_t count = 0;
+    double model = 0;
+    for (int k = 0; k < s.nobjects; k++)
+        count += s.objects[k].gaussians.count,
+            model += model_bytes_per_gaussian(&s.objects[k].gaussians) * (double)s.objects[k].gaussians.count;
+    render_settings rs = {{SAMPLER_THESIS, 1, 1, c->tspp, 4}, s.shut, c->threads, 0, 1, 1, 0, 0, 0, 0, 0, 0,
+                          PIXEL_FILTER_POINT, BLUR_SPACE_MODEL};
+    accel_settings set = {s.shut.open, s.shut.close, s.epsilon, s.kernel_sigma, 1};
+    accel *a;
+    rr_error err;
+    double t0 = rr_seconds();
+    if (accel_build(&s, &set, &a, &err)) {
+        fprintf(stderr, "bench: %s\n", err.msg);
+        exit(1);
+    }
+    r->build_ms = 1e3 * (rr_seconds() - t0);
+    r->embree_bytes = (double)accel_embree_peak_bytes(a) / (double)count;
+    r->model_bytes = model / (double)count;
+    image img;
+    volatile sig_atomic_t never = 0;
+    image_alloc(&img, s.cam.width, s.cam.height);
+    if (render_image(&s, a, &rs, &img, NULL, &never, &err)) {
+        fprintf(stderr, "bench: %s\n", err.msg);
+        exit(1);
+    }
+    r->seconds = img.seconds, r->mrays = (double)img.rays / img.seconds * 1e-6;
+    image_free(&img);
+    struct rusage ru;
+    getrusage(RUSAGE_SELF, &ru);
+    r->peak_mb = ru.ru_maxrss / 1024.0;
+    accel_free(a);
+    scene_free(&s);
+}
+
+int bench_gaussian_scale(int quick, int threads, FILE *csv)
+{
+    scale_case c = {quick ? 20000 : 1000000, quick ? 150 : 600, quick ? 100 : 400, quick ? 8 : 64, threads};
+    scale_result r;
+    printf("\nscale: a benchmark-scale view: three concentric 2DGS spheres (radii 1, 0.75, 0.5) of %zu Gaussians\n"
+           "each (%zu in all, SH degree 3) under the same camera shake, %dx%d, --pixel-filter point, 1 x %d\n"
+           "samples a pixel, %d threads, one run.\n\n"
+           "| Gaussians | build ms | seconds per view | Mrays/s | model B/G | Embree peak B/G | peak RSS MB |\n"
+           "| --- | --- | --- | --- | --- | --- | --- |\n", c.per_layer, 3 * c.per_layer, c.width, c.height, c.tspp,
+           threads);
+    fflush(stdout);
+    if (bench_in_child(scale_run, &c, &r, sizeof r))
+        return -1;
+    printf("| %zu | %.0f | %.1f | %.3f | %.0f | %.0f | %.0f |\n", 3 * c.per_layer, r.build_ms, r.seconds, r.mrays,
+           r.model_bytes, r.embree_bytes, r.peak_mb);
+    fprintf(csv, "gaussians-scale,%zu,camera,0,2dgs,%d,%d,%dx%d,%.1f,0,%.4f,0,0,0,0,%.1f,%.1f,0,0\n", 3 * c.per_layer,
+            c.tspp, threads, c.width, c.height, r.build_ms, r.mrays, r.peak_mb, r.model_bytes + r.embree_bytes);
+    fflush(stdout);
+    return 0;
+}
+
 int bench_gaussians(int quick, int threads, FILE *csv)
 {
     gs_case c = {quick ? 20000 : 1000000, quick ? 64 : 256, threads, quick ? 1 : 3, GAUSSIAN_2D};
@@ -395,5 +502,6 @@ int bench_gaussians(int quick, int threads, FILE *csv)
     int failed = gs_row(&c, csv);
     c.kind = GAUSSIAN_3D;
     failed |= gs_row(&c, csv);
-    return gs_load_row(c.count) || failed ? -1 : 0;
+    failed |= gs_load_row(c.count);
+    return bench_gaussian_scale(quick, threads, csv) || failed ? -1 : 0;
 }

@@ -15,4 +15,8 @@ int bench_in_child(void (*run)(const void *in, void *out), const void *in, void 
  * its table; quick: a small model. Returns 0, or -1 if the case failed. */
 int bench_gaussians(int quick, int threads, FILE *csv);
 
+/* The benchmark-scale row alone (part of bench_gaussians; series
+ * "scale"): seconds per 600x400 view of 3M layered Gaussians. */
+int bench_gaussian_scale(int quick, int threads, FILE *csv);
+
 #endif
