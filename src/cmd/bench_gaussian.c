@@ -237,6 +237,21 @@ static double median3(double *v, int n)
     return v[n / 2];
 }
 
+/* The scene's acceleration structure over its shutter; exits on failure. */
+static accel *build_timed(const scene *s, double *build_ms)
+{
+    accel_settings set = {s->shut.open, s->shut.close, s->epsilon, s->kernel_sigma, 1};
+    accel *a;
+    rr_error err;
+    double t0 = rr_seconds();
+    if (accel_build(s, &set, &a, &err)) {
+        fprintf(stderr, "bench: %s\n", err.msg);
+        exit(1);
+    }
+    *build_ms = 1e3 * (rr_seconds() - t0);
+    return a;
+}
+
 static void gs_run(const gs_case *c, gs_result *r)
 {
     scene s;
@@ -245,15 +260,7 @@ static void gs_run(const gs_case *c, gs_result *r)
     r->model_bytes = model_bytes_per_gaussian(m);
     render_settings rs = {{SAMPLER_THESIS, 1, 2, 4, 4}, s.shut, c->threads, 0, 1, 1, 0, 0, 0, 0, 0, 0,
                           PIXEL_FILTER_BOX, BLUR_SPACE_MODEL};
-    accel_settings set = {s.shut.open, s.shut.close, s.epsilon, s.kernel_sigma, 1};
-    accel *a;
-    rr_error err;
-    double t0 = rr_seconds();
-    if (accel_build(&s, &set, &a, &err)) {
-        fprintf(stderr, "bench: %s\n", err.msg);
-        exit(1);
-    }
-    r->build_ms = 1e3 * (rr_seconds() - t0);
+    accel *a = build_timed(&s, &r->build_ms);
     r->embree_bytes = (double)accel_embree_peak_bytes(a) / (double)m->count;
     RTCDevice dev = rtcNewDevice(NULL);
     RTCScene discs = disc_scene(dev, &s, m);
@@ -441,19 +448,12 @@ static void scale_run(const void *in, void *out)
             model += model_bytes_per_gaussian(&s.objects[k].gaussians) * (double)s.objects[k].gaussians.count;
     render_settings rs = {{SAMPLER_THESIS, 1, 1, c->tspp, 4}, s.shut, c->threads, 0, 1, 1, 0, 0, 0, 0, 0, 0,
                           PIXEL_FILTER_POINT, BLUR_SPACE_MODEL};
-    accel_settings set = {s.shut.open, s.shut.close, s.epsilon, s.kernel_sigma, 1};
-    accel *a;
-    rr_error err;
-    double t0 = rr_seconds();
-    if (accel_build(&s, &set, &a, &err)) {
-        fprintf(stderr, "bench: %s\n", err.msg);
-        exit(1);
-    }
-    r->build_ms = 1e3 * (rr_seconds() - t0);
+    accel *a = build_timed(&s, &r->build_ms);
     r->embree_bytes = (double)accel_embree_peak_bytes(a) / (double)count;
     r->model_bytes = model / (double)count;
     image img;
     volatile sig_atomic_t never = 0;
+    rr_error err;
     image_alloc(&img, s.cam.width, s.cam.height);
     if (render_image(&s, a, &rs, &img, NULL, &never, &err)) {
         fprintf(stderr, "bench: %s\n", err.msg);
