@@ -90,7 +90,7 @@ static const raster_rules *raster_rules_of(gaussian_formation f)
 double gaussian_view_stretch(const camera_view *v)
 {
     double lx = RASTER_CLAMP * v->cx / v->fx, ly = RASTER_CLAMP * v->cy / v->fy;
-    return sqrt(1.0 + lx * lx + ly * ly) * fmax(v->fx, v->fy) / fmin(v->fx, v->fy);
+    return sqrt(1.0 + lx * lx + ly * ly) * rr_fmax(v->fx, v->fy) / rr_fmin(v->fx, v->fy);
 }
 
 void gaussian_ray_init(gaussian_ray *r, const camera_view *view, const xform *xf, double x, double y, vec3 org,
@@ -114,7 +114,7 @@ void gaussian_ray_init(gaussian_ray *r, const camera_view *view, const xform *xf
     for (int j = 0; j < 3; j++)
         for (int k = 0; k < 3; k++)
             col2[j] += xf->r[k][j] * xf->r[k][j];
-    r->scale = sqrt(fmax(col2[0], fmax(col2[1], col2[2]))) * (1 + 1e-9);
+    r->scale = sqrt(rr_fmax(col2[0], rr_fmax(col2[1], col2[2]))) * (1 + 1e-9);
     r->stretch = gaussian_view_stretch(view);
 }
 
@@ -128,15 +128,22 @@ static void quaternion_matrix(const float *q, double R[3][3])
 }
 
 /* m's linear part times v, and m applied to the point p. */
-static vec3 cam_vector(const double m[3][4], vec3 v)
+static inline vec3 cam_vector(const double m[3][4], vec3 v)
 {
     return v3(m[0][0] * v.x + m[0][1] * v.y + m[0][2] * v.z, m[1][0] * v.x + m[1][1] * v.y + m[1][2] * v.z,
               m[2][0] * v.x + m[2][1] * v.y + m[2][2] * v.z);
 }
 
-static vec3 cam_point(const double m[3][4], vec3 p)
+static inline vec3 cam_point(const double m[3][4], vec3 p)
 {
     return v3_add(cam_vector(m, p), v3(m[0][3], m[1][3], m[2][3]));
+}
+
+/* Gaussian i's mean in camera space. */
+static inline vec3 camera_mean(const gaussian_model *m, size_t i, const gaussian_ray *r)
+{
+    const float *mu = &m->mean[3 * i];
+    return cam_point(r->m, v3(mu[0], mu[1], mu[2]));
 }
 
 /* Rows of the 2DGS homogeneous map T = K [t_u t_v p] (u, v, 1 -> pixel x w,
@@ -179,7 +186,7 @@ static int filter_centre(const vec3 row[3], double c, double *px, double *py)
     return 1;
 }
 
-static double clamp_alpha(double alpha_max, double opacity, double g) { return fmin(alpha_max, opacity * g); }
+static double clamp_alpha(double alpha_max, double opacity, double g) { return rr_fmin(alpha_max, opacity * g); }
 
 /* The image of camera-space point p minus the ray's raster position. */
 static void image_offset(const gaussian_ray *r, vec3 p, double *dx, double *dy)
@@ -196,7 +203,7 @@ enum { TILE = 16 };
  * toward 0; the clamps keep it defined for any v. */
 static int tile_index(double v, int grid)
 {
-    return (int)fmin((double)grid, fmax(0.0, trunc(fmax(-1.0, fmin(1e9, v)))));
+    return (int)rr_fmin((double)grid, rr_fmax(0.0, trunc(rr_fmax(-1.0, rr_fmin(1e9, v)))));
 }
 
 static int in_rasterizer_tiles(const gaussian_ray *r, double cx, double cy, double radius)
@@ -218,8 +225,8 @@ static int in_2dgs_tiles(const gaussian_ray *r, const vec3 row[3], double c, dou
     double hy = centre_y * centre_y - dual_conic(row[1], row[1], c) / d22;
     /* the extent does not depend on where the pixel grid's origin is; the
      * centre in pixel-index coordinates (ndc2pix's (W-1)/2) is 0.5 less */
-    double extent = sqrt(fmax(1e-4, fmax(hx, hy)));
-    double radius = c == 1.0 ? ceil(3.0 * extent) : ceil(fmax(extent, c * 0.707106f));
+    double extent = sqrt(rr_fmax(1e-4, rr_fmax(hx, hy)));
+    double radius = c == 1.0 ? ceil(3.0 * extent) : ceil(rr_fmax(extent, c * 0.707106f));
     return in_rasterizer_tiles(r, centre_x - 0.5, centre_y - 0.5, radius);
 }
 
@@ -235,25 +242,31 @@ static int in_2dgs_tiles(const gaussian_ray *r, const vec3 row[3], double c, dou
 static int splat_near_pixel(const gaussian_ray *r, vec3 p, double s, double c)
 {
     const double k = 3.3302, filter_px = 2.3537; /* sqrt(2 ln 255), sqrt(ln 255) */
-    double f = fmax(r->fx, r->fy), dx, dy;
+    double f = rr_fmax(r->fx, r->fy), dx, dy;
     image_offset(r, p, &dx, &dy);
     double reach_k = k * s, reach_c = c * s;
-    if (p.z <= fmax(reach_k, reach_c) * (1 + 1e-9))
+    if (p.z <= rr_fmax(reach_k, reach_c) * (1 + 1e-9))
         return 1; /* near the camera plane: no bound from the projection */
     double spread = f * v3_len(p) / p.z;
-    double reach = fmax(spread * reach_k / (p.z - reach_k), spread * reach_c / (p.z - reach_c) + filter_px);
+    double reach = rr_fmax(spread * reach_k / (p.z - reach_k), spread * reach_c / (p.z - reach_c) + filter_px);
     reach = reach * (1 + 1e-6) + 1e-6;
     return dx * dx + dy * dy <= reach * reach;
 }
 
-int gaussian_hit_2d(const gaussian_model *m, size_t i, gaussian_order order, const gaussian_ray *r,
-                    gaussian_hit *h)
+/* The 2DGS cull from the mean and the scale: the centre in front of the
+ * near plane, as the rasterizer's frustum test, and near the pixel. */
+static int cull_2d(const gaussian_model *m, size_t i, const gaussian_ray *r, vec3 p)
+{
+    const float *s = &m->scale[3 * i];
+    return !(p.z <= GAUSSIAN_NEAR) && splat_near_pixel(r, p, rr_fmax(s[0], s[1]) * r->scale, filter_circle(m));
+}
+
+/* Gaussian i's 2DGS hit once cull_2d passed it (p: its camera-space mean). */
+static int hit_2d_after_cull(const gaussian_model *m, size_t i, gaussian_order order, const gaussian_ray *r, vec3 p,
+                             gaussian_hit *h)
 {
     const float *mu = &m->mean[3 * i], *s = &m->scale[3 * i];
     double circle = filter_circle(m);
-    vec3 p = cam_point(r->m, v3(mu[0], mu[1], mu[2]));
-    if (p.z <= GAUSSIAN_NEAR || !splat_near_pixel(r, p, fmax(s[0], s[1]) * r->scale, circle)) /* frustum cull, as the rasterizer */
-        return 0;
     double R[3][3];
     quaternion_matrix(&m->rotation[4 * i], R);
     vec3 tu = cam_vector(r->m, v3(R[0][0] * s[0], R[1][0] * s[0], R[2][0] * s[0]));
@@ -277,7 +290,7 @@ int gaussian_hit_2d(const gaussian_model *m, size_t i, gaussian_order order, con
     double depth = rho3d <= rho2d ? plane_depth : row[2].z;
     if (plane_depth < GAUSSIAN_NEAR)
         return 0;
-    double rho = fmin(rho3d, rho2d), t = depth / r->depth_per_t;
+    double rho = rr_fmin(rho3d, rho2d), t = depth / r->depth_per_t;
     if (!(rho <= 2.0 * log(m->opacity[i] / GAUSSIAN_ALPHA_MIN) + 1e-9) || !(t >= r->tmin && t < r->tmax))
         return 0; /* alpha below 1/255 for certain (exp is the costly part; the exact test follows) */
     double alpha = clamp_alpha(GAUSSIAN_ALPHA_MAX, m->opacity[i], exp(-0.5 * rho));
@@ -290,6 +303,13 @@ int gaussian_hit_2d(const gaussian_model *m, size_t i, gaussian_order order, con
     *h = (gaussian_hit){(float)key, (float)t, (float)alpha,
                         {(float)dir.x, (float)dir.y, (float)dir.z}, 0, (unsigned)i};
     return 1;
+}
+
+int gaussian_hit_2d(const gaussian_model *m, size_t i, gaussian_order order, const gaussian_ray *r,
+                    gaussian_hit *h)
+{
+    vec3 p = camera_mean(m, i, r);
+    return cull_2d(m, i, r, p) && hit_2d_after_cull(m, i, order, r, p, h);
 }
 
 /* The 3D rasterizers' image of Gaussian i at the ray's pixel (forward.cu
@@ -306,12 +326,12 @@ static int raster_alpha(const gaussian_model *m, size_t i, const raster_rules *r
     double dx, dy, k2 = 2.0 * log(m->opacity[i] * 255.0);
     image_offset(r, p, &dx, &dy);
     /* cheap and sure: lambda_max(cov2D) <= (f_max / z)^2 (1 + lim^2) s_max^2 + dilation (gaussian_view_stretch) */
-    double fz = fmax(r->fx, r->fy) / p.z * fmax(s[0], fmax(s[1], s[2])) * r->scale * r->stretch;
+    double fz = rr_fmax(r->fx, r->fy) / p.z * rr_fmax(s[0], rr_fmax(s[1], s[2])) * r->scale * r->stretch;
     if (!(dx * dx + dy * dy <= k2 * (fz * fz + rules->dilation) * (1 + 1e-6)))
         return 0;
     double R[3][3], limx = RASTER_CLAMP * r->cx / r->fx, limy = RASTER_CLAMP * r->cy / r->fy;
     quaternion_matrix(&m->rotation[4 * i], R);
-    double tx = fmin(limx, fmax(-limx, p.x / p.z)), ty = fmin(limy, fmax(-limy, p.y / p.z));
+    double tx = rr_fmin(limx, rr_fmax(-limx, p.x / p.z)), ty = rr_fmin(limy, rr_fmax(-limy, p.y / p.z));
     vec3 j0 = v3(r->fx / p.z, 0, -r->fx * tx / p.z), j1 = v3(0, r->fy / p.z, -r->fy * ty / p.z);
     double c00 = 0, c01 = 0, c11 = 0;
     for (int a = 0; a < 3; a++) { /* column a of L = M R S, through J */
@@ -329,28 +349,48 @@ static int raster_alpha(const gaussian_model *m, size_t i, const raster_rules *r
         return 0;
     double opacity = m->opacity[i];
     if (rules->antialiased)
-        opacity *= sqrt(fmax(rules->aa_floor, det0 / det));
+        opacity *= sqrt(rr_fmax(rules->aa_floor, det0 / det));
     *alpha = clamp_alpha(rules->alpha_max, opacity, exp(power));
     if (*alpha < GAUSSIAN_ALPHA_MIN)
         return 0;
     if (m->tile_rule && rules->tiles_cut) { /* radius ceil(3 sqrt(lambda_max)), lambda from mid +- sqrt(max(0.1, mid^2 - det)) */
-        double mid = 0.5 * (c00 + c11), radius = ceil(3.0 * sqrt(mid + sqrt(fmax(0.1, mid * mid - det))));
+        double mid = 0.5 * (c00 + c11), radius = ceil(3.0 * sqrt(mid + sqrt(rr_fmax(0.1, mid * mid - det))));
         return in_rasterizer_tiles(r, dx + r->x - 0.5, dy + r->y - 0.5, radius);
     }
     return 1;
 }
 
-int gaussian_hit_3d_raster(const gaussian_model *m, size_t i, const gaussian_ray *r, gaussian_hit *h)
+/* The 3D rasterizers' cull from the mean and the scale: the centre within
+ * the depths in_frustum keeps, its depth in the ray's stretch, and the
+ * pixel within the reach raster_alpha's first test allows at opacity 1. */
+static int cull_3d_raster(const gaussian_model *m, size_t i, const gaussian_ray *r, vec3 p)
+{
+    const raster_rules *rules = raster_rules_of(gaussian_formation_of(m));
+    const float *s = &m->scale[3 * i];
+    double t = p.z / r->depth_per_t, dx, dy, k2 = 2.0 * log(255.0); /* opacities are at most 1 (gaussian.c) */
+    if (!(p.z > rules->near && p.z <= rules->far) || !(t >= r->tmin && t < r->tmax))
+        return 0;
+    image_offset(r, p, &dx, &dy);
+    double fz = rr_fmax(r->fx, r->fy) / p.z * rr_fmax(s[0], rr_fmax(s[1], s[2])) * r->scale * r->stretch;
+    return dx * dx + dy * dy <= k2 * (fz * fz + rules->dilation) * (1 + 1e-6);
+}
+
+static int hit_3d_raster_after_cull(const gaussian_model *m, size_t i, const gaussian_ray *r, vec3 p, gaussian_hit *h)
 {
     const raster_rules *rules = raster_rules_of(gaussian_formation_of(m));
     const float *mu = &m->mean[3 * i];
-    vec3 p = cam_point(r->m, v3(mu[0], mu[1], mu[2]));
     double alpha, t = p.z / r->depth_per_t; /* the centre's depth: the key and where the bounds hold the ray */
     if (!(p.z > rules->near && p.z <= rules->far) || !(t >= r->tmin && t < r->tmax) || !raster_alpha(m, i, rules, r, p, &alpha))
         return 0;
     vec3 dir = v3_sub(v3(mu[0], mu[1], mu[2]), r->eye);
     *h = (gaussian_hit){(float)t, (float)t, (float)alpha, {(float)dir.x, (float)dir.y, (float)dir.z}, 0, (unsigned)i};
     return 1;
+}
+
+int gaussian_hit_3d_raster(const gaussian_model *m, size_t i, const gaussian_ray *r, gaussian_hit *h)
+{
+    vec3 p = camera_mean(m, i, r);
+    return cull_3d_raster(m, i, r, p) && hit_3d_raster_after_cull(m, i, r, p, h);
 }
 
 /* x in the Gaussian's canonical frame: S^-1 R^T x. */
@@ -390,7 +430,7 @@ static double kernel_reach(const gaussian_model *m, size_t i)
 {
     double r2 = 2.0 * log(m->opacity[i] / GAUSSIAN_ALPHA_MIN);
     if (gaussian_formation_of(m) == GAUSSIAN_FORMATION_3DGRT)
-        r2 = fmin(r2, -2.0 * log(GAUSSIAN_GRT_MIN_RESPONSE));
+        r2 = rr_fmin(r2, -2.0 * log(GAUSSIAN_GRT_MIN_RESPONSE));
     return r2 > 0 ? sqrt(r2) : 0.0;
 }
 
@@ -423,7 +463,7 @@ static double filter_2d_reach(const gaussian_model *m, size_t i, const gaussian_
     if (!(px2 > 0))
         return 0.0;
     const float *s = &m->scale[3 * i];
-    double radius = filter_circle(m) * fmax(s[0], s[1]);
+    double radius = filter_circle(m) * rr_fmax(s[0], s[1]);
     return radius + sqrt(px2) * (v->distance + radius) / v->focal;
 }
 
@@ -438,7 +478,7 @@ static double footprint_3d_reach(const gaussian_model *m, size_t i, const gaussi
     if (!(k2 > 0))
         return 0.0;
     const float *s = &m->scale[3 * i];
-    double sigma = fmax(s[0], fmax(s[1], s[2])) * v->stretch, z = v->distance / v->focal;
+    double sigma = rr_fmax(s[0], rr_fmax(s[1], s[2])) * v->stretch, z = v->distance / v->focal;
     return sqrt(k2 * (sigma * sigma + raster_rules_of(gaussian_formation_of(m))->dilation * z * z));
 }
 
@@ -452,10 +492,14 @@ double gaussian_view_reach(const gaussian_model *m, size_t i, const gaussian_vie
     }
 }
 
-void gaussian_prefetch(const gaussian_model *m, size_t i)
+void gaussian_prefetch_cull(const gaussian_model *m, size_t i)
 {
     __builtin_prefetch(&m->mean[3 * i]);
     __builtin_prefetch(&m->scale[3 * i]);
+}
+
+void gaussian_prefetch_hit(const gaussian_model *m, size_t i)
+{
     __builtin_prefetch(&m->rotation[4 * i]);
     __builtin_prefetch(&m->opacity[i]);
 }
@@ -469,13 +513,30 @@ void gaussian_prefetch_sh(const gaussian_model *m, size_t i)
     __builtin_prefetch(sh + bytes - 1);
 }
 
-int gaussian_hit_any(const gaussian_model *m, size_t i, gaussian_order order, const gaussian_ray *r, gaussian_hit *h)
+int gaussian_cull(const gaussian_model *m, size_t i, const gaussian_ray *r, vec3 *p)
+{
+    *p = camera_mean(m, i, r);
+    if (m->kind == GAUSSIAN_2D)
+        return cull_2d(m, i, r, *p);
+    if (gaussian_formation_of(m) == GAUSSIAN_FORMATION_3DGRT)
+        return 1; /* its test is the ray's closest approach: nothing cheaper */
+    return cull_3d_raster(m, i, r, *p);
+}
+
+int gaussian_hit_after_cull(const gaussian_model *m, size_t i, gaussian_order order, const gaussian_ray *r, vec3 p,
+                            gaussian_hit *h)
 {
     if (m->kind == GAUSSIAN_2D)
-        return gaussian_hit_2d(m, i, order, r, h);
+        return hit_2d_after_cull(m, i, order, r, p, h);
     if (gaussian_formation_of(m) == GAUSSIAN_FORMATION_3DGRT)
         return gaussian_hit_3dgrt(m, i, r, h);
-    return gaussian_hit_3d_raster(m, i, r, h);
+    return hit_3d_raster_after_cull(m, i, r, p, h);
+}
+
+int gaussian_hit_any(const gaussian_model *m, size_t i, gaussian_order order, const gaussian_ray *r, gaussian_hit *h)
+{
+    vec3 p;
+    return gaussian_cull(m, i, r, &p) && gaussian_hit_after_cull(m, i, order, r, p, h);
 }
 
 aabb gaussian_bounds(const gaussian_model *m, size_t i, double view_reach)
@@ -489,7 +550,7 @@ aabb gaussian_bounds(const gaussian_model *m, size_t i, double view_reach)
         double e2 = 0;
         for (int j = 0; j < 3; j++) /* a 2D Gaussian's third scale is 0 */
             e2 += (R[a][j] * s[j]) * (R[a][j] * s[j]);
-        double e = fmax(k * sqrt(e2), view_reach);
+        double e = rr_fmax(k * sqrt(e2), view_reach);
         double pad = e * 1e-5 + 1e-6 * fabs(c[a]) + 1e-30; /* float rounding never clips a Gaussian */
         lo[a] = c[a] - e - pad, hi[a] = c[a] + e + pad;
     }

@@ -72,6 +72,13 @@ typedef struct {
 } gaussian_hit;
 
 /* A ray's hits (grown as needed; a thread's scratch). */
+/* A Gaussian a traversal listed, and its mean in camera space once the
+ * cull has computed it. */
+typedef struct {
+    vec3 p;
+    unsigned prim;
+} gaussian_candidate;
+
 typedef struct {
     gaussian_hit *hits;
     size_t count, cap;
@@ -81,7 +88,7 @@ typedef struct {
     size_t order_cap;
     struct gaussian_ray_s *rays; /* accel's per-object rays of one sample */
     size_t rays_cap;
-    unsigned *candidates; /* a traversal's Gaussians, evaluated after it (accel.c) */
+    gaussian_candidate *candidates; /* a traversal's Gaussians, evaluated after it (accel.c) */
     size_t candidates_count, candidates_cap;
 } gaussian_hits;
 
@@ -121,19 +128,26 @@ double gaussian_key_lead(const gaussian_model *m, gaussian_order order, double s
  * near a point of the filter's circle. */
 double gaussian_traversal_pad(const gaussian_model *m, double s, double depth_per_t);
 
-/* Starts loading what evaluating Gaussian i reads (its mean, scale,
- * rotation and opacity: four arrays), and what compositing it reads (its
- * SH coefficients). A model of millions is far larger than the caches: a
- * hit's evaluation waited on those loads one after another (issue 31's
- * profile: most of gaussian_hit_2d's time), and evaluating a traversal's
- * candidates a few behind their prefetches overlaps the waits. No value
- * changes. */
-void gaussian_prefetch(const gaussian_model *m, size_t i);
+/* Start loading what Gaussian i's cull reads (its mean and scale), what
+ * the rest of its evaluation reads (rotation and opacity) and what
+ * compositing it reads (its SH coefficients). A model of millions is far
+ * larger than the caches: a hit's evaluation waited on those loads one
+ * after another (issue 31's profile: most of gaussian_hit_2d's time), and
+ * evaluating a traversal's candidates a few behind their prefetches
+ * overlaps the waits; most candidates fail the cull, so only the ones
+ * that pass it load the rest. No value changes. */
+void gaussian_prefetch_cull(const gaussian_model *m, size_t i);
+void gaussian_prefetch_hit(const gaussian_model *m, size_t i);
 void gaussian_prefetch_sh(const gaussian_model *m, size_t i);
 
 /* Gaussian i's hit on the ray under m's formation: 1 and *h filled (not
- * obj), or 0. The three rules it dispatches to are below. */
+ * obj), or 0. The three rules it dispatches to are below. It is the cull
+ * (0: no hit for certain; else *p = the camera-space mean), from the mean
+ * and scale alone, and then the rest of the evaluation. */
 int gaussian_hit_any(const gaussian_model *m, size_t i, gaussian_order order, const gaussian_ray *r, gaussian_hit *h);
+int gaussian_cull(const gaussian_model *m, size_t i, const gaussian_ray *r, vec3 *p);
+int gaussian_hit_after_cull(const gaussian_model *m, size_t i, gaussian_order order, const gaussian_ray *r, vec3 p,
+                            gaussian_hit *h);
 int gaussian_hit_2d(const gaussian_model *m, size_t i, gaussian_order order, const gaussian_ray *r,
                     gaussian_hit *h);
 int gaussian_hit_3d_raster(const gaussian_model *m, size_t i, const gaussian_ray *r, gaussian_hit *h);
