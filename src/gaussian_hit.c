@@ -230,6 +230,13 @@ static int in_2dgs_tiles(const gaussian_ray *r, const vec3 row[3], double c, dou
     return in_rasterizer_tiles(r, centre_x - 0.5, centre_y - 0.5, radius);
 }
 
+/* p's image's offset from the ray's raster position, times p.z (no
+ * division: the culls compare it with bounds scaled by p.z alike). */
+static void scaled_image_offset(const gaussian_ray *r, vec3 p, double *X, double *Y)
+{
+    *X = r->fx * p.x + (r->cx - r->x) * p.z, *Y = r->fy * p.y + (r->cy - r->y) * p.z;
+}
+
 /* Can the splat (centre p in camera space, larger scale s) give the ray's
  * pixel anything? A point p + delta, |delta| <= D < p.z, projects within
  * f |delta| |p| / (p.z (p.z - |delta|)) pixels of p's image (the offset is
@@ -238,19 +245,20 @@ static int in_2dgs_tiles(const gaussian_ray *r, const vec3 row[3], double c, dou
  * Hits lie within the kernel's reach (3.33 scales at opacity 1); the
  * filter acts within 2.36 pixels of the image of a point of the filter's
  * circle (c scales). A cheap test that the boxes of most candidates fail
- * (they hold a ball; the pixel's ray is a line). */
+ * (they hold a ball; the pixel's ray is a line). Both reaches are bounded
+ * over the larger one's p.z - reach, and the test multiplied through by
+ * p.z (p.z - reach): no division (issue 31's profile: they led the cull),
+ * and never tighter than the bound itself; the 1e-6 slack covers rounding. */
 static int splat_near_pixel(const gaussian_ray *r, vec3 p, double s, double c)
 {
     const double k = 3.3302, filter_px = 2.3537; /* sqrt(2 ln 255), sqrt(ln 255) */
-    double f = rr_fmax(r->fx, r->fy), dx, dy;
-    image_offset(r, p, &dx, &dy);
-    double reach_k = k * s, reach_c = c * s;
-    if (p.z <= rr_fmax(reach_k, reach_c) * (1 + 1e-9))
+    double reach_k = k * s, reach_c = c * s, reach = rr_fmax(reach_k, reach_c);
+    if (p.z <= reach * (1 + 1e-9))
         return 1; /* near the camera plane: no bound from the projection */
-    double spread = f * v3_len(p) / p.z;
-    double reach = rr_fmax(spread * reach_k / (p.z - reach_k), spread * reach_c / (p.z - reach_c) + filter_px);
-    reach = reach * (1 + 1e-6) + 1e-6;
-    return dx * dx + dy * dy <= reach * reach;
+    double X, Y, depth = p.z * (p.z - reach), spread = rr_fmax(r->fx, r->fy) * v3_len(p);
+    scaled_image_offset(r, p, &X, &Y);
+    double bound = rr_fmax(spread * reach_k, spread * reach_c + filter_px * depth) * (1 + 1e-6) + 1e-6 * depth;
+    return (X * X + Y * Y) * (p.z - reach) * (p.z - reach) <= bound * bound;
 }
 
 /* The 2DGS cull from the mean and the scale: the centre in front of the
@@ -361,18 +369,18 @@ static int raster_alpha(const gaussian_model *m, size_t i, const raster_rules *r
 }
 
 /* The 3D rasterizers' cull from the mean and the scale: the centre within
- * the depths in_frustum keeps, its depth in the ray's stretch, and the
- * pixel within the reach raster_alpha's first test allows at opacity 1. */
+ * the depths in_frustum keeps, and the pixel within the reach
+ * raster_alpha's first test allows at opacity 1. */
 static int cull_3d_raster(const gaussian_model *m, size_t i, const gaussian_ray *r, vec3 p)
 {
     const raster_rules *rules = raster_rules_of(gaussian_formation_of(m));
     const float *s = &m->scale[3 * i];
-    double t = p.z / r->depth_per_t, dx, dy, k2 = 2.0 * log(255.0); /* opacities are at most 1 (gaussian.c) */
-    if (!(p.z > rules->near && p.z <= rules->far) || !(t >= r->tmin && t < r->tmax))
+    double k2 = 2.0 * log(255.0); /* opacities are at most 1 (gaussian.c) */
+    if (!(p.z > rules->near && p.z <= rules->far))
         return 0;
-    image_offset(r, p, &dx, &dy);
-    double fz = rr_fmax(r->fx, r->fy) / p.z * rr_fmax(s[0], rr_fmax(s[1], s[2])) * r->scale * r->stretch;
-    return dx * dx + dy * dy <= k2 * (fz * fz + rules->dilation) * (1 + 1e-6);
+    double X, Y, F = rr_fmax(r->fx, r->fy) * rr_fmax(s[0], rr_fmax(s[1], s[2])) * r->scale * r->stretch;
+    scaled_image_offset(r, p, &X, &Y); /* raster_alpha's first test times p.z^2, with room for rounding */
+    return X * X + Y * Y <= k2 * (F * F + rules->dilation * p.z * p.z) * (1 + 1e-5);
 }
 
 static int hit_3d_raster_after_cull(const gaussian_model *m, size_t i, const gaussian_ray *r, vec3 p, gaussian_hit *h)
