@@ -151,6 +151,9 @@ int gaussian_hit_after_cull(const gaussian_model *m, size_t i, gaussian_order or
 int gaussian_hit_2d(const gaussian_model *m, size_t i, gaussian_order order, const gaussian_ray *r,
                     gaussian_hit *h);
 int gaussian_hit_3d_raster(const gaussian_model *m, size_t i, const gaussian_ray *r, gaussian_hit *h);
+/* The 2DGS low-pass filter's centre (raster position) of Gaussian i seen
+ * by r's camera; 0 where its circle's image is no ellipse (for tests). */
+int gaussian_filter_centre_2d(const gaussian_model *m, size_t i, const gaussian_ray *r, double *x, double *y);
 int gaussian_hit_3dgrt(const gaussian_model *m, size_t i, const gaussian_ray *r, gaussian_hit *h);
 
 /* What a Gaussian's bounds must hold of the camera over the shutter. */
@@ -158,7 +161,15 @@ typedef struct {
     double distance; /* the farthest the camera gets from the Gaussian (object units) */
     double focal;    /* the smaller focal length, pixels (shrunk by the object's scale spread) */
     double stretch;  /* gaussian_view_stretch of the camera */
+    double near;     /* 2DGS: a view depth a hit's centre always exceeds, as an object length
+                      * (gaussian_filter_near); 0: none known */
 } gaussian_view_bound;
+
+/* The least view depth a 2DGS hit's centre has (GAUSSIAN_NEAR, world) as
+ * an object length, for an object scaled by factors in [min_scale,
+ * max_scale]: the world's pole offset (max_scale r)^2 / depth, over
+ * min_scale, is at most r^2 / this (filter_2d_reach). */
+double gaussian_filter_near(double min_scale, double max_scale);
 
 /* How much farther than f / depth a length can project in a rasterizer's
  * footprint: sqrt(1 + lim_x^2 + lim_y^2) f_max / f_min, lim the Jacobian's

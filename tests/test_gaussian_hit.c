@@ -109,6 +109,20 @@ static int inside(aabb b, vec3 p)
     return p.x >= b.lo.x && p.x <= b.hi.x && p.y >= b.lo.y && p.y <= b.hi.y && p.z >= b.lo.z && p.z <= b.hi.z;
 }
 
+/* Does the 2D hit h of the ray from the origin along dir lie in its
+ * Gaussian's bounds, the camera at the origin and no farther (focal 100,
+ * the filter's pole bounded by GAUSSIAN_NEAR)? A point of the ray within
+ * the lead of the hit's distance must be in the box. */
+static int hit_in_its_box(const gaussian_model *m, vec3 dir, const gaussian_hit *h, double lead)
+{
+    gaussian_view_bound vb = {v3_len(v3(m->mean[0], m->mean[1], m->mean[2])), 100, 1, gaussian_filter_near(1, 1)};
+    aabb box = gaussian_bounds(m, 0, gaussian_view_reach(m, 0, &vb));
+    for (int k = -50; k <= 50; k++)
+        if (inside(box, v3_scale(dir, h->t + lead * k / 50.0)))
+            return 1;
+    return 0;
+}
+
 /* Random splats of every size from far below a pixel to many pixels, seen
  * from a camera at the origin looking down +z with focal length 100
  * pixels, through random pixels near their centres' images. */
@@ -135,12 +149,7 @@ TEST(gaussian_2d_hits_lie_in_their_bounds_within_the_lead_of_their_distance)
         double s = fmax(m.scale[0], m.scale[1]), lead = gaussian_key_lead(&m, GAUSSIAN_ORDER_CENTER_DEPTH, s, dir.z);
         filtered += s < 1e-3; /* sub-pixel: seen through the filter */
         /* the camera's distance bounds the view depth the footprint is taken at */
-        gaussian_view_bound vb = {v3_len(v3(m.mean[0], m.mean[1], depth)), 100, 1};
-        aabb box = gaussian_bounds(&m, 0, gaussian_view_reach(&m, 0, &vb));
-        int found = 0; /* a point of the ray within the lead of the hit's distance is in the box */
-        for (int k = -50; k <= 50 && !found; k++)
-            found = inside(box, v3_scale(dir, h.t + lead * k / 50.0));
-        outside += !found;
+        outside += !hit_in_its_box(&m, dir, &h, lead);
         late += h.key < h.t - lead * (1 + 1e-5) - 1e-6;
     }
     CHECK(hits > 2000 && filtered > 500);
@@ -180,7 +189,7 @@ TEST(gaussian_3d_raster_hits_lie_in_their_bounds_at_their_distance)
             continue;
         hits++;
         beyond_clamp += fabs(m.mean[0] / depth) > 0.65;
-        gaussian_view_bound vb = {v3_len(v3(m.mean[0], m.mean[1], depth)), 80, gaussian_view_stretch(&v)};
+        gaussian_view_bound vb = {v3_len(v3(m.mean[0], m.mean[1], depth)), 80, gaussian_view_stretch(&v), 0};
         aabb box = gaussian_bounds(&m, 0, gaussian_view_reach(&m, 0, &vb));
         outside += !inside(box, v3_scale(dir, h.t));
         CHECK(h.key == h.t && gaussian_traversal_pad(&m, 1.0, dir.z) == 0.0);
@@ -188,6 +197,94 @@ TEST(gaussian_3d_raster_hits_lie_in_their_bounds_at_their_distance)
     CHECK(hits > 4000 && beyond_clamp > 500);
     CHECK(outside == 0);
     gaussian_model_free(&m);
+}
+
+/* The cull (gaussian_cull, from mean and scale) never drops a Gaussian
+ * that the whole evaluation would hit, and every 2D hit lies in its box:
+ * random Gaussians of both 2DGS circle rules and the four rasterizer
+ * semantics, from far below a pixel to many pixels, tilted at random, at
+ * view depths from just beyond GAUSSIAN_NEAR (where the filter's pole
+ * bound is tightest) to 3, through pixels up to 20 pixels from their
+ * means' images. */
+TEST(gaussian_culls_never_drop_a_hit_and_2d_hits_near_the_camera_lie_in_their_bounds)
+{
+    const gaussian_formation kinds[] = {GAUSSIAN_FORMATION_2DGS, GAUSSIAN_FORMATION_2DGS_UNIT_CIRCLE,
+                                        GAUSSIAN_FORMATION_3DGS, GAUSSIAN_FORMATION_3DGS_ANTIALIASED,
+                                        GAUSSIAN_FORMATION_GSPLAT, GAUSSIAN_FORMATION_GSPLAT_ANTIALIASED};
+    camera_view v = {v3(0, 0, 0), {v3(1, 0, 0), v3(0, 1, 0), v3(0, 0, 1)}, 100, 100, 50, 50, 100, 100};
+    xform id = {{{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}, {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}, {0, 0, 0}, 0};
+    unsigned st = 31;
+    int hits = 0, near_hits = 0, culled = 0, dropped = 0, outside = 0;
+    for (int trial = 0; trial < 60000; trial++) {
+        gaussian_model m;
+        gaussian_formation f = kinds[trial % 6];
+        model_of(&m, 1, f <= GAUSSIAN_FORMATION_2DGS_UNIT_CIRCLE ? GAUSSIAN_2D : GAUSSIAN_3D);
+        m.formation = f;
+        double depth = GAUSSIAN_NEAR * (1 + 1e-3) + 2.8 * pow(uniform(&st), 2);
+        random_gaussian(&m, 0, &st, depth * pow(10.0, -3.5 + 3 * uniform(&st)));
+        m.mean[0] = (float)((uniform(&st) - 0.5) * depth), m.mean[1] = (float)((uniform(&st) - 0.5) * depth);
+        m.mean[2] = (float)depth;
+        double x = 100 * m.mean[0] / depth + 50 + 40 * (uniform(&st) - 0.5);
+        double y = 100 * m.mean[1] / depth + 50 + 40 * (uniform(&st) - 0.5);
+        vec3 dir = v3_normalize(v3((x - 50) / 100, (y - 50) / 100, 1)), p;
+        gaussian_ray r;
+        gaussian_ray_init(&r, &v, &id, x, y, v3(0, 0, 0), dir);
+        gaussian_hit h;
+        int kept = gaussian_cull(&m, 0, &r, &p);
+        int hit = gaussian_hit_after_cull(&m, 0, GAUSSIAN_ORDER_CENTER_DEPTH, &r, p, &h);
+        culled += !kept, dropped += hit && !kept, hits += hit;
+        if (hit && m.kind == GAUSSIAN_2D) {
+            double s = fmax(m.scale[0], m.scale[1]);
+            near_hits += depth < 0.5;
+            outside += !hit_in_its_box(&m, dir, &h, gaussian_key_lead(&m, GAUSSIAN_ORDER_CENTER_DEPTH, s, dir.z));
+        }
+        gaussian_model_free(&m);
+    }
+    printf("    hits %d (2D near the camera %d), culled %d: of them hits %d; 2D hits outside their box %d\n", hits, near_hits, culled, dropped, outside);
+    CHECK(hits > 5000 && near_hits > 300 && culled > 20000);
+    CHECK(dropped == 0);
+    CHECK(outside == 0);
+}
+
+/* The centre of the image of the 2DGS filter's circle (radius r) is the
+ * image of a point within r^2 / z of the mean (z its view depth; the pole
+ * of the plane's line at view depth 0): it lies within f |p| pole / (z (z -
+ * pole)) pixels of the mean's image, the offset the cull allows. Random
+ * tilted splats of both circle rules, from far below a pixel to as large
+ * as their depth, means off axis; the bound is nearly reached (splats whose
+ * plane holds the view axis), so a pole bound half as large fails. */
+TEST(gaussian_2d_filter_centre_lies_within_the_pole_bound_of_the_mean)
+{
+    camera_view v = {v3(0, 0, 0), {v3(1, 0, 0), v3(0, 1, 0), v3(0, 0, 1)}, 100, 70, 50, 50, 100, 100};
+    xform id = {{{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}, {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}, {0, 0, 0}, 0};
+    unsigned st = 41;
+    int checked = 0, beyond = 0;
+    double closest = 0; /* the largest offset / bound */
+    for (int trial = 0; trial < 40000; trial++) {
+        gaussian_model m;
+        model_of(&m, 1, GAUSSIAN_2D);
+        m.formation = trial % 2 ? GAUSSIAN_FORMATION_2DGS : GAUSSIAN_FORMATION_2DGS_UNIT_CIRCLE;
+        double depth = GAUSSIAN_NEAR + 3 * uniform(&st), c = trial % 2 ? 3.0 : 1.0;
+        random_gaussian(&m, 0, &st, depth / c * pow(10.0, -4 + 4 * uniform(&st)));
+        m.mean[0] = (float)((uniform(&st) - 0.5) * 1.6 * depth), m.mean[1] = (float)((uniform(&st) - 0.5) * 1.6 * depth);
+        m.mean[2] = (float)depth;
+        gaussian_ray r;
+        gaussian_ray_init(&r, &v, &id, 50, 50, v3(0, 0, 0), v3(0, 0, 1));
+        vec3 p = v3(m.mean[0], m.mean[1], m.mean[2]); /* the float mean the model holds */
+        double radius = c * fmax(m.scale[0], m.scale[1]), pole = radius * radius / p.z, x, y;
+        if (p.z > radius && gaussian_filter_centre_2d(&m, 0, &r, &x, &y)) {
+            double dx = x - (100 * p.x / p.z + 50), dy = y - (70 * p.y / p.z + 50);
+            double offset = sqrt(dx * dx + dy * dy), bound = 100 * v3_len(p) * pole / (p.z * (p.z - pole));
+            checked++;
+            beyond += offset > bound * (1 + 1e-6) + 1e-9;
+            closest = fmax(closest, offset / bound);
+        }
+        gaussian_model_free(&m);
+    }
+    printf("    splats %d, beyond the bound %d, largest offset / bound %.3f\n", checked, beyond, closest);
+    CHECK(checked > 30000);
+    CHECK(beyond == 0);
+    CHECK(closest > 0.5);
 }
 
 /* 400,000 hits of one key (a degenerate model: every Gaussian at one
