@@ -98,9 +98,10 @@ typedef struct {
     double x, y, z;
 } vec3;
 
-/* fmax and fmin exactly as glibc's (the first argument when they are
- * equal, the number when one is NaN), inlined: at -O2 GCC calls libm's,
- * 3% of a Gaussian render's time (src/cmd/BENCH.md). */
+/* fmax and fmin with glibc's values (the number when one is NaN; which
+ * zero a tie of +0 and -0 gives, C leaves open, and GCC may swap libm's
+ * operands), inlined: at -O2 GCC calls libm's, 3% of a Gaussian render's
+ * time (src/cmd/BENCH.md). */
 static inline double rr_fmax(double x, double y) { return x >= y || y != y ? x : y; }
 static inline double rr_fmin(double x, double y) { return x <= y || y != y ? x : y; }
 

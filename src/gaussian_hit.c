@@ -276,7 +276,7 @@ static void scaled_image_offset(const gaussian_ray *r, vec3 p, double *X, double
  * and never tighter than the bound itself; the 1e-6 slack covers rounding. */
 static int splat_near_pixel(const gaussian_ray *r, vec3 p, double s, double c)
 {
-    const double k = 3.3302, filter_px = 2.3537; /* sqrt(2 ln 255), sqrt(ln 255) */
+    const double k = 3.3302, filter_px = 2.3540; /* sqrt(2 ln 255) = 3.32901, sqrt(ln 255) = 2.35399, rounded up */
     double reach_k = k * s, circle = c * s;
     if (p.z <= rr_fmax(reach_k, circle) * (1 + 1e-9))
         return 1; /* near the camera plane: no bound from the projection */
@@ -549,11 +549,10 @@ void gaussian_prefetch_hit(const gaussian_model *m, size_t i)
 
 void gaussian_prefetch_sh(const gaussian_model *m, size_t i)
 {
-    const char *sh = (const char *)&m->sh[(size_t)3 * m->sh_coeffs * i];
-    size_t bytes = (size_t)3 * m->sh_coeffs * sizeof *m->sh;
-    for (size_t b = 0; b < bytes; b += 64)
-        __builtin_prefetch(sh + b);
-    __builtin_prefetch(sh + bytes - 1);
+    const float *sh = &m->sh[(size_t)3 * m->sh_coeffs * i];
+    uintptr_t last = (uintptr_t)(sh + 3 * (size_t)m->sh_coeffs) - 1;
+    for (uintptr_t line = (uintptr_t)sh & ~(uintptr_t)63; line <= last; line += 64) /* each line once */
+        __builtin_prefetch((const void *)line);
 }
 
 int gaussian_cull(const gaussian_model *m, size_t i, const gaussian_ray *r, vec3 *p)

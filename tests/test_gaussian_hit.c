@@ -246,6 +246,43 @@ TEST(gaussian_culls_never_drop_a_hit_and_2d_hits_near_the_camera_lie_in_their_bo
     CHECK(outside == 0);
 }
 
+/* The cull keeps a 2DGS filter hit at the filter's very edge: sub-pixel
+ * splats of opacity just below 1 (the filter reaches sqrt(ln 255) =
+ * 2.35399 pixels) through pixels 2.35398 pixels from their filter centres
+ * in every direction, under a non-uniformly scaled object, fx != fy (a
+ * cull reach of 2.3537 pixels, as first written, drops them). */
+TEST(gaussian_2d_cull_keeps_hits_at_the_filters_edge)
+{
+    camera_view v = {v3(0, 0, 0), {v3(1, 0, 0), v3(0, 1, 0), v3(0, 0, 1)}, 120, 90, 50, 50, 100, 100};
+    xform xf = {{{1.7, 0, 0}, {0, 0.6, 0}, {0, 0, 1.1}}, {{1 / 1.7, 0, 0}, {0, 1 / 0.6, 0}, {0, 0, 1 / 1.1}}, {0, 0, 0}, 1};
+    unsigned st = 53;
+    int hits = 0, dropped = 0, trials = 4000;
+    for (int trial = 0; trial < trials; trial++) {
+        gaussian_model m;
+        model_of(&m, 1, GAUSSIAN_2D);
+        m.formation = trial % 2 ? GAUSSIAN_FORMATION_2DGS : GAUSSIAN_FORMATION_2DGS_UNIT_CIRCLE;
+        double depth = 0.5 + 2.5 * uniform(&st);
+        random_gaussian(&m, 0, &st, 1e-5 * depth);
+        m.opacity[0] = 0.99999994f; /* the largest float below 1 */
+        m.mean[0] = (float)((uniform(&st) - 0.5) * depth / 1.7), m.mean[1] = (float)((uniform(&st) - 0.5) * depth / 0.6);
+        m.mean[2] = (float)(depth / 1.1);
+        gaussian_ray r;
+        double cx, cy, angle = 2 * M_PI * uniform(&st);
+        gaussian_ray_init(&r, &v, &xf, 50, 50, v3(0, 0, 0), v3(0, 0, 1));
+        CHECK(gaussian_filter_centre_2d(&m, 0, &r, &cx, &cy));
+        double x = cx + 2.35398 * cos(angle), y = cy + 2.35398 * sin(angle);
+        gaussian_ray_init(&r, &v, &xf, x, y, v3(0, 0, 0), v3_normalize(v3((x - 50) / 120, (y - 50) / 90, 1)));
+        vec3 p;
+        gaussian_hit h;
+        int kept = gaussian_cull(&m, 0, &r, &p), hit = gaussian_hit_after_cull(&m, 0, GAUSSIAN_ORDER_CENTER_DEPTH, &r, p, &h);
+        hits += hit, dropped += hit && !kept;
+        gaussian_model_free(&m);
+    }
+    printf("    hits %d of %d, dropped by the cull %d\n", hits, trials, dropped);
+    CHECK(hits > trials * 9 / 10);
+    CHECK(dropped == 0);
+}
+
 /* The centre of the image of the 2DGS filter's circle (radius r) is the
  * image of a point within r^2 / z of the mean (z its view depth; the pole
  * of the plane's line at view depth 0): it lies within f |p| pole / (z (z -
