@@ -447,5 +447,5 @@ vec3 gaussian_sh_color(const float *sh, int degree, vec3 dir)
     for (int k = 0; k < n; k++)
         for (int c = 0; c < 3; c++)
             rgb[c] += b[k] * sh[3 * k + c];
-    return v3(fmax(rgb[0] + 0.5, 0.0), fmax(rgb[1] + 0.5, 0.0), fmax(rgb[2] + 0.5, 0.0));
+    return v3(rr_fmax(rgb[0] + 0.5, 0.0), rr_fmax(rgb[1] + 0.5, 0.0), rr_fmax(rgb[2] + 0.5, 0.0));
 }
