@@ -542,8 +542,8 @@ void accel_gaussian_bounds_cb(const struct RTCBoundsFunctionArguments *args)
     vec3 at_open = xform_point(&f->at_open, v3(mu[0], mu[1], mu[2]));
     double distance = v3_len(v3_sub(at_open, f->camera_center)) + f->camera_radius + f->travel;
     gaussian_view_bound view = {distance / f->min_scale, f->focal * f->min_scale / f->max_scale, f->stretch,
-                                gaussian_filter_near(f->min_scale, f->max_scale)};
-    aabb b = gaussian_bounds(m, args->primID, gaussian_view_reach(m, args->primID, &view));
+                                gaussian_filter_near(f->min_scale, f->max_scale), f->view_axis, f->view_cone};
+    aabb b = gaussian_view_bounds(m, args->primID, &view);
     struct RTCBounds *r = args->bounds_o;
     r->lower_x = nextafterf((float)b.lo.x, -INFINITY), r->lower_y = nextafterf((float)b.lo.y, -INFINITY);
     r->lower_z = nextafterf((float)b.lo.z, -INFINITY);

@@ -81,6 +81,27 @@ static void embree_error(void *user, enum RTCError code, const char *str)
              (int)code, str ? str : "", o->name, count, o->model_file[0] ? ", from " : "", o->model_file);
 }
 
+/* The camera's view axis at mid-shutter in the space of a static,
+ * uniformly scaled object (view depth there is a multiple of the world's),
+ * and the most it turns from it over [open, close] (the camera motion's
+ * turn rate over half the shutter); other objects: no axis. */
+static void gaussian_view_axis(const scene *s, const gaussian_footprint *f, const scene_object *o, double open,
+                               double close, vec3 *axis, double *cone)
+{
+    *axis = v3(0, 0, 0), *cone = M_PI;
+    if (!animation_is_static(&o->anim) || f->min_scale != f->max_scale)
+        return;
+    camera_view v;
+    scene_camera_view(s, 0.5 * (open + close), &v);
+    const double(*r)[3] = f->at_open.r; /* the object's linear part: axis . (r x) = (r^T axis) . x */
+    vec3 a = v.axis[2], in_object = v3(r[0][0] * a.x + r[1][0] * a.y + r[2][0] * a.z,
+                                       r[0][1] * a.x + r[1][1] * a.y + r[2][1] * a.z,
+                                       r[0][2] * a.x + r[1][2] * a.y + r[2][2] * a.z);
+    double turn = scene_camera_moves(s) ? animation_motion_bound(&s->camera_motion, open, close).turn : 0.0;
+    *axis = v3_normalize(in_object);
+    *cone = turn * 0.5 * (close - open) * (1 + 1e-9) + 1e-9;
+}
+
 /* A Gaussian object's footprint parameters for the shutter [open, close]. */
 static void gaussian_footprint_for(accel *a, unsigned obj, double open, double close)
 {
@@ -104,6 +125,7 @@ static void gaussian_footprint_for(accel *a, unsigned obj, double open, double c
     for (size_t i = 0; i < 3 * o->gaussians.count; i++)
         largest = fmax(largest, o->gaussians.scale[i]);
     f->largest = largest * f->max_scale;
+    gaussian_view_axis(s, f, o, open, close, &f->view_axis, &f->view_cone);
 }
 
 /* A Gaussian object's BVH depends on the shutter (the filter's footprint

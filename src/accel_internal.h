@@ -43,6 +43,8 @@ typedef struct {
     double focal;        /* the smaller focal length, pixels */
     double stretch;      /* gaussian_view_stretch */
     double largest;      /* the largest scale of a Gaussian over the shutter, world units */
+    vec3 view_axis;      /* the camera's view axis in object space at mid-shutter, and how far */
+    double view_cone;    /* it can turn from it (gaussian_view_bound); a zero axis: not known */
 } gaussian_footprint;
 
 struct accel {

@@ -489,6 +489,8 @@ double gaussian_key_lead(const gaussian_model *m, gaussian_order order, double s
     return order == GAUSSIAN_ORDER_CENTER_DEPTH ? gaussian_traversal_pad(m, s, depth_per_t) : 0.0;
 }
 
+static aabb bounds_with_reach(const gaussian_model *m, size_t i, const double view_reach[3]);
+
 double gaussian_filter_near(double min_scale, double max_scale)
 {
     return GAUSSIAN_NEAR * min_scale / (max_scale * max_scale);
@@ -496,25 +498,29 @@ double gaussian_filter_near(double min_scale, double max_scale)
 
 /* 2DGS: rho2d = 2 |d|^2 <= 2 ln(255 o): the ray's pixel lies within
  * sqrt(ln(255 o)) pixels of the centre of the image of the filter's circle
- * (c scales), which is the image of a point P of its disc (filter_pole);
- * at P's view depth (at most distance + |P - mean|) a pixel spans depth /
- * focal. */
-static double filter_2d_reach(const gaussian_model *m, size_t i, const gaussian_view_bound *v)
+ * (c scales), which is the image of a point P of its disc (filter_pole,
+ * *along_plane: in the splat's plane); at P's view depth (at most distance
+ * + |P - mean|) a pixel spans depth / focal (*across_view: at P's view
+ * depth, so across the view axis). */
+static void filter_2d_reach(const gaussian_model *m, size_t i, const gaussian_view_bound *v, double *along_plane,
+                            double *across_view)
 {
     double px2 = log(m->opacity[i] / GAUSSIAN_ALPHA_MIN);
+    *along_plane = *across_view = 0.0;
     if (!(px2 > 0))
-        return 0.0;
+        return;
     const float *s = &m->scale[3 * i];
     double radius = filter_circle(m) * rr_fmax(s[0], s[1]);
     double pole = v->near > 0 ? rr_fmin(radius, filter_pole(radius, v->near)) : radius;
-    return pole + sqrt(px2) * (v->distance + pole) / v->focal;
+    *along_plane = pole, *across_view = sqrt(px2) * (v->distance + pole) / v->focal;
 }
 
 /* The 3D rasterizers: the ray through a pixel d pixels from the mean's
  * image passes the mean's depth z within |d| z / f_min of it, and alpha >=
  * 1/255 needs |d|^2 <= 2 ln(255 o) lambda_max(cov2D), lambda_max <=
  * (f_max / z)^2 (1 + lim^2) s^2 + dilation: within k sqrt(stretch^2 s^2 +
- * dilation (z / f_min)^2), z at most the distance. */
+ * dilation (z / f_min)^2), z at most the distance, across the view axis
+ * (the hit is at the mean's view depth). */
 static double footprint_3d_reach(const gaussian_model *m, size_t i, const gaussian_view_bound *v)
 {
     double k2 = 2.0 * log(m->opacity[i] / GAUSSIAN_ALPHA_MIN);
@@ -525,14 +531,45 @@ static double footprint_3d_reach(const gaussian_model *m, size_t i, const gaussi
     return sqrt(k2 * (sigma * sigma + raster_rules_of(gaussian_formation_of(m))->dilation * z * z));
 }
 
-double gaussian_view_reach(const gaussian_model *m, size_t i, const gaussian_view_bound *v)
+/* The screen footprint's reach about the mean: a part that can point any
+ * way, and a part across the view axis. */
+static void view_reach_parts(const gaussian_model *m, size_t i, const gaussian_view_bound *v, double *any,
+                             double *across)
 {
     switch (gaussian_formation_of(m)) {
     case GAUSSIAN_FORMATION_2DGS:
-    case GAUSSIAN_FORMATION_2DGS_UNIT_CIRCLE: return filter_2d_reach(m, i, v);
-    case GAUSSIAN_FORMATION_3DGRT: return 0.0;
-    default: return footprint_3d_reach(m, i, v);
+    case GAUSSIAN_FORMATION_2DGS_UNIT_CIRCLE: filter_2d_reach(m, i, v, any, across); return;
+    case GAUSSIAN_FORMATION_3DGRT: *any = *across = 0.0; return;
+    default: *any = 0.0, *across = footprint_3d_reach(m, i, v); return;
     }
+}
+
+double gaussian_view_reach(const gaussian_model *m, size_t i, const gaussian_view_bound *v)
+{
+    double any, across;
+    view_reach_parts(m, i, v, &any, &across);
+    return any + across;
+}
+
+/* How far along unit axis e (component n_e of the view axis n) a vector of
+ * length 1 across a view axis within `cone` radians of n reaches: across
+ * the axis a it reaches sqrt(1 - (a.e)^2), and the least |a.e| in the cone
+ * is sin(max(0, asin|n_e| - cone)). 1 without a view axis. */
+static double across_view_extent(const gaussian_view_bound *v, double n_e)
+{
+    if (!(v->cone < M_PI / 2) || v3_dot(v->axis, v->axis) == 0)
+        return 1.0;
+    double tilt = asin(rr_fmin(1.0, fabs(n_e))) - v->cone;
+    return tilt > 0 ? cos(tilt) * (1 + 1e-9) + 1e-12 : 1.0;
+}
+
+aabb gaussian_view_bounds(const gaussian_model *m, size_t i, const gaussian_view_bound *v)
+{
+    double any, across, n[3] = {v->axis.x, v->axis.y, v->axis.z}, reach[3];
+    view_reach_parts(m, i, v, &any, &across);
+    for (int a = 0; a < 3; a++)
+        reach[a] = any + across * across_view_extent(v, n[a]);
+    return bounds_with_reach(m, i, reach);
 }
 
 void gaussian_prefetch_cull(const gaussian_model *m, size_t i)
@@ -583,6 +620,12 @@ int gaussian_hit_any(const gaussian_model *m, size_t i, gaussian_order order, co
 
 aabb gaussian_bounds(const gaussian_model *m, size_t i, double view_reach)
 {
+    double reach[3] = {view_reach, view_reach, view_reach};
+    return bounds_with_reach(m, i, reach);
+}
+
+static aabb bounds_with_reach(const gaussian_model *m, size_t i, const double view_reach[3])
+{
     const float *mu = &m->mean[3 * i], *s = &m->scale[3 * i];
     double R[3][3], k = kernel_reach(m, i);
     quaternion_matrix(&m->rotation[4 * i], R);
@@ -592,7 +635,7 @@ aabb gaussian_bounds(const gaussian_model *m, size_t i, double view_reach)
         double e2 = 0;
         for (int j = 0; j < 3; j++) /* a 2D Gaussian's third scale is 0 */
             e2 += (R[a][j] * s[j]) * (R[a][j] * s[j]);
-        double e = rr_fmax(k * sqrt(e2), view_reach);
+        double e = rr_fmax(k * sqrt(e2), view_reach[a]);
         double pad = e * 1e-5 + 1e-6 * fabs(c[a]) + 1e-30; /* float rounding never clips a Gaussian */
         lo[a] = c[a] - e - pad, hi[a] = c[a] + e + pad;
     }

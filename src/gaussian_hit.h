@@ -163,6 +163,8 @@ typedef struct {
     double stretch;  /* gaussian_view_stretch of the camera */
     double near;     /* 2DGS: a view depth a hit's centre always exceeds, as an object length
                       * (gaussian_filter_near); 0: none known */
+    vec3 axis;       /* the camera's view axis (unit, object space) at some time, and how far */
+    double cone;     /* (radians) it turns from it over the shutter; a zero axis: not known */
 } gaussian_view_bound;
 
 /* The least view depth a 2DGS hit's centre has (GAUSSIAN_NEAR, world) as
@@ -187,6 +189,12 @@ double gaussian_view_reach(const gaussian_model *m, size_t i, const gaussian_vie
  * radius where opacity G reaches 1/255, and a ball of radius view_reach
  * (gaussian_view_reach) about the mean. */
 aabb gaussian_bounds(const gaussian_model *m, size_t i, double view_reach);
+/* The same with the footprint's reach as it points: the screen footprint
+ * lies across the view axis (a rasterizer's hit at the mean's view depth,
+ * the 2DGS filter's at its point P's), so where the view axis is known to
+ * within a cone the box is flatter along it (issue 31: a ball's box,
+ * pierced obliquely, listed 2.5 candidates a kept one). */
+aabb gaussian_view_bounds(const gaussian_model *m, size_t i, const gaussian_view_bound *v);
 
 /* Front-to-back compositing, a stretch of the ray at a time (hits are
  * gathered in windows of ray distance, so that a ray whose transmittance

@@ -106,7 +106,8 @@ static RTCScene disc_scene(RTCDevice dev, const scene *sc, const gaussian_model 
         vec3 far = v3(fmax(fabs(mu[0] - cam.lo.x), fabs(mu[0] - cam.hi.x)),
                       fmax(fabs(mu[1] - cam.lo.y), fabs(mu[1] - cam.hi.y)),
                       fmax(fabs(mu[2] - cam.lo.z), fabs(mu[2] - cam.hi.z)));
-        gaussian_view_bound vb = {v3_len(far), fmin(v.fx, v.fy), gaussian_view_stretch(&v), gaussian_filter_near(1, 1)};
+        gaussian_view_bound vb = {v3_len(far), fmin(v.fx, v.fy), gaussian_view_stretch(&v), gaussian_filter_near(1, 1),
+                                  v3(0, 0, 0), M_PI}; /* the disc's radius: the reach any way */
         vtx[4 * i + 3] = (float)fmax(k * fmax(s[0], fmax(s[1], s[2])), gaussian_view_reach(m, i, &vb));
         nrm[3 * i] = (float)(2 * (x * z + w * y)), nrm[3 * i + 1] = (float)(2 * (y * z - w * x));
         nrm[3 * i + 2] = (float)(1 - 2 * (x * x + y * y));
