@@ -640,9 +640,10 @@ static size_t gaussian_rays(const accel *a, const camera_view *view, double x, d
         gaussian_ray_init(r, view, &xf, x, y, org, dir);
         const sphere_bound *b = &a->swept_sphere[obj];
         double along = v3_dot(v3_sub(b->center, org), dir), radius = sqrt(b->radius2);
-        r->obj = obj, r->enter = fmax(0.0, along - radius), r->exit = along + radius;
         r->lead = gaussian_key_lead(&o->gaussians, o->order, a->footprint[obj].largest, r->depth_per_t);
         r->pad = gaussian_traversal_pad(&o->gaussians, a->footprint[obj].largest, r->depth_per_t);
+        /* a 2D hit can lie the pad beyond where its box (inside the sphere) holds the ray */
+        r->obj = obj, r->enter = fmax(0.0, along - radius - r->pad), r->exit = along + radius + r->pad;
     }
     return n;
 }

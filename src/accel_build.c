@@ -84,12 +84,14 @@ static void embree_error(void *user, enum RTCError code, const char *str)
 /* The camera's view axis at mid-shutter in the space of a static,
  * uniformly scaled object (view depth there is a multiple of the world's),
  * and the most it turns from it over [open, close] (the camera motion's
- * turn rate over half the shutter); other objects: no axis. */
+ * turn rate over half the shutter); other objects, and cameras whose
+ * keyframed rotation can jump (a step key, a cycle): no axis. */
 static void gaussian_view_axis(const scene *s, const gaussian_footprint *f, const scene_object *o, double open,
                                double close, vec3 *axis, double *cone)
 {
     *axis = v3(0, 0, 0), *cone = M_PI;
-    if (!animation_is_static(&o->anim) || f->min_scale != f->max_scale)
+    if (!animation_is_static(&o->anim) || f->min_scale != f->max_scale ||
+        (scene_camera_moves(s) && !animation_turns_continuously(&s->camera_motion)))
         return;
     camera_view v;
     scene_camera_view(s, 0.5 * (open + close), &v);

@@ -52,6 +52,15 @@ int animation_is_static(const animation *a)
     return !moves && !turns;
 }
 
+int animation_turns_continuously(const animation *a)
+{
+    if (a->keys)
+        for (int ch = CH_RX; ch <= CH_RZ; ch++)
+            if (!curve_is_continuous(&a->keys->ch[ch]))
+                return 0;
+    return 1;
+}
+
 void rotation_matrix(vec3 k, double angle, double r[3][3])
 {
     double c = cos(angle), s = sin(angle), C = 1 - c;

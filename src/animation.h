@@ -58,6 +58,11 @@ void animation_free(animation *a);
 /* 1 when the transform is the same at every time. */
 int animation_is_static(const animation *a);
 
+/* 1 when the rotation never jumps (keyframed rotation channels are
+ * continuous: curve_is_continuous), so directions turn at most at
+ * animation_motion_bound's rate. */
+int animation_turns_continuously(const animation *a);
+
 /* The rigid motion that takes a pose (position, rotation whose columns are
  * the posed frame's axes) from a at time t0 to b at time t1 with the
  * position linear and the rotation slerped (a constant turn about one

@@ -405,3 +405,12 @@ void curve_free(curve *c)
     c->keys = NULL;
     c->count = 0;
 }
+
+int curve_is_continuous(const curve *c)
+{
+    for (int i = 0; i + 1 < c->count; i++)
+        if ((c->keys[i].out == TAN_STEP || c->keys[i].out == TAN_STEPNEXT) && c->keys[i].value != c->keys[i + 1].value)
+            return 0;
+    int cycles = c->pre == INF_CYCLE || c->post == INF_CYCLE;
+    return !(cycles && c->count > 1 && c->keys[0].value != c->keys[c->count - 1].value);
+}

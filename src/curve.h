@@ -91,6 +91,11 @@ double curve_eval_left(const curve *c, double t);
  * curve_prepare; 0 for a curve without keys. */
 double curve_max_slope(const curve *c);
 
+/* 1 when the curve never jumps: no step or stepnext segment between keys
+ * of different values, and no cycle infinity between different first and
+ * last values (its value then moves at most at curve_max_slope). */
+int curve_is_continuous(const curve *c);
+
 /* Appends a key: 0, or -1 when its time is not after the last key's, or
  * -2 when out of memory (the curve is unchanged then). */
 int curve_append(curve *c, const curve_key *k);

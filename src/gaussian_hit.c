@@ -557,9 +557,10 @@ double gaussian_view_reach(const gaussian_model *m, size_t i, const gaussian_vie
  * is sin(max(0, asin|n_e| - cone)). 1 without a view axis. */
 static double across_view_extent(const gaussian_view_bound *v, double n_e)
 {
-    if (!(v->cone < M_PI / 2) || v3_dot(v->axis, v->axis) == 0)
+    if (!(v->cone < M_PI / 2) || v3_dot(v->axis, v->axis) == 0 || !(fabs(n_e) <= 1.0))
         return 1.0;
-    double tilt = asin(rr_fmin(1.0, fabs(n_e))) - v->cone;
+    /* 1e-6 more cone: asin near 1 magnifies n_e's rounding (1e-16 -> 1.5e-8 rad) */
+    double tilt = asin(fabs(n_e)) - v->cone - 1e-6;
     return tilt > 0 ? cos(tilt) * (1 + 1e-9) + 1e-12 : 1.0;
 }
 

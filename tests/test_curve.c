@@ -282,3 +282,49 @@ TEST(weighted_slope_bound_holds_everywhere)
         curve_free(&c);
     }
 }
+
+/* Whether evaluation shows a jump over [t0, t1]: two samples dt apart that
+ * differ by more than the slope bound allows. */
+static int jumps_when_sampled(const curve *c, double t0, double t1)
+{
+    const int n = 200000;
+    double dt = (t1 - t0) / n, prev = curve_eval(c, t0);
+    for (int i = 1; i <= n; i++) {
+        double v = curve_eval(c, t0 + i * dt);
+        if (fabs(v - prev) > curve_max_slope(c) * dt * (1 + 1e-9) + 1e-12)
+            return 1;
+        prev = v;
+    }
+    return 0;
+}
+
+/* curve_is_continuous (the flattened Gaussian boxes trust a camera's turn
+ * rate only when its rotation cannot jump) agrees with sampling: steps
+ * between different values and cycles between different ends jump; steps
+ * between equal values, linear and spline keys, cycle-relative and
+ * oscillate infinities do not. */
+TEST(curve_continuity_agrees_with_sampling)
+{
+    const double differ[] = {0, 1, 1, 3, 2, 2}, same_ends[] = {0, 1, 1, 3, 2, 1}, flat[] = {0, 2, 1, 2, 2, 2};
+    struct {
+        const double *tv;
+        tangent_kind out;
+        infinity_kind post;
+        int continuous;
+    } cases[] = {
+        {differ, TAN_STEP, INF_CONSTANT, 0},        {differ, TAN_STEPNEXT, INF_CONSTANT, 0},
+        {flat, TAN_STEP, INF_CONSTANT, 1},          {differ, TAN_LINEAR, INF_CONSTANT, 1},
+        {differ, TAN_SPLINE, INF_LINEAR, 1},        {differ, TAN_LINEAR, INF_CYCLE, 0},
+        {same_ends, TAN_LINEAR, INF_CYCLE, 1},      {differ, TAN_LINEAR, INF_CYCLE_RELATIVE, 1},
+        {differ, TAN_SPLINE, INF_OSCILLATE, 1},
+    };
+    int disagree = 0;
+    for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
+        curve c = make(3, cases[k].tv, cases[k].out == TAN_STEP || cases[k].out == TAN_STEPNEXT ? TAN_FLAT : cases[k].out,
+                       cases[k].out, INF_CONSTANT, cases[k].post);
+        int sampled = !jumps_when_sampled(&c, -1.0, 7.0);
+        disagree += sampled != cases[k].continuous || curve_is_continuous(&c) != cases[k].continuous;
+        curve_free(&c);
+    }
+    CHECK(disagree == 0);
+}

@@ -113,12 +113,23 @@ static int inside(aabb b, vec3 p)
  * Gaussian's bounds, the camera at the origin and no farther (focal 100,
  * the filter's pole bounded by GAUSSIAN_NEAR)? A point of the ray within
  * the lead of the hit's distance must be in the box. */
+/* Does the segment of the ray from the origin along dir with distances
+ * in [t - lead, t + lead] meet the box? (slabs: exact, however thin the
+ * box along the ray) */
 static int ray_in_box_near(aabb box, vec3 dir, double t, double lead)
 {
-    for (int k = -50; k <= 50; k++)
-        if (inside(box, v3_scale(dir, t + lead * k / 50.0)))
-            return 1;
-    return 0;
+    double lo = t - lead, hi = t + lead, d[3] = {dir.x, dir.y, dir.z};
+    double b0[3] = {box.lo.x, box.lo.y, box.lo.z}, b1[3] = {box.hi.x, box.hi.y, box.hi.z};
+    for (int a = 0; a < 3; a++) {
+        if (d[a] == 0) {
+            if (!(b0[a] <= 0 && 0 <= b1[a]))
+                return 0;
+            continue;
+        }
+        double ta = b0[a] / d[a], tb = b1[a] / d[a];
+        lo = fmax(lo, fmin(ta, tb)), hi = fmin(hi, fmax(ta, tb));
+    }
+    return lo <= hi;
 }
 
 static int hit_in_its_box(const gaussian_model *m, vec3 dir, const gaussian_hit *h, double lead)
