@@ -90,17 +90,15 @@ static void gaussian_view_axis(const scene *s, const gaussian_footprint *f, cons
                                double close, vec3 *axis, double *cone)
 {
     *axis = v3(0, 0, 0), *cone = M_PI;
+    int moves = scene_camera_moves(s);
     if (!animation_is_static(&o->anim) || f->min_scale != f->max_scale ||
-        (scene_camera_moves(s) && !animation_turns_continuously(&s->camera_motion)))
+        (moves && !animation_turns_continuously(&s->camera_motion)))
         return;
     camera_view v;
     scene_camera_view(s, 0.5 * (open + close), &v);
-    const double(*r)[3] = f->at_open.r; /* the object's linear part: axis . (r x) = (r^T axis) . x */
-    vec3 a = v.axis[2], in_object = v3(r[0][0] * a.x + r[1][0] * a.y + r[2][0] * a.z,
-                                       r[0][1] * a.x + r[1][1] * a.y + r[2][1] * a.z,
-                                       r[0][2] * a.x + r[1][2] * a.y + r[2][2] * a.z);
-    double turn = scene_camera_moves(s) ? animation_motion_bound(&s->camera_motion, open, close).turn : 0.0;
-    *axis = v3_normalize(in_object);
+    /* view depth a . (r x) = (r^T a) . x, and r^T is r^-1 up to the uniform scale */
+    *axis = v3_normalize(xform_inverse_vector(&f->at_open, v.axis[2]));
+    double turn = moves ? animation_motion_bound(&s->camera_motion, open, close).turn : 0.0;
     *cone = turn * 0.5 * (close - open) * (1 + 1e-9) + 1e-9;
 }
 

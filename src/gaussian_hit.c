@@ -270,10 +270,10 @@ static void scaled_image_offset(const gaussian_ray *r, vec3 p, double *X, double
  * most candidates fail (they hold a ball; the pixel's ray is a line): the
  * pole (a thousandth of a pixel for the bench's splats, where the whole
  * circle was assumed before) cut the candidates it keeps from 1.7 to about
- * 1.1 per hit. Both reaches are bounded
- * over the larger one's p.z - reach, and the test multiplied through by
- * p.z (p.z - reach): no division (issue 31's profile: they led the cull),
- * and never tighter than the bound itself; the 1e-6 slack covers rounding. */
+ * 1.1 per hit. Both reaches are bounded over the larger one's p.z - reach,
+ * and the test multiplied through by p.z (p.z - reach): one division (the
+ * pole's) where there were four (issue 31's profile: they led the cull),
+ * never tighter than the bound itself; the 1e-6 slack covers rounding. */
 static int splat_near_pixel(const gaussian_ray *r, vec3 p, double s, double c)
 {
     const double k = 3.3302, filter_px = 2.3540; /* sqrt(2 ln 255) = 3.32901, sqrt(ln 255) = 2.35399, rounded up */
@@ -360,12 +360,8 @@ static int raster_alpha(const gaussian_model *m, size_t i, const raster_rules *r
                         vec3 p, double *alpha)
 {
     const float *s = &m->scale[3 * i];
-    double dx, dy, k2 = 2.0 * log(m->opacity[i] * 255.0);
-    image_offset(r, p, &dx, &dy);
-    /* cheap and sure: lambda_max(cov2D) <= (f_max / z)^2 (1 + lim^2) s_max^2 + dilation (gaussian_view_stretch) */
-    double fz = rr_fmax(r->fx, r->fy) / p.z * rr_fmax(s[0], rr_fmax(s[1], s[2])) * r->scale * r->stretch;
-    if (!(dx * dx + dy * dy <= k2 * (fz * fz + rules->dilation) * (1 + 1e-6)))
-        return 0;
+    double dx, dy;
+    image_offset(r, p, &dx, &dy); /* (the cheap and sure reach test is cull_3d_raster's, run first) */
     double R[3][3], limx = RASTER_CLAMP * r->cx / r->fx, limy = RASTER_CLAMP * r->cy / r->fy;
     quaternion_matrix(&m->rotation[4 * i], R);
     double tx = rr_fmin(limx, rr_fmax(-limx, p.x / p.z)), ty = rr_fmin(limy, rr_fmax(-limy, p.y / p.z));
@@ -398,8 +394,10 @@ static int raster_alpha(const gaussian_model *m, size_t i, const raster_rules *r
 }
 
 /* The 3D rasterizers' cull from the mean and the scale: the centre within
- * the depths in_frustum keeps, and the pixel within the reach
- * raster_alpha's first test allows at opacity 1. */
+ * the depths in_frustum keeps, and the pixel within the footprint's reach,
+ * cheap and sure: lambda_max(cov2D) <= (f_max / z)^2 (1 + lim^2) s_max^2 +
+ * dilation (gaussian_view_stretch), alpha >= 1/255 within k^2 of it, k^2
+ * = 2 ln(255 o) <= 2 ln 255. */
 static int cull_3d_raster(const gaussian_model *m, size_t i, const gaussian_ray *r, vec3 p)
 {
     const raster_rules *rules = raster_rules_of(gaussian_formation_of(m));
@@ -408,7 +406,7 @@ static int cull_3d_raster(const gaussian_model *m, size_t i, const gaussian_ray 
     if (!(p.z > rules->near && p.z <= rules->far))
         return 0;
     double X, Y, F = rr_fmax(r->fx, r->fy) * rr_fmax(s[0], rr_fmax(s[1], s[2])) * r->scale * r->stretch;
-    scaled_image_offset(r, p, &X, &Y); /* raster_alpha's first test times p.z^2, with room for rounding */
+    scaled_image_offset(r, p, &X, &Y); /* times p.z^2 (no division), with room for rounding */
     return X * X + Y * Y <= k2 * (F * F + rules->dilation * p.z * p.z) * (1 + 1e-5);
 }
 

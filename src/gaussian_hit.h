@@ -71,7 +71,6 @@ typedef struct {
     unsigned obj, prim;
 } gaussian_hit;
 
-/* A ray's hits (grown as needed; a thread's scratch). */
 /* A Gaussian a traversal listed, and its mean in camera space once the
  * cull has computed it. */
 typedef struct {
@@ -79,6 +78,7 @@ typedef struct {
     unsigned prim;
 } gaussian_candidate;
 
+/* A ray's hits (grown as needed; a thread's scratch). */
 typedef struct {
     gaussian_hit *hits;
     size_t count, cap;

@@ -109,10 +109,6 @@ static int inside(aabb b, vec3 p)
     return p.x >= b.lo.x && p.x <= b.hi.x && p.y >= b.lo.y && p.y <= b.hi.y && p.z >= b.lo.z && p.z <= b.hi.z;
 }
 
-/* Does the 2D hit h of the ray from the origin along dir lie in its
- * Gaussian's bounds, the camera at the origin and no farther (focal 100,
- * the filter's pole bounded by GAUSSIAN_NEAR)? A point of the ray within
- * the lead of the hit's distance must be in the box. */
 /* Does the segment of the ray from the origin along dir with distances
  * in [t - lead, t + lead] meet the box? (slabs: exact, however thin the
  * box along the ray) */
@@ -132,6 +128,10 @@ static int ray_in_box_near(aabb box, vec3 dir, double t, double lead)
     return lo <= hi;
 }
 
+/* Does the 2D hit h of the ray from the origin along dir lie in its
+ * Gaussian's bounds, the camera at the origin and no farther (focal 100,
+ * the filter's pole bounded by GAUSSIAN_NEAR)? A point of the ray within
+ * the lead of the hit's distance must be in the box. */
 static int hit_in_its_box(const gaussian_model *m, vec3 dir, const gaussian_hit *h, double lead)
 {
     gaussian_view_bound vb = {v3_len(v3(m->mean[0], m->mean[1], m->mean[2])), 100, 1, gaussian_filter_near(1, 1),
@@ -215,6 +215,12 @@ TEST(gaussian_3d_raster_hits_lie_in_their_bounds_at_their_distance)
     gaussian_model_free(&m);
 }
 
+/* Both 2DGS circle rules and the four rasterizer semantics (3DGRT has no
+ * cull and no screen footprint). */
+static const gaussian_formation splatting_formations[6] = {
+    GAUSSIAN_FORMATION_2DGS, GAUSSIAN_FORMATION_2DGS_UNIT_CIRCLE, GAUSSIAN_FORMATION_3DGS,
+    GAUSSIAN_FORMATION_3DGS_ANTIALIASED, GAUSSIAN_FORMATION_GSPLAT, GAUSSIAN_FORMATION_GSPLAT_ANTIALIASED};
+
 /* The cull (gaussian_cull, from mean and scale) never drops a Gaussian
  * that the whole evaluation would hit, and every 2D hit lies in its box:
  * random Gaussians of both 2DGS circle rules and the four rasterizer
@@ -224,16 +230,13 @@ TEST(gaussian_3d_raster_hits_lie_in_their_bounds_at_their_distance)
  * means' images. */
 TEST(gaussian_culls_never_drop_a_hit_and_2d_hits_near_the_camera_lie_in_their_bounds)
 {
-    const gaussian_formation kinds[] = {GAUSSIAN_FORMATION_2DGS, GAUSSIAN_FORMATION_2DGS_UNIT_CIRCLE,
-                                        GAUSSIAN_FORMATION_3DGS, GAUSSIAN_FORMATION_3DGS_ANTIALIASED,
-                                        GAUSSIAN_FORMATION_GSPLAT, GAUSSIAN_FORMATION_GSPLAT_ANTIALIASED};
     camera_view v = {v3(0, 0, 0), {v3(1, 0, 0), v3(0, 1, 0), v3(0, 0, 1)}, 100, 100, 50, 50, 100, 100};
     xform id = {{{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}, {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}, {0, 0, 0}, 0};
     unsigned st = 31;
     int hits = 0, near_hits = 0, culled = 0, dropped = 0, outside = 0;
     for (int trial = 0; trial < 60000; trial++) {
         gaussian_model m;
-        gaussian_formation f = kinds[trial % 6];
+        gaussian_formation f = splatting_formations[trial % 6];
         model_of(&m, 1, f <= GAUSSIAN_FORMATION_2DGS_UNIT_CIRCLE ? GAUSSIAN_2D : GAUSSIAN_3D);
         m.formation = f;
         double depth = GAUSSIAN_NEAR * (1 + 1e-3) + 2.8 * pow(uniform(&st), 2);
@@ -262,14 +265,14 @@ TEST(gaussian_culls_never_drop_a_hit_and_2d_hits_near_the_camera_lie_in_their_bo
     CHECK(outside == 0);
 }
 
-/* A random rotation, as the rows of R. */
+/* A random rotation by at most angle_max, as the rows of R. */
 static void random_rotation(unsigned *st, double angle_max, vec3 R[3])
 {
     vec3 axis = v3_normalize(v3(uniform(st) - 0.5, uniform(st) - 0.5, uniform(st) - 0.5));
-    double a = angle_max * uniform(st), c = cos(a), s = sin(a), t = 1 - c, x = axis.x, y = axis.y, z = axis.z;
-    R[0] = v3(t * x * x + c, t * x * y - s * z, t * x * z + s * y);
-    R[1] = v3(t * x * y + s * z, t * y * y + c, t * y * z - s * x);
-    R[2] = v3(t * x * z - s * y, t * y * z + s * x, t * z * z + c);
+    double m[3][3];
+    rotation_matrix(axis, angle_max * uniform(st), m);
+    for (int k = 0; k < 3; k++)
+        R[k] = v3(m[k][0], m[k][1], m[k][2]);
 }
 
 static vec3 rotate(const vec3 R[3], vec3 p) { return v3(v3_dot(R[0], p), v3_dot(R[1], p), v3_dot(R[2], p)); }
@@ -281,15 +284,12 @@ static vec3 rotate(const vec3 R[3], vec3 p) { return v3(v3_dot(R[0], p), v3_dot(
  * across their footprints. A box 0.9 as flat across the axis fails. */
 TEST(gaussian_boxes_flattened_along_the_view_axis_hold_every_hit)
 {
-    const gaussian_formation kinds[] = {GAUSSIAN_FORMATION_2DGS, GAUSSIAN_FORMATION_2DGS_UNIT_CIRCLE,
-                                        GAUSSIAN_FORMATION_3DGS, GAUSSIAN_FORMATION_3DGS_ANTIALIASED,
-                                        GAUSSIAN_FORMATION_GSPLAT, GAUSSIAN_FORMATION_GSPLAT_ANTIALIASED};
     xform id = {{{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}, {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}, {0, 0, 0}, 0};
     unsigned st = 61;
     int hits = 0, turned = 0, outside = 0;
     for (int trial = 0; trial < 60000; trial++) {
         gaussian_model m;
-        gaussian_formation f = kinds[trial % 6];
+        gaussian_formation f = splatting_formations[trial % 6];
         model_of(&m, 1, f <= GAUSSIAN_FORMATION_2DGS_UNIT_CIRCLE ? GAUSSIAN_2D : GAUSSIAN_3D);
         m.formation = f;
         vec3 ref[3], turn[3], cam[3];

@@ -35,10 +35,9 @@ def model(scale):
             "opacity": np.array([0.8]), "sh": ((colour - 0.5) / ref.SH_C0).reshape(1, 1, 3), "degree": 0}
 
 
-def pixel_colour(m, mean, C, px, py):
+def pixel_colour(m, mean, C, px, py, R=np.eye(3)):
     """The reference's colour of pixel centre (px, py) with the Gaussian's mean and camera centre at
-    one instant (camera axes fixed: R = I, x right, y down, z forward)."""
-    R = np.eye(3)
+    one instant (camera axes R_c2w, by default x right, y down, z forward)."""
     T, depth = ref.splat_transform(mean, m["scale"][0], m["rot"][0], R, C, F, F, W, H)
     items = []
     if depth > 0.2:
@@ -101,11 +100,8 @@ def turning_quadrature(m, mean):
     out = np.zeros((W, 3))
     for k in range(QUAD):
         R = turned_y(TURN * ((k + 0.5) / QUAD - 0.5))
-        T, depth = ref.splat_transform(mean, m["scale"][0], m["rot"][0], R, np.zeros(3), F, F, W, H)
-        d = mean / np.linalg.norm(mean)
-        items = [(depth, 0, T, ref.projected_centre(T), ref.sh_to_rgb(m["sh"][0], 0, d))] if depth > 0.2 else []
         for i in range(W):
-            out[i] += ref.shade_pixel(items, m, i + 0.5, H // 2 + 0.5, BACKGROUND)[0] / QUAD
+            out[i] += pixel_colour(m, mean, np.zeros(3), i + 0.5, H // 2 + 0.5, R) / QUAD
     return out
 
 
