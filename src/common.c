@@ -31,6 +31,54 @@ void rr_warn(rr_warnings *w, const char *fmt, ...)
     w->count++;
 }
 
+uint32_t rr_float_order_bits(float f)
+{
+    uint32_t u;
+    memcpy(&u, &f, sizeof u);
+    return u & 0x80000000u ? ~u : u | 0x80000000u;
+}
+
+enum { SORT_RUN = 16 };
+
+static void insertion_sort_u64(uint64_t *a, size_t n)
+{
+    for (size_t i = 1; i < n; i++) {
+        uint64_t w = a[i];
+        size_t j = i;
+        for (; j > 0 && a[j - 1] > w; j--)
+            a[j] = a[j - 1];
+        a[j] = w;
+    }
+}
+
+static void merge_u64(const uint64_t *src, uint64_t *dst, size_t lo, size_t mid, size_t hi)
+{
+    size_t i = lo, j = mid, k = lo;
+    while (i < mid && j < hi)
+        dst[k++] = src[j] < src[i] ? src[j++] : src[i++];
+    while (i < mid)
+        dst[k++] = src[i++];
+    while (j < hi)
+        dst[k++] = src[j++];
+}
+
+void rr_sort_u64(uint64_t *a, uint64_t *tmp, size_t n)
+{
+    for (size_t lo = 0; lo < n; lo += SORT_RUN)
+        insertion_sort_u64(a + lo, n - lo < SORT_RUN ? n - lo : SORT_RUN);
+    uint64_t *src = a, *dst = tmp;
+    for (size_t width = SORT_RUN; width < n; width *= 2) {
+        for (size_t lo = 0; lo < n; lo += 2 * width) {
+            size_t mid = lo + width < n ? lo + width : n, hi = lo + 2 * width < n ? lo + 2 * width : n;
+            merge_u64(src, dst, lo, mid, hi);
+        }
+        uint64_t *t = src;
+        src = dst, dst = t;
+    }
+    if (src != a)
+        memcpy(a, src, n * sizeof *a);
+}
+
 int cmp_double(const void *a, const void *b)
 {
     double x = *(const double *)a, y = *(const double *)b;

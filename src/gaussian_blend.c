@@ -27,6 +27,7 @@ void gaussian_hits_free(gaussian_hits *h)
     free(h->order);
     free(h->rays);
     free(h->candidates);
+    free(h->candidate_order);
     memset(h, 0, sizeof *h);
 }
 
@@ -48,61 +49,6 @@ static int tie_order(const void *a, const void *b, void *hits)
     return hit_before(x, y) ? -1 : hit_before(y, x) ? 1 : 0;
 }
 
-/* A float's bits as an unsigned that sorts as the float does. */
-static uint32_t sortable(float f)
-{
-    uint32_t u;
-    memcpy(&u, &f, sizeof u);
-    return u & 0x80000000u ? ~u : u | 0x80000000u;
-}
-
-/* Sorts 64-bit words (key bits above, hit index below: all distinct, so
- * any correct sort gives the one order): insertion sort in runs of
- * SORT_RUN, then bottom-up merges between a and tmp. Rays gather tens to
- * hundreds of hits, in nearly the traversal's front-to-back order, and
- * sorting the hits themselves through qsort's callback took a fifth of the
- * render (make bench); merging from single words, a tenth (issue 31). */
-enum { SORT_RUN = 16 };
-
-static void insertion_sort_u64(uint64_t *a, size_t n)
-{
-    for (size_t i = 1; i < n; i++) {
-        uint64_t w = a[i];
-        size_t j = i;
-        for (; j > 0 && a[j - 1] > w; j--)
-            a[j] = a[j - 1];
-        a[j] = w;
-    }
-}
-
-static void merge_u64(const uint64_t *src, uint64_t *dst, size_t lo, size_t mid, size_t hi)
-{
-    size_t i = lo, j = mid, k = lo;
-    while (i < mid && j < hi)
-        dst[k++] = src[j] < src[i] ? src[j++] : src[i++];
-    while (i < mid)
-        dst[k++] = src[i++];
-    while (j < hi)
-        dst[k++] = src[j++];
-}
-
-static void merge_sort_u64(uint64_t *a, uint64_t *tmp, size_t n)
-{
-    for (size_t lo = 0; lo < n; lo += SORT_RUN)
-        insertion_sort_u64(a + lo, n - lo < SORT_RUN ? n - lo : SORT_RUN);
-    uint64_t *src = a, *dst = tmp;
-    for (size_t width = SORT_RUN; width < n; width *= 2) {
-        for (size_t lo = 0; lo < n; lo += 2 * width) {
-            size_t mid = lo + width < n ? lo + width : n, hi = lo + 2 * width < n ? lo + 2 * width : n;
-            merge_u64(src, dst, lo, mid, hi);
-        }
-        uint64_t *t = src;
-        src = dst, dst = t;
-    }
-    if (src != a)
-        memcpy(a, src, n * sizeof *a);
-}
-
 /* h->order holds, per hit: its sort word, the merge sort's scratch word,
  * and room for the hits kept for later (gaussian_blend_hits). */
 enum { ORDER_WORDS = 2 + (sizeof(gaussian_hit) + sizeof(uint64_t) - 1) / sizeof(uint64_t) };
@@ -117,8 +63,8 @@ static int sort_hits(gaussian_hits *h)
         h->order = grown, h->order_cap = h->count;
     }
     for (size_t k = 0; k < h->count; k++)
-        h->order[k] = (uint64_t)sortable(h->hits[k].key) << 32 | (uint64_t)k;
-    merge_sort_u64(h->order, h->order + h->count, h->count);
+        h->order[k] = (uint64_t)rr_float_order_bits(h->hits[k].key) << 32 | (uint64_t)k;
+    rr_sort_u64(h->order, h->order + h->count, h->count);
     /* runs of equal keys: by object and Gaussian, O(m log m) (an insertion
      * sort took 17 s for one ray with 256k equal keys, issue 32.5) */
     for (size_t k = 0, end; k < h->count; k = end) {

@@ -601,6 +601,20 @@ int gaussian_cull(const gaussian_model *m, size_t i, const gaussian_ray *r, vec3
     return cull_3d_raster(m, i, r, *p);
 }
 
+float gaussian_key_floor(const gaussian_model *m, size_t i, const gaussian_ray *r, vec3 p)
+{
+    double centre = p.z / r->depth_per_t, floor;
+    if (m->kind == GAUSSIAN_2D) { /* within 3.33 scales of the centre's depth (gaussian_traversal_pad) */
+        const float *s = &m->scale[3 * i];
+        floor = centre - 3.3302 * rr_fmax(s[0], s[1]) * r->scale / r->depth_per_t * (1 + 1e-6);
+    } else if (gaussian_formation_of(m) == GAUSSIAN_FORMATION_3DGRT) {
+        return -INFINITY; /* the closest approach: not tied to the centre's depth */
+    } else {
+        floor = centre; /* the rasterizers' key is the centre's depth, computed alike */
+    }
+    return nextafterf((float)floor, -INFINITY); /* below (float)t for every t >= floor */
+}
+
 int gaussian_hit_after_cull(const gaussian_model *m, size_t i, gaussian_order order, const gaussian_ray *r, vec3 p,
                             gaussian_hit *h)
 {

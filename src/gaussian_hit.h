@@ -75,7 +75,9 @@ typedef struct {
  * cull has computed it. */
 typedef struct {
     vec3 p;
+    float key_floor; /* gaussian_key_floor, once the cull has kept it */
     unsigned prim;
+    unsigned ray;    /* its object's ray among gaussian_hits.rays */
 } gaussian_candidate;
 
 /* A ray's hits (grown as needed; a thread's scratch). */
@@ -88,8 +90,10 @@ typedef struct {
     size_t order_cap;
     struct gaussian_ray_s *rays; /* accel's per-object rays of one sample */
     size_t rays_cap;
-    gaussian_candidate *candidates; /* a traversal's Gaussians, evaluated after it (accel.c) */
+    gaussian_candidate *candidates; /* a window's Gaussians, evaluated after its traversals (accel.c) */
     size_t candidates_count, candidates_cap;
+    uint64_t *candidate_order;      /* their evaluation order (accel.c), with sorting space */
+    size_t candidate_order_cap;
 } gaussian_hits;
 
 void gaussian_hits_add(gaussian_hits *h, const gaussian_hit *hit);
@@ -150,6 +154,11 @@ int gaussian_hit_after_cull(const gaussian_model *m, size_t i, gaussian_order or
                             gaussian_hit *h);
 int gaussian_hit_2d(const gaussian_model *m, size_t i, gaussian_order order, const gaussian_ray *r,
                     gaussian_hit *h);
+/* A float at or below the key of any hit of Gaussian i on r, in either
+ * order, from its camera-space mean p (the cull's): its hits can then
+ * wait while those of smaller keys are composited (accel.c); -INFINITY
+ * where no bound is known. */
+float gaussian_key_floor(const gaussian_model *m, size_t i, const gaussian_ray *r, vec3 p);
 int gaussian_hit_3d_raster(const gaussian_model *m, size_t i, const gaussian_ray *r, gaussian_hit *h);
 /* The 2DGS low-pass filter's centre (raster position) of Gaussian i seen
  * by r's camera; 0 where its circle's image is no ellipse (for tests). */
