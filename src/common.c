@@ -62,7 +62,7 @@ static void merge_u64(const uint64_t *src, uint64_t *dst, size_t lo, size_t mid,
         dst[k++] = src[j++];
 }
 
-void rr_sort_u64(uint64_t *a, uint64_t *tmp, size_t n)
+static void merge_sort_u64(uint64_t *a, uint64_t *tmp, size_t n)
 {
     for (size_t lo = 0; lo < n; lo += SORT_RUN)
         insertion_sort_u64(a + lo, n - lo < SORT_RUN ? n - lo : SORT_RUN);
@@ -77,6 +77,22 @@ void rr_sort_u64(uint64_t *a, uint64_t *tmp, size_t n)
     }
     if (src != a)
         memcpy(a, src, n * sizeof *a);
+}
+
+void rr_sort_u64(uint64_t *a, uint64_t *tmp, size_t n)
+{
+    size_t sorted = 1; /* compositing sorts its carried hits (in order) with a few new ones */
+    while (sorted < n && a[sorted - 1] < a[sorted])
+        sorted++;
+    if (sorted >= n)
+        return;
+    if (sorted <= SORT_RUN) {
+        merge_sort_u64(a, tmp, n);
+        return;
+    }
+    merge_sort_u64(a + sorted, tmp, n - sorted);
+    merge_u64(a, tmp, 0, sorted, n);
+    memcpy(a, tmp, n * sizeof *a);
 }
 
 int cmp_double(const void *a, const void *b)

@@ -79,7 +79,8 @@ int cmp_double(const void *a, const void *b);
 uint32_t rr_float_order_bits(float f);
 
 /* Sorts n 64-bit words ascending (tmp: room for n more): insertion sort in
- * runs of 16, then bottom-up merges between a and tmp. Its callers sort
+ * runs of 16, then bottom-up merges between a and tmp; an ascending
+ * prefix longer than a run is kept and merged with the rest, sorted. Its callers sort
  * tens to hundreds of words (a key above, an index below: all distinct,
  * so any correct sort gives the one order), nearly in order already;
  * through qsort's callback the Gaussian hits' sort took a fifth of the

@@ -2,6 +2,7 @@
  * line, condition and values, and test builds have DCHECKs compiled in
  * (make test builds with RR_DCHECKS; a release build has them as no-ops). */
 #include <signal.h>
+#include <stdlib.h>
 #include <string.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -52,4 +53,40 @@ TEST(inline_fmax_and_fmin_give_libms_values)
                 differ += !(got[k] == want[k] || (isnan(got[k]) && isnan(want[k])));
         }
     CHECK(differ == 0);
+}
+
+static int cmp_u64(const void *a, const void *b)
+{
+    uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
+    return (x > y) - (x < y);
+}
+
+/* rr_sort_u64 gives qsort's order for lengths 0-300, random words and
+ * words with an ascending prefix of every length (kept and merged) or
+ * nearly sorted ones; and rr_float_order_bits orders floats as < does,
+ * signed zeros and infinities included. */
+TEST(u64_sort_agrees_with_qsort_and_float_bits_sort_as_floats)
+{
+    uint64_t a[300], b[300], tmp[300];
+    unsigned st = 3;
+    int wrong = 0;
+    for (int trial = 0; trial < 3000; trial++) {
+        size_t n = (size_t)(rand_r(&st) % 301), prefix = n ? (size_t)rand_r(&st) % (n + 1) : 0;
+        for (size_t k = 0; k < n; k++)
+            a[k] = (uint64_t)rand_r(&st) << 20 ^ (uint64_t)(rand_r(&st) % 64);
+        if (trial % 3 == 0)
+            qsort(a, prefix, sizeof *a, cmp_u64);
+        else if (trial % 3 == 1)
+            for (size_t k = 0; k < n; k++)
+                a[k] = (uint64_t)k * 1000 + (uint64_t)(rand_r(&st) % 3000);
+        memcpy(b, a, n * sizeof *a);
+        rr_sort_u64(a, tmp, n);
+        qsort(b, n, sizeof *b, cmp_u64);
+        wrong += memcmp(a, b, n * sizeof *a) != 0;
+    }
+    CHECK(wrong == 0);
+    const float f[] = {-INFINITY, -3.5f, -1e-30f, -0.0f, 1e-40f, 2.0f, 3e38f, INFINITY};
+    for (size_t k = 1; k < sizeof f / sizeof *f; k++)
+        CHECK(rr_float_order_bits(f[k - 1]) < rr_float_order_bits(f[k]));
+    CHECK(rr_float_order_bits(0.0f) == rr_float_order_bits(-0.0f) + 1); /* -0 just before +0 */
 }
