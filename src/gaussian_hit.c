@@ -321,8 +321,11 @@ static int hit_2d_after_cull(const gaussian_model *m, size_t i, gaussian_order o
     if (plane_depth < GAUSSIAN_NEAR)
         return 0;
     double rho = rr_fmin(rho3d, rho2d), t = depth / r->depth_per_t;
-    if (!(rho <= 2.0 * log(m->opacity[i] / GAUSSIAN_ALPHA_MIN) + 1e-9) || !(t >= r->tmin && t < r->tmax))
-        return 0; /* alpha below 1/255 for certain (exp is the costly part; the exact test follows) */
+    /* alpha below 1/255 for certain (opacity <= 1): exp is the costly
+     * part, and the exact test follows (a test with the opacity's own log
+     * cost a log per candidate) */
+    if (!(rho <= 2.0 * log(1.0 / GAUSSIAN_ALPHA_MIN) + 1e-9) || !(t >= r->tmin && t < r->tmax))
+        return 0;
     double alpha = clamp_alpha(GAUSSIAN_ALPHA_MAX, m->opacity[i], exp(-0.5 * rho));
     if (alpha < GAUSSIAN_ALPHA_MIN)
         return 0;
@@ -612,7 +615,9 @@ float gaussian_key_floor(const gaussian_model *m, size_t i, const gaussian_ray *
     } else {
         floor = centre; /* the rasterizers' key is the centre's depth, computed alike */
     }
-    return nextafterf((float)floor, -INFINITY); /* below (float)t for every t >= floor */
+    /* rounding is monotone: a hit's key (float)t >= (float)floor for t >=
+     * floor, and compositing takes keys strictly below it */
+    return (float)floor;
 }
 
 int gaussian_hit_after_cull(const gaussian_model *m, size_t i, gaussian_order order, const gaussian_ray *r, vec3 p,
