@@ -582,30 +582,11 @@ void accel_gaussian_gather(const struct RTCIntersectFunctionNArguments *args)
     h->candidates[h->candidates_count++].prim = args->primID;
 }
 
-/* Culls the candidates listed from `first` on (object ray `ray`'s
- * traversal), keeping those it passes there with their key floors: the
- * cull reads the mean and scale (prefetched a few ahead); the rest of the
- * evaluation reads rotation and opacity, prefetched for those it keeps
- * (three of five candidates of a 2DGS model fail it, src/cmd/BENCH.md). */
-enum { PREFETCH_AHEAD = 8 };
 static void cull_candidates(const gather_context *c, size_t first, unsigned ray)
 {
     gaussian_hits *h = c->out;
-    const gaussian_model *m = &c->o->gaussians;
-    gaussian_candidate *cand = h->candidates;
-    size_t n = h->candidates_count, kept = first;
-    for (size_t k = first; k < n; k++) {
-        if (k + PREFETCH_AHEAD < n)
-            gaussian_prefetch_cull(m, cand[k + PREFETCH_AHEAD].prim);
-        unsigned prim = cand[k].prim;
-        if (gaussian_cull(m, prim, c->ray, &cand[kept].p)) {
-            gaussian_prefetch_hit(m, prim);
-            cand[kept].key_floor = gaussian_key_floor(m, prim, c->ray, cand[kept].p);
-            cand[kept].prim = prim, cand[kept].ray = ray;
-            kept++;
-        }
-    }
-    h->candidates_count = kept;
+    size_t n = h->candidates_count - first;
+    h->candidates_count = first + gaussian_cull_candidates(&c->o->gaussians, c->ray, h->candidates + first, n, ray);
 }
 
 static void evaluate_kept(const accel *a, gaussian_hits *h, const gaussian_candidate *k)

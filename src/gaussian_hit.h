@@ -154,6 +154,12 @@ int gaussian_hit_after_cull(const gaussian_model *m, size_t i, gaussian_order or
                             gaussian_hit *h);
 int gaussian_hit_2d(const gaussian_model *m, size_t i, gaussian_order order, const gaussian_ray *r,
                     gaussian_hit *h);
+/* Culls the n candidates listed in cand (their prims), keeping those the
+ * cull passes at the front of cand with their means in camera space, key
+ * floors and `ray`; returns how many. Their rotation and opacity are
+ * prefetched; the means and scales a few ahead. */
+size_t gaussian_cull_candidates(const gaussian_model *m, const gaussian_ray *r, gaussian_candidate *cand, size_t n,
+                                unsigned ray);
 /* A float at or below the key of any hit of Gaussian i on r, in either
  * order, from its camera-space mean p (the cull's): its hits can then
  * wait while those of smaller keys are composited (accel.c); -INFINITY

@@ -278,6 +278,67 @@ static void random_rotation(unsigned *st, double angle_max, vec3 R[3])
 
 static vec3 rotate(const vec3 R[3], vec3 p) { return v3(v3_dot(R[0], p), v3_dot(R[1], p), v3_dot(R[2], p)); }
 
+/* gaussian_cull_candidates (the culls in vector lanes where the CPU has
+ * AVX2) keeps exactly the Gaussians gaussian_cull keeps, in order, with
+ * the same camera-space means and key floors, bit for bit: both 2DGS
+ * circle rules and the four rasterizer semantics, means behind the camera, at the near plane and out to 4,
+ * from far below a pixel to many pixels, scattered about the cull's edge
+ * (the footprint's reach from the pixel's ray) and exactly at the near
+ * plane; candidate counts that are no multiple of the lanes. */
+TEST(gaussian_cull_candidates_keeps_what_gaussian_cull_keeps)
+{
+    camera_view v = {v3(0, 0, 0), {v3(1, 0, 0), v3(0, 1, 0), v3(0, 0, 1)}, 100, 100, 50, 50, 100, 100};
+    xform id = {{{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}, {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}, {0, 0, 0}, 0};
+    unsigned st = 91;
+    enum { N = 4099 };
+    gaussian_candidate *cand = malloc(N * sizeof *cand);
+    long kept_total = 0, culled_total = 0, mismatched = 0;
+    for (int trial = 0; trial < 60; trial++) {
+        gaussian_model m;
+        m.formation = splatting_formations[trial % 6];
+        model_of(&m, N, m.formation <= GAUSSIAN_FORMATION_2DGS_UNIT_CIRCLE ? GAUSSIAN_2D : GAUSSIAN_3D);
+        m.formation = splatting_formations[trial % 6];
+        double x = 100 * uniform(&st), y = 100 * uniform(&st);
+        vec3 dir = v3_normalize(v3((x - 50) / 100, (y - 50) / 100, 1));
+        for (size_t i = 0; i < N; i++) {
+            double depth = -0.5 + 4.5 * uniform(&st) * uniform(&st) + (i % 7 == 0 ? GAUSSIAN_NEAR + 0.5 : 0);
+            random_gaussian(&m, i, &st, fabs(depth) * pow(10.0, -4 + 3 * uniform(&st)));
+            double reach = 3.4 * fmax(m.scale[3 * i], m.scale[3 * i + 1]) + 2.4 * fabs(depth) / 100; /* the cull's scale */
+            vec3 at = v3_scale(dir, depth / dir.z);
+            for (int k = 0; k < 3; k++)
+                m.mean[3 * i + k] = (float)((k == 0 ? at.x : k == 1 ? at.y : at.z) + 1.3 * reach * (2 * uniform(&st) - 1));
+        }
+        for (size_t i = 0; i < N; i += 5) { /* exactly at the near plane of 2DGS and Inria (0.2): 0.5 - 0.3 */
+            m.mean[3 * i] = (float)(0.5 * dir.x / dir.z), m.mean[3 * i + 1] = (float)(0.5 * dir.y / dir.z);
+            m.mean[3 * i + 2] = 0.5f;
+        }
+        xform back = id;
+        back.t = v3(0, 0, -0.3); /* the others 0.3 nearer */
+        gaussian_ray r;
+        gaussian_ray_init(&r, &v, &back, x, y, v3(0, 0, 0), dir);
+        size_t n = N - (size_t)trial % 4;
+        for (size_t i = 0; i < n; i++)
+            cand[i].prim = (unsigned)i;
+        size_t kept = gaussian_cull_candidates(&m, &r, cand, n, 7), j = 0;
+        for (size_t i = 0; i < n; i++) {
+            vec3 p;
+            if (!gaussian_cull(&m, i, &r, &p))
+                continue;
+            float floor = gaussian_key_floor(&m, i, &r, p);
+            mismatched += j >= kept || cand[j].prim != i || memcmp(&cand[j].p, &p, sizeof p) || cand[j].ray != 7 ||
+                          memcmp(&cand[j].key_floor, &floor, sizeof floor);
+            j++;
+        }
+        mismatched += j != kept;
+        kept_total += (long)kept, culled_total += (long)(n - kept);
+        gaussian_model_free(&m);
+    }
+    free(cand);
+    printf("    kept %ld, culled %ld, differing from gaussian_cull %ld\n", kept_total, culled_total, mismatched);
+    CHECK(kept_total > 15000 && culled_total > 15000);
+    CHECK(mismatched == 0);
+}
+
 /* gaussian_key_floor lies at or below the key of every hit, in both
  * orders, under all seven formations, for objects placed by a rotation
  * and a uniform or non-uniform scale, with Gaussians from far below a
