@@ -29,7 +29,10 @@ endif
 INCLUDES  := -I/usr/include/embree3 -I/usr/include/OpenEXR -I/usr/include/libxml2
 RR_CPPFLAGS = -D_GNU_SOURCE $(INCLUDES) -DRR_SOURCE_SCENE='"$(CURDIR)/scenes/default.xml"' \
               -DRR_SOURCE_DIR='"$(CURDIR)"' -MMD -MP $(CPPFLAGS)
-RR_CFLAGS   = -std=c11 $(OPT) -Wall -Wextra $(CFLAGS)
+# -ffp-contract=off: the Gaussian culls in AVX2 lanes give the scalar
+# cull's answers bit for bit only if neither is fused into FMA (-std=c11
+# implies it for GCC; clang, or -std=gnu11 with -march=native, would fuse)
+RR_CFLAGS   = -std=c11 -ffp-contract=off $(OPT) -Wall -Wextra $(CFLAGS)
 RR_CXXFLAGS = -std=c++17 $(OPT) -Wall -Wextra $(CXXFLAGS)
 LDLIBS   := -ljson-c -lassimp -lembree3 -lOpenEXRCore -lxml2 -ldl -lpthread -lm
 # OpenImageIO only in the preview module, opened when a preview is written

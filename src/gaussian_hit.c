@@ -685,6 +685,7 @@ float gaussian_key_floor(const gaussian_model *m, size_t i, const gaussian_ray *
     if (m->kind == GAUSSIAN_2D) { /* within 3.33 scales of the centre's depth (gaussian_traversal_pad) */
         const float *s = &m->scale[3 * i];
         floor = centre - 3.3302 * rr_fmax(s[0], s[1]) * r->scale / r->depth_per_t * (1 + 1e-6);
+        floor -= 1e-15 * fabs(centre); /* the subtraction's rounding, where the pad is below it */
     } else if (gaussian_formation_of(m) == GAUSSIAN_FORMATION_3DGRT) {
         return -INFINITY; /* the closest approach: not tied to the centre's depth */
     } else {
@@ -696,7 +697,7 @@ float gaussian_key_floor(const gaussian_model *m, size_t i, const gaussian_ray *
 }
 
 /* Keeps cand[k] (k < n) that the cull passes, at the front, with p and
- * key floor; a 2D model's in blocks (cull_2d_block). */
+ * key floor (gaussian_cull_candidates). */
 static size_t keep_culled(const gaussian_model *m, const gaussian_ray *r, gaussian_candidate *cand, size_t kept,
                           unsigned prim, vec3 p, unsigned ray)
 {

@@ -85,7 +85,7 @@ typedef struct {
     gaussian_hit *hits;
     size_t count, cap;
     size_t dropped;   /* hits that found no memory */
-    size_t added;     /* hits ever added (a statistic) */
+    size_t added;     /* hits ever added (a statistic, and how windows grow: accel.c) */
     uint64_t *order;  /* gaussian_blend_hits's sorting space */
     size_t order_cap;
     struct gaussian_ray_s *rays; /* accel's per-object rays of one sample */
