@@ -332,6 +332,40 @@ static void gaussian_slab(gaussian_model *m, gaussian_kind kind, size_t n, unsig
     }
 }
 
+/* Whether the windowed, chunked gathering (accel_blend_gaussians) of the
+ * ray through raster (x, y) at time 0, before tmax, composites anything
+ * other than every hit of every object at once; *hits: how many there
+ * are, *composited: how many the blend took. */
+static int gathering_differs(const accel *a, const scene *s, double x, double y, double tmax, gaussian_hits *windowed,
+                             gaussian_hits *all, size_t *hits, size_t *composited)
+{
+    camera_view view;
+    scene_camera_view(s, 0, &view);
+    vec3 org, d;
+    scene_camera_ray(s, x, y, 0, &org, &d);
+    gaussian_blend got, want;
+    gaussian_blend_init(&got), gaussian_blend_init(&want);
+    accel_blend_gaussians(a, &view, x, y, org, d, 0, tmax, windowed, &got);
+    all->count = 0;
+    for (unsigned ob = 0; ob < (unsigned)s->nobjects; ob++) {
+        const scene_object *o = &s->objects[ob];
+        xform xf = animation_at(&o->anim, 0);
+        gaussian_ray r;
+        gaussian_ray_init(&r, &view, &xf, x, y, org, d);
+        r.tmax = tmax;
+        for (size_t i = 0; i < o->gaussians.count; i++) {
+            gaussian_hit h;
+            if (gaussian_hit_any(&o->gaussians, i, o->order, &r, &h))
+                h.obj = ob, gaussian_hits_add(all, &h);
+        }
+    }
+    *hits = all->count;
+    gaussian_blend_hits(&want, all, accel_gaussian_models(a), INFINITY);
+    *composited = want.composited;
+    return memcmp(&got.sum, &want.sum, sizeof got.sum) || got.T != want.T || got.composited != want.composited ||
+           got.done != want.done;
+}
+
 /* accel_blend_gaussians gathers a ray's hits in windows of distance and
  * evaluates a window's candidates in chunks, in order of their key floors,
  * compositing between chunks: it must composite exactly what compositing
@@ -367,30 +401,12 @@ TEST(gaussian_windows_and_chunks_composite_what_all_hits_at_once_do)
             CHECK(0);
             continue;
         }
-        const scene_object *o = &s.objects[0];
-        camera_view view;
-        scene_camera_view(&s, 0, &view);
-        xform id = {{{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}, {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}, {0, 0, 0}, 0};
         gaussian_hits windowed = {0}, all = {0};
         for (int p = 0; p < 256; p++) {
             double x = 4 * (p % 16) + 2 + 0.37 * (p % 3), y = 4 * (p / 16) + 2 + 0.21 * (p % 5);
-            vec3 org, d;
-            scene_camera_ray(&s, x, y, 0, &org, &d);
-            gaussian_blend got, want;
-            gaussian_blend_init(&got), gaussian_blend_init(&want);
-            accel_blend_gaussians(a, &view, x, y, org, d, 0, INFINITY, &windowed, &got);
-            gaussian_ray r;
-            gaussian_ray_init(&r, &view, &id, x, y, org, d);
-            all.count = 0;
-            for (size_t i = 0; i < o->gaussians.count; i++) {
-                gaussian_hit h;
-                if (gaussian_hit_any(&o->gaussians, i, o->order, &r, &h))
-                    h.obj = 0, gaussian_hits_add(&all, &h);
-            }
-            chunked += all.count > 64 && want.composited < all.count;
-            gaussian_blend_hits(&want, &all, accel_gaussian_models(a), INFINITY);
-            mismatched += memcmp(&got.sum, &want.sum, sizeof got.sum) || got.T != want.T ||
-                          got.composited != want.composited || got.done != want.done;
+            size_t hits, composited;
+            mismatched += gathering_differs(a, &s, x, y, INFINITY, &windowed, &all, &hits, &composited);
+            chunked += hits > 64 && composited < hits;
         }
         gaussian_hits_free(&windowed), gaussian_hits_free(&all);
         accel_free(a);
@@ -448,34 +464,13 @@ TEST(gaussian_windows_shared_by_objects_composite_what_all_hits_at_once_do)
             CHECK(0);
             continue;
         }
-        camera_view view;
-        scene_camera_view(&s, 0, &view);
         gaussian_hits windowed = {0}, all = {0};
         for (int p = 0; p < 400; p++) {
             double x = 64.0 * rand_r(&st) / RAND_MAX, y = 64.0 * rand_r(&st) / RAND_MAX;
             double tmax = p % 2 ? 2.9 + 1.2 * rand_r(&st) / RAND_MAX : INFINITY;
-            vec3 org, d;
-            scene_camera_ray(&s, x, y, 0, &org, &d);
-            gaussian_blend got, want;
-            gaussian_blend_init(&got), gaussian_blend_init(&want);
-            accel_blend_gaussians(a, &view, x, y, org, d, 0, tmax, &windowed, &got);
-            all.count = 0;
-            for (unsigned ob = 0; ob < (unsigned)s.nobjects; ob++) {
-                const scene_object *o = &s.objects[ob];
-                xform xf = animation_at(&o->anim, 0);
-                gaussian_ray r;
-                gaussian_ray_init(&r, &view, &xf, x, y, org, d);
-                r.tmax = tmax;
-                for (size_t i = 0; i < o->gaussians.count; i++) {
-                    gaussian_hit h;
-                    if (gaussian_hit_any(&o->gaussians, i, o->order, &r, &h))
-                        h.obj = ob, gaussian_hits_add(&all, &h);
-                }
-            }
-            many += all.count > 64;
-            gaussian_blend_hits(&want, &all, accel_gaussian_models(a), INFINITY);
-            mismatched += memcmp(&got.sum, &want.sum, sizeof got.sum) || got.T != want.T ||
-                          got.composited != want.composited || got.done != want.done;
+            size_t hits, composited;
+            mismatched += gathering_differs(a, &s, x, y, tmax, &windowed, &all, &hits, &composited);
+            many += hits > 64;
         }
         gaussian_hits_free(&windowed), gaussian_hits_free(&all);
         accel_free(a);
