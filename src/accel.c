@@ -530,54 +530,25 @@ typedef struct {
     const scene_object *o;
     unsigned obj;
     gaussian_hits *out;
-    const gaussian_footprint *probe; /* set: find where boxes can start instead (first_hit_bound) */
-    double first, radius_t, dir2;    /* (the probe's) */
 } gather_context;
 
-/* Gaussian prim's box as Embree holds it (accel_gaussian_bounds_cb). */
-static aabb gaussian_box(const gaussian_footprint *f, unsigned prim)
+void accel_gaussian_bounds_cb(const struct RTCBoundsFunctionArguments *args)
 {
+    const gaussian_footprint *f = args->geometryUserPtr;
     const gaussian_model *m = f->acc->models[f->obj];
-    const float *mu = &m->mean[3 * prim];
+    const float *mu = &m->mean[3 * args->primID];
     /* the farthest the camera gets from the Gaussian (world), in object
      * units; the focal length shrunk by the scale's spread */
     vec3 at_open = xform_point(&f->at_open, v3(mu[0], mu[1], mu[2]));
     double distance = v3_len(v3_sub(at_open, f->camera_center)) + f->camera_radius + f->travel;
     gaussian_view_bound view = {distance / f->min_scale, f->focal * f->min_scale / f->max_scale, f->stretch,
                                 gaussian_filter_near(f->min_scale, f->max_scale), f->view_axis, f->view_cone};
-    aabb b = gaussian_view_bounds(m, prim, &view);
-    return (aabb){v3(nextafterf((float)b.lo.x, -INFINITY), nextafterf((float)b.lo.y, -INFINITY),
-                     nextafterf((float)b.lo.z, -INFINITY)),
-                  v3(nextafterf((float)b.hi.x, INFINITY), nextafterf((float)b.hi.y, INFINITY),
-                     nextafterf((float)b.hi.z, INFINITY))};
-}
-
-/* Raises f's box radius to that of box b about mean mu (a float rounded
- * up, as bits: positive floats order as their bits). */
-static void raise_box_radius(gaussian_footprint *f, aabb b, const float *mu)
-{
-    vec3 far = v3(rr_fmax(mu[0] - b.lo.x, b.hi.x - mu[0]), rr_fmax(mu[1] - b.lo.y, b.hi.y - mu[1]),
-                  rr_fmax(mu[2] - b.lo.z, b.hi.z - mu[2]));
-    float radius = nextafterf((float)(v3_len(far) * (1 + 1e-9)), INFINITY);
-    uint32_t bits, seen = atomic_load(&f->box_radius_bits);
-    memcpy(&bits, &radius, sizeof bits);
-    /* up to a float of 3 mantissa bits: the maximum then rises a few times
-     * an octave; raised at nearly every Gaussian (a 2DGS model ordered
-     * toward the camera) the build threads fought over it (build 0.34 ->
-     * 1.1 s for 1M Gaussians) */
-    bits = bits >= 0x7F800000u ? 0x7F800000u : (bits + 0xFFFFFu) & ~0xFFFFFu;
-    while (bits > seen && !atomic_compare_exchange_weak(&f->box_radius_bits, &seen, bits))
-        ;
-}
-
-void accel_gaussian_bounds_cb(const struct RTCBoundsFunctionArguments *args)
-{
-    gaussian_footprint *f = args->geometryUserPtr;
-    aabb b = gaussian_box(f, args->primID);
-    raise_box_radius(f, b, &f->acc->models[f->obj]->mean[3 * args->primID]);
+    aabb b = gaussian_view_bounds(m, args->primID, &view);
     struct RTCBounds *r = args->bounds_o;
-    r->lower_x = (float)b.lo.x, r->lower_y = (float)b.lo.y, r->lower_z = (float)b.lo.z;
-    r->upper_x = (float)b.hi.x, r->upper_y = (float)b.hi.y, r->upper_z = (float)b.hi.z;
+    r->lower_x = nextafterf((float)b.lo.x, -INFINITY), r->lower_y = nextafterf((float)b.lo.y, -INFINITY);
+    r->lower_z = nextafterf((float)b.lo.z, -INFINITY);
+    r->upper_x = nextafterf((float)b.hi.x, INFINITY), r->upper_y = nextafterf((float)b.hi.y, INFINITY);
+    r->upper_z = nextafterf((float)b.hi.z, INFINITY);
 }
 
 static void evaluate(const gather_context *c, unsigned prim)
@@ -589,36 +560,15 @@ static void evaluate(const gather_context *c, unsigned prim)
     }
 }
 
-/* The probe's callback: a distance no box of this Gaussian's can start
- * before (its mean's closest approach less the largest box radius, in t),
- * and the ray shortened to it, so that the traversal goes on only to
- * boxes that may start sooner: no box it skips starts before the least
- * such distance. */
-static void probe_box(gather_context *c, const struct RTCIntersectFunctionNArguments *args)
-{
-    const float *mu = &c->o->gaussians.mean[3 * args->primID];
-    double closest = v3_dot(v3_sub(v3(mu[0], mu[1], mu[2]), c->ray->org), c->ray->dir) / c->dir2;
-    double start = closest - c->radius_t;
-    if (start < c->first) {
-        float *tnear = lane_f(args->rayhit, args->N, F_TNEAR, 0), *tfar = lane_f(args->rayhit, args->N, F_TFAR, 0);
-        c->first = start;
-        *tfar = fmaxf(*tnear, fminf(*tfar, nextafterf((float)start, INFINITY)));
-    }
-}
-
 /* Every Gaussian the ray passes is listed (cull_candidates and
  * evaluate_window take them after the traversal): the ray is never
- * shortened, so the traversal finds them all (but for the probe's,
- * probe_box). Listing first lets their loads be prefetched ahead. */
+ * shortened, so the traversal finds them all. Listing first lets their
+ * loads be prefetched ahead. */
 void accel_gaussian_gather(const struct RTCIntersectFunctionNArguments *args)
 {
     if (!args->valid[0])
         return;
     gather_context *c = (gather_context *)args->context;
-    if (c->probe) {
-        probe_box(c, args);
-        return;
-    }
     gaussian_hits *h = c->out;
     if (h->candidates_count == h->candidates_cap) {
         size_t cap = h->candidates_cap ? 2 * h->candidates_cap : 1024;
@@ -741,7 +691,7 @@ static void list_window(const accel *a, gaussian_hits *out, unsigned ray, double
     gather_context c;
     rtcInitIntersectContext(&c.rtc);
     r->tmin = t0, r->tmax = t1;
-    c.ray = r, c.o = &a->sc->objects[r->obj], c.obj = r->obj, c.out = out, c.probe = NULL;
+    c.ray = r, c.o = &a->sc->objects[r->obj], c.obj = r->obj, c.out = out;
     struct RTCRayHit rh;
     double pad = r->pad + 1e-6 * t1;
     init_rayhit1(&rh, r->org, r->dir, nextafterf((float)(t1 + pad), INFINITY));
@@ -749,32 +699,6 @@ static void list_window(const accel *a, gaussian_hits *out, unsigned ray, double
     size_t first = out->candidates_count;
     rtcIntersect1(a->object_scenes[r->obj], &c.rtc, &rh);
     cull_candidates(&c, first, ray);
-}
-
-/* A distance before which object ray r has no hit: the least over its
- * Gaussians of where their boxes can start (probe_box: each visited
- * shortens the ray, so the traversal visits a few near its first box),
- * less the pad (a hit's box holds a point of the ray within that of the
- * hit) and room for rounding (the traversal's float ray against this
- * double one); INFINITY: no box on its stretch. The windows start there:
- * they used to march from the object's bounding sphere, and 5 of the 5.7
- * traversals of a 2DGS ray on make bench's sphere found nothing. */
-static double first_hit_bound(const accel *a, gaussian_ray *r)
-{
-    gather_context c;
-    rtcInitIntersectContext(&c.rtc);
-    c.ray = r, c.o = &a->sc->objects[r->obj], c.obj = r->obj, c.out = NULL;
-    c.probe = &a->footprint[r->obj], c.first = INFINITY, c.dir2 = v3_dot(r->dir, r->dir);
-    uint32_t bits = atomic_load(&c.probe->box_radius_bits);
-    float radius;
-    memcpy(&radius, &bits, sizeof radius);
-    c.radius_t = radius / sqrt(c.dir2) * (1 + 1e-9);
-    struct RTCRayHit rh;
-    double pad = r->pad + 1e-6 * r->exit;
-    init_rayhit1(&rh, r->org, r->dir, nextafterf((float)(r->exit + pad), INFINITY));
-    rh.ray.tnear = fmaxf(0.0f, nextafterf((float)(r->enter - pad), -INFINITY));
-    rtcIntersect1(a->object_scenes[r->obj], &c.rtc, &rh);
-    return c.first < INFINITY ? c.first - 1e-5 * fabs(c.first) - r->pad : INFINITY;
 }
 
 /* Windows start at 1/64 of the stretch the objects span and double while
@@ -788,10 +712,8 @@ void accel_blend_gaussians(const accel *a, const camera_view *view, double x, do
     size_t n = gaussian_rays(a, view, x, y, org, dir, time, scratch);
     double start = INFINITY, end = 0, lead = 0;
     for (size_t k = 0; k < n; k++) {
-        gaussian_ray *r = &scratch->rays[k];
-        r->enter = rr_fmax(r->enter, first_hit_bound(a, r));
-        start = fmin(start, r->enter), end = fmax(end, r->exit);
-        lead = fmax(lead, r->lead);
+        start = fmin(start, scratch->rays[k].enter), end = fmax(end, scratch->rays[k].exit);
+        lead = fmax(lead, scratch->rays[k].lead);
     }
     end = fmin(end, tmax);
     double width = (end - start) / WINDOW_FRACTION;

@@ -126,7 +126,6 @@ static void gaussian_footprint_for(accel *a, unsigned obj, double open, double c
         largest = fmax(largest, o->gaussians.scale[i]);
     f->largest = largest * f->max_scale;
     gaussian_view_axis(s, f, o, open, close, &f->view_axis, &f->view_cone);
-    atomic_store(&f->box_radius_bits, 0); /* the build's bounds callbacks raise it */
 }
 
 /* A Gaussian object's BVH depends on the shutter (the filter's footprint

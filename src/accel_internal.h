@@ -4,8 +4,6 @@
 #define RR_ACCEL_INTERNAL_H
 
 #include <embree3/rtcore.h>
-#include <stdatomic.h>
-#include <stdint.h>
 
 #include "accel.h"
 
@@ -47,10 +45,6 @@ typedef struct {
     double largest;      /* the largest scale of a Gaussian over the shutter, world units */
     vec3 view_axis;      /* the camera's view axis in object space at mid-shutter, and how far */
     double view_cone;    /* it can turn from it (gaussian_view_bound); a zero axis: not known */
-    /* the farthest any Gaussian's box reaches from its mean (object units),
-     * as the bits of a float rounded up: the bounds callback's, which Embree
-     * calls from its build threads */
-    _Atomic uint32_t box_radius_bits;
 } gaussian_footprint;
 
 struct accel {
