@@ -587,7 +587,9 @@ static void cull_candidates(const gather_context *c, size_t first, unsigned ray)
 {
     gaussian_hits *h = c->out;
     size_t n = h->candidates_count - first;
-    h->candidates_count = first + gaussian_cull_candidates(&c->o->gaussians, c->ray, h->candidates + first, n, ray);
+    if (n) /* (none listed yet: no array to offset) */
+        h->candidates_count =
+            first + gaussian_cull_candidates(&c->o->gaussians, c->ray, h->candidates + first, n, ray);
 }
 
 static void evaluate_kept(const accel *a, gaussian_hits *h, const gaussian_candidate *k)
