@@ -332,6 +332,22 @@ static void gaussian_slab(gaussian_model *m, gaussian_kind kind, size_t n, unsig
     }
 }
 
+/* The camera the slabs face, and a slab object: n random Gaussians of the
+ * kind written to `ply` and appended to xml (at len; returns its new
+ * length) as <object>placement<gaussianModel .../></object>. */
+#define SLAB_CAMERA "<scene><camera position='0 0 0' lookat='0 0 -1' up='0 1 0' fov='20' width='64' height='64'/>"
+static int append_slab(char *xml, size_t size, int len, const char *ply, size_t n, const char *kind, const char *attrs,
+                       const char *placement, unsigned *st)
+{
+    gaussian_model m;
+    gaussian_slab(&m, strcmp(kind, "2dgs") ? GAUSSIAN_3D : GAUSSIAN_2D, n, st);
+    rr_error e;
+    CHECK(gaussian_write_ply(ply, &m, &e) == 0);
+    gaussian_model_free(&m);
+    return len + snprintf(xml + len, size - (size_t)len, "<object>%s<gaussianModel file='%s' kind='%s' %s/></object>",
+                          placement, ply, kind, attrs);
+}
+
 /* Whether the windowed, chunked gathering (accel_blend_gaussians) of the
  * ray through raster (x, y) at time 0, before tmax, composites anything
  * other than every hit of every object at once; *hits: how many there
@@ -366,6 +382,35 @@ static int gathering_differs(const accel *a, const scene *s, double x, double y,
            got.done != want.done;
 }
 
+/* Loads the slab scene xml and counts, over `rays` rays (a grid, or at
+ * random with an opaque surface in front of every other one), those whose
+ * gathering differs from all hits at once, those with more than 64 hits,
+ * and those of them whose transmittance was spent first. */
+static void check_gathering(const char *xml, int rays, int at_random, unsigned *st, int *mismatched, int *many,
+                            int *spent)
+{
+    scene s;
+    accel *a;
+    if (load_and_build(xml, &s, &a)) {
+        CHECK(0);
+        return;
+    }
+    gaussian_hits windowed = {0}, all = {0};
+    for (int p = 0; p < rays; p++) {
+        double x = 4 * (p % 16) + 2 + 0.37 * (p % 3), y = 4 * (p / 16) + 2 + 0.21 * (p % 5), tmax = INFINITY;
+        if (at_random) {
+            x = 64.0 * rand_r(st) / RAND_MAX, y = 64.0 * rand_r(st) / RAND_MAX;
+            tmax = p % 2 ? 2.9 + 1.2 * rand_r(st) / RAND_MAX : INFINITY;
+        }
+        size_t hits, composited;
+        *mismatched += gathering_differs(a, &s, x, y, tmax, &windowed, &all, &hits, &composited);
+        *many += hits > 64, *spent += hits > 64 && composited < hits;
+    }
+    gaussian_hits_free(&windowed), gaussian_hits_free(&all);
+    accel_free(a);
+    scene_free(&s);
+}
+
 /* accel_blend_gaussians gathers a ray's hits in windows of distance and
  * evaluates a window's candidates in chunks, in order of their key floors,
  * compositing between chunks: it must composite exactly what compositing
@@ -383,34 +428,14 @@ TEST(gaussian_windows_and_chunks_composite_what_all_hits_at_once_do)
     char dir[] = "/tmp/refrender-chunks-XXXXXX";
     CHECK(mkdtemp(dir) != NULL);
     unsigned st = 5;
-    int chunked = 0, mismatched = 0;
+    int chunked = 0, mismatched = 0, many = 0;
     for (int v = 0; v < 4; v++) {
-        gaussian_model m;
-        gaussian_slab(&m, v < 2 ? GAUSSIAN_2D : GAUSSIAN_3D, 8000, &st);
         char ply[160], xml[600];
         snprintf(ply, sizeof ply, "%s/slab.ply", dir);
-        rr_error e;
-        CHECK(gaussian_write_ply(ply, &m, &e) == 0);
-        gaussian_model_free(&m);
-        snprintf(xml, sizeof xml,
-                 "<scene><camera position='0 0 0' lookat='0 0 -1' up='0 1 0' fov='20' width='64' height='64'/>"
-                 "<object><gaussianModel file='%s' kind='%s' %s/></object></scene>", ply, variants[v][0], variants[v][1]);
-        scene s;
-        accel *a;
-        if (load_and_build(xml, &s, &a)) {
-            CHECK(0);
-            continue;
-        }
-        gaussian_hits windowed = {0}, all = {0};
-        for (int p = 0; p < 256; p++) {
-            double x = 4 * (p % 16) + 2 + 0.37 * (p % 3), y = 4 * (p / 16) + 2 + 0.21 * (p % 5);
-            size_t hits, composited;
-            mismatched += gathering_differs(a, &s, x, y, INFINITY, &windowed, &all, &hits, &composited);
-            chunked += hits > 64 && composited < hits;
-        }
-        gaussian_hits_free(&windowed), gaussian_hits_free(&all);
-        accel_free(a);
-        scene_free(&s);
+        int len = append_slab(xml, sizeof xml, snprintf(xml, sizeof xml, SLAB_CAMERA), ply, 8000,
+                              variants[v][0], variants[v][1], "", &st);
+        snprintf(xml + len, sizeof xml - (size_t)len, "</scene>");
+        check_gathering(xml, 256, 0, &st, &mismatched, &many, &chunked);
         unlink(ply);
     }
     rmdir(dir);
@@ -439,42 +464,19 @@ TEST(gaussian_windows_shared_by_objects_composite_what_all_hits_at_once_do)
     char dir[] = "/tmp/refrender-objects-XXXXXX";
     CHECK(mkdtemp(dir) != NULL);
     unsigned st = 11;
-    int mismatched = 0, many = 0;
+    int mismatched = 0, many = 0, spent = 0;
     for (int combo = 0; combo < 3; combo++) { /* all four; the 2D centre-depth with 3DGS; both 2D */
         char xml[4000], ply[4][160];
-        int len = snprintf(xml, sizeof xml, "<scene><camera position='0 0 0' lookat='0 0 -1' up='0 1 0' fov='20' "
-                                            "width='64' height='64'/>");
+        int len = snprintf(xml, sizeof xml, SLAB_CAMERA);
         for (int v = 0; v < 4; v++) {
             ply[v][0] = 0;
             if ((combo == 1 && v % 2) || (combo == 2 && v >= 2))
                 continue;
-            gaussian_model m;
-            gaussian_slab(&m, v < 2 ? GAUSSIAN_2D : GAUSSIAN_3D, 3000, &st);
             snprintf(ply[v], sizeof ply[v], "%s/slab%d.ply", dir, v);
-            rr_error e;
-            CHECK(gaussian_write_ply(ply[v], &m, &e) == 0);
-            gaussian_model_free(&m);
-            len += snprintf(xml + len, sizeof xml - (size_t)len, "<object>%s<gaussianModel file='%s' kind='%s' %s/></object>",
-                            placed[v], ply[v], kinds[v][0], kinds[v][1]);
+            len = append_slab(xml, sizeof xml, len, ply[v], 3000, kinds[v][0], kinds[v][1], placed[v], &st);
         }
         snprintf(xml + len, sizeof xml - (size_t)len, "</scene>");
-        scene s;
-        accel *a;
-        if (load_and_build(xml, &s, &a)) {
-            CHECK(0);
-            continue;
-        }
-        gaussian_hits windowed = {0}, all = {0};
-        for (int p = 0; p < 400; p++) {
-            double x = 64.0 * rand_r(&st) / RAND_MAX, y = 64.0 * rand_r(&st) / RAND_MAX;
-            double tmax = p % 2 ? 2.9 + 1.2 * rand_r(&st) / RAND_MAX : INFINITY;
-            size_t hits, composited;
-            mismatched += gathering_differs(a, &s, x, y, tmax, &windowed, &all, &hits, &composited);
-            many += hits > 64;
-        }
-        gaussian_hits_free(&windowed), gaussian_hits_free(&all);
-        accel_free(a);
-        scene_free(&s);
+        check_gathering(xml, 400, 1, &st, &mismatched, &many, &spent);
         for (int v = 0; v < 4; v++)
             if (ply[v][0])
                 unlink(ply[v]);
