@@ -259,6 +259,16 @@ static void scaled_image_offset(const gaussian_ray *r, vec3 p, double *X, double
     *X = r->fx * p.x + (r->cx - r->x) * p.z, *Y = r->fy * p.y + (r->cy - r->y) * p.z;
 }
 
+/* Reaches, rounded up, that the culls, key floors and traversal pads
+ * share: the kernel's 1/255 radius sqrt(2 ln 255) = 3.32901 scales (at
+ * opacity 1), the 2DGS low-pass filter's sqrt(ln 255) = 2.35399 pixels
+ * (FilterInvSquare), and the 3D rasterizers' k^2 = 2 ln 255 (opacities are
+ * at most 1, gaussian.c) with its rounding room. */
+#define KERNEL_REACH 3.3302
+#define FILTER_REACH_PX 2.3540
+#define RASTER_REACH2 (2.0 * log(255.0))
+#define RASTER_REACH2_SLACK (1 + 1e-5)
+
 /* Can the splat (centre p in camera space, larger scale s) give the ray's
  * pixel anything? A point p + delta, |delta| <= D < p.z, projects within
  * f |delta| |p| / (p.z (p.z - |delta|)) pixels of p's image (the offset is
@@ -276,14 +286,13 @@ static void scaled_image_offset(const gaussian_ray *r, vec3 p, double *X, double
  * never tighter than the bound itself; the 1e-6 slack covers rounding. */
 static int splat_near_pixel(const gaussian_ray *r, vec3 p, double s, double c)
 {
-    const double k = 3.3302, filter_px = 2.3540; /* sqrt(2 ln 255) = 3.32901, sqrt(ln 255) = 2.35399, rounded up */
-    double reach_k = k * s, circle = c * s;
+    double reach_k = KERNEL_REACH * s, circle = c * s;
     if (p.z <= rr_fmax(reach_k, circle) * (1 + 1e-9))
         return 1; /* near the camera plane: no bound from the projection */
     double reach_c = filter_pole(circle, p.z), reach = rr_fmax(reach_k, reach_c); /* the pole: below circle here */
     double X, Y, depth = p.z * (p.z - reach), spread = rr_fmax(r->fx, r->fy) * v3_len(p);
     scaled_image_offset(r, p, &X, &Y);
-    double bound = rr_fmax(spread * reach_k, spread * reach_c + filter_px * depth) * (1 + 1e-6) + 1e-6 * depth;
+    double bound = rr_fmax(spread * reach_k, spread * reach_c + FILTER_REACH_PX * depth) * (1 + 1e-6) + 1e-6 * depth;
     return (X * X + Y * Y) * (p.z - reach) * (p.z - reach) <= bound * bound;
 }
 
@@ -328,7 +337,7 @@ __attribute__((target("avx2"))) static int cull_2d_lanes(const gaussian_ray *r, 
     __m256d X0 = _mm256_loadu_pd(mx), Y0 = _mm256_loadu_pd(my), Z0 = _mm256_loadu_pd(mz);
     __m256d x = lanes_row(r->m[0], X0, Y0, Z0), y = lanes_row(r->m[1], X0, Y0, Z0), z = lanes_row(r->m[2], X0, Y0, Z0);
     __m256d s = _mm256_mul_pd(_mm256_loadu_pd(s_in), _mm256_set1_pd(r->scale));
-    __m256d reach_k = _mm256_mul_pd(_mm256_set1_pd(3.3302), s), circle = _mm256_mul_pd(_mm256_set1_pd(circle_scales), s);
+    __m256d reach_k = _mm256_mul_pd(_mm256_set1_pd(KERNEL_REACH), s), circle = _mm256_mul_pd(_mm256_set1_pd(circle_scales), s);
     __m256d near = _mm256_cmp_pd(z, _mm256_mul_pd(lanes_fmax(reach_k, circle), _mm256_set1_pd(1 + 1e-9)), _CMP_LE_OQ);
     __m256d reach_c = _mm256_div_pd(_mm256_mul_pd(circle, circle), z), reach = lanes_fmax(reach_k, reach_c);
     __m256d gap = _mm256_sub_pd(z, reach), depth = _mm256_mul_pd(z, gap);
@@ -337,7 +346,7 @@ __attribute__((target("avx2"))) static int cull_2d_lanes(const gaussian_ray *r, 
     __m256d X = _mm256_add_pd(_mm256_mul_pd(_mm256_set1_pd(r->fx), x), _mm256_mul_pd(_mm256_set1_pd(r->cx - r->x), z));
     __m256d Y = _mm256_add_pd(_mm256_mul_pd(_mm256_set1_pd(r->fy), y), _mm256_mul_pd(_mm256_set1_pd(r->cy - r->y), z));
     __m256d wide = lanes_fmax(_mm256_mul_pd(spread, reach_k),
-                              _mm256_add_pd(_mm256_mul_pd(spread, reach_c), _mm256_mul_pd(_mm256_set1_pd(2.3540), depth)));
+                              _mm256_add_pd(_mm256_mul_pd(spread, reach_c), _mm256_mul_pd(_mm256_set1_pd(FILTER_REACH_PX), depth)));
     __m256d bound = _mm256_add_pd(_mm256_mul_pd(wide, _mm256_set1_pd(1 + 1e-6)), _mm256_mul_pd(_mm256_set1_pd(1e-6), depth));
     __m256d off2 = _mm256_mul_pd(_mm256_mul_pd(_mm256_add_pd(_mm256_mul_pd(X, X), _mm256_mul_pd(Y, Y)), gap), gap);
     __m256d within = _mm256_cmp_pd(off2, _mm256_mul_pd(bound, bound), _CMP_LE_OQ);
@@ -360,8 +369,8 @@ __attribute__((target("avx2"))) static int cull_3d_lanes(const gaussian_ray *r, 
     __m256d X = _mm256_add_pd(_mm256_mul_pd(_mm256_set1_pd(r->fx), x), _mm256_mul_pd(_mm256_set1_pd(r->cx - r->x), z));
     __m256d Y = _mm256_add_pd(_mm256_mul_pd(_mm256_set1_pd(r->fy), y), _mm256_mul_pd(_mm256_set1_pd(r->cy - r->y), z));
     __m256d dilated = _mm256_mul_pd(_mm256_mul_pd(_mm256_set1_pd(rules->dilation), z), z);
-    __m256d bound = _mm256_mul_pd(_mm256_set1_pd(2.0 * log(255.0)), _mm256_add_pd(_mm256_mul_pd(F, F), dilated));
-    bound = _mm256_mul_pd(bound, _mm256_set1_pd(1 + 1e-5));
+    __m256d bound = _mm256_mul_pd(_mm256_set1_pd(RASTER_REACH2), _mm256_add_pd(_mm256_mul_pd(F, F), dilated));
+    bound = _mm256_mul_pd(bound, _mm256_set1_pd(RASTER_REACH2_SLACK));
     __m256d within = _mm256_cmp_pd(_mm256_add_pd(_mm256_mul_pd(X, X), _mm256_mul_pd(Y, Y)), bound, _CMP_LE_OQ);
     _mm256_storeu_pd(px, x), _mm256_storeu_pd(py, y), _mm256_storeu_pd(pz, z);
     return _mm256_movemask_pd(_mm256_and_pd(in_range, within));
@@ -480,12 +489,11 @@ static int cull_3d_raster(const gaussian_model *m, size_t i, const gaussian_ray 
 {
     const raster_rules *rules = raster_rules_of(gaussian_formation_of(m));
     const float *s = &m->scale[3 * i];
-    double k2 = 2.0 * log(255.0); /* opacities are at most 1 (gaussian.c) */
     if (!(p.z > rules->near && p.z <= rules->far))
         return 0;
     double X, Y, F = rr_fmax(r->fx, r->fy) * rr_fmax(s[0], rr_fmax(s[1], s[2])) * r->scale * r->stretch;
     scaled_image_offset(r, p, &X, &Y); /* times p.z^2 (no division), with room for rounding */
-    return X * X + Y * Y <= k2 * (F * F + rules->dilation * p.z * p.z) * (1 + 1e-5);
+    return X * X + Y * Y <= RASTER_REACH2 * (F * F + rules->dilation * p.z * p.z) * RASTER_REACH2_SLACK;
 }
 
 static int hit_3d_raster_after_cull(const gaussian_model *m, size_t i, const gaussian_ray *r, vec3 p, gaussian_hit *h)
@@ -555,7 +563,7 @@ double gaussian_traversal_pad(const gaussian_model *m, double s, double depth_pe
     /* the hit lies in the splat's plane within 3.33 scales of the centre
      * (rho3d <= 2 ln 255), or has the centre's depth while the filter's
      * circle point lies within 3 scales (the filter won) */
-    return 3.3302 * s / depth_per_t * (1 + 1e-6);
+    return KERNEL_REACH * s / depth_per_t * (1 + 1e-6);
 }
 
 double gaussian_key_lead(const gaussian_model *m, gaussian_order order, double s, double depth_per_t)
@@ -684,7 +692,7 @@ float gaussian_key_floor(const gaussian_model *m, size_t i, const gaussian_ray *
     double centre = p.z / r->depth_per_t, floor;
     if (m->kind == GAUSSIAN_2D) { /* within 3.33 scales of the centre's depth (gaussian_traversal_pad) */
         const float *s = &m->scale[3 * i];
-        floor = centre - 3.3302 * rr_fmax(s[0], s[1]) * r->scale / r->depth_per_t * (1 + 1e-6);
+        floor = centre - gaussian_traversal_pad(m, rr_fmax(s[0], s[1]) * r->scale, r->depth_per_t);
         floor -= 1e-15 * fabs(centre); /* the subtraction's rounding, where the pad is below it */
     } else if (gaussian_formation_of(m) == GAUSSIAN_FORMATION_3DGRT) {
         return -INFINITY; /* the closest approach: not tied to the centre's depth */
