@@ -23,11 +23,13 @@ typedef struct {
     int background;      /* 1: add a static surfel wall filling the image behind (80% static) */
     double degrees;      /* rotation speed per time unit (shutter [0,1]); 0: the default 90 */
     int scaling;         /* 1: `threads` threads against 1 thread, alternated in one process */
+    int floor;           /* 1: also the same discs as user geometry on the same rays (floor_build) */
 } bench_case;
 
 typedef struct {
     double build_ms, base_build_ms, mrays, base_mrays, peak_mb, bytes_per_splat;
     double same_rays_mrays; /* the baseline on refrender's object-space rays (0: not measured) */
+    double floor_mrays;     /* the discs as user geometry on those rays (0: not measured) */
     double moving_share; /* static80: pixel-center rays meeting the moving swept bounds */
     double base_splats_px, same_splats_px; /* distinct discs hit per covered pixel, each baseline */
     unsigned long long rays;
@@ -221,6 +223,71 @@ static RTCScene baseline_build(RTCDevice dev, const surfel *f, size_t n)
     return scene;
 }
 
+/* ---- floor: the same discs as Embree user geometry, closest hit ------------
+ * What refrender's design (splats as user primitives, each tested in a
+ * callback) costs before any of its own work: the same disc test Embree's
+ * built-in primitive does, one callback per candidate, no blending. */
+
+typedef struct {
+    const float *disc;   /* center xyz, radius (the built-in's vertex buffer) */
+    const float *normal; /* xyz */
+} floor_discs;
+
+static void floor_bounds(const struct RTCBoundsFunctionArguments *args)
+{
+    const floor_discs *d = args->geometryUserPtr;
+    const float *c = &d->disc[4 * args->primID], *n = &d->normal[3 * args->primID];
+    float e[3];
+    for (int a = 0; a < 3; a++) /* a disc's extent along axis a: r sqrt(1 - n_a^2) */
+        e[a] = c[3] * sqrtf(fmaxf(0.0f, 1.0f - n[a] * n[a])) * 1.0001f + 1e-7f;
+    struct RTCBounds *b = args->bounds_o;
+    b->lower_x = c[0] - e[0], b->lower_y = c[1] - e[1], b->lower_z = c[2] - e[2];
+    b->upper_x = c[0] + e[0], b->upper_y = c[1] + e[1], b->upper_z = c[2] + e[2];
+}
+
+static void floor_intersect(const struct RTCIntersectFunctionNArguments *args)
+{
+    if (!args->valid[0]) /* rtcIntersect1 only: N = 1 */
+        return;
+    const floor_discs *d = args->geometryUserPtr;
+    const float *c = &d->disc[4 * args->primID], *n = &d->normal[3 * args->primID];
+    struct RTCRayHit *rh = (struct RTCRayHit *)args->rayhit;
+    float dn = rh->ray.dir_x * n[0] + rh->ray.dir_y * n[1] + rh->ray.dir_z * n[2];
+    float t = ((c[0] - rh->ray.org_x) * n[0] + (c[1] - rh->ray.org_y) * n[1] + (c[2] - rh->ray.org_z) * n[2]) / dn;
+    if (!(t > rh->ray.tnear && t < rh->ray.tfar))
+        return;
+    float px = rh->ray.org_x + t * rh->ray.dir_x - c[0], py = rh->ray.org_y + t * rh->ray.dir_y - c[1];
+    float pz = rh->ray.org_z + t * rh->ray.dir_z - c[2];
+    if (px * px + py * py + pz * pz > c[3] * c[3])
+        return;
+    rh->ray.tfar = t;
+    rh->hit.primID = args->primID, rh->hit.geomID = args->geomID;
+    rh->hit.Ng_x = n[0], rh->hit.Ng_y = n[1], rh->hit.Ng_z = n[2];
+}
+
+static void floor_occluded(const struct RTCOccludedFunctionNArguments *args) { (void)args; }
+
+/* The built-in scene's own buffers serve the user geometry too (same discs,
+ * same order). */
+static RTCScene floor_build(RTCDevice dev, RTCScene builtin, size_t n, floor_discs *d)
+{
+    RTCGeometry src = rtcGetGeometry(builtin, 0);
+    d->disc = rtcGetGeometryBufferData(src, RTC_BUFFER_TYPE_VERTEX, 0);
+    d->normal = rtcGetGeometryBufferData(src, RTC_BUFFER_TYPE_NORMAL, 0);
+    RTCScene scene = rtcNewScene(dev);
+    RTCGeometry g = rtcNewGeometry(dev, RTC_GEOMETRY_TYPE_USER);
+    rtcSetGeometryUserPrimitiveCount(g, (unsigned)n);
+    rtcSetGeometryUserData(g, d);
+    rtcSetGeometryBoundsFunction(g, floor_bounds, d);
+    rtcSetGeometryIntersectFunction(g, floor_intersect);
+    rtcSetGeometryOccludedFunction(g, floor_occluded);
+    rtcCommitGeometry(g);
+    rtcAttachGeometry(scene, g);
+    rtcReleaseGeometry(g);
+    rtcCommitScene(scene);
+    return scene;
+}
+
 /* The baseline's time; with count_distinct (not for timing), *splats_px gets
  * the distinct discs hit per covered pixel. */
 static double baseline_seconds(RTCScene rtc_scene, const scene *s, const render_settings *rs, int same_rays,
@@ -359,12 +426,18 @@ static void run_case(const bench_case *c, bench_result *r)
     double t0 = rr_seconds();
     RTCScene base = baseline_build(dev, surfels, n);
     r->base_build_ms = 1e3 * (rr_seconds() - t0);
-    double ours[16], theirs[16], same[16], rays = (double)c->res * c->res * 4 * c->tspp;
+    floor_discs discs;
+    RTCScene user = c->floor ? floor_build(dev, base, n, &discs) : NULL;
+    double ours[16], theirs[16], same[16], floor[16], rays = (double)c->res * c->res * 4 * c->tspp;
     for (int k = 0; k < c->reps; k++) { /* interleaved repetitions */
         ours[k] = render_mrays(&s, acc, &rs, c->res, &r->rays);
         theirs[k] = rays / baseline_seconds(base, &s, &rs, 0, 0, NULL) * 1e-6;
         same[k] = rays / baseline_seconds(base, &s, &rs, 1, 0, NULL) * 1e-6;
+        floor[k] = user ? rays / baseline_seconds(user, &s, &rs, 1, 0, NULL) * 1e-6 : 0;
     }
+    r->floor_mrays = median(floor, c->reps);
+    if (user)
+        rtcReleaseScene(user);
     baseline_seconds(base, &s, &rs, 0, 1, &r->base_splats_px);
     baseline_seconds(base, &s, &rs, 1, 1, &r->same_splats_px);
     r->mrays = median(ours, c->reps);
@@ -392,6 +465,16 @@ static int wanted(const char *only, const char *series)
     return !only || !strcmp(only, series);
 }
 
+static void print_csv_row(FILE *csv, const char *series, const bench_case *c, const bench_result *r)
+{
+    double deg = strcmp(c->motion, "rotation") ? 0 : c->degrees ? c->degrees : 90;
+    double same = r->same_rays_mrays > 0 ? r->mrays / r->same_rays_mrays : 0;
+    fprintf(csv, "%s,%d,%s,%.1f,%s,%d,%d,%d,%.1f,%.1f,%.4f,%.4f,%.4f,%.4f,%.4f,%.1f,%.1f,%.2f,%.2f,%.4f\n", series,
+            c->splats, c->motion, deg, c->elliptical ? "elliptical" : "circular", c->tspp, c->threads, c->res,
+            r->build_ms, r->base_build_ms, r->mrays, r->base_mrays, r->mrays / r->base_mrays, r->same_rays_mrays,
+            same, r->peak_mb, r->bytes_per_splat, r->base_splats_px, r->same_splats_px, r->floor_mrays);
+}
+
 static void print_row(FILE *csv, const char *series, const bench_case *c, const bench_result *r)
 {
     double deg = strcmp(c->motion, "rotation") ? 0 : c->degrees ? c->degrees : 90;
@@ -401,12 +484,36 @@ static void print_row(FILE *csv, const char *series, const bench_case *c, const 
            series, c->splats, c->motion, deg, c->elliptical ? "elliptical" : "circular", c->tspp, c->threads,
            r->build_ms, r->base_build_ms, r->mrays, r->base_mrays, r->mrays / r->base_mrays, r->same_rays_mrays,
            same, r->peak_mb, r->bytes_per_splat, r->base_splats_px, r->same_splats_px);
-    fprintf(csv, "%s,%d,%s,%.1f,%s,%d,%d,%d,%.1f,%.1f,%.4f,%.4f,%.4f,%.4f,%.4f,%.1f,%.1f,%.2f,%.2f\n", series,
-            c->splats, c->motion, deg, c->elliptical ? "elliptical" : "circular", c->tspp, c->threads, c->res,
-            r->build_ms, r->base_build_ms, r->mrays, r->base_mrays, r->mrays / r->base_mrays, r->same_rays_mrays,
-            same, r->peak_mb, r->bytes_per_splat, r->base_splats_px, r->same_splats_px);
+    print_csv_row(csv, series, c, r);
     fflush(stdout);
     fflush(csv);
+}
+
+/* Surfels against the floor of their design: the same discs as user
+ * geometry (floor_intersect) on the same rays, at each rotation speed and
+ * at 4x the splats. refrender / floor is what its own work costs; floor /
+ * discs what user primitives cost against Embree's built-in ones. */
+static void bench_floor(int speeds, int splats, int tspp, int threads, int res, int reps, FILE *csv)
+{
+    static const double degrees[] = {90, 10, 1};
+    printf("\nfloor: the same discs as Embree user geometry (one callback per candidate, the disc test, closest\n"
+           "hit) on the same rays: what refrender's design costs before its own work.\n\n"
+           "| splats | deg/t | refrender Mrays/s | discs same rays | user-geometry discs same rays "
+           "| refrender / discs | user geometry / discs | refrender / user geometry |\n"
+           "| --- | --- | --- | --- | --- | --- | --- | --- |\n");
+    for (int i = 0; i <= speeds; i++) {
+        int last = i == speeds; /* then 4x the splats at the fastest speed */
+        bench_case c = {"rotation", 0, last ? 4 * splats : splats, tspp, threads, res, reps, 0,
+                        degrees[last ? 0 : i], 0, 1};
+        bench_result r;
+        if (run_in_child(&c, &r))
+            continue;
+        print_csv_row(csv, "floor", &c, &r);
+        printf("| %d | %.0f | %.2f | %.2f | %.2f | %.2fx | %.2fx | %.2fx |\n", c.splats, c.degrees, r.mrays,
+               r.same_rays_mrays, r.floor_mrays, r.mrays / r.same_rays_mrays, r.floor_mrays / r.same_rays_mrays,
+               r.mrays / r.floor_mrays);
+        fflush(stdout);
+    }
 }
 
 int main(int argc, char **argv)
@@ -424,7 +531,7 @@ int main(int argc, char **argv)
     }
     fprintf(csv, "series,splats,motion,degrees_per_time,splat,tspp,threads,res,build_ms,baseline_build_ms,mrays,"
                  "baseline_mrays,ratio,same_rays_baseline_mrays,same_rays_ratio,peak_mb,bytes_per_splat,"
-                 "base_splats_per_pixel,same_rays_splats_per_pixel\n");
+                 "base_splats_per_pixel,same_rays_splats_per_pixel,user_geometry_mrays\n");
     printf("refrender-bench: %dx%d pixels, 4 spatial samples, thesis sampler, median of %d interleaved runs\n\n"
            "'base': Embree's built-in discs, closest hit, on the world rays of the scene at rest (no motion);\n"
            "'same rays': the same discs on the object-space rays refrender traces (each time's ray moved by the\n"
@@ -439,45 +546,47 @@ int main(int argc, char **argv)
     for (int size = 0; size < 2 && wanted(only, "cases"); size++)
         for (int m = 0; m < 3; m++)
             for (int e = 0; e < 2; e++) {
-                bench_case c = {motions[m], e, size ? big : small, tspp, threads, res, reps, 0, 0, 0};
+                bench_case c = {motions[m], e, size ? big : small, tspp, threads, res, reps, 0, 0, 0, 0};
                 if (!run_in_child(&c, &r))
                     print_row(csv, "cases", &c, &r);
             }
     if (only && !strcmp(only, "target")) { /* issue 7's headline case alone, for quick iterations */
-        bench_case c = {"rotation", 0, big, tspp, threads, res, reps, 0, 0, 0};
+        bench_case c = {"rotation", 0, big, tspp, threads, res, reps, 0, 0, 0, 0};
         if (!run_in_child(&c, &r))
             print_row(csv, "target", &c, &r);
     }
     double speeds[] = {1, 10, 90};
     for (int i = 0; i < (quick ? 1 : 3) && wanted(only, "speed"); i++) {
-        bench_case c = {"rotation", 0, big, tspp, threads, res, reps, 0, speeds[i], 0};
+        bench_case c = {"rotation", 0, big, tspp, threads, res, reps, 0, speeds[i], 0, 0};
         if (!run_in_child(&c, &r))
             print_row(csv, "speed", &c, &r);
     }
     int counts[] = {10000, 100000, 1000000, 4000000};
     for (int i = 0; i < (quick ? 1 : 4) && wanted(only, "splats"); i++) {
-        bench_case c = {"rotation", 0, counts[i], tspp, threads, res, reps, 0, 0, 0};
+        bench_case c = {"rotation", 0, counts[i], tspp, threads, res, reps, 0, 0, 0, 0};
         if (!run_in_child(&c, &r))
             print_row(csv, "splats", &c, &r);
     }
     int tspps[] = {10, 30, 100};
     for (int i = 0; i < (quick ? 1 : 3) && wanted(only, "tspp"); i++) {
-        bench_case c = {"rotation", 0, big, tspps[i], threads, res, reps, 0, 0, 0};
+        bench_case c = {"rotation", 0, big, tspps[i], threads, res, reps, 0, 0, 0, 0};
         if (!run_in_child(&c, &r))
             print_row(csv, "tspp", &c, &r);
     }
     for (int t = 1; t <= threads && wanted(only, "threads"); t++) {
-        bench_case c = {"rotation", 0, big, tspp, t, res, reps, 0, 0, 0};
+        bench_case c = {"rotation", 0, big, tspp, t, res, reps, 0, 0, 0, 0};
         if (!run_in_child(&c, &r))
             print_row(csv, "threads", &c, &r);
     }
-    bench_case scaling = {"rotation", 0, big, tspp, threads, res, reps, 0, 0, 1};
+    bench_case scaling = {"rotation", 0, big, tspp, threads, res, reps, 0, 0, 1, 0};
     if (threads > 1 && wanted(only, "threads") && !run_in_child(&scaling, &r)) {
         print_row(csv, "scaling", &scaling, &r);
         printf("\nscaling: %d threads against 1, alternated in one process ('base' = 1 thread): %.2fx\n\n", threads,
                r.mrays / r.base_mrays);
     }
-    bench_case c80 = {"rotation", 0, small, tspp, threads, res, reps, 1, 0, 0};
+    if (wanted(only, "floor"))
+        bench_floor(quick ? 1 : 3, quick ? small : big, tspp, threads, res, reps, csv);
+    bench_case c80 = {"rotation", 0, small, tspp, threads, res, reps, 1, 0, 0, 0};
     if (wanted(only, "static80"))
         printf("\nstatic80: a static wall fills the image, a rotating sphere covers about 15%% of it; 'base' is\n"
                "the same render tracing every time sample separately (--no-static-reuse), 'ratio' the speed-up.\n\n");
