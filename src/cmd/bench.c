@@ -30,6 +30,7 @@ typedef struct {
     double build_ms, base_build_ms, mrays, base_mrays, peak_mb, bytes_per_splat;
     double same_rays_mrays; /* the baseline on refrender's object-space rays (0: not measured) */
     double floor_mrays;     /* the discs as user geometry on those rays (0: not measured) */
+    double floor_eps_mrays; /* the same, the rays kept to the closest hit + epsilon */
     double moving_share; /* static80: pixel-center rays meeting the moving swept bounds */
     double base_splats_px, same_splats_px; /* distinct discs hit per covered pixel, each baseline */
     unsigned long long rays;
@@ -231,6 +232,7 @@ static RTCScene baseline_build(RTCDevice dev, const surfel *f, size_t n)
 typedef struct {
     const float *disc;   /* center xyz, radius (the built-in's vertex buffer) */
     const float *normal; /* xyz */
+    float epsilon;       /* > 0: the ray is kept to the closest hit + epsilon, as blending needs */
 } floor_discs;
 
 static void floor_bounds(const struct RTCBoundsFunctionArguments *args)
@@ -260,7 +262,12 @@ static void floor_intersect(const struct RTCIntersectFunctionNArguments *args)
     float pz = rh->ray.org_z + t * rh->ray.dir_z - c[2];
     if (px * px + py * py + pz * pz > c[3] * c[3])
         return;
-    rh->ray.tfar = t;
+    if (d->epsilon > 0) { /* hit.u holds the closest hit so far (the ray was reset to u = 0) */
+        if (rh->hit.geomID != RTC_INVALID_GEOMETRY_ID && rh->hit.u <= t)
+            return; /* a hit within epsilon behind the closest: kept by blending, not closer */
+        rh->ray.tfar = t + d->epsilon, rh->hit.u = t;
+    } else
+        rh->ray.tfar = t;
     rh->hit.primID = args->primID, rh->hit.geomID = args->geomID;
     rh->hit.Ng_x = n[0], rh->hit.Ng_y = n[1], rh->hit.Ng_z = n[2];
 }
@@ -269,8 +276,9 @@ static void floor_occluded(const struct RTCOccludedFunctionNArguments *args) { (
 
 /* The built-in scene's own buffers serve the user geometry too (same discs,
  * same order). */
-static RTCScene floor_build(RTCDevice dev, RTCScene builtin, size_t n, floor_discs *d)
+static RTCScene floor_build(RTCDevice dev, RTCScene builtin, size_t n, float epsilon, floor_discs *d)
 {
+    d->epsilon = epsilon;
     RTCGeometry src = rtcGetGeometry(builtin, 0);
     d->disc = rtcGetGeometryBufferData(src, RTC_BUFFER_TYPE_VERTEX, 0);
     d->normal = rtcGetGeometryBufferData(src, RTC_BUFFER_TYPE_NORMAL, 0);
@@ -426,18 +434,21 @@ static void run_case(const bench_case *c, bench_result *r)
     double t0 = rr_seconds();
     RTCScene base = baseline_build(dev, surfels, n);
     r->base_build_ms = 1e3 * (rr_seconds() - t0);
-    floor_discs discs;
-    RTCScene user = c->floor ? floor_build(dev, base, n, &discs) : NULL;
-    double ours[16], theirs[16], same[16], floor[16], rays = (double)c->res * c->res * 4 * c->tspp;
+    floor_discs discs, discs_eps;
+    RTCScene user = c->floor ? floor_build(dev, base, n, 0, &discs) : NULL;
+    RTCScene user_eps = c->floor ? floor_build(dev, base, n, (float)s.epsilon, &discs_eps) : NULL;
+    double ours[16], theirs[16], same[16], floor[16], floor_eps[16], rays = (double)c->res * c->res * 4 * c->tspp;
     for (int k = 0; k < c->reps; k++) { /* interleaved repetitions */
         ours[k] = render_mrays(&s, acc, &rs, c->res, &r->rays);
         theirs[k] = rays / baseline_seconds(base, &s, &rs, 0, 0, NULL) * 1e-6;
         same[k] = rays / baseline_seconds(base, &s, &rs, 1, 0, NULL) * 1e-6;
         floor[k] = user ? rays / baseline_seconds(user, &s, &rs, 1, 0, NULL) * 1e-6 : 0;
+        floor_eps[k] = user ? rays / baseline_seconds(user_eps, &s, &rs, 1, 0, NULL) * 1e-6 : 0;
     }
     r->floor_mrays = median(floor, c->reps);
+    r->floor_eps_mrays = median(floor_eps, c->reps);
     if (user)
-        rtcReleaseScene(user);
+        rtcReleaseScene(user), rtcReleaseScene(user_eps);
     baseline_seconds(base, &s, &rs, 0, 1, &r->base_splats_px);
     baseline_seconds(base, &s, &rs, 1, 1, &r->same_splats_px);
     r->mrays = median(ours, c->reps);
@@ -469,10 +480,11 @@ static void print_csv_row(FILE *csv, const char *series, const bench_case *c, co
 {
     double deg = strcmp(c->motion, "rotation") ? 0 : c->degrees ? c->degrees : 90;
     double same = r->same_rays_mrays > 0 ? r->mrays / r->same_rays_mrays : 0;
-    fprintf(csv, "%s,%d,%s,%.1f,%s,%d,%d,%d,%.1f,%.1f,%.4f,%.4f,%.4f,%.4f,%.4f,%.1f,%.1f,%.2f,%.2f,%.4f\n", series,
+    fprintf(csv, "%s,%d,%s,%.1f,%s,%d,%d,%d,%.1f,%.1f,%.4f,%.4f,%.4f,%.4f,%.4f,%.1f,%.1f,%.2f,%.2f,%.4f,%.4f\n", series,
             c->splats, c->motion, deg, c->elliptical ? "elliptical" : "circular", c->tspp, c->threads, c->res,
             r->build_ms, r->base_build_ms, r->mrays, r->base_mrays, r->mrays / r->base_mrays, r->same_rays_mrays,
-            same, r->peak_mb, r->bytes_per_splat, r->base_splats_px, r->same_splats_px, r->floor_mrays);
+            same, r->peak_mb, r->bytes_per_splat, r->base_splats_px, r->same_splats_px, r->floor_mrays,
+            r->floor_eps_mrays);
 }
 
 static void print_row(FILE *csv, const char *series, const bench_case *c, const bench_result *r)
@@ -496,11 +508,12 @@ static void print_row(FILE *csv, const char *series, const bench_case *c, const 
 static void bench_floor(int speeds, int splats, int tspp, int threads, int res, int reps, FILE *csv)
 {
     static const double degrees[] = {90, 10, 1};
-    printf("\nfloor: the same discs as Embree user geometry (one callback per candidate, the disc test, closest\n"
-           "hit) on the same rays: what refrender's design costs before its own work.\n\n"
-           "| splats | deg/t | refrender Mrays/s | discs same rays | user-geometry discs same rays "
-           "| refrender / discs | user geometry / discs | refrender / user geometry |\n"
-           "| --- | --- | --- | --- | --- | --- | --- | --- |\n");
+    printf("\nfloor: the same discs as Embree user geometry (one callback per candidate, the disc test) on the\n"
+           "same rays, closest hit ('user'), and kept to the closest hit + epsilon as blending needs ('user eps'):\n"
+           "what refrender's design and its definition cost before its own work. Mrays/s.\n\n"
+           "| splats | deg/t | refrender | discs | user | user eps | refrender / discs | user / discs "
+           "| user eps / discs | refrender / user eps |\n"
+           "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n");
     for (int i = 0; i <= speeds; i++) {
         int last = i == speeds; /* then 4x the splats at the fastest speed */
         bench_case c = {"rotation", 0, last ? 4 * splats : splats, tspp, threads, res, reps, 0,
@@ -509,9 +522,9 @@ static void bench_floor(int speeds, int splats, int tspp, int threads, int res, 
         if (run_in_child(&c, &r))
             continue;
         print_csv_row(csv, "floor", &c, &r);
-        printf("| %d | %.0f | %.2f | %.2f | %.2f | %.2fx | %.2fx | %.2fx |\n", c.splats, c.degrees, r.mrays,
-               r.same_rays_mrays, r.floor_mrays, r.mrays / r.same_rays_mrays, r.floor_mrays / r.same_rays_mrays,
-               r.mrays / r.floor_mrays);
+        printf("| %d | %.0f | %.2f | %.2f | %.2f | %.2f | %.2fx | %.2fx | %.2fx | %.2fx |\n", c.splats, c.degrees,
+               r.mrays, r.same_rays_mrays, r.floor_mrays, r.floor_eps_mrays, r.mrays / r.same_rays_mrays,
+               r.floor_mrays / r.same_rays_mrays, r.floor_eps_mrays / r.same_rays_mrays, r.mrays / r.floor_eps_mrays);
         fflush(stdout);
     }
 }
@@ -531,7 +544,7 @@ int main(int argc, char **argv)
     }
     fprintf(csv, "series,splats,motion,degrees_per_time,splat,tspp,threads,res,build_ms,baseline_build_ms,mrays,"
                  "baseline_mrays,ratio,same_rays_baseline_mrays,same_rays_ratio,peak_mb,bytes_per_splat,"
-                 "base_splats_per_pixel,same_rays_splats_per_pixel,user_geometry_mrays\n");
+                 "base_splats_per_pixel,same_rays_splats_per_pixel,user_geometry_mrays,user_geometry_epsilon_mrays\n");
     printf("refrender-bench: %dx%d pixels, 4 spatial samples, thesis sampler, median of %d interleaved runs\n\n"
            "'base': Embree's built-in discs, closest hit, on the world rays of the scene at rest (no motion);\n"
            "'same rays': the same discs on the object-space rays refrender traces (each time's ray moved by the\n"
