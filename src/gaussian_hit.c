@@ -268,6 +268,10 @@ static void scaled_image_offset(const gaussian_ray *r, vec3 p, double *X, double
 #define FILTER_REACH_PX 2.3540
 #define RASTER_REACH2 (2.0 * log(255.0))
 #define RASTER_REACH2_SLACK (1 + 1e-5)
+/* gaussian_traversal_pad's rounding room, and the key floor's room for
+ * the subtraction's rounding where the pad is below it */
+#define TRAVERSAL_PAD_SLACK (1 + 1e-6)
+#define KEY_FLOOR_ROUNDING 1e-15
 
 /* Can the splat (centre p in camera space, larger scale s) give the ray's
  * pixel anything? A point p + delta, |delta| <= D < p.z, projects within
@@ -321,6 +325,12 @@ __attribute__((target("avx2"))) static inline __m256d lanes_fmax(__m256d x, __m2
     return _mm256_blendv_pd(y, x, take_x);
 }
 
+/* Component a of four Gaussians' float triples, as doubles (exact). */
+__attribute__((target("avx2"))) static inline __m256d lanes_of(const float *const v[4], int a)
+{
+    return _mm256_cvtps_pd(_mm_set_ps(v[3][a], v[2][a], v[1][a], v[0][a]));
+}
+
 __attribute__((target("avx2"))) static inline __m256d lanes_row(const double row[4], __m256d x, __m256d y, __m256d z)
 {
     __m256d sum = _mm256_add_pd(_mm256_mul_pd(_mm256_set1_pd(row[0]), x), _mm256_mul_pd(_mm256_set1_pd(row[1]), y));
@@ -330,13 +340,12 @@ __attribute__((target("avx2"))) static inline __m256d lanes_row(const double row
 
 /* mean (mx, my, mz) and larger scale s of four Gaussians -> their camera
  * space means (px, py, pz) and a mask of those cull_2d keeps. */
-__attribute__((target("avx2"))) static int cull_2d_lanes(const gaussian_ray *r, double circle_scales, const double *mx,
-                                                         const double *my, const double *mz, const double *s_in,
-                                                         double *px, double *py, double *pz)
+__attribute__((target("avx2"))) static int cull_2d_lanes(const gaussian_ray *r, double circle_scales, __m256d X0,
+                                                         __m256d Y0, __m256d Z0, __m256d s_in, double *px, double *py,
+                                                         double *pz, float *floor)
 {
-    __m256d X0 = _mm256_loadu_pd(mx), Y0 = _mm256_loadu_pd(my), Z0 = _mm256_loadu_pd(mz);
     __m256d x = lanes_row(r->m[0], X0, Y0, Z0), y = lanes_row(r->m[1], X0, Y0, Z0), z = lanes_row(r->m[2], X0, Y0, Z0);
-    __m256d s = _mm256_mul_pd(_mm256_loadu_pd(s_in), _mm256_set1_pd(r->scale));
+    __m256d s = _mm256_mul_pd(s_in, _mm256_set1_pd(r->scale));
     __m256d reach_k = _mm256_mul_pd(_mm256_set1_pd(KERNEL_REACH), s), circle = _mm256_mul_pd(_mm256_set1_pd(circle_scales), s);
     __m256d near = _mm256_cmp_pd(z, _mm256_mul_pd(lanes_fmax(reach_k, circle), _mm256_set1_pd(1 + 1e-9)), _CMP_LE_OQ);
     __m256d reach_c = _mm256_div_pd(_mm256_mul_pd(circle, circle), z), reach = lanes_fmax(reach_k, reach_c);
@@ -352,19 +361,25 @@ __attribute__((target("avx2"))) static int cull_2d_lanes(const gaussian_ray *r, 
     __m256d within = _mm256_cmp_pd(off2, _mm256_mul_pd(bound, bound), _CMP_LE_OQ);
     __m256d in_front = _mm256_cmp_pd(z, _mm256_set1_pd(GAUSSIAN_NEAR), _CMP_NLE_UQ);
     _mm256_storeu_pd(px, x), _mm256_storeu_pd(py, y), _mm256_storeu_pd(pz, z);
+    /* gaussian_key_floor: the centre's depth less gaussian_traversal_pad */
+    __m256d depth_per_t = _mm256_set1_pd(r->depth_per_t), centre = _mm256_div_pd(z, depth_per_t);
+    __m256d pad = _mm256_div_pd(_mm256_mul_pd(_mm256_set1_pd(KERNEL_REACH), s), depth_per_t);
+    pad = _mm256_mul_pd(pad, _mm256_set1_pd(TRAVERSAL_PAD_SLACK));
+    __m256d below = _mm256_sub_pd(centre, pad), magnitude = _mm256_andnot_pd(_mm256_set1_pd(-0.0), centre);
+    below = _mm256_sub_pd(below, _mm256_mul_pd(_mm256_set1_pd(KEY_FLOOR_ROUNDING), magnitude));
+    _mm_storeu_ps(floor, _mm256_cvtpd_ps(below));
     return _mm256_movemask_pd(_mm256_and_pd(in_front, _mm256_or_pd(near, within)));
 }
 
 /* cull_3d_raster the same way (mx, my, mz, s: means and largest scales). */
 __attribute__((target("avx2"))) static int cull_3d_lanes(const gaussian_ray *r, const raster_rules *rules,
-                                                         const double *mx, const double *my, const double *mz,
-                                                         const double *s_in, double *px, double *py, double *pz)
+                                                         __m256d X0, __m256d Y0, __m256d Z0, __m256d s_in, double *px,
+                                                         double *py, double *pz, float *floor)
 {
-    __m256d X0 = _mm256_loadu_pd(mx), Y0 = _mm256_loadu_pd(my), Z0 = _mm256_loadu_pd(mz);
     __m256d x = lanes_row(r->m[0], X0, Y0, Z0), y = lanes_row(r->m[1], X0, Y0, Z0), z = lanes_row(r->m[2], X0, Y0, Z0);
     __m256d in_range = _mm256_and_pd(_mm256_cmp_pd(z, _mm256_set1_pd(rules->near), _CMP_GT_OQ),
                                      _mm256_cmp_pd(z, _mm256_set1_pd(rules->far), _CMP_LE_OQ));
-    __m256d F = _mm256_mul_pd(_mm256_set1_pd(rr_fmax(r->fx, r->fy)), _mm256_loadu_pd(s_in));
+    __m256d F = _mm256_mul_pd(_mm256_set1_pd(rr_fmax(r->fx, r->fy)), s_in);
     F = _mm256_mul_pd(_mm256_mul_pd(F, _mm256_set1_pd(r->scale)), _mm256_set1_pd(r->stretch));
     __m256d X = _mm256_add_pd(_mm256_mul_pd(_mm256_set1_pd(r->fx), x), _mm256_mul_pd(_mm256_set1_pd(r->cx - r->x), z));
     __m256d Y = _mm256_add_pd(_mm256_mul_pd(_mm256_set1_pd(r->fy), y), _mm256_mul_pd(_mm256_set1_pd(r->cy - r->y), z));
@@ -373,6 +388,7 @@ __attribute__((target("avx2"))) static int cull_3d_lanes(const gaussian_ray *r, 
     bound = _mm256_mul_pd(bound, _mm256_set1_pd(RASTER_REACH2_SLACK));
     __m256d within = _mm256_cmp_pd(_mm256_add_pd(_mm256_mul_pd(X, X), _mm256_mul_pd(Y, Y)), bound, _CMP_LE_OQ);
     _mm256_storeu_pd(px, x), _mm256_storeu_pd(py, y), _mm256_storeu_pd(pz, z);
+    _mm_storeu_ps(floor, _mm256_cvtpd_ps(_mm256_div_pd(z, _mm256_set1_pd(r->depth_per_t)))); /* gaussian_key_floor */
     return _mm256_movemask_pd(_mm256_and_pd(in_range, within));
 }
 #else
@@ -563,7 +579,7 @@ double gaussian_traversal_pad(const gaussian_model *m, double s, double depth_pe
     /* the hit lies in the splat's plane within 3.33 scales of the centre
      * (rho3d <= 2 ln 255), or has the centre's depth while the filter's
      * circle point lies within 3 scales (the filter won) */
-    return KERNEL_REACH * s / depth_per_t * (1 + 1e-6);
+    return KERNEL_REACH * s / depth_per_t * TRAVERSAL_PAD_SLACK;
 }
 
 double gaussian_key_lead(const gaussian_model *m, gaussian_order order, double s, double depth_per_t)
@@ -693,7 +709,7 @@ float gaussian_key_floor(const gaussian_model *m, size_t i, const gaussian_ray *
     if (m->kind == GAUSSIAN_2D) { /* within 3.33 scales of the centre's depth (gaussian_traversal_pad) */
         const float *s = &m->scale[3 * i];
         floor = centre - gaussian_traversal_pad(m, rr_fmax(s[0], s[1]) * r->scale, r->depth_per_t);
-        floor -= 1e-15 * fabs(centre); /* the subtraction's rounding, where the pad is below it */
+        floor -= KEY_FLOOR_ROUNDING * fabs(centre);
     } else if (gaussian_formation_of(m) == GAUSSIAN_FORMATION_3DGRT) {
         return -INFINITY; /* the closest approach: not tied to the centre's depth */
     } else {
@@ -706,11 +722,11 @@ float gaussian_key_floor(const gaussian_model *m, size_t i, const gaussian_ray *
 
 /* Keeps cand[k] (k < n) that the cull passes, at the front, with p and
  * key floor (gaussian_cull_candidates). */
-static size_t keep_culled(const gaussian_model *m, const gaussian_ray *r, gaussian_candidate *cand, size_t kept,
-                          unsigned prim, vec3 p, unsigned ray)
+static size_t keep_culled(const gaussian_model *m, gaussian_candidate *cand, size_t kept, unsigned prim, vec3 p,
+                          float key_floor, unsigned ray)
 {
     gaussian_prefetch_hit(m, prim);
-    cand[kept] = (gaussian_candidate){p, gaussian_key_floor(m, prim, r, p), prim, ray};
+    cand[kept] = (gaussian_candidate){p, key_floor, prim, ray};
     return kept + 1;
 }
 
@@ -727,22 +743,26 @@ __attribute__((target("avx2"))) static size_t cull_in_lanes(const gaussian_model
     double circle = filter_circle(m);
     size_t k = 0;
     for (; k + CULL_LANES <= n; k += CULL_LANES) {
-        double mx[CULL_LANES], my[CULL_LANES], mz[CULL_LANES], s[CULL_LANES], px[CULL_LANES], py[CULL_LANES],
-            pz[CULL_LANES];
+        double px[CULL_LANES], py[CULL_LANES], pz[CULL_LANES];
+        float floor[CULL_LANES];
         unsigned prim[CULL_LANES];
+        const float *mu[CULL_LANES], *sc[CULL_LANES];
         for (int j = 0; j < CULL_LANES; j++) {
             if (k + j + PREFETCH_AHEAD < n)
                 gaussian_prefetch_cull(m, cand[k + j + PREFETCH_AHEAD].prim);
             prim[j] = cand[k + j].prim;
-            const float *mu = &m->mean[3 * prim[j]], *sc = &m->scale[3 * prim[j]];
-            mx[j] = mu[0], my[j] = mu[1], mz[j] = mu[2];
-            s[j] = rules ? rr_fmax(sc[0], rr_fmax(sc[1], sc[2])) : rr_fmax(sc[0], sc[1]);
+            mu[j] = &m->mean[3 * prim[j]], sc[j] = &m->scale[3 * prim[j]];
         }
-        int keep = rules ? cull_3d_lanes(r, rules, mx, my, mz, s, px, py, pz)
-                         : cull_2d_lanes(r, circle, mx, my, mz, s, px, py, pz);
+        /* the lanes built in registers: doubles stored one by one and
+         * loaded as a vector stalled on store forwarding (perf annotate) */
+        __m256d X0 = lanes_of(mu, 0), Y0 = lanes_of(mu, 1), Z0 = lanes_of(mu, 2);
+        __m256d S = rules ? lanes_fmax(lanes_of(sc, 0), lanes_fmax(lanes_of(sc, 1), lanes_of(sc, 2)))
+                          : lanes_fmax(lanes_of(sc, 0), lanes_of(sc, 1));
+        int keep = rules ? cull_3d_lanes(r, rules, X0, Y0, Z0, S, px, py, pz, floor)
+                         : cull_2d_lanes(r, circle, X0, Y0, Z0, S, px, py, pz, floor);
         for (int j = 0; j < CULL_LANES; j++)
             if (keep >> j & 1)
-                *kept = keep_culled(m, r, cand, *kept, prim[j], v3(px[j], py[j], pz[j]), ray);
+                *kept = keep_culled(m, cand, *kept, prim[j], v3(px[j], py[j], pz[j]), floor[j], ray);
     }
     return k;
 }
@@ -762,7 +782,7 @@ size_t gaussian_cull_candidates(const gaussian_model *m, const gaussian_ray *r, 
         unsigned prim = cand[k].prim;
         vec3 p;
         if (gaussian_cull(m, prim, r, &p))
-            kept = keep_culled(m, r, cand, kept, prim, p, ray);
+            kept = keep_culled(m, cand, kept, prim, p, gaussian_key_floor(m, prim, r, p), ray);
     }
     return kept;
 }
