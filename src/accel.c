@@ -603,6 +603,36 @@ static void evaluate_kept(const accel *a, gaussian_hits *h, const gaussian_candi
     }
 }
 
+/* evaluate_kept on the n candidates cand[order[k]] in turn, four at a time
+ * where four in a row share a ray (gaussian_hits_after_cull4). */
+static void evaluate_chunk(const accel *a, gaussian_hits *h, const gaussian_candidate *cand, const uint64_t *order,
+                           size_t n)
+{
+    size_t k = 0;
+    while (k < n) {
+        const gaussian_candidate *c[4];
+        for (int j = 0; j < 4 && k + (size_t)j < n; j++)
+            c[j] = &cand[(uint32_t)order[k + (size_t)j]];
+        if (k + 4 > n || c[1]->ray != c[0]->ray || c[2]->ray != c[0]->ray || c[3]->ray != c[0]->ray) {
+            evaluate_kept(a, h, c[0]);
+            k++;
+            continue;
+        }
+        const gaussian_ray *r = &h->rays[c[0]->ray];
+        const scene_object *o = &a->sc->objects[r->obj];
+        unsigned prim[4] = {c[0]->prim, c[1]->prim, c[2]->prim, c[3]->prim};
+        vec3 p[4] = {c[0]->p, c[1]->p, c[2]->p, c[3]->p};
+        gaussian_hit hit[4];
+        int found = gaussian_hits_after_cull4(&o->gaussians, prim, o->order, r, p, hit);
+        for (int j = 0; j < 4; j++)
+            if (found >> j & 1) {
+                hit[j].obj = r->obj;
+                gaussian_hits_add(h, &hit[j]);
+            }
+        k += 4;
+    }
+}
+
 /* The window's kept candidates in order of their key floors, `order`
  * (room for 2n words): the evaluation can stop where the transmittance is
  * spent. */
@@ -641,8 +671,7 @@ static void evaluate_window(const accel *a, gaussian_hits *h, gaussian_blend *bl
     order_by_key_floor(cand, n, h->candidate_order);
     for (size_t from = 0; from < n && !blend->done; from += EVALUATION_CHUNK) {
         size_t to = n - from < EVALUATION_CHUNK ? n : from + EVALUATION_CHUNK;
-        for (size_t k = from; k < to; k++)
-            evaluate_kept(a, h, &cand[(uint32_t)h->candidate_order[k]]);
+        evaluate_chunk(a, h, cand, h->candidate_order + from, to - from);
         double below = to < n ? cand[(uint32_t)h->candidate_order[to]].key_floor : INFINITY;
         if (below > -INFINITY) /* (else nothing can be composited yet) */
             gaussian_blend_hits(blend, h, a->models, rr_fmin(below, final_below));

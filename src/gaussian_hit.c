@@ -188,7 +188,7 @@ static double dual_conic(vec3 a, vec3 b, double c)
  * camera's plane: its image is no ellipse and has no centre to filter
  * about (the rasterizer would filter about the hyperbola's, anywhere on
  * screen; GAUSSIANS.md). */
-static int filter_centre(const vec3 row[3], double c, double *px, double *py)
+static int filter_centre(const vec3 *row, double c, double *px, double *py)
 {
     double d22 = dual_conic(row[2], row[2], c);
     if (!(d22 < 0))
@@ -395,32 +395,52 @@ __attribute__((target("avx2"))) static int cull_3d_lanes(const gaussian_ray *r, 
 #define RR_AVX2_CULL 0
 #endif
 
-/* Gaussian i's 2DGS hit once cull_2d passed it (p: its camera-space mean). */
-static int hit_2d_after_cull(const gaussian_model *m, size_t i, gaussian_order order, const gaussian_ray *r, vec3 p,
-                             gaussian_hit *h)
+/* What a 2DGS hit's rules read of the splat's geometry at the ray's
+ * pixel: computed one Gaussian at a time (splat_2d_geometry) or four in
+ * lanes (splat_2d_geometry_lanes), the same operations in the same order. */
+typedef struct {
+    vec3 row[3];             /* T's rows (splat_rows) */
+    double cz, u, v;         /* the pixel's planes' intersection (u, v, 1) cz; u, v once cz != 0 */
+    double rho3d, rho2d;     /* the kernel's and the filter's squared distances (rho2d: inf unfiltered) */
+    double centre_x, centre_y; /* the filter's centre (0 unfiltered) */
+    double plane_depth;
+    int filtered;
+} splat_2d_geometry;
+
+static void splat_2d_geometry_of(const gaussian_ray *r, double circle, splat_2d_geometry *g)
 {
-    const float *mu = &m->mean[3 * i];
-    double circle = filter_circle(m);
-    vec3 row[3];
-    gaussian_splat_rows(m, i, r, p, row);
+    const vec3 *row = g->row;
     /* the planes through the pixel's column and row, in (u, v, 1) */
     vec3 k = v3_sub(v3_scale(row[2], r->x), row[0]), l = v3_sub(v3_scale(row[2], r->y), row[1]);
     vec3 c = v3_cross(k, l);
+    g->cz = c.z;
     if (c.z == 0)
+        return;
+    g->u = c.x / c.z, g->v = c.y / c.z, g->rho3d = g->u * g->u + g->v * g->v;
+    double centre_x = 0, centre_y = 0;
+    g->filtered = filter_centre(g->row, circle, &centre_x, &centre_y);
+    g->rho2d = INFINITY, g->centre_x = centre_x, g->centre_y = centre_y;
+    if (g->filtered) /* FilterInvSquare |pixel - centre|^2 */
+        g->rho2d = GAUSSIAN_FILTER_INV_SQUARE * ((g->centre_x - r->x) * (g->centre_x - r->x) +
+                                                 (g->centre_y - r->y) * (g->centre_y - r->y));
+    g->plane_depth = g->u * row[2].x + g->v * row[2].y + row[2].z;
+}
+
+/* Gaussian i's 2DGS hit from its geometry at the pixel (p: its
+ * camera-space mean). */
+static int hit_2d_from_geometry(const gaussian_model *m, size_t i, gaussian_order order, const gaussian_ray *r, vec3 p,
+                                const splat_2d_geometry *g, gaussian_hit *h)
+{
+    if (g->cz == 0)
         return 0;
-    double u = c.x / c.z, v = c.y / c.z, rho3d = u * u + v * v, rho2d = INFINITY, centre_x = 0, centre_y = 0;
-    int filtered = filter_centre(row, circle, &centre_x, &centre_y);
-    if (filtered) /* FilterInvSquare |pixel - centre|^2 */
-        rho2d = GAUSSIAN_FILTER_INV_SQUARE * ((centre_x - r->x) * (centre_x - r->x) + (centre_y - r->y) * (centre_y - r->y));
-    double plane_depth = u * row[2].x + v * row[2].y + row[2].z;
     /* the near skip takes the plane hit's depth even where the filter wins
      * (forward.cu since e0ed020, the commit 2DGS pins); where the filter
      * wins the hit is placed at the centre's depth (the depth of the
      * earlier code), the point its bounds and windows hold */
-    double depth = rho3d <= rho2d ? plane_depth : row[2].z;
-    if (plane_depth < GAUSSIAN_NEAR)
+    double depth = g->rho3d <= g->rho2d ? g->plane_depth : g->row[2].z;
+    if (g->plane_depth < GAUSSIAN_NEAR)
         return 0;
-    double rho = rr_fmin(rho3d, rho2d), t = depth / r->depth_per_t;
+    double rho = rr_fmin(g->rho3d, g->rho2d), t = depth / r->depth_per_t;
     /* alpha below 1/255 for certain (opacity <= 1): exp is the costly
      * part, and the exact test follows (a test with the opacity's own log
      * cost a log per candidate) */
@@ -429,13 +449,116 @@ static int hit_2d_after_cull(const gaussian_model *m, size_t i, gaussian_order o
     double alpha = clamp_alpha(GAUSSIAN_ALPHA_MAX, m->opacity[i], exp(-0.5 * rho));
     if (alpha < GAUSSIAN_ALPHA_MIN)
         return 0;
-    if (m->tile_rule && (!filtered || !in_2dgs_tiles(r, row, circle, centre_x, centre_y)))
+    if (m->tile_rule && (!g->filtered || !in_2dgs_tiles(r, g->row, filter_circle(m), g->centre_x, g->centre_y)))
         return 0;
+    const float *mu = &m->mean[3 * i];
     vec3 dir = v3_sub(v3(mu[0], mu[1], mu[2]), r->eye);
     double key = order == GAUSSIAN_ORDER_CENTER_DEPTH ? p.z / r->depth_per_t : t;
     *h = (gaussian_hit){(float)key, (float)t, (float)alpha,
                         {(float)dir.x, (float)dir.y, (float)dir.z}, 0, (unsigned)i};
     return 1;
+}
+
+#if RR_AVX2_CULL
+/* The linear part of camera matrix row `row` times (x, y, z) (cam_vector). */
+__attribute__((target("avx2"))) static inline __m256d lanes_linear(const double row[4], __m256d x, __m256d y, __m256d z)
+{
+    __m256d sum = _mm256_add_pd(_mm256_mul_pd(_mm256_set1_pd(row[0]), x), _mm256_mul_pd(_mm256_set1_pd(row[1]), y));
+    return _mm256_add_pd(sum, _mm256_mul_pd(_mm256_set1_pd(row[2]), z));
+}
+
+/* a * b - c * d, lane by lane */
+__attribute__((target("avx2"))) static inline __m256d lanes_cross_term(__m256d a, __m256d b, __m256d c, __m256d d)
+{
+    return _mm256_sub_pd(_mm256_mul_pd(a, b), _mm256_mul_pd(c, d));
+}
+
+/* dual_conic(a, b, c) with cc = c * c */
+__attribute__((target("avx2"))) static inline __m256d lanes_dual_conic(const __m256d a[3], const __m256d b[3], __m256d cc)
+{
+    __m256d across = _mm256_add_pd(_mm256_mul_pd(a[0], b[0]), _mm256_mul_pd(a[1], b[1]));
+    return _mm256_sub_pd(_mm256_mul_pd(cc, across), _mm256_mul_pd(a[2], b[2]));
+}
+
+/* gaussian_splat_rows for four Gaussians: T's rows as row[k][component]. */
+__attribute__((target("avx2"))) static void splat_rows_lanes(const gaussian_model *m, const unsigned prim[4],
+                                                             const gaussian_ray *r, const vec3 p[4], __m256d row[3][3])
+{
+    const float *q[4], *sc[4];
+    for (int j = 0; j < 4; j++)
+        q[j] = &m->rotation[4 * prim[j]], sc[j] = &m->scale[3 * prim[j]];
+    __m256d w = lanes_of(q, 0), x = lanes_of(q, 1), y = lanes_of(q, 2), z = lanes_of(q, 3);
+    __m256d one = _mm256_set1_pd(1), two = _mm256_set1_pd(2), s0 = lanes_of(sc, 0), s1 = lanes_of(sc, 1);
+    /* quaternion_matrix's first two columns, each times its scale */
+    __m256d R00 = _mm256_sub_pd(one, _mm256_mul_pd(two, _mm256_add_pd(_mm256_mul_pd(y, y), _mm256_mul_pd(z, z))));
+    __m256d R10 = _mm256_mul_pd(two, _mm256_add_pd(_mm256_mul_pd(x, y), _mm256_mul_pd(w, z)));
+    __m256d R20 = _mm256_mul_pd(two, _mm256_sub_pd(_mm256_mul_pd(x, z), _mm256_mul_pd(w, y)));
+    __m256d R01 = _mm256_mul_pd(two, _mm256_sub_pd(_mm256_mul_pd(x, y), _mm256_mul_pd(w, z)));
+    __m256d R11 = _mm256_sub_pd(one, _mm256_mul_pd(two, _mm256_add_pd(_mm256_mul_pd(x, x), _mm256_mul_pd(z, z))));
+    __m256d R21 = _mm256_mul_pd(two, _mm256_add_pd(_mm256_mul_pd(y, z), _mm256_mul_pd(w, x)));
+    __m256d ux = _mm256_mul_pd(R00, s0), uy = _mm256_mul_pd(R10, s0), uz = _mm256_mul_pd(R20, s0);
+    __m256d vx = _mm256_mul_pd(R01, s1), vy = _mm256_mul_pd(R11, s1), vz = _mm256_mul_pd(R21, s1);
+    __m256d tu[3], tv[3];
+    for (int a = 0; a < 3; a++)
+        tu[a] = lanes_linear(r->m[a], ux, uy, uz), tv[a] = lanes_linear(r->m[a], vx, vy, vz);
+    __m256d pc[3] = {_mm256_set_pd(p[3].x, p[2].x, p[1].x, p[0].x), _mm256_set_pd(p[3].y, p[2].y, p[1].y, p[0].y),
+                     _mm256_set_pd(p[3].z, p[2].z, p[1].z, p[0].z)};
+    __m256d third[3] = {tu[2], tv[2], pc[2]}, first[3] = {tu[0], tv[0], pc[0]}, second[3] = {tu[1], tv[1], pc[1]};
+    __m256d fx = _mm256_set1_pd(r->fx), fy = _mm256_set1_pd(r->fy), cx = _mm256_set1_pd(r->cx), cy = _mm256_set1_pd(r->cy);
+    for (int a = 0; a < 3; a++) { /* splat_rows */
+        row[2][a] = third[a];
+        row[0][a] = _mm256_add_pd(_mm256_mul_pd(first[a], fx), _mm256_mul_pd(third[a], cx));
+        row[1][a] = _mm256_add_pd(_mm256_mul_pd(second[a], fy), _mm256_mul_pd(third[a], cy));
+    }
+}
+
+/* splat_2d_geometry_of for four Gaussians (rows from splat_rows_lanes). */
+__attribute__((target("avx2"))) static void splat_2d_geometry_lanes(const gaussian_ray *r, double circle,
+                                                                    __m256d row[3][3], splat_2d_geometry g[4])
+{
+    __m256d rx = _mm256_set1_pd(r->x), ry = _mm256_set1_pd(r->y), k[3], l[3];
+    for (int a = 0; a < 3; a++)
+        k[a] = _mm256_sub_pd(_mm256_mul_pd(row[2][a], rx), row[0][a]),
+        l[a] = _mm256_sub_pd(_mm256_mul_pd(row[2][a], ry), row[1][a]);
+    __m256d cx = lanes_cross_term(k[1], l[2], k[2], l[1]), cy = lanes_cross_term(k[2], l[0], k[0], l[2]);
+    __m256d cz = lanes_cross_term(k[0], l[1], k[1], l[0]);
+    __m256d u = _mm256_div_pd(cx, cz), v = _mm256_div_pd(cy, cz);
+    __m256d rho3d = _mm256_add_pd(_mm256_mul_pd(u, u), _mm256_mul_pd(v, v));
+    __m256d cc = _mm256_mul_pd(_mm256_set1_pd(circle), _mm256_set1_pd(circle));
+    __m256d d22 = lanes_dual_conic(row[2], row[2], cc), filtered = _mm256_cmp_pd(d22, _mm256_setzero_pd(), _CMP_LT_OQ);
+    __m256d centre_x = _mm256_and_pd(filtered, _mm256_div_pd(lanes_dual_conic(row[0], row[2], cc), d22));
+    __m256d centre_y = _mm256_and_pd(filtered, _mm256_div_pd(lanes_dual_conic(row[1], row[2], cc), d22));
+    __m256d dx = _mm256_sub_pd(centre_x, rx), dy = _mm256_sub_pd(centre_y, ry);
+    __m256d rho2d = _mm256_mul_pd(_mm256_set1_pd(GAUSSIAN_FILTER_INV_SQUARE),
+                                  _mm256_add_pd(_mm256_mul_pd(dx, dx), _mm256_mul_pd(dy, dy)));
+    rho2d = _mm256_blendv_pd(_mm256_set1_pd(INFINITY), rho2d, filtered);
+    __m256d plane_depth = _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(u, row[2][0]), _mm256_mul_pd(v, row[2][1])), row[2][2]);
+    double out[16][4];
+    __m256d fields[16] = {row[0][0], row[0][1], row[0][2], row[1][0], row[1][1], row[1][2], row[2][0], row[2][1],
+                          row[2][2], cz, u, v, rho3d, rho2d, centre_x, centre_y};
+    for (int f = 0; f < 16; f++)
+        _mm256_storeu_pd(out[f], fields[f]);
+    double depth[4];
+    _mm256_storeu_pd(depth, plane_depth);
+    int mask = _mm256_movemask_pd(filtered);
+    for (int j = 0; j < 4; j++) {
+        for (int a = 0; a < 3; a++)
+            g[j].row[a] = v3(out[3 * a][j], out[3 * a + 1][j], out[3 * a + 2][j]);
+        g[j].cz = out[9][j], g[j].u = out[10][j], g[j].v = out[11][j], g[j].rho3d = out[12][j];
+        g[j].rho2d = out[13][j], g[j].centre_x = out[14][j], g[j].centre_y = out[15][j];
+        g[j].plane_depth = depth[j], g[j].filtered = mask >> j & 1;
+    }
+}
+#endif
+
+/* Gaussian i's 2DGS hit once cull_2d passed it (p: its camera-space mean). */
+static int hit_2d_after_cull(const gaussian_model *m, size_t i, gaussian_order order, const gaussian_ray *r, vec3 p,
+                             gaussian_hit *h)
+{
+    splat_2d_geometry g;
+    gaussian_splat_rows(m, i, r, p, g.row);
+    splat_2d_geometry_of(r, filter_circle(m), &g);
+    return hit_2d_from_geometry(m, i, order, r, p, &g, h);
 }
 
 int gaussian_hit_2d(const gaussian_model *m, size_t i, gaussian_order order, const gaussian_ray *r,
@@ -796,6 +919,63 @@ int gaussian_hit_after_cull(const gaussian_model *m, size_t i, gaussian_order or
         return gaussian_hit_3dgrt(m, i, r, h);
     return hit_3d_raster_after_cull(m, i, r, p, h);
 }
+
+int gaussian_hits_after_cull4(const gaussian_model *m, const unsigned prim[4], gaussian_order order,
+                              const gaussian_ray *r, const vec3 p[4], gaussian_hit h[4])
+{
+    int found = 0;
+#if RR_AVX2_CULL
+    if (m->kind == GAUSSIAN_2D && __builtin_cpu_supports("avx2")) {
+        __m256d row[3][3];
+        splat_2d_geometry g[4];
+        splat_rows_lanes(m, prim, r, p, row);
+        splat_2d_geometry_lanes(r, filter_circle(m), row, g);
+        for (int j = 0; j < 4; j++)
+            found |= hit_2d_from_geometry(m, prim[j], order, r, p[j], &g[j], &h[j]) << j;
+        return found;
+    }
+#endif
+    for (int j = 0; j < 4; j++)
+        found |= gaussian_hit_after_cull(m, prim[j], order, r, p[j], &h[j]) << j;
+    return found;
+}
+
+#ifdef RR_DCHECKS
+/* The lanes whose splat_2d_geometry differs in any bit from the scalar
+ * splat_2d_geometry_of's: the hits' floats hide a double's last bits. */
+static int geometry_differs(const splat_2d_geometry *a, const splat_2d_geometry *b)
+{
+    if (memcmp(a->row, b->row, sizeof a->row) || memcmp(&a->cz, &b->cz, sizeof a->cz))
+        return 1;
+    if (a->cz == 0)
+        return 0;
+    double x[] = {a->u, a->v, a->rho3d, a->rho2d, a->centre_x, a->centre_y, a->plane_depth};
+    double y[] = {b->u, b->v, b->rho3d, b->rho2d, b->centre_x, b->centre_y, b->plane_depth};
+    return memcmp(x, y, sizeof x) || a->filtered != b->filtered;
+}
+
+int gaussian_2d_geometry_lanes_differ(const gaussian_model *m, const unsigned prim[4], const gaussian_ray *r,
+                                      const vec3 p[4])
+{
+    int differ = 0;
+#if RR_AVX2_CULL
+    if (m->kind != GAUSSIAN_2D || !__builtin_cpu_supports("avx2"))
+        return 0;
+    __m256d row[3][3];
+    splat_2d_geometry four[4], one;
+    splat_rows_lanes(m, prim, r, p, row);
+    splat_2d_geometry_lanes(r, filter_circle(m), row, four);
+    for (int j = 0; j < 4; j++) {
+        gaussian_splat_rows(m, prim[j], r, p[j], one.row);
+        splat_2d_geometry_of(r, filter_circle(m), &one);
+        differ |= geometry_differs(&one, &four[j]) << j;
+    }
+#else
+    (void)m, (void)prim, (void)r, (void)p;
+#endif
+    return differ;
+}
+#endif
 
 int gaussian_hit_any(const gaussian_model *m, size_t i, gaussian_order order, const gaussian_ray *r, gaussian_hit *h)
 {

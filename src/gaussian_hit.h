@@ -152,6 +152,17 @@ int gaussian_hit_any(const gaussian_model *m, size_t i, gaussian_order order, co
 int gaussian_cull(const gaussian_model *m, size_t i, const gaussian_ray *r, vec3 *p);
 int gaussian_hit_after_cull(const gaussian_model *m, size_t i, gaussian_order order, const gaussian_ray *r, vec3 p,
                             gaussian_hit *h);
+/* gaussian_hit_after_cull for four Gaussians of one ray (the same hits, bit
+ * for bit; 2D geometry in AVX2 lanes where the CPU has them): bit j of the
+ * result is set when prim[j] hits, h[j] its hit. */
+int gaussian_hits_after_cull4(const gaussian_model *m, const unsigned prim[4], gaussian_order order,
+                              const gaussian_ray *r, const vec3 p[4], gaussian_hit h[4]);
+#ifdef RR_DCHECKS
+/* Test hook: bit j set when the lanes' 2D geometry of prim[j] differs in
+ * any bit from the scalar's (0 without AVX2 lanes). */
+int gaussian_2d_geometry_lanes_differ(const gaussian_model *m, const unsigned prim[4], const gaussian_ray *r,
+                                      const vec3 p[4]);
+#endif
 int gaussian_hit_2d(const gaussian_model *m, size_t i, gaussian_order order, const gaussian_ray *r,
                     gaussian_hit *h);
 /* Culls the n candidates listed in cand (their prims), keeping those the

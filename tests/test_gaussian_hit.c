@@ -287,50 +287,59 @@ static vec3 rotate(const vec3 R[3], vec3 p) { return v3(v3_dot(R[0], p), v3_dot(
  * plane, half of the trials through a turned, unevenly scaled object
  * (where regrouping a sum changes the means); candidate counts that are
  * no multiple of the lanes. */
-TEST(gaussian_cull_candidates_keeps_what_gaussian_cull_keeps)
+enum { CULL_TRIAL_N = 4099 };
+
+/* One trial of the lanes' tests: CULL_TRIAL_N Gaussians of
+ * splatting_formations[trial % 6] about a random pixel's ray r. */
+static void cull_trial(int trial, unsigned *st, gaussian_model *m, gaussian_ray *r)
 {
     camera_view v = {v3(0, 0, 0), {v3(1, 0, 0), v3(0, 1, 0), v3(0, 0, 1)}, 100, 100, 50, 50, 100, 100};
     xform id = {{{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}, {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}, {0, 0, 0}, 0};
+    enum { N = CULL_TRIAL_N };
+    m->formation = splatting_formations[trial % 6];
+    model_of(m, N, m->formation <= GAUSSIAN_FORMATION_2DGS_UNIT_CIRCLE ? GAUSSIAN_2D : GAUSSIAN_3D);
+    m->formation = splatting_formations[trial % 6];
+    double x = 100 * uniform(st), y = 100 * uniform(st);
+    vec3 dir = v3_normalize(v3((x - 50) / 100, (y - 50) / 100, 1));
+    for (size_t i = 0; i < N; i++) {
+        double depth = -0.5 + 4.5 * uniform(st) * uniform(st) + (i % 7 == 0 ? GAUSSIAN_NEAR + 0.5 : 0);
+        random_gaussian(m, i, st, fabs(depth) * pow(10.0, -4 + 3 * uniform(st)));
+        double reach = 3.4 * fmax(m->scale[3 * i], m->scale[3 * i + 1]) + 2.4 * fabs(depth) / 100; /* the cull's scale */
+        vec3 at = v3_scale(dir, depth / dir.z);
+        for (int k = 0; k < 3; k++)
+            m->mean[3 * i + k] = (float)((k == 0 ? at.x : k == 1 ? at.y : at.z) + 1.3 * reach * (2 * uniform(st) - 1));
+    }
+    for (size_t i = 0; i < N; i += 5) { /* exactly at the near plane of 2DGS and Inria (0.2): 0.5 - 0.3 */
+        m->mean[3 * i] = (float)(0.5 * dir.x / dir.z), m->mean[3 * i + 1] = (float)(0.5 * dir.y / dir.z);
+        m->mean[3 * i + 2] = 0.5f;
+    }
+    xform back = id;
+    back.t = v3(0, 0, -0.3); /* the others 0.3 nearer */
+    if (trial % 2) { /* a turned, unevenly scaled object: sums of unlike terms (their order shows) */
+        double R[3][3], sc[3] = {0.7 + uniform(st), 0.7 + uniform(st), 0.7 + uniform(st)};
+        rotation_matrix(v3_normalize(v3(uniform(st) - 0.5, uniform(st) - 0.5, uniform(st) - 0.5)), 3 * uniform(st), R);
+        for (int a = 0; a < 3; a++)
+            for (int b = 0; b < 3; b++)
+                back.r[a][b] = R[a][b] * sc[b], back.ri[a][b] = R[b][a] / sc[a];
+        back.scaled = 1, back.t = v3(0.01 * uniform(st), 0.01 * uniform(st), -0.3);
+        for (size_t i = 0; i < N; i++) { /* the same world means as the identity's */
+            vec3 w = xform_inverse_point(&back, v3(m->mean[3 * i], m->mean[3 * i + 1], m->mean[3 * i + 2] - 0.3));
+            m->mean[3 * i] = (float)w.x, m->mean[3 * i + 1] = (float)w.y, m->mean[3 * i + 2] = (float)w.z;
+        }
+    }
+    gaussian_ray_init(r, &v, &back, x, y, v3(0, 0, 0), dir);
+}
+
+TEST(gaussian_cull_candidates_keeps_what_gaussian_cull_keeps)
+{
     unsigned st = 91;
-    enum { N = 4099 };
+    enum { N = CULL_TRIAL_N };
     gaussian_candidate *cand = malloc(N * sizeof *cand);
     long kept_total = 0, culled_total = 0, mismatched = 0;
     for (int trial = 0; trial < 60; trial++) {
         gaussian_model m;
-        m.formation = splatting_formations[trial % 6];
-        model_of(&m, N, m.formation <= GAUSSIAN_FORMATION_2DGS_UNIT_CIRCLE ? GAUSSIAN_2D : GAUSSIAN_3D);
-        m.formation = splatting_formations[trial % 6];
-        double x = 100 * uniform(&st), y = 100 * uniform(&st);
-        vec3 dir = v3_normalize(v3((x - 50) / 100, (y - 50) / 100, 1));
-        for (size_t i = 0; i < N; i++) {
-            double depth = -0.5 + 4.5 * uniform(&st) * uniform(&st) + (i % 7 == 0 ? GAUSSIAN_NEAR + 0.5 : 0);
-            random_gaussian(&m, i, &st, fabs(depth) * pow(10.0, -4 + 3 * uniform(&st)));
-            double reach = 3.4 * fmax(m.scale[3 * i], m.scale[3 * i + 1]) + 2.4 * fabs(depth) / 100; /* the cull's scale */
-            vec3 at = v3_scale(dir, depth / dir.z);
-            for (int k = 0; k < 3; k++)
-                m.mean[3 * i + k] = (float)((k == 0 ? at.x : k == 1 ? at.y : at.z) + 1.3 * reach * (2 * uniform(&st) - 1));
-        }
-        for (size_t i = 0; i < N; i += 5) { /* exactly at the near plane of 2DGS and Inria (0.2): 0.5 - 0.3 */
-            m.mean[3 * i] = (float)(0.5 * dir.x / dir.z), m.mean[3 * i + 1] = (float)(0.5 * dir.y / dir.z);
-            m.mean[3 * i + 2] = 0.5f;
-        }
-        xform back = id;
-        back.t = v3(0, 0, -0.3); /* the others 0.3 nearer */
-        if (trial % 2) { /* a turned, unevenly scaled object: sums of unlike terms (their order shows) */
-            double R[3][3], sc[3] = {0.7 + uniform(&st), 0.7 + uniform(&st), 0.7 + uniform(&st)};
-            rotation_matrix(v3_normalize(v3(uniform(&st) - 0.5, uniform(&st) - 0.5, uniform(&st) - 0.5)),
-                            3 * uniform(&st), R);
-            for (int a = 0; a < 3; a++)
-                for (int b = 0; b < 3; b++)
-                    back.r[a][b] = R[a][b] * sc[b], back.ri[a][b] = R[b][a] / sc[a];
-            back.scaled = 1, back.t = v3(0.01 * uniform(&st), 0.01 * uniform(&st), -0.3);
-            for (size_t i = 0; i < N; i++) { /* the same world means as the identity's */
-                vec3 w = xform_inverse_point(&back, v3(m.mean[3 * i], m.mean[3 * i + 1], m.mean[3 * i + 2] - 0.3));
-                m.mean[3 * i] = (float)w.x, m.mean[3 * i + 1] = (float)w.y, m.mean[3 * i + 2] = (float)w.z;
-            }
-        }
         gaussian_ray r;
-        gaussian_ray_init(&r, &v, &back, x, y, v3(0, 0, 0), dir);
+        cull_trial(trial, &st, &m, &r);
         size_t n = N - (size_t)trial % 4;
         for (size_t i = 0; i < n; i++)
             cand[i].prim = (unsigned)i;
@@ -353,6 +362,56 @@ TEST(gaussian_cull_candidates_keeps_what_gaussian_cull_keeps)
            mismatched, __builtin_cpu_supports("avx2") ? "in use" : "absent: the scalar cull against itself");
     CHECK(kept_total > 15000 && culled_total > 15000);
     CHECK(mismatched == 0);
+}
+
+/* gaussian_hits_after_cull4 (the 2D geometry in AVX2 lanes where the CPU
+ * has them) finds exactly the hits gaussian_hit_after_cull finds one at a
+ * time, bit for bit: the cull trials' Gaussians (both 2DGS circle rules,
+ * and the rasterizers, which take the scalar path), both orders, the tile
+ * rule on and off, in groups of four culled candidates. The hits' floats
+ * hide a regrouped sum's last bit, so the DCHECKS build (make test)
+ * compares every double of the geometry too. */
+TEST(gaussian_hits_after_cull4_are_the_hits_one_at_a_time)
+{
+    unsigned st = 17;
+    enum { N = CULL_TRIAL_N };
+    gaussian_candidate *cand = malloc(N * sizeof *cand);
+    long hits2d = 0, misses2d = 0, mismatched = 0, geometry_differs = 0;
+    for (int trial = 0; trial < 96; trial++) {
+        gaussian_model m;
+        gaussian_ray r;
+        cull_trial(trial, &st, &m, &r);
+        m.tile_rule = trial / 6 % 2;
+        gaussian_order order = trial / 12 % 2 ? GAUSSIAN_ORDER_HIT_DEPTH : GAUSSIAN_ORDER_CENTER_DEPTH;
+        for (size_t i = 0; i < N; i++)
+            cand[i].prim = (unsigned)i;
+        size_t kept = gaussian_cull_candidates(&m, &r, cand, N, 0);
+        for (size_t k = 0; k + 4 <= kept; k += 4) {
+            unsigned prim[4];
+            vec3 p[4];
+            gaussian_hit four[4], one;
+            for (int j = 0; j < 4; j++)
+                prim[j] = cand[k + (size_t)j].prim, p[j] = cand[k + (size_t)j].p;
+            int found = gaussian_hits_after_cull4(&m, prim, order, &r, p, four);
+#ifdef RR_DCHECKS
+            geometry_differs += __builtin_popcount((unsigned)gaussian_2d_geometry_lanes_differ(&m, prim, &r, p));
+#endif
+            for (int j = 0; j < 4; j++) {
+                memset(&one, 0, sizeof one);
+                int hit = gaussian_hit_after_cull(&m, prim[j], order, &r, p[j], &one);
+                mismatched += hit != (found >> j & 1) || (hit && memcmp(&one, &four[j], sizeof one));
+                if (m.kind == GAUSSIAN_2D)
+                    hits2d += hit, misses2d += !hit;
+            }
+        }
+        gaussian_model_free(&m);
+    }
+    free(cand);
+    printf("    2D hits %ld, misses %ld, differing %ld, geometry differing in a bit %ld (AVX2 lanes %s)\n", hits2d,
+           misses2d, mismatched, geometry_differs,
+           __builtin_cpu_supports("avx2") ? "in use" : "absent: the scalar path against itself");
+    CHECK(hits2d > 2000 && misses2d > 2000);
+    CHECK(mismatched == 0 && geometry_differs == 0);
 }
 
 /* gaussian_key_floor lies at or below the key of every hit, in both
