@@ -633,14 +633,14 @@ static void evaluate_chunk(const accel *a, gaussian_hits *h, const gaussian_cand
     }
 }
 
-/* The window's kept candidates in order of their key floors, `order`
- * (room for 2n words): the evaluation can stop where the transmittance is
- * spent. */
-static void order_by_key_floor(const gaussian_candidate *cand, size_t n, uint64_t *order)
+/* The window's kept candidates in order of their key floors, finished a
+ * prefix at a time (`order`: room for 3n words): the evaluation stops
+ * where the transmittance is spent, most often a third of the way in. */
+static void order_by_key_floor(const gaussian_candidate *cand, size_t n, uint64_t *order, rr_lazy_sort *sorted)
 {
     for (size_t k = 0; k < n; k++)
         order[k] = (uint64_t)rr_float_order_bits(cand[k].key_floor) << 32 | (uint64_t)k;
-    rr_sort_u64(order, order + n, n);
+    rr_lazy_sort_begin(sorted, order, order + n, n);
 }
 
 /* Evaluates the window's kept candidates EVALUATION_CHUNK at a time in
@@ -657,20 +657,22 @@ static void evaluate_window(const accel *a, gaussian_hits *h, gaussian_blend *bl
 {
     size_t n = h->candidates_count;
     const gaussian_candidate *cand = h->candidates;
-    if (n > EVALUATION_CHUNK && h->candidate_order_cap < 2 * n) {
-        uint64_t *grown = realloc(h->candidate_order, 2 * n * sizeof *grown);
+    if (n > EVALUATION_CHUNK && h->candidate_order_cap < 3 * n) {
+        uint64_t *grown = realloc(h->candidate_order, 3 * n * sizeof *grown);
         if (grown)
-            h->candidate_order = grown, h->candidate_order_cap = 2 * n;
+            h->candidate_order = grown, h->candidate_order_cap = 3 * n;
     }
-    if (n <= EVALUATION_CHUNK || h->candidate_order_cap < 2 * n) { /* (no room to order them: all at once) */
+    if (n <= EVALUATION_CHUNK || h->candidate_order_cap < 3 * n) { /* (no room to order them: all at once) */
         for (size_t k = 0; k < n; k++)
             evaluate_kept(a, h, &cand[k]);
         gaussian_blend_hits(blend, h, a->models, final_below);
         return;
     }
-    order_by_key_floor(cand, n, h->candidate_order);
+    rr_lazy_sort sorted;
+    order_by_key_floor(cand, n, h->candidate_order, &sorted);
     for (size_t from = 0; from < n && !blend->done; from += EVALUATION_CHUNK) {
         size_t to = n - from < EVALUATION_CHUNK ? n : from + EVALUATION_CHUNK;
+        rr_lazy_sort_through(&sorted, to < n ? to + 1 : n); /* the chunk, and the floor after it */
         evaluate_chunk(a, h, cand, h->candidate_order + from, to - from);
         double below = to < n ? cand[(uint32_t)h->candidate_order[to]].key_floor : INFINITY;
         if (below > -INFINITY) /* (else nothing can be composited yet) */

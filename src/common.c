@@ -95,6 +95,52 @@ void rr_sort_u64(uint64_t *a, uint64_t *tmp, size_t n)
     memcpy(a, tmp, n * sizeof *a);
 }
 
+void rr_lazy_sort_begin(rr_lazy_sort *s, uint64_t *a, uint64_t *scratch, size_t n)
+{
+    /* scratch: n words for the scatter (then the big buckets' merges);
+     * after them the bucket starts (n / 2 + 2 of 32 bits) and each word's
+     * bucket (n of 32 bits) */
+    size_t buckets = n / 2;
+    s->a = a, s->tmp = scratch, s->start = (uint32_t *)(scratch + n), s->n = n, s->done = 0, s->next = 0;
+    s->n_buckets = buckets;
+    if (n <= SORT_RUN) { /* (and the room above holds the buckets: n >= 4) */
+        insertion_sort_u64(a, n);
+        s->done = n, s->n_buckets = 0;
+        return;
+    }
+    uint32_t *start = s->start, *bucket = start + buckets + 2, lo = UINT32_MAX, hi = 0;
+    for (size_t k = 0; k < n; k++) {
+        uint32_t key = (uint32_t)(a[k] >> 32);
+        lo = key < lo ? key : lo, hi = key > hi ? key : hi;
+    }
+    /* bucket = (key - lo) * scale >> 32: monotone in the key (so the
+     * buckets in order hold the words in order), below `buckets` for every
+     * key up to hi, and no division per word */
+    uint64_t scale = ((uint64_t)buckets << 32) / ((uint64_t)(hi - lo) + 1);
+    memset(start, 0, (buckets + 2) * sizeof *start);
+    for (size_t k = 0; k < n; k++) { /* counts, shifted by two: after the sums start[b + 1] is bucket b's start */
+        bucket[k] = (uint32_t)((uint64_t)((uint32_t)(a[k] >> 32) - lo) * scale >> 32);
+        start[bucket[k] + 2]++;
+    }
+    for (size_t b = 2; b < buckets + 2; b++)
+        start[b] += start[b - 1];
+    for (size_t k = 0; k < n; k++)
+        scratch[start[bucket[k] + 1]++] = a[k];
+    memcpy(a, scratch, n * sizeof *a);
+}
+
+void rr_lazy_sort_through(rr_lazy_sort *s, size_t k)
+{
+    while (s->done < k && s->next < s->n_buckets) {
+        size_t from = s->start[s->next], to = s->start[s->next + 1];
+        if (to - from <= SORT_RUN)
+            insertion_sort_u64(s->a + from, to - from);
+        else
+            rr_sort_u64(s->a + from, s->tmp, to - from);
+        s->done = to, s->next++;
+    }
+}
+
 int cmp_double(const void *a, const void *b)
 {
     double x = *(const double *)a, y = *(const double *)b;

@@ -65,6 +65,44 @@ static int cmp_u64(const void *a, const void *b)
  * words with an ascending prefix of every length (kept and merged) or
  * nearly sorted ones; and rr_float_order_bits orders floats as < does,
  * signed zeros and infinities included. */
+/* rr_lazy_sort finishes, prefix by prefix, exactly rr_sort_u64's order
+ * (qsort's, the words being distinct or equal as wholes): random words,
+ * upper halves clustered, all equal, two values, one outlier far above
+ * the rest (every other word in the first bucket), sizes 0 to 300, the
+ * prefixes asked for in random steps (and zero steps), each checked as it
+ * is finished and nothing after it required. */
+TEST(lazy_sort_finishes_the_prefixes_of_the_full_sort)
+{
+    uint64_t a[300], b[300], scratch[600];
+    unsigned st = 5;
+    int wrong = 0, trials = 0;
+    for (int trial = 0; trial < 4000; trial++) {
+        size_t n = (size_t)(rand_r(&st) % 301);
+        int kind = trial % 5;
+        for (size_t k = 0; k < n; k++) {
+            uint32_t hi = kind == 0   ? (uint32_t)rand_r(&st) * 2654435761u
+                          : kind == 1 ? 0x40000000u + (uint32_t)(rand_r(&st) % 50)
+                          : kind == 2 ? 7u
+                          : kind == 3 ? (uint32_t)(rand_r(&st) % 2) * 0x80000000u
+                                      : (k == n / 2 ? 0xffffffffu : (uint32_t)(rand_r(&st) % 1000));
+            a[k] = (uint64_t)hi << 32 | (uint64_t)(rand_r(&st) % 64);
+        }
+        memcpy(b, a, n * sizeof *a);
+        qsort(b, n, sizeof *b, cmp_u64);
+        rr_lazy_sort s;
+        rr_lazy_sort_begin(&s, a, scratch, n);
+        for (size_t k = 0; k <= n; k += (size_t)(rand_r(&st) % 20)) {
+            rr_lazy_sort_through(&s, k);
+            wrong += memcmp(a, b, k * sizeof *a) != 0;
+        }
+        rr_lazy_sort_through(&s, n);
+        wrong += memcmp(a, b, n * sizeof *a) != 0;
+        trials++;
+    }
+    printf("    %d arrays, %d prefixes differing from qsort's\n", trials, wrong);
+    CHECK(wrong == 0);
+}
+
 TEST(u64_sort_agrees_with_qsort_and_float_bits_sort_as_floats)
 {
     uint64_t a[300], b[300], tmp[300];
