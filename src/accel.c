@@ -562,8 +562,9 @@ static void evaluate(const gather_context *c, unsigned prim)
 
 /* Every Gaussian the ray passes is listed (cull_candidates and
  * evaluate_window take them after the traversal): the ray is never
- * shortened, so the traversal finds them all. Listing first lets their
- * loads be prefetched ahead. */
+ * shortened, so the traversal finds them all. Listing first lets the cull
+ * prefetch their loads a few ahead (a prefetch here too, a traversal
+ * ahead, measured 1-9% slower: issue 31, src/cmd/BENCH.md). */
 void accel_gaussian_gather(const struct RTCIntersectFunctionNArguments *args)
 {
     if (!args->valid[0])
@@ -579,7 +580,6 @@ void accel_gaussian_gather(const struct RTCIntersectFunctionNArguments *args)
         }
         h->candidates = grown, h->candidates_cap = cap;
     }
-    gaussian_prefetch_cull(&c->o->gaussians, args->primID);
     h->candidates[h->candidates_count++].prim = args->primID;
 }
 
