@@ -845,10 +845,8 @@ float gaussian_key_floor(const gaussian_model *m, size_t i, const gaussian_ray *
 
 /* Keeps cand[k] (k < n) that the cull passes, at the front, with p and
  * key floor (gaussian_cull_candidates). */
-static size_t keep_culled(const gaussian_model *m, gaussian_candidate *cand, size_t kept, unsigned prim, vec3 p,
-                          float key_floor, unsigned ray)
+static size_t keep_culled(gaussian_candidate *cand, size_t kept, unsigned prim, vec3 p, float key_floor, unsigned ray)
 {
-    gaussian_prefetch_hit(m, prim);
     cand[kept] = (gaussian_candidate){p, key_floor, prim, ray};
     return kept + 1;
 }
@@ -883,9 +881,11 @@ __attribute__((target("avx2"))) static size_t cull_in_lanes(const gaussian_model
                           : lanes_fmax(lanes_of(sc, 0), lanes_of(sc, 1));
         int keep = rules ? cull_3d_lanes(r, rules, X0, Y0, Z0, S, px, py, pz, floor)
                          : cull_2d_lanes(r, circle, X0, Y0, Z0, S, px, py, pz, floor);
+        /* without a branch (whether a lane is kept is a coin toss): every
+         * lane is written where the next kept one goes, at or below its own
+         * slot, which the loop above has read */
         for (int j = 0; j < CULL_LANES; j++)
-            if (keep >> j & 1)
-                *kept = keep_culled(m, cand, *kept, prim[j], v3(px[j], py[j], pz[j]), floor[j], ray);
+            *kept = keep_culled(cand, *kept, prim[j], v3(px[j], py[j], pz[j]), floor[j], ray) - !(keep >> j & 1);
     }
     return k;
 }
@@ -905,8 +905,10 @@ size_t gaussian_cull_candidates(const gaussian_model *m, const gaussian_ray *r, 
         unsigned prim = cand[k].prim;
         vec3 p;
         if (gaussian_cull(m, prim, r, &p))
-            kept = keep_culled(m, cand, kept, prim, p, gaussian_key_floor(m, prim, r, p), ray);
+            kept = keep_culled(cand, kept, prim, p, gaussian_key_floor(m, prim, r, p), ray);
     }
+    for (size_t j = 0; j < kept; j++) /* what their evaluation reads */
+        gaussian_prefetch_hit(m, cand[j].prim);
     return kept;
 }
 
