@@ -437,14 +437,68 @@ static void sh_basis(int degree, double x, double y, double z, double *b)
     b[14] = C3[5] * z * (xx - yy), b[15] = C3[6] * x * (xx - 3 * yy);
 }
 
+#if defined(__x86_64__) && defined(__GNUC__)
+#include <immintrin.h>
+/* The three sums of gaussian_sh_color in one AVX2 register (the fourth
+ * lane unused): per channel the same products added in the same order,
+ * so the same doubles bit for bit (no FMA: -ffp-contract=off). */
+__attribute__((target("avx2"))) static vec3 sh_sums_lanes(const float *sh, const double *b, int n)
+{
+    __m128i three = _mm_set_epi32(0, -1, -1, -1); /* (the load reads no fourth float) */
+    __m256d sum = _mm256_setzero_pd();
+    for (int k = 0; k < n; k++)
+        sum = _mm256_add_pd(sum, _mm256_mul_pd(_mm256_set1_pd(b[k]), _mm256_cvtps_pd(_mm_maskload_ps(sh + 3 * k, three))));
+    double out[4];
+    _mm256_storeu_pd(out, sum);
+    return v3(out[0], out[1], out[2]);
+}
+#define RR_SH_LANES 1
+#else
+#define RR_SH_LANES 0
+#endif
+
+static vec3 sh_sums_scalar(const float *sh, const double *b, int n)
+{
+    double r = 0, g = 0, bl = 0;
+    for (int k = 0; k < n; k++) /* in registers: an array's sums went through memory (issue 31's profile) */
+        r += b[k] * sh[3 * k], g += b[k] * sh[3 * k + 1], bl += b[k] * sh[3 * k + 2];
+    return v3(r, g, bl);
+}
+
+static vec3 sh_sums(const float *sh, const double *b, int n)
+{
+#if RR_SH_LANES
+    if (__builtin_cpu_supports("avx2"))
+        return sh_sums_lanes(sh, b, n);
+#endif
+    return sh_sums_scalar(sh, b, n);
+}
+
+#ifdef RR_DCHECKS
+int gaussian_sh_lanes_differ(const float *sh, int degree, vec3 dir)
+{
+#if RR_SH_LANES
+    if (!__builtin_cpu_supports("avx2"))
+        return 0;
+    vec3 d = v3_normalize(dir);
+    double b[GAUSSIAN_MAX_SH_COEFFS];
+    sh_basis(degree, d.x, d.y, d.z, b);
+    int n = (degree + 1) * (degree + 1);
+    vec3 lanes = sh_sums_lanes(sh, b, n), scalar = sh_sums_scalar(sh, b, n);
+    return memcmp(&lanes, &scalar, sizeof lanes) != 0;
+#else
+    (void)sh, (void)degree, (void)dir;
+    return 0;
+#endif
+}
+#endif
+
 vec3 gaussian_sh_color(const float *sh, int degree, vec3 dir)
 {
     RR_DCHECK(degree >= 0 && degree <= GAUSSIAN_MAX_SH_DEGREE);
     vec3 d = v3_normalize(dir);
-    double b[GAUSSIAN_MAX_SH_COEFFS], r = 0, g = 0, bl = 0;
+    double b[GAUSSIAN_MAX_SH_COEFFS];
     sh_basis(degree, d.x, d.y, d.z, b);
-    int n = (degree + 1) * (degree + 1);
-    for (int k = 0; k < n; k++) /* in registers: an array's sums went through memory (issue 31's profile) */
-        r += b[k] * sh[3 * k], g += b[k] * sh[3 * k + 1], bl += b[k] * sh[3 * k + 2];
-    return v3(rr_fmax(r + 0.5, 0.0), rr_fmax(g + 0.5, 0.0), rr_fmax(bl + 0.5, 0.0));
+    vec3 sum = sh_sums(sh, b, (degree + 1) * (degree + 1));
+    return v3(rr_fmax(sum.x + 0.5, 0.0), rr_fmax(sum.y + 0.5, 0.0), rr_fmax(sum.z + 0.5, 0.0));
 }

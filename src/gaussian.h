@@ -105,5 +105,10 @@ int gaussian_from_surfels(const struct surfel_s *s, size_t n, gaussian_kind kind
  * the given degree seen along dir (need not be unit): the real SH series
  * plus 0.5, clamped below at 0 (not above), as the official renderers do. */
 vec3 gaussian_sh_color(const float *sh, int degree, vec3 dir);
+#ifdef RR_DCHECKS
+/* Test hook: whether the SH sums in AVX2 lanes differ in any bit from the
+ * scalar sums (0 without the lanes). */
+int gaussian_sh_lanes_differ(const float *sh, int degree, vec3 dir);
+#endif
 
 #endif

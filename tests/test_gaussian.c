@@ -291,6 +291,30 @@ TEST(gaussian_mip_splatting_filter_3d_is_refused)
     CHECK(refused_rest(9, "filter_3D", "Mip-Splatting's 3D filter is not supported"));
 }
 
+/* The SH sums in AVX2 lanes (where the CPU has them) are the scalar sums
+ * bit for bit: random coefficients of every degree, random directions
+ * (the DCHECKS build, make test's, compares the doubles themselves). */
+TEST(sh_sums_in_lanes_are_the_scalar_sums)
+{
+    unsigned st = 29;
+    float sh[3 * GAUSSIAN_MAX_SH_COEFFS];
+    int differ = 0, trials = 0;
+    for (int trial = 0; trial < 20000; trial++) {
+        int degree = trial % (GAUSSIAN_MAX_SH_DEGREE + 1);
+        for (int k = 0; k < 3 * GAUSSIAN_MAX_SH_COEFFS; k++)
+            sh[k] = (float)((rand_r(&st) / (double)RAND_MAX - 0.5) * pow(10.0, rand_r(&st) % 7 - 3));
+        vec3 dir = v3(rand_r(&st) / (double)RAND_MAX - 0.5, rand_r(&st) / (double)RAND_MAX - 0.5,
+                      rand_r(&st) / (double)RAND_MAX - 0.5);
+#ifdef RR_DCHECKS
+        differ += gaussian_sh_lanes_differ(sh, degree, dir);
+#endif
+        trials++;
+        (void)degree, (void)dir;
+    }
+    printf("    %d colours, %d differing\n", trials, differ);
+    CHECK(differ == 0);
+}
+
 /* The basis function k at dir, read through gaussian_sh_color: coefficient
  * 0.1 on basis k of the red channel (small enough that 0.5 + it is never
  * clamped), so Y_k = (R - 0.5) / 0.1. */
