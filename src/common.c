@@ -31,12 +31,6 @@ void rr_warn(rr_warnings *w, const char *fmt, ...)
     w->count++;
 }
 
-uint32_t rr_float_order_bits(float f)
-{
-    uint32_t u;
-    memcpy(&u, &f, sizeof u);
-    return u & 0x80000000u ? ~u : u | 0x80000000u;
-}
 
 enum { SORT_RUN = 16 };
 

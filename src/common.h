@@ -8,6 +8,7 @@
 #include <signal.h>
 #include <stddef.h>
 #include <stdint.h>
+#include <string.h>
 
 #define RR_VERSION "0.1.0"
 
@@ -76,7 +77,12 @@ int cmp_double(const void *a, const void *b);
 
 /* A float's bits as an unsigned that sorts as the float does (a sort
  * key's upper half, rr_sort_u64). */
-uint32_t rr_float_order_bits(float f);
+static inline uint32_t rr_float_order_bits(float f)
+{
+    uint32_t u;
+    memcpy(&u, &f, sizeof u);
+    return u & 0x80000000u ? ~u : u | 0x80000000u;
+}
 
 /* Sorts n 64-bit words ascending (tmp: room for n more): insertion sort in
  * runs of 16, then bottom-up merges between a and tmp; an ascending
