@@ -533,7 +533,7 @@ int main(int argc, char **argv)
 {
     const char *csv_path = argc > 1 ? argv[1] : "bench.csv";
     int quick = argc > 2 && !strcmp(argv[2], "quick");
-    const char *only = argc > 3 ? argv[3] : NULL; /* one series: cases, speed, splats, tspp, threads, static80, target, gaussians, scale */
+    const char *only = argc > 3 ? argv[3] : NULL; /* one series: cases, speed, splats, tspp, threads, static80, target, floor, gaussians, scale */
     int res = quick ? 48 : 128, reps = quick ? 1 : 3;
     long cores = sysconf(_SC_NPROCESSORS_ONLN);
     int threads = cores > 0 ? (int)cores : 1;
