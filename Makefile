@@ -126,7 +126,7 @@ FUZZ_TARGETS := scene ply anim state gaussian camjson render_gaussian render_cam
 FUZZ_SECONDS ?= 60
 FUZZ_DIR     := build-fuzz
 FUZZ_FLAGS   := -O1 -g -fno-omit-frame-pointer -fsanitize=address,undefined -fno-sanitize-recover=undefined
-FUZZ_CFLAGS  := -std=c11 -D_GNU_SOURCE -DRR_DCHECKS $(FUZZ_FLAGS) -fsanitize=fuzzer-no-link -Wall -Wextra $(INCLUDES) \
+FUZZ_CFLAGS  := -std=c11 -ffp-contract=off -D_GNU_SOURCE -DRR_DCHECKS $(FUZZ_FLAGS) -fsanitize=fuzzer-no-link -Wall -Wextra $(INCLUDES) \
                 -DSCENE_MAX_GENERATED=1e4
 FUZZ_OBJS    := $(LIB_SRCS:%=$(FUZZ_DIR)/%.o)
 
