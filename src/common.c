@@ -95,7 +95,7 @@ void rr_lazy_sort_begin(rr_lazy_sort *s, uint64_t *a, uint64_t *scratch, size_t 
      * after them the bucket starts (n / 2 + 2 of 32 bits) and each word's
      * bucket (n of 32 bits) */
     size_t buckets = n / 2;
-    s->a = a, s->tmp = scratch, s->start = NULL, s->n = n, s->done = 0, s->next = 0;
+    s->a = a, s->tmp = scratch, s->start = NULL, s->done = 0, s->next = 0;
     if (n <= SORT_RUN) { /* (and the room above holds the buckets: n >= 4) */
         insertion_sort_u64(a, n);
         s->done = n, s->n_buckets = 0;

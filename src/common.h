@@ -103,7 +103,7 @@ void rr_sort_u64(uint64_t *a, uint64_t *tmp, size_t n);
 typedef struct {
     uint64_t *a, *tmp;
     uint32_t *start; /* bucket b holds a[start[b] .. start[b + 1]) */
-    size_t n, done;  /* a[0..done) final */
+    size_t done;     /* a[0..done) final */
     size_t next;     /* the first bucket not yet sorted */
     size_t n_buckets;
 } rr_lazy_sort;

@@ -331,11 +331,17 @@ __attribute__((target("avx2"))) static inline __m256d lanes_of(const float *cons
     return _mm256_cvtps_pd(_mm_set_ps(v[3][a], v[2][a], v[1][a], v[0][a]));
 }
 
-__attribute__((target("avx2"))) static inline __m256d lanes_row(const double row[4], __m256d x, __m256d y, __m256d z)
+/* The linear part of camera matrix row `row` times (x, y, z) (cam_vector). */
+__attribute__((target("avx2"))) static inline __m256d lanes_linear(const double row[4], __m256d x, __m256d y, __m256d z)
 {
     __m256d sum = _mm256_add_pd(_mm256_mul_pd(_mm256_set1_pd(row[0]), x), _mm256_mul_pd(_mm256_set1_pd(row[1]), y));
-    sum = _mm256_add_pd(sum, _mm256_mul_pd(_mm256_set1_pd(row[2]), z));
-    return _mm256_add_pd(sum, _mm256_set1_pd(row[3]));
+    return _mm256_add_pd(sum, _mm256_mul_pd(_mm256_set1_pd(row[2]), z));
+}
+
+/* Camera matrix row `row` applied to the point (x, y, z) (cam_point). */
+__attribute__((target("avx2"))) static inline __m256d lanes_row(const double row[4], __m256d x, __m256d y, __m256d z)
+{
+    return _mm256_add_pd(lanes_linear(row, x, y, z), _mm256_set1_pd(row[3]));
 }
 
 /* mean (mx, my, mz) and larger scale s of four Gaussians -> their camera
@@ -396,7 +402,7 @@ __attribute__((target("avx2"))) static int cull_3d_lanes(const gaussian_ray *r, 
 #endif
 
 /* What a 2DGS hit's rules read of the splat's geometry at the ray's
- * pixel: computed one Gaussian at a time (splat_2d_geometry) or four in
+ * pixel: computed one Gaussian at a time (splat_2d_geometry_of) or four in
  * lanes (splat_2d_geometry_lanes), the same operations in the same order. */
 typedef struct {
     vec3 row[3];             /* T's rows (splat_rows) */
@@ -460,13 +466,6 @@ static int hit_2d_from_geometry(const gaussian_model *m, size_t i, gaussian_orde
 }
 
 #if RR_AVX2_CULL
-/* The linear part of camera matrix row `row` times (x, y, z) (cam_vector). */
-__attribute__((target("avx2"))) static inline __m256d lanes_linear(const double row[4], __m256d x, __m256d y, __m256d z)
-{
-    __m256d sum = _mm256_add_pd(_mm256_mul_pd(_mm256_set1_pd(row[0]), x), _mm256_mul_pd(_mm256_set1_pd(row[1]), y));
-    return _mm256_add_pd(sum, _mm256_mul_pd(_mm256_set1_pd(row[2]), z));
-}
-
 /* a * b - c * d, lane by lane */
 __attribute__((target("avx2"))) static inline __m256d lanes_cross_term(__m256d a, __m256d b, __m256d c, __m256d d)
 {
@@ -533,20 +532,18 @@ __attribute__((target("avx2"))) static void splat_2d_geometry_lanes(const gaussi
                                   _mm256_add_pd(_mm256_mul_pd(dx, dx), _mm256_mul_pd(dy, dy)));
     rho2d = _mm256_blendv_pd(_mm256_set1_pd(INFINITY), rho2d, filtered);
     __m256d plane_depth = _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(u, row[2][0]), _mm256_mul_pd(v, row[2][1])), row[2][2]);
-    double out[16][4];
-    __m256d fields[16] = {row[0][0], row[0][1], row[0][2], row[1][0], row[1][1], row[1][2], row[2][0], row[2][1],
-                          row[2][2], cz, u, v, rho3d, rho2d, centre_x, centre_y};
-    for (int f = 0; f < 16; f++)
+    double out[17][4];
+    __m256d fields[17] = {row[0][0], row[0][1], row[0][2], row[1][0], row[1][1], row[1][2], row[2][0], row[2][1],
+                          row[2][2], cz, u, v, rho3d, rho2d, centre_x, centre_y, plane_depth};
+    for (int f = 0; f < 17; f++)
         _mm256_storeu_pd(out[f], fields[f]);
-    double depth[4];
-    _mm256_storeu_pd(depth, plane_depth);
     int mask = _mm256_movemask_pd(filtered);
     for (int j = 0; j < 4; j++) {
         for (int a = 0; a < 3; a++)
             g[j].row[a] = v3(out[3 * a][j], out[3 * a + 1][j], out[3 * a + 2][j]);
         g[j].cz = out[9][j], g[j].u = out[10][j], g[j].v = out[11][j], g[j].rho3d = out[12][j];
         g[j].rho2d = out[13][j], g[j].centre_x = out[14][j], g[j].centre_y = out[15][j];
-        g[j].plane_depth = depth[j], g[j].filtered = mask >> j & 1;
+        g[j].plane_depth = out[16][j], g[j].filtered = mask >> j & 1;
     }
 }
 #endif

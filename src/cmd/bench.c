@@ -451,10 +451,10 @@ static void run_case(const bench_case *c, bench_result *r)
     r->floor_mrays = median(floor, c->reps);
     r->floor_eps_mrays = median(floor_eps, c->reps);
     r->floor_splats_px = 0;
-    if (user) /* (untimed) the same discs found as the built-in ones? */
+    if (user) { /* (untimed) the same discs found as the built-in ones? */
         baseline_seconds(user, &s, &rs, 1, 1, &r->floor_splats_px);
-    if (user)
         rtcReleaseScene(user), rtcReleaseScene(user_eps);
+    }
     baseline_seconds(base, &s, &rs, 0, 1, &r->base_splats_px);
     baseline_seconds(base, &s, &rs, 1, 1, &r->same_splats_px);
     r->mrays = median(ours, c->reps);
