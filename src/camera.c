@@ -1,5 +1,7 @@
 #include "camera.h"
 
+#include <float.h>
+
 /* a / |a| without squaring the components (a length of 1e200 squared
  * overflows to inf and its direction came out 0); 0 for a = 0. */
 static vec3 direction_of(vec3 a)
@@ -61,6 +63,24 @@ double camera_principal_offset(double size, double centre)
     double d = centre / size - 0.5;
     rr_round_trip_representative(&d, 1, principal_round_trip, &size);
     return d;
+}
+
+/* The EXR records the camera's matrices in float32 (OpenEXR's m44f: worldToNDC):
+ * a scale beyond float's range is written as infinity. Half FLT_MAX leaves room
+ * for the 1e-6 by which a field of view's tangent may move (camera_focal_usable). */
+static int fits_float_header(double x) { return fabs(x) <= 0.5 * FLT_MAX; }
+
+int camera_focal_usable(double focal, double size)
+{
+    double t = 0.5 * size / focal, deg = 360.0 / M_PI * atan(t);
+    return focal > 0 && deg > 0 && deg < 180 && fabs(tan(deg * M_PI / 360.0) / t - 1) <= 1e-6 &&
+           fits_float_header(focal / size);
+}
+
+int camera_principal_usable(double focal, double centre, double size)
+{
+    return camera_focal_usable(focal, 2 * fmax(fabs(centre), fabs(size - centre))) &&
+           fits_float_header(centre / size);
 }
 
 int camera_prepare(camera *c, rr_error *err)

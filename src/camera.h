@@ -44,6 +44,19 @@ typedef struct {
 double camera_fov_of_focal(double size, double focal);
 double camera_principal_offset(double size, double centre);
 
+/* The one rule for a pinhole's intrinsics read from a file (cameras.json,
+ * transforms.json). A focal length (pixels) over size pixels is usable when
+ * its field of view 2 atan(size / (2 focal)) lies inside (0, 180) degrees and
+ * gives back its tangent within 1e-6 (focal = 1e-14 is a view of 180
+ * degrees, all background), and the EXR's float32 worldToNDC holds its scale
+ * focal / size (1e300 was written as infinity). A principal point `centre`
+ * pixels from the image's first edge is usable with it when the centred view
+ * reaching the farther image edge, 2 max(|centre|, |size - centre|) pixels
+ * wide, is (both image edges inside 90 degrees of the optical axis, their
+ * tangents kept), and worldToNDC holds centre / size. */
+int camera_focal_usable(double focal, double size);
+int camera_principal_usable(double focal, double centre, double size);
+
 /* The prepared camera at rest. */
 void camera_view_rest(const camera *c, camera_view *v);
 

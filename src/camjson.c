@@ -5,6 +5,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "camera.h"
 #include "inputfile.h"
 
 #define CAMJSON_MAX_BYTES ((size_t)256 << 20)
@@ -113,15 +114,6 @@ static int direction_survives(const double pos[3], const double r[3][3])
     return 1;
 }
 
-/* fx, fy > 0 whose field of view 2 atan(size / (2 f)) lies inside (0, 180)
- * degrees and gives back its tangent within 1e-6 (issue 32.8: fx = 1e-14 is
- * a view of 180 degrees, and the render blamed the object's reach). */
-static int usable_focal(double f, int size)
-{
-    double t = 0.5 * size / f, deg = 360.0 / M_PI * atan(t);
-    return f > 0 && deg > 0 && deg < 180 && fabs(tan(deg * M_PI / 360.0) / t - 1) <= 1e-6;
-}
-
 static int read_focal(const char *name, size_t index, json_object *entry, camjson_camera *c, rr_error *err)
 {
     const char *focal[2] = {"fx", "fy"};
@@ -132,11 +124,12 @@ static int read_focal(const char *name, size_t index, json_object *entry, camjso
             return entry_fail(err, name, index, entry, number_errors[-rc], focal[k]);
         if (!(*f[k] > 0))
             return entry_fail(err, name, index, entry, "field '%s' must be > 0", focal[k]);
-        if (!usable_focal(*f[k], size[k])) {
+        if (!camera_focal_usable(*f[k], size[k])) { /* fx = 1e-14 was blamed on the object's reach */
             char what[400];
             snprintf(what, sizeof what, "field '%%s' = %g gives no usable field of view for %s %d (2 atan(%s / (2 "
-                     "%s)) must lie inside (0, 180) degrees)", *f[k], k ? "height" : "width", size[k],
-                     k ? "height" : "width", focal[k]);
+                     "%s)) must lie inside (0, 180) degrees and %s / %s fit the EXR header's float32)", *f[k],
+                     k ? "height" : "width", size[k], k ? "height" : "width", focal[k], focal[k],
+                     k ? "height" : "width");
             return entry_fail(err, name, index, entry, what, focal[k]);
         }
     }

@@ -43,7 +43,8 @@ void camjson_free(camjson_file *f);
  * file and, where one is at fault, the entry (index and img_name) and its
  * field: not JSON (with the line), not an array, a missing or mistyped
  * field, a non-finite number, a size below 1 or above RR_MAX_PIXELS,
- * focal lengths <= 0 or without a field of view inside (0, 180) degrees, a
+ * focal lengths <= 0 or not usable (camera_focal_usable: a field of view
+ * inside (0, 180) degrees, a scale the EXR's float32 header holds), a
  * rotation that is not one (orthonormal within 1e-4, determinant 1), a
  * position too far out for position + view direction to keep the
  * direction, no camera of that name (compared with the JSON string's whole

@@ -129,3 +129,15 @@ TEST(camjson_names_nul_names_far_positions_and_degenerate_focal_lengths)
     snprintf(f, sizeof f, GOOD_POS ", \"rotation\": " ROT ", " GOOD_SIZE ", \"fx\": 70, \"fy\": 1e-300");
     CHECK(fails_with(f, "field 'fy' = 1e-300 gives no usable field of view"));
 }
+
+/* fx = 1e300 passed the field-of-view rule (a tiny view, its tangent kept)
+ * and wrote infinity into the EXR's float32 worldToNDC, whose scale is
+ * fx / width: the rule holds that scale within float's range. */
+TEST(camjson_refuses_a_focal_length_the_exr_header_cannot_hold)
+{
+    char f[1024];
+    snprintf(f, sizeof f, GOOD_POS ", \"rotation\": " ROT ", " GOOD_SIZE ", \"fx\": 1e300, \"fy\": 71");
+    CHECK(fails_with(f, "camera 0 ('A'): field 'fx' = 1e+300 gives no usable field of view for width 80"));
+    snprintf(f, sizeof f, GOOD_POS ", \"rotation\": " ROT ", " GOOD_SIZE ", \"fx\": 70, \"fy\": 1e41");
+    CHECK(fails_with(f, "field 'fy' = 1e+41 gives no usable field of view for height 60"));
+}
