@@ -4,6 +4,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "camera.h"
 #include "camjson.h"
 #include "inputfile.h"
 
@@ -38,28 +39,124 @@ static int known_keys(json_object *o, const char *const *extra, const char *name
     return 0;
 }
 
+/* A value as the file writes it, for a message: compact JSON, its first 60
+ * characters and "..." when longer. */
+static const char *value_text(json_object *v, char *buf, size_t size)
+{
+    const char *text = json_object_to_json_string_ext(v, JSON_C_TO_STRING_PLAIN | JSON_C_TO_STRING_NOSLASHESCAPE);
+    snprintf(buf, size, "%.60s%s", text ? text : "?", text && strlen(text) > 60 ? "..." : "");
+    return buf;
+}
+
+static int is_number(json_object *v)
+{
+    return json_object_is_type(v, json_type_double) || json_object_is_type(v, json_type_int);
+}
+
+/* A key that changes the projection says "none" or is refused: a distortion
+ * coefficient must be the number 0, a camera model PINHOLE or OPENCV (OPENCV
+ * with zero coefficients is the pinhole). nerfstudio reads them at the top
+ * level and in each frame, and float()s strings, so "0.3" is a distortion
+ * (nerfstudio_dataparser.py at 01595f7, _generate_dataparser_outputs): a
+ * frame's or a string's rendered as a pinhole if not refused. where: "" or
+ * "frames[i]." */
+static int projection_keys(const char *name, json_object *o, const char *where, rr_error *err)
+{
+    char text[72];
+    json_object_object_foreach(o, key, value) {
+        if (listed(DISTORTION, key) && !(is_number(value) && json_object_get_double(value) == 0))
+            return rr_fail(err, "%s: distortion %s%s = %s: refrender renders a pinhole camera (undistort the images "
+                                "and give the coefficients as the number 0)", name, where, key,
+                           value_text(value, text, sizeof text));
+        const char *model = json_object_is_type(value, json_type_string) ? json_object_get_string(value) : "";
+        if (!strcmp(key, "camera_model") && strcmp(model, "PINHOLE") && strcmp(model, "OPENCV"))
+            return rr_fail(err, "%s: %scamera_model = %s: only \"PINHOLE\" (or \"OPENCV\" without distortion)", name,
+                           where, value_text(value, text, sizeof text));
+    }
+    return 0;
+}
+
+/* o's number `key` into *out: 0; 1 where o has no such key; a value that is
+ * not a finite number is refused, naming it (a string would read as absent). */
+static int number_key(const char *name, json_object *o, const char *where, const char *key, double *out,
+                      rr_error *err)
+{
+    json_object *v;
+    if (!json_object_object_get_ex(o, key, &v))
+        return 1;
+    int rc = camjson_number_field(o, key, out);
+    char text[72];
+    return rc ? rr_fail(err, "%s: %s%s = %s is not a %snumber", name, where, key, value_text(v, text, sizeof text),
+                        rc == -2 ? "finite " : "")
+              : 0;
+}
+
+/* Every frame an object of known keys that say nothing but a pinhole's
+ * (before any frame is read: a number among them was counted as a frame
+ * without a 'time'). */
+static int check_frames(const char *name, json_object *frames, rr_error *err)
+{
+    size_t n = json_object_array_length(frames);
+    for (size_t i = 0; i < n; i++) {
+        json_object *f = json_object_array_get_idx(frames, i);
+        char label[48], entry[48], text[72];
+        if (!json_object_is_type(f, json_type_object))
+            return rr_fail(err, "%s: frames[%zu] = %s: a frame is an object ({\"transform_matrix\": [...], ...})",
+                           name, i, value_text(f, text, sizeof text));
+        snprintf(label, sizeof label, "frames[%zu]: ", i);
+        snprintf(entry, sizeof entry, "frames[%zu].", i);
+        if (known_keys(f, FRAME_KEYS, name, label, err) || projection_keys(name, f, entry, err))
+            return -1;
+    }
+    return 0;
+}
+
 /* One intrinsic of the top level or, where a frame gives it, that frame's,
  * which must then agree (one camera for the whole path). */
 static int intrinsic(const char *name, json_object *root, json_object *frames, const char *key, double *out,
                      rr_error *err)
 {
-    int rc = camjson_number_field(root, key, out);
-    if (rc == -2)
-        return rr_fail(err, "%s: '%s' is not finite", name, key);
+    int rc = number_key(name, root, "", key, out, err);
+    if (rc < 0)
+        return -1;
     size_t n = json_object_array_length(frames);
     for (size_t i = 0; i < n; i++) {
         double v;
-        int f = camjson_number_field(json_object_array_get_idx(frames, i), key, &v);
-        if (f == -2 || (f == 0 && rc == 0 && v != *out))
-            return rr_fail(err, "%s: frames[%zu]: '%s' %s (per-frame intrinsics must all be the same camera's)",
-                           name, i, key, f == -2 ? "is not finite" : "differs from the file's");
+        char where[48];
+        snprintf(where, sizeof where, "frames[%zu].", i);
+        int f = number_key(name, json_object_array_get_idx(frames, i), where, key, &v, err);
+        if (f < 0)
+            return -1;
+        if (f == 0 && rc == 0 && v != *out)
+            return rr_fail(err, "%s: frames[%zu].%s = %.17g differs from the file's %.17g (per-frame intrinsics must "
+                                "all be the same camera's)", name, i, key, v, *out);
         if (f == 0 && rc != 0)
             return rr_fail(err, "%s: frames[%zu] gives '%s' but the file does not: give the camera once, at the top "
                                 "level", name, i, key);
     }
-    return rc ? rr_fail(err, "%s: '%s' is missing or not a number (the pinhole camera needs fl_x, fl_y, cx, cy, w, "
-                             "h)", name, key)
+    return rc ? rr_fail(err, "%s: '%s' is missing (the pinhole camera needs fl_x, fl_y, cx, cy, w, h)", name, key)
               : 0;
+}
+
+/* The range rule cameras.json's focal lengths follow (camera_focal_usable),
+ * and the principal point's (camera_principal_usable): fl_x = 1e-14 rendered
+ * all background, fl_x or cx = 1e300 wrote infinity into the EXR header. */
+static int usable_intrinsics(const char *name, const double v[6], rr_error *err)
+{
+    static const char *const focal[2] = {"fl_x", "fl_y"}, *const centre[2] = {"cx", "cy"}, *const size[2] = {"w", "h"};
+    for (int k = 0; k < 2; k++) {
+        double f = v[k], c = v[2 + k], s = v[4 + k];
+        if (!camera_focal_usable(f, s))
+            return rr_fail(err, "%s: %s = %.9g gives no usable field of view for %s = %g (2 atan(%s / (2 %s)) must lie "
+                                "inside (0, 180) degrees and %s / %s fit the EXR header's float32)", name, focal[k], f,
+                           size[k], s, size[k], focal[k], focal[k], size[k]);
+        if (!camera_principal_usable(f, c, s))
+            return rr_fail(err, "%s: %s = %.9g is too far off the image for %s = %.9g, %s = %g (the farther image edge "
+                                "must lie inside 90 degrees of the optical axis, its tangent kept within 1e-6, and "
+                                "%s / %s fit the EXR header's float32)", name, centre[k], c, focal[k], f, size[k], s,
+                           centre[k], size[k]);
+    }
+    return 0;
 }
 
 static int read_camera(const char *name, json_object *root, json_object *frames, transforms_camera *cam,
@@ -69,23 +166,12 @@ static int read_camera(const char *name, json_object *root, json_object *frames,
     for (int k = 0; INTRINSICS[k]; k++)
         if (intrinsic(name, root, frames, INTRINSICS[k], &v[k], err))
             return -1;
-    for (int k = 0; DISTORTION[k]; k++) {
-        double d;
-        int rc = camjson_number_field(root, DISTORTION[k], &d);
-        if (rc == -2 || (rc == 0 && d != 0))
-            return rr_fail(err, "%s: distortion '%s' = %g: refrender renders a pinhole camera (undistort the images "
-                                "and give the coefficients as 0)", name, DISTORTION[k], d);
-    }
-    json_object *m;
-    if (json_object_object_get_ex(root, "camera_model", &m)) {
-        const char *model = json_object_is_type(m, json_type_string) ? json_object_get_string(m) : "";
-        if (strcmp(model, "PINHOLE") && strcmp(model, "OPENCV"))
-            return rr_fail(err, "%s: camera_model '%.60s': only PINHOLE (or OPENCV without distortion)", name, model);
-    }
     if (!(v[0] > 0) || !(v[1] > 0) || !(v[4] >= 1 && v[4] <= 65536 && v[4] == floor(v[4])) ||
         !(v[5] >= 1 && v[5] <= 65536 && v[5] == floor(v[5])))
         return rr_fail(err, "%s: fl_x %g, fl_y %g must be > 0 and w %g, h %g whole numbers of pixels in [1, 65536]",
                        name, v[0], v[1], v[4], v[5]);
+    if (usable_intrinsics(name, v, err))
+        return -1;
     cam->fx = v[0], cam->fy = v[1], cam->cx = v[2], cam->cy = v[3], cam->width = (int)v[4], cam->height = (int)v[5];
     cam->exposure_time = camjson_number_field(root, "exposure_time", &v[0]) ? NAN : v[0];
     cam->rolling_shutter_time = camjson_number_field(root, "rolling_shutter_time", &v[0]) ? NAN : v[0];
@@ -157,9 +243,11 @@ static int read_times(const char *name, json_object *frames, size_t n, double *t
 {
     size_t timed = 0;
     for (size_t i = 0; i < n; i++) {
-        int rc = camjson_number_field(json_object_array_get_idx(frames, i), "time", &t[i]);
-        if (rc == -2 || (rc == -1 && json_object_object_get_ex(json_object_array_get_idx(frames, i), "time", NULL)))
-            return rr_fail(err, "%s: frames[%zu]: 'time' is not a finite number", name, i);
+        char where[48];
+        snprintf(where, sizeof where, "frames[%zu].", i);
+        int rc = number_key(name, json_object_array_get_idx(frames, i), where, "time", &t[i], err);
+        if (rc < 0)
+            return -1;
         timed += rc == 0;
     }
     if (timed && timed != n)
@@ -182,13 +270,8 @@ static int read_frames(const char *name, json_object *frames, trajectory *tr, rr
     double *t = malloc((n ? n : 1) * sizeof *t);
     tr->knots = malloc((n ? n : 1) * sizeof *tr->knots);
     int rc = !t || !tr->knots ? rr_fail(err, "out of memory") : read_times(name, frames, n, t, err);
-    for (size_t i = 0; !rc && i < n; i++) {
-        json_object *f = json_object_array_get_idx(frames, i);
-        char where[48];
-        snprintf(where, sizeof where, "frames[%zu]: ", i);
-        rc = !json_object_is_type(f, json_type_object) ? rr_fail(err, "%s: frames[%zu] is not an object", name, i)
-                                                        : known_keys(f, FRAME_KEYS, name, where, err) ||
-                                                              read_pose(name, i, f, &tr->knots[i], err);
+    for (size_t i = 0; !rc && i < n; i++) { /* each an object (check_frames) */
+        rc = read_pose(name, i, json_object_array_get_idx(frames, i), &tr->knots[i], err);
         tr->knots[i].t = t[i];
     }
     free(t);
@@ -208,7 +291,8 @@ int transforms_parse(const char *name, const char *text, size_t len, trajectory 
                  ? rr_fail(err, "%s: not a transforms.json (expected an object with 'frames')", name)
              : !json_object_object_get_ex(root, "frames", &frames) || !json_object_is_type(frames, json_type_array)
                  ? rr_fail(err, "%s: 'frames' is missing or not an array", name)
-                 : known_keys(root, TOP_KEYS, name, "", err) || read_camera(name, root, frames, cam, err) ||
+                 : known_keys(root, TOP_KEYS, name, "", err) || projection_keys(name, root, "", err) ||
+                       check_frames(name, frames, err) || read_camera(name, root, frames, cam, err) ||
                        read_frames(name, frames, tr, err);
     if (!rc && !(tr->name = strdup(name)))
         rc = rr_fail(err, "out of memory");

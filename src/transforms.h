@@ -3,9 +3,11 @@
  * z backward) are the knots, in file order at times 0, 1, 2, ... or at
  * each frame's `time` where every frame has one; the pinhole intrinsics
  * `fl_x`, `fl_y`, `cx`, `cy`, `w`, `h` (top level, or the same in every
- * frame) the camera's. Distortion coefficients other than zero and
- * camera models other than PINHOLE and OPENCV are refused, naming them;
- * so are unknown keys (a misspelt one would otherwise be ignored). */
+ * frame) the camera's, within cameras.json's range (camera_focal_usable,
+ * camera_principal_usable). Distortion coefficients other than the number
+ * 0 and camera models other than PINHOLE and OPENCV are refused, at the top
+ * level or in a frame, naming the entry and the value; so are unknown keys
+ * (a misspelt one would otherwise be ignored). */
 #ifndef RR_TRANSFORMS_H
 #define RR_TRANSFORMS_H
 

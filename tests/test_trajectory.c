@@ -2,6 +2,8 @@
  * a file it wrote reads back bit for bit, and the motion bounds hold the
  * interpolated path (the poses themselves are checked against an
  * independent reference in tests/test_trajectory.py). */
+#include <float.h>
+#include <math.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -179,11 +181,11 @@ static int transforms_fail(const char *text, const char *needle)
 TEST(transforms_json_mistakes_are_named)
 {
     CHECK(transforms_fail("{\"fl_x\": 50, \"frames\": []}", "t.json: 'fl_y' is missing"));
-    CHECK(transforms_fail("{" CAMERA ", \"k1\": 0.01, \"frames\": []}", "t.json: distortion 'k1' = 0.01"));
+    CHECK(transforms_fail("{" CAMERA ", \"k1\": 0.01, \"frames\": []}", "t.json: distortion k1 = 0.01"));
     CHECK(transforms_fail("{" CAMERA ", \"k2\": 0, \"p1\": 0.0, \"frames\": [" FRAME("") "], \"fl_z\": 3}",
                           "t.json: unknown key 'fl_z'"));
     CHECK(transforms_fail("{" CAMERA ", \"camera_model\": \"OPENCV_FISHEYE\", \"frames\": []}",
-                          "camera_model 'OPENCV_FISHEYE'"));
+                          "camera_model = \"OPENCV_FISHEYE\""));
     CHECK(transforms_fail("{" CAMERA ", \"frames\": [" FRAME("\"time\": 0, ") "," FRAME("") "]}",
                           "1 of 2 frames have a 'time'"));
     CHECK(transforms_fail("{" CAMERA ", \"frames\": [" FRAME("\"time\": 1, ") "," FRAME("\"time\": 1, ") "]}",
@@ -191,13 +193,114 @@ TEST(transforms_json_mistakes_are_named)
     CHECK(transforms_fail("{" CAMERA ", \"frames\": [{\"transform_matrix\": [[2,0,0,0],[0,1,0,0],[0,0,1,0],[0,0,0,1]]}]}",
                           "frames[0]: 'transform_matrix' rotation is not one"));
     CHECK(transforms_fail("{" CAMERA ", \"frames\": [{\"transform_matrix\": [[1,0,0,0],[0,1,0,0],[0,0,1,0]], "
-                          "\"fl_x\": 51}]}", "frames[0]: 'fl_x' differs from the file's"));
+                          "\"fl_x\": 51}]}", "frames[0].fl_x = 51 differs from the file's 50"));
     CHECK(transforms_fail("{" CAMERA ", \"frames\": [{\"file_path\": \"a\", \"mask\": 1, "
                           "\"transform_matrix\": [[1,0,0,0],[0,1,0,0],[0,0,1,0]]}]}", "frames[0]: unknown key 'mask'"));
     CHECK(transforms_fail("{" CAMERA ", \"frames\": [{\"transform_matrix\": [[1,0,0,0],[0,1,0,0],[0,0,1,\"x\"]]}]}",
                           "frames[0]: 'transform_matrix' row 2 is not 4 numbers"));
     CHECK(transforms_fail("[1]", "not a transforms.json"));
     CHECK(transforms_fail("{" CAMERA ", \"frames\": [", "t.json:1: not a complete JSON document"));
+}
+
+static int transforms_ok(const char *text, transforms_camera *cam)
+{
+    trajectory tr;
+    rr_error e = {{0}};
+    int rc = transforms_parse("t.json", text, strlen(text), &tr, cam, &e);
+    if (rc)
+        printf("    expected no error, got '%s'\n", e.msg);
+    else
+        trajectory_free(&tr);
+    return rc == 0;
+}
+
+/* A distortion or camera model given in a frame, or as a string ("0.3" is a
+ * distortion to nerfstudio, which float()s it), was read as absent and the
+ * camera rendered as a pinhole: refused by entry and value wherever and
+ * however given, unless it says "none" (the number 0, PINHOLE, OPENCV). */
+TEST(transforms_json_refuses_distortion_in_frames_and_as_strings)
+{
+    CHECK(transforms_fail("{" CAMERA ", \"frames\": [" FRAME("") "," FRAME("\"k1\": 0.3, ") "]}",
+                          "t.json: distortion frames[1].k1 = 0.3: refrender renders a pinhole camera"));
+    CHECK(transforms_fail("{" CAMERA ", \"frames\": [" FRAME("\"p2\": -1e-3, ") "]}", "frames[0].p2 = -1e-3"));
+    CHECK(transforms_fail("{" CAMERA ", \"k1\": \"0.3\", \"frames\": []}", "t.json: distortion k1 = \"0.3\""));
+    CHECK(transforms_fail("{" CAMERA ", \"k2\": \"0\", \"frames\": []}", "t.json: distortion k2 = \"0\""));
+    CHECK(transforms_fail("{" CAMERA ", \"k3\": null, \"frames\": []}", "t.json: distortion k3 = null"));
+    CHECK(transforms_fail("{" CAMERA ", \"frames\": [" FRAME("\"k4\": [0.1], ") "]}", "frames[0].k4 = [0.1]"));
+    CHECK(transforms_fail("{" CAMERA ", \"frames\": [" FRAME("") "," FRAME("\"camera_model\": \"OPENCV_FISHEYE\", ")
+                          "]}", "t.json: frames[1].camera_model = \"OPENCV_FISHEYE\": only \"PINHOLE\""));
+    CHECK(transforms_fail("{" CAMERA ", \"camera_model\": 1, \"frames\": []}", "t.json: camera_model = 1: only"));
+    CHECK(transforms_fail("{" CAMERA ", \"frames\": [" FRAME("\"camera_model\": \"pinhole\", ") "]}",
+                          "frames[0].camera_model = \"pinhole\""));
+    /* intrinsics in a frame, as strings: read as absent before */
+    CHECK(transforms_fail("{" CAMERA ", \"frames\": [" FRAME("") "," FRAME("\"fl_x\": \"500\", ") "]}",
+                          "t.json: frames[1].fl_x = \"500\" is not a number"));
+    CHECK(transforms_fail("{" CAMERA ", \"frames\": [" FRAME("\"w\": true, ") "]}",
+                          "frames[0].w = true is not a number"));
+    CHECK(transforms_fail("{\"fl_x\": \"50\", \"fl_y\": 52, \"cx\": 20.5, \"cy\": 14, \"w\": 40, \"h\": 30, "
+                          "\"frames\": []}",
+                          "t.json: fl_x = \"50\" is not a number"));
+    /* "none", at the top level or in every frame, and the same camera per frame: the pinhole */
+    transforms_camera cam;
+    CHECK(transforms_ok("{" CAMERA ", \"camera_model\": \"OPENCV\", \"k1\": 0, \"p2\": -0.0, \"frames\": ["
+                        FRAME("\"camera_model\": \"PINHOLE\", \"k2\": 0.0, \"k4\": 0, \"fl_x\": 50, \"w\": 40, ") "]}",
+                        &cam));
+    CHECK(cam.fx == 50 && cam.fy == 52 && cam.cx == 20.5 && cam.cy == 14 && cam.width == 40 && cam.height == 30);
+}
+
+/* Intrinsics follow the range rule of cameras.json's (camera_focal_usable,
+ * camera_principal_usable): fl_x = 1e-14 rendered all background; fl_x or cx
+ * = 1e300 wrote infinity into the EXR's float32 worldToNDC. */
+TEST(transforms_json_intrinsics_out_of_range_are_named)
+{
+#define SIZES "\"w\": 40, \"h\": 30, \"frames\": []}"
+    CHECK(transforms_fail("{\"fl_x\": 1e300, \"fl_y\": 52, \"cx\": 20, \"cy\": 15, " SIZES,
+                          "t.json: fl_x = 1e+300 gives no usable field of view for w = 40"));
+    CHECK(transforms_fail("{\"fl_x\": 1e-14, \"fl_y\": 52, \"cx\": 20, \"cy\": 15, " SIZES,
+                          "t.json: fl_x = 1e-14 gives no usable field of view"));
+    CHECK(transforms_fail("{\"fl_x\": 50, \"fl_y\": 1e-300, \"cx\": 20, \"cy\": 15, " SIZES,
+                          "t.json: fl_y = 1e-300 gives no usable field of view for h = 30"));
+    CHECK(transforms_fail("{\"fl_x\": 50, \"fl_y\": 52, \"cx\": 1e300, \"cy\": 15, " SIZES,
+                          "t.json: cx = 1e+300 is too far off the image for fl_x = 50, w = 40"));
+    CHECK(transforms_fail("{\"fl_x\": 50, \"fl_y\": 52, \"cx\": 20, \"cy\": -1e300, " SIZES, "t.json: cy = -1e+300"));
+    /* an edge at atan(2e11) from the axis: 90 degrees within 3e-10 degrees, its tangent lost */
+    CHECK(transforms_fail("{\"fl_x\": 50, \"fl_y\": 52, \"cx\": 1e13, \"cy\": 15, " SIZES, "t.json: cx = 1e+13"));
+    /* the EXR header alone: fl_x / w = 2.5e38 is past float's 3.4e38 / 2, though the view's tangent keeps */
+    CHECK(transforms_fail("{\"fl_x\": 1e40, \"fl_y\": 52, \"cx\": 20, \"cy\": 15, " SIZES, "t.json: fl_x = 1e+40"));
+    /* a principal point off the image (a shifted lens) whose edges lie inside 90 degrees: kept */
+    transforms_camera cam;
+    CHECK(transforms_ok("{\"fl_x\": 50, \"fl_y\": 52, \"cx\": -100, \"cy\": 130, " SIZES, &cam));
+    CHECK(cam.cx == -100 && cam.cy == 130);
+    /* just inside the header's bound (fl_x / w = 0.49 FLT_MAX, cx / w = -0.49 FLT_MAX at its tangent 1): the
+     * matrices the EXR records are finite in float32, as the camera the scene makes of it projects them */
+    char text[512];
+    snprintf(text, sizeof text, "{\"fl_x\": %.17g, \"fl_y\": 52, \"cx\": %.17g, \"cy\": 15, " SIZES,
+             0.49 * FLT_MAX * 40, -0.49 * FLT_MAX * 40);
+    CHECK(transforms_ok(text, &cam));
+    camera c = {.position = v3(0, 0, 0), .lookat = v3(0, 0, 1), .up = v3(0, -1, 0), .width = 40, .height = 30};
+    c.fov_degrees = camera_fov_of_focal(30, cam.fy), c.fov_x_degrees = camera_fov_of_focal(40, cam.fx);
+    c.principal_dx = camera_principal_offset(40, cam.cx), c.principal_dy = camera_principal_offset(30, cam.cy);
+    rr_error e = {{0}};
+    CHECK(camera_prepare(&c, &e) == 0);
+    double m[4][4];
+    camera_projection(&c, 1, 1, m);
+    for (int r = 0; r < 4; r++)
+        for (int k = 0; k < 4; k++)
+            CHECK(isfinite((float)m[r][k]));
+#undef SIZES
+}
+
+/* A frame that is not an object was counted as a frame without a 'time'
+ * ("2 of 3 frames have a 'time'"): named, with its value. */
+TEST(transforms_json_frame_that_is_not_an_object_is_named)
+{
+    CHECK(transforms_fail("{" CAMERA ", \"frames\": [" FRAME("\"time\": 0, ") ", 2, " FRAME("\"time\": 1, ") "]}",
+                          "t.json: frames[1] = 2: a frame is an object"));
+    CHECK(transforms_fail("{" CAMERA ", \"frames\": [\"a.png\"]}",
+                          "t.json: frames[0] = \"a.png\": a frame is an object"));
+    CHECK(transforms_fail("{" CAMERA ", \"frames\": [" FRAME("") ", null]}", "t.json: frames[1] = null"));
+    CHECK(transforms_fail("{" CAMERA ", \"frames\": [" FRAME("") "," FRAME("\"time\": \"1\", ") "]}",
+                          "t.json: frames[1].time = \"1\" is not a number"));
 }
 
 /* A transforms.json of n frames: quarter turns through the half turns about

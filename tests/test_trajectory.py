@@ -297,6 +297,34 @@ def test_transforms_json_camera_mistakes_are_named(tmp_path):
     assert proc.returncode != 0 and "drop 'axes'" in proc.stderr
 
 
+@pytest.mark.parametrize("where, key, value, named", [
+    ("frame", "k1", 0.3, 'distortion frames[1].k1 = 0.3'),
+    ("top", "k1", "0.3", 'distortion k1 = "0.3"'),
+    ("frame", "camera_model", "OPENCV_FISHEYE", 'frames[1].camera_model = "OPENCV_FISHEYE"'),
+    ("frame", "fl_x", "70", 'frames[1].fl_x = "70" is not a number'),
+    ("top", "fl_x", 1e-14, "fl_x = 1e-14 gives no usable field of view"),
+    ("top", "fl_x", 1e300, "fl_x = 1e+300 gives no usable field of view"),
+    ("top", "cx", 1e300, "cx = 1e+300 is too far off the image"),
+    ("frames", 1, 2, "frames[1] = 2: a frame is an object"),
+])
+def test_transforms_json_keys_it_cannot_honour_are_refused_by_entry(tmp_path, where, key, value, named):
+    """A distortion or camera model in a frame or as a string rendered as a pinhole, exit 0; intrinsics out of
+    cameras.json's range rendered all background or wrote infinity into worldToNDC; a frame that is a number was
+    miscounted. Each is refused naming the file, the entry and its value, and no image is written."""
+    s, _ = transforms_scene(tmp_path, '<object><sphere radius="1"/></object>')
+    doc = json.loads((tmp_path / "transforms.json").read_text())
+    doc["frames"].append(dict(doc["frames"][0]))
+    if where == "frames":
+        doc["frames"].insert(key, value)
+    else:
+        (doc["frames"][1] if where == "frame" else doc)[key] = value
+    (tmp_path / "transforms.json").write_text(json.dumps(doc))
+    out = tmp_path / "o.exr"
+    proc = run([s, "-o", out, "--spp", 1, "--quiet"])
+    assert proc.returncode != 0 and f"transforms.json: {named}" in proc.stderr, proc.stderr
+    assert not out.exists()
+
+
 # ---- every interpolation against an independent reference ----
 
 def reference_knots():

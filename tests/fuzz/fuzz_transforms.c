@@ -1,9 +1,11 @@
 /* libFuzzer target: the nerfstudio transforms.json reader (transforms.c)
  * and every interpolation of what it accepts: poses finite unit
- * quaternions, the camera's intrinsics positive and finite. */
+ * quaternions, the camera's intrinsics inside the range rule of
+ * camera_focal_usable and camera_principal_usable. */
 #include <stdint.h>
 #include <stdlib.h>
 
+#include "camera.h"
 #include "transforms.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
@@ -13,7 +15,9 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     rr_error err;
     if (transforms_parse("fuzz.json", (const char *)data, size, &tr, &cam, &err))
         return 0;
-    if (!(cam.fx > 0) || !(cam.fy > 0) || !isfinite(cam.cx) || !isfinite(cam.cy) || cam.width < 1 || cam.height < 1)
+    if (!(cam.fx > 0) || !(cam.fy > 0) || !isfinite(cam.cx) || !isfinite(cam.cy) || cam.width < 1 || cam.height < 1 ||
+        !camera_focal_usable(cam.fx, cam.width) || !camera_focal_usable(cam.fy, cam.height) ||
+        !camera_principal_usable(cam.fx, cam.cx, cam.width) || !camera_principal_usable(cam.fy, cam.cy, cam.height))
         abort();
     for (int k = TRAJECTORY_LINEAR; k <= TRAJECTORY_BEZIER_SE3; k++) {
         tr.interp = (trajectory_interp)k;
