@@ -24,7 +24,8 @@ Camera (both)
   INRIA: fx = W / (2 tan_fovx) (rasterizer_impl.cu:224-225), where the
   Python side sets tan_fovx = tan(FoVx / 2) with FoVx = focal2fov(fx, W) =
   2 atan(W / (2 fx)) (3DGS graphics_utils.py:76-77), so tan_fovx = W / (2 fx).
-  GSPLAT: explicit K = [[fx, 0, cx], [0, fy, cy]]; here cx = W/2, cy = H/2.
+  GSPLAT: explicit K = [[fx, 0, cx], [0, fy, cy]]; cx, cy are arguments here
+  (default W/2, H/2); see "Principal point" below.
 
 Projection of the mean and the pixel convention
   INRIA: p_hom = full_proj @ (mean, 1), p_w = 1 / (p_hom.w + 1e-7), p_proj
@@ -202,18 +203,63 @@ def _c_trunc_div(num, den):
     return int(math.trunc(num / den))
 
 
-def project(model, R_c2w, C, fx, fy, W, H, variant="inria"):
+def principal_point(family, W, H, cx, cy, inria_off_centre_extension):
+    """(cx, cy) in pixel-edge coordinates, W/2 and H/2 when not given. INRIA's rasterizer has no
+    principal point: an off-centre one is refused unless the caller asks for this reference's
+    extension (module docstring, "Principal point")."""
+    cx = W / 2.0 if cx is None else float(cx)
+    cy = H / 2.0 if cy is None else float(cy)
+    if not (math.isfinite(cx) and math.isfinite(cy)):
+        raise ValueError("principal point (cx, cy) = (%r, %r) is not finite" % (cx, cy))
+    centred = cx == W / 2.0 and cy == H / 2.0
+    if family == "inria" and not centred and not inria_off_centre_extension:
+        raise ValueError("principal point (%r, %r) is off the image centre (%r, %r): Inria's rasterizer "
+                         "has none (only tan_fovx, tan_fovy); pass inria_off_centre_extension=True for "
+                         "this reference's extension, which is not Inria's code" % (cx, cy, W / 2.0, H / 2.0))
+    return cx, cy
+
+
+def jacobian_tangents(family, x, y, z, fx, fy, W, H, cx, cy):
+    """The clamped (t.x / z, t.y / z) at which the EWA Jacobian is evaluated. INRIA (and its
+    off-centre extension): +-1.3 tan_fov about the optical axis, tan_fovx = W / (2 fx)
+    (forward.cu:82-87). GSPLAT persp_proj: the limits follow the image edges through cx, cy,
+    x/z in [-(cx/fx + 0.3 tan_fovx), (W - cx)/fx + 0.3 tan_fovx] (Utils.cuh:514-524)."""
+    tanx, tany = W / (2.0 * fx), H / (2.0 * fy)
+    if family == "inria":
+        limx, limy = 1.3 * tanx, 1.3 * tany
+        return min(limx, max(-limx, x / z)), min(limy, max(-limy, y / z))
+    txz = min((W - cx) / fx + 0.3 * tanx, max(-(cx / fx + 0.3 * tanx), x / z))
+    tyz = min((H - cy) / fy + 0.3 * tany, max(-(cy / fy + 0.3 * tany), y / z))
+    return txz, tyz
+
+
+def inria_point_image(x, y, z, fx, fy, W, H, cx, cy):
+    """INRIA's point_image (pixel-index coordinates): full_proj, the 1e-7 in p_w, ndc2Pix
+    (forward.cu:195-197, auxiliary.h:40-43). The principal point enters as the projection
+    matrix's third column P[0,2] = 2 cx/W - 1, P[1,2] = 2 cy/H - 1 (0 when centred, as 3DGS's
+    getProjectionMatrix builds it: the extension only)."""
+    tanx, tany = W / (2.0 * fx), H / (2.0 * fy)
+    ndc_x = (x / tanx + (2.0 * cx / W - 1.0) * z) / (z + 1e-7)
+    ndc_y = (y / tany + (2.0 * cy / H - 1.0) * z) / (z + 1e-7)
+    return ((ndc_x + 1.0) * W - 1.0) * 0.5, ((ndc_y + 1.0) * H - 1.0) * 0.5
+
+
+def project(model, R_c2w, C, fx, fy, W, H, variant="inria", cx=None, cy=None, inria_off_centre_extension=False):
     """Per Gaussian, what the preprocess step produces. Returns a list (index order) of dicts, or
     None where the Gaussian is culled whatever the tiling. Keys: index, depth (view z), xy (the
     mean in the variant's own 2D coordinates), pix_offset (0 for INRIA's pixel-index pixf, 0.5 for
     GSPLAT's j + 0.5), cov2d_raw (2x2 before the 0.3), cov2d (after), conic (A, B, C), opacity
     (times the antialiasing factor if any), aa_factor, colour, radius (INRIA int, GSPLAT (rx, ry)),
-    tiles ((x0, x1, y0, y1), half-open, or None: dropped under the tile rule)."""
+    tiles ((x0, x1, y0, y1), half-open, or None: dropped under the tile rule), jacobian_txz
+    (the clamped (t.x/z, t.y/z) of the EWA Jacobian).
+    cx, cy: the principal point in pixel-edge coordinates (K[0,2], K[1,2]: pixel j spans
+    [j, j + 1]); None means W/2, H/2. Off centre, the INRIA variants raise ValueError unless
+    inria_off_centre_extension=True (this reference's extension, not Inria's code; the GSPLAT
+    variants ignore the flag)."""
     family, aa, _ = VARIANTS[variant]
+    cx, cy = principal_point(family, W, H, cx, cy, inria_off_centre_extension)
     R_c2w, C = np.asarray(R_c2w, np.float64), np.asarray(C, np.float64)
     Rw2c = R_c2w.T
-    tanx, tany = W / (2.0 * fx), H / (2.0 * fy)
-    cx, cy = W / 2.0, H / 2.0
     out = []
     for n in range(len(model["opacity"])):
         mean = np.asarray(model["mean"][n], np.float64)
@@ -227,12 +273,7 @@ def project(model, R_c2w, C, fx, fy, W, H, variant="inria"):
         Rq = quat_to_rot(model["rot"][n])
         s = np.asarray(model["scale"][n], np.float64)
         sigma_c = Rw2c @ (Rq @ np.diag(s * s) @ Rq.T) @ Rw2c.T
-        if family == "inria":
-            limx, limy = 1.3 * tanx, 1.3 * tany
-            txz, tyz = min(limx, max(-limx, x / z)), min(limy, max(-limy, y / z))
-        else:
-            txz = min((W - cx) / fx + 0.3 * tanx, max(-(cx / fx + 0.3 * tanx), x / z))
-            tyz = min((H - cy) / fy + 0.3 * tany, max(-(cy / fy + 0.3 * tany), y / z))
+        txz, tyz = jacobian_tangents(family, x, y, z, fx, fy, W, H, cx, cy)
         J = np.array([[fx / z, 0.0, -fx * txz / z], [0.0, fy / z, -fy * tyz / z]])
         raw = J @ sigma_c @ J.T
         raw = 0.5 * (raw + raw.T)
@@ -255,10 +296,9 @@ def project(model, R_c2w, C, fx, fy, W, H, variant="inria"):
         colour = sh_colour(np.asarray(model["sh"][n])[: (model["degree"] + 1) ** 2], model["degree"],
                            d / np.linalg.norm(d))
         g = {"index": n, "depth": z, "cov2d_raw": raw, "cov2d": cov, "conic": conic, "opacity": opacity,
-             "aa_factor": factor, "colour": colour}
+             "aa_factor": factor, "colour": colour, "jacobian_txz": (txz, tyz)}
         if family == "inria":
-            ndc = ((x / tanx) / (z + 1e-7), (y / tany) / (z + 1e-7))
-            g["xy"] = (((ndc[0] + 1.0) * W - 1.0) * 0.5, ((ndc[1] + 1.0) * H - 1.0) * 0.5)
+            g["xy"] = inria_point_image(x, y, z, fx, fy, W, H, cx, cy)
             g["pix_offset"] = 0.0
             mid = 0.5 * (cov[0, 0] + cov[1, 1])
             root = math.sqrt(max(0.1, mid * mid - det))
@@ -297,14 +337,17 @@ def project(model, R_c2w, C, fx, fy, W, H, variant="inria"):
     return out
 
 
-def render(model, R_c2w, C, fx, fy, W, H, background, variant="inria", tile_rule=False):
+def render(model, R_c2w, C, fx, fy, W, H, background, variant="inria", tile_rule=False, cx=None, cy=None,
+           inria_off_centre_extension=False):
     """Render (H, W) pixels of model (dict as tests/gsply.py read() returns) through the camera
-    (R_c2w: columns x right, y down, z forward; centre C; principal point at the image centre).
+    (R_c2w: columns x right, y down, z forward; centre C; principal point (cx, cy) in pixel-edge
+    coordinates, the image centre when None -- see project() for the INRIA variants off centre).
     Returns (image (H, W, 3) float64, final_T (H, W)). See the module docstring for every rule."""
     if variant not in VARIANTS:
         raise ValueError("variant must be one of %s" % sorted(VARIANTS))
     family, _, alpha_max = VARIANTS[variant]
-    gs = [g for g in project(model, R_c2w, C, fx, fy, W, H, variant) if g is not None]
+    gs = [g for g in project(model, R_c2w, C, fx, fy, W, H, variant, cx, cy, inria_off_centre_extension)
+          if g is not None]
     if tile_rule:
         gs = [g for g in gs if g["tiles"] is not None]
     gs.sort(key=lambda g: (g["depth"], g["index"]))
