@@ -55,8 +55,59 @@ Projection of the mean and the pixel convention
   GSPLAT persp_proj Utils.cuh:498-537: lim_x_pos = (W - cx)/fx + 0.3
   tan_fovx, lim_x_neg = cx/fx + 0.3 tan_fovx with tan_fovx = 0.5 W/fx
   (:514-519); tx = z clamp(x/z, -lim_x_neg, lim_x_pos) (:523-524); J as INRIA
-  (:527-535). With cx = W/2 both limits are 1.3 tan_fovx: the same clamp.
+  (:527-535). With cx = W/2 both limits are 1.3 tan_fovx: the same clamp
+  (off centre: "Principal point" below).
   Only J uses the clamped position; the mean is projected unclamped.
+
+Principal point (cx, cy), arguments of project() and render()
+  cx, cy are in pixel-edge coordinates: pixel j spans [j, j + 1] and the
+  optical axis meets the image at (cx, cy); centred = (W/2, H/2), as in
+  COLMAP's and nerfstudio's intrinsics. None = centred, bit-identical to the
+  reference before it took a principal point.
+  GSPLAT uses cx, cy in exactly these places of the forward pass (v1.5.3):
+  - K read row-major: fx = K[0,0], fy = K[1,1], cx = K[0,2], cy = K[1,2];
+    the skew K[0,1] is never read (ProjectionEWA3DGSFused.cu:110-121; the
+    packed kernel, rasterization()'s default packed=True at rendering.py:48,
+    the same at ProjectionEWA3DGSPacked.cu:126-137).
+  - persp_proj (Utils.cuh:498-537; the file is gsplat/cuda/include/Utils.cuh
+    at this commit): tan_fovx = 0.5 W / fx, tan_fovy = 0.5 H / fy, whatever
+    cx, cy (:514-515); the limits lim_x_pos = (W - cx)/fx + 0.3 tan_fovx,
+    lim_x_neg = cx/fx + 0.3 tan_fovx, y likewise with H, cy, fy (:516-519);
+    tx = z min(lim_x_pos, max(-lim_x_neg, x/z)), ty likewise (:523-524); J
+    from tx, ty (:527-534); cov2d = J Sigma_c J^T (:535); the mean
+    mean2d = (fx x/z + cx, fy y/z + cy), unclamped (:536). In pixels the
+    clamp keeps fx tx/z + cx within [-0.3 fx tan_fovx, W + 0.3 fx tan_fovx]
+    = [-0.15 W, 1.15 W]: a window fixed on the image, wherever cx lies
+    (the interval is never empty: its width is 1.3 W / fx).
+  - The radius (extend, ceil of extend sqrt(cov2d_xx)) does not involve cx
+    (ProjectionEWA3DGSFused.cu:164-184, ProjectionEWA3DGSPacked.cu:181-199);
+    the off-image drop compares mean2d, which carries cx, with [0, W] x
+    [0, H] (Fused :193-198, Packed :205-209); the tiles are taken from
+    mean2d and the radii only (IntersectTile.cu:55-77).
+  - The pixel centre px = j + 0.5, py = i + 0.5 does not involve cx
+    (RasterizeToPixels3DGSFwd.cu:62-63); nor does the SH direction (camera
+    centre from the inverse view matrix, rendering.py:491).
+  INRIA has no principal point: GaussianRasterizationSettings carries only
+  tanfovx, tanfovy, the view and the full projection matrix (MAIN
+  diff_gaussian_rasterization/__init__.py:157-169); the focal is W /
+  (2 tan_fovx) (MAIN rasterizer_impl.cu:222-223); computeCov2D clamps x/z to
+  +-1.3 tan_fovx, symmetric about the optical axis (MAIN forward.cu:82-87),
+  which 3DGS's getProjectionMatrix puts at the image centre (P[0,2] = 0 for
+  its symmetric frustum, graphics_utils.py:66). So Inria's clamp window is
+  W/2 +- 0.65 W = [-0.15 W, 1.15 W], the same as gsplat's when centred.
+  Off centre, project() and render() refuse an INRIA variant (ValueError)
+  unless inria_off_centre_extension=True: THIS REFERENCE'S EXTENSION, NOT
+  INRIA'S CODE, namely what Inria's CUDA computes when handed a full
+  projection matrix whose third column holds P[0,2] = 2 cx/W - 1, P[1,2] =
+  2 cy/H - 1 (the values that put the optical axis at pixel-edge cx, cy):
+  point_image.x = ((x/tan_fovx + (2 cx/W - 1) z) / (z + 1e-7) + 1) W/2 - 1/2
+  = fx x/(z + 1e-7) + cx - 1/2 up to the 1e-7, the mean unclamped
+  (forward.cu:195-197, MAIN :198-200 and :233 with ndc2Pix); the Jacobian
+  clamp stays +-1.3 W/(2 fx) about the optical axis (only tan_fovx reaches
+  computeCov2D, MAIN forward.cu:216), so its window in pixels, [cx - 0.65 W,
+  cx + 0.65 W], moves with the principal point. (getProjectionMatrix's own (r+l)/(r-l) for an asymmetric frustum,
+  r = n (W - cx)/fx, l = -n cx/fx, is 1 - 2 cx/W, the opposite sign:
+  3DGS never builds one, and the extension does not use that formula.)
 
 Dilation, antialiasing
   INRIA: det_cov = det(cov) BEFORE, cov += 0.3 I, det = det AFTER
