@@ -305,3 +305,16 @@ def test_inria_off_centre_extension(variant):
     # point_image = f x/(z + 1e-7) + c - 0.5 (pixel index): (-9.6 + 3.5, 9.6 + 11.5) = (-6.1, 21.1)
     assert np.allclose(g[0]["xy"], (-6.1, 21.1), atol=1e-6)
     assert np.allclose(g[1]["xy"], (13.1, 1.9), atol=1e-6)
+
+
+def test_gsplat_off_image_drop_uses_principal_point():
+    # sigma = 0.1 at (-2.4, 0, 4), opacity 0.9, f = 16, W = H = 16: extend = sqrt(2 ln(0.9 * 255)) = 3.2975.
+    # cx = 4: x/z = -0.6 clamps to -0.4, cov_xx = 0.01 (16 + 2.56) + 0.3 = 0.4856, rx = ceil(2.298) = 3,
+    # mean2d.x = -9.6 + 4 = -5.6 and -5.6 + 3 <= 0: dropped (ProjectionEWA3DGSFused.cu:193-198).
+    # cx = 8: unclamped, cov_xx = 0.01 (16 + 5.76) + 0.3 = 0.5176, rx = ceil(2.372) = 3, mean2d.x = -1.6: kept.
+    m = model([((-2.4, 0.0, 4.0), (0.1, 0.1, 0.1), 0.9, (1.0, 1.0, 1.0))])
+    off = ref.project(m, EYE, ORIGIN, 16.0, 16.0, 16, 16, "gsplat", cx=4.0, cy=8.0)[0]
+    assert abs(off["cov2d"][0, 0] - 0.4856) < 1e-12 and off["radius"] == (3, 3) and off["tiles"] is None
+    centred = ref.project(m, EYE, ORIGIN, 16.0, 16.0, 16, 16, "gsplat", cx=8.0, cy=8.0)[0]
+    assert abs(centred["cov2d"][0, 0] - 0.5176) < 1e-12 and centred["radius"] == (3, 3)
+    assert centred["tiles"] == (0, 1, 0, 1)
