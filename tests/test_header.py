@@ -51,3 +51,20 @@ def test_world_to_ndc_projects_onto_the_rendered_position(tmp_path):
         assert np.isclose(cam[2], np.dot(np.array([x, y, z]) -
                           np.array([0.3, 0.2, 4.0]), forward), rtol=1e-5)  # z: depth along the view
         assert np.isclose(1.0 / (ndc[2] / ndc[3]), cam[2], rtol=1e-5)  # z: 1 / depth
+
+
+def test_camera_matrices_beyond_float32_are_refused(tmp_path):
+    """worldToCamera and worldToNDC are float32 in the header: a camera whose matrices hold a
+    number past float's range (3.4e38) would be written as infinity. The intrinsics' own rules
+    do not catch a tiny fov (its 1 / tan is 5.7e301) or a far position (the translation itself),
+    so the header's check must: refused, naming the file and line, with no output written."""
+    for camera in ('position="0 0.2 4" lookat="0 0 0" fov="1e-300"',
+                   'position="0 0 4e38" lookat="0 0 0" fov="40"'):
+        scene = tmp_path / "s.xml"
+        scene.write_text(f'<scene>\n<camera {camera} width="8" height="8"/>\n'
+                         '<object><sphere radius="1"/></object></scene>')
+        out = tmp_path / "f.exr"
+        proc = run([scene, "-o", out, "--spp", 1, "--tspp", 1, "--quiet"])
+        assert proc.returncode != 0 and f"{scene}:2:" in proc.stderr and "float32" in proc.stderr, \
+            (camera, proc.returncode, proc.stderr)
+        assert not out.exists()
