@@ -24,7 +24,8 @@ Camera (both)
   INRIA: fx = W / (2 tan_fovx) (rasterizer_impl.cu:224-225), where the
   Python side sets tan_fovx = tan(FoVx / 2) with FoVx = focal2fov(fx, W) =
   2 atan(W / (2 fx)) (3DGS graphics_utils.py:76-77), so tan_fovx = W / (2 fx).
-  GSPLAT: explicit K = [[fx, 0, cx], [0, fy, cy]]; here cx = W/2, cy = H/2.
+  GSPLAT: explicit K = [[fx, 0, cx], [0, fy, cy]]; cx, cy are arguments here
+  (default W/2, H/2); see "Principal point" below.
 
 Projection of the mean and the pixel convention
   INRIA: p_hom = full_proj @ (mean, 1), p_w = 1 / (p_hom.w + 1e-7), p_proj
@@ -54,8 +55,59 @@ Projection of the mean and the pixel convention
   GSPLAT persp_proj Utils.cuh:498-537: lim_x_pos = (W - cx)/fx + 0.3
   tan_fovx, lim_x_neg = cx/fx + 0.3 tan_fovx with tan_fovx = 0.5 W/fx
   (:514-519); tx = z clamp(x/z, -lim_x_neg, lim_x_pos) (:523-524); J as INRIA
-  (:527-535). With cx = W/2 both limits are 1.3 tan_fovx: the same clamp.
+  (:527-535). With cx = W/2 both limits are 1.3 tan_fovx: the same clamp
+  (off centre: "Principal point" below).
   Only J uses the clamped position; the mean is projected unclamped.
+
+Principal point (cx, cy), arguments of project() and render()
+  cx, cy are in pixel-edge coordinates: pixel j spans [j, j + 1] and the
+  optical axis meets the image at (cx, cy); centred = (W/2, H/2), as in
+  COLMAP's and nerfstudio's intrinsics. None = centred, bit-identical to the
+  reference before it took a principal point.
+  GSPLAT uses cx, cy in exactly these places of the forward pass (v1.5.3):
+  - K read row-major: fx = K[0,0], fy = K[1,1], cx = K[0,2], cy = K[1,2];
+    the skew K[0,1] is never read (ProjectionEWA3DGSFused.cu:110-121; the
+    packed kernel, rasterization()'s default packed=True at rendering.py:48,
+    the same at ProjectionEWA3DGSPacked.cu:126-137).
+  - persp_proj (Utils.cuh:498-537; the file is gsplat/cuda/include/Utils.cuh
+    at this commit): tan_fovx = 0.5 W / fx, tan_fovy = 0.5 H / fy, whatever
+    cx, cy (:514-515); the limits lim_x_pos = (W - cx)/fx + 0.3 tan_fovx,
+    lim_x_neg = cx/fx + 0.3 tan_fovx, y likewise with H, cy, fy (:516-519);
+    tx = z min(lim_x_pos, max(-lim_x_neg, x/z)), ty likewise (:523-524); J
+    from tx, ty (:527-534); cov2d = J Sigma_c J^T (:535); the mean
+    mean2d = (fx x/z + cx, fy y/z + cy), unclamped (:536). In pixels the
+    clamp keeps fx tx/z + cx within [-0.3 fx tan_fovx, W + 0.3 fx tan_fovx]
+    = [-0.15 W, 1.15 W]: a window fixed on the image, wherever cx lies
+    (the interval is never empty: its width is 1.3 W / fx).
+  - The radius (extend, ceil of extend sqrt(cov2d_xx)) does not involve cx
+    (ProjectionEWA3DGSFused.cu:164-184, ProjectionEWA3DGSPacked.cu:181-199);
+    the off-image drop compares mean2d, which carries cx, with [0, W] x
+    [0, H] (Fused :193-198, Packed :205-209); the tiles are taken from
+    mean2d and the radii only (IntersectTile.cu:55-77).
+  - The pixel centre px = j + 0.5, py = i + 0.5 does not involve cx
+    (RasterizeToPixels3DGSFwd.cu:62-63); nor does the SH direction (camera
+    centre from the inverse view matrix, rendering.py:491).
+  INRIA has no principal point: GaussianRasterizationSettings carries only
+  tanfovx, tanfovy, the view and the full projection matrix (MAIN
+  diff_gaussian_rasterization/__init__.py:157-169); the focal is W /
+  (2 tan_fovx) (MAIN rasterizer_impl.cu:222-223); computeCov2D clamps x/z to
+  +-1.3 tan_fovx, symmetric about the optical axis (MAIN forward.cu:82-87),
+  which 3DGS's getProjectionMatrix puts at the image centre (P[0,2] = 0 for
+  its symmetric frustum, graphics_utils.py:66). So Inria's clamp window is
+  W/2 +- 0.65 W = [-0.15 W, 1.15 W], the same as gsplat's when centred.
+  Off centre, project() and render() refuse an INRIA variant (ValueError)
+  unless inria_off_centre_extension=True: THIS REFERENCE'S EXTENSION, NOT
+  INRIA'S CODE, namely what Inria's CUDA computes when handed a full
+  projection matrix whose third column holds P[0,2] = 2 cx/W - 1, P[1,2] =
+  2 cy/H - 1 (the values that put the optical axis at pixel-edge cx, cy):
+  point_image.x = ((x/tan_fovx + (2 cx/W - 1) z) / (z + 1e-7) + 1) W/2 - 1/2
+  = fx x/(z + 1e-7) + cx - 1/2 up to the 1e-7, the mean unclamped
+  (forward.cu:195-197, MAIN :198-200 and :233 with ndc2Pix); the Jacobian
+  clamp stays +-1.3 W/(2 fx) about the optical axis (only tan_fovx reaches
+  computeCov2D, MAIN forward.cu:216), so its window in pixels, [cx - 0.65 W,
+  cx + 0.65 W], moves with the principal point. (getProjectionMatrix's own (r+l)/(r-l) for an asymmetric frustum,
+  r = n (W - cx)/fx, l = -n cx/fx, is 1 - 2 cx/W, the opposite sign:
+  3DGS never builds one, and the extension does not use that formula.)
 
 Dilation, antialiasing
   INRIA: det_cov = det(cov) BEFORE, cov += 0.3 I, det = det AFTER
@@ -202,18 +254,63 @@ def _c_trunc_div(num, den):
     return int(math.trunc(num / den))
 
 
-def project(model, R_c2w, C, fx, fy, W, H, variant="inria"):
+def principal_point(family, W, H, cx, cy, inria_off_centre_extension):
+    """(cx, cy) in pixel-edge coordinates, W/2 and H/2 when not given. INRIA's rasterizer has no
+    principal point: an off-centre one is refused unless the caller asks for this reference's
+    extension (module docstring, "Principal point")."""
+    cx = W / 2.0 if cx is None else float(cx)
+    cy = H / 2.0 if cy is None else float(cy)
+    if not (math.isfinite(cx) and math.isfinite(cy)):
+        raise ValueError("principal point (cx, cy) = (%r, %r) is not finite" % (cx, cy))
+    centred = cx == W / 2.0 and cy == H / 2.0
+    if family == "inria" and not centred and not inria_off_centre_extension:
+        raise ValueError("principal point (%r, %r) is off the image centre (%r, %r): Inria's rasterizer "
+                         "has none (only tan_fovx, tan_fovy); pass inria_off_centre_extension=True for "
+                         "this reference's extension, which is not Inria's code" % (cx, cy, W / 2.0, H / 2.0))
+    return cx, cy
+
+
+def jacobian_tangents(family, x, y, z, fx, fy, W, H, cx, cy):
+    """The clamped (t.x / z, t.y / z) at which the EWA Jacobian is evaluated. INRIA (and its
+    off-centre extension): +-1.3 tan_fov about the optical axis, tan_fovx = W / (2 fx)
+    (forward.cu:82-87). GSPLAT persp_proj: the limits follow the image edges through cx, cy,
+    x/z in [-(cx/fx + 0.3 tan_fovx), (W - cx)/fx + 0.3 tan_fovx] (Utils.cuh:514-524)."""
+    tanx, tany = W / (2.0 * fx), H / (2.0 * fy)
+    if family == "inria":
+        limx, limy = 1.3 * tanx, 1.3 * tany
+        return min(limx, max(-limx, x / z)), min(limy, max(-limy, y / z))
+    txz = min((W - cx) / fx + 0.3 * tanx, max(-(cx / fx + 0.3 * tanx), x / z))
+    tyz = min((H - cy) / fy + 0.3 * tany, max(-(cy / fy + 0.3 * tany), y / z))
+    return txz, tyz
+
+
+def inria_point_image(x, y, z, fx, fy, W, H, cx, cy):
+    """INRIA's point_image (pixel-index coordinates): full_proj, the 1e-7 in p_w, ndc2Pix
+    (forward.cu:195-197, auxiliary.h:40-43). The principal point enters as the projection
+    matrix's third column P[0,2] = 2 cx/W - 1, P[1,2] = 2 cy/H - 1 (0 when centred, as 3DGS's
+    getProjectionMatrix builds it: the extension only)."""
+    tanx, tany = W / (2.0 * fx), H / (2.0 * fy)
+    ndc_x = (x / tanx + (2.0 * cx / W - 1.0) * z) / (z + 1e-7)
+    ndc_y = (y / tany + (2.0 * cy / H - 1.0) * z) / (z + 1e-7)
+    return ((ndc_x + 1.0) * W - 1.0) * 0.5, ((ndc_y + 1.0) * H - 1.0) * 0.5
+
+
+def project(model, R_c2w, C, fx, fy, W, H, variant="inria", cx=None, cy=None, inria_off_centre_extension=False):
     """Per Gaussian, what the preprocess step produces. Returns a list (index order) of dicts, or
     None where the Gaussian is culled whatever the tiling. Keys: index, depth (view z), xy (the
     mean in the variant's own 2D coordinates), pix_offset (0 for INRIA's pixel-index pixf, 0.5 for
     GSPLAT's j + 0.5), cov2d_raw (2x2 before the 0.3), cov2d (after), conic (A, B, C), opacity
     (times the antialiasing factor if any), aa_factor, colour, radius (INRIA int, GSPLAT (rx, ry)),
-    tiles ((x0, x1, y0, y1), half-open, or None: dropped under the tile rule)."""
+    tiles ((x0, x1, y0, y1), half-open, or None: dropped under the tile rule), jacobian_txz
+    (the clamped (t.x/z, t.y/z) of the EWA Jacobian).
+    cx, cy: the principal point in pixel-edge coordinates (K[0,2], K[1,2]: pixel j spans
+    [j, j + 1]); None means W/2, H/2. Off centre, the INRIA variants raise ValueError unless
+    inria_off_centre_extension=True (this reference's extension, not Inria's code; the GSPLAT
+    variants ignore the flag)."""
     family, aa, _ = VARIANTS[variant]
+    cx, cy = principal_point(family, W, H, cx, cy, inria_off_centre_extension)
     R_c2w, C = np.asarray(R_c2w, np.float64), np.asarray(C, np.float64)
     Rw2c = R_c2w.T
-    tanx, tany = W / (2.0 * fx), H / (2.0 * fy)
-    cx, cy = W / 2.0, H / 2.0
     out = []
     for n in range(len(model["opacity"])):
         mean = np.asarray(model["mean"][n], np.float64)
@@ -227,12 +324,7 @@ def project(model, R_c2w, C, fx, fy, W, H, variant="inria"):
         Rq = quat_to_rot(model["rot"][n])
         s = np.asarray(model["scale"][n], np.float64)
         sigma_c = Rw2c @ (Rq @ np.diag(s * s) @ Rq.T) @ Rw2c.T
-        if family == "inria":
-            limx, limy = 1.3 * tanx, 1.3 * tany
-            txz, tyz = min(limx, max(-limx, x / z)), min(limy, max(-limy, y / z))
-        else:
-            txz = min((W - cx) / fx + 0.3 * tanx, max(-(cx / fx + 0.3 * tanx), x / z))
-            tyz = min((H - cy) / fy + 0.3 * tany, max(-(cy / fy + 0.3 * tany), y / z))
+        txz, tyz = jacobian_tangents(family, x, y, z, fx, fy, W, H, cx, cy)
         J = np.array([[fx / z, 0.0, -fx * txz / z], [0.0, fy / z, -fy * tyz / z]])
         raw = J @ sigma_c @ J.T
         raw = 0.5 * (raw + raw.T)
@@ -255,10 +347,9 @@ def project(model, R_c2w, C, fx, fy, W, H, variant="inria"):
         colour = sh_colour(np.asarray(model["sh"][n])[: (model["degree"] + 1) ** 2], model["degree"],
                            d / np.linalg.norm(d))
         g = {"index": n, "depth": z, "cov2d_raw": raw, "cov2d": cov, "conic": conic, "opacity": opacity,
-             "aa_factor": factor, "colour": colour}
+             "aa_factor": factor, "colour": colour, "jacobian_txz": (txz, tyz)}
         if family == "inria":
-            ndc = ((x / tanx) / (z + 1e-7), (y / tany) / (z + 1e-7))
-            g["xy"] = (((ndc[0] + 1.0) * W - 1.0) * 0.5, ((ndc[1] + 1.0) * H - 1.0) * 0.5)
+            g["xy"] = inria_point_image(x, y, z, fx, fy, W, H, cx, cy)
             g["pix_offset"] = 0.0
             mid = 0.5 * (cov[0, 0] + cov[1, 1])
             root = math.sqrt(max(0.1, mid * mid - det))
@@ -297,14 +388,17 @@ def project(model, R_c2w, C, fx, fy, W, H, variant="inria"):
     return out
 
 
-def render(model, R_c2w, C, fx, fy, W, H, background, variant="inria", tile_rule=False):
+def render(model, R_c2w, C, fx, fy, W, H, background, variant="inria", tile_rule=False, cx=None, cy=None,
+           inria_off_centre_extension=False):
     """Render (H, W) pixels of model (dict as tests/gsply.py read() returns) through the camera
-    (R_c2w: columns x right, y down, z forward; centre C; principal point at the image centre).
+    (R_c2w: columns x right, y down, z forward; centre C; principal point (cx, cy) in pixel-edge
+    coordinates, the image centre when None -- see project() for the INRIA variants off centre).
     Returns (image (H, W, 3) float64, final_T (H, W)). See the module docstring for every rule."""
     if variant not in VARIANTS:
         raise ValueError("variant must be one of %s" % sorted(VARIANTS))
     family, _, alpha_max = VARIANTS[variant]
-    gs = [g for g in project(model, R_c2w, C, fx, fy, W, H, variant) if g is not None]
+    gs = [g for g in project(model, R_c2w, C, fx, fy, W, H, variant, cx, cy, inria_off_centre_extension)
+          if g is not None]
     if tile_rule:
         gs = [g for g in gs if g["tiles"] is not None]
     gs.sort(key=lambda g: (g["depth"], g["index"]))

@@ -223,3 +223,98 @@ def test_sh_degree1_world_direction(variant):
     g3 = ref.project(model([((2.0, 0, 0), (0.5, 0.5, 0.5), 0.5, sh3)], degree=1), R, C, 20.0, 20.0, 15, 15,
                      variant)[0]
     assert np.all(g3["colour"] == 0.0)
+
+
+def scene_off_axis():
+    # Unit isotropic Gaussians at z = 4 with x/z and y/z = +-0.6 and +-1.0, and one on the axis.
+    return model([((-2.4, 2.4, 4.0), (1, 1, 1), 0.9, (1.0, 1.0, 1.0)),
+                  ((2.4, -2.4, 4.0), (1, 1, 1), 0.7, (0.2, 0.5, 0.9)),
+                  ((4.0, 4.0, 4.0), (1, 1, 1), 0.5, (0.9, 0.1, 0.3)),
+                  ((0.0, 0.0, 6.0), (0.4, 0.2, 0.3), 0.8, (0.3, 0.9, 0.4))])
+
+
+@pytest.mark.parametrize("variant", ALL)
+@pytest.mark.parametrize("tile_rule", [False, True])
+def test_centred_principal_point_is_the_default(variant, tile_rule):
+    # cx = W/2, cy = H/2 given explicitly (and, for INRIA, through the extension) changes nothing
+    m = scene_off_axis()
+    base = ref.render(m, EYE, ORIGIN, 16.0, 18.0, 16, 14, BG, variant, tile_rule)
+    for kw in ({"cx": 8.0, "cy": 7.0}, {"cx": 8.0, "cy": 7.0, "inria_off_centre_extension": True}):
+        img, T = ref.render(m, EYE, ORIGIN, 16.0, 18.0, 16, 14, BG, variant, tile_rule, **kw)
+        assert np.array_equal(img, base[0]) and np.array_equal(T, base[1])
+
+
+def off_centre_cov(t):
+    # f = 16, z = 4, sigma = I: J = [[4, 0, -4 t_x], [0, 4, -4 t_y]], cov = J J^T + 0.3 I
+    # = [[16.3 + 16 t_x^2, 16 t_x t_y], [16 t_x t_y, 16.3 + 16 t_y^2]]
+    return np.array([[16.3 + 16 * t[0] ** 2, 16 * t[0] * t[1]], [16 * t[0] * t[1], 16.3 + 16 * t[1] ** 2]])
+
+
+@pytest.mark.parametrize("variant", ["gsplat", "gsplat-antialiased"])
+def test_gsplat_off_centre_clamp(variant):
+    # W = H = 16, f = 16, tan_fov = 0.5, principal point (4, 12). gsplat persp_proj limits:
+    # x/z in [-(4/16 + 0.15), 12/16 + 0.15] = [-0.4, 0.9], y/z in [-(12/16 + 0.15), 4/16 + 0.15] = [-0.9, 0.4].
+    # Gaussian 0 at x/z = -0.6, y/z = +0.6: beyond 0.4, inside 0.9, so both clamp to 0.4 in magnitude:
+    # t = (-0.4, 0.4), cov = [[18.86, -2.56], [-2.56, 18.86]] (unclamped or symmetric +-0.65 clamp:
+    # [[22.06, -5.76], [-5.76, 22.06]]). Gaussian 1, mirrored (x/z = +0.6, y/z = -0.6), is inside the
+    # wide limits: unclamped, 22.06. Gaussian 2 at (1, 1): clamped to (0.9, 0.4).
+    g = ref.project(scene_off_axis(), EYE, ORIGIN, 16.0, 16.0, 16, 16, variant, cx=4.0, cy=12.0)
+    assert np.allclose(g[0]["jacobian_txz"], (-0.4, 0.4), atol=1e-12)
+    assert np.allclose(g[0]["cov2d"], [[18.86, -2.56], [-2.56, 18.86]], atol=1e-9)
+    assert np.allclose(g[1]["jacobian_txz"], (0.6, -0.6), atol=1e-12)
+    assert np.allclose(g[1]["cov2d"], [[22.06, -5.76], [-5.76, 22.06]], atol=1e-9)
+    assert np.allclose(g[2]["jacobian_txz"], (0.9, 0.4), atol=1e-12)
+    assert np.allclose(g[2]["cov2d"], off_centre_cov((0.9, 0.4)), atol=1e-9)
+    # means: mean2d = f x/z + c (pixel edges): (-9.6 + 4, 9.6 + 12) = (-5.6, 21.6), (13.6, 2.4)
+    assert np.allclose(g[0]["xy"], (-5.6, 21.6), atol=1e-12) and np.allclose(g[1]["xy"], (13.6, 2.4), atol=1e-12)
+    if variant == "gsplat":
+        # pixel (row 15, col 0), centre (0.5, 15.5): d = (-6.1, 6.1), along the eigenvector (-1, 1) of
+        # the clamped cov, eigenvalue 18.86 + 2.56 = 21.42: alpha = 0.9 exp(-0.5 * 74.42 / 21.42);
+        # Gaussian 2's mean (20, 13.6) is 19.5 px away in x: alpha 1e-5, skipped
+        one = model([((-2.4, 2.4, 4.0), (1, 1, 1), 0.9, (1.0, 1.0, 1.0))])
+        img, T = ref.render(one, EYE, ORIGIN, 16.0, 16.0, 16, 16, np.zeros(3), variant, cx=4.0, cy=12.0)
+        a = 0.9 * math.exp(-0.5 * 74.42 / 21.42)
+        assert abs(a - 0.158418) < 1e-6 and abs(0.9 * math.exp(-0.5 * 74.42 / 27.82) - 0.236245) < 1e-6
+        assert abs(img[15, 0, 0] - a) < 1e-9 and abs(T[15, 0] - (1 - a)) < 1e-9
+
+
+def test_gsplat_off_centre_mirror():
+    # Mirroring x -> -x with cx -> W - cx swaps gsplat's two x limits and mirrors the pixel centres
+    # j + 0.5 -> W - (j + 0.5): the image is mirrored column for column.
+    m = scene_off_axis()
+    mirrored = dict(m, mean=m["mean"] * [-1.0, 1.0, 1.0])
+    for tile_rule in (False, True):
+        img, T = ref.render(m, EYE, ORIGIN, 16.0, 16.0, 16, 16, BG, "gsplat", tile_rule, cx=4.5, cy=12.0)
+        img2, T2 = ref.render(mirrored, EYE, ORIGIN, 16.0, 16.0, 16, 16, BG, "gsplat", tile_rule, cx=11.5, cy=12.0)
+        assert np.allclose(img2, img[:, ::-1], atol=1e-12) and np.allclose(T2, T[:, ::-1], atol=1e-12)
+
+
+@pytest.mark.parametrize("variant", ["inria", "inria-antialiased"])
+def test_inria_off_centre_extension(variant):
+    # Inria's rasterizer has no principal point: refused off centre unless the extension is asked for
+    m = scene_off_axis()
+    with pytest.raises(ValueError, match="principal point"):
+        ref.project(m, EYE, ORIGIN, 16.0, 16.0, 16, 16, variant, cx=4.0, cy=12.0)
+    # The extension: clamp +-1.3 * 0.5 = +-0.65 about the optical axis whatever cx, cy, so Gaussians
+    # 0 and 1 (|x/z| = |y/z| = 0.6) are unclamped, Gaussian 2 clamps to (0.65, 0.65) (gsplat: (0.9, 0.4))
+    g = ref.project(m, EYE, ORIGIN, 16.0, 16.0, 16, 16, variant, cx=4.0, cy=12.0, inria_off_centre_extension=True)
+    assert np.allclose(g[0]["jacobian_txz"], (-0.6, 0.6), atol=1e-12)
+    assert np.allclose(g[0]["cov2d"], [[22.06, -5.76], [-5.76, 22.06]], atol=1e-9)
+    assert np.allclose(g[2]["jacobian_txz"], (0.65, 0.65), atol=1e-12)
+    assert np.allclose(g[2]["cov2d"], off_centre_cov((0.65, 0.65)), atol=1e-9)
+    # point_image = f x/(z + 1e-7) + c - 0.5 (pixel index): (-9.6 + 3.5, 9.6 + 11.5) = (-6.1, 21.1)
+    assert np.allclose(g[0]["xy"], (-6.1, 21.1), atol=1e-6)
+    assert np.allclose(g[1]["xy"], (13.1, 1.9), atol=1e-6)
+
+
+def test_gsplat_off_image_drop_uses_principal_point():
+    # sigma = 0.1 at (-2.4, 0, 4), opacity 0.9, f = 16, W = H = 16: extend = sqrt(2 ln(0.9 * 255)) = 3.2975.
+    # cx = 4: x/z = -0.6 clamps to -0.4, cov_xx = 0.01 (16 + 2.56) + 0.3 = 0.4856, rx = ceil(2.298) = 3,
+    # mean2d.x = -9.6 + 4 = -5.6 and -5.6 + 3 <= 0: dropped (ProjectionEWA3DGSFused.cu:193-198).
+    # cx = 8: unclamped, cov_xx = 0.01 (16 + 5.76) + 0.3 = 0.5176, rx = ceil(2.372) = 3, mean2d.x = -1.6: kept.
+    m = model([((-2.4, 0.0, 4.0), (0.1, 0.1, 0.1), 0.9, (1.0, 1.0, 1.0))])
+    off = ref.project(m, EYE, ORIGIN, 16.0, 16.0, 16, 16, "gsplat", cx=4.0, cy=8.0)[0]
+    assert abs(off["cov2d"][0, 0] - 0.4856) < 1e-12 and off["radius"] == (3, 3) and off["tiles"] is None
+    centred = ref.project(m, EYE, ORIGIN, 16.0, 16.0, 16, 16, "gsplat", cx=8.0, cy=8.0)[0]
+    assert abs(centred["cov2d"][0, 0] - 0.5176) < 1e-12 and centred["radius"] == (3, 3)
+    assert centred["tiles"] == (0, 1, 0, 1)
