@@ -194,12 +194,12 @@ def test_semantics_mistakes_are_named(tmp_path, attrs, why):
 OFF_W, OFF_H, OFF_FX, OFF_FY, OFF_CX, OFF_CY = 48, 36, 40.0, 44.0, 10.0, 28.0  # 14 px left of centre, 10 px below
 
 
-def transforms_camera(tmp_path, R, C):
-    """The <camera> of a nerfstudio transforms.json with the principal point (OFF_CX, OFF_CY): its
-    transform_matrix is camera-to-world in OpenGL axes (the OpenCV rotation's y and z columns negated)."""
+def transforms_camera(tmp_path, R, C, fx=OFF_FX, fy=OFF_FY, cx=OFF_CX, cy=OFF_CY):
+    """The <camera> of a nerfstudio transforms.json of OFF_W x OFF_H pixels with that principal point:
+    its transform_matrix is camera-to-world in OpenGL axes (the OpenCV rotation's y and z columns negated)."""
     c2w = np.eye(4)
     c2w[:3, :3], c2w[:3, 3] = R @ np.diag([1.0, -1.0, -1.0]), C
-    doc = {"camera_model": "PINHOLE", "fl_x": OFF_FX, "fl_y": OFF_FY, "cx": OFF_CX, "cy": OFF_CY, "w": OFF_W,
+    doc = {"camera_model": "PINHOLE", "fl_x": fx, "fl_y": fy, "cx": cx, "cy": cy, "w": OFF_W,
            "h": OFF_H, "frames": [{"file_path": f"{i}.png", "transform_matrix": c2w.tolist()} for i in range(2)]}
     path = tmp_path / "transforms.json"
     path.write_text(json.dumps(doc))
@@ -247,3 +247,33 @@ def test_an_off_centre_principal_point_clamps_as_each_rasterizer_does(tmp_path, 
     assert (final_t < 1 - 0.05).sum() > 20  # the Gaussian is drawn in the image
     old = with_constant("jacobian_tangents", old_clamp, render)[0]
     assert np.abs(old - expect).max() > 10 * TOL  # and the old clamp draws it otherwise
+
+
+@pytest.mark.parametrize("semantics", ["gsplat", "gsplat-antialiased"])
+def test_an_off_centre_needle_beyond_the_clamp_is_drawn_to_the_end_of_its_tail(tmp_path, semantics):
+    """The cull's reach follows the widest clamp. fx = fy = 40 (no slack from their ratio), principal
+    point (10, 28): gsplat clamps x/z to [-0.385, 1.13] and y/z to [-0.835, 0.335] (persp_proj,
+    Utils.cuh:514-524). A needle whose mean lies beyond the right and top limits, at (1.2, -0.9) z, along
+    the direction the clamped Jacobian stretches most, (t_x, t_y, -(t_x^2 + t_y^2)), opacity 0.99, draws
+    a tail 8 px a sigma into the image down to alpha 1/255. A reach from the old clamp (+-1.3 cx/fx,
+    +-1.3 cy/fy) bounds the footprint by sqrt(1 + 0.325^2 + 0.91^2) / sqrt(1 + 1.13^2 + 0.835^2) = 0.81
+    of it and loses the tail beyond 0.81 x 3.32 sigma (alpha up to 0.03)."""
+    f, cx, cy, z = 40.0, 10.0, 28.0, 2.0
+    t = np.array([1.13, -0.835])
+    d = np.array([t[0], t[1], -(t @ t)])
+    d /= np.linalg.norm(d)
+    # the rotation taking the Gaussian's x axis to d: quaternion (1 + d.x, 0, -d.z, d.y), normalised
+    q = np.array([1 + d[0], 0.0, -d[2], d[1]])
+    sigma = 8.0 / (f / z * np.sqrt(1 + t @ t))  # 8 px along the major axis
+    model = {"mean": np.array([[1.2 * z, -0.9 * z, z]]), "scale": np.array([[sigma, sigma / 4, sigma / 4]]),
+             "rot": (q / np.linalg.norm(q))[None], "opacity": np.array([0.99]), "sh": np.full((1, 1, 3), 1.5),
+             "degree": 0}
+    ply = tmp_path / "model.ply"
+    gsply.write(ply, model)
+    R, C = np.eye(3), np.zeros(3)
+    camera = transforms_camera(tmp_path, R, C, f, f, cx, cy)
+    img = sharp_gaussian_render(tmp_path, camera, ply, f' kind="3dgs" semantics="{semantics}"')
+    expect, final_t = ref.render(gsply.read(ply), R, C, f, f, OFF_W, OFF_H, BACKGROUND, VARIANT[semantics], cx=cx,
+                                 cy=cy)
+    assert_matches(img, expect, final_t)
+    assert ((final_t < 1 - 1 / 255) & (final_t > 1 - 0.03)).sum() > 30  # the tail's end is in the image
