@@ -64,12 +64,13 @@ typedef struct {
     double aa_floor;   /* 2.5e-5 (forward.cu); 0 (gsplat) */
     int tiles_cut;     /* the tile rule can cut a tail: inria's 3-sigma radius; gsplat's box of
                         * sqrt(2 ln(255 o)) sigma per axis holds every alpha >= 1/255 */
+    int clamp_at_edges; /* the Jacobian's clamp (jacobian_clamp): gsplat's, past each image edge */
 } raster_rules;
 
-static const raster_rules inria_rules = {0.2, INFINITY, 0.3, 0.99, 0, 0.0, 1};
-static const raster_rules inria_aa_rules = {0.2, INFINITY, 0.3, 0.99, 1, 2.5e-5, 1};
-static const raster_rules gsplat_rules = {0.01, 1e10, 0.3, 0.999, 0, 0.0, 0};
-static const raster_rules gsplat_aa_rules = {0.01, 1e10, 0.3, 0.999, 1, 0.0, 0};
+static const raster_rules inria_rules = {0.2, INFINITY, 0.3, 0.99, 0, 0.0, 1, 0};
+static const raster_rules inria_aa_rules = {0.2, INFINITY, 0.3, 0.99, 1, 2.5e-5, 1, 0};
+static const raster_rules gsplat_rules = {0.01, 1e10, 0.3, 0.999, 0, 0.0, 0, 1};
+static const raster_rules gsplat_aa_rules = {0.01, 1e10, 0.3, 0.999, 1, 0.0, 0, 1};
 
 static const raster_rules *raster_rules_of(gaussian_formation f)
 {
@@ -82,14 +83,37 @@ static const raster_rules *raster_rules_of(gaussian_formation f)
 }
 
 /* The rasterizers evaluate the Jacobian of the projection at the mean's
- * x/z and y/z clamped to 1.3 tan(fov/2) (computeCov2D's limx; gsplat's
- * lim_x_pos/neg = (W - cx)/fx + 0.3 tan and cx/fx + 0.3 tan, the same for
- * the centred principal point every camera here has). */
+ * x/z and y/z clamped to [-neg, pos], tan(fov/2) = size / (2 f) (x: the
+ * image's width, fx, cx; y: height, fy, cy). Inria's computeCov2D has no
+ * principal point: limx = 1.3 tan_fovx either side of the optical axis,
+ * tan_fovx = tan(focal2fov(fx, W) / 2); a principal point off the centre
+ * (a transforms.json camera's) keeps that clamp, as an Inria rasterizer
+ * given a shifted projection matrix does (it reads only tan_fovx). gsplat
+ * v1.5.3's persp_proj (937e299 gsplat/cuda/include/Utils.cuh:514-519,
+ * given K's cx, cy) reaches 0.3 tan(fov/2) past each image edge: pos = (W -
+ * cx)/fx + 0.3 tan, neg = cx/fx + 0.3 tan. Written as 1.3 tan -+ the
+ * principal point's offset, so that a centred one gives 1.3 tan bit for
+ * bit under both. */
 #define RASTER_CLAMP 1.3
+
+static void jacobian_clamp(const raster_rules *rules, double size, double f, double c, double *neg, double *pos)
+{
+    double half = 0.5 * size, shift = rules->clamp_at_edges ? c - half : 0.0;
+    *neg = (RASTER_CLAMP * half + shift) / f, *pos = (RASTER_CLAMP * half - shift) / f;
+}
+
+/* The wider of the two clamps' largest |x/z| (or |y/z|): gsplat's, as
+ * max(W - cx, cx) >= W / 2 (jacobian_clamp's operations, so never below
+ * either limit). */
+static double widest_clamp(double size, double f, double c)
+{
+    double half = 0.5 * size;
+    return (RASTER_CLAMP * half + fabs(c - half)) / f;
+}
 
 double gaussian_view_stretch(const camera_view *v)
 {
-    double lx = RASTER_CLAMP * v->cx / v->fx, ly = RASTER_CLAMP * v->cy / v->fy;
+    double lx = widest_clamp(v->width, v->fx, v->cx), ly = widest_clamp(v->height, v->fy, v->cy);
     return sqrt(1.0 + lx * lx + ly * ly) * rr_fmax(v->fx, v->fy) / rr_fmin(v->fx, v->fy);
 }
 
@@ -585,9 +609,11 @@ static int raster_alpha(const gaussian_model *m, size_t i, const raster_rules *r
     const float *s = &m->scale[3 * i];
     double dx, dy;
     image_offset(r, p, &dx, &dy); /* (the cheap and sure reach test is cull_3d_raster's, run first) */
-    double R[3][3], limx = RASTER_CLAMP * r->cx / r->fx, limy = RASTER_CLAMP * r->cy / r->fy;
+    double R[3][3], negx, posx, negy, posy;
+    jacobian_clamp(rules, r->width, r->fx, r->cx, &negx, &posx);
+    jacobian_clamp(rules, r->height, r->fy, r->cy, &negy, &posy);
     quaternion_matrix(&m->rotation[4 * i], R);
-    double tx = rr_fmin(limx, rr_fmax(-limx, p.x / p.z)), ty = rr_fmin(limy, rr_fmax(-limy, p.y / p.z));
+    double tx = rr_fmin(posx, rr_fmax(-negx, p.x / p.z)), ty = rr_fmin(posy, rr_fmax(-negy, p.y / p.z));
     vec3 j0 = v3(r->fx / p.z, 0, -r->fx * tx / p.z), j1 = v3(0, r->fy / p.z, -r->fy * ty / p.z);
     double c00 = 0, c01 = 0, c11 = 0;
     for (int a = 0; a < 3; a++) { /* column a of L = M R S, through J */

@@ -18,8 +18,9 @@
  * 3D Gaussians as their rasterizers draw them (the default; graphdeco-inria
  * diff-gaussian-rasterization, its antialiased variant, nerfstudio gsplat):
  * the EWA footprint cov2D = J W Sigma W^T J^T of the camera of the ray's
- * instant, J at the mean's x/z, y/z clamped to 1.3 tan(fov/2), + 0.3 on the
- * diagonal, evaluated at the ray's pixel; ordered by the centre's view
+ * instant, J at the mean's x/z, y/z clamped to 1.3 tan(fov/2) about the
+ * optical axis (gsplat: to 0.3 tan(fov/2) past each image edge), + 0.3 on
+ * the diagonal, evaluated at the ray's pixel; ordered by the centre's view
  * depth; colour from SH in the direction camera -> mean.
  *
  * 3D Gaussians as 3DGRT traces them (Moenne-Loccoz et al. 2024,
@@ -201,7 +202,8 @@ double gaussian_filter_near(double min_scale, double max_scale);
 
 /* How much farther than f / depth a length can project in a rasterizer's
  * footprint: sqrt(1 + lim_x^2 + lim_y^2) f_max / f_min, lim the Jacobian's
- * clamp (1.3 tan(fov / 2)). */
+ * widest clamp (gsplat's: 0.3 tan(fov / 2) past the farther image edge
+ * from the principal point). */
 double gaussian_view_stretch(const camera_view *v);
 
 /* How far from the mean (object space) a ray can pass and still get alpha

@@ -216,6 +216,108 @@ TEST(gaussian_3d_raster_hits_lie_in_their_bounds_at_their_distance)
     gaussian_model_free(&m);
 }
 
+/* A 3D rasterizer's Gaussian under a camera whose principal point is off
+ * the image centre: a needle (scales s, s/100, s/100) along the direction
+ * its Jacobian stretches most, opacity 1, at camera-space mean `mean`, and
+ * the raster position `u` reaches (0 to 1.15) of the way along its
+ * footprint's major axis toward 3.33 sigma (where alpha reaches 1/255).
+ * The Jacobian's clamp as the sources state it (gsplat v1.5.3 persp_proj,
+ * 937e299 gsplat/cuda/include/Utils.cuh:514-524: [-(cx/fx + 0.3 tan),
+ * (W - cx)/fx + 0.3 tan], tan = W / (2 fx); Inria's computeCov2D: +-1.3
+ * tan_fovx about the axis, GAUSSIANS.md's rule for a principal point off
+ * the centre), so that the needle is the one whose footprint is widest. */
+static double clamped_ratio(int gsplat, double ratio, double size, double f, double c)
+{
+    double t = 0.5 * size / f, neg = gsplat ? c / f + 0.3 * t : 1.3 * t, pos = gsplat ? (size - c) / f + 0.3 * t : 1.3 * t;
+    return fmin(pos, fmax(-neg, ratio));
+}
+
+static void needle_at_its_reach(gaussian_model *m, const camera_view *v, unsigned *st, double *x, double *y)
+{
+    int gsplat = m->formation == GAUSSIAN_FORMATION_GSPLAT || m->formation == GAUSSIAN_FORMATION_GSPLAT_ANTIALIASED;
+    double z = 0.3 + 3.7 * uniform(st), rx = 5 * (uniform(st) - 0.5), ry = 5 * (uniform(st) - 0.5);
+    double tx = clamped_ratio(gsplat, rx, v->width, v->fx, v->cx), ty = clamped_ratio(gsplat, ry, v->height, v->fy, v->cy);
+    /* J = diag(fx, fy) / z [[1, 0, -tx], [0, 1, -ty]] stretches (tx, ty, -(tx^2 + ty^2)) the most */
+    vec3 d = v3_normalize(v3(tx, ty, -(tx * tx + ty * ty)));
+    if (!(tx * tx + ty * ty > 1e-6))
+        d = v3(1, 0, 0);
+    double q[4] = {1 + d.x, 0, -d.z, d.y}, len = sqrt(q[0] * q[0] + q[2] * q[2] + q[3] * q[3]); /* x axis -> d */
+    double px = (1 + 14 * uniform(st)) * z / v->fx; /* major sigma 1 to 15 pixels at the axis */
+    for (int k = 0; k < 4; k++)
+        m->rotation[k] = (float)(q[k] / len);
+    m->scale[0] = (float)px, m->scale[1] = m->scale[2] = (float)(px / 100);
+    m->mean[0] = (float)(rx * z), m->mean[1] = (float)(ry * z), m->mean[2] = (float)z;
+    m->opacity[0] = 1.0f;
+    double ax = v->fx * (d.x - tx * d.z) / z * px, ay = v->fy * (d.y - ty * d.z) / z * px; /* the major sigma */
+    double u = 1.15 * uniform(st) * 3.33;
+    *x = v->fx * rx + v->cx + u * ax + (uniform(st) - 0.5), *y = v->fy * ry + v->cy + u * ay + (uniform(st) - 0.5);
+}
+
+/* With the principal point off the centre (a transforms.json camera's),
+ * the cull's reach (gaussian_view_stretch) and the bounds hold the wider
+ * clamp: the cull never drops a hit and every hit lies in its bounds, for
+ * needles beyond either clamp at the edge of their footprints under the
+ * four rasterizer semantics; and the AVX2 lanes' cull keeps exactly the
+ * scalar's, bit for bit, on such Gaussians. */
+TEST(gaussian_3d_raster_culls_and_bounds_hold_an_off_centre_principal_point)
+{
+    const gaussian_formation kinds[] = {GAUSSIAN_FORMATION_3DGS, GAUSSIAN_FORMATION_3DGS_ANTIALIASED,
+                                        GAUSSIAN_FORMATION_GSPLAT, GAUSSIAN_FORMATION_GSPLAT_ANTIALIASED};
+    xform id = {{{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}, {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}, {0, 0, 0}, 0};
+    enum { N = 1027 };
+    unsigned st = 57;
+    long hits = 0, dropped = 0, outside = 0, far_out = 0, mismatched = 0;
+    gaussian_candidate *cand = malloc(N * sizeof *cand);
+    for (int trial = 0; trial < 64; trial++) {
+        camera_view v = {v3(0, 0, 0), {v3(1, 0, 0), v3(0, 1, 0), v3(0, 0, 1)}, 50, 50 + 20 * uniform(&st),
+                         100 * (0.05 + 0.9 * uniform(&st)), 80 * (0.05 + 0.9 * uniform(&st)), 100, 80};
+        gaussian_model one, batch;
+        model_of(&one, 1, GAUSSIAN_3D), model_of(&batch, N, GAUSSIAN_3D);
+        one.formation = batch.formation = kinds[trial % 4];
+        for (int k = 0; k < 400; k++) {
+            double x, y;
+            vec3 p;
+            needle_at_its_reach(&one, &v, &st, &x, &y);
+            vec3 mean = v3(one.mean[0], one.mean[1], one.mean[2]), dir = v3_normalize(v3((x - v.cx) / v.fx, (y - v.cy) / v.fy, 1));
+            gaussian_ray r;
+            gaussian_ray_init(&r, &v, &id, x, y, v3(0, 0, 0), dir);
+            gaussian_hit h;
+            int kept = gaussian_cull(&one, 0, &r, &p), hit = gaussian_hit_after_cull(&one, 0, GAUSSIAN_ORDER_CENTER_DEPTH, &r, p, &h);
+            hits += hit, dropped += hit && !kept;
+            far_out += hit && fmax(fabs(mean.x / mean.z) * v.fx / 50, fabs(mean.y / mean.z) * v.fy / 40) > 1.3;
+            if (hit) {
+                gaussian_view_bound vb = {v3_len(mean), fmin(v.fx, v.fy), gaussian_view_stretch(&v), 0, v3(0, 0, 1), 0};
+                outside += !inside(gaussian_view_bounds(&one, 0, &vb), v3_scale(dir, h.t));
+            }
+        }
+        double x = 100 * uniform(&st), y = 80 * uniform(&st);
+        gaussian_ray r;
+        gaussian_ray_init(&r, &v, &id, x, y, v3(0, 0, 0), v3_normalize(v3((x - v.cx) / v.fx, (y - v.cy) / v.fy, 1)));
+        for (size_t i = 0; i < N; i++) { /* needles about this ray's pixel: their means moved by their offsets */
+            double gx, gy;
+            needle_at_its_reach(&one, &v, &st, &gx, &gy);
+            memcpy(&batch.rotation[4 * i], one.rotation, sizeof(float[4])), memcpy(&batch.scale[3 * i], one.scale, sizeof(float[3]));
+            batch.opacity[i] = one.opacity[0];
+            batch.mean[3 * i] = (float)(one.mean[0] + (x - gx) * one.mean[2] / v.fx);
+            batch.mean[3 * i + 1] = (float)(one.mean[1] + (y - gy) * one.mean[2] / v.fy), batch.mean[3 * i + 2] = one.mean[2];
+            cand[i].prim = (unsigned)i;
+        }
+        size_t kept = gaussian_cull_candidates(&batch, &r, cand, N, 0), j = 0;
+        for (size_t i = 0; i < N; i++) {
+            vec3 p;
+            if (gaussian_cull(&batch, i, &r, &p))
+                mismatched += j >= kept || cand[j].prim != i || memcmp(&cand[j].p, &p, sizeof p), j++;
+        }
+        mismatched += j != kept;
+        gaussian_model_free(&one), gaussian_model_free(&batch);
+    }
+    free(cand);
+    printf("    hits %ld (beyond 1.3 tan(fov/2) %ld): dropped by the cull %ld, outside their bounds %ld; lanes "
+           "differing %ld\n", hits, far_out, dropped, outside, mismatched);
+    CHECK(hits > 5000 && far_out > 1000);
+    CHECK(dropped == 0 && outside == 0 && mismatched == 0);
+}
+
 /* Both 2DGS circle rules and the four rasterizer semantics (3DGRT has no
  * cull and no screen footprint). */
 static const gaussian_formation splatting_formations[6] = {

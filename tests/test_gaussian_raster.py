@@ -187,3 +187,93 @@ def test_semantics_mistakes_are_named(tmp_path, attrs, why):
                      f'<object name="g">\n<gaussianModel file="{ply}" {attrs}/></object></scene>')
     proc = run([scene, "--time", 0, "-o", tmp_path / "x.exr", "--quiet"])
     assert proc.returncode != 0 and why in proc.stderr and "bad.xml:2" in proc.stderr, proc.stderr
+
+
+# ---- a principal point off the image centre (a transforms.json camera) ----
+
+OFF_W, OFF_H, OFF_FX, OFF_FY, OFF_CX, OFF_CY = 48, 36, 40.0, 44.0, 10.0, 28.0  # 14 px left of centre, 10 px below
+
+
+def transforms_camera(tmp_path, R, C, fx=OFF_FX, fy=OFF_FY, cx=OFF_CX, cy=OFF_CY):
+    """The <camera> of a nerfstudio transforms.json of OFF_W x OFF_H pixels with that principal point:
+    its transform_matrix is camera-to-world in OpenGL axes (the OpenCV rotation's y and z columns negated)."""
+    c2w = np.eye(4)
+    c2w[:3, :3], c2w[:3, 3] = R @ np.diag([1.0, -1.0, -1.0]), C
+    doc = {"camera_model": "PINHOLE", "fl_x": fx, "fl_y": fy, "cx": cx, "cy": cy, "w": OFF_W,
+           "h": OFF_H, "frames": [{"file_path": f"{i}.png", "transform_matrix": c2w.tolist()} for i in range(2)]}
+    path = tmp_path / "transforms.json"
+    path.write_text(json.dumps(doc))
+    return f'<camera><trajectory file="{path}"/></camera>'
+
+
+# (x/z, y/z) of single Gaussians between the old clamp (+-1.3 cx/fx, +-1.3 cy/fy = +-0.325, +-0.827)
+# and each rasterizer's: gsplat's x/z in [-0.43, 1.13], y/z in [-0.759, 0.3045] (0.3 tan(fov/2) past
+# each image edge), Inria's +-0.78, +-0.532 (1.3 tan(fov/2) about the axis). Two in the image, two
+# off it whose tails reach in.
+OFF_CENTRE_GAUSSIANS = [((0.9, 0.0), 3.0, (0.25, 0.05, 0.05)), ((-0.38, -0.2), 2.0, (0.5, 0.3, 0.1)),
+                        ((0.0, 0.6), 2.5, (0.3, 0.8, 0.2)), ((0.3, -0.8), 2.0, (0.2, 0.5, 0.3))]
+
+
+def old_clamp(family, x, y, z, fx, fy, W, H, cx, cy):
+    """The clamp refrender had, +-1.3 cx/fx and +-1.3 cy/fy whatever the semantics (a planted error)."""
+    lx, ly = 1.3 * cx / fx, 1.3 * cy / fy
+    return min(lx, max(-lx, x / z)), min(ly, max(-ly, y / z))
+
+
+@pytest.mark.parametrize("semantics", ["gsplat", "gsplat-antialiased", "3dgs", "3dgs-antialiased"])
+@pytest.mark.parametrize("case", range(len(OFF_CENTRE_GAUSSIANS)))
+def test_an_off_centre_principal_point_clamps_as_each_rasterizer_does(tmp_path, semantics, case):
+    """gsplat v1.5.3 clamps the Jacobian's x/z to [-(cx/fx + 0.3 tan), (W - cx)/fx + 0.3 tan], tan =
+    W / (2 fx), y likewise (persp_proj, 937e299 gsplat/cuda/include/Utils.cuh:514-524); Inria's
+    rasterizer has no principal point and its clamp, +-1.3 tan_fovx about the optical axis
+    (forward.cu:82-87), is kept (GAUSSIANS.md; the reference's inria_off_centre_extension: an
+    off-centre projection matrix handed to Inria's CUDA). A single Gaussian between the old and the
+    new limit, rendered through a transforms.json camera, is the reference's within 1e-4."""
+    (tx, ty), z, scale = OFF_CENTRE_GAUSSIANS[case]
+    R, C = rotation(0.1, -0.05, 0.2), np.array([0.3, -0.2, -1.0])
+    rng = np.random.default_rng(71 + case)
+    q = rng.normal(size=4)
+    model = {"mean": (C + R @ np.array([tx * z, ty * z, z]))[None], "scale": np.array([scale]),
+             "rot": (q / np.linalg.norm(q))[None], "opacity": np.array([0.9]), "sh": rng.normal(0, 0.4, (1, 1, 3)),
+             "degree": 0}
+    ply = tmp_path / "model.ply"
+    gsply.write(ply, model)
+    img = sharp_gaussian_render(tmp_path, transforms_camera(tmp_path, R, C), ply, f' kind="3dgs" semantics="{semantics}"')
+    read = gsply.read(ply)
+    render = lambda: ref.render(read, R, C, OFF_FX, OFF_FY, OFF_W, OFF_H, BACKGROUND, VARIANT[semantics],
+                                cx=OFF_CX, cy=OFF_CY, inria_off_centre_extension=True)
+    expect, final_t = render()
+    assert_matches(img, expect, final_t)
+    assert (final_t < 1 - 0.05).sum() > 20  # the Gaussian is drawn in the image
+    old = with_constant("jacobian_tangents", old_clamp, render)[0]
+    assert np.abs(old - expect).max() > 10 * TOL  # and the old clamp draws it otherwise
+
+
+@pytest.mark.parametrize("semantics", ["gsplat", "gsplat-antialiased"])
+def test_an_off_centre_needle_beyond_the_clamp_is_drawn_to_the_end_of_its_tail(tmp_path, semantics):
+    """The cull's reach follows the widest clamp. fx = fy = 40 (no slack from their ratio), principal
+    point (10, 28): gsplat clamps x/z to [-0.385, 1.13] and y/z to [-0.835, 0.335] (persp_proj,
+    Utils.cuh:514-524). A needle whose mean lies beyond the right and top limits, at (1.2, -0.9) z, along
+    the direction the clamped Jacobian stretches most, (t_x, t_y, -(t_x^2 + t_y^2)), opacity 0.99, draws
+    a tail 8 px a sigma into the image down to alpha 1/255. A reach from the old clamp (+-1.3 cx/fx,
+    +-1.3 cy/fy) bounds the footprint by sqrt(1 + 0.325^2 + 0.91^2) / sqrt(1 + 1.13^2 + 0.835^2) = 0.81
+    of it and loses the tail beyond 0.81 x 3.32 sigma (alpha up to 0.03)."""
+    f, cx, cy, z = 40.0, 10.0, 28.0, 2.0
+    t = np.array([1.13, -0.835])
+    d = np.array([t[0], t[1], -(t @ t)])
+    d /= np.linalg.norm(d)
+    # the rotation taking the Gaussian's x axis to d: quaternion (1 + d.x, 0, -d.z, d.y), normalised
+    q = np.array([1 + d[0], 0.0, -d[2], d[1]])
+    sigma = 8.0 / (f / z * np.sqrt(1 + t @ t))  # 8 px along the major axis
+    model = {"mean": np.array([[1.2 * z, -0.9 * z, z]]), "scale": np.array([[sigma, sigma / 4, sigma / 4]]),
+             "rot": (q / np.linalg.norm(q))[None], "opacity": np.array([0.99]), "sh": np.full((1, 1, 3), 1.5),
+             "degree": 0}
+    ply = tmp_path / "model.ply"
+    gsply.write(ply, model)
+    R, C = np.eye(3), np.zeros(3)
+    camera = transforms_camera(tmp_path, R, C, f, f, cx, cy)
+    img = sharp_gaussian_render(tmp_path, camera, ply, f' kind="3dgs" semantics="{semantics}"')
+    expect, final_t = ref.render(gsply.read(ply), R, C, f, f, OFF_W, OFF_H, BACKGROUND, VARIANT[semantics], cx=cx,
+                                 cy=cy)
+    assert_matches(img, expect, final_t)
+    assert ((final_t < 1 - 1 / 255) & (final_t > 1 - 0.03)).sum() > 30  # the tail's end is in the image
