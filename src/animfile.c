@@ -374,6 +374,23 @@ static int header_statement(lexer *lx, char w[][ANIM_WORD], int n, units *u)
     return 0; /* mayaVersion, startTime, endTime, ...: informational */
 }
 
+/* Maya exports a visibility curve with the transforms. refrender draws every
+ * object at every time, so a curve that holds 1 (visible) throughout changes
+ * nothing and is skipped without a word; any other would hide the object
+ * somewhere, which refrender cannot do, and is warned about like every
+ * unsupported curve. Constant 1: every key is 1, and the curve neither
+ * slopes (its slope bound is 0) nor jumps. */
+static int always_visible(const char *leaf, curve *c)
+{
+    rr_error sub;
+    if (strcmp(leaf, "visibility") || c->count == 0 || curve_prepare(c, &sub))
+        return 0;
+    for (int i = 0; i < c->count; i++)
+        if (c->keys[i].value != 1.0)
+            return 0;
+    return curve_max_slope(c) == 0.0 && curve_is_continuous(c);
+}
+
 /* anim <attribute path> [<leaf> <node> <row> <child> <index>]; [animData {...}] */
 static int parse_anim(lexer *lx, keyframes *kf, char w[][ANIM_WORD], int n, const units *u, int *seen, int selected)
 {
@@ -387,19 +404,19 @@ static int parse_anim(lexer *lx, keyframes *kf, char w[][ANIM_WORD], int n, cons
     int ch = selected ? channel_of(leaf) : -2; /* -2: another node's curve, read and dropped */
     curve skipped = {0, NULL, INF_CONSTANT, INF_CONSTANT, 0, 0.0, 0.0};
     curve_reader r = {ch >= 0 ? &kf->ch[ch] : &skipped, ch, 1.0, u->seconds_per_frame, u->radians_per_unit, 0};
-    if (ch == -1)
-        rr_warn(lx->warnings, "%s:%d: skipping curve of unsupported attribute '%s'", lx->name, line, w[1]);
-    else if (ch >= 0 && seen[ch])
+    if (ch >= 0 && seen[ch])
         return rr_fail(lx->err, "%s:%d: a second curve for '%s' (first at line %d)", lx->name, line, leaf, seen[ch]);
     else if (ch >= 0)
         seen[ch] = line;
     r.value_scale = ch >= 0 && ch <= CH_TZ ? u->meters_per_unit : ch >= CH_RX && ch <= CH_RZ ? u->radians_per_unit : 1.0;
     int rc = parse_anim_data(lx, &r, u);
+    r.c->weighted = r.weighted;
+    if (!rc && ch == -1 && !always_visible(leaf, &skipped))
+        rr_warn(lx->warnings, "%s:%d: skipping curve of unsupported attribute '%s'", lx->name, line, w[1]);
     curve_free(&skipped);
     if (rc)
         return -1;
     rr_error sub;
-    r.c->weighted = r.weighted;
     r.c->clamp_flat = ch >= 0 ? keyframes_clamp_flat(ch) : 0.0;
     if (ch >= 0 && curve_prepare(r.c, &sub))
         return rr_fail(lx->err, "%s:%d: curve '%s': %s", lx->name, line, leaf, sub.msg);
