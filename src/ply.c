@@ -385,10 +385,31 @@ static int has_slots(const int *present, int first, int n)
     return 1;
 }
 
+typedef struct {
+    vec3 default_color;
+    pointmodel *m;
+    unsigned gaussian_properties; /* bit i: the header declares GAUSSIAN_MARKS[i] */
+} surfel_sink;
+
+/* Properties every trained 3DGS/2DGS PLY has (the official save_ply) and no
+ * surfel file needs: a file with all three is a Gaussian-splat model. */
+static const char *const GAUSSIAN_MARKS[] = {"scale_0", "rot_0", "opacity"};
+
+static int note_gaussian_property(void *user, const char *path, long line, const char *name, rr_error *err)
+{
+    (void)path, (void)line, (void)err;
+    surfel_sink *sink = user;
+    for (size_t i = 0; i < sizeof GAUSSIAN_MARKS / sizeof *GAUSSIAN_MARKS; i++)
+        if (!strcmp(name, GAUSSIAN_MARKS[i]))
+            sink->gaussian_properties |= 1u << i;
+    return 0;
+}
+
 /* Checks the vertex element declares what a splat needs. */
 static int check_surfel_properties(void *user, const char *p, const int *present, size_t count, rr_error *err)
 {
-    (void)user, (void)count;
+    const surfel_sink *sink = user;
+    (void)count;
     if (!has_slots(present, SLOT_X, 3))
         return rr_fail(err, "%s: vertex element lacks one of the required properties x y z", p);
     int any_color = present[SLOT_R] || present[SLOT_G] || present[SLOT_B];
@@ -401,6 +422,9 @@ static int check_surfel_properties(void *user, const char *p, const int *present
         return rr_fail(err, "%s: elliptical splats need all of ux uy uz vx vy vz", p);
     if (any_axis)
         return 0;
+    if (!present[SLOT_RADIUS] && sink->gaussian_properties == 7)
+        return rr_fail(err, "%s: vertices have no splat size, but scale_0, rot_0 and opacity: this is a trained "
+                            "Gaussian-splat model; name it with <gaussianModel file=\"...\"/>, not <pointModel>", p);
     if (!present[SLOT_RADIUS])
         return rr_fail(err, "%s: vertices have no splat size: add a 'radius' property "
                             "(with nx ny nz) or tangent axes 'ux uy uz vx vy vz'", p);
@@ -437,10 +461,6 @@ static int check_element_size(ply_reader *r, const ply_element *e)
     return 0;
 }
 
-typedef struct {
-    vec3 default_color;
-    pointmodel *m;
-} surfel_sink;
 
 static int add_surfel(void *user, const double *v, const int *present, char *why, size_t why_size)
 {
@@ -565,8 +585,8 @@ int ply_parse_vertices(const char *name, const char *data, size_t len, const ply
 
 int ply_parse(const char *name, const char *data, size_t len, vec3 default_color, pointmodel *m, rr_error *err)
 {
-    surfel_sink sink = {default_color, m};
-    ply_visitor v = {check_surfel_properties, add_surfel, &sink, NULL};
+    surfel_sink sink = {default_color, m, 0};
+    ply_visitor v = {check_surfel_properties, add_surfel, &sink, note_gaussian_property};
     return ply_parse_vertices(name, data, len, &surfel_schema, &v, err);
 }
 
@@ -586,8 +606,8 @@ int ply_read_vertices(const char *path, const ply_schema *schema, const ply_visi
 
 int ply_read(const char *path, vec3 default_color, pointmodel *m, uint64_t *content_hash, rr_error *err)
 {
-    surfel_sink sink = {default_color, m};
-    ply_visitor v = {check_surfel_properties, add_surfel, &sink, NULL};
+    surfel_sink sink = {default_color, m, 0};
+    ply_visitor v = {check_surfel_properties, add_surfel, &sink, note_gaussian_property};
     return ply_read_vertices(path, &surfel_schema, &v, content_hash, err);
 }
 

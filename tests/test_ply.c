@@ -152,6 +152,26 @@ TEST(ply_missing_splat_size)
         "property float y\nproperty float z\nend_header\n0 0 1\n"), "no splat size"));
 }
 
+/* A trained Gaussian-splat PLY (the official save_ply's x y z, opacity,
+ * scale_*, rot_*) named as a surfel model says where it belongs; a file
+ * with only some of those properties gets the surfel advice. */
+TEST(ply_gaussian_model_as_surfels_names_gaussianModel)
+{
+    const char *gs = "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\n"
+                     "property float f_dc_0\nproperty float f_dc_1\nproperty float f_dc_2\nproperty float opacity\n"
+                     "property float scale_0\nproperty float scale_1\nproperty float scale_2\nproperty float rot_0\n"
+                     "property float rot_1\nproperty float rot_2\nproperty float rot_3\nend_header\n"
+                     "0 0 0 0 0 0 1 -3 -3 -3 1 0 0 0\n";
+    CHECK(fails_with(write_text("g.ply", gs), "no splat size, but scale_0, rot_0 and opacity"));
+    CHECK(fails_with(write_text("g.ply", gs), "<gaussianModel file="));
+    const char *partial = "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
+                          "property float z\nproperty float opacity\nproperty float scale_0\nend_header\n0 0 1 1 1\n";
+    pointmodel m;
+    const char *msg = read_result(write_text("p.ply", partial), &m);
+    CHECK(strstr(msg, "add a 'radius' property") && !strstr(msg, "gaussianModel"));
+    pointmodel_free(&m);
+}
+
 TEST(ply_nan_value)
 {
     CHECK(fails_with(write_text("n.ply", HEADER_XYZNR "end_header\n0 nan 0 0 0 1 0.5\n1 0 0 0 0 1 1\n"), "NaN"));
