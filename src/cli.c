@@ -6,6 +6,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -79,6 +80,27 @@ int cli_check_writable(const char *path, rr_error *err)
     close(fd);
     unlink(probe);
     return 0;
+}
+
+/* The extension of path's base name ("" if it has none; a leading dot,
+ * as in ".hidden", is no extension). */
+static const char *extension_of(const char *path)
+{
+    const char *slash = strrchr(path, '/'), *base = slash ? slash + 1 : path, *dot = strrchr(base, '.');
+    return dot && dot != base ? dot + 1 : "";
+}
+
+int cli_check_exr_name(const char *opt, const char *path, int has_preview, rr_error *err)
+{
+    const char *ext = extension_of(path);
+    if (!*ext || !strcasecmp(ext, "exr"))
+        return 0;
+    int stem = (int)(ext - 1 - path);
+    if (!has_preview)
+        return rr_fail(err, "%s %s: refrender writes OpenEXR only, not .%s: use %s %.*s.exr", opt, path, ext, opt,
+                       stem, path);
+    return rr_fail(err, "%s %s: refrender writes OpenEXR only, not .%s: use %s %.*s.exr, and --preview %.*s.png for "
+                        "an 8-bit sRGB preview beside it", opt, path, ext, opt, stem, path, stem, path);
 }
 
 /* The absolute name path has or would have: the real path of its directory
@@ -158,4 +180,24 @@ void cli_frame_path(const char *pattern, int frame, char *out, size_t size)
         return;
     }
     snprintf(out, size, zero ? "%.*s%0*d%s" : "%.*s%*d%s", (int)(a - pattern), pattern, width, frame, b);
+}
+
+void cli_suggest_option(const char *prog, const char *arg, const struct option *longopts)
+{
+    enum { MAX_OPTIONS = 64 };
+    const char *names[MAX_OPTIONS + 1];
+    char word[64];
+    int n = 0;
+    if (!arg || strncmp(arg, "--", 2) || snprintf(word, sizeof word, "%.*s", (int)strcspn(arg + 2, "="), arg + 2) >=
+                                             (int)sizeof word)
+        return;
+    for (const struct option *o = longopts; o->name && n < MAX_OPTIONS; o++) {
+        if (!strncmp(o->name, word, strlen(word)))
+            return; /* the option itself, or an abbreviation of it */
+        names[n++] = o->name;
+    }
+    names[n] = NULL;
+    const char *near = rr_nearest_name(word, names);
+    if (near)
+        fprintf(stderr, "%s: did you mean '--%s'?\n", prog, near);
 }

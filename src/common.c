@@ -1,5 +1,7 @@
 #include "common.h"
 
+#include <ctype.h>
+#include <limits.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -204,3 +206,53 @@ static volatile sig_atomic_t *interrupt_flag;
 void rr_interrupt_watch(volatile sig_atomic_t *flag) { interrupt_flag = flag; }
 
 int rr_interrupted(void) { return interrupt_flag && *interrupt_flag; }
+
+/* Optimal string alignment distance (Damerau-Levenshtein without moving a
+ * letter twice), case-insensitive; words longer than the row are far. */
+static int edit_distance(const char *a, const char *b)
+{
+    enum { MAX = 64 };
+    size_t la = strlen(a), lb = strlen(b);
+    if (la >= MAX || lb >= MAX)
+        return INT_MAX;
+    int d[MAX][MAX];
+    for (size_t i = 0; i <= la; i++)
+        d[i][0] = (int)i;
+    for (size_t j = 0; j <= lb; j++)
+        d[0][j] = (int)j;
+    for (size_t i = 1; i <= la; i++)
+        for (size_t j = 1; j <= lb; j++) {
+            int ai = tolower((unsigned char)a[i - 1]), bj = tolower((unsigned char)b[j - 1]);
+            int best = d[i - 1][j - 1] + (ai != bj);
+            best = d[i - 1][j] + 1 < best ? d[i - 1][j] + 1 : best;
+            best = d[i][j - 1] + 1 < best ? d[i][j - 1] + 1 : best;
+            if (i > 1 && j > 1 && ai == tolower((unsigned char)b[j - 2]) && tolower((unsigned char)a[i - 2]) == bj &&
+                d[i - 2][j - 2] + 1 < best)
+                best = d[i - 2][j - 2] + 1;
+            d[i][j] = best;
+        }
+    return d[la][lb];
+}
+
+const char *rr_nearest_name(const char *word, const char *const *names)
+{
+    const char *best = NULL;
+    int best_d = INT_MAX;
+    for (const char *const *p = names; *p; p++) {
+        int limit = (int)strlen(*p) / 3, d = edit_distance(word, *p);
+        limit = limit < 1 ? 1 : limit > 3 ? 3 : limit;
+        if (d <= limit && d < best_d)
+            best = *p, best_d = d;
+    }
+    return best;
+}
+
+const char *rr_did_you_mean(const char *word, const char *const *names, const char *prefix, const char *suffix,
+                            char *buf, size_t size)
+{
+    const char *near = rr_nearest_name(word, names);
+    if (!near)
+        return "";
+    snprintf(buf, size, " (did you mean '%s%s%s'?)", prefix, near, suffix);
+    return buf;
+}

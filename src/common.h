@@ -124,6 +124,19 @@ int rr_round_trip_representative(double *v, int n, void (*f)(const double *in, d
 /* out = a b for 4x4 matrices (out may not alias a or b). */
 void mat4_mul(double a[4][4], double b[4][4], double out[4][4]);
 
+/* "Did you mean": of the NULL-terminated names, the one nearest to word, or
+ * NULL when none is near enough to be a slip of the keyboard. Near: an
+ * edit distance (insertions, deletions, substitutions and swaps of two
+ * neighbours, letter case ignored) of at most a third of the name's length,
+ * at least 1 and at most 3; ties go to the first. One rule for the command
+ * line's options and the scene file's elements and attributes. */
+const char *rr_nearest_name(const char *word, const char *const *names);
+/* " (did you mean 'NAME'?)" with the nearest name quoted as given by
+ * prefix (e.g. "--" for options, "<" ">" for elements), or "" when none is
+ * near; formatted into buf. */
+const char *rr_did_you_mean(const char *word, const char *const *names, const char *prefix, const char *suffix,
+                            char *buf, size_t size);
+
 /* Monotonic wall-clock seconds (for progress, checkpoints and timings). */
 double rr_seconds(void);
 

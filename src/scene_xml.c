@@ -5,10 +5,12 @@
 
 #include <libxml/parser.h>
 #include <libxml/xmlerror.h>
+#include <errno.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 #include "animfile.h"
 #include "inputfile.h"
@@ -257,6 +259,18 @@ static int generate_shape(xml_ctx *c, xmlNodePtr n, const char *kind, scene_obje
     return rc ? xml_fail(c, n, "%s", sub.msg) : 0;
 }
 
+/* The scanned models of the scene suite are converted by `make scenes` into
+ * scenes/models/ (never committed): a model missing there says how to make
+ * it, the first thing a fresh clone runs into. */
+static const char *missing_model_hint(const char *path)
+{
+    const char *dir = strstr(path, "scenes/models/");
+    struct stat st;
+    if (!dir || (dir != path && dir[-1] != '/') || stat(path, &st) == 0 || errno != ENOENT)
+        return "";
+    return " (run `make scenes` to convert the scanned models)";
+}
+
 static int parse_point_model(xml_ctx *c, xmlNodePtr n, scene_object *o)
 {
     static const char *const ok[] = {"file", "generate", "count", "radius", "minor_radius",
@@ -276,7 +290,8 @@ static int parse_point_model(xml_ctx *c, xmlNodePtr n, scene_object *o)
             return -1;
         rr_error sub;
         if (ply_read(path, default_color, &o->model, c->inputs_hash, &sub))
-            return rr_fail(c->err, "%s (point model of %s:%ld)", sub.msg, c->name, xmlGetLineNo(n));
+            return rr_fail(c->err, "%s (point model of %s:%ld)%s", sub.msg, c->name, xmlGetLineNo(n),
+                           missing_model_hint(path));
         if (scene_add_input(c->sc, path))
             return xml_fail(c, n, "out of memory");
         snprintf(o->model_file, sizeof o->model_file, "%s", path);
@@ -284,11 +299,14 @@ static int parse_point_model(xml_ctx *c, xmlNodePtr n, scene_object *o)
     if ((has_kind = xml_attr_text(c, n, "generate", kind, sizeof kind)) < 0 ||
         (has_kind && generate_shape(c, n, kind, o)))
         return -1;
+    char near[128];
     for (xmlNodePtr k = n->children; k; k = k->next) {
         if (!xml_is_element(k))
             continue;
         if (strcmp(xml_elname(k), "splat"))
-            return xml_fail(c, k, "unknown element inside <pointModel> (expected splat)");
+            return xml_fail(c, k, "unknown element inside <pointModel> (expected splat)%s",
+                            rr_did_you_mean(xml_elname(k), (const char *const[]){"splat", NULL}, "<", ">", near,
+                                            sizeof near));
         if (parse_splat(c, k, &o->model, default_color))
             return -1;
         o->inline_splats++;
@@ -372,7 +390,8 @@ static int parse_gaussian_model(xml_ctx *c, xmlNodePtr n, scene_object *o)
         return -1;
     rr_error sub;
     if (gaussian_read(path, kind, &o->gaussians, c->inputs_hash, &sub))
-        return rr_fail(c->err, "%s (gaussianModel of %s:%ld)", sub.msg, c->name, xmlGetLineNo(n));
+        return rr_fail(c->err, "%s (gaussianModel of %s:%ld)%s", sub.msg, c->name, xmlGetLineNo(n),
+                       missing_model_hint(path));
     if (o->gaussians.kind == GAUSSIAN_3D && xmlHasProp(n, (const xmlChar *)"order"))
         return xml_fail(c, n, "'order' is for 2D Gaussian models: 3D ones go by the centre's view depth (the "
                                "rasterizers) or by the distance to each Gaussian's maximum response (3dgrt)");
@@ -398,8 +417,10 @@ static int parse_object_child(xml_ctx *c, xmlNodePtr k, scene_object *o, int *sh
         return parse_material(c, k, &o->mat);
     if (!strcmp(name, "animation"))
         return xml_parse_animation(c, k, &o->anim);
+    static const char *const known[] = {"pointModel", "gaussianModel", "sphere", "material", "animation", NULL};
+    char near[128];
     return xml_fail(c, k, "unknown element inside <object> (expected pointModel, gaussianModel, sphere, "
-                           "material or animation)");
+                           "material or animation)%s", rr_did_you_mean(name, known, "<", ">", near, sizeof near));
 }
 
 static int parse_object(xml_ctx *c, xmlNodePtr n, scene *s)
@@ -484,8 +505,11 @@ static int parse_scene_child(xml_ctx *c, xmlNodePtr k, scene *s)
     if (!strcmp(name, "light")) return parse_light(c, k, s);
     if (!strcmp(name, "render")) return parse_render(c, k, s);
     if (!strcmp(name, "object")) return parse_object(c, k, s);
+    static const char *const known[] = {"camera", "shutter", "frames", "background", "ambient", "light", "render",
+                                        "object", NULL};
+    char near[128];
     return xml_fail(c, k, "unknown element (expected camera, shutter, frames, background, ambient, "
-                           "light, render or object)");
+                           "light, render or object)%s", rr_did_you_mean(name, known, "<", ">", near, sizeof near));
 }
 
 static int parse_scene(xml_ctx *c, xmlDocPtr doc, scene *s)

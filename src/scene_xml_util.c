@@ -24,8 +24,10 @@ int xml_check_attributes(xml_ctx *c, xmlNodePtr n, const char *const *allowed)
         int ok = 0;
         for (const char *const *p = allowed; *p && !ok; p++)
             ok = !strcmp(*p, (const char *)a->name);
+        char near[128];
         if (!ok)
-            return xml_fail(c, n, "unknown attribute '%s'", (const char *)a->name);
+            return xml_fail(c, n, "unknown attribute '%s'%s", (const char *)a->name,
+                            rr_did_you_mean((const char *)a->name, allowed, "", "", near, sizeof near));
     }
     return 0;
 }

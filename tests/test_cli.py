@@ -198,3 +198,69 @@ def test_sigterm_while_loading_a_large_model_exits_130(tmp_path):
     _, err = proc.communicate(timeout=60)
     assert proc.returncode == 130, (proc.returncode, err)
     assert "interrupted" in err and not (tmp_path / "o.exr").exists()
+
+
+def test_an_output_name_refrender_will_not_write_is_refused_before_rendering(tmp_path):
+    """-o names the EXR refrender writes: an out.png used to exit 0 with an
+    EXR under that name, which every viewer trusting the name fails to open.
+    Refused before the scene is even read (a missing scene is not the error
+    reported), naming the option and the extension, suggesting .exr and
+    --preview; nothing is written. The same for merge's -o and for
+    --checkpoint."""
+    scene = tmp_path / "s.xml"
+    scene.write_text(TINY)
+    for name in ["out.png", "out.PNG", "out.tif", "dir.exr/out.jpg"]:
+        (tmp_path / "dir.exr").mkdir(exist_ok=True)
+        proc = run([scene, "--spp", 1, "--tspp", 1, "-o", tmp_path / name])
+        ext = name.rsplit(".", 1)[1]
+        assert proc.returncode == 1, (name, proc.stderr)
+        assert f"-o {tmp_path / name}: refrender writes OpenEXR only, not .{ext}" in proc.stderr
+        stem = str(tmp_path / name)[:-len(ext) - 1]
+        assert f"use -o {stem}.exr, and --preview {stem}.png" in proc.stderr
+    proc = run([tmp_path / "missing.xml", "-o", tmp_path / "a.png"])
+    assert proc.returncode == 1 and "OpenEXR only" in proc.stderr and "missing.xml" not in proc.stderr
+    proc = run([scene, "--checkpoint", tmp_path / "c.png", "-o", tmp_path / "a.exr"])
+    assert proc.returncode == 1 and "--checkpoint" in proc.stderr and ".png" in proc.stderr
+    proc = run(["merge", tmp_path / "a.exr", "-o", tmp_path / "m.png"])
+    assert proc.returncode == 1 and f"-o {tmp_path / 'm.png'}: refrender writes OpenEXR only" in proc.stderr
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["dir.exr", "s.xml"]
+    assert not list((tmp_path / "dir.exr").iterdir())
+    # what it does write: .exr in any case, or no extension at all
+    for name in ["a.exr", "b.EXR", "c"]:
+        assert run([scene, "--spp", 1, "--tspp", 1, "--quiet", "-o", tmp_path / name]).returncode == 0, name
+        assert (tmp_path / name).read_bytes()[:4] == b"\x76\x2f\x31\x01"  # the OpenEXR magic number
+
+
+def test_a_misspelt_option_gets_a_did_you_mean():
+    """pbrt's --cropwindow and slips of the keyboard name the option meant
+    (common.c's rr_nearest_name, the rule the scene file's names use); an
+    option missing its value or an ambiguous abbreviation keeps getopt's own
+    message, and a word near no option gets no guess."""
+    for args, meant in [(["--cropwindow", "0,1,0,1"], "--crop-window"), (["--samplr", "sobol"], "--sampler"),
+                        (["--previw=a.png"], "--preview"), (["gen", "sphere", "--cout", "5"], "--count"),
+                        (["surfels", "m.obj", "--overlpa", "2"], "--overlap"), (["merge", "--ouptut", "x.exr"], "--output")]:
+        proc = run(args)
+        assert proc.returncode == 2 and f"did you mean '{meant}'?" in proc.stderr, (args, proc.stderr)
+    for args in [["--spp"], ["--s", "1"], ["--no-such-option"]]:
+        proc = run(args)
+        assert proc.returncode == 2 and "did you mean" not in proc.stderr, (args, proc.stderr)
+
+
+def test_the_bundled_animated_scene_renders_without_warnings(tmp_path):
+    """scenes/animated.xml's rolling ball carries Maya's visibility curve,
+    constant 1: it changes nothing refrender draws and is not warned about
+    (a curve that hides the object is: tests/test_animfile.c)."""
+    proc = run([ROOT / "scenes" / "animated.xml", "--res", "8x6", "--spp", 1, "--tspp", 1, "-o", tmp_path / "a.exr"])
+    assert proc.returncode == 0 and "warning" not in proc.stderr, proc.stderr
+
+
+def test_a_missing_suite_model_says_to_run_make_scenes(tmp_path):
+    """A fresh clone that skipped `make scenes` is told to run it, by the
+    scene that needs the model (a copy of a suite scene whose models are
+    not made)."""
+    (tmp_path / "scenes").mkdir()
+    scene = tmp_path / "scenes" / "diagonal.xml"
+    scene.write_text((ROOT / "scenes" / "diagonal.xml").read_text())
+    proc = run([scene, "-o", tmp_path / "a.exr"])
+    assert proc.returncode == 1
+    assert "scenes/models/bunny.ply: cannot open" in proc.stderr and "run `make scenes`" in proc.stderr

@@ -10,6 +10,32 @@
 #include "../src/common.h"
 #include "harness.h"
 
+/* "Did you mean": distances worked by hand (one deletion, one swap of
+ * neighbours, case), the limit a third of the name's length (at least 1,
+ * at most 3), ties to the first name. */
+TEST(nearest_name_takes_slips_of_the_keyboard_and_nothing_else)
+{
+    const char *const opts[] = {"crop-window", "spp", "tspp", "sampler", "seed", NULL};
+    CHECK(rr_nearest_name("cropwindow", opts) == opts[0]); /* pbrt's name: one deletion */
+    CHECK(rr_nearest_name("samlper", opts) == opts[3]);    /* one swap */
+    CHECK(rr_nearest_name("SPP", opts) == opts[1]);        /* case */
+    CHECK(rr_nearest_name("sppp", opts) == opts[1]);       /* spp 1, tspp 2 */
+    CHECK(rr_nearest_name("sed", opts) == opts[4]);        /* seed 1 (limit 1), spp 2 */
+    CHECK(rr_nearest_name("output", opts) == NULL);
+    CHECK(rr_nearest_name("sp", opts) == opts[1]);         /* spp 1 */
+    CHECK(rr_nearest_name("s", opts) == NULL);             /* spp 2 > its limit 1 */
+    const char *const sigma[] = {"kernel_sigma", NULL};  /* limit min(3, 12/3) = 3 */
+    CHECK(rr_nearest_name("kernelSigma", sigma) == sigma[0]); /* 1 */
+    CHECK(rr_nearest_name("krnelsigam", sigma) == sigma[0]);  /* 3: e, _, a<->m */
+    CHECK(rr_nearest_name("kernsigm", sigma) == NULL);        /* 4: e, l, _, a */
+    const char *const tie[] = {"seed", "send", NULL};
+    CHECK(rr_nearest_name("sed", tie) == tie[0]);
+    char buf[64];
+    CHECK(!strcmp(rr_did_you_mean("objet", (const char *const[]){"object", NULL}, "<", ">", buf, sizeof buf),
+                  " (did you mean '<object>'?)"));
+    CHECK(!strcmp(rr_did_you_mean("bogus", (const char *const[]){"object", NULL}, "<", ">", buf, sizeof buf), ""));
+}
+
 TEST(dchecks_are_on_in_test_builds_and_abort_with_the_values)
 {
 #ifndef RR_DCHECKS

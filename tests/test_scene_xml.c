@@ -73,6 +73,47 @@ TEST(scene_generated_model_and_thesis_style_path)
                      "./models/missing.ply: cannot open"));
 }
 
+/* A misspelt attribute or element is named with the nearest one it may
+ * mean (common.c's rr_nearest_name); a name near none gets no guess. */
+TEST(scene_typos_get_a_did_you_mean)
+{
+    CHECK(fails_with("<scene>\n<camera positon='0 0 5'/>\n</scene>",
+                     "mem.xml:2: <camera>: unknown attribute 'positon' (did you mean 'position'?)"));
+    CHECK(fails_with("<scene><render kernelSigma='0.5'/></scene>", "(did you mean 'kernel_sigma'?)"));
+    CHECK(fails_with("<scene>\n<objet/>\n</scene>", "mem.xml:2: <objet>: unknown element (expected camera, "
+                     "shutter, frames, background, ambient, light, render or object) (did you mean '<object>'?)"));
+    CHECK(fails_with("<scene><object><gaussianmodel file='a.ply'/></object></scene>",
+                     "(did you mean '<gaussianModel>'?)"));
+    CHECK(fails_with("<scene><object><sphere radius='1'/><animation><rotaton axis='0 1 0'/></animation></object>"
+                     "</scene>", "(did you mean '<rotation>'?)"));
+    CHECK(fails_with("<scene><camera><trajectroy file='a.tum'/></camera></scene>", "(did you mean '<trajectory>'?)"));
+    CHECK(fails_with("<scene><object><sphere radius='1'/><animation><keyframes><kye time='0'/></keyframes>"
+                     "</animation></object></scene>", "(did you mean '<key>'?)"));
+    CHECK(fails_with("<scene><object><pointModel><splats center='0 0 0'/></pointModel></object></scene>",
+                     "(did you mean '<splat>'?)"));
+    CHECK(!fails_with("<scene>\n<bogus/>\n</scene>", "did you mean"));
+    CHECK(!fails_with("<scene><camera velocity='1 0 0'/></scene>", "did you mean"));
+}
+
+/* The scene suite's scanned models are made by `make scenes` into
+ * scenes/models/: a model missing there says so; one missing elsewhere
+ * gets no such hint. */
+TEST(a_missing_suite_model_says_make_scenes)
+{
+    const char *xml = "<scene><object><pointModel>models/refrender-never-made.ply</pointModel></object></scene>";
+    scene s;
+    rr_error e = {{0}};
+    CHECK(scene_load_memory(xml, strlen(xml), "scenes/x.xml", "scenes", &s, &e) != 0);
+    CHECK(strstr(e.msg, "scenes/models/refrender-never-made.ply: cannot open") &&
+          strstr(e.msg, "(run `make scenes` to convert the scanned models)"));
+    const char *gs = "<scene><object><gaussianModel file='models/refrender-never-made.ply'/></object></scene>";
+    CHECK(scene_load_memory(gs, strlen(gs), "x.xml", "/tmp/scenes", &s, &e) != 0);
+    CHECK(strstr(e.msg, "(run `make scenes` to convert the scanned models)"));
+    CHECK(fails_with(xml, "./models/refrender-never-made.ply: cannot open") && !fails_with(xml, "make scenes"));
+    CHECK(scene_load_memory(xml, strlen(xml), "x.xml", "/tmp/notscenes", &s, &e) != 0);
+    CHECK(!strstr(e.msg, "make scenes"));
+}
+
 TEST(scene_errors_name_file_and_line)
 {
     CHECK(fails_with("<scene>\n<camera fov='abc'/>\n</scene>", "mem.xml:2: <camera>: attribute 'fov'"));

@@ -65,7 +65,11 @@ int cmd_gen(int argc, char **argv)
     int c;
     while ((c = getopt_long(argc, argv, "ho:", longopts, NULL)) != -1) {
         if (c == 'h') { gen_usage(stdout); return 0; }
-        if (c == '?') { fputs("Try 'refrender gen --help'.\n", stderr); return 2; }
+        if (c == '?') {
+            cli_suggest_option("refrender gen", argv[optind - 1], longopts);
+            fputs("Try 'refrender gen --help'.\n", stderr);
+            return 2;
+        }
         if (gen_option(c, optarg, &p, &o, &err)) {
             fprintf(stderr, "refrender gen: %s\n", err.msg);
             return 2;

@@ -250,7 +250,11 @@ static int parse_args(int argc, char **argv, render_options *o)
     while ((c = getopt_long(argc, argv, "hD:o:", longopts, NULL)) != -1) {
         if (c == 'h') { usage(stdout); return 1; }
         if (c == OPT_VERSION) { printf("refrender %s\n", RR_VERSION); return 1; }
-        if (c == '?') { fputs("Try 'refrender --help'.\n", stderr); return 2; }
+        if (c == '?') {
+            cli_suggest_option("refrender", argv[optind - 1], longopts);
+            fputs("Try 'refrender --help'.\n", stderr);
+            return 2;
+        }
         if (parse_option(c, optarg, o, &err)) {
             fprintf(stderr, "refrender: %s\n", err.msg);
             return 2;
@@ -729,7 +733,9 @@ int cmd_render(int argc, char **argv)
     scene s;
     char cmdline[2048];
     join_args(argc, argv, cmdline, sizeof cmdline);
-    if (cli_check_writable(o.output, &err) || (o.preview && cli_check_writable(o.preview, &err)) ||
+    if (cli_check_exr_name("-o", o.output, 1, &err) ||
+        (o.checkpoint && cli_check_exr_name("--checkpoint", o.checkpoint, 0, &err)) ||
+        cli_check_writable(o.output, &err) || (o.preview && cli_check_writable(o.preview, &err)) ||
         (o.preview && preview_check_format(o.preview, &err)) ||
         (o.checkpoint && cli_check_writable(o.checkpoint, &err)) ||
         scene_load_file_params(o.scene, &o.params, &s, &err)) {

@@ -157,14 +157,18 @@ int cmd_merge(int argc, char **argv)
         if (c == 'h') { merge_usage(stdout); return 0; }
         if (c == 'o') out = optarg;
         else if (c == 'q') quiet = 1;
-        else { fputs("Try 'refrender merge --help'.\n", stderr); return 2; }
+        else {
+            cli_suggest_option("refrender merge", argv[optind - 1], longopts);
+            fputs("Try 'refrender merge --help'.\n", stderr);
+            return 2;
+        }
     }
     if (!out || optind >= argc) {
         fputs("refrender merge: need STATE files and -o OUT.exr; try 'refrender merge --help'\n", stderr);
         return 2;
     }
     rr_error err = {{0}};
-    if (cli_check_writable(out, &err) || cli_refuse_overwriting_inputs(out, argv + optind, argc - optind, &err) ||
+    if (cli_check_exr_name("-o", out, 0, &err) || cli_check_writable(out, &err) || cli_refuse_overwriting_inputs(out, argv + optind, argc - optind, &err) ||
         merge_files(argv + optind, argc - optind, out, quiet, &err)) {
         fprintf(stderr, "refrender merge: %s\n", err.msg);
         return 1;

@@ -104,7 +104,11 @@ int cmd_surfels(int argc, char **argv)
     int c;
     while ((c = getopt_long(argc, argv, "ho:", longopts, NULL)) != -1) {
         if (c == 'h') { surfels_usage(stdout); return 0; }
-        if (c == '?') { fputs("Try 'refrender surfels --help'.\n", stderr); return 2; }
+        if (c == '?') {
+            cli_suggest_option("refrender surfels", argv[optind - 1], longopts);
+            fputs("Try 'refrender surfels --help'.\n", stderr);
+            return 2;
+        }
         if (surfels_option(c, optarg, &o, &err)) {
             fprintf(stderr, "refrender surfels: %s\n", err.msg);
             return 2;
