@@ -6,6 +6,7 @@ moving camera. The shutter is 1e-7 long, so the exported time is the
 rendered one."""
 import hashlib
 import json
+import re
 
 import numpy as np
 import pytest
@@ -203,3 +204,44 @@ def test_export_writes_all_its_outputs_or_none(tmp_path):
         assert (tmp_path / "e.json").read_bytes() == PREVIOUS and not (tmp_path / "y.tum").exists(), args
         assert [p.name for p in tmp_path.iterdir() if ".tmp-" in p.name or ".probe-" in p.name] == []
 
+
+def lines_span(kind, value, lines):
+    """The times the lines of a shutter [0.4, 0.6] are exposed, from the rolling shutters' definitions
+    (scenes/README.md): 'lines' exposes line i over [open, close] + i lineDelay; '3dgs-deblur' line i at
+    t + readoutTime ((i + 0.5) / lines - 0.5), t in [open, close]."""
+    if kind == "lines":
+        return 0.4, 0.6 + value * (lines - 1)
+    reach = value * (0.5 - 0.5 / lines)
+    return 0.4 - reach, 0.6 + reach
+
+
+@pytest.mark.parametrize("kind,value,readout,accepted", [
+    ("lines", 0.06, "top-to-bottom", True),          # H = 6 rows: the last closes at 0.6 + 5 x 0.06 = 0.9
+    ("lines", 0.06, "left-to-right", False),         # W = 8 columns: 0.6 + 7 x 0.06 = 1.02
+    ("lines", 0.1, "bottom-to-top", False),          # 0.6 + 5 x 0.1 = 1.1
+    ("3dgs-deblur", 0.93, "top-to-bottom", True),    # 0.5 -+ (0.1 + 0.93 (0.5 - 1/12)) = [0.0125, 0.9875]
+    ("3dgs-deblur", 0.93, "right-to-left", False),   # 0.5 -+ (0.1 + 0.93 (0.5 - 1/16)) = [-0.0069, 1.0069]
+    ("gsplat", 0, "left-to-right", True),            # every line within [open, close]
+])
+def test_export_takes_the_renders_rule_for_a_rolling_shutter(tmp_path, kind, value, readout, accepted):
+    """A rolling shutter exposes its lines past [open, close]: export checked only [open, close] against
+    the trajectory's poses and exported frames that render refuses. Both now take one rule: every line's
+    times within the poses, [0, 1] here, with the same message, which names the span of the lines'
+    times (from the shutters' definitions, written out above)."""
+    attr = {"lines": f'lineDelay="{value}"', "3dgs-deblur": f'readoutTime="{value}"', "gsplat": ""}[kind]
+    scene = trajectory_scene(tmp_path, f'<shutter open="0.4" close="0.6" rolling="{kind}" readout="{readout}" '
+                                       f'{attr}/>')
+    lo, hi = lines_span(kind, value, W if readout in ("left-to-right", "right-to-left") else H)
+    assert accepted == (0 <= lo and hi <= 1)
+    exported = run(["export", scene, "-o", tmp_path / "e.json"])
+    rendered = run([scene, "-o", tmp_path / "r.exr", "--spp", 1, "--tspp", 1, "--quiet"])
+    assert (exported.returncode == 0) == accepted == (rendered.returncode == 0), (exported.stderr, rendered.stderr)
+    if accepted:
+        return
+    message = exported.stderr.removeprefix("refrender export: ")
+    assert exported.returncode == 1 and message == rendered.stderr.removeprefix("refrender: "), (exported.stderr,
+                                                                                                  rendered.stderr)
+    span = re.search(r"exposes lines over \[([^,]+), ([^\]]+)\]", message)
+    assert span and abs(float(span[1]) - lo) < 1e-12 and abs(float(span[2]) - hi) < 1e-12, message
+    assert f'rolling="{kind}"' in message and "covers [0, 1]" in message and "s.xml" in message
+    assert not (tmp_path / "e.json").exists()

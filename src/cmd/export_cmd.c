@@ -141,12 +141,10 @@ static int matrix_finite(double m[4][4])
 
 /* JSON has no number for inf or NaN (a velocity of 1e308 at t = 10 once
  * wrote "inf" into the file): such a transform is refused, naming it. */
-static int check_frame(const scene *s, const double *times, int n, rr_error *err)
+static int check_frame(const scene *s, const shutter *sh, const double *times, int n, rr_error *err)
 {
-    double m[4][4], first = INFINITY, last = -INFINITY;
-    for (int i = 0; i < n; i++)
-        first = fmin(first, times[i]), last = fmax(last, times[i]);
-    if (n && scene_check_trajectory_times(s, first, last, err)) /* as a render refuses them */
+    double m[4][4];
+    if (scene_check_shutter_in_trajectory(s, sh, err)) /* the render's rule: every line's times */
         return -1;
     for (int i = 0; i < n; i++) {
         world_to_camera(s, times[i], m);
@@ -171,7 +169,7 @@ static int write_frame(FILE *f, const scene *s, long long frame, int numbered, c
         return rr_fail(err, "the shutter [%g, %g] is longer than double precision holds (close - open overflows)",
                        sh->open, sh->close);
     int n = sample_times(sh, k, times);
-    if (check_frame(s, times, n, err))
+    if (check_frame(s, sh, times, n, err))
         return -1;
     fputs("    {\"frame\": ", f);
     numbered ? fprintf(f, "%lld", frame) : fputs("null", f);
