@@ -646,11 +646,7 @@ static int check_frame_shutters(const scene *s, const render_options *o, rr_erro
 {
     for (long long f = o->first_frame; f <= o->last_frame; f++) {
         shutter shut;
-        double t0, t1;
-        if (frame_shutter(s, o, f, &shut, err))
-            return -1;
-        shutter_span(&shut, s->cam.width, s->cam.height, &t0, &t1);
-        if (scene_check_trajectory_times(s, t0, t1, err))
+        if (frame_shutter(s, o, f, &shut, err) || scene_check_shutter_in_trajectory(s, &shut, err))
             return -1;
     }
     return 0;
