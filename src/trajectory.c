@@ -154,34 +154,57 @@ int trajectory_min_knots(trajectory_interp k) { return k == TRAJECTORY_CUBIC ? 4
 
 static const char *const TUM_FIELDS[8] = {"t", "tx", "ty", "tz", "qx", "qy", "qz", "qw"};
 
+/* Up to n bytes of s for a message, quoted: printable ASCII as it is,
+ * any other byte as \xHH (a byte order mark or a stray control byte is
+ * otherwise invisible in the message), "..." where it is cut. */
+static const char *quoted(const char *s, size_t n, char out[96])
+{
+    size_t k = 0;
+    for (size_t i = 0; i < n; i++) {
+        unsigned char b = (unsigned char)s[i];
+        if (k + 8 >= 96) { /* room for one escape and the "..." */
+            memcpy(out + k, "...", 4);
+            return out;
+        }
+        k += (size_t)snprintf(out + k, 96 - k, b >= 0x20 && b < 0x7f ? "%c" : "\\x%02x", b);
+    }
+    out[k] = 0;
+    return out;
+}
+
+static int tum_space(char c) { return c == ' ' || c == '\t' || c == '\r'; }
+
 /* One line's fields into v; line is NUL-free and ends at end. */
 static int tum_fields(const char *line, const char *end, const char *name, long lineno, double v[8], rr_error *err)
 {
     const char *s = line;
+    char q[96];
     for (int f = 0; f < 8; f++) {
-        while (s < end && (*s == ' ' || *s == '\t' || *s == '\r'))
+        while (s < end && tum_space(*s))
             s++;
         if (s == end)
             return rr_fail(err, "%s:%ld: field '%s' is missing (a TUM line is t tx ty tz qx qy qz qw)", name, lineno,
                            TUM_FIELDS[f]);
         char buf[64], *stop;
         size_t n = 0;
-        while (s + n < end && s[n] != ' ' && s[n] != '\t' && s[n] != '\r')
+        while (s + n < end && !tum_space(s[n]))
             n++;
         if (n >= sizeof buf)
-            return rr_fail(err, "%s:%ld: field '%s' is not a number ('%.20s...')", name, lineno, TUM_FIELDS[f], s);
+            return rr_fail(err, "%s:%ld: field '%s' is not a number ('%s...')", name, lineno, TUM_FIELDS[f],
+                           quoted(s, 20, q));
         memcpy(buf, s, n), buf[n] = 0;
         errno = 0;
         v[f] = strtod(buf, &stop);
         if (*stop || stop == buf || !isfinite(v[f]))
-            return rr_fail(err, "%s:%ld: field '%s' is not a finite number ('%s')", name, lineno, TUM_FIELDS[f], buf);
+            return rr_fail(err, "%s:%ld: field '%s' is not a finite number ('%s')", name, lineno, TUM_FIELDS[f],
+                           quoted(buf, n, q));
         s += n;
     }
-    while (s < end && (*s == ' ' || *s == '\t' || *s == '\r'))
+    while (s < end && tum_space(*s))
         s++;
     if (s != end)
-        return rr_fail(err, "%s:%ld: more than the 8 fields t tx ty tz qx qy qz qw ('%.*s')", name, lineno,
-                       (int)(end - s < 20 ? end - s : 20), s); /* the text need not end in a NUL */
+        return rr_fail(err, "%s:%ld: more than the 8 fields t tx ty tz qx qy qz qw ('%s')", name, lineno,
+                       quoted(s, (size_t)(end - s < 20 ? end - s : 20), q));
     return 0;
 }
 
@@ -232,7 +255,7 @@ static int add_knot(trajectory *out, int *cap, const trajectory_knot *k, const c
 
 static int blank_or_comment(const char *s, const char *end)
 {
-    while (s < end && (*s == ' ' || *s == '\t' || *s == '\r'))
+    while (s < end && tum_space(*s))
         s++;
     return s == end || *s == '#';
 }
@@ -244,6 +267,8 @@ int trajectory_parse_tum(const char *text, size_t len, const char *name, traject
     const char *s = text, *end = text + len;
     if (memchr(text, 0, len))
         return rr_fail(err, "%s: contains a NUL byte: not a TUM text file", name);
+    if (len >= 3 && !memcmp(text, "\xEF\xBB\xBF", 3)) /* a UTF-8 byte order mark, as Windows editors write */
+        s += 3;
     for (long lineno = 1; s < end; lineno++) {
         const char *nl = memchr(s, '\n', (size_t)(end - s)), *eol = nl ? nl : end;
         if (!blank_or_comment(s, eol)) {

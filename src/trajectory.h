@@ -70,7 +70,9 @@ int trajectory_min_knots(trajectory_interp k);
 
 /* Parses a TUM file's text (len bytes): one knot a line,
  * `t tx ty tz qx qy qz qw`, blank lines and lines starting with '#'
- * skipped. Refuses, naming name, the line and the field: a missing or
+ * skipped, and a UTF-8 byte order mark before the first line (editors
+ * write one; it is no part of the text). Refuses, naming name, the line
+ * and the field (bytes outside printable ASCII as \xHH): a missing or
  * extra field, one that is not a finite number, a position coordinate
  * beyond TRAJECTORY_MAX_ABS, a zero quaternion or one
  * whose length is not 1 within 1e-3 (it is normalised), times that do not

@@ -86,6 +86,24 @@ TEST(prepare_refuses_what_the_interpolation_cannot_use)
     trajectory_free(&tr);
 }
 
+/* Editors on Windows start a text file with the UTF-8 byte order mark: it is
+ * no part of the first line; anywhere else it is named, byte by byte (it
+ * prints as nothing). */
+TEST(tum_reader_skips_a_leading_byte_order_mark_and_names_one_elsewhere)
+{
+    trajectory tr;
+    rr_error e;
+    CHECK(parse("\xEF\xBB\xBF" L0 "1 0 0 0 0 0 0 1\n", &tr, &e) == 0);
+    CHECK(tr.count == 2 && tr.knots[0].t == 0 && tr.knots[1].t == 1);
+    trajectory_free(&tr);
+    CHECK(parse("\xEF\xBB\xBF# t tx ty tz qx qy qz qw\n" L0, &tr, &e) == 0 && tr.count == 1); /* then a comment */
+    trajectory_free(&tr);
+    CHECK(fails_with(L0 "\xEF\xBB\xBF" "1 0 0 0 0 0 0 1\n", "p.tum:2: field 't' is not a finite number "
+                                                             "('\\xef\\xbb\\xbf1')"));
+    CHECK(fails_with(L0 "1 0 0 0 0 0 0 1 \x01x\n", "p.tum:2: more than the 8 fields t tx ty tz qx qy qz qw "
+                                                   "('\\x01x')"));
+}
+
 TEST(a_written_trajectory_reads_back_bit_for_bit)
 {
     const char *text = "0.5 0.1 -2 3.25 0.1 0.2 0.3 0.9273618495495703\n"
