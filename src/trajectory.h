@@ -50,6 +50,8 @@ typedef struct {
     int opengl_axes; /* the file's camera axes: 1 OpenGL, 0 OpenCV */
     int count;
     trajectory_knot *knots;
+    long *lines; /* the TUM line each knot was read from, for messages
+                  * (NULL: a transforms.json's, knot k its frames[k]) */
     /* over the whole domain, set by trajectory_prepare: how fast the
      * camera's origin moves and how fast it turns (radians) per unit time */
     double speed, turn_rate;
@@ -87,7 +89,9 @@ int trajectory_load_tum(const char *path, trajectory *out, uint64_t *content_has
 /* Checks the knots against the interpolation (how many; cubic: evenly
  * spaced; bezier: control quaternions within one hemisphere; every
  * rotation between neighbours short of 180 degrees, where Log is
- * ambiguous) and sets the motion bounds. Fails naming name. */
+ * ambiguous; times far enough apart that the motion bounds are finite)
+ * and sets the motion bounds. Fails naming name and, where one pose is
+ * at fault, its line (or frames[k]). */
 int trajectory_prepare(trajectory *tr, const char *name, rr_error *err);
 
 /* The times the interpolation is defined over. */
