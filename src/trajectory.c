@@ -501,8 +501,8 @@ static int fail_too_close(const trajectory *tr, const char *name, rr_error *err)
     int from = bezier ? 0 : k;
     k = bezier ? tr->count - 2 : k;
     char where[sizeof err->msg], place[32];
-    return rr_fail(err, "%sposes too close in time for their motion: this pose is %.3g after %s's (the speed "
-                        "overflows)%s", knot_where(tr, name, k + 1, where, sizeof where),
+    return rr_fail(err, "%sposes too close in time for their motion: this pose is %.3g after %s's (the motion "
+                        "bound overflows)%s", knot_where(tr, name, k + 1, where, sizeof where),
                    tr->knots[k + 1].t - tr->knots[from].t, knot_place(tr, from, place),
                    bezier ? "; a Bezier spans its first pose to its last" : "");
 }
