@@ -124,11 +124,11 @@ static char *even_poses(const char *fmt, double t0, double spacing, int n, int s
 static int cubic_prepare(const char *text, rr_error *e)
 {
     trajectory tr;
-    int rc = parse(text, &tr, e);
+    if (parse(text, &tr, e))
+        return -1;
     tr.interp = TRAJECTORY_CUBIC;
-    rc = rc || trajectory_prepare(&tr, "p.tum", e);
-    if (!rc)
-        trajectory_free(&tr);
+    int rc = trajectory_prepare(&tr, "p.tum", e);
+    trajectory_free(&tr);
     return rc;
 }
 
