@@ -337,7 +337,7 @@ static void segment_bounds(trajectory *tr)
  * u^2/2 <= 1/2; dt the shortest spacing. */
 static void cubic_bounds(trajectory *tr)
 {
-    double dt = INFINITY; /* the shortest spacing: check_spacing lets them differ by their rounding */
+    double dt = INFINITY; /* the shortest spacing: check_spacing lets them differ by its slack */
     for (int k = 0; k + 1 < tr->count; k++)
         dt = fmin(dt, tr->knots[k + 1].t - tr->knots[k].t);
     for (int k = 0; k + 1 < tr->count; k++)
