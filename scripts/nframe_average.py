@@ -31,8 +31,11 @@ Blur-synthesis procedures (--procedure, issue 30.3)
   A procedure is the whole recipe by which a dataset turns sharp frames into
   its blurred image. Its parts:
     times   midpoint (k + 1/2)/N, endpoints k/(N-1) (both shutter ends
-            included), or random (uniform, seeded by seed=S, sorted);
-    n       the number of frames N;
+            included), or random (uniform, seeded by seed=S, an integer >= 0,
+            sorted);
+    n       the number of frames N, at most 256: each frame is a refrender
+            run and stays in memory (32 bytes a pixel), and at 256 the
+            midpoint rule's error is 1/650 of its error at 10;
     frames  how the renderer that made the dataset wrote each sharp frame as
             8-bit: round, floor, or none (float frames);
     space   what is averaged: model (the renderer's own float values, in the
@@ -118,8 +121,11 @@ Blur-synthesis procedures (--procedure, issue 30.3)
   T = display(clip(R, 0, 1)). Reported in two spaces, both said in the output:
     display  E - T in 8-bit levels (x 255): mean (the bias, with the 1-sigma the
              reference's noise puts on it), the mean over pixels that move (some
-             two frames rendered in the run differ by more than half a level),
-             RMSE, RMSE without the reference's noise, max; the reference's
+             two sharp frames differ by more than half a level: the run's frames
+             and 16 at the midpoint times (k + 1/2)/16, rendered for this, as a
+             procedure's own few frames miss what moves between them, and one
+             frame sees no motion), RMSE, RMSE without the reference's noise,
+             max; the reference's
              standard error carried through the encoding's slope;
     linear   decode(E) - clip(R, 0, 1) (decode: the sRGB curve for --display
              srgb): the RMSE, the bias and RMSE / the reference's noise.
@@ -195,6 +201,13 @@ PRESETS = {
     "midpoint": Procedure("midpoint", "midpoint", 10, "none", "model", "mean", "none"),
 }
 CUSTOM = Procedure("custom", "midpoint", 10, "none", "model", "mean", "none")
+# The most frames one N may have. Each frame is a refrender run (about a second for the 128x128
+# Gaussian bunnies: loading the model and building its BVH) and stays in memory as float64 RGBA until
+# the run ends. 256 is 8 times the largest N of the procedures emulated (31, BlenderCV), and there the
+# midpoint rule's error (falling as N^-2 where the motion is smooth) is 1/650 of its error at N = 10:
+# below the noise of the references in src/TRAJECTORIES.md, so more frames would measure nothing.
+MAX_FRAMES = 256
+FRAME_COST = "each frame is a refrender run and stays in memory, 32 bytes a pixel"
 CHOICES = {"times": TIMES, "space": SPACES, "sum": SUMS, "frames": QUANTIZATIONS, "result": QUANTIZATIONS}
 
 
@@ -209,6 +222,8 @@ def parse_procedure(spec):
         if not eq or key not in ("n", "seed", *CHOICES):
             raise Failure(f"--procedure {spec}: '{item}' is not key=value with key one of "
                           f"times, n, frames, space, sum, result, seed")
+        if key in parts:
+            raise Failure(f"--procedure {spec}: {key} is given twice")
         if key in CHOICES and value not in CHOICES[key]:
             raise Failure(f"--procedure {spec}: {key} must be one of {', '.join(CHOICES[key])}, not '{value}'")
         if key in ("n", "seed"):
@@ -220,6 +235,14 @@ def parse_procedure(spec):
     p = dataclasses.replace(base, name=spec if parts else name, **parts)
     if p.n < (2 if p.times == "endpoints" else 1):
         raise Failure(f"--procedure {spec}: n = {p.n} is too few frames for times={p.times}")
+    if p.n > MAX_FRAMES:
+        raise Failure(f"--procedure {spec}: n = {p.n} is more than {MAX_FRAMES} frames, the most one N may have "
+                      f"({FRAME_COST})")
+    if "seed" in parts and p.times != "random":
+        raise Failure(f"--procedure {spec}: seed={p.seed} has no meaning with times={p.times} (it seeds "
+                      "times=random only)")
+    if p.seed < 0:  # numpy's generators take seeds >= 0 only
+        raise Failure(f"--procedure {spec}: seed must be an integer >= 0, not {p.seed}")
     if p.space == "model" and p.frames != "none":
         raise Failure(f"--procedure {spec}: space=model averages the renderer's floats, so frames={p.frames} "
                       "(8-bit frames) has no meaning: use space=srgb, gamma2.2 or gamma1")
@@ -488,6 +511,14 @@ def procedure_figure(truth, outs, path):
     fig.savefig(path, bbox_inches="tight")
 
 
+def check_names(value):
+    """One --procedure value names at least one procedure, and no name between its commas is empty."""
+    names = [value] if ":" in value else value.split(",")
+    if any(not name.strip() for name in names):
+        raise Failure(f"--procedure '{value}': an empty procedure name (write NAME or NAME,NAME,... with NAME "
+                      f"one of {', '.join(PRESETS)}, custom)")
+
+
 def parse(argv):
     extra = []
     if "--" in argv:
@@ -498,7 +529,8 @@ def parse(argv):
                                 epilog="Float averages" + __doc__.split("\nFloat averages", 1)[1])
     p.add_argument("scene")
     p.add_argument("--reference", help="the converged render (with standard errors); default: render one")
-    p.add_argument("--n", help="frame counts, comma-separated (default 10,16,51; not with --procedure)")
+    p.add_argument("--n", help=f"frame counts, comma-separated, each at most {MAX_FRAMES} (default 10,16,51; not "
+                   "with --procedure)")
     p.add_argument("--times", choices=("midpoint", "endpoints"), help="default midpoint; not with --procedure")
     p.add_argument("--procedure", action="append", help="blur-synthesis procedures (repeatable): "
                    f"{', '.join(PRESETS)}, custom, comma-separated; NAME:key=value,... changes parts of one "
@@ -517,9 +549,11 @@ def parse(argv):
             if getattr(args, option) is not None:
                 p.error(f"--{option} is for float averages: with --procedure each procedure states its own "
                         "(e.g. deblur-nerf:n=16,times=midpoint)")
-        specs = [s for v in args.procedure for s in ([v] if ":" in v else v.split(","))]
+        specs = [s.strip() for v in args.procedure for s in ([v] if ":" in v else v.split(","))]
         try:
-            args.procedures = [parse_procedure(s.strip()) for s in specs if s.strip()]
+            for v in args.procedure:
+                check_names(v)
+            args.procedures = [parse_procedure(s) for s in specs]
         except Failure as e:
             p.error(str(e))
         return args, extra
@@ -531,6 +565,9 @@ def parse(argv):
         p.error(f"--n: expected counts such as 10,16,51, got '{args.n}'")
     if any(n < 1 for n in args.counts):
         p.error("--n: counts must be >= 1")
+    if max(args.counts) > MAX_FRAMES:
+        p.error(f"--n {args.n}: {max(args.counts)} is more than {MAX_FRAMES} frames, the most one N may have "
+                f"({FRAME_COST})")
     return args, extra
 
 
@@ -551,6 +588,22 @@ def float_averages(args, settings, ref, se, frames, out):
         plot(rows, noise, args.plot)
 
 
+# Where the scene moves is measured on sharp frames at the midpoint times of this many, as well as the
+# procedures' own: a procedure's frames alone see no motion with one frame, and between two or three
+# they miss what an object sweeps over in the meantime (tests/test_nframe_average.py's splat, which
+# sweeps 7.5 px: 0 % of the image with one frame, 11 % with two, 15 % from 8 midpoint frames up to
+# 256). On the bunnies of src/TRAJECTORIES.md they add no pixel to what its 47 frames find.
+MOTION_PROBES = 16
+
+
+def moving_pixels(renders, display, shape):
+    """The pixels that move: some two of the sharp frames (RGBA, any order) differ by more than half an
+    8-bit level in some channel, as a mask of `shape` (the same for every channel)."""
+    shown = np.array([to_display(f[..., :3], display) for f in renders])
+    spread = (shown.max(axis=0) - shown.min(axis=0) > 0.5 / 255).any(axis=-1, keepdims=True)
+    return np.broadcast_to(spread, shape)
+
+
 def procedures(args, settings, ref, se, frames, cache, out):
     display = args.display or ("srgb" if settings["blur"] == "linear" else "identity")
     ref_rgb, outs = ref[..., :3], []
@@ -558,14 +611,13 @@ def procedures(args, settings, ref, se, frames, cache, out):
         renders = [f[..., :3] for f in frames(procedure_times(p, settings["open"], settings["close"]))]
         outs.append((p, emulate(p, renders, display)))
         write_exr(out / f"procedure_{p.name.replace(':', '_').replace(',', '_').replace('=', '')}.exr", outs[-1][1])
-    # pixels that move: some two rendered frames differ by more than half an 8-bit level
-    shown = np.array([to_display(f[..., :3], display) for f in cache.values()])
-    moving = np.broadcast_to((shown.max(axis=0) - shown.min(axis=0) > 0.5 / 255).any(axis=-1, keepdims=True),
-                             ref_rgb.shape)
+    frames(frame_times(settings["open"], settings["close"], MOTION_PROBES, "midpoint"))
+    moving = moving_pixels(cache.values(), display, ref_rgb.shape)
     rows = [{"procedure": dataclasses.asdict(p), **measure_procedure(o, ref_rgb, se, display, moving)}
             for p, o in outs]
     print(procedure_table(rows, display, settings["blur"]))
-    print(f"moving pixels: {100 * float(moving[..., 0].mean()):.1f}% of the image")
+    print(f"moving pixels: {100 * float(moving[..., 0].mean()):.1f}% of the image (some two of the {len(cache)} "
+          f"sharp frames, {MOTION_PROBES} of them evenly spaced over the shutter, differ by more than half a level)")
     if args.json:
         curve = "the sRGB curve" if display == "srgb" else "identity"
         Path(args.json).write_text(json.dumps({

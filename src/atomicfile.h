@@ -36,6 +36,20 @@ void atomic_discard(const char *tmp);
 int atomic_write_stdio(const char *path, int (*write)(FILE *f, void *ctx, rr_error *err), void *ctx,
                        rr_error *err);
 
+/* atomic_write_stdio without the commit: the complete content is left in
+ * the temporary tmp (size bytes, PATH_MAX + 64 will do) for
+ * atomic_commit_all; on failure nothing is left. */
+int atomic_prepare_stdio(const char *path, int (*write)(FILE *f, void *ctx, rr_error *err), void *ctx, char *tmp,
+                         size_t size, rr_error *err);
+
+/* Several outputs of one command, all or nothing: each tmps[i] holds the
+ * complete paths[i] (atomic_create, atomic_prepare_stdio). Renames them
+ * into place in order; if one rename fails, the files the earlier ones
+ * replaced are put back (kept under a second name until the end) and the
+ * rest discarded, so that every path holds what it held before. The
+ * paths must name distinct files. */
+int atomic_commit_all(const char *const *tmps, const char *const *paths, int n, rr_error *err);
+
 #ifdef __cplusplus
 }
 #endif

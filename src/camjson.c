@@ -247,6 +247,12 @@ static int *entry_lines(const char *data, size_t len, size_t n)
 
 int camjson_parse_document(const char *name, const char *data, size_t len, struct json_object **out, rr_error *err)
 {
+    /* RFC 8259 section 8.1: a parser may ignore a leading byte order mark, which
+     * Windows editors write; json-c refuses it with the mark invisible in the
+     * message (the TUM reader skips it likewise) */
+    static const char bom[] = "\xEF\xBB\xBF";
+    if (len >= 3 && !memcmp(data, bom, 3))
+        data += 3, len -= 3;
     json_tokener *tok = json_tokener_new();
     if (!tok)
         return rr_fail(err, "out of memory");

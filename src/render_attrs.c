@@ -72,6 +72,21 @@ static void weight_text(FILE *f, const void *sh) { describe_weight(f, sh); }
 static void gaussians_text(FILE *f, const void *s) { describe_gaussians(f, s); }
 static void parameters_text(FILE *f, const void *p) { describe_parameters(f, p); }
 
+/* A rolling shutter's windows, the first and the last line's, for a reader
+ * who does not know the presets' rules (with --time the shutter is [T, T]
+ * but the lines are not all at T); each preset's window moves linearly with
+ * the line, so these two give every line's. */
+static void line_times(attr_list *a, const shutter *sh, int width, int height)
+{
+    if (sh->rolling.kind == ROLLING_OFF)
+        return;
+    int lines;
+    shutter_line(sh, 0, 0, width, height, &lines);
+    attrs_set(a, "refrender:lineTimes", "line 0 [%.17g, %.17g], line %d [%.17g, %.17g], linear between",
+              shutter_line_time(sh, 0, lines, sh->open), shutter_line_time(sh, 0, lines, sh->close), lines - 1,
+              shutter_line_time(sh, lines - 1, lines, sh->open), shutter_line_time(sh, lines - 1, lines, sh->close));
+}
+
 /* Writes the column-vector matrix m (p' = m p) as OpenEXR stores it: for
  * Imath's row vectors (p' = p M), i.e. transposed, row after row. */
 static void set_matrix(attr_list *a, const char *key, double m[4][4])
@@ -124,6 +139,7 @@ void attrs_for_render(attr_list *a, const scene *s, const render_settings *rs, u
     char rolling[256];
     shutter_rolling_text(&rs->shut, rolling, sizeof rolling);
     attrs_set(a, "refrender:rollingShutter", "%s", rolling);
+    line_times(a, &rs->shut, s->cam.width, s->cam.height);
     attrs_set(a, "refrender:timeFactor", "%d", smp->time_factor);
     attrs_set(a, "refrender:timeIntegration", "%s", rs->exact_time ? "exact" : "sampled");
     attrs_set(a, "refrender:pixelFilter", "%s", pixel_filter_name(rs->filter));

@@ -81,6 +81,25 @@ int scene_check_trajectory_times(const scene *s, double open, double close, rr_e
     return 0;
 }
 
+int scene_check_shutter_in_trajectory(const scene *s, const shutter *sh, rr_error *err)
+{
+    const trajectory *tr = s->camera_motion.path;
+    double t0, t1, lo, hi;
+    if (!tr)
+        return 0;
+    shutter_span(sh, s->cam.width, s->cam.height, &lo, &hi);
+    if (sh->rolling.kind == ROLLING_OFF)
+        return scene_check_trajectory_times(s, lo, hi, err);
+    trajectory_domain(tr, &t0, &t1);
+    if (lo < t0 || hi > t1) /* the lines' times, not [open, close], are what leave the poses */
+        return rr_fail(err, "%s: the shutter [%.17g, %.17g] with rolling=\"%s\" exposes lines over "
+                            "[%.17g, %.17g], which reaches beyond the camera trajectory %s, whose %s interpolation "
+                            "covers [%.17g, %.17g]", s->path, sh->open, sh->close,
+                       shutter_rolling_name(sh->rolling.kind), lo, hi, tr->name, trajectory_interp_name(tr->interp),
+                       t0, t1);
+    return 0;
+}
+
 void scene_free(scene *s)
 {
     for (int i = 0; i < s->nobjects; i++) {

@@ -115,6 +115,13 @@ void scene_free(scene *s);
  * reaches past them, where the camera would be held still. */
 int scene_check_trajectory_times(const scene *s, double open, double close, rr_error *err);
 
+/* The rule every command that takes a frame's shutter applies (render and
+ * export): every time a line of the camera's image is exposed, with a
+ * rolling shutter past [open, close] (shutter_span), lies within the camera
+ * trajectory's poses; -1 with err naming the scene, the shutter, the lines'
+ * times and the trajectory's domain otherwise. */
+int scene_check_shutter_in_trajectory(const scene *s, const shutter *sh, rr_error *err);
+
 /* Records an input file's path; -1 when out of memory. */
 int scene_add_input(scene *s, const char *path);
 

@@ -52,11 +52,20 @@ double shutter_line_time(const shutter *s, int line, int lines, double t)
         return t + r->line_delay * line;
     case ROLLING_3DGS_DEBLUR:
         return t + r->readout_time * ((line + 0.5) / lines - 0.5);
-    case ROLLING_GSPLAT: /* the fraction first: no overflow */
-        return lines > 1 ? s->open + (s->close - s->open) * ((double)line / (lines - 1)) : s->open;
+    case ROLLING_GSPLAT: { /* the fraction first: no overflow */
+        double readout = r->readout_time != 0 ? r->readout_time : s->close - s->open;
+        return lines > 1 ? s->open + readout * ((double)line / (lines - 1)) : s->open;
+    }
     default:
         return t;
     }
+}
+
+void shutter_at_instant(shutter *s, double t)
+{
+    if (s->rolling.kind == ROLLING_GSPLAT && s->rolling.readout_time == 0)
+        s->rolling.readout_time = s->close - s->open; /* its readout spanned the shutter */
+    s->open = s->close = t, s->kind = WEIGHT_BOX;
 }
 
 void shutter_span(const shutter *s, int width, int height, double *t0, double *t1)

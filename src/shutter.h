@@ -19,11 +19,13 @@ typedef enum { WEIGHT_BOX, WEIGHT_LINEAR, WEIGHT_EXP, WEIGHT_TABLE } weight_kind
  *   3dgs-deblur  [open, close] + t_ro ((r + 0.5) / L - 1/2): [open, close] is
  *                the middle's window, readoutTime t_ro spans the frame
  *                (3dgs-deblur's gsplat fork 64154bb, forward.cu:360-363)
- *   gsplat       the single instant open + (close - open) r / (L - 1), no
- *                exposure (gsplat's and 3DGUT's floor(y) / (H - 1) between a
- *                start and an end pose, gsplat 90d7b4b Cameras.cuh:504-528;
- *                bottom-to-top (H - ceil(y)) / (H - 1) is the same line
- *                count from the bottom for y off the pixel edges)
+ *   gsplat       the single instant open + R r / (L - 1), no exposure, the
+ *                readout R = close - open (gsplat's and 3DGUT's floor(y) /
+ *                (H - 1) between a start and an end pose, gsplat 90d7b4b
+ *                Cameras.cuh:504-528; bottom-to-top (H - ceil(y)) / (H - 1)
+ *                is the same line count from the bottom for y off the pixel
+ *                edges), or R = readoutTime once shutter_at_instant has
+ *                shrunk [open, close] to an instant
  * Rows and columns are the full image's, whatever the crop window. */
 typedef enum { ROLLING_OFF, ROLLING_LINES, ROLLING_3DGS_DEBLUR, ROLLING_GSPLAT } rolling_kind;
 typedef enum { READOUT_TOP_TO_BOTTOM, READOUT_BOTTOM_TO_TOP, READOUT_LEFT_TO_RIGHT, READOUT_RIGHT_TO_LEFT } readout_dir;
@@ -32,7 +34,8 @@ typedef struct {
     rolling_kind kind;
     readout_dir readout;
     double line_delay;   /* lines: delta */
-    double readout_time; /* 3dgs-deblur: t_ro */
+    double readout_time; /* 3dgs-deblur: t_ro; gsplat: 0 (the readout spans the shutter) or, at an
+                          * instant, the readout the shutter spanned */
 } rolling_shutter;
 
 typedef struct {
@@ -90,6 +93,15 @@ int shutter_line(const shutter *s, int x, int y, int width, int height, int *lin
 /* The time of a sample drawn at t in [open, close] (a(t)'s distribution)
  * on line `line` of `lines`. Without rolling shutter, t. */
 double shutter_line_time(const shutter *s, int line, int lines, double t);
+
+/* A sharp image at t (--time): every line's exposure shrinks to an instant
+ * and the readout stays, so line r is seen at t plus its readout offset, as
+ * the sensor records a sharp frame: lines t + delta r; 3dgs-deblur t + t_ro
+ * ((r + 0.5) / L - 1/2) (t is the middle line's instant); gsplat t + R r /
+ * (L - 1) with R the shutter's length, kept as readoutTime. Each preset's
+ * shutter [t, t] is then read by its own rule; without a rolling shutter
+ * every sample is at t. a(t) becomes a box: an instant has nothing to weigh. */
+void shutter_at_instant(shutter *s, double t);
 
 /* Every time any line of a width x height image is exposed: [open, close]
  * without rolling shutter. What the BVHs' swept bounds must cover. */

@@ -154,34 +154,57 @@ int trajectory_min_knots(trajectory_interp k) { return k == TRAJECTORY_CUBIC ? 4
 
 static const char *const TUM_FIELDS[8] = {"t", "tx", "ty", "tz", "qx", "qy", "qz", "qw"};
 
+/* Up to n bytes of s for a message, quoted: printable ASCII as it is,
+ * any other byte as \xHH (a byte order mark or a stray control byte is
+ * otherwise invisible in the message), "..." where it is cut. */
+static const char *quoted(const char *s, size_t n, char out[96])
+{
+    size_t k = 0;
+    for (size_t i = 0; i < n; i++) {
+        unsigned char b = (unsigned char)s[i];
+        if (k + 8 >= 96) { /* room for one escape and the "..." */
+            memcpy(out + k, "...", 4);
+            return out;
+        }
+        k += (size_t)snprintf(out + k, 96 - k, b >= 0x20 && b < 0x7f ? "%c" : "\\x%02x", b);
+    }
+    out[k] = 0;
+    return out;
+}
+
+static int tum_space(char c) { return c == ' ' || c == '\t' || c == '\r'; }
+
 /* One line's fields into v; line is NUL-free and ends at end. */
 static int tum_fields(const char *line, const char *end, const char *name, long lineno, double v[8], rr_error *err)
 {
     const char *s = line;
+    char q[96];
     for (int f = 0; f < 8; f++) {
-        while (s < end && (*s == ' ' || *s == '\t' || *s == '\r'))
+        while (s < end && tum_space(*s))
             s++;
         if (s == end)
             return rr_fail(err, "%s:%ld: field '%s' is missing (a TUM line is t tx ty tz qx qy qz qw)", name, lineno,
                            TUM_FIELDS[f]);
         char buf[64], *stop;
         size_t n = 0;
-        while (s + n < end && s[n] != ' ' && s[n] != '\t' && s[n] != '\r')
+        while (s + n < end && !tum_space(s[n]))
             n++;
         if (n >= sizeof buf)
-            return rr_fail(err, "%s:%ld: field '%s' is not a number ('%.20s...')", name, lineno, TUM_FIELDS[f], s);
+            return rr_fail(err, "%s:%ld: field '%s' is not a number ('%s...')", name, lineno, TUM_FIELDS[f],
+                           quoted(s, 20, q));
         memcpy(buf, s, n), buf[n] = 0;
         errno = 0;
         v[f] = strtod(buf, &stop);
         if (*stop || stop == buf || !isfinite(v[f]))
-            return rr_fail(err, "%s:%ld: field '%s' is not a finite number ('%s')", name, lineno, TUM_FIELDS[f], buf);
+            return rr_fail(err, "%s:%ld: field '%s' is not a finite number ('%s')", name, lineno, TUM_FIELDS[f],
+                           quoted(buf, n, q));
         s += n;
     }
-    while (s < end && (*s == ' ' || *s == '\t' || *s == '\r'))
+    while (s < end && tum_space(*s))
         s++;
     if (s != end)
-        return rr_fail(err, "%s:%ld: more than the 8 fields t tx ty tz qx qy qz qw ('%.*s')", name, lineno,
-                       (int)(end - s < 20 ? end - s : 20), s); /* the text need not end in a NUL */
+        return rr_fail(err, "%s:%ld: more than the 8 fields t tx ty tz qx qy qz qw ('%s')", name, lineno,
+                       quoted(s, (size_t)(end - s < 20 ? end - s : 20), q));
     return 0;
 }
 
@@ -222,17 +245,21 @@ static int add_knot(trajectory *out, int *cap, const trajectory_knot *k, const c
     if (out->count == *cap) {
         int grown = *cap ? 2 * *cap : 64;
         trajectory_knot *m = grown > (1 << 24) ? NULL : realloc(out->knots, (size_t)grown * sizeof *m);
-        if (!m)
+        if (m)
+            out->knots = m;
+        long *lines = m ? realloc(out->lines, (size_t)grown * sizeof *lines) : NULL;
+        if (!lines)
             return rr_fail(err, "%s:%ld: out of memory (more than %d poses?)", name, lineno, *cap);
-        out->knots = m, *cap = grown;
+        out->lines = lines, *cap = grown;
     }
+    out->lines[out->count] = lineno;
     out->knots[out->count++] = *k;
     return 0;
 }
 
 static int blank_or_comment(const char *s, const char *end)
 {
-    while (s < end && (*s == ' ' || *s == '\t' || *s == '\r'))
+    while (s < end && tum_space(*s))
         s++;
     return s == end || *s == '#';
 }
@@ -240,10 +267,12 @@ static int blank_or_comment(const char *s, const char *end)
 int trajectory_parse_tum(const char *text, size_t len, const char *name, trajectory *out, rr_error *err)
 {
     int cap = 0;
-    out->knots = NULL, out->count = 0, out->name = NULL;
+    out->knots = NULL, out->lines = NULL, out->count = 0, out->name = NULL;
     const char *s = text, *end = text + len;
     if (memchr(text, 0, len))
         return rr_fail(err, "%s: contains a NUL byte: not a TUM text file", name);
+    if (len >= 3 && !memcmp(text, "\xEF\xBB\xBF", 3)) /* a UTF-8 byte order mark, as Windows editors write */
+        s += 3;
     for (long lineno = 1; s < end; lineno++) {
         const char *nl = memchr(s, '\n', (size_t)(end - s)), *eol = nl ? nl : end;
         if (!blank_or_comment(s, eol)) {
@@ -305,10 +334,12 @@ static void segment_bounds(trajectory *tr)
  * >= 0 summing to 1), so |p'| <= max |P_j+1 - P_j| / dt; the body rate of
  * R_0 Exp(B1 L1) Exp(B2 L2) Exp(B3 L3) is at most sum |B_j'| |L_j| / dt,
  * with B1' = (1-u)^2/2 <= 1/2, B2' = (1 + 2u - 2u^2)/2 <= 3/4, B3' =
- * u^2/2 <= 1/2. */
+ * u^2/2 <= 1/2; dt the shortest spacing. */
 static void cubic_bounds(trajectory *tr)
 {
-    double dt = tr->knots[1].t - tr->knots[0].t;
+    double dt = INFINITY; /* the shortest spacing: check_spacing lets them differ by its slack */
+    for (int k = 0; k + 1 < tr->count; k++)
+        dt = fmin(dt, tr->knots[k + 1].t - tr->knots[k].t);
     for (int k = 0; k + 1 < tr->count; k++)
         tr->speed = fmax(tr->speed, v3_len(v3_sub(tr->knots[k + 1].p, tr->knots[k].p)) / dt);
     for (int k = 1; k + 2 < tr->count; k++) {
@@ -391,14 +422,48 @@ static void bezier_se3_bounds(trajectory *tr)
     tr->speed = drho + v_rate(phi_max) * dphi * rho_max;
 }
 
+/* Knot k's place in its file: "line L" (a TUM file) or "frames[k]" (a
+ * transforms.json, whose knot k is its frames[k]). */
+static const char *knot_place(const trajectory *tr, int k, char buf[32])
+{
+    if (tr->lines)
+        snprintf(buf, 32, "line %ld", tr->lines[k]);
+    else
+        snprintf(buf, 32, "frames[%d]", k);
+    return buf;
+}
+
+/* A message's start naming knot k: "name:L: " or "name: frames[k]: ". */
+static const char *knot_where(const trajectory *tr, const char *name, int k, char *buf, size_t size)
+{
+    char place[32];
+    if (tr->lines)
+        snprintf(buf, size, "%s:%ld: ", name, tr->lines[k]);
+    else
+        snprintf(buf, size, "%s: %s: ", name, knot_place(tr, k, place));
+    return buf;
+}
+
+/* A uniform B-spline's times are evenly spaced: each spacing equals the
+ * first within 1e-4 of it, plus what binary64 holds the times to (each
+ * within half an ulp, 2^-53 |t|; four of them 2^-51 max |t|). The slack
+ * is the spacing's, not |t|'s: at Unix times (1.7e9) a slack of 1e-9 |t|
+ * let a segment 10x short pass. 1e-4 holds times written to the
+ * microsecond, as TUM RGB-D writes them, up to 100 Hz; a spacing off by
+ * that moves the path by 1e-4 of a segment's motion, and cubic_bounds
+ * takes the shortest spacing, so no segment outruns the bounds. */
 static int check_spacing(const trajectory *tr, const char *name, rr_error *err)
 {
     double dt = tr->knots[1].t - tr->knots[0].t;
     for (int k = 1; k + 1 < tr->count; k++) {
         double d = tr->knots[k + 1].t - tr->knots[k].t;
-        if (fabs(d - dt) > 1e-9 * fmax(dt, fabs(tr->knots[k + 1].t)))
-            return rr_fail(err, "%s: a cubic B-spline needs evenly spaced times: poses %d and %d are %.17g apart, "
-                                "poses 1 and 2 %.17g", name, k + 1, k + 2, d, dt);
+        double rounding = 0x1p-51 * fmax(fabs(tr->knots[0].t), fabs(tr->knots[k + 1].t)); /* times increase */
+        if (fabs(d - dt) > 1e-4 * dt + rounding) {
+            char where[sizeof err->msg], place[32];
+            return rr_fail(err, "%sa cubic B-spline needs evenly spaced times: this pose is %.17g after the one "
+                                "before (%s), the first two %.17g apart", knot_where(tr, name, k + 1, where,
+                           sizeof where), d, knot_place(tr, k, place), dt);
+        }
     }
     return 0;
 }
@@ -423,6 +488,25 @@ static int check_turns(const trajectory *tr, const char *name, rr_error *err)
     return 0;
 }
 
+/* The bounds overflowed: the times the interpolation divides by are too
+ * close for the motion. A Bezier divides by its whole span (its inner
+ * times only order the poses), the others by each segment: the shortest
+ * one is named, by the line of the pose that ends it. */
+static int fail_too_close(const trajectory *tr, const char *name, rr_error *err)
+{
+    int bezier = tr->interp == TRAJECTORY_BEZIER || tr->interp == TRAJECTORY_BEZIER_SE3, k = 0;
+    for (int i = 1; i + 1 < tr->count; i++)
+        if (tr->knots[i + 1].t - tr->knots[i].t < tr->knots[k + 1].t - tr->knots[k].t)
+            k = i;
+    int from = bezier ? 0 : k;
+    k = bezier ? tr->count - 2 : k;
+    char where[sizeof err->msg], place[32];
+    return rr_fail(err, "%sposes too close in time for their motion: this pose is %.3g after %s's (the motion "
+                        "bound overflows)%s", knot_where(tr, name, k + 1, where, sizeof where),
+                   tr->knots[k + 1].t - tr->knots[from].t, knot_place(tr, from, place),
+                   bezier ? "; a Bezier spans its first pose to its last" : "");
+}
+
 int trajectory_prepare(trajectory *tr, const char *name, rr_error *err)
 {
     int need = trajectory_min_knots(tr->interp);
@@ -439,14 +523,14 @@ int trajectory_prepare(trajectory *tr, const char *name, rr_error *err)
     tr->speed = tr->turn_rate = 0;
     if (tr->interp == TRAJECTORY_CUBIC)
         cubic_bounds(tr);
-    else if (tr->interp == TRAJECTORY_BEZIER)
-        return bezier_bounds(tr, name, err);
     else if (tr->interp == TRAJECTORY_BEZIER_SE3)
         bezier_se3_bounds(tr);
-    else
+    else if (tr->interp != TRAJECTORY_BEZIER)
         segment_bounds(tr);
+    else if (bezier_bounds(tr, name, err))
+        return -1;
     if (!isfinite(tr->speed) || !isfinite(tr->turn_rate))
-        return rr_fail(err, "%s: poses too close in time for their motion (the speed overflows)", name);
+        return fail_too_close(tr, name, err);
     return 0;
 }
 
@@ -616,7 +700,8 @@ void trajectory_write_tum_line(FILE *f, double t, vec3 p, const double q[4], int
 void trajectory_free(trajectory *tr)
 {
     free(tr->knots);
+    free(tr->lines);
     free(tr->name);
-    tr->knots = NULL, tr->name = NULL;
+    tr->knots = NULL, tr->lines = NULL, tr->name = NULL;
     tr->count = 0;
 }

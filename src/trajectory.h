@@ -50,6 +50,8 @@ typedef struct {
     int opengl_axes; /* the file's camera axes: 1 OpenGL, 0 OpenCV */
     int count;
     trajectory_knot *knots;
+    long *lines; /* the TUM line each knot was read from, for messages
+                  * (NULL: a transforms.json's, knot k its frames[k]) */
     /* over the whole domain, set by trajectory_prepare: how fast the
      * camera's origin moves and how fast it turns (radians) per unit time */
     double speed, turn_rate;
@@ -70,7 +72,9 @@ int trajectory_min_knots(trajectory_interp k);
 
 /* Parses a TUM file's text (len bytes): one knot a line,
  * `t tx ty tz qx qy qz qw`, blank lines and lines starting with '#'
- * skipped. Refuses, naming name, the line and the field: a missing or
+ * skipped, and a UTF-8 byte order mark before the first line (editors
+ * write one; it is no part of the text). Refuses, naming name, the line
+ * and the field (bytes outside printable ASCII as \xHH): a missing or
  * extra field, one that is not a finite number, a position coordinate
  * beyond TRAJECTORY_MAX_ABS, a zero quaternion or one
  * whose length is not 1 within 1e-3 (it is normalised), times that do not
@@ -85,7 +89,9 @@ int trajectory_load_tum(const char *path, trajectory *out, uint64_t *content_has
 /* Checks the knots against the interpolation (how many; cubic: evenly
  * spaced; bezier: control quaternions within one hemisphere; every
  * rotation between neighbours short of 180 degrees, where Log is
- * ambiguous) and sets the motion bounds. Fails naming name. */
+ * ambiguous; times far enough apart that the motion bounds are finite)
+ * and sets the motion bounds. Fails naming name and, where one pose is
+ * at fault, its line (or frames[k]). */
 int trajectory_prepare(trajectory *tr, const char *name, rr_error *err);
 
 /* The times the interpolation is defined over. */

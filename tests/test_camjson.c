@@ -141,3 +141,20 @@ TEST(camjson_refuses_a_focal_length_the_exr_header_cannot_hold)
     snprintf(f, sizeof f, GOOD_POS ", \"rotation\": " ROT ", " GOOD_SIZE ", \"fx\": 70, \"fy\": 1e41");
     CHECK(fails_with(f, "field 'fy' = 1e+41 gives no usable field of view for height 60"));
 }
+
+/* A byte order mark before the JSON (RFC 8259 8.1 lets a parser ignore it; Windows
+ * editors write it) is skipped, as the TUM reader skips one: the file reads as
+ * without it, and a later mistake keeps its line. Elsewhere it is still an error. */
+TEST(camjson_skips_a_leading_byte_order_mark)
+{
+    char text[4096], marked[4100];
+    snprintf(text, sizeof text, "[%s]", one("A", GOOD_POS ", \"rotation\": " ROT ", " GOOD_SIZE ", " GOOD_F));
+    snprintf(marked, sizeof marked, "\xEF\xBB\xBF%s", text);
+    camjson_camera plain, c;
+    rr_error e = {{0}};
+    CHECK(parse(text, "A", &plain, &e) == 0);
+    CHECK(parse(marked, "A", &c, &e) == 0 && c.fx == plain.fx && c.width == plain.width);
+    CHECK(parse("\xEF\xBB\xBF[\n{\"img_name\": \"A\",\n \"fx\": }]", "A", &c, &e) != 0 &&
+          strstr(e.msg, "cams.json:3: not a complete JSON"));
+    CHECK(parse("[\xEF\xBB\xBF{\"img_name\": \"A\"}]", "A", &c, &e) != 0 && strstr(e.msg, "not a complete JSON"));
+}

@@ -4,7 +4,9 @@ camera to raster, and finds it where refrender renders it (the centroid of
 its coverage) within 0.1 pixel: for a still scene, a keyframed object and a
 moving camera. The shutter is 1e-7 long, so the exported time is the
 rendered one."""
+import hashlib
 import json
+import re
 
 import numpy as np
 import pytest
@@ -110,3 +112,136 @@ def test_a_long_shutter_is_sampled_without_overflow_or_named(tmp_path):
     proc = run(["export", scene, "--shutter", "-1e308,1e308", "-o", out])
     assert proc.returncode == 1 and "shutter [-1e+308, 1e+308]: its length overflows" in proc.stderr, proc.stderr
     assert "camera" not in proc.stderr
+
+
+# A camera on a two-pose linear trajectory over [0, 1]; the image is W x H, so that a rolling shutter's
+# lines are H rows (top-to-bottom) or W columns (left-to-right).
+W, H = 8, 6
+TUM = "0 0 0 0 0 0 0 1\n1 0.1 0 0 0 0 0 1\n"
+PREVIOUS = b"a file the export must leave as it was\n"
+
+
+def trajectory_scene(tmp_path, shutter='<shutter open="0.4" close="0.6"/>', trajectory="p.tum"):
+    if trajectory == "p.tum":
+        (tmp_path / "p.tum").write_text(TUM)
+    tum = trajectory.endswith(".tum")  # a transforms.json gives the camera's intrinsics itself
+    camera = f'<camera fov="40" width="{W}" height="{H}">' if tum else "<camera>"
+    axes = ' axes="opengl" interpolation="linear"' if tum else ""
+    scene = tmp_path / "s.xml"
+    scene.write_text(f'<scene>{camera}<trajectory file="{trajectory}"{axes}/></camera>{shutter}'
+                     '<object name="ball"><sphere radius="0.5"/></object></scene>')
+    return scene
+
+
+def digests(paths):
+    return {p.name: hashlib.sha256(p.read_bytes()).hexdigest() if p.exists() else None for p in paths}
+
+
+def test_export_refuses_to_overwrite_its_inputs(tmp_path):
+    """--tum and --transforms, like -o, may not name a file the scene is read from: the scene itself, its
+    TUM trajectory, or the transforms.json it reads its poses from, however the name is spelled (./, a
+    directory and .., a symbolic link). Each is refused, naming the option and both spellings, and no
+    input nor the existing -o file changes (SHA-256 before and after)."""
+    scene = trajectory_scene(tmp_path)
+    (tmp_path / "sub").mkdir()
+    (tmp_path / "link.tum").symlink_to("p.tum")
+    out = tmp_path / "e.json"
+    out.write_bytes(PREVIOUS)
+    cases = [("--tum", "p.tum"), ("--tum", "./p.tum"), ("--tum", "sub/../p.tum"), ("--tum", "link.tum"),
+             ("--transforms", "s.xml"), ("--transforms", str(scene)), ("-o", "./s.xml")]
+    watched = [scene, tmp_path / "p.tum", out]
+    before = digests(watched)
+    for option, path in cases:
+        args = ["export", "s.xml", "-o", "e.json", option, path] if option != "-o" else ["export", "s.xml", "-o", path]
+        proc = run(args, cwd=tmp_path)
+        assert proc.returncode == 1, (option, path, proc.stderr)
+        assert f"{option} {path} is an input of this scene" in proc.stderr, proc.stderr
+        assert digests(watched) == before, (option, path)
+    # a scene whose poses are a transforms.json: --transforms naming it is refused the same way
+    assert run(["export", "s.xml", "-o", "e0.json", "--transforms", "t.json"], cwd=tmp_path).returncode == 0
+    poses = trajectory_scene(tmp_path, trajectory="t.json")
+    before = digests([poses, tmp_path / "t.json"])
+    proc = run(["export", "s.xml", "-o", "e1.json", "--transforms", "./t.json"], cwd=tmp_path)
+    assert proc.returncode == 1 and "--transforms ./t.json is an input of this scene" in proc.stderr, proc.stderr
+    assert digests([poses, tmp_path / "t.json"]) == before and not (tmp_path / "e1.json").exists()
+
+
+def test_export_refuses_two_outputs_in_one_file(tmp_path):
+    """Two outputs naming one file would leave only the later: refused before anything is written, naming
+    both options, for the same file spelled alike, spelled differently, or through a symbolic link; a file
+    already there keeps its bytes."""
+    trajectory_scene(tmp_path)
+    (tmp_path / "sub").mkdir()
+    (tmp_path / "a.json").write_bytes(PREVIOUS)
+    (tmp_path / "alias.json").symlink_to("a.json")
+    cases = [["-o", "same.json", "--tum", "same.json"],
+             ["-o", "e.json", "--tum", "x.txt", "--transforms", "./x.txt"],
+             ["-o", "a.json", "--transforms", "alias.json"],
+             ["-o", "sub/../a.json", "--tum", "a.json"],
+             ["-o", "e.json", "--tum", "sub/t", "--transforms", str(tmp_path / "sub" / "t")]]
+    for args in cases:
+        proc = run(["export", "s.xml", *args], cwd=tmp_path)
+        first, second = [args[i:i + 2] for i in range(0, len(args), 2)][-2:]
+        assert proc.returncode == 1, (args, proc.stderr)
+        assert f"{' '.join(first)} and {' '.join(second)} name the same file" in proc.stderr, proc.stderr
+        assert (tmp_path / "a.json").read_bytes() == PREVIOUS
+        assert sorted(p.name for p in tmp_path.iterdir()) == ["a.json", "alias.json", "p.tum", "s.xml", "sub"], args
+    assert list((tmp_path / "sub").iterdir()) == []
+
+
+def test_export_writes_all_its_outputs_or_none(tmp_path):
+    """--tum into a directory that does not exist was found only after the -o JSON had been written: every
+    output is checked before any is written. A failure names the file; the files there keep their bytes
+    and none is created. (A write or rename failing midway: tests/test_faults.py.)"""
+    trajectory_scene(tmp_path)
+    (tmp_path / "e.json").write_bytes(PREVIOUS)
+    for args, named in [(["-o", "e.json", "--tum", "nodir/y.tum"], "nodir/y.tum"),
+                        (["-o", "e.json", "--tum", "y.tum", "--transforms", "nodir/t.json"], "nodir/t.json"),
+                        (["-o", "e.json", "--tum", "y.tum", "--transforms", "sub"], "sub")]:
+        (tmp_path / "sub").mkdir(exist_ok=True)
+        proc = run(["export", "s.xml", *args], cwd=tmp_path)
+        assert proc.returncode == 1 and f"{named}: " in proc.stderr, (args, proc.stderr)
+        assert (tmp_path / "e.json").read_bytes() == PREVIOUS and not (tmp_path / "y.tum").exists(), args
+        assert [p.name for p in tmp_path.iterdir() if ".tmp-" in p.name or ".probe-" in p.name] == []
+
+
+def lines_span(kind, value, lines):
+    """The times the lines of a shutter [0.4, 0.6] are exposed, from the rolling shutters' definitions
+    (scenes/README.md): 'lines' exposes line i over [open, close] + i lineDelay; '3dgs-deblur' line i at
+    t + readoutTime ((i + 0.5) / lines - 0.5), t in [open, close]."""
+    if kind == "lines":
+        return 0.4, 0.6 + value * (lines - 1)
+    reach = value * (0.5 - 0.5 / lines)
+    return 0.4 - reach, 0.6 + reach
+
+
+@pytest.mark.parametrize("kind,value,readout,accepted", [
+    ("lines", 0.06, "top-to-bottom", True),          # H = 6 rows: the last closes at 0.6 + 5 x 0.06 = 0.9
+    ("lines", 0.06, "left-to-right", False),         # W = 8 columns: 0.6 + 7 x 0.06 = 1.02
+    ("lines", 0.1, "bottom-to-top", False),          # 0.6 + 5 x 0.1 = 1.1
+    ("3dgs-deblur", 0.93, "top-to-bottom", True),    # 0.5 -+ (0.1 + 0.93 (0.5 - 1/12)) = [0.0125, 0.9875]
+    ("3dgs-deblur", 0.93, "right-to-left", False),   # 0.5 -+ (0.1 + 0.93 (0.5 - 1/16)) = [-0.0069, 1.0069]
+    ("gsplat", 0, "left-to-right", True),            # every line within [open, close]
+])
+def test_export_takes_the_renders_rule_for_a_rolling_shutter(tmp_path, kind, value, readout, accepted):
+    """A rolling shutter exposes its lines past [open, close]: export checked only [open, close] against
+    the trajectory's poses and exported frames that render refuses. Both now take one rule: every line's
+    times within the poses, [0, 1] here, with the same message, which names the span of the lines'
+    times (from the shutters' definitions, written out above)."""
+    attr = {"lines": f'lineDelay="{value}"', "3dgs-deblur": f'readoutTime="{value}"', "gsplat": ""}[kind]
+    scene = trajectory_scene(tmp_path, f'<shutter open="0.4" close="0.6" rolling="{kind}" readout="{readout}" '
+                                       f'{attr}/>')
+    lo, hi = lines_span(kind, value, W if readout in ("left-to-right", "right-to-left") else H)
+    assert accepted == (0 <= lo and hi <= 1)
+    exported = run(["export", scene, "-o", tmp_path / "e.json"])
+    rendered = run([scene, "-o", tmp_path / "r.exr", "--spp", 1, "--tspp", 1, "--quiet"])
+    assert (exported.returncode == 0) == accepted == (rendered.returncode == 0), (exported.stderr, rendered.stderr)
+    if accepted:
+        return
+    message = exported.stderr.removeprefix("refrender export: ")
+    assert exported.returncode == 1 and message == rendered.stderr.removeprefix("refrender: "), (exported.stderr,
+                                                                                                  rendered.stderr)
+    span = re.search(r"exposes lines over \[([^,]+), ([^\]]+)\]", message)
+    assert span and abs(float(span[1]) - lo) < 1e-12 and abs(float(span[2]) - hi) < 1e-12, message
+    assert f'rolling="{kind}"' in message and "covers [0, 1]" in message and "s.xml" in message
+    assert not (tmp_path / "e.json").exists()

@@ -154,3 +154,41 @@ def test_scene_export(tmp_path, scene, op):
     def complete(path):
         return path.read_bytes() == (good / "s.json").read_bytes()
     assert check_every_fault(tmp_path, ["export", scene, "--frames", "0-2", "-o", out], [out], complete, op) >= 1
+
+
+# a write fault is sticky (a disk that stays full): the shim's one failing fwrite does not set the
+# stream's error flag, as a real one does, so alone it could go unseen
+@pytest.mark.parametrize("op,sticky", [("write", True), ("rename", False), ("rename", True)])
+def test_scene_export_writes_its_three_outputs_or_none(tmp_path, scene, op, sticky):
+    """export -o, --tum and --transforms are one result: after a write or a rename fails at any point,
+    either every output is complete or every one holds its previous bytes. The JSON was put in place
+    before the TUM file was written, so a fault in the TUM's writes, or in the second rename, left a new
+    JSON beside an old TUM file. A rename failing after others succeeded puts their previous files back,
+    also when every later rename fails too (sticky)."""
+    good = tmp_path / "good"
+    good.mkdir()
+    names = ["s.json", "s.tum", "t.json"]
+
+    def export_args(folder):
+        return ["export", scene, "--frames", "0-2", "-o", folder / names[0], "--tum", folder / names[1],
+                "--transforms", folder / names[2]]
+    assert run(export_args(good)).returncode == 0
+    outputs = [tmp_path / name for name in names]
+    log = tmp_path / "faults.log"
+    proc, _, calls = faulty_run(export_args(tmp_path), 0, op, log)
+    total = calls[1 if op == "rename" else 0]
+    assert proc.returncode == 0 and total >= 3, proc.stderr
+    for n in fault_points(total):
+        for out in outputs:
+            out.write_bytes(PREVIOUS)
+        proc, faulted, _ = faulty_run(export_args(tmp_path), n, op, log, sticky)
+        assert faulted and proc.returncode == 1 and proc.stderr.strip(), (n, proc.returncode, proc.stderr)
+        states = ["previous" if out.read_bytes() == PREVIOUS else
+                  "complete" if out.read_bytes() == (good / out.name).read_bytes() else "other" for out in outputs]
+        assert states == ["previous"] * 3, (n, states)  # a fault in any of them: none is put in place
+        assert [p.name for p in tmp_path.iterdir() if ".tmp-" in p.name] == [], n
+        for out in outputs:  # and where there was no file, none is left
+            out.unlink()
+        proc, faulted, _ = faulty_run(export_args(tmp_path), n, op, log, sticky)
+        assert faulted and proc.returncode == 1 and not any(out.exists() for out in outputs), n
+        assert [p.name for p in tmp_path.iterdir() if ".tmp-" in p.name] == [], n

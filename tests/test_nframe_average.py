@@ -245,7 +245,9 @@ def test_bad_procedures_are_refused_by_name(tmp_path):
                           (["--procedure", "deblur-nerf:gamma=2"], "'gamma=2' is not key=value"),
                           (["--procedure", "custom:space=model,frames=round"], "space=model averages"),
                           (["--procedure", "custom:times=endpoints,n=1"], "too few frames"),
-                          (["--procedure", "deblur-nerf", "--n", "4"], "--n is for float averages")):
+                          (["--procedure", "deblur-nerf", "--n", "4"], "--n is for float averages"),
+                          (["--procedure", "custom:seed=3"], "seed=3 has no meaning with times=midpoint"),
+                          (["--procedure", "deblur-nerf:n=16,n=31"], "n is given twice")):
         proc = subprocess.run([sys.executable, str(SCRIPT), str(scene), "--out", str(tmp_path / "nf"), *args],
                               capture_output=True, text=True, env={**os.environ, "REFRENDER": BIN})
         assert proc.returncode == 2 and message in proc.stderr and "Traceback" not in proc.stderr, proc.stderr
@@ -264,3 +266,81 @@ def test_frames_round_half_up_as_blender():
     top = one - half / np.float32(255)
     blender = [0 if x <= 0 else 255 if x > top else int(np.float32(255) * x + half) for x in v]
     assert np.array_equal(nf.to_8bit(v, "round"), np.array(blender, np.uint8))
+
+
+def _refused(capsys, *argv):
+    """The script's argparse-style refusal of argv: exit 2 with one error line, its message."""
+    with pytest.raises(SystemExit) as stop:
+        nf.parse(list(map(str, argv)))
+    errors = [line for line in capsys.readouterr().err.splitlines() if "error:" in line]
+    assert stop.value.code == 2 and len(errors) == 1, errors
+    return errors[0]
+
+
+def test_empty_names_negative_seeds_and_endless_runs_are_refused_by_name(tmp_path, capsys):
+    """An empty --procedure ('' or ' , ') named nothing and ended in a traceback after rendering the
+    reference; seed=-1 in numpy's traceback (its generators take seeds >= 0); n = 1e12 rendered
+    frames until killed. Each is refused by value when the arguments are read, and an N is bounded
+    by MAX_FRAMES (named in the message and in --help); N = MAX_FRAMES itself is accepted. The whole
+    command once: exit 2, no traceback, nothing rendered or written."""
+    scene = write_scene(tmp_path, 1.0)
+    assert "--procedure '':" in _refused(capsys, scene, "--procedure", "")
+    assert "--procedure ' , ':" in _refused(capsys, scene, "--procedure", " , ")
+    assert "--procedure 'midpoint,,deblur-nerf':" in _refused(capsys, scene, "--procedure", "midpoint,,deblur-nerf")
+    line = _refused(capsys, scene, "--procedure", "custom:times=random,seed=-1")
+    assert "custom:times=random,seed=-1" in line and "seed must be an integer >= 0, not -1" in line
+    bound = f"more than {nf.MAX_FRAMES} frames"
+    line = _refused(capsys, scene, "--procedure", "custom:n=1000000000000")
+    assert "n = 1000000000000" in line and bound in line
+    line = _refused(capsys, scene, "--n", f"4,{nf.MAX_FRAMES + 1}")
+    assert f"{nf.MAX_FRAMES + 1} is {bound}" in line
+    for argv in (["--procedure", f"custom:n={nf.MAX_FRAMES}"], ["--n", str(nf.MAX_FRAMES)]):
+        assert nf.parse([str(scene), *argv])[0].scene == str(scene)
+    proc = subprocess.run([sys.executable, str(SCRIPT), str(scene), "--procedure", "", "--out", str(tmp_path / "nf")],
+                          capture_output=True, text=True, env={**os.environ, "REFRENDER": BIN}, timeout=120)
+    assert proc.returncode == 2 and "Traceback" not in proc.stderr and not (tmp_path / "nf").exists(), proc.stderr
+    in_process = _refused(capsys, scene, "--procedure", "").split("error:")[1]
+    assert [line.split("error:")[1] for line in proc.stderr.splitlines() if "error:" in line] == [in_process]
+    helptext = subprocess.run([sys.executable, str(SCRIPT), "--help"], capture_output=True, text=True).stdout
+    assert f"at most {nf.MAX_FRAMES}" in " ".join(helptext.split())
+
+
+def _srgb(linear):
+    """The sRGB curve (IEC 61966-2-1), written here apart from the script's."""
+    x = np.clip(linear, 0, 1)
+    return np.where(x <= 0.0031308, 12.92 * x, 1.055 * x ** (1 / 2.4) - 0.055)
+
+
+def test_one_or_two_frames_still_see_the_motion(tmp_path):
+    """A procedure of one frame reported 0 % moving pixels (one frame has no spread) and one of two
+    frames 11 %, for a scene whose splat sweeps 15 % of the image. The truth here: the pixels whose
+    sharp frames at 33 times k/32, spanning the shutter, differ by more than half a level (this
+    test's own sRGB curve and spread). The script's times (0.5; 0.25 and 0.75; its probes at
+    (k + 1/2)/16) are rendered here too, so it can only find fewer. It may miss only what the splat
+    changes in the first or last 1/32 of the shutter, before or after every probe: it moves 7.5 px
+    over the shutter (1 unit at depth 3, f = 6 / tan 15 deg = 22.4 px), so 0.23 px in 1/32, which
+    brings at most one more column into reach at each end of a row: at most two pixels a row."""
+    scene = write_scene(tmp_path, 1.0)
+    ref = _reference(tmp_path, scene, "lin.exr", "--blur-space", "linear", "--pixel-filter", "point")
+    found = {}
+    for n in (1, 2):
+        out = tmp_path / f"n{n}.json"
+        proc = subprocess.run([sys.executable, str(SCRIPT), str(scene), "--reference", str(ref), "--out",
+                               str(tmp_path / "nf"), "--procedure", f"midpoint:n={n}", "--json", str(out)],
+                              capture_output=True, text=True, env={**os.environ, "REFRENDER": BIN})
+        assert proc.returncode == 0, proc.stderr
+        found[n] = json.loads(out.read_text())["moving_fraction"]
+    times = sorted({k / 32 for k in range(33)} | {(k + 0.5) / 16 for k in range(16)} | {0.25, 0.5, 0.75})
+    shown = []
+    for t in times:
+        frame = tmp_path / "sharp.exr"
+        assert subprocess.run([BIN, str(scene), "--pixel-filter", "point", "--blur-space", "linear", "--time", repr(t),
+                               "--tspp", "1", "--batches", "1", "--quiet", "-o", str(frame)]).returncode == 0
+        shown.append(_srgb(nf.read_rgba(frame)[0][..., :3]))
+    shown = np.array(shown)
+    truth = ((shown.max(axis=0) - shown.min(axis=0)) > 0.5 / 255).any(axis=-1)
+    rows_touched = int(truth.any(axis=1).sum())
+    assert truth.mean() > 0.1 and rows_touched >= 1
+    for n, fraction in found.items():
+        pixels = round(fraction * truth.size)
+        assert truth.sum() - 2 * rows_touched <= pixels <= truth.sum(), (n, pixels, int(truth.sum()), rows_touched)

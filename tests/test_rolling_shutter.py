@@ -22,6 +22,8 @@ column (a shift moves the moment, not the sum) are compared with the analytic
 ones within K = 4 standard errors (64 comparisons, 32 batches; a false failure
 about 4e-3 by the normal tail). A wrong line index or delay fails by far, and
 3dgs-deblur's half line (0.07 pixels here) too (the planted checks below)."""
+import re
+
 import numpy as np
 import pytest
 
@@ -167,6 +169,57 @@ def test_gsplat_preset_exposes_each_row_at_one_instant(tmp_path, readout):
     other = {"top-to-bottom": "bottom-to-top", "right-to-left": "left-to-right"}[readout]
     assert not np.array_equal(got > 0.5, covered_time(gsplat_instants(other) - 1e-9,
                                                       gsplat_instants(other) + 1e-9) > 1e-9)
+
+
+SHARP_T = 0.05
+
+
+def sharp_instants(kind, readout):
+    """Each pixel's instant in a sharp frame at SHARP_T: every line's exposure shrunk to an instant, the
+    readout kept (as the sensor records a zero-length exposure): the preset's window with [open, close]
+    = [T, T], and for gsplat, whose lines are instants already and whose readout spans its shutter, the
+    scene's readout (CLOSE - OPEN) begun at T."""
+    r, lines = line_index(readout)
+    if kind == "lines":
+        return SHARP_T + 0.005 * r
+    if kind == "3dgs-deblur":
+        rows = np.broadcast_to(np.arange(H)[:, None], (H, W))
+        t0, t1 = reference.deblur3dgs_row_window(rows, H, SHARP_T, SHARP_T, 0.2)
+        assert np.array_equal(t0, t1)
+        return t0
+    j, i = np.meshgrid(np.arange(H), np.arange(W), indexing="ij")
+    return reference.gsplat_row_instant(j, i, W, H, SHARP_T, SHARP_T + CLOSE - OPEN, readout.replace("-", "_"))
+
+
+@pytest.mark.parametrize("kind, attrs, readout", [
+    ("lines", 'lineDelay="0.005"', "top-to-bottom"),
+    ("3dgs-deblur", 'readoutTime="0.2"', "top-to-bottom"),
+    ("gsplat", "", "top-to-bottom"),
+    ("gsplat", "", "right-to-left"),
+])
+def test_time_gives_each_line_its_instant_around_t(tmp_path, kind, attrs, readout):
+    """--time T with a rolling shutter: each line at T plus its readout offset, for every preset (gsplat
+    once gave every line T, and both headers said [T, T] only). With the camera moving, the sphere's
+    edge in each row is where the analytic coverage at that row's instant puts it, pixel for pixel;
+    the header's lineTimes states the first and last lines' instants."""
+    out = tmp_path / "o.exr"
+    proc = run([scene(tmp_path, f'rolling="{kind}" readout="{readout}" {attrs}'), "--time", SHARP_T,
+                "--pixel-filter", "point", "--spp", 1, "-o", out, "--quiet"])
+    assert proc.returncode == 0, proc.stderr
+    ch, header = read_full(out)
+    t = sharp_instants(kind, readout)
+    hit = covered_time(t - 1e-9, t + 1e-9) > 1e-9
+    got = ch["R"]
+    assert set(np.unique(got)) <= {0.0, 1.0}
+    assert np.array_equal(got > 0.5, hit), np.argwhere((got > 0.5) != hit)
+    # planted: every line at T is another image
+    assert not np.array_equal(got > 0.5, covered_time(SHARP_T - 1e-9, SHARP_T + 1e-9) > 1e-9)
+    assert [float(v) for v in header["refrender:shutter"].split()] == [SHARP_T, SHARP_T]
+    r, lines = line_index(readout)
+    windows = re.findall(r"line (\d+) \[([^,]+), ([^]]+)\]", header["refrender:lineTimes"])
+    assert [int(w[0]) for w in windows] == [0, lines - 1], header["refrender:lineTimes"]
+    for (_, start, end), want in zip(windows, (t[r == 0][0], t[r == lines - 1][0])):
+        assert float(start) == float(end) == pytest.approx(want, rel=0, abs=1e-15)
 
 
 def test_rolling_shutter_composes_with_passes_crops_and_is_in_the_identity(tmp_path):

@@ -88,6 +88,118 @@ TEST(prepare_refuses_what_the_interpolation_cannot_use)
     trajectory_free(&tr);
 }
 
+/* Editors on Windows start a text file with the UTF-8 byte order mark: it is
+ * no part of the first line; anywhere else it is named, byte by byte (it
+ * prints as nothing). */
+TEST(tum_reader_skips_a_leading_byte_order_mark_and_names_one_elsewhere)
+{
+    trajectory tr;
+    rr_error e;
+    CHECK(parse("\xEF\xBB\xBF" L0 "1 0 0 0 0 0 0 1\n", &tr, &e) == 0);
+    CHECK(tr.count == 2 && tr.knots[0].t == 0 && tr.knots[1].t == 1);
+    trajectory_free(&tr);
+    CHECK(parse("\xEF\xBB\xBF# t tx ty tz qx qy qz qw\n" L0, &tr, &e) == 0 && tr.count == 1); /* then a comment */
+    trajectory_free(&tr);
+    CHECK(fails_with(L0 "\xEF\xBB\xBF" "1 0 0 0 0 0 0 1\n", "p.tum:2: field 't' is not a finite number "
+                                                             "('\\xef\\xbb\\xbf1')"));
+    CHECK(fails_with(L0 "1 0 0 0 0 0 0 1 \x01x\n", "p.tum:2: more than the 8 fields t tx ty tz qx qy qz qw "
+                                                   "('\\x01x')"));
+}
+
+/* n poses moving along x at times t0 + k spacing (written with fmt), one
+ * comment line first: pose k is on line k + 2. The spacing after pose
+ * `short_at` is `shortened` times the others. */
+static char *even_poses(const char *fmt, double t0, double spacing, int n, int short_at, double shortened)
+{
+    static char text[4096];
+    size_t len = (size_t)snprintf(text, sizeof text, "# t tx ty tz qx qy qz qw\n");
+    double t = t0;
+    for (int k = 0; k < n; k++) {
+        char time[64];
+        snprintf(time, sizeof time, fmt, t);
+        len += (size_t)snprintf(text + len, sizeof text - len, "%s %.17g 0 0 0 0 0 1\n", time, 0.1 * k);
+        t += k == short_at ? spacing * shortened : spacing;
+    }
+    return text;
+}
+
+static int cubic_prepare(const char *text, rr_error *e)
+{
+    trajectory tr;
+    if (parse(text, &tr, e))
+        return -1;
+    tr.interp = TRAJECTORY_CUBIC;
+    int rc = trajectory_prepare(&tr, "p.tum", e);
+    trajectory_free(&tr);
+    return rc;
+}
+
+/* A uniform B-spline needs evenly spaced times, to a slack of the spacing
+ * (not of |t|): at TUM RGB-D's Unix times (1.3e9, 1.7e9) a 30 Hz file is
+ * even to the rounding of its doubles (2^-51 |t|, 6e-7 s) or, written to the
+ * microsecond as TUM writes them, 1e-6 s (3e-5 of the spacing); one segment
+ * 10x short is 0.03 s off and refused, naming the file and the line, as it
+ * is at t = 0. */
+TEST(cubic_spacing_is_checked_against_the_spacing_at_unix_times)
+{
+    rr_error e;
+    for (int w = 0; w < 2; w++)
+        for (double t0 = 1.3e9; t0 < 2e9; t0 += 0.4e9) {
+            const char *fmt = w ? "%.6f" : "%.17g";
+            int rc = cubic_prepare(even_poses(fmt, t0, 1.0 / 30, 40, -1, 1), &e);
+            if (rc)
+                printf("    %s at %g: %s\n", fmt, t0, e.msg);
+            CHECK(rc == 0);
+        }
+    const char *needle = "p.tum:6: a cubic B-spline needs evenly spaced times: this pose is ";
+    for (double t0 = 0; t0 < 2e9; t0 += 1.7e9) {
+        rr_error f = {{0}};
+        CHECK(cubic_prepare(even_poses("%.17g", t0, 1.0 / 30, 8, 3, 0.1), &f) != 0 && strstr(f.msg, needle));
+        CHECK(strstr(f.msg, "after the one before (line 5)"));
+        printf("    at %g: %s\n", t0, f.msg);
+    }
+}
+
+/* What the slack lets through, the bounds hold: poses evenly along x, one
+ * spacing 5e-5 short (within 1e-4 of the first's): the camera moves at
+ * 0.1 / spacing there, faster than the first spacing gives, and the speed
+ * bound covers it. */
+TEST(cubic_bounds_hold_the_shortest_spacing)
+{
+    trajectory tr;
+    rr_error e;
+    CHECK(parse(even_poses("%.17g", 0, 1, 8, 3, 1 - 5e-5), &tr, &e) == 0);
+    tr.interp = TRAJECTORY_CUBIC;
+    CHECK(trajectory_prepare(&tr, "p.tum", &e) == 0);
+    double fastest = 0.1 / (tr.knots[4].t - tr.knots[3].t);
+    printf("    speed bound %.17g, the shortest segment's speed %.17g\n", tr.speed, fastest);
+    CHECK(tr.speed >= fastest);
+    trajectory_free(&tr);
+}
+
+/* Poses too close in time for their motion overflow the bounds: refused
+ * alike by every interpolation, naming the pose's line (a Bezier's: its
+ * last, as it divides by its whole span). */
+TEST(poses_too_close_in_time_are_refused_by_line)
+{
+    const char *segments = "# t tx ty tz qx qy qz qw\n" L0 "1e-310 1 0 0 0 0 0 1\n1 2 0 0 0 0 0 1\n";
+    const char *cubic = "# t tx ty tz qx qy qz qw\n" L0 "1e-310 1 0 0 0 0 0 1\n2e-310 2 0 0 0 0 0 1\n"
+                        "3e-310 3 0 0 0 0 0 1\n";
+    const char *bezier = "# t tx ty tz qx qy qz qw\n" L0 "1e-310 1 0 0 0 0 0 1\n";
+    for (int k = TRAJECTORY_LINEAR; k <= TRAJECTORY_BEZIER_SE3; k++) {
+        trajectory tr;
+        rr_error e = {{0}};
+        const char *text = k == TRAJECTORY_CUBIC ? cubic : k >= TRAJECTORY_BEZIER ? bezier : segments;
+        CHECK(parse(text, &tr, &e) == 0);
+        tr.interp = (trajectory_interp)k;
+        int rc = trajectory_prepare(&tr, "p.tum", &e);
+        printf("    %s: %s\n", trajectory_interp_name(tr.interp), rc ? e.msg : "accepted");
+        CHECK(rc != 0 && strstr(e.msg, "p.tum:3: poses too close in time for their motion: this pose is 1e-310 "
+                                        "after line 2's"));
+        trajectory_free(&tr);
+    }
+}
+
 TEST(a_written_trajectory_reads_back_bit_for_bit)
 {
     const char *text = "0.5 0.1 -2 3.25 0.1 0.2 0.3 0.9273618495495703\n"

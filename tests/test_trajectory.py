@@ -188,6 +188,29 @@ def test_a_bad_tum_line_is_named_with_the_scene_line(tmp_path):
     assert proc.returncode != 0 and "p.tum:2: field 'qw' is missing" in proc.stderr and "s.xml:3" in proc.stderr
 
 
+@pytest.mark.parametrize("spacings, why", [
+    ([1] * 7, None),
+    ([1, 1, 1, 0.1, 1, 1, 1], "p.tum:6: a cubic B-spline needs evenly spaced times"),
+])
+def test_cubic_times_at_unix_epoch_are_even_to_their_spacing(tmp_path, spacings, why):
+    """TUM RGB-D's times are Unix seconds (~1.7e9) written to the microsecond: a 30 Hz file is even to
+    1e-6 s (3e-5 of its spacing) and is rendered; one segment 10x short (0.03 s off) is refused, naming
+    the file and line, as it is with times from 0 (a slack of |t|'s order once let it through)."""
+    times = 1.7e9 + np.concatenate([[0.0], np.cumsum(spacings)]) / 30
+    lines = [f"{t:.6f} {0.05 * k:.17g} 0 0 0 0 0 1" for k, t in enumerate(times)]
+    (tmp_path / "p.tum").write_text("# t tx ty tz qx qy qz qw\n" + "\n".join(lines) + "\n")
+    t0, t1 = times[2], times[3]
+    s = tmp_path / "s.xml"
+    s.write_text(f'<scene><camera fov="40" width="8" height="8"><trajectory file="p.tum" axes="opencv" '
+                 f'interpolation="cubic"/></camera><shutter open="{t0!r}" close="{t1!r}"/>'
+                 '<object position="0 0 4"><sphere radius="1"/></object></scene>')
+    proc = run([s, "--spp", 1, "--tspp", 1, "-o", tmp_path / "o.exr", "--quiet"])
+    if why is None:
+        assert proc.returncode == 0, proc.stderr
+    else:
+        assert proc.returncode != 0 and why in proc.stderr and "(line 5)" in proc.stderr, proc.stderr
+
+
 # ---- nerfstudio transforms.json: its camera, principal point off the centre ----
 
 TW, TH, FX, FY, CX, CY = 64, 48, 70.0, 74.0, 40.5, 19.0  # the principal point 8.5 px right, 5 px up of centre

@@ -43,7 +43,9 @@ static void export_usage(FILE *f)
 "                  BAD-Gaussians, the default) or opencv (x right, y down, z forward)\n"
 "  --transforms F  the same poses as a nerfstudio transforms.json, with the\n"
 "                  camera's intrinsics (one frame a time, 'time' its time)\n"
-"  -o, --output F  output JSON file (required); written atomically\n", f);
+"  -o, --output F  output JSON file (required)\n"
+"All outputs are written or none; none may name an input of the scene or\n"
+"another output.\n", f);
 }
 
 typedef struct {
@@ -139,12 +141,10 @@ static int matrix_finite(double m[4][4])
 
 /* JSON has no number for inf or NaN (a velocity of 1e308 at t = 10 once
  * wrote "inf" into the file): such a transform is refused, naming it. */
-static int check_frame(const scene *s, const double *times, int n, rr_error *err)
+static int check_frame(const scene *s, const shutter *sh, const double *times, int n, rr_error *err)
 {
-    double m[4][4], first = INFINITY, last = -INFINITY;
-    for (int i = 0; i < n; i++)
-        first = fmin(first, times[i]), last = fmax(last, times[i]);
-    if (n && scene_check_trajectory_times(s, first, last, err)) /* as a render refuses them */
+    double m[4][4];
+    if (scene_check_shutter_in_trajectory(s, sh, err)) /* the render's rule: every line's times */
         return -1;
     for (int i = 0; i < n; i++) {
         world_to_camera(s, times[i], m);
@@ -169,7 +169,7 @@ static int write_frame(FILE *f, const scene *s, long long frame, int numbered, c
         return rr_fail(err, "the shutter [%g, %g] is longer than double precision holds (close - open overflows)",
                        sh->open, sh->close);
     int n = sample_times(sh, k, times);
-    if (check_frame(s, times, n, err))
+    if (check_frame(s, sh, times, n, err))
         return -1;
     fputs("    {\"frame\": ", f);
     numbered ? fprintf(f, "%lld", frame) : fputs("null", f);
@@ -439,29 +439,87 @@ static int write_export(FILE *f, void *ctx, rr_error *err)
     return write_json(f, j->s, j->o, err);
 }
 
+/* One file the export writes, and the option that named it. */
+typedef struct {
+    const char *option, *path;
+    int (*write)(FILE *f, void *ctx, rr_error *err);
+} export_output;
+
+enum { MAX_EXPORT_OUTPUTS = 3 };
+
+/* The outputs asked for, -o's first. */
+static int export_outputs(const export_options *o, export_output *out)
+{
+    int n = 0;
+    out[n++] = (export_output){"-o", o->output, write_export};
+    if (o->tum)
+        out[n++] = (export_output){"--tum", o->tum, write_tum};
+    if (o->transforms)
+        out[n++] = (export_output){"--transforms", o->transforms, write_transforms};
+    return n;
+}
+
+/* Before the scene is loaded: each output can be created, and no two name
+ * one file however they are spelled (the later would replace the
+ * earlier). */
+static int check_outputs(const export_output *out, int n, rr_error *err)
+{
+    for (int i = 0; i < n; i++) {
+        if (cli_check_writable(out[i].path, err))
+            return -1;
+        for (int j = 0; j < i; j++)
+            if (cli_same_file(out[i].path, out[j].path))
+                return rr_fail(err, "%s %s and %s %s name the same file: each output needs its own",
+                               out[j].option, out[j].path, out[i].option, out[i].path);
+    }
+    return 0;
+}
+
+/* No output replaces a file the scene was read from (the scene, its
+ * trajectory or transforms.json, models, .anim files). */
+static int check_not_inputs(const scene *s, const export_output *out, int n, rr_error *err)
+{
+    for (int i = 0; i < n; i++)
+        for (int k = 0; k < s->ninputs; k++)
+            if (cli_same_file(out[i].path, s->inputs[k]))
+                return rr_fail(err, "%s %s is an input of this scene (%s): refusing to overwrite it", out[i].option,
+                               out[i].path, s->inputs[k]);
+    return 0;
+}
+
+/* All or nothing: every output is made in full beside its target before
+ * any is put in place, so a failure in a later one (a pose limit, a full
+ * disk) leaves the earlier ones' files as they were. */
+static int write_outputs(const export_output *out, int n, export_job *job, rr_error *err)
+{
+    char tmp[MAX_EXPORT_OUTPUTS][PATH_MAX + 64];
+    const char *tmps[MAX_EXPORT_OUTPUTS], *paths[MAX_EXPORT_OUTPUTS];
+    for (int i = 0; i < n; i++) {
+        if (atomic_prepare_stdio(out[i].path, out[i].write, job, tmp[i], sizeof tmp[i], err)) {
+            for (int k = 0; k < i; k++)
+                atomic_discard(tmp[k]);
+            return -1;
+        }
+        tmps[i] = tmp[i], paths[i] = out[i].path;
+    }
+    return atomic_commit_all(tmps, paths, n, err);
+}
+
 static int export_scene(const export_options *o, rr_error *err)
 {
     scene s;
-    if (cli_check_writable(o->output, err) || scene_load_file_params(o->scene, &o->params, &s, err))
+    export_output out[MAX_EXPORT_OUTPUTS];
+    int n = export_outputs(o, out);
+    if (check_outputs(out, n, err) || scene_load_file_params(o->scene, &o->params, &s, err))
         return -1;
+    int rc = 0;
     if (o->shutter_set) { /* as the render applies it (main.c) */
         s.shut.open = o->shutter_open, s.shut.close = o->shutter_close;
-        if (shutter_check(&s.shut, err)) {
-            scene_free(&s);
-            return -1;
-        }
+        rc = shutter_check(&s.shut, err);
     }
-    for (int i = 0; i < s.ninputs; i++)
-        if (cli_same_file(o->output, s.inputs[i])) {
-            scene_free(&s);
-            return rr_fail(err, "%s: is an input of this scene", o->output);
-        }
     export_job job = {&s, o};
-    int rc = atomic_write_stdio(o->output, write_export, &job, err);
-    if (!rc && o->tum)
-        rc = atomic_write_stdio(o->tum, write_tum, &job, err);
-    if (!rc && o->transforms)
-        rc = atomic_write_stdio(o->transforms, write_transforms, &job, err);
+    if (!rc)
+        rc = check_not_inputs(&s, out, n, err) || write_outputs(out, n, &job, err) ? -1 : 0;
     scene_free(&s);
     return rc;
 }

@@ -50,7 +50,8 @@ static void usage(FILE *f)
 "  --shutter O,C      shutter interval (frame 0's with <frames>)\n"
 "  --frame N          render frame N of a scene with <frames rate>\n"
 "  --frames A-B       render frames A to B into -o out.%04d.exr\n"
-"  --time T           a sharp image at the instant T (default --tspp 1)\n"
+"  --time T           a sharp image at the instant T (default --tspp 1); a rolling\n"
+"                     shutter's lines at T plus their readout offsets\n"
 "  --blur-space S     model (default): average colours as given; linear: decode sRGB first\n"
 "Output:\n"
 "  -o, --output F     output EXR (default render.exr), written atomically\n"
@@ -337,8 +338,8 @@ static int apply_overrides(scene *s, const render_options *o, rr_error *err)
         if (shutter_check(&s->shut, err))
             return -1;
     }
-    if (o->instant_set) /* a zero-length box shutter: every sample's time is the instant */
-        s->shut.open = s->shut.close = o->instant, s->shut.kind = WEIGHT_BOX;
+    if (o->instant_set) /* every line's exposure an instant; a rolling shutter's lines keep their offsets */
+        shutter_at_instant(&s->shut, o->instant);
     return camera_prepare(&s->cam, err);
 }
 
@@ -650,11 +651,7 @@ static int check_frame_shutters(const scene *s, const render_options *o, rr_erro
 {
     for (long long f = o->first_frame; f <= o->last_frame; f++) {
         shutter shut;
-        double t0, t1;
-        if (frame_shutter(s, o, f, &shut, err))
-            return -1;
-        shutter_span(&shut, s->cam.width, s->cam.height, &t0, &t1);
-        if (scene_check_trajectory_times(s, t0, t1, err))
+        if (frame_shutter(s, o, f, &shut, err) || scene_check_shutter_in_trajectory(s, &shut, err))
             return -1;
     }
     return 0;
