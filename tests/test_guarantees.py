@@ -30,9 +30,11 @@ def test_outputs_never_overwrite_inputs_or_each_other(tmp_path):
     model_scene = scene(tmp_path, '<scene><camera width="8" height="6"/><object><pointModel>m.ply</pointModel>'
                                   '</object></scene>', "m.xml")
     model = ply.read_bytes()
+    os.link(ply, tmp_path / "model.exr")  # -o takes only EXR names: an input under one is still refused
     cases = [
-        ([s, "-o", s], "is an input of this render"),
-        ([model_scene, "-o", ply], "is an input of this render"),
+        ([s, "-o", s], "OpenEXR only"),
+        ([model_scene, "-o", ply], "OpenEXR only"),
+        ([model_scene, "-o", tmp_path / "model.exr"], "is an input of this render"),
         ([s, "-o", tmp_path / "a.exr", "--preview", tmp_path / "a.exr"], "name the same file"),
         ([s, "-o", tmp_path / "a.exr", "--preview", f"{tmp_path}/../{tmp_path.name}/a.exr"], "name the same file"),
         ([s, "-o", tmp_path / "a.exr", "--checkpoint", tmp_path / "a.exr"], "name the same file"),
