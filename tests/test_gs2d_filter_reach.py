@@ -5,10 +5,10 @@ test_gaussian_render.py.
 
 Where rho2d < rho3d, forward.cu (e0ed020, renderCUDA fw:355-387) gives a pixel alpha = opacity
 exp(-|pixel - c|^2), c the centre of the image of the splat's 3-sigma circle (compute_aabb
-fw:119-145), at every pixel of the splat's tile rectangle (which holds the 2.354 pixels the filter
-reaches: its radius is at least ceil(3 x 0.707), fw:230), wherever the pixel's ray meets the
-splat's plane at view depth 0.2 or more (fw:369-372). Such pixels can lie far from the splat's
-own footprint, and every one must be found:
+fw:119-145), at every pixel of the splat's tile rectangle (the reference, and refrender without
+tileRule, at every pixel: GAUSSIANS.md's deliberate difference), wherever the pixel's ray meets
+the splat's plane at view depth 0.2 or more (fw:369-372). Such pixels can lie far from the
+splat's own footprint, and every one must be found:
  - splats seen nearly edge-on (88 to 89.9 degrees from facing the camera): the footprint is a
    sliver, and the filter draws a disc of 2.35 pixels about c on the side where the plane's
    intersection lies in front of the camera;
@@ -25,8 +25,8 @@ own footprint, and every one must be found:
    boxes, built once for the whole shutter, must hold the filter for every pose. The principal
    point is an integer number of pixels off the centre: the image is then a crop of the centred
    image of a larger sensor (the reference's camera, which has no principal point).
-Splats whose 3-sigma circle reaches the camera's plane (a hyperbola: GAUSSIANS.md's documented
-difference) are not drawn. Each group is first checked to be one the filter matters in: the
+No splat's 3-sigma circle reaches the camera's plane (its image a hyperbola: GAUSSIANS.md's
+other documented difference). Each group is first checked to be one the filter matters in: the
 reference without its filter differs from it by far more than the tolerance. Rendering the
 splats with boxes that hold only the splat (no filter footprint) fails the edge-on, random and
 moving groups."""
