@@ -21,6 +21,10 @@ import math
 import os
 import sys
 
+import pydeps
+
+pydeps.require(*pydeps.IMAGE_MODULES, "matplotlib")  # a missing package: one line, not a traceback
+
 import numpy as np
 
 import flip

@@ -21,6 +21,10 @@ import os
 import subprocess
 import sys
 
+import pydeps
+
+pydeps.require(*pydeps.IMAGE_MODULES, "matplotlib")  # a missing package: one line, not a traceback
+
 import numpy as np
 
 import imagecompare

@@ -17,6 +17,10 @@ import csv
 import os
 import sys
 
+import pydeps
+
+pydeps.require(*pydeps.IMAGE_MODULES, "matplotlib")  # a missing package: one line, not a traceback
+
 import numpy as np
 
 import flip

@@ -9,6 +9,10 @@ import argparse
 import os
 import sys
 
+import pydeps
+
+pydeps.require(*pydeps.IMAGE_MODULES)  # a missing package: one line, not a traceback
+
 import numpy as np
 import OpenImageIO as oiio
 
