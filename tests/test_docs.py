@@ -91,6 +91,14 @@ def test_every_script_and_test_readme_names_exists():
     assert named and not [n for n in named if not (ROOT / n).exists()]
 
 
+def test_every_file_the_scene_files_name_exists():
+    """A scene file's comment that sends the reader to a script or document
+    names one that ships."""
+    named = {n for scene in (ROOT / "scenes").rglob("*.xml") for n in
+             re.findall(r"\b(?:scripts|src|tests|scenes|reference_images)/[\w./-]*\w", scene.read_text())}
+    assert named and not sorted(n for n in named if not (ROOT / n).exists())
+
+
 def readme_commands(prefix, section=None):
     """The indented code lines of README (of one ## section, if given) that
     start with prefix, with their continuation lines joined and comments
