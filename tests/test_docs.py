@@ -99,6 +99,14 @@ def test_every_file_the_scene_files_name_exists():
     assert named and not sorted(n for n in named if not (ROOT / n).exists())
 
 
+def test_the_header_lister_the_readme_names_is_installed():
+    """README names a command that lists the EXR header's attributes: it is
+    one that scripts/install-deps.sh's packages provide (openexr's
+    exrheader is not among them; openimageio-tools' iinfo is)."""
+    (tool,) = re.findall(r"Attributes \(`(\S+)[^`]*` lists them", (ROOT / "README.md").read_text())
+    assert shutil.which(tool), f"README's {tool} is not installed by scripts/install-deps.sh's packages"
+
+
 def readme_commands(prefix, section=None):
     """The indented code lines of README (of one ## section, if given) that
     start with prefix, with their continuation lines joined and comments
