@@ -726,9 +726,9 @@ int cmd_render(int argc, char **argv)
     scene s;
     char cmdline[2048];
     join_args(argc, argv, cmdline, sizeof cmdline);
-    if (cli_check_writable(o.output, &err) || (o.preview && cli_check_writable(o.preview, &err)) ||
+    if (cli_check_writable("-o", o.output, &err) || (o.preview && cli_check_writable("--preview", o.preview, &err)) ||
         (o.preview && preview_check_format(o.preview, &err)) ||
-        (o.checkpoint && cli_check_writable(o.checkpoint, &err)) ||
+        (o.checkpoint && cli_check_writable("--checkpoint", o.checkpoint, &err)) ||
         scene_load_file_params(o.scene, &o.params, &s, &err)) {
         fprintf(stderr, "refrender: %s\n", err.msg);
         return interrupted ? 130 : 1;
