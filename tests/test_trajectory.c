@@ -372,6 +372,12 @@ TEST(transforms_json_refuses_distortion_in_frames_and_as_strings)
     CHECK(transforms_fail("{\"fl_x\": \"50\", \"fl_y\": 52, \"cx\": 20.5, \"cy\": 14, \"w\": 40, \"h\": 30, "
                           "\"frames\": []}",
                           "t.json: fl_x = \"50\" is not a number"));
+    /* exposure_time and rolling_shutter_time are not applied (a warning says so) but must be
+     * numbers: a string was dropped without the warning */
+    CHECK(transforms_fail("{" CAMERA ", \"rolling_shutter_time\": \"abc\", \"frames\": []}",
+                          "t.json: rolling_shutter_time = \"abc\" is not a number"));
+    CHECK(transforms_fail("{" CAMERA ", \"exposure_time\": \"0.01\", \"frames\": []}",
+                          "t.json: exposure_time = \"0.01\" is not a number"));
     /* "none", at the top level or in every frame, and the same camera per frame: the pinhole */
     transforms_camera cam;
     CHECK(transforms_ok("{" CAMERA ", \"camera_model\": \"OPENCV\", \"k1\": 0, \"p2\": -0.0, \"frames\": ["
