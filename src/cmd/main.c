@@ -336,7 +336,10 @@ static int apply_overrides(scene *s, const render_options *o, rr_error *err)
     }
     if (o->instant_set) /* every line's exposure an instant; a rolling shutter's lines keep their offsets */
         shutter_at_instant(&s->shut, o->instant);
-    return camera_prepare(&s->cam, err);
+    rr_error why;
+    if (camera_prepare(&s->cam, &why)) /* the scene's camera passed when it loaded: --res changed it */
+        return rr_fail(err, "%s with --res %dx%d: %s", s->path, s->cam.width, s->cam.height, why.msg);
+    return 0;
 }
 
 static void join_args(int argc, char **argv, char *buf, size_t size)
