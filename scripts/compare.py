@@ -21,6 +21,10 @@ import math
 import os
 import sys
 
+import pydeps
+
+pydeps.require(*pydeps.IMAGE_MODULES, "matplotlib")  # a missing package: one line, not a traceback
+
 import numpy as np
 
 import flip
@@ -87,7 +91,12 @@ def parse_args(argv):
                         "largest |difference|)")
     p.add_argument("--flip-range", default="0,1", metavar="LO,HI",
                    help="colour range of the FLIP maps, the same for all inputs (default 0,1)")
-    p.add_argument("--latex", metavar="FILE", help="write a booktabs LaTeX table, best value per column in bold")
+    p.add_argument("--latex", metavar="FILE",
+                   help="write a booktabs LaTeX table, the best value of each column in bold among the methods "
+                        "on the same frame and window; a sequence's table has a Frame column, one row per frame, "
+                        "then each method's mean and worst frame")
+    p.add_argument("--latex-summary", action="store_true",
+                   help="with a sequence, the LaTeX table holds only each method's mean and worst-frame rows")
     p.add_argument("--report", metavar="DIR", help="write an offline HTML report with the images")
     return p.parse_args(argv)
 
@@ -286,7 +295,20 @@ def summarize(rows, labels):
     return out
 
 
+def latex_rows(rows, summary_only):
+    """The LaTeX table's rows: the frames in order, then every mean, then
+    every worst frame (each group compared within itself); only the last two
+    groups when summary_only."""
+    def kind(r):
+        frame = str(r.get("frame", ""))
+        return 1 if frame == "mean" else 2 if frame.startswith("worst") else 0
+    return sorted((r for r in rows if kind(r) or not summary_only), key=kind)
+
+
 def compare(args):
+    if args.latex_summary and not (args.latex and sequences.is_sequence(args.reference)):
+        raise CompareError("--latex-summary needs --latex and a sequence (a pattern such as 'gt.%04d.exr' "
+                           "or a directory): a single image has no mean or worst frame")
     labels = labels_of(args, args.tests)
     if not sequences.is_sequence(args.reference):
         if args.frames:
@@ -313,8 +335,7 @@ def main(argv=None):
     write_machine_readable(rows, args.json, args.csv, schema(args))
     if args.latex:
         import figures  # matplotlib only when figures are asked for
-        figures.latex_table([r for r in rows if not str(r.get("frame", "")).startswith("worst")],
-                            COLUMNS + [f">{args.k_sigma:g}SE"], args.latex)
+        figures.latex_table(latex_rows(rows, args.latex_summary), COLUMNS + [f">{args.k_sigma:g}SE"], args.latex)
     try:
         write_pictures(args, rows, maps)
     except CompareError as e:

@@ -17,6 +17,10 @@ import csv
 import os
 import sys
 
+import pydeps
+
+pydeps.require(*pydeps.IMAGE_MODULES, "matplotlib")  # a missing package: one line, not a traceback
+
 import numpy as np
 
 import flip
@@ -86,6 +90,12 @@ def reference_curves(path, unit):
     return {k: sorted(v) for k, v in curves.items()}
 
 
+# refrender's reference curves: grey, so the methods' coloured curves stand out, and told apart
+# from each other by line style and marker (greys alone cannot be), none of them the methods' "o-"
+REFERENCE_STYLES = [("--", "s", "0.25"), (":", "^", "0.45"), ("-.", "D", "0.6"), ((0, (5, 1, 1, 1)), "v", "0.35"),
+                    ((0, (1, 3)), "x", "0.5")]
+
+
 def plot(results, curves, unit, path):
     import matplotlib
     matplotlib.use("Agg")
@@ -97,8 +107,10 @@ def plot(results, curves, unit, path):
             pts = sorted((r[2], r[col]) for r in results if r[0] == label)
             ax.loglog(*zip(*pts), "o-", label=label)
         if name == "RMSE":
-            for label, pts in curves.items():
-                ax.loglog(*zip(*pts), "--", color="grey", alpha=0.7, label=label)
+            for k, (label, pts) in enumerate(curves.items()):
+                style, marker, grey = REFERENCE_STYLES[k % len(REFERENCE_STYLES)]
+                ax.loglog(*zip(*pts), linestyle=style, marker=marker, color=grey, markersize=4,
+                          markerfacecolor="none", label=label)
         ax.set_xlabel(unit)
         ax.set_ylabel(name)
         ax.grid(True, which="both", alpha=0.3)

@@ -80,13 +80,29 @@ def write_crops(out_dir, label, test, crops, inset_scale):
     return files
 
 
+def comparison_group(row):
+    """The rows a value competes with for bold: the same frame (or the same
+    summary, mean or worst) and the same window. A bold value across frames or
+    windows would compare a crop's error with a full image's, or frame 3's
+    with frame 0's, which says nothing about the methods."""
+    frame = row.get("frame")
+    if isinstance(frame, str) and frame.startswith("worst"):
+        frame = "worst"
+    return frame, row.get("window")
+
+
 def best_values(rows, columns):
-    """Per column, the best value among the rows (None if none is numeric)."""
+    """Per comparison group and column, the best value among the rows of that
+    group (lowest error; highest PSNR and SSIM); columns without a numeric
+    value are left out."""
     best = {}
-    for c in columns:
-        vals = [r.get(c) for r in rows if isinstance(r.get(c), (int, float))]
-        if vals:
-            best[c] = max(vals) if HIGHER_IS_BETTER.get(c) else min(vals)
+    for r in rows:
+        group = best.setdefault(comparison_group(r), {})
+        for c in columns:
+            v = r.get(c)
+            if isinstance(v, (int, float)) and (c not in group or
+                                                (v > group[c] if HIGHER_IS_BETTER.get(c) else v < group[c])):
+                group[c] = v
     return best
 
 
@@ -97,23 +113,32 @@ def _tex(text):
     return text
 
 
+def _latex_cell(value, best):
+    if not isinstance(value, (int, float)):
+        return "--"
+    text = "$\\infty$" if isinstance(value, float) and np.isinf(value) else f"{value:.4g}"
+    return r"\textbf{" + text + "}" if best == value else text
+
+
 def latex_table(rows, columns, path):
-    """A booktabs table: one row per input row (image, window), the best value
-    of each column in bold (lowest error; highest PSNR and SSIM)."""
+    """A booktabs table: one row per input row (method, frame when the rows
+    come from a sequence, window), the best value of each column in bold
+    among the rows of the same frame (or summary) and window. Rows come in
+    groups (a frame, the means, the worst frames), a rule between groups."""
     best = best_values(rows, columns)
-    lines = [r"\begin{tabular}{ll" + "r" * len(columns) + "}", r"\toprule",
-             "Method & Window & " + " & ".join(_tex(c) for c in columns) + r" \\", r"\midrule"]
+    frames = any(r.get("frame") is not None for r in rows)
+    names = ["Method"] + (["Frame"] if frames else []) + ["Window"]
+    lines = [r"\begin{tabular}{" + "l" * len(names) + "r" * len(columns) + "}", r"\toprule",
+             " & ".join(names + [_tex(c) for c in columns]) + r" \\", r"\midrule"]
+    previous = None
     for r in rows:
-        cells = []
-        for c in columns:
-            v = r.get(c)
-            if not isinstance(v, (int, float)):
-                cells.append("--")
-                continue
-            text = "$\\infty$" if isinstance(v, float) and np.isinf(v) else f"{v:.4g}"
-            cells.append(r"\textbf{" + text + "}" if best.get(c) == v else text)
-        head = _tex(str(r["image"])) + " & " + _tex(str(r["window"]))
-        lines.append(head + " & " + " & ".join(cells) + r" \\")
+        group = comparison_group(r)[0]
+        if previous is not None and group != previous:
+            lines.append(r"\midrule")
+        previous = group
+        head = [str(r["image"])] + ([str(r.get("frame", ""))] if frames else []) + [str(r["window"])]
+        cells = [_latex_cell(r.get(c), best[comparison_group(r)].get(c)) for c in columns]
+        lines.append(" & ".join([_tex(h) for h in head] + cells) + r" \\")
     lines += [r"\bottomrule", r"\end{tabular}"]
     with open(path, "w") as f:
         f.write("% refrender compare.py; requires \\usepackage{booktabs}\n" + "\n".join(lines) + "\n")

@@ -1,13 +1,24 @@
 #!/usr/bin/python3
-"""Contact sheet of rendered scenes: each EXR tone-mapped like refrender's
-preview (RGB clamped to [0, 1], sRGB transfer curve), labelled with its file
-name when a font is available, four to a row in the order given.
+"""Contact sheet of rendered scenes: each image's RGB as stored (a
+refrender EXR's RGB already holds the scene's own background where nothing
+is covered) tone-mapped like refrender's preview (clamped to [0, 1], sRGB
+transfer curve), labelled with its file name, four to a row in the order
+given.
 
-usage: gallery.py OUT.png IMAGE.exr [IMAGE.exr ...]
+usage: gallery.py OUT.png IMAGE.exr [IMAGE.exr ...] [--font FONT]
+
+Labels are drawn with matplotlib's own DejaVu Sans (a file every machine
+with the scripts' packages has, so sheets made on two machines agree), else
+OpenImageIO's search for DejaVuSans or its default font; when none can be
+drawn the sheet is written without labels and stderr says so.
 """
 import argparse
 import os
 import sys
+
+import pydeps
+
+pydeps.require(*pydeps.IMAGE_MODULES, "matplotlib")  # a missing package: one line, not a traceback
 
 import numpy as np
 import OpenImageIO as oiio
@@ -18,17 +29,41 @@ import imagecompare
 COLUMNS, LABEL = 4, 18
 
 
-def tile(path):
-    img = imagecompare.read_image(path, "linear")
-    rgb = imagecompare.composite(img, (0, 0, 0))
-    srgb = flip.linear_to_srgb(np.clip(rgb, 0, 1))
+def font_candidates(requested):
+    """--font alone when given; else matplotlib's bundled DejaVu Sans file,
+    then OpenImageIO's search for DejaVuSans, then its default ("": Droid
+    Sans, which Debian does not ship)."""
+    if requested:
+        return [requested]
+    import matplotlib
+    bundled = os.path.join(matplotlib.get_data_path(), "fonts", "ttf", "DejaVuSans.ttf")
+    return [bundled, "DejaVuSans", ""]
+
+
+def label_font(requested):
+    """The first candidate font OpenImageIO can draw with, or None."""
+    for font in font_candidates(requested):
+        probe = oiio.ImageBuf(np.zeros((LABEL, 16, 3), dtype=np.float32))
+        if oiio.ImageBufAlgo.render_text(probe, 2, LABEL - 4, "x", 13, font, (1, 1, 1)):
+            return font
+    return None
+
+
+def tile(path, font):
+    """One image as it would be displayed, with its name above it when a
+    font is available. Its RGB is used as stored: a refrender image's RGB
+    already holds the scene's background (weighted by 1 - coverage), which
+    the committed gallery shows; compositing over black would hide it."""
+    rgb = imagecompare.read_image(path, "linear").rgb
+    srgb = flip.linear_to_srgb(np.clip(rgb, 0, 1)).astype(np.float32)
+    if font is None:
+        return srgb
     h, w, _ = srgb.shape
     out = np.zeros((h + LABEL, w, 3), dtype=np.float32)
     out[LABEL:] = srgb
     buf = oiio.ImageBuf(out)
     name = os.path.splitext(os.path.basename(path))[0]
-    if not oiio.ImageBufAlgo.render_text(buf, 4, LABEL - 4, name, 13, "", (0.9, 0.9, 0.9)):
-        return srgb  # no font on this machine: no label band
+    oiio.ImageBufAlgo.render_text(buf, 4, LABEL - 4, name, 13, font, (0.9, 0.9, 0.9))
     return buf.get_pixels(oiio.FLOAT)
 
 
@@ -36,8 +71,15 @@ def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("out", metavar="OUT.png", help="contact sheet to write (8-bit, format by extension)")
     p.add_argument("images", metavar="IMAGE", nargs="+", help="images to show, in this order")
+    p.add_argument("--font", help="font for the labels: a name OpenImageIO finds or a .ttf file (default: "
+                                  "matplotlib's DejaVu Sans, else OpenImageIO's DejaVuSans or default font)")
     args = p.parse_args(argv)
-    tiles = [tile(path) for path in args.images]
+    font = label_font(args.font)
+    if font is None:
+        tried = ", ".join(repr(f) for f in font_candidates(args.font))
+        print(f"gallery.py: OpenImageIO cannot draw with any font tried ({tried}): the sheet has no labels; "
+              "give --font FILE.ttf", file=sys.stderr)
+    tiles = [tile(path, font) for path in args.images]
     h = max(t.shape[0] for t in tiles)
     w = max(t.shape[1] for t in tiles)
     rows = (len(tiles) + COLUMNS - 1) // COLUMNS

@@ -25,6 +25,10 @@ import argparse
 import json
 import sys
 
+import pydeps
+
+pydeps.require(*pydeps.IMAGE_MODULES)  # a missing package: one line, not a traceback
+
 import numpy as np
 
 import imagecompare

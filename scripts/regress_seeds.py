@@ -11,6 +11,10 @@ import subprocess
 import sys
 import tempfile
 
+import pydeps
+
+pydeps.require(*pydeps.IMAGE_MODULES)  # a missing package: one line, not a traceback
+
 import regress
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))

@@ -21,6 +21,10 @@ import subprocess
 import sys
 import time
 
+import pydeps
+
+pydeps.require(*pydeps.IMAGE_MODULES)  # a missing package: one line, not a traceback
+
 import numpy as np
 
 import imagecompare

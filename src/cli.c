@@ -64,19 +64,26 @@ int cli_vec3(const char *opt, const char *text, vec3 *out, rr_error *err)
     return 0;
 }
 
-int cli_check_writable(const char *path, rr_error *err)
+int cli_check_writable(const char *option, const char *path, rr_error *err)
 {
     struct stat st;
     if (strlen(path) > PATH_MAX - 64)
         return rr_fail(err, "%.200s...: path is too long (%zu characters, at most %d)", path, strlen(path),
                        PATH_MAX - 64);
+    if (!*path)
+        return rr_fail(err, "%s: the file name is empty", option);
     if (stat(path, &st) == 0 && S_ISDIR(st.st_mode))
-        return rr_fail(err, "%s: is a directory, not a file name", path);
+        return rr_fail(err, "%s %s: is a directory, not a file name", option, path);
+    /* outputs are renamed into place: a FIFO, a device (/dev/null, /dev/stdout)
+     * or a socket would be replaced by a regular file, for every program */
+    if (stat(path, &st) == 0 && !S_ISREG(st.st_mode))
+        return rr_fail(err, "%s %s: is not a regular file (a device, FIFO or socket): outputs are written to a "
+                            "temporary file and renamed into place, which would replace it", option, path);
     char probe[PATH_MAX + 64];
     snprintf(probe, sizeof probe, "%s.probe-XXXXXX", path);
     int fd = mkstemp(probe);
     if (fd < 0)
-        return rr_fail(err, "%s: cannot create files there: %s", path, strerror(errno));
+        return rr_fail(err, "%s %s: cannot create files there: %s", option, path, strerror(errno));
     close(fd);
     unlink(probe);
     return 0;

@@ -14,9 +14,11 @@ int cli_double(const char *opt, const char *text, double lo, double *out, rr_err
 int cli_resolution(const char *opt, const char *text, int *w, int *h, rr_error *err);
 int cli_vec3(const char *opt, const char *text, vec3 *out, rr_error *err);
 
-/* Fails early, before a long render, if path is too long, names a
- * directory, or no file can be created in its directory. */
-int cli_check_writable(const char *path, rr_error *err);
+/* Fails early, before a long render, if the output path (given with
+ * option, which the message names) is empty or too long, names a directory
+ * or another file that is not a regular one, or no file can be created in
+ * its directory. */
+int cli_check_writable(const char *option, const char *path, rr_error *err);
 
 /* -1 ("OPT PATH: refrender writes OpenEXR only, not .EXT ...") if the
  * base name has an extension other than .exr: the file would be an EXR

@@ -466,7 +466,10 @@ static int hit_2d_from_geometry(const gaussian_model *m, size_t i, gaussian_orde
     /* the near skip takes the plane hit's depth even where the filter wins
      * (forward.cu since e0ed020, the commit 2DGS pins); where the filter
      * wins the hit is placed at the centre's depth (the depth of the
-     * earlier code), the point its bounds and windows hold */
+     * earlier code), the point its bounds and windows hold. A splat seen
+     * exactly edge-on (its plane holds the camera centre), which forward.cu
+     * culls (DUAL_VISIABLE: -p_view . n == 0), is skipped here too: every
+     * ray meets its plane at the camera centre, at view depth 0 */
     double depth = g->rho3d <= g->rho2d ? g->plane_depth : g->row[2].z;
     if (g->plane_depth < GAUSSIAN_NEAR)
         return 0;

@@ -316,17 +316,26 @@ static double rel_angle(const trajectory_knot *a, const trajectory_knot *b)
 /* Linear and se3, per segment: the origin moves at |dp|/dt (linear) or
  * |rho|/dt (a screw: point x of the camera frame moves at |phi x x + rho|
  * / dt), and turns at |phi| / dt. */
+/* Segment k's speed and turn rate (linear, slerp, se3: the motion over its
+ * time; the bounds are their maxima). */
+static void segment_rates(const trajectory *tr, int k, double *speed, double *turn_rate)
+{
+    const trajectory_knot *a = &tr->knots[k], *b = &tr->knots[k + 1];
+    double dt = b->t - a->t, q[4];
+    vec3 p;
+    relative_pose(a, b, &p, q);
+    twist x = se3_log(p, q);
+    double moved = tr->interp == TRAJECTORY_SE3 ? v3_len(x.rho) : v3_len(v3_sub(b->p, a->p));
+    *speed = moved / dt, *turn_rate = v3_len(x.phi) / dt;
+}
+
 static void segment_bounds(trajectory *tr)
 {
     for (int k = 0; k + 1 < tr->count; k++) {
-        const trajectory_knot *a = &tr->knots[k], *b = &tr->knots[k + 1];
-        double dt = b->t - a->t, q[4];
-        vec3 p;
-        relative_pose(a, b, &p, q);
-        twist x = se3_log(p, q);
-        double moved = tr->interp == TRAJECTORY_SE3 ? v3_len(x.rho) : v3_len(v3_sub(b->p, a->p));
-        tr->speed = fmax(tr->speed, moved / dt);
-        tr->turn_rate = fmax(tr->turn_rate, v3_len(x.phi) / dt);
+        double speed, turn_rate;
+        segment_rates(tr, k, &speed, &turn_rate);
+        tr->speed = fmax(tr->speed, speed);
+        tr->turn_rate = fmax(tr->turn_rate, turn_rate);
     }
 }
 
@@ -490,14 +499,31 @@ static int check_turns(const trajectory *tr, const char *name, rr_error *err)
 
 /* The bounds overflowed: the times the interpolation divides by are too
  * close for the motion. A Bezier divides by its whole span (its inner
- * times only order the poses), the others by each segment: the shortest
- * one is named, by the line of the pose that ends it. */
+ * times only order the poses); a cubic by its shortest spacing (the
+ * spacings are even to a slack); the others by each segment's own time: the
+ * first segment whose rate overflows is named, by the line of the pose
+ * that ends it (the shortest segment may not move at all). */
+static int overflowing_segment(const trajectory *tr)
+{
+    int shortest = 0;
+    for (int i = 1; i + 1 < tr->count; i++)
+        if (tr->knots[i + 1].t - tr->knots[i].t < tr->knots[shortest + 1].t - tr->knots[shortest].t)
+            shortest = i;
+    if (tr->interp == TRAJECTORY_CUBIC)
+        return shortest;
+    for (int k = 0; k + 1 < tr->count; k++) {
+        double speed, turn_rate;
+        segment_rates(tr, k, &speed, &turn_rate);
+        if (!isfinite(speed) || !isfinite(turn_rate))
+            return k;
+    }
+    return shortest;
+}
+
 static int fail_too_close(const trajectory *tr, const char *name, rr_error *err)
 {
-    int bezier = tr->interp == TRAJECTORY_BEZIER || tr->interp == TRAJECTORY_BEZIER_SE3, k = 0;
-    for (int i = 1; i + 1 < tr->count; i++)
-        if (tr->knots[i + 1].t - tr->knots[i].t < tr->knots[k + 1].t - tr->knots[k].t)
-            k = i;
+    int bezier = tr->interp == TRAJECTORY_BEZIER || tr->interp == TRAJECTORY_BEZIER_SE3;
+    int k = bezier ? 0 : overflowing_segment(tr);
     int from = bezier ? 0 : k;
     k = bezier ? tr->count - 2 : k;
     char where[sizeof err->msg], place[32];

@@ -173,8 +173,17 @@ static int read_camera(const char *name, json_object *root, json_object *frames,
     if (usable_intrinsics(name, v, err))
         return -1;
     cam->fx = v[0], cam->fy = v[1], cam->cx = v[2], cam->cy = v[3], cam->width = (int)v[4], cam->height = (int)v[5];
-    cam->exposure_time = camjson_number_field(root, "exposure_time", &v[0]) ? NAN : v[0];
-    cam->rolling_shutter_time = camjson_number_field(root, "rolling_shutter_time", &v[0]) ? NAN : v[0];
+    /* not applied (the scene's shutter is), but read as numbers: a string
+     * one was dropped without the warning a number gets */
+    cam->exposure_time = cam->rolling_shutter_time = NAN;
+    int rc = number_key(name, root, "", "exposure_time", &v[0], err);
+    if (rc < 0)
+        return -1;
+    cam->exposure_time = rc ? NAN : v[0];
+    rc = number_key(name, root, "", "rolling_shutter_time", &v[0], err);
+    if (rc < 0)
+        return -1;
+    cam->rolling_shutter_time = rc ? NAN : v[0];
     return 0;
 }
 

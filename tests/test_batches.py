@@ -235,3 +235,42 @@ def test_states_of_changed_model_or_animation_files_do_not_merge_or_resume(tmp_p
     bad = run(["merge", q0, changed_anim, "-o", tmp_path / "x.exr"])
     assert bad.returncode == 1 and "refrender:inputsHash" in bad.stderr, bad.stderr
     assert not (tmp_path / "x.exr").exists() and not (tmp_path / "y.exr").exists()
+
+
+def test_convergence_script_reports_progress_while_it_runs(tmp_path):
+    """A render that takes longer than --progress-every is announced at that
+    interval; every render ends with a line counting it and the time left.
+    The renders are slowed by a wrapper (0.3 s each) so that the interval
+    (0.05 s) is certainly crossed, however fast the machine."""
+    slow = tmp_path / "slow-refrender"
+    slow.write_text(f'#!/bin/sh\nsleep 0.3\nexec "{BIN}" "$@"\n')
+    slow.chmod(0o755)
+    scene = tmp_path / "disk.xml"
+    scene.write_text(DISK)
+    proc = subprocess.run(["/usr/bin/python3", str(ROOT / "scripts" / "convergence.py"), str(scene), "--res", "8x6",
+                           "--counts", "4,16", "--samplers", "thesis", "--baseline", "4", "--reference-count", "64",
+                           "--progress-every", "0.05", "--out", str(tmp_path / "conv")],
+                          capture_output=True, text=True, env=dict(os.environ, REFRENDER=str(slow)))
+    assert proc.returncode == 0, proc.stderr
+    lines = proc.stderr.splitlines()
+    done = [line for line in lines if ": done" in line]
+    assert [line.split("]")[0] for line in done] == ["convergence.py: [1/3", "convergence.py: [2/3",
+                                                     "convergence.py: [3/3"]
+    assert "reference" in done[0] and all("s left" in line for line in done)
+    assert done[-1].endswith("about 0 s left")
+    assert any("still rendering after" in line for line in lines)
+
+
+def test_convergence_help_describes_every_option_and_writes_where_cost_error_reads():
+    """Each option of convergence.py --help has a description, and its
+    default output directory is the one scripts/README.md's cost_error.py
+    example reads convergence.csv from."""
+    import re
+    import convergence
+    parser = convergence.build_parser()
+    undocumented = [a.option_strings or a.dest for a in parser._actions if not (a.help or "").strip()]
+    assert not undocumented
+    defaults = parser.parse_args(["scene.xml"])
+    readme = (ROOT / "scripts" / "README.md").read_text()
+    (curves,) = re.findall(r"--refrender-curves (\S+)", readme)
+    assert os.path.join(defaults.out, "convergence.csv") == curves

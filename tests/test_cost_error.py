@@ -42,3 +42,23 @@ def test_bad_entries_are_named(tmp_path):
     none = run_script(ref, "--out", tmp_path / "o")
     assert none.returncode == 2 and "no entries" in none.stderr
     assert run_script("--help").returncode == 0
+
+
+def test_refrender_curves_are_told_apart(tmp_path, monkeypatch):
+    """The three samplers' reference curves differ in line style and
+    marker (not only in a grey a reader cannot tell apart), and the legend
+    names each."""
+    import matplotlib.figure
+    import cost_error
+    drawn = []
+    monkeypatch.setattr(matplotlib.figure.Figure, "savefig", lambda fig, *a, **k: drawn.append(fig))
+    curves = {f"refrender {s}": [(16, 0.1), (64, 0.05)] for s in ("thesis", "jittered3d", "sobol")}
+    cost_error.plot([("ours", "a.exr", 1.0, 0.2, 0.1), ("ours", "b.exr", 2.0, 0.1, 0.05)], curves, "samples",
+                    tmp_path / "p.png")
+    (fig,) = drawn
+    rmse_axis = fig.axes[0]
+    lines = {line.get_label(): line for line in rmse_axis.get_lines()}
+    styles = {(lines[name].get_linestyle(), lines[name].get_marker()) for name in curves}
+    assert len(styles) == len(curves) and ("-", "o") not in styles  # apart from each other and from the methods'
+    legend = [t.get_text() for t in rmse_axis.get_legend().get_texts()]
+    assert set(curves) <= set(legend)

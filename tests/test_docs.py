@@ -91,6 +91,22 @@ def test_every_script_and_test_readme_names_exists():
     assert named and not [n for n in named if not (ROOT / n).exists()]
 
 
+def test_every_file_the_scene_files_name_exists():
+    """A scene file's comment that sends the reader to a script or document
+    names one that ships."""
+    named = {n for scene in (ROOT / "scenes").rglob("*.xml") for n in
+             re.findall(r"\b(?:scripts|src|tests|scenes|reference_images)/[\w./-]*\w", scene.read_text())}
+    assert named and not sorted(n for n in named if not (ROOT / n).exists())
+
+
+def test_the_header_lister_the_readme_names_is_installed():
+    """README names a command that lists the EXR header's attributes: it is
+    one that scripts/install-deps.sh's packages provide (openexr's
+    exrheader is not among them; openimageio-tools' iinfo is)."""
+    (tool,) = re.findall(r"Attributes \(`(\S+)[^`]*` lists them", (ROOT / "README.md").read_text())
+    assert shutil.which(tool), f"README's {tool} is not installed by scripts/install-deps.sh's packages"
+
+
 def readme_commands(prefix, section=None):
     """The indented code lines of README (of one ## section, if given) that
     start with prefix, with their continuation lines joined and comments

@@ -252,7 +252,7 @@ def test_an_off_centre_principal_point_clamps_as_each_rasterizer_does(tmp_path, 
 @pytest.mark.parametrize("semantics", ["gsplat", "gsplat-antialiased"])
 def test_an_off_centre_needle_beyond_the_clamp_is_drawn_to_the_end_of_its_tail(tmp_path, semantics):
     """The cull's reach follows the widest clamp. fx = fy = 40 (no slack from their ratio), principal
-    point (10, 28): gsplat clamps x/z to [-0.385, 1.13] and y/z to [-0.835, 0.335] (persp_proj,
+    point (10, 28): gsplat clamps x/z to [-0.43, 1.13] and y/z to [-0.835, 0.335] (persp_proj,
     Utils.cuh:514-524). A needle whose mean lies beyond the right and top limits, at (1.2, -0.9) z, along
     the direction the clamped Jacobian stretches most, (t_x, t_y, -(t_x^2 + t_y^2)), opacity 0.99, draws
     a tail 8 px a sigma into the image down to alpha 1/255. A reach from the old clamp (+-1.3 cx/fx,

@@ -48,6 +48,30 @@ def test_outputs_never_overwrite_inputs_or_each_other(tmp_path):
     assert not (tmp_path / "a.exr").exists()
 
 
+def test_outputs_that_are_not_regular_files_or_empty_are_refused(tmp_path):
+    """Outputs are written to a temporary file and renamed into place: an output naming a FIFO
+    (or /dev/null, a device) would be replaced by a regular file, for every program on the
+    machine. Each output option of each command refuses one, naming the option, and leaves it a
+    FIFO; an empty name is refused by option before anything is loaded or written."""
+    s = scene(tmp_path)
+    fifo = tmp_path / "ff"
+    os.mkfifo(fifo)
+    exr = tmp_path / "o.exr"
+    state = tmp_path / "p.exr"
+    assert run([s, "-o", state, "--pass", "0/2", "--batches", 2, *FAST]).returncode == 0
+    cases = [([s, "-o", fifo, *FAST], "-o"), ([s, "-o", exr, "--preview", fifo, *FAST], "--preview"),
+             ([s, "-o", exr, "--checkpoint", fifo, *FAST], "--checkpoint"),
+             (["export", s, "-o", tmp_path / "e.json", "--tum", fifo], "--tum"),
+             (["export", s, "-o", fifo], "-o"), (["merge", state, "-o", fifo, "--quiet"], "-o"),
+             (["export", s, "-o", tmp_path / "e.json", "--tum", ""], "--tum"), ([s, "-o", "", *FAST], "-o")]
+    for args, option in cases:
+        proc = run(args)
+        assert proc.returncode == 1 and "refrender" in proc.stderr and option in proc.stderr, (args, proc.stderr)
+        assert "not a regular file" in proc.stderr or "the file name is empty" in proc.stderr, (args, proc.stderr)
+        assert fifo.is_fifo()
+    assert not exr.exists() and not (tmp_path / "e.json").exists()
+
+
 def test_bad_output_names_fail_before_rendering(tmp_path):
     s = scene(tmp_path)
     start = time.time()

@@ -68,3 +68,10 @@ def test_camera_matrices_beyond_float32_are_refused(tmp_path):
         assert proc.returncode != 0 and f"{scene}:2:" in proc.stderr and "float32" in proc.stderr, \
             (camera, proc.returncode, proc.stderr)
         assert not out.exists()
+    # a scene whose camera fits at its own size, pushed past float by --res: named with both
+    scene.write_text('<scene>\n<camera position="0 0 4" lookat="0 0 0" fov="1e-34" width="8" height="8"/>\n'
+                     '<object><sphere radius="1"/></object></scene>')
+    proc = run([scene, "-o", out, "--res", "1x1000", "--spp", 1, "--tspp", 1, "--quiet"])
+    assert proc.returncode != 0 and f"{scene} with --res 1x1000:" in proc.stderr and "float32" in proc.stderr, \
+        proc.stderr
+    assert not out.exists()

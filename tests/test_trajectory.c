@@ -200,6 +200,26 @@ TEST(poses_too_close_in_time_are_refused_by_line)
     }
 }
 
+/* The segment named is the one whose rate overflows, not the shortest: the
+ * reviewer's file, where line 3 follows line 2 1e-310 later without moving
+ * and the overflow is line 2, 1e-300 after line 1 and 1e15 away. */
+TEST(poses_too_close_name_the_segment_that_overflows)
+{
+    const char *text = "# t tx ty tz qx qy qz qw\n" L0 "1e-300 1e15 0 0 0 0 0 1\n"
+                       "1.0000000001e-300 1e15 0 0 0 0 0 1\n1 1e15 0 0 0 0 0 1\n";
+    for (int k = TRAJECTORY_LINEAR; k < TRAJECTORY_CUBIC; k++) {
+        trajectory tr;
+        rr_error e = {{0}};
+        CHECK(parse(text, &tr, &e) == 0);
+        tr.interp = (trajectory_interp)k;
+        int rc = trajectory_prepare(&tr, "p.tum", &e);
+        printf("    %s: %s\n", trajectory_interp_name(tr.interp), rc ? e.msg : "accepted");
+        CHECK(rc != 0 && strstr(e.msg, "p.tum:3: poses too close in time for their motion: this pose is 1e-300 "
+                                        "after line 2's"));
+        trajectory_free(&tr);
+    }
+}
+
 TEST(a_written_trajectory_reads_back_bit_for_bit)
 {
     const char *text = "0.5 0.1 -2 3.25 0.1 0.2 0.3 0.9273618495495703\n"
@@ -352,6 +372,12 @@ TEST(transforms_json_refuses_distortion_in_frames_and_as_strings)
     CHECK(transforms_fail("{\"fl_x\": \"50\", \"fl_y\": 52, \"cx\": 20.5, \"cy\": 14, \"w\": 40, \"h\": 30, "
                           "\"frames\": []}",
                           "t.json: fl_x = \"50\" is not a number"));
+    /* exposure_time and rolling_shutter_time are not applied (a warning says so) but must be
+     * numbers: a string was dropped without the warning */
+    CHECK(transforms_fail("{" CAMERA ", \"rolling_shutter_time\": \"abc\", \"frames\": []}",
+                          "t.json: rolling_shutter_time = \"abc\" is not a number"));
+    CHECK(transforms_fail("{" CAMERA ", \"exposure_time\": \"0.01\", \"frames\": []}",
+                          "t.json: exposure_time = \"0.01\" is not a number"));
     /* "none", at the top level or in every frame, and the same camera per frame: the pinhole */
     transforms_camera cam;
     CHECK(transforms_ok("{" CAMERA ", \"camera_model\": \"OPENCV\", \"k1\": 0, \"p2\": -0.0, \"frames\": ["

@@ -465,7 +465,7 @@ static int export_outputs(const export_options *o, export_output *out)
 static int check_outputs(const export_output *out, int n, rr_error *err)
 {
     for (int i = 0; i < n; i++) {
-        if (cli_check_writable(out[i].path, err))
+        if (cli_check_writable(out[i].option, out[i].path, err))
             return -1;
         for (int j = 0; j < i; j++)
             if (cli_same_file(out[i].path, out[j].path))

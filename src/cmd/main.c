@@ -340,7 +340,10 @@ static int apply_overrides(scene *s, const render_options *o, rr_error *err)
     }
     if (o->instant_set) /* every line's exposure an instant; a rolling shutter's lines keep their offsets */
         shutter_at_instant(&s->shut, o->instant);
-    return camera_prepare(&s->cam, err);
+    rr_error why;
+    if (camera_prepare(&s->cam, &why)) /* the scene's camera passed when it loaded: --res changed it */
+        return rr_fail(err, "%s with --res %dx%d: %s", s->path, s->cam.width, s->cam.height, why.msg);
+    return 0;
 }
 
 static void join_args(int argc, char **argv, char *buf, size_t size)
@@ -732,9 +735,9 @@ int cmd_render(int argc, char **argv)
     join_args(argc, argv, cmdline, sizeof cmdline);
     if (cli_check_exr_name("-o", o.output, 1, &err) ||
         (o.checkpoint && cli_check_exr_name("--checkpoint", o.checkpoint, 0, &err)) ||
-        cli_check_writable(o.output, &err) || (o.preview && cli_check_writable(o.preview, &err)) ||
+        cli_check_writable("-o", o.output, &err) || (o.preview && cli_check_writable("--preview", o.preview, &err)) ||
         (o.preview && preview_check_format(o.preview, &err)) ||
-        (o.checkpoint && cli_check_writable(o.checkpoint, &err)) ||
+        (o.checkpoint && cli_check_writable("--checkpoint", o.checkpoint, &err)) ||
         scene_load_file_params(o.scene, &o.params, &s, &err)) {
         fprintf(stderr, "refrender: %s\n", err.msg);
         return interrupted ? 130 : 1;

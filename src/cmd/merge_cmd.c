@@ -168,7 +168,8 @@ int cmd_merge(int argc, char **argv)
         return 2;
     }
     rr_error err = {{0}};
-    if (cli_check_exr_name("-o", out, 0, &err) || cli_check_writable(out, &err) || cli_refuse_overwriting_inputs(out, argv + optind, argc - optind, &err) ||
+    if (cli_check_exr_name("-o", out, 0, &err) || cli_check_writable("-o", out, &err) ||
+        cli_refuse_overwriting_inputs(out, argv + optind, argc - optind, &err) ||
         merge_files(argv + optind, argc - optind, out, quiet, &err)) {
         fprintf(stderr, "refrender merge: %s\n", err.msg);
         return 1;

@@ -122,7 +122,7 @@ int cmd_surfels(int argc, char **argv)
         fprintf(stderr, "refrender surfels: %s\n", err.msg);
         return 2;
     }
-    if (cli_check_writable(o.output.out, &err) || cli_refuse_overwriting_inputs(o.output.out, argv + optind, 1, &err) ||
+    if (cli_check_writable("-o", o.output.out, &err) || cli_refuse_overwriting_inputs(o.output.out, argv + optind, 1, &err) ||
         convert(argv[optind], &o, &err)) {
         fprintf(stderr, "refrender surfels: %s\n", err.msg);
         return 1;
