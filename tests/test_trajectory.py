@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation, Slerp
 
-from conftest import read_full, run
+from conftest import ROOT, read_full, run
 
 W, H, FOV = 40, 30, 50.0
 F = H / 2 / np.tan(np.radians(FOV) / 2)
@@ -432,3 +432,57 @@ def test_frames_at_the_trajectory_centre_each_exposure_on_its_pose(tmp_path):
 def test_frames_at_the_trajectory_mistakes_are_named(tmp_path, frames, camera, message):
     proc = run([frames_scene(tmp_path, frames, camera), "-o", tmp_path / "o.exr", "--quiet"])
     assert proc.returncode != 0 and message in proc.stderr, proc.stderr
+
+
+def test_export_tum_rate_writes_evenly_spaced_poses_that_a_cubic_accepts(tmp_path):
+    """export --tum-rate R writes the camera's poses at the multiples of 1/R within the exported
+    span. A camera moving along x at unit speed (position x = t, closed form) exported over
+    [0.05, 0.97] at 10 per unit has its poses at k/10, k = 1..9 (Python's k / 10 is the nearest
+    double, as C's), at x = t; a cubic B-spline reads that file, where the export's own times
+    (0.05, K between, 0.97: its ends closer to their neighbours than the steps) are refused as
+    uneven. --transforms takes the same times. Frames at a trajectory's poses span their
+    exposures: frames 2-4 of scenes/examples/trajectory.xml (exposures of 1 centred on 2, 3, 4)
+    at 4 per unit are the 13 times 1.5, 1.75, ..., 4.5."""
+    scene = tmp_path / "lin.xml"
+    scene.write_text('<scene><camera position="0 0 5" lookat="0 0 0" up="0 1 0" fov="40" width="16" height="12">'
+                     '<animation><linear velocity="1 0 0"/></animation></camera><shutter open="0.05" close="0.97"/>'
+                     '<object><sphere radius="1"/></object></scene>')
+    proc = run(["export", scene, "--tum-rate", 10, "--tum", tmp_path / "even.tum", "--transforms",
+                tmp_path / "even.json", "-o", tmp_path / "e.json"])
+    assert proc.returncode == 0, proc.stderr
+    rows = [list(map(float, line.split())) for line in (tmp_path / "even.tum").read_text().splitlines()
+            if not line.startswith("#")]
+    assert [r[0] for r in rows] == [k / 10 for k in range(1, 10)]
+    assert np.allclose([r[1:] for r in rows], [[k / 10, 0, 5, 0, 0, 0, 1] for k in range(1, 10)], rtol=0, atol=1e-12)
+    frames = json.loads((tmp_path / "even.json").read_text())["frames"]
+    assert [f["time"] for f in frames] == [k / 10 for k in range(1, 10)]
+    proc = run(["export", scene, "--times", 48, "--tum", tmp_path / "uneven.tum", "-o", tmp_path / "u.json"])
+    assert proc.returncode == 0, proc.stderr
+
+    def cubic(tum):
+        xml = tmp_path / f"{tum}.xml"
+        xml.write_text(f'<scene><camera fov="40" width="16" height="12"><trajectory file="{tum}" axes="opengl" '
+                       'interpolation="cubic"/></camera><shutter open="0.3" close="0.7"/>'
+                       '<object position="0 0 0"><sphere radius="1"/></object></scene>')
+        return run([xml, "--spp", 1, "--tspp", 2, "--quiet", "-o", tmp_path / f"{tum}.exr"])
+    assert cubic("even.tum").returncode == 0, cubic("even.tum").stderr
+    refused = cubic("uneven.tum")
+    assert refused.returncode == 1 and "evenly spaced" in refused.stderr, refused.stderr
+    example = ROOT / "scenes" / "examples" / "trajectory.xml"
+    proc = run(["export", example, "--frames", "2-4", "--tum-rate", 4, "--tum", tmp_path / "f.tum", "-o",
+                tmp_path / "f.json"])
+    assert proc.returncode == 0, proc.stderr
+    times = [float(line.split()[0]) for line in (tmp_path / "f.tum").read_text().splitlines() if line[0] != "#"]
+    assert times == [k / 4 for k in range(6, 19)]
+
+
+def test_export_tum_rate_mistakes_are_named(tmp_path):
+    scene = ROOT / "scenes" / "examples" / "trajectory.xml"
+    for args, why in [(["--tum-rate", 4], "give one of them"), (["--tum-rate", 0, "--tum", tmp_path / "a.tum"], "> 0"),
+                      (["--tum-rate", "nan", "--tum", tmp_path / "a.tum"], "nan")]:
+        proc = run(["export", scene, *args, "-o", tmp_path / "x.json"])
+        assert proc.returncode == 2 and "--tum-rate" in proc.stderr and why in proc.stderr, (args, proc.stderr)
+    proc = run(["export", scene, "--shutter", "1.2,1.3", "--tum-rate", 2, "--tum", tmp_path / "a.tum", "-o",
+                tmp_path / "x.json"])
+    assert proc.returncode == 1 and "no multiple of 1/2 lies in the exported span" in proc.stderr, proc.stderr
+    assert not list(tmp_path.iterdir())

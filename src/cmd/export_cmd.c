@@ -21,7 +21,7 @@ static void export_usage(FILE *f)
     fputs(
 "usage: refrender export SCENE.xml [--frame N | --frames A-B] [--shutter O,C] [--times K]\n"
 "                        [-D name=value] [--tum PATH.tum [--tum-axes opengl|opencv]]\n"
-"                        [--transforms PATH.json] -o SCENE.json\n"
+"                        [--transforms PATH.json] [--tum-rate HZ] -o SCENE.json\n"
 "\n"
 "Writes the scene as another renderer needs it (scripts/README.md, Exporting):\n"
 "resolution, camera intrinsics, and per frame the world-to-camera matrix,\n"
@@ -43,6 +43,10 @@ static void export_usage(FILE *f)
 "                  BAD-Gaussians, the default) or opencv (x right, y down, z forward)\n"
 "  --transforms F  the same poses as a nerfstudio transforms.json, with the\n"
 "                  camera's intrinsics (one frame a time, 'time' its time)\n"
+"  --tum-rate HZ   --tum's and --transforms' poses at the multiples of 1/HZ\n"
+"                  from the first frame's open to the last one's close instead:\n"
+"                  evenly spaced, as interpolation=\"cubic\" needs (its spline\n"
+"                  spans the second pose to the last but one)\n"
 "  -o, --output F  output JSON file (required)\n"
 "All outputs are written or none; none may name an input of the scene or\n"
 "another output.\n", f);
@@ -51,6 +55,7 @@ static void export_usage(FILE *f)
 typedef struct {
     const char *scene, *output, *tum, *transforms;
     int tum_opengl; /* --tum-axes */
+    double tum_rate; /* --tum-rate: poses per unit of scene time; 0: at the export's times */
     int frames, first, last, times;
     int shutter_set; /* --shutter */
     double shutter_open, shutter_close;
@@ -393,11 +398,67 @@ static double *path_times(const export_job *j, int *count, rr_error *err)
     return out;
 }
 
+/* The span [first frame's open, last frame's close]; -1 with err set. */
+static int path_span(const export_job *j, double *lo, double *hi, rr_error *err)
+{
+    *lo = INFINITY, *hi = -INFINITY;
+    for (long long fr = j->o->first; fr <= j->o->last; fr++) {
+        shutter sh = j->s->shut;
+        if (j->o->frames && scene_frame_shutter(j->s, (int)fr, &sh, err))
+            return -1;
+        *lo = fmin(*lo, sh.open), *hi = fmax(*hi, sh.close);
+    }
+    return 0;
+}
+
+/* --tum-rate R: the times k / R (k an integer) within the export's span.
+ * A cubic B-spline (trajectory.c) needs evenly spaced knots; the export's
+ * own times (each frame's open, K between, close) are not, across frames
+ * or within a frame's ends. Multiples of 1/R rather than the span's open
+ * plus steps: two exports of one scene share their knots. */
+static double *rate_times(const export_job *j, int *count, rr_error *err)
+{
+    double lo, hi, rate = j->o->tum_rate;
+    if (path_span(j, &lo, &hi, err))
+        return NULL;
+    double first = ceil(lo * rate), last = floor(hi * rate);
+    if (first / rate < lo) /* lo * rate rounded down past an integer */
+        first += 1;
+    if (last / rate > hi)
+        last -= 1;
+    if (!(last >= first)) {
+        rr_fail(err, "--tum-rate %g: no multiple of 1/%g lies in the exported span [%.17g, %.17g]: give a higher "
+                     "rate", rate, rate, lo, hi);
+        return NULL;
+    }
+    if (last - first + 1 > MAX_PATH_POSES) {
+        rr_fail(err, "--tum-rate %g: %.0f camera poses in [%.17g, %.17g], more than %d", rate, last - first + 1, lo,
+                hi, MAX_PATH_POSES);
+        return NULL;
+    }
+    int n = (int)(last - first + 1);
+    double *out = malloc((size_t)n * sizeof *out);
+    if (!out) {
+        rr_fail(err, "out of memory");
+        return NULL;
+    }
+    for (int i = 0; i < n; i++)
+        out[i] = (first + i) / rate;
+    *count = n;
+    return out;
+}
+
+/* The times of the poses --tum and --transforms write. */
+static double *pose_times(const export_job *j, int *count, rr_error *err)
+{
+    return j->o->tum_rate > 0 ? rate_times(j, count, err) : path_times(j, count, err);
+}
+
 static int write_transforms(FILE *f, void *ctx, rr_error *err)
 {
     const export_job *j = ctx;
     int n = 0;
-    double *t = path_times(j, &n, err), (*q)[4] = t ? malloc((size_t)n * sizeof *q + 1) : NULL;
+    double *t = pose_times(j, &n, err), (*q)[4] = t ? malloc((size_t)n * sizeof *q + 1) : NULL;
     vec3 *p = q ? malloc((size_t)n * sizeof *p + 1) : NULL;
     int ok = p != NULL;
     if (t && !ok)
@@ -420,7 +481,7 @@ static int write_tum(FILE *f, void *ctx, rr_error *err)
     fprintf(f, "# refrender %s camera path of %s: t tx ty tz qx qy qz qw, camera-to-world, %s axes\n", RR_VERSION,
             j->s->path, j->o->tum_opengl ? "OpenGL (x right, y up, z backward)" : "OpenCV (x right, y down, z forward)");
     int n = 0;
-    double *t = path_times(j, &n, err);
+    double *t = pose_times(j, &n, err);
     if (!t)
         return -1;
     for (int i = 0; i < n; i++) {
@@ -531,6 +592,7 @@ static int parse_export_args(int argc, char **argv, export_options *o, rr_error 
                                              {"shutter", required_argument, 0, 's'},
                                              {"tum", required_argument, 0, 'T'}, {"tum-axes", required_argument, 0, 'A'},
                                              {"transforms", required_argument, 0, 'J'},
+                                             {"tum-rate", required_argument, 0, 'R'},
                                              {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
     int c;
     char extra;
@@ -555,17 +617,25 @@ static int parse_export_args(int argc, char **argv, export_options *o, rr_error 
             o->tum = optarg;
         if (c == 'J')
             o->transforms = optarg;
+        if (c == 'R' && cli_double("--tum-rate", optarg, 0.0, &o->tum_rate, err))
+            return -1;
+        if (c == 'R' && !(o->tum_rate > 0))
+            return rr_fail(err, "--tum-rate: expected a number of poses per unit of scene time > 0, got '%s'", optarg);
         if (c == 'A' && strcmp(optarg, "opengl") && strcmp(optarg, "opencv"))
             return rr_fail(err, "--tum-axes: opengl or opencv, got '%s'", optarg);
         if (c == 'A')
             o->tum_opengl = !strcmp(optarg, "opengl");
         if (c == 's' && (o->shutter_set = 1, cli_shutter(optarg, &o->shutter_open, &o->shutter_close, err)))
             return -1;
-        if (c == '?')
+        if (c == '?') {
+            cli_suggest_option("refrender export", argv[optind - 1], longopts);
             return rr_fail(err, "unknown option (see 'refrender export --help')");
+        }
     }
     if (optind != argc - 1 || !o->output)
         return rr_fail(err, "expected one SCENE.xml and -o FILE.json (see 'refrender export --help')");
+    if (o->tum_rate > 0 && !o->tum && !o->transforms)
+        return rr_fail(err, "--tum-rate sets the times of --tum's or --transforms' poses: give one of them");
     o->scene = argv[optind];
     return 0;
 }
