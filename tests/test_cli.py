@@ -238,7 +238,8 @@ def test_a_misspelt_option_gets_a_did_you_mean():
     message, and a word near no option gets no guess."""
     for args, meant in [(["--cropwindow", "0,1,0,1"], "--crop-window"), (["--samplr", "sobol"], "--sampler"),
                         (["--previw=a.png"], "--preview"), (["gen", "sphere", "--cout", "5"], "--count"),
-                        (["surfels", "m.obj", "--overlpa", "2"], "--overlap"), (["merge", "--ouptut", "x.exr"], "--output")]:
+                        (["surfels", "m.obj", "--overlpa", "2"], "--overlap"), (["merge", "--ouptut", "x.exr"], "--output"),
+                        (["export", "s.xml", "--tum-axis", "opencv"], "--tum-axes")]:
         proc = run(args)
         assert proc.returncode == 2 and f"did you mean '{meant}'?" in proc.stderr, (args, proc.stderr)
     for args in [["--spp"], ["--s", "1"], ["--no-such-option"]]:
