@@ -34,7 +34,10 @@ typedef enum { GAUSSIAN_ORDER_CENTER_DEPTH, GAUSSIAN_ORDER_HIT_DEPTH } gaussian_
 typedef enum {
     GAUSSIAN_FORMATION_DEFAULT = 0,
     GAUSSIAN_FORMATION_2DGS,             /* diff-surfel-rasterization e0ed020: filter about the 3-sigma circle's centre */
-    GAUSSIAN_FORMATION_2DGS_UNIT_CIRCLE, /* before 909dd85 (2024-06-28): about the unit circle's centre */
+    GAUSSIAN_FORMATION_2DGS_CENTER_NEAR, /* 909dd85 to 7bdbd51 (2DGS's pins 2024-06-28 to 11-10): the same,
+                                          * and where the filter wins the near skip takes the centre's depth */
+    GAUSSIAN_FORMATION_2DGS_UNIT_CIRCLE, /* before 909dd85 (2024-06-28): about the unit circle's centre, the
+                                          * near skip as 2DGS_CENTER_NEAR's */
     GAUSSIAN_FORMATION_3DGS,             /* diff-gaussian-rasterization: EWA, +0.3 dilation */
     GAUSSIAN_FORMATION_3DGS_ANTIALIASED, /* the same with its `antialiasing` opacity compensation */
     GAUSSIAN_FORMATION_GSPLAT,           /* nerfstudio gsplat, rasterize_mode classic */

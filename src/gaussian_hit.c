@@ -10,6 +10,7 @@ static const struct {
     const char *name;
 } formations[] = {
     {GAUSSIAN_FORMATION_2DGS, GAUSSIAN_2D, "2dgs"},
+    {GAUSSIAN_FORMATION_2DGS_CENTER_NEAR, GAUSSIAN_2D, "2dgs-center-near"},
     {GAUSSIAN_FORMATION_2DGS_UNIT_CIRCLE, GAUSSIAN_2D, "2dgs-unit-circle"},
     {GAUSSIAN_FORMATION_3DGS, GAUSSIAN_3D, "3dgs"},
     {GAUSSIAN_FORMATION_3DGS_ANTIALIASED, GAUSSIAN_3D, "3dgs-antialiased"},
@@ -273,7 +274,15 @@ static int in_2dgs_tiles(const gaussian_ray *r, const vec3 row[3], double c, dou
  * That line lies at least `depth` from the mean (view depth changes by at
  * most 1 per unit length), and the pole of a line d from the centre lies
  * within radius^2 / d of it: at depth 2.5 a 3-scale circle's P is
- * 1/500 of the radius from the mean, where the bounds assumed all of it. */
+ * 1/500 of the radius from the mean, where the bounds assumed all of it.
+ * P is always in front of the camera: the filter acts only where the
+ * circle's image is an ellipse (filter_centre), so the circle, and the
+ * disc within it, lie beyond view depth 0, and the pole of a line that
+ * misses the circle lies inside it. The bounds built on P (the culls,
+ * filter_2d_reach) hold every pixel within the filter's reach of P's
+ * image and never ask where the pixel's ray meets the splat's plane: so
+ * they hold under either near rule (hit_2d_from_geometry), also the older
+ * rule's filter pixels whose rays meet the plane behind the camera. */
 static double filter_pole(double radius, double depth) { return radius * radius / depth; }
 
 /* p's image's offset from the ray's raster position, times p.z (no
@@ -456,6 +465,30 @@ static void splat_2d_geometry_of(const gaussian_ray *r, double circle, splat_2d_
     g->plane_depth = g->u * row[2].x + g->v * row[2].y + row[2].z;
 }
 
+/* Whether the near skip takes the centre's view depth where the filter
+ * wins: forward.cu renderCUDA's `depth = (rho3d <= rho2d) ? hit : Tw.z;
+ * if (depth < near_n) continue;` from 661d224 (2024-05-06, the first
+ * commit 2DGS pinned; fw:384-385) to 7bdbd51 (2024-08-28, fw:365-366);
+ * e0ed020 ("fix near cull", fw:369-372) takes the plane hit's depth at
+ * every pixel. */
+static int near_by_centre_where_filtered(const gaussian_model *m)
+{
+    gaussian_formation f = gaussian_formation_of(m);
+    return f == GAUSSIAN_FORMATION_2DGS_CENTER_NEAR || f == GAUSSIAN_FORMATION_2DGS_UNIT_CIRCLE;
+}
+
+/* Whether Gaussian i's plane holds the camera centre exactly (p: its
+ * camera-space mean): forward.cu's DUAL_VISIABLE cull, -p_view . n == 0
+ * (fw:209-214 at e0ed020 and 7bdbd51; since 3a9357f), with the normal as
+ * t_u x t_v in camera space (so under an object's uneven scale too). */
+static int splat_edge_on(const gaussian_model *m, size_t i, const gaussian_ray *r, vec3 p)
+{
+    double R[3][3];
+    quaternion_matrix(&m->rotation[4 * i], R);
+    vec3 tu = cam_vector(r->m, v3(R[0][0], R[1][0], R[2][0])), tv = cam_vector(r->m, v3(R[0][1], R[1][1], R[2][1]));
+    return v3_dot(p, v3_cross(tu, tv)) == 0;
+}
+
 /* Gaussian i's 2DGS hit from its geometry at the pixel (p: its
  * camera-space mean). */
 static int hit_2d_from_geometry(const gaussian_model *m, size_t i, gaussian_order order, const gaussian_ray *r, vec3 p,
@@ -463,16 +496,21 @@ static int hit_2d_from_geometry(const gaussian_model *m, size_t i, gaussian_orde
 {
     if (g->cz == 0)
         return 0;
-    /* the near skip takes the plane hit's depth even where the filter wins
-     * (forward.cu since e0ed020, the commit 2DGS pins); where the filter
-     * wins the hit is placed at the centre's depth (the depth of the
-     * earlier code), the point its bounds and windows hold. A splat seen
-     * exactly edge-on (its plane holds the camera centre), which forward.cu
-     * culls (DUAL_VISIABLE: -p_view . n == 0), is skipped here too: every
-     * ray meets its plane at the camera centre, at view depth 0 */
+    /* where the filter wins the hit is placed at the centre's depth, the
+     * point its bounds and windows hold. The near skip takes the plane
+     * hit's depth even there (forward.cu since e0ed020, the commit 2DGS
+     * pins), or that centre's depth (the older rule): then filter pixels
+     * whose ray meets the plane nearer than 0.2, or behind the camera, are
+     * drawn (the centre is beyond 0.2: cull_2d). A splat seen exactly
+     * edge-on (its plane holds the camera centre), which forward.cu culls
+     * (DUAL_VISIABLE), shows nothing: under e0ed020's rule every ray meets
+     * its plane at the camera centre, at view depth 0; under the older
+     * one its filter pixels are culled by name */
     double depth = g->rho3d <= g->rho2d ? g->plane_depth : g->row[2].z;
-    if (g->plane_depth < GAUSSIAN_NEAR)
-        return 0;
+    if (g->plane_depth < GAUSSIAN_NEAR) {
+        if (!near_by_centre_where_filtered(m) || depth < GAUSSIAN_NEAR || splat_edge_on(m, i, r, p))
+            return 0;
+    }
     double rho = rr_fmin(g->rho3d, g->rho2d), t = depth / r->depth_per_t;
     /* alpha below 1/255 for certain (opacity <= 1): exp is the costly
      * part, and the exact test follows (a test with the opacity's own log
@@ -787,6 +825,7 @@ static void view_reach_parts(const gaussian_model *m, size_t i, const gaussian_v
 {
     switch (gaussian_formation_of(m)) {
     case GAUSSIAN_FORMATION_2DGS:
+    case GAUSSIAN_FORMATION_2DGS_CENTER_NEAR:
     case GAUSSIAN_FORMATION_2DGS_UNIT_CIRCLE: filter_2d_reach(m, i, v, any, across); return;
     case GAUSSIAN_FORMATION_3DGRT: *any = *across = 0.0; return;
     default: *any = 0.0, *across = footprint_3d_reach(m, i, v); return;

@@ -10,9 +10,11 @@
  * planes x T_3 - T_1 and y T_3 - T_2 cross, rho3d = u^2 + v^2; the
  * screen-space low-pass rho2d = 2 |pixel - centre of the projected
  * ellipse|^2; G = exp(-min(rho3d, rho2d) / 2); the depth is the hit's view
- * depth, or the centre's when the filter wins; nearer than 0.2 is skipped
- * (and so is a splat whose centre is); alpha = min(0.99, opacity G),
- * skipped below 1/255; colour from SH in the direction camera -> mean.
+ * depth, or the centre's when the filter wins; a plane hit nearer than 0.2
+ * is skipped (and so is a splat whose centre is; before e0ed020 the
+ * filter's hits were tested at the centre's depth: 2dgs-center-near);
+ * alpha = min(0.99, opacity G), skipped below 1/255; colour from SH in
+ * the direction camera -> mean.
  * Order: the centre's view depth (the rasterizer's sort) or the hit's.
  *
  * 3D Gaussians as their rasterizers draw them (the default; graphdeco-inria

@@ -318,15 +318,17 @@ TEST(gaussian_3d_raster_culls_and_bounds_hold_an_off_centre_principal_point)
     CHECK(dropped == 0 && outside == 0 && mismatched == 0);
 }
 
-/* Both 2DGS circle rules and the four rasterizer semantics (3DGRT has no
- * cull and no screen footprint). */
-static const gaussian_formation splatting_formations[6] = {
+/* The 2DGS semantics (both circle rules, both near rules) and the four
+ * rasterizer semantics (3DGRT has no cull and no screen footprint). */
+enum { SPLATTING_FORMATIONS = 7 };
+static const gaussian_formation splatting_formations[SPLATTING_FORMATIONS] = {
     GAUSSIAN_FORMATION_2DGS, GAUSSIAN_FORMATION_2DGS_UNIT_CIRCLE, GAUSSIAN_FORMATION_3DGS,
-    GAUSSIAN_FORMATION_3DGS_ANTIALIASED, GAUSSIAN_FORMATION_GSPLAT, GAUSSIAN_FORMATION_GSPLAT_ANTIALIASED};
+    GAUSSIAN_FORMATION_3DGS_ANTIALIASED, GAUSSIAN_FORMATION_GSPLAT, GAUSSIAN_FORMATION_GSPLAT_ANTIALIASED,
+    GAUSSIAN_FORMATION_2DGS_CENTER_NEAR};
 
 /* The cull (gaussian_cull, from mean and scale) never drops a Gaussian
  * that the whole evaluation would hit, and every 2D hit lies in its box:
- * random Gaussians of both 2DGS circle rules and the four rasterizer
+ * random Gaussians of the three 2DGS semantics and the four rasterizer
  * semantics, from far below a pixel to many pixels, tilted at random, at
  * view depths from just beyond GAUSSIAN_NEAR (where the filter's pole
  * bound is tightest) to 3, through pixels up to 20 pixels from their
@@ -339,7 +341,7 @@ TEST(gaussian_culls_never_drop_a_hit_and_2d_hits_near_the_camera_lie_in_their_bo
     int hits = 0, near_hits = 0, culled = 0, dropped = 0, outside = 0;
     for (int trial = 0; trial < 60000; trial++) {
         gaussian_model m;
-        gaussian_formation f = splatting_formations[trial % 6];
+        gaussian_formation f = splatting_formations[trial % SPLATTING_FORMATIONS];
         model_of(&m, 1, f <= GAUSSIAN_FORMATION_2DGS_UNIT_CIRCLE ? GAUSSIAN_2D : GAUSSIAN_3D);
         m.formation = f;
         double depth = GAUSSIAN_NEAR * (1 + 1e-3) + 2.8 * pow(uniform(&st), 2);
@@ -382,8 +384,8 @@ static vec3 rotate(const vec3 R[3], vec3 p) { return v3(v3_dot(R[0], p), v3_dot(
 
 /* gaussian_cull_candidates (the culls in vector lanes where the CPU has
  * AVX2) keeps exactly the Gaussians gaussian_cull keeps, in order, with
- * the same camera-space means and key floors, bit for bit: both 2DGS
- * circle rules and the four rasterizer semantics, means behind the camera, at the near plane and out to 4,
+ * the same camera-space means and key floors, bit for bit: the three
+ * 2DGS semantics and the four rasterizer semantics, means behind the camera, at the near plane and out to 4,
  * from far below a pixel to many pixels, scattered about the cull's edge
  * (the footprint's reach from the pixel's ray) and exactly at the near
  * plane, half of the trials through a turned, unevenly scaled object
@@ -392,15 +394,15 @@ static vec3 rotate(const vec3 R[3], vec3 p) { return v3(v3_dot(R[0], p), v3_dot(
 enum { CULL_TRIAL_N = 4099 };
 
 /* One trial of the lanes' tests: CULL_TRIAL_N Gaussians of
- * splatting_formations[trial % 6] about a random pixel's ray r. */
+ * splatting_formations[trial % SPLATTING_FORMATIONS] about a random pixel's ray r. */
 static void cull_trial(int trial, unsigned *st, gaussian_model *m, gaussian_ray *r)
 {
     camera_view v = {v3(0, 0, 0), {v3(1, 0, 0), v3(0, 1, 0), v3(0, 0, 1)}, 100, 100, 50, 50, 100, 100};
     xform id = {{{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}, {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}, {0, 0, 0}, 0};
     enum { N = CULL_TRIAL_N };
-    m->formation = splatting_formations[trial % 6];
+    m->formation = splatting_formations[trial % SPLATTING_FORMATIONS];
     model_of(m, N, m->formation <= GAUSSIAN_FORMATION_2DGS_UNIT_CIRCLE ? GAUSSIAN_2D : GAUSSIAN_3D);
-    m->formation = splatting_formations[trial % 6];
+    m->formation = splatting_formations[trial % SPLATTING_FORMATIONS];
     double x = 100 * uniform(st), y = 100 * uniform(st);
     vec3 dir = v3_normalize(v3((x - 50) / 100, (y - 50) / 100, 1));
     for (size_t i = 0; i < N; i++) {
@@ -468,7 +470,7 @@ TEST(gaussian_cull_candidates_keeps_what_gaussian_cull_keeps)
 
 /* gaussian_hits_after_cull4 (the 2D geometry in AVX2 lanes where the CPU
  * has them) finds exactly the hits gaussian_hit_after_cull finds one at a
- * time, bit for bit: the cull trials' Gaussians (both 2DGS circle rules,
+ * time, bit for bit: the cull trials' Gaussians (the three 2DGS semantics,
  * and the rasterizers, which take the scalar path), both orders, the tile
  * rule on and off, in groups of four culled candidates. The hits' floats
  * hide a regrouped sum's last bit, so the DCHECKS build (make test)
@@ -517,7 +519,7 @@ TEST(gaussian_hits_after_cull4_are_the_hits_one_at_a_time)
 }
 
 /* gaussian_key_floor lies at or below the key of every hit, in both
- * orders, under all seven formations, for objects placed by a rotation
+ * orders, under all eight formations, for objects placed by a rotation
  * and a uniform or non-uniform scale, with Gaussians from far below a
  * pixel to many pixels at depths from near the camera to 3; and it is
  * tight: some 2D hits' keys lie within a tenth of the pad above it (a pad
@@ -529,7 +531,9 @@ TEST(gaussian_key_floor_lies_below_every_hits_key)
     int hits = 0, below = 0, tight_2d = 0, exact_3d = 0;
     for (int trial = 0; trial < 140000; trial++) {
         gaussian_model m;
-        gaussian_formation f = trial % 7 == 6 ? GAUSSIAN_FORMATION_3DGRT : splatting_formations[trial % 7];
+        gaussian_formation f = trial % (SPLATTING_FORMATIONS + 1) == SPLATTING_FORMATIONS
+                                   ? GAUSSIAN_FORMATION_3DGRT
+                                   : splatting_formations[trial % (SPLATTING_FORMATIONS + 1)];
         model_of(&m, 1, f <= GAUSSIAN_FORMATION_2DGS_UNIT_CIRCLE ? GAUSSIAN_2D : GAUSSIAN_3D);
         m.formation = f;
         double R[3][3];
@@ -571,8 +575,8 @@ TEST(gaussian_key_floor_lies_below_every_hits_key)
 
 /* Boxes flattened along the view axis (gaussian_view_bounds) hold every
  * hit: cameras of random orientation, turned up to 0.3 radians from the
- * axis the box is built for (the cone) or not at all, Gaussians of both
- * 2DGS rules and the four rasterizer semantics in front of them, pixels
+ * axis the box is built for (the cone) or not at all, Gaussians of the
+ * three 2DGS semantics and the four rasterizer semantics in front of them, pixels
  * across their footprints. A box 0.9 as flat across the axis fails. */
 TEST(gaussian_boxes_flattened_along_the_view_axis_hold_every_hit)
 {
@@ -581,7 +585,7 @@ TEST(gaussian_boxes_flattened_along_the_view_axis_hold_every_hit)
     int hits = 0, turned = 0, outside = 0;
     for (int trial = 0; trial < 60000; trial++) {
         gaussian_model m;
-        gaussian_formation f = splatting_formations[trial % 6];
+        gaussian_formation f = splatting_formations[trial % SPLATTING_FORMATIONS];
         model_of(&m, 1, f <= GAUSSIAN_FORMATION_2DGS_UNIT_CIRCLE ? GAUSSIAN_2D : GAUSSIAN_3D);
         m.formation = f;
         vec3 ref[3], turn[3], cam[3];

@@ -302,32 +302,39 @@ def _tilted_elongated(seed, n=14):
             "rot": q, "opacity": rng.uniform(0.3, 0.9, n), "sh": rng.normal(0, 0.4, (n, 1, 3)), "degree": 0}
 
 
-@pytest.mark.parametrize("semantics,centre", [("2dgs", "cutoff"), ("2dgs-unit-circle", "unit-circle")])
-def test_the_filter_centre_is_e0ed020s_and_the_unit_circle_variant_the_older_one(tmp_path, semantics, centre):
+# each 2D semantics, its filter centre and its near rule in the reference (up to 7bdbd51 the near
+# skip took the centre's depth where the filter wins: near_depth="centre-if-filter")
+SEMANTICS_2D = [("2dgs", "cutoff", "hit"), ("2dgs-center-near", "cutoff", "centre-if-filter"),
+                ("2dgs-unit-circle", "unit-circle", "centre-if-filter")]
+
+
+@pytest.mark.parametrize("semantics,centre,near", SEMANTICS_2D, ids=[s[0] for s in SEMANTICS_2D])
+def test_the_filter_centre_is_e0ed020s_and_the_unit_circle_variant_the_older_one(tmp_path, semantics, centre, near):
     """e0ed020 (the commit 2DGS pins) centres the low-pass filter on the image of the 3-sigma circle's
     centre (compute_aabb, since 909dd85); before, on the unit circle's. On tilted, elongated splats the
     two differ by far more than the tolerance, and each semantics is its reference."""
     R = rotation(0.3, -0.2)
     C = -4.0 * R[:, 2]
     img, model = _render_2d(tmp_path, _tilted_elongated(5), R, C, F, W, H, f' semantics="{semantics}"')
-    expect, final_t = ref.render(model, R, C, F, F, W, H, BACKGROUND, centre=centre)
+    expect, final_t = ref.render(model, R, C, F, F, W, H, BACKGROUND, centre=centre, near_depth=near)
     assert np.abs(img[..., :3] - expect).max() < TOL
     other, _ = ref.render(model, R, C, F, F, W, H, BACKGROUND,
                           centre="unit-circle" if centre == "cutoff" else "cutoff")
     assert np.abs(other - expect).max() > 100 * TOL
 
 
-@pytest.mark.parametrize("semantics,centre", [("2dgs", "cutoff"), ("2dgs-unit-circle", "unit-circle")])
-def test_the_2dgs_tile_rule_draws_what_the_rasterizer_draws(tmp_path, semantics, centre):
+@pytest.mark.parametrize("semantics,centre,near", SEMANTICS_2D, ids=[s[0] for s in SEMANTICS_2D])
+def test_the_2dgs_tile_rule_draws_what_the_rasterizer_draws(tmp_path, semantics, centre, near):
     """tileRule="on": a splat only in the 16x16 tiles of its compute_aabb rectangle (each version's
     radius); opaque splats' tails beyond it are cut, as in the official image."""
     R, C = np.eye(3), np.array([0.0, 0.0, -4.0])
     model = random_model(17, 30, 0, sub_pixel=0)
     model["opacity"] = np.full(30, 0.98)
     img, read = _render_2d(tmp_path, model, R, C, 60.0, 64, 48, f' tileRule="on" semantics="{semantics}"')
-    expect, _ = ref.render(read, R, C, 60.0, 60.0, 64, 48, BACKGROUND, tile_rule=True, centre=centre)
+    expect, _ = ref.render(read, R, C, 60.0, 60.0, 64, 48, BACKGROUND, tile_rule=True, centre=centre,
+                           near_depth=near)
     assert np.abs(img[..., :3] - expect).max() < TOL
-    untiled, _ = ref.render(read, R, C, 60.0, 60.0, 64, 48, BACKGROUND, centre=centre)
+    untiled, _ = ref.render(read, R, C, 60.0, 60.0, 64, 48, BACKGROUND, centre=centre, near_depth=near)
     assert np.abs(untiled - expect).max() > 10 * TOL
 
 

@@ -177,6 +177,21 @@ TEST(cubic_bounds_hold_the_shortest_spacing)
     trajectory_free(&tr);
 }
 
+/* Whether text, read with interpolation k, is refused with a message
+ * holding needle. */
+static int refused_as(const char *text, int k, const char *needle)
+{
+    trajectory tr;
+    rr_error e = {{0}};
+    if (parse(text, &tr, &e))
+        return 0;
+    tr.interp = (trajectory_interp)k;
+    int rc = trajectory_prepare(&tr, "p.tum", &e);
+    printf("    %s: %s\n", trajectory_interp_name(tr.interp), rc ? e.msg : "accepted");
+    trajectory_free(&tr);
+    return rc != 0 && strstr(e.msg, needle) != NULL;
+}
+
 /* Poses too close in time for their motion overflow the bounds: refused
  * alike by every interpolation, naming the pose's line (a Bezier's: its
  * last, as it divides by its whole span). */
@@ -186,38 +201,21 @@ TEST(poses_too_close_in_time_are_refused_by_line)
     const char *cubic = "# t tx ty tz qx qy qz qw\n" L0 "1e-310 1 0 0 0 0 0 1\n2e-310 2 0 0 0 0 0 1\n"
                         "3e-310 3 0 0 0 0 0 1\n";
     const char *bezier = "# t tx ty tz qx qy qz qw\n" L0 "1e-310 1 0 0 0 0 0 1\n";
-    for (int k = TRAJECTORY_LINEAR; k <= TRAJECTORY_BEZIER_SE3; k++) {
-        trajectory tr;
-        rr_error e = {{0}};
-        const char *text = k == TRAJECTORY_CUBIC ? cubic : k >= TRAJECTORY_BEZIER ? bezier : segments;
-        CHECK(parse(text, &tr, &e) == 0);
-        tr.interp = (trajectory_interp)k;
-        int rc = trajectory_prepare(&tr, "p.tum", &e);
-        printf("    %s: %s\n", trajectory_interp_name(tr.interp), rc ? e.msg : "accepted");
-        CHECK(rc != 0 && strstr(e.msg, "p.tum:3: poses too close in time for their motion: this pose is 1e-310 "
-                                        "after line 2's"));
-        trajectory_free(&tr);
-    }
+    for (int k = TRAJECTORY_LINEAR; k <= TRAJECTORY_BEZIER_SE3; k++)
+        CHECK(refused_as(k == TRAJECTORY_CUBIC ? cubic : k >= TRAJECTORY_BEZIER ? bezier : segments, k,
+                         "p.tum:3: poses too close in time for their motion: this pose is 1e-310 after line 2's"));
 }
 
-/* The segment named is the one whose rate overflows, not the shortest: the
- * reviewer's file, where line 3 follows line 2 1e-310 later without moving
- * and the overflow is line 2, 1e-300 after line 1 and 1e15 away. */
+/* The segment named is the one whose rate overflows, not the shortest:
+ * line 4 follows line 3 1e-310 later without moving; the overflow is line 3,
+ * 1e-300 after line 2 and 1e15 away. */
 TEST(poses_too_close_name_the_segment_that_overflows)
 {
     const char *text = "# t tx ty tz qx qy qz qw\n" L0 "1e-300 1e15 0 0 0 0 0 1\n"
                        "1.0000000001e-300 1e15 0 0 0 0 0 1\n1 1e15 0 0 0 0 0 1\n";
-    for (int k = TRAJECTORY_LINEAR; k < TRAJECTORY_CUBIC; k++) {
-        trajectory tr;
-        rr_error e = {{0}};
-        CHECK(parse(text, &tr, &e) == 0);
-        tr.interp = (trajectory_interp)k;
-        int rc = trajectory_prepare(&tr, "p.tum", &e);
-        printf("    %s: %s\n", trajectory_interp_name(tr.interp), rc ? e.msg : "accepted");
-        CHECK(rc != 0 && strstr(e.msg, "p.tum:3: poses too close in time for their motion: this pose is 1e-300 "
-                                        "after line 2's"));
-        trajectory_free(&tr);
-    }
+    for (int k = TRAJECTORY_LINEAR; k < TRAJECTORY_CUBIC; k++)
+        CHECK(refused_as(text, k, "p.tum:3: poses too close in time for their motion: this pose is 1e-300 after "
+                                  "line 2's"));
 }
 
 TEST(a_written_trajectory_reads_back_bit_for_bit)
