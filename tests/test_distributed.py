@@ -347,3 +347,26 @@ def test_slurm_logs_in_the_tree_are_ignored():
     if proc.returncode == 128:
         pytest.skip("not a git checkout")
     assert proc.returncode == 0
+
+
+def test_resumed_render_reports_the_rays_of_the_whole_render(tmp_path):
+    # Killed (SIGKILL: no last checkpoint) and resumed from its periodic
+    # checkpoint, a pass reports the rays of all its batches, as if never
+    # interrupted: one primary ray per sample here, W*H*spp*tspp*batches. So a
+    # merge of requeued tasks still sums to one process's rays.
+    import time
+    scene = scene_file(tmp_path)
+    w, h, tspp = 96, 72, 256
+    args = [scene, "--res", f"{w}x{h}", "--spp", SPP, "--tspp", tspp, "--batches", 4, "--pass", "0/2",
+            "--threads", 1, "--quiet", "--checkpoint-every", 0.2]
+    state, out = tmp_path / "ckpt.exr", tmp_path / "pass.exr"
+    proc = subprocess.Popen([BIN, *map(str, args), "--checkpoint", str(state), "-o", str(out)])
+    deadline = time.time() + 60
+    while not state.exists() and time.time() < deadline and proc.poll() is None:
+        time.sleep(0.02)
+    proc.kill()
+    proc.wait()
+    assert state.exists() and not out.exists(), "the render ended before its first checkpoint"
+    assert 0 < read_full(state)[1]["refrender:rays"] < w * h * SPP * tspp * 2
+    render_ok(*args, "--checkpoint", state, "--resume", state, "-o", out)
+    assert read_full(out)[1]["refrender:rays"] == w * h * SPP * tspp * 2

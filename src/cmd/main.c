@@ -371,6 +371,8 @@ typedef struct {
 static int write_checkpoint(void *user, const image *img, rr_error *err)
 {
     render_run *run = user;
+    attrs_set(&run->attrs, "refrender:renderSeconds", "%.3f", img->seconds);
+    attrs_set(&run->attrs, "refrender:rays", "%llu", (unsigned long long)img->rays);
     return output_write_state(run->o->checkpoint, img, run->rs.batch_begin,
                               run->rs.batch_begin + run->rs.batches, &run->attrs, err);
 }
@@ -430,6 +432,10 @@ static int resume_state(render_run *run, image *img, rr_error *err)
     }
     if (check_resumable_counts(run, img, err))
         return -1;
+    /* the work the state took goes on counting (render.c, checkpoint_paused) */
+    const char *rays = attrs_get(&saved, "refrender:rays"), *seconds = attrs_get(&saved, "refrender:renderSeconds");
+    img->rays = rays ? (uint64_t)strtod(rays, NULL) : 0;
+    img->seconds = seconds ? strtod(seconds, NULL) : 0.0;
     if (!run->o->quiet) { /* a log then shows the work kept */
         uint64_t done = 0, n = (uint64_t)img->width * img->height;
         for (uint64_t i = 0; i < n; i++)
