@@ -105,7 +105,7 @@ test-py: $(BIN) $(TESTBIN) $(BUILD)/libfaultinject.so scenes
 	REFRENDER=$(CURDIR)/$(BIN) UNIT_TESTS=$(CURDIR)/$(TESTBIN) FAULTINJECT=$(CURDIR)/$(BUILD)/libfaultinject.so \
 	    $(PYTHON) -m pytest -q -n $(TEST_JOBS) tests
 
-# A real Slurm (README, "Rendering on a Slurm cluster"): tests/cluster_slurm.py
+# A real Slurm (scripts/README.md, "Rendering on a Slurm cluster"): tests/cluster_slurm.py
 # starts a throwaway single-node cluster of its own (Debian's slurm-wlm and
 # munge: scripts/install-deps.sh --cluster) and renders through
 # scripts/slurm-render.sbatch with the plain build, as users run it. Not
