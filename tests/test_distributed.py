@@ -118,7 +118,7 @@ def test_merge_of_exact_time_passes_weights_the_unresolved_share_by_rays(tmp_pat
     # The unresolved share is per traced ray: the merged share is the passes'
     # ray-weighted mean, which is one render's share up to the 6 digits the
     # passes store.
-    exact = ["--time-integration", "exact", "--batches", BATCHES, "--spp", SPP, "--quiet"]
+    exact = ["--time-integration", "exact", "--batches", BATCHES, "--spp", 1, "--quiet"]
     single = tmp_path / "single.exr"
     render_ok(scene_file(tmp_path), "--frame", 3, *exact, "-o", single)
     parts = passes_of_frame(tmp_path, 3, args=exact)
@@ -370,3 +370,20 @@ def test_resumed_render_reports_the_rays_of_the_whole_render(tmp_path):
     assert 0 < read_full(state)[1]["refrender:rays"] < w * h * SPP * tspp * 2
     render_ok(*args, "--checkpoint", state, "--resume", state, "-o", out)
     assert read_full(out)[1]["refrender:rays"] == w * h * SPP * tspp * 2
+
+
+def test_two_tasks_never_merge_one_frame_at_once(tmp_path):
+    # Two tasks of a frame finishing together on two nodes would write its
+    # image at once (and each one's stale-temporary sweep could remove the
+    # other's file): a task merges only holding the frame's lock directory.
+    scene, out = scene_file(tmp_path), tmp_path / "out"
+    args = ["--passes", 2, out, "--", scene, *COMMON]
+    assert sbatch_task(args, task_env(0, array=(0, 1))).returncode == 0
+    (lock,) = [d / "still.merging" for d in out.glob("run-*")]
+    lock.mkdir()  # another task is merging
+    last = sbatch_task(args, task_env(1, array=(0, 1)))
+    assert last.returncode == 0 and "another task is merging it" in last.stderr, last.stderr
+    assert not (out / "render.exr").exists()
+    lock.rmdir()
+    by_hand = sbatch_task(["--merge", *args], task_env(0, array=(0, 1)))
+    assert by_hand.returncode == 0 and (out / "render.exr").exists(), by_hand.stderr
