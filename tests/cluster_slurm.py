@@ -310,6 +310,9 @@ def test_slurm_array_renders_frames_resumes_a_killed_task_and_merges_bit_for_bit
                   and not np.array_equal(np.asarray(ha.get(k)), np.asarray(hb.get(k)))}
         assert differ == set(), (frame, differ)
         assert hb["refrender:frame"] == frame
+        seconds = [read_full(run_dir / f"f{frame:04d}.p{k}of{PASSES}.exr")[1]["refrender:renderSeconds"]
+                   for k in range(PASSES)]
+        assert hb["refrender:renderSeconds"] == pytest.approx(sum(seconds), abs=1e-3 * PASSES)
 
 
 def pixel_batches(state):
