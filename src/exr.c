@@ -368,6 +368,14 @@ int exr_read_rgba(const char *path, int *w, int *h, float **rgba, rr_error *err)
     return 0;
 }
 
+/* 16 numbers as set_matrix reads them; %.9g gives each float back exactly. */
+static void format_matrix(const float m[16], char *buf, size_t size)
+{
+    size_t len = 0;
+    for (int k = 0; k < 16 && len < size; k++)
+        len += (size_t)snprintf(buf + len, size - len, "%s%.9g", k ? " " : "", (double)m[k]);
+}
+
 int exr_read_string_attr(const char *path, const char *key, char *buf, size_t size, rr_error *err)
 {
     exr_result_t rc;
@@ -391,6 +399,8 @@ int exr_read_string_attr(const char *path, const char *key, char *buf, size_t si
         snprintf(buf, size, "%.17g", a->d);
     else if (ok && a->type == EXR_ATTR_FLOAT)
         snprintf(buf, size, "%.9g", (double)a->f);
+    else if (ok && a->type == EXR_ATTR_M44F)
+        format_matrix(a->m44f->m, buf, size);
     else
         ok = 0;
     exr_finish(&ctx);

@@ -59,4 +59,11 @@ int output_read_state(const char *path, image *img, attr_list *a, uint32_t *begi
 int attrs_check_identity(const attr_list *a, const char *a_name, const attr_list *b, const char *b_name,
                          rr_error *err);
 
+/* Folds state b's descriptive attributes into merged (a merge's first
+ * state): the frame, frame rate, shutter and camera matrices must be equal
+ * in both, or absent from both; rays and render seconds are summed; exact
+ * time's unresolved share becomes the ray-weighted mean. Fails naming the
+ * attribute and both files. */
+int attrs_combine(attr_list *merged, const char *merged_name, const attr_list *b, const char *b_name, rr_error *err);
+
 #endif
