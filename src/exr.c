@@ -163,6 +163,12 @@ int exr_write(const char *path, int w, int h, const exr_channel *channels, int n
 int exr_write_window(const char *path, const exr_window *win, const exr_channel *channels, int nchannels,
                      const exr_string_attr *attrs, int nattrs, rr_error *err)
 {
+    return exr_write_window_into(NULL, path, win, channels, nchannels, attrs, nattrs, err);
+}
+
+int exr_write_window_into(atomic_set *set, const char *path, const exr_window *win, const exr_channel *channels,
+                          int nchannels, const exr_string_attr *attrs, int nattrs, rr_error *err)
+{
     char tmp[PATH_MAX + 64];
     if (atomic_create(path, "", tmp, sizeof tmp, err))
         return -1;
@@ -184,7 +190,7 @@ int exr_write_window(const char *path, const exr_window *win, const exr_channel 
         atomic_discard(tmp);
         return exr_fail(err, path, "writing failed", rc);
     }
-    return atomic_commit(tmp, path, err);
+    return atomic_finish(set, tmp, path, err);
 }
 
 int exr_write_rgba(const char *path, int w, int h, const float *rgba, const exr_string_attr *attrs,

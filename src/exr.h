@@ -4,6 +4,7 @@
 
 #include <stdint.h>
 
+#include "atomicfile.h"
 #include "common.h"
 
 /* How an attribute given as text is stored: as a string, or parsed into a
@@ -43,6 +44,10 @@ typedef struct {
  * its w x h pixels); readers see the full display window. */
 int exr_write_window(const char *path, const exr_window *win, const exr_channel *channels, int nchannels,
                      const exr_string_attr *attrs, int nattrs, rr_error *err);
+/* The same, its file left in set for atomic_set_commit (set NULL: put in
+ * place now). */
+int exr_write_window_into(atomic_set *set, const char *path, const exr_window *win, const exr_channel *channels,
+                          int nchannels, const exr_string_attr *attrs, int nattrs, rr_error *err);
 
 /* Interleaved float RGBA (w*h*4) as channels R, G, B, A. */
 int exr_write_rgba(const char *path, int w, int h, const float *rgba, const exr_string_attr *attrs,

@@ -167,6 +167,12 @@ static void compact_window(float *plane, int elems, const exr_window *win)
 int output_write_final_window(const char *path, const image *img, int samples_per_batch, const attr_list *a,
                               const exr_window *win, rr_error *err)
 {
+    return output_write_final_into(NULL, path, img, samples_per_batch, a, win, err);
+}
+
+int output_write_final_into(atomic_set *set, const char *path, const image *img, int samples_per_batch,
+                            const attr_list *a, const exr_window *win, rr_error *err)
+{
     size_t n = (size_t)img->width * img->height;
     float *rgba = malloc(n * 4 * sizeof *rgba), *var = malloc(n * 4 * sizeof *var);
     float *se = malloc(n * 4 * sizeof *se), *samples = malloc(n * sizeof *samples);
@@ -190,7 +196,7 @@ int output_write_final_window(const char *path, const image *img, int samples_pe
             compact_window(planes[k], 4, win);
         compact_window(samples, 1, win);
         exr_string_attr sa[ATTR_MAX];
-        rc = exr_write_window(path, win, chs, nch, string_attrs(a, sa), a->n, err);
+        rc = exr_write_window_into(set, path, win, chs, nch, string_attrs(a, sa), a->n, err);
     } else {
         rr_fail(err, "out of memory");
     }
@@ -240,6 +246,12 @@ static void unpack_state(const uint32_t w[STATE_WORDS], pixel_state *p)
 int output_write_state(const char *path, const image *img, uint32_t begin, uint32_t end, attr_list *a,
                        rr_error *err)
 {
+    return output_write_state_into(NULL, path, img, begin, end, a, err);
+}
+
+int output_write_state_into(atomic_set *set, const char *path, const image *img, uint32_t begin, uint32_t end,
+                            attr_list *a, rr_error *err)
+{
     size_t n = (size_t)img->width * img->height;
     uint32_t *words = malloc(n * STATE_WORDS * sizeof *words);
     float *rgba = malloc(n * 4 * sizeof *rgba);
@@ -263,7 +275,8 @@ int output_write_state(const char *path, const image *img, uint32_t begin, uint3
     }
     attrs_set(a, "refrender:state", "batches %u-%u", begin, end);
     exr_string_attr sa[ATTR_MAX];
-    int rc = exr_write(path, img->width, img->height, chs, 4 + STATE_WORDS, string_attrs(a, sa), a->n, err);
+    exr_window whole = {img->width, img->height, 0, 0, img->width, img->height};
+    int rc = exr_write_window_into(set, path, &whole, chs, 4 + STATE_WORDS, string_attrs(a, sa), a->n, err);
     free(words), free(rgba);
     return rc;
 }

@@ -479,7 +479,7 @@ static void setup_run(render_run *run, const scene *s, const shutter *shut, cons
     attrs_for_render(&run->attrs, s, &run->rs, total, cmdline);
 }
 
-static int write_preview(const char *path, const image *img, rr_error *err)
+static int write_preview(atomic_set *set, const char *path, const image *img, rr_error *err)
 {
     size_t n = (size_t)img->width * img->height;
     float *rgba = malloc(n * 4 * sizeof *rgba), *var = malloc(n * 4 * sizeof *var);
@@ -487,7 +487,7 @@ static int write_preview(const char *path, const image *img, rr_error *err)
     int rc = rgba && var && se && samples ? 0 : rr_fail(err, "out of memory");
     if (!rc) {
         image_resolve(img, 1, rgba, var, se, samples);
-        rc = preview_write_srgb(path, img->width, img->height, rgba, err);
+        rc = preview_write_srgb_into(set, path, img->width, img->height, rgba, err);
     }
     free(rgba), free(var), free(se), free(samples);
     return rc;
@@ -561,7 +561,7 @@ static void warn_about_settings(const render_options *o, const render_settings *
 }
 
 /* The final image, only the crop window's pixels with --crop-window. */
-static int write_final(const char *output, const image *img, render_run *run, rr_error *err)
+static int write_final(atomic_set *set, const char *output, const image *img, render_run *run, rr_error *err)
 {
     const render_settings *rs = &run->rs;
     exr_window win = {img->width, img->height, 0, 0, img->width, img->height};
@@ -571,7 +571,24 @@ static int write_final(const char *output, const image *img, render_run *run, rr
         const double *c = run->o->crop;
         attrs_set(&run->attrs, "refrender:cropWindow", "%.17g %.17g %.17g %.17g", c[0], c[1], c[2], c[3]);
     }
-    return output_write_final_window(output, img, (int)sampler_count(&rs->smp), &run->attrs, &win, err);
+    return output_write_final_into(set, output, img, (int)sampler_count(&rs->smp), &run->attrs, &win, err);
+}
+
+/* The image (a pass's state with --pass) and the preview: both put in
+ * place or neither, as every command's outputs. */
+static int write_outputs(const image *img, render_run *run, const char *output, const char *preview, rr_error *err)
+{
+    atomic_set set = {0};
+    int rc = run->o->passes ? output_write_state_into(&set, output, img, run->rs.batch_begin,
+                                                      run->rs.batch_begin + run->rs.batches, &run->attrs, err)
+                            : write_final(&set, output, img, run, err);
+    if (!rc && preview)
+        rc = write_preview(&set, preview, img, err);
+    if (rc) {
+        atomic_set_discard(&set);
+        return -1;
+    }
+    return atomic_set_commit(&set, err);
 }
 
 /* Says what the render was handed, not what was asked for: the period it
@@ -621,12 +638,8 @@ static int render_one(const scene *s, const shutter *shut, long long frame, acce
             attrs_set(&run.attrs, "refrender:frameRate", "%.17g", s->frame_rate);
         if (o->frames)
             attrs_set(&run.attrs, "refrender:frame", "%lld", frame);
-        rc = o->passes ? output_write_state(output, &img, run.rs.batch_begin,
-                                            run.rs.batch_begin + run.rs.batches, &run.attrs, err)
-                       : write_final(output, &img, &run, err);
+        rc = write_outputs(&img, &run, output, preview, err);
     }
-    if (!rc && preview)
-        rc = write_preview(preview, &img, err);
     image_free(&img);
     return rc;
 }
