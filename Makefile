@@ -51,7 +51,7 @@ TEST_OBJS := $(TEST_SRCS:tests/%.c=$(BUILD)/tests/%.o) $(BUILD)/tests/harness.o
 BIN      := $(BUILD)/refrender
 TESTBIN  := $(BUILD)/unit_tests
 
-.PHONY: all deps demo test test-build test-c test-py test-fuzz fuzz bench bench-time clean clean-models scenes references gallery
+.PHONY: all deps demo test test-build test-c test-py test-cluster test-fuzz fuzz bench bench-time clean clean-models scenes references gallery
 all: $(BIN) $(BUILD)/refrender-bench
 
 # An object without its .d file (built before dependency tracking, or the
@@ -104,6 +104,15 @@ TEST_JOBS ?= $(shell nproc)
 test-py: $(BIN) $(TESTBIN) $(BUILD)/libfaultinject.so scenes
 	REFRENDER=$(CURDIR)/$(BIN) UNIT_TESTS=$(CURDIR)/$(TESTBIN) FAULTINJECT=$(CURDIR)/$(BUILD)/libfaultinject.so \
 	    $(PYTHON) -m pytest -q -n $(TEST_JOBS) tests
+
+# A real Slurm (scripts/README.md, "Rendering on a Slurm cluster"): tests/cluster_slurm.py
+# starts a throwaway single-node cluster of its own (Debian's slurm-wlm and
+# munge: scripts/install-deps.sh --cluster) and renders through
+# scripts/slurm-render.sbatch with the plain build, as users run it. Not
+# part of `make test`; about a minute.
+test-cluster:
+	$(MAKE) SAN=0 DCHECKS=0 build/refrender
+	$(PYTHON) -m pytest -q -rs -p no:xdist tests/cluster_slurm.py
 
 # Tests run with the RR_DCHECK invariant checks on (src/common.h): the plain
 # build stays the one users run, without them.

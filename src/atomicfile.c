@@ -200,3 +200,30 @@ int atomic_commit_all(const char *const *tmps, const char *const *paths, int n, 
     free(keep);
     return rc;
 }
+
+int atomic_finish(atomic_set *set, const char *tmp, const char *path, rr_error *err)
+{
+    if (!set)
+        return atomic_commit(tmp, path, err);
+    RR_CHECK(set->n < ATOMIC_SET_MAX);
+    snprintf(set->tmp[set->n], sizeof set->tmp[set->n], "%s", tmp);
+    set->path[set->n++] = path;
+    return 0;
+}
+
+int atomic_set_commit(atomic_set *set, rr_error *err)
+{
+    const char *tmps[ATOMIC_SET_MAX];
+    for (int i = 0; i < set->n; i++)
+        tmps[i] = set->tmp[i];
+    int rc = set->n ? atomic_commit_all(tmps, set->path, set->n, err) : 0;
+    set->n = 0;
+    return rc;
+}
+
+void atomic_set_discard(atomic_set *set)
+{
+    for (int i = 0; i < set->n; i++)
+        atomic_discard(set->tmp[i]);
+    set->n = 0;
+}

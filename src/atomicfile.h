@@ -8,6 +8,7 @@
 #ifndef RR_ATOMICFILE_H
 #define RR_ATOMICFILE_H
 
+#include <limits.h>
 #include <stddef.h>
 #include <stdio.h>
 
@@ -49,6 +50,24 @@ int atomic_prepare_stdio(const char *path, int (*write)(FILE *f, void *ctx, rr_e
  * rest discarded, so that every path holds what it held before. The
  * paths must name distinct files. */
 int atomic_commit_all(const char *const *tmps, const char *const *paths, int n, rr_error *err);
+
+/* The outputs of one command put in place together: a writer handed a set
+ * leaves its complete temporary there (atomic_finish) instead of renaming
+ * it, and atomic_set_commit puts them all in place or none
+ * (atomic_commit_all). The paths must outlive the set. */
+#define ATOMIC_SET_MAX 4
+typedef struct {
+    int n;
+    char tmp[ATOMIC_SET_MAX][PATH_MAX + 64];
+    const char *path[ATOMIC_SET_MAX];
+} atomic_set;
+
+/* The last step of a writer: renames tmp over path now (set NULL), or
+ * leaves it in set for atomic_set_commit. */
+int atomic_finish(atomic_set *set, const char *tmp, const char *path, rr_error *err);
+int atomic_set_commit(atomic_set *set, rr_error *err);
+/* Removes the set's temporaries (a later output failed). */
+void atomic_set_discard(atomic_set *set);
 
 #ifdef __cplusplus
 }

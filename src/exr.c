@@ -163,6 +163,12 @@ int exr_write(const char *path, int w, int h, const exr_channel *channels, int n
 int exr_write_window(const char *path, const exr_window *win, const exr_channel *channels, int nchannels,
                      const exr_string_attr *attrs, int nattrs, rr_error *err)
 {
+    return exr_write_window_into(NULL, path, win, channels, nchannels, attrs, nattrs, err);
+}
+
+int exr_write_window_into(atomic_set *set, const char *path, const exr_window *win, const exr_channel *channels,
+                          int nchannels, const exr_string_attr *attrs, int nattrs, rr_error *err)
+{
     char tmp[PATH_MAX + 64];
     if (atomic_create(path, "", tmp, sizeof tmp, err))
         return -1;
@@ -184,7 +190,7 @@ int exr_write_window(const char *path, const exr_window *win, const exr_channel 
         atomic_discard(tmp);
         return exr_fail(err, path, "writing failed", rc);
     }
-    return atomic_commit(tmp, path, err);
+    return atomic_finish(set, tmp, path, err);
 }
 
 int exr_write_rgba(const char *path, int w, int h, const float *rgba, const exr_string_attr *attrs,
@@ -368,6 +374,14 @@ int exr_read_rgba(const char *path, int *w, int *h, float **rgba, rr_error *err)
     return 0;
 }
 
+/* 16 numbers as set_matrix reads them; %.9g gives each float back exactly. */
+static void format_matrix(const float m[16], char *buf, size_t size)
+{
+    size_t len = 0;
+    for (int k = 0; k < 16 && len < size; k++)
+        len += (size_t)snprintf(buf + len, size - len, "%s%.9g", k ? " " : "", (double)m[k]);
+}
+
 int exr_read_string_attr(const char *path, const char *key, char *buf, size_t size, rr_error *err)
 {
     exr_result_t rc;
@@ -391,6 +405,8 @@ int exr_read_string_attr(const char *path, const char *key, char *buf, size_t si
         snprintf(buf, size, "%.17g", a->d);
     else if (ok && a->type == EXR_ATTR_FLOAT)
         snprintf(buf, size, "%.9g", (double)a->f);
+    else if (ok && a->type == EXR_ATTR_M44F)
+        format_matrix(a->m44f->m, buf, size);
     else
         ok = 0;
     exr_finish(&ctx);

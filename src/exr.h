@@ -4,6 +4,7 @@
 
 #include <stdint.h>
 
+#include "atomicfile.h"
 #include "common.h"
 
 /* How an attribute given as text is stored: as a string, or parsed into a
@@ -43,6 +44,10 @@ typedef struct {
  * its w x h pixels); readers see the full display window. */
 int exr_write_window(const char *path, const exr_window *win, const exr_channel *channels, int nchannels,
                      const exr_string_attr *attrs, int nattrs, rr_error *err);
+/* The same, its file left in set for atomic_set_commit (set NULL: put in
+ * place now). */
+int exr_write_window_into(atomic_set *set, const char *path, const exr_window *win, const exr_channel *channels,
+                          int nchannels, const exr_string_attr *attrs, int nattrs, rr_error *err);
 
 /* Interleaved float RGBA (w*h*4) as channels R, G, B, A. */
 int exr_write_rgba(const char *path, int w, int h, const float *rgba, const exr_string_attr *attrs,
@@ -64,8 +69,9 @@ int exr_read_channel(const char *path, const exr_channel *ch, int optional, int 
 int exr_read_rgba(const char *path, int *w, int *h, float **rgba, rr_error *err);
 
 /* Reads an attribute of part 0 into buf as text: strings as they are, int
- * attributes with %d, double with %.17g and float with %.9g (the same text
- * they were written from). Returns 0, 1 if there is no such attribute, -1
+ * attributes with %d, double with %.17g, float with %.9g and m44f as 16
+ * numbers with %.9g (the same text they were written from; buf must hold
+ * 16 numbers, 256 characters). Returns 0, 1 if there is no such attribute, -1
  * if the file cannot be read or the string does not fit in buf (never
  * cut). */
 int exr_read_string_attr(const char *path, const char *key, char *buf, size_t size, rr_error *err);

@@ -18,6 +18,16 @@ static const char *const identity_keys[] = {
     "refrender:pixelFilter", "refrender:blurSpace", "refrender:gaussians", "refrender:gaussiansHash",
     "refrender:rollingShutter", NULL};
 
+/* Attributes that describe a render without being its identity (README,
+ * Output), and what a merge of its states writes for each: the frame and
+ * the camera are those of every state, so they must agree (a misnumbered
+ * pass would otherwise pass as the frame); rays and seconds are the work
+ * of all states together, so they add up. */
+static const char *const equal_keys[] = {"worldToCamera", "worldToNDC", "refrender:shutterOpen",
+                                         "refrender:shutterClose", "refrender:frame", "refrender:frameRate", NULL};
+static const char *const summed_keys[] = {"refrender:rays", "refrender:renderSeconds", NULL};
+#define UNRESOLVED_KEY "refrender:exactUnresolvedShare"
+
 /* The attributes stored as EXR numbers (README, Output). */
 static rr_attr_kind attr_kind(const char *key)
 {
@@ -82,6 +92,56 @@ int attrs_check_identity(const attr_list *a, const char *a_name, const attr_list
     return 0;
 }
 
+/* Both or neither of a and b have key; fails naming the files if not. */
+static int check_both_have(const attr_list *a, const char *a_name, const attr_list *b, const char *b_name,
+                           const char *key, rr_error *err)
+{
+    const char *va = attrs_get(a, key), *vb = attrs_get(b, key);
+    if (!va != !vb)
+        return rr_fail(err, "%s %s %s but %s %s it: states of one render all have it or none does", a_name,
+                       va ? "has" : "lacks", key, b_name, vb ? "has" : "lacks");
+    return 0;
+}
+
+/* Exact time's unresolved share is per traced ray (main.c), so the share
+ * of states together is their ray-weighted mean; called before the rays
+ * are summed. */
+static void combine_unresolved(attr_list *merged, const attr_list *b)
+{
+    const char *sa = attrs_get(merged, UNRESOLVED_KEY), *sb = attrs_get(b, UNRESOLVED_KEY);
+    const char *ra = attrs_get(merged, "refrender:rays"), *rb = attrs_get(b, "refrender:rays");
+    if (!sa || !sb || !ra || !rb)
+        return;
+    double wa = strtod(ra, NULL), wb = strtod(rb, NULL);
+    double share = wa + wb > 0 ? (strtod(sa, NULL) * wa + strtod(sb, NULL) * wb) / (wa + wb) : 0.0;
+    attrs_set(merged, UNRESOLVED_KEY, "%.6g", share);
+}
+
+int attrs_combine(attr_list *merged, const char *merged_name, const attr_list *b, const char *b_name, rr_error *err)
+{
+    for (const char *const *k = equal_keys; *k; k++) {
+        if (check_both_have(merged, merged_name, b, b_name, *k, err))
+            return -1;
+        const char *va = attrs_get(merged, *k), *vb = attrs_get(b, *k);
+        if (va && strcmp(va, vb))
+            return rr_fail(err, "%s and %s differ in %s ('%.160s' vs '%.160s'): not the same frame and camera",
+                           merged_name, b_name, *k, va, vb);
+    }
+    if (check_both_have(merged, merged_name, b, b_name, UNRESOLVED_KEY, err))
+        return -1;
+    for (const char *const *k = summed_keys; *k; k++)
+        if (check_both_have(merged, merged_name, b, b_name, *k, err))
+            return -1;
+    combine_unresolved(merged, b);
+    const char *rays = attrs_get(merged, "refrender:rays"), *secs = attrs_get(merged, "refrender:renderSeconds");
+    if (rays) /* a double holds counts exactly up to 2^53 rays */
+        attrs_set(merged, "refrender:rays", "%.17g", strtod(rays, NULL) + strtod(attrs_get(b, "refrender:rays"), NULL));
+    if (secs)
+        attrs_set(merged, "refrender:renderSeconds", "%.3f",
+                  strtod(secs, NULL) + strtod(attrs_get(b, "refrender:renderSeconds"), NULL));
+    return 0;
+}
+
 static exr_string_attr *string_attrs(const attr_list *a, exr_string_attr *out)
 {
     for (int i = 0; i < a->n; i++)
@@ -107,6 +167,12 @@ static void compact_window(float *plane, int elems, const exr_window *win)
 int output_write_final_window(const char *path, const image *img, int samples_per_batch, const attr_list *a,
                               const exr_window *win, rr_error *err)
 {
+    return output_write_final_into(NULL, path, img, samples_per_batch, a, win, err);
+}
+
+int output_write_final_into(atomic_set *set, const char *path, const image *img, int samples_per_batch,
+                            const attr_list *a, const exr_window *win, rr_error *err)
+{
     size_t n = (size_t)img->width * img->height;
     float *rgba = malloc(n * 4 * sizeof *rgba), *var = malloc(n * 4 * sizeof *var);
     float *se = malloc(n * 4 * sizeof *se), *samples = malloc(n * sizeof *samples);
@@ -130,7 +196,7 @@ int output_write_final_window(const char *path, const image *img, int samples_pe
             compact_window(planes[k], 4, win);
         compact_window(samples, 1, win);
         exr_string_attr sa[ATTR_MAX];
-        rc = exr_write_window(path, win, chs, nch, string_attrs(a, sa), a->n, err);
+        rc = exr_write_window_into(set, path, win, chs, nch, string_attrs(a, sa), a->n, err);
     } else {
         rr_fail(err, "out of memory");
     }
@@ -180,6 +246,12 @@ static void unpack_state(const uint32_t w[STATE_WORDS], pixel_state *p)
 int output_write_state(const char *path, const image *img, uint32_t begin, uint32_t end, attr_list *a,
                        rr_error *err)
 {
+    return output_write_state_into(NULL, path, img, begin, end, a, err);
+}
+
+int output_write_state_into(atomic_set *set, const char *path, const image *img, uint32_t begin, uint32_t end,
+                            attr_list *a, rr_error *err)
+{
     size_t n = (size_t)img->width * img->height;
     uint32_t *words = malloc(n * STATE_WORDS * sizeof *words);
     float *rgba = malloc(n * 4 * sizeof *rgba);
@@ -203,7 +275,8 @@ int output_write_state(const char *path, const image *img, uint32_t begin, uint3
     }
     attrs_set(a, "refrender:state", "batches %u-%u", begin, end);
     exr_string_attr sa[ATTR_MAX];
-    int rc = exr_write(path, img->width, img->height, chs, 4 + STATE_WORDS, string_attrs(a, sa), a->n, err);
+    exr_window whole = {img->width, img->height, 0, 0, img->width, img->height};
+    int rc = exr_write_window_into(set, path, &whole, chs, 4 + STATE_WORDS, string_attrs(a, sa), a->n, err);
     free(words), free(rgba);
     return rc;
 }
@@ -211,7 +284,8 @@ int output_write_state(const char *path, const image *img, uint32_t begin, uint3
 static int read_attrs(const char *path, attr_list *a, rr_error *err)
 {
     static const char *const keys[] = {"refrender:scene", "refrender:command", "software", "refrender:background",
-                                       "refrender:alpha", NULL};
+                                       "refrender:alpha", UNRESOLVED_KEY, NULL};
+    const char *const *optional[] = {keys, equal_keys, summed_keys};
     a->n = 0;
     char buf[ATTR_TEXT_MAX];
     for (const char *const *k = identity_keys; *k; k++) {
@@ -220,13 +294,14 @@ static int read_attrs(const char *path, attr_list *a, rr_error *err)
             return rc > 0 ? rr_fail(err, "%s: not a refrender render state (no %s)", path, *k) : -1;
         attrs_set(a, *k, "%s", buf);
     }
-    for (const char *const *k = keys; *k; k++) {
-        int rc = exr_read_string_attr(path, *k, buf, sizeof buf, err);
-        if (rc < 0) /* longer than refrender writes: refused, not cut */
-            return -1;
-        if (!rc)
-            attrs_set(a, *k, "%s", buf);
-    }
+    for (int list = 0; list < 3; list++)
+        for (const char *const *k = optional[list]; *k; k++) {
+            int rc = exr_read_string_attr(path, *k, buf, sizeof buf, err);
+            if (rc < 0) /* longer than refrender writes: refused, not cut */
+                return -1;
+            if (!rc)
+                attrs_set(a, *k, "%s", buf);
+        }
     return 0;
 }
 

@@ -50,6 +50,12 @@ int output_write_final_window(const char *path, const image *img, int samples_pe
 /* batch range [begin, end) is recorded in the attributes */
 int output_write_state(const char *path, const image *img, uint32_t begin, uint32_t end, attr_list *a,
                        rr_error *err);
+/* The two above with their file left in set, for outputs put in place
+ * together (atomic_set_commit; set NULL: now). */
+int output_write_final_into(atomic_set *set, const char *path, const image *img, int samples_per_batch,
+                            const attr_list *a, const exr_window *win, rr_error *err);
+int output_write_state_into(atomic_set *set, const char *path, const image *img, uint32_t begin, uint32_t end,
+                            attr_list *a, rr_error *err);
 
 /* Reads a state file into img (allocated here) and its attributes. */
 int output_read_state(const char *path, image *img, attr_list *a, uint32_t *begin, uint32_t *end,
@@ -58,5 +64,12 @@ int output_read_state(const char *path, image *img, attr_list *a, uint32_t *begi
 /* Fails naming the first identity attribute on which a and b differ. */
 int attrs_check_identity(const attr_list *a, const char *a_name, const attr_list *b, const char *b_name,
                          rr_error *err);
+
+/* Folds state b's descriptive attributes into merged (a merge's first
+ * state): the frame, frame rate, shutter and camera matrices must be equal
+ * in both, or absent from both; rays and render seconds are summed; exact
+ * time's unresolved share becomes the ray-weighted mean. Fails naming the
+ * attribute and both files. */
+int attrs_combine(attr_list *merged, const char *merged_name, const attr_list *b, const char *b_name, rr_error *err);
 
 #endif

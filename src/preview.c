@@ -92,6 +92,11 @@ static int write_all(const char *name, const unsigned char *bytes, size_t len)
 
 int preview_write_srgb(const char *path, int w, int h, const float *rgba, rr_error *err)
 {
+    return preview_write_srgb_into(NULL, path, w, h, rgba, err);
+}
+
+int preview_write_srgb_into(atomic_set *set, const char *path, int w, int h, const float *rgba, rr_error *err)
+{
     if (preview_check_format(path, err))
         return -1;
     size_t count = (size_t)w * h, len = 0;
@@ -112,5 +117,5 @@ int preview_write_srgb(const char *path, int w, int h, const float *rgba, rr_err
         rc = rr_fail(err, "%s: cannot write preview (disk full?)", path);
     }
     free(bytes);
-    return rc ? -1 : atomic_commit(name, path, err);
+    return rc ? -1 : atomic_finish(set, name, path, err);
 }

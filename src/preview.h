@@ -5,6 +5,7 @@
 #ifndef RR_PREVIEW_H
 #define RR_PREVIEW_H
 
+#include "atomicfile.h"
 #include "common.h"
 
 #ifdef __cplusplus
@@ -16,6 +17,8 @@ extern "C" {
  * Atomic like the EXR output (atomicfile.h), and read back before it
  * replaces anything. Returns 0, or -1 with the reason in err. */
 int preview_write_srgb(const char *path, int w, int h, const float *rgba, rr_error *err);
+/* The same, its file left in set for atomic_set_commit (set NULL: now). */
+int preview_write_srgb_into(atomic_set *set, const char *path, int w, int h, const float *rgba, rr_error *err);
 
 /* 0 if OpenImageIO can write the format of path's extension; checked before
  * a render so that a bad --preview name (or a missing module) fails at

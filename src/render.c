@@ -383,14 +383,22 @@ static void *worker(void *arg)
     return NULL;
 }
 
-static int checkpoint_paused(render_job *job, const render_hooks *hooks, rr_error *err)
+/* The state written carries the work its batches took so far (the rays of
+ * the finished tiles and the seconds), so that a resumed render reports
+ * the rays and time of the whole render, as an uninterrupted one. */
+static int checkpoint_paused(render_job *job, const render_hooks *hooks, double start, rr_error *err)
 {
     pthread_mutex_lock(&job->lock);
     job->paused = 1;
     while (job->active > 0)
         pthread_cond_wait(&job->cond, &job->lock);
     pthread_mutex_unlock(&job->lock);
-    int rc = hooks->checkpoint(hooks->user, job->img, err);
+    image *img = job->img;
+    uint64_t rays = img->rays;
+    double seconds = img->seconds;
+    img->rays += atomic_load(&job->rays), img->seconds += rr_seconds() - start;
+    int rc = hooks->checkpoint(hooks->user, img, err);
+    img->rays = rays, img->seconds = seconds;
     pthread_mutex_lock(&job->lock);
     job->paused = 0;
     pthread_cond_broadcast(&job->cond);
@@ -462,7 +470,7 @@ static int run_round(render_job *job, const render_hooks *hooks, double start, d
                   rr_seconds() - *last_checkpoint >= hooks->checkpoint_every;
         if (due && !*job->cancel && !rc) {
             rr_error ck_err;
-            if (checkpoint_paused(job, hooks, &ck_err) && hooks->checkpoint_failed)
+            if (checkpoint_paused(job, hooks, start, &ck_err) && hooks->checkpoint_failed)
                 hooks->checkpoint_failed(hooks->user, &ck_err);
             *last_checkpoint = rr_seconds();
         }

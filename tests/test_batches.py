@@ -106,20 +106,6 @@ def test_parallel_passes_merge_to_the_single_render_bit_for_bit(tmp_path):
     assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".passes")] == []
 
 
-def test_slurm_array_script_runs_each_task_as_a_pass(tmp_path):
-    env = dict(os.environ, REFRENDER=BIN, SLURM_ARRAY_TASK_COUNT="2")
-    for task in range(2):
-        env["SLURM_ARRAY_TASK_ID"] = str(task)
-        proc = subprocess.run(["sh", str(ROOT / "scripts" / "slurm-render.sbatch"), str(tmp_path / "passes"), "--",
-                               str(SCENE), *map(str, COMMON)], capture_output=True, text=True, env=env)
-        assert proc.returncode == 0, proc.stderr
-    out = tmp_path / "merged.exr"
-    assert run(["merge", tmp_path / "passes" / "pass0.exr", tmp_path / "passes" / "pass1.exr", "-o", out]).returncode == 0
-    single = tmp_path / "single.exr"
-    assert run([SCENE, *COMMON, "-o", single, "--quiet"]).returncode == 0
-    assert np.array_equal(read_exr(single)[0], read_exr(out)[0])
-
-
 def test_merge_refuses_mismatched_missing_and_overlapping_states(tmp_path):
     def state(name, *extra):
         path = tmp_path / name

@@ -72,9 +72,21 @@ def help_text():
     return "\n".join(texts)
 
 
+# Slurm's own options (sbatch's), which the cluster documents show beside the scripts'
+SLURM_OPTIONS = {"--array", "--cpus-per-task", "--time", "--mem", "--dependency", "--open-mode", "--requeue",
+                 "--parsable"}
+
+
+def shell_script_options():
+    """The options the shell scripts' header comments (their usage) name."""
+    scripts = [p for p in (ROOT / "scripts").iterdir() if p.suffix in (".sh", ".sbatch")]
+    comments = [line for p in scripts for line in p.read_text().splitlines() if line.startswith("#")]
+    return set(re.findall(r"--[a-z][a-z0-9-]*", "\n".join(comments))) | SLURM_OPTIONS
+
+
 def test_every_option_shown_in_readme_exists():
     readme = (ROOT / "README.md").read_text()
-    known = set(re.findall(r"--[a-z][a-z0-9-]*", help_text()))
+    known = set(re.findall(r"--[a-z][a-z0-9-]*", help_text())) | shell_script_options()
     shown = set(re.findall(r"(?<![\w-])--[a-z][a-z0-9-]*", readme))
     not_ours = {"--cropwindow", "--crop", "--label", "--maps", "--latex", "--report", "--sshloginfile", "--json",
                 "--csv", "--heatmaps", "--mask", "--alpha", "--exposure", "--entry", "--refrender-curves",
@@ -270,7 +282,7 @@ def test_every_detail_section_is_one_click_from_readme():
 def test_every_option_the_detail_documents_show_exists():
     """A refrender option in the scene, script, speed and exact-time documents
     exists in refrender's --help or in a script's."""
-    known = set(re.findall(r"--[a-z][a-z0-9-]*", help_text()))
+    known = set(re.findall(r"--[a-z][a-z0-9-]*", help_text())) | shell_script_options()
     for script in sorted({p.name for p in (ROOT / "scripts").glob("*.py")} - compare_modules()):
         out = subprocess.run(["/usr/bin/python3", str(ROOT / "scripts" / script), "--help"], capture_output=True,
                              text=True, timeout=120).stdout

@@ -37,7 +37,7 @@ import pytest
 
 import gs2d_reference as ref
 import gsply
-from conftest import read_exr, run
+from conftest import read_exr, run, sharp_gaussian_render
 
 TOL = 1e-4
 BACKGROUND = (0.1, 0.2, 0.3)
@@ -97,13 +97,9 @@ def render_still(tmp_path, name, m, f, w, h, semantics="2dgs"):
     and the model as written (float32) and read back with the official activations."""
     ply = tmp_path / f"{name}.ply"
     gsply.write(ply, m)
-    scene = tmp_path / f"{name}.xml"
-    scene.write_text(f'<scene>{gsply.camera_xml(np.eye(3), np.zeros(3), f, w, h)}<background color="0.1 0.2 0.3"/>'
-                     f'<object name="g"><gaussianModel file="{ply}" semantics="{semantics}"/></object></scene>')
-    out = tmp_path / f"{name}.exr"
-    proc = run([scene, "--pixel-filter", "point", "--time", 0, "--spp", 1, "--tspp", 1, "-o", out, "--quiet"])
-    assert proc.returncode == 0, proc.stderr
-    return read_exr(out)[0], gsply.read(ply)
+    camera = gsply.camera_xml(np.eye(3), np.zeros(3), f, w, h)
+    image = sharp_gaussian_render(tmp_path, camera, ply, f' semantics="{semantics}"', name)
+    return image, gsply.read(ply)
 
 
 def unfiltered(fn, *args, **kw):

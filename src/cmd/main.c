@@ -70,6 +70,7 @@ static void usage(FILE *f)
 "Running:\n"
 "  --threads N        render threads (default: all cores)\n"
 "  --quiet            no progress bar and no summary line\n"
+"  --progress-every S  a progress line every S seconds, also into a log (no terminal)\n"
 "  --no-static-reuse  trace every time sample on its own (same image; for benchmarks)\n"
 "  --version, -h, --help\n"
 "\n"
@@ -94,6 +95,7 @@ typedef struct {
     int frames, first_frame, last_frame; /* frames: 0 none, 1 --frame, 2 --frames */
     sampler_kind sampler;
     double eps, sigma, target_error, checkpoint_every; /* eps, sigma < 0: from the scene */
+    double progress_every;                      /* --progress-every S; 0: a bar on a terminal only */
     uint64_t seed;
     const char *scene, *output, *preview, *checkpoint, *resume;
 } render_options;
@@ -101,7 +103,8 @@ typedef struct {
 enum { OPT_SPP = 256, OPT_TSPP, OPT_RES, OPT_THREADS, OPT_SEED, OPT_EPS, OPT_SIGMA, OPT_TFACTOR,
        OPT_PREVIEW, OPT_QUIET, OPT_VERSION, OPT_SAMPLER, OPT_BATCHES, OPT_TARGET, OPT_MAXB, OPT_PASS,
        OPT_CKPT, OPT_CKPT_EVERY, OPT_RESUME, OPT_NO_REUSE, OPT_FRAME, OPT_FRAMES,
-       OPT_TIME_INTEGRATION, OPT_SHUTTER, OPT_CROP, OPT_TIME, OPT_PIXEL_FILTER, OPT_BLUR_SPACE };
+       OPT_TIME_INTEGRATION, OPT_SHUTTER, OPT_CROP, OPT_TIME, OPT_PIXEL_FILTER, OPT_BLUR_SPACE,
+       OPT_PROGRESS_EVERY };
 
 static int parse_pass(const char *arg, render_options *o, rr_error *err)
 {
@@ -136,6 +139,7 @@ static int parse_option(int c, const char *arg, render_options *o, rr_error *err
     case OPT_MAXB: return cli_int("--max-batches", arg, 1, FILM_MAX_BATCHES, &o->max_batches, err);
     case OPT_TARGET: return cli_double("--target-error", arg, 1e-12, &o->target_error, err);
     case OPT_CKPT_EVERY: return cli_double("--checkpoint-every", arg, 0.0, &o->checkpoint_every, err);
+    case OPT_PROGRESS_EVERY: return cli_double("--progress-every", arg, 0.0, &o->progress_every, err);
     case OPT_PASS: return parse_pass(arg, o, err);
     case OPT_FRAMES: return parse_frames(arg, o, err);
     case OPT_FRAME:
@@ -245,6 +249,7 @@ static int parse_args(int argc, char **argv, render_options *o)
         {"shutter", required_argument, 0, OPT_SHUTTER}, {"crop-window", required_argument, 0, OPT_CROP},
         {"time", required_argument, 0, OPT_TIME}, {"pixel-filter", required_argument, 0, OPT_PIXEL_FILTER},
         {"blur-space", required_argument, 0, OPT_BLUR_SPACE},
+        {"progress-every", required_argument, 0, OPT_PROGRESS_EVERY},
         {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
     int c;
     rr_error err;
@@ -368,11 +373,14 @@ typedef struct {
     render_settings rs;
     attr_list attrs;
     uint32_t total_batches;
+    double last_progress; /* seconds into the render of the last progress line */
 } render_run;
 
 static int write_checkpoint(void *user, const image *img, rr_error *err)
 {
     render_run *run = user;
+    attrs_set(&run->attrs, "refrender:renderSeconds", "%.3f", img->seconds);
+    attrs_set(&run->attrs, "refrender:rays", "%llu", (unsigned long long)img->rays);
     return output_write_state(run->o->checkpoint, img, run->rs.batch_begin,
                               run->rs.batch_begin + run->rs.batches, &run->attrs, err);
 }
@@ -382,6 +390,20 @@ static void warn_checkpoint(void *user, const rr_error *err)
     (void)user;
     fprintf(stderr, "\nrefrender: warning: checkpoint not written, the previous one is kept; rendering goes on: %s\n",
             err->msg);
+}
+
+/* --progress-every without a terminal (a batch job's log): a line at most
+ * every S seconds, and the last one. */
+static void print_progress_line(void *user, double fraction, uint64_t rays, double seconds)
+{
+    render_run *run = user;
+    if (fraction < 1 && seconds - run->last_progress < run->o->progress_every)
+        return;
+    run->last_progress = seconds;
+    double eta = fraction > 0 ? seconds * (1 - fraction) / fraction : 0;
+    fprintf(stderr, "refrender: %5.1f%% after %.1fs, ETA %.1fs, %.2f Mrays/s\n", 100 * fraction, seconds, eta,
+            seconds > 0 ? rays / seconds * 1e-6 : 0.0);
+    fflush(stderr);
 }
 
 /* No pixel of a resumed state may hold more batches than this render gives
@@ -416,7 +438,20 @@ static int resume_state(render_run *run, image *img, rr_error *err)
         return rr_fail(err, "%s holds batches %u-%u, this render %u-%u", run->o->resume, begin, end,
                        run->rs.batch_begin, run->rs.batch_begin + run->rs.batches);
     }
-    return check_resumable_counts(run, img, err);
+    if (check_resumable_counts(run, img, err))
+        return -1;
+    /* the work the state took goes on counting (render.c, checkpoint_paused) */
+    const char *rays = attrs_get(&saved, "refrender:rays"), *seconds = attrs_get(&saved, "refrender:renderSeconds");
+    img->rays = rays ? (uint64_t)strtod(rays, NULL) : 0;
+    img->seconds = seconds ? strtod(seconds, NULL) : 0.0;
+    if (!run->o->quiet) { /* a log then shows the work kept */
+        uint64_t done = 0, n = (uint64_t)img->width * img->height;
+        for (uint64_t i = 0; i < n; i++)
+            done += img->px[i].batches;
+        fprintf(stderr, "refrender: resuming %s: %llu of %llu pixel batches already done\n", run->o->resume,
+                (unsigned long long)done, (unsigned long long)(n * run->rs.batches));
+    }
+    return 0;
 }
 
 /* --max-batches, by default 8 B (at most FILM_MAX_BATCHES). */
@@ -434,6 +469,7 @@ static void setup_run(render_run *run, const scene *s, const shutter *shut, cons
     uint32_t end = o->passes ? (uint32_t)((uint64_t)(o->pass + 1) * total / o->passes) : total;
     run->o = o;
     run->total_batches = total;
+    run->last_progress = 0;
     run->rs = (render_settings){
         {o->sampler, o->seed, sampler_grid_for_spp(o->spp), o->tspp, s->time_factor}, *shut,
         o->threads, begin, end - begin, max_batches_of(o), o->target_error, o->exact_time, 0, 0, 0, 0,
@@ -447,7 +483,7 @@ static void setup_run(render_run *run, const scene *s, const shutter *shut, cons
     attrs_for_render(&run->attrs, s, &run->rs, total, cmdline);
 }
 
-static int write_preview(const char *path, const image *img, rr_error *err)
+static int write_preview(atomic_set *set, const char *path, const image *img, rr_error *err)
 {
     size_t n = (size_t)img->width * img->height;
     float *rgba = malloc(n * 4 * sizeof *rgba), *var = malloc(n * 4 * sizeof *var);
@@ -455,7 +491,7 @@ static int write_preview(const char *path, const image *img, rr_error *err)
     int rc = rgba && var && se && samples ? 0 : rr_fail(err, "out of memory");
     if (!rc) {
         image_resolve(img, 1, rgba, var, se, samples);
-        rc = preview_write_srgb(path, img->width, img->height, rgba, err);
+        rc = preview_write_srgb_into(set, path, img->width, img->height, rgba, err);
     }
     free(rgba), free(var), free(se), free(samples);
     return rc;
@@ -529,7 +565,7 @@ static void warn_about_settings(const render_options *o, const render_settings *
 }
 
 /* The final image, only the crop window's pixels with --crop-window. */
-static int write_final(const char *output, const image *img, render_run *run, rr_error *err)
+static int write_final(atomic_set *set, const char *output, const image *img, render_run *run, rr_error *err)
 {
     const render_settings *rs = &run->rs;
     exr_window win = {img->width, img->height, 0, 0, img->width, img->height};
@@ -539,7 +575,24 @@ static int write_final(const char *output, const image *img, render_run *run, rr
         const double *c = run->o->crop;
         attrs_set(&run->attrs, "refrender:cropWindow", "%.17g %.17g %.17g %.17g", c[0], c[1], c[2], c[3]);
     }
-    return output_write_final_window(output, img, (int)sampler_count(&rs->smp), &run->attrs, &win, err);
+    return output_write_final_into(set, output, img, (int)sampler_count(&rs->smp), &run->attrs, &win, err);
+}
+
+/* The image (a pass's state with --pass) and the preview: both put in
+ * place or neither, as every command's outputs. */
+static int write_outputs(const image *img, render_run *run, const char *output, const char *preview, rr_error *err)
+{
+    atomic_set set = {0};
+    int rc = run->o->passes ? output_write_state_into(&set, output, img, run->rs.batch_begin,
+                                                      run->rs.batch_begin + run->rs.batches, &run->attrs, err)
+                            : write_final(&set, output, img, run, err);
+    if (!rc && preview)
+        rc = write_preview(&set, preview, img, err);
+    if (rc) {
+        atomic_set_discard(&set);
+        return -1;
+    }
+    return atomic_set_commit(&set, err);
 }
 
 /* Says what the render was handed, not what was asked for: the period it
@@ -568,8 +621,13 @@ static int render_one(const scene *s, const shutter *shut, long long frame, acce
                                                          ? rr_fail(err, "out of memory for the image") : 0))
         return -1;
     int tty = !o->quiet && isatty(STDERR_FILENO);
-    render_hooks hooks = {tty ? print_progress : NULL, o->checkpoint ? write_checkpoint : NULL, warn_checkpoint,
-                          o->checkpoint_every, &run};
+    void (*progress)(void *, double, uint64_t, double) =
+        tty ? print_progress : !o->quiet && o->progress_every > 0 ? print_progress_line : NULL;
+    render_hooks hooks = {progress, o->checkpoint ? write_checkpoint : NULL, warn_checkpoint, o->checkpoint_every,
+                          &run};
+    if (o->passes && !o->quiet)
+        fprintf(stderr, "refrender: pass %d/%d: batches %u-%u of %u\n", o->pass, o->passes, run.rs.batch_begin,
+                run.rs.batch_begin + run.rs.batches, run.total_batches);
     announce_checkpoints(o, &hooks);
     int rc = render_image(s, acc, &run.rs, &img, &hooks, &interrupted, err);
     if (!rc) {
@@ -584,12 +642,8 @@ static int render_one(const scene *s, const shutter *shut, long long frame, acce
             attrs_set(&run.attrs, "refrender:frameRate", "%.17g", s->frame_rate);
         if (o->frames)
             attrs_set(&run.attrs, "refrender:frame", "%lld", frame);
-        rc = o->passes ? output_write_state(output, &img, run.rs.batch_begin,
-                                            run.rs.batch_begin + run.rs.batches, &run.attrs, err)
-                       : write_final(output, &img, &run, err);
+        rc = write_outputs(&img, &run, output, preview, err);
     }
-    if (!rc && preview)
-        rc = write_preview(preview, &img, err);
     image_free(&img);
     return rc;
 }

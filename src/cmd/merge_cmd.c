@@ -19,8 +19,11 @@ static void merge_usage(FILE *f)
 "into the final EXR, identical to a single render with all batches. Refuses\n"
 "states of different renders (hashes of the scene and of every model and\n"
 ".anim file, resolution, sampler, counts, seed, epsilon, sigma, shutter,\n"
-"weight, time factor, batches), overlapping or missing batch ranges,\n"
-"incomplete states, and states whose contents no render can produce.\n"
+"weight, time factor, batches), of different frames or cameras (frame,\n"
+"frame rate, shutter, worldToCamera, worldToNDC must be equal), overlapping\n"
+"or missing batch ranges, incomplete states, and states whose contents no\n"
+"render can produce. The output carries the states' attributes; its\n"
+"refrender:rays and refrender:renderSeconds are the states' sums.\n"
 "  -o, --output F   output EXR (required); written atomically\n"
 "  --quiet          no summary line\n", f);
 }
@@ -109,6 +112,8 @@ static int add_state(const char *path, image *merged, attr_list *first, const ch
         rc = check_complete(&img, range, err);
     if (!rc && !is_first)
         rc = attrs_check_identity(first, first_path, &attrs, path, err);
+    if (!rc && !is_first)
+        rc = attrs_combine(first, first_path, &attrs, path, err);
     if (!rc)
         rc = check_batch_total(is_first ? &attrs : first, range, so_far, err);
     if (!rc && is_first) {
