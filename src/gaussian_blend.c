@@ -6,11 +6,16 @@
 #include <stdlib.h>
 #include <string.h>
 
-/* Compositing order: key (by its order bits, so -0 comes before +0), then
- * object, then Gaussian (ties in key are rare but must not depend on the
- * order the traversal found them in). */
-static int hit_before(const gaussian_hit *a, const gaussian_hit *b)
+/* Compositing order: key, then object, then Gaussian (ties in key are
+ * rare but must not depend on the order the traversal found them in). Keys
+ * equal as floats but not in bits (-0 and +0) go by their order bits, as a
+ * sort by rr_float_order_bits would put them. */
+static inline __attribute__((always_inline)) int hit_before(const gaussian_hit *a, const gaussian_hit *b)
 {
+    if (a->key < b->key)
+        return 1;
+    if (b->key < a->key)
+        return 0;
     uint32_t ka = rr_float_order_bits(a->key), kb = rr_float_order_bits(b->key);
     if (ka != kb)
         return ka < kb;
@@ -44,18 +49,20 @@ void gaussian_hits_add(gaussian_hits *h, const gaussian_hit *hit)
     h->moved += moved;
 }
 
-/* Removes and returns the first hit in compositing order (h->count > 0). */
+/* Removes and returns the first hit in compositing order (h->count > 0).
+ * Floyd's order of moves: the hole goes down to a leaf along the first
+ * children (one comparison a level), then the last hit, which most often
+ * belongs near the leaves, rises into it. */
 static gaussian_hit take_first(gaussian_hits *h)
 {
     gaussian_hit first = h->hits[0], last = h->hits[--h->count];
     size_t n = h->count, i = 0, moved = 0;
     for (size_t c = 1; c < n; i = c, c = 2 * c + 1, moved++) {
-        if (c + 1 < n && hit_before(&h->hits[c + 1], &h->hits[c]))
-            c++;
-        if (!hit_before(&h->hits[c], &last))
-            break;
+        c += c + 1 < n && hit_before(&h->hits[c + 1], &h->hits[c]);
         h->hits[i] = h->hits[c];
     }
+    for (; i > 0 && hit_before(&last, &h->hits[(i - 1) / 2]); i = (i - 1) / 2, moved++)
+        h->hits[i] = h->hits[(i - 1) / 2];
     h->hits[i] = last;
     h->moved += moved;
     return first;
@@ -123,13 +130,13 @@ void gaussian_blend_hits(gaussian_blend *b, gaussian_hits *h, const gaussian_mod
         gaussian_prefetch_sh(models[ahead[taken].obj], ahead[taken].prim);
     }
     for (; used < taken && !b->done; used++) {
-        gaussian_hit g = ahead[used % SH_PREFETCH_AHEAD];
-        if (first_below(h, final_below)) {
+        gaussian_hit *g = &ahead[used % SH_PREFETCH_AHEAD];
+        blend_one(b, g, models[g->obj]);
+        if (!b->done && first_below(h, final_below)) { /* into the place just composited */
             gaussian_hit *next = &ahead[taken++ % SH_PREFETCH_AHEAD];
             *next = take_first(h);
             gaussian_prefetch_sh(models[next->obj], next->prim);
         }
-        blend_one(b, &g, models[g.obj]);
     }
     if (b->done) /* nothing behind is wanted */
         h->count = 0;

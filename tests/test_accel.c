@@ -530,7 +530,7 @@ static void write_cloud(const char *ply, gaussian_kind kind, size_t n, const clo
 
 /* Over `rays` rays through raster points within `spread` pixels of the
  * image centre, windowed and chunked as a render does (accel_blend_gaussians):
- * counts those whose compositing moved more than 2 n log2 n hits (n the
+ * counts those whose compositing moved more than 3 n log2 n hits (n the
  * ray's hits), those that composite anything other than all hits at once,
  * the hits of all rays, and the largest moves / (n log2 n). */
 typedef struct {
@@ -557,7 +557,7 @@ static void count_moves(const char *xml, int rays, double spread, unsigned *st, 
         c->mismatched += gathering_differs(a, &s, x, y, INFINITY, &windowed, &all, &hits, &composited);
         size_t n = windowed.added - added, moves = windowed.moved - moved;
         double n_log_n = n > 1 ? (double)n * log2((double)n) : 0;
-        c->over_bound += (double)moves > 2 * n_log_n;
+        c->over_bound += (double)moves > 3 * n_log_n;
         c->hits += n;
         if (n > 1)
             c->worst = fmax(c->worst, (double)moves / n_log_n);
@@ -582,20 +582,21 @@ static void count_cloud_moves(const char *kind, const char *attrs, size_t n, con
 }
 
 /* Compositing a ray is O(n log n) whatever its keys: the hits wait in a
- * heap, where a hit moves at most log2 n levels on the way in and log2 n
- * on the way out, so a ray's compositing moves at most 2 n log2 n hits.
- * Through the whole path of a render (windows, chunks in order of key
- * floors, compositing after each chunk what lies below the next floor):
- * 16,384 Gaussians at one point on the ray (one key: no hit is below the
- * next floor until the last chunk), 3DGS and 2DGS; and dense see-through
- * clouds (hits wait while the floors after them lie below their keys),
- * 2DGS in both orders, 3DGS and 3DGRT. Each ray composites what all its
- * hits at once do, bit for bit. Re-sorting the waiting hits after each
- * chunk (the code before the heap, counting each waiting hit once a
- * chunk) fails it: n^2 / 32 on the one-key rays, 18 times the bound (a
- * render of 256k such Gaussians took 95 s), and up to 6.6 times it on
- * every 2DGS cloud ray. */
-TEST(gaussian_compositing_moves_at_most_2_n_log2_n_hits_a_ray)
+ * binary heap of at most n, where a hit rises at most log2 n levels on the
+ * way in and the hole it leaves on the way out goes down at most log2 n
+ * levels and back up at most as many, so a ray's compositing moves at most
+ * 3 n log2 n hits. Through the whole path of a render (windows, chunks in
+ * order of key floors, compositing after each chunk what lies below the
+ * next floor): 16,384 Gaussians at one point on the ray (one key: no hit
+ * is below the next floor until the last chunk), 3DGS and 2DGS; and dense
+ * see-through clouds (hits wait while the floors after them lie below
+ * their keys), 2DGS in both orders, 3DGS and 3DGRT. Each ray composites
+ * what all its hits at once do, bit for bit. Re-sorting the waiting hits
+ * after each chunk (the code before the heap, counting each waiting hit
+ * once a chunk) fails it: n^2 / 32 on the one-key rays, 12 times the
+ * bound (a render of 256k such Gaussians took 95 s), and up to 4.4 times
+ * it on every 2DGS cloud ray. */
+TEST(gaussian_compositing_moves_at_most_3_n_log2_n_hits_a_ray)
 {
     unsigned st = 23;
     const cloud_shape one_point = {v3(0, 0, -3), v3(0, 0, 0), {0.02, 0.06}, {0.05, 0.2}};
@@ -603,7 +604,7 @@ TEST(gaussian_compositing_moves_at_most_2_n_log2_n_hits_a_ray)
     move_count equal = {0};
     for (int v = 0; v < 2; v++)
         count_cloud_moves(one_key[v][0], one_key[v][1], 16384, &one_point, 1, 0, &st, &equal);
-    printf("    one key: hits %zu, moves / (n log2 n) at most %.3f, over 2 n log2 n %d, differing %d\n", equal.hits,
+    printf("    one key: hits %zu, moves / (n log2 n) at most %.3f, over 3 n log2 n %d, differing %d\n", equal.hits,
            equal.worst, equal.over_bound, equal.mismatched);
     CHECK(equal.hits == 2 * 16384);
     CHECK(equal.over_bound == 0 && equal.mismatched == 0);
@@ -614,7 +615,7 @@ TEST(gaussian_compositing_moves_at_most_2_n_log2_n_hits_a_ray)
     move_count mixed = {0};
     for (int v = 0; v < 4; v++)
         count_cloud_moves(kinds[v][0], kinds[v][1], 3000, &cloud, 32, 4, &st, &mixed);
-    printf("    clouds: hits %zu in 128 rays, moves / (n log2 n) at most %.3f, over 2 n log2 n %d, differing %d\n",
+    printf("    clouds: hits %zu in 128 rays, moves / (n log2 n) at most %.3f, over 3 n log2 n %d, differing %d\n",
            mixed.hits, mixed.worst, mixed.over_bound, mixed.mismatched);
     CHECK(mixed.hits > 128 * 300);
     CHECK(mixed.over_bound == 0 && mixed.mismatched == 0);
