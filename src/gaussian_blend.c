@@ -42,6 +42,9 @@ void gaussian_hits_add(gaussian_hits *h, const gaussian_hit *hit)
         }
         h->hits = grown, h->cap = cap;
     }
+    /* hits found in compositing order (a rasterizer's key is its floor, and a
+     * chunk's candidates come in order of their floors) keep the array sorted */
+    h->in_order = !h->count || (h->in_order && hit_before(&h->hits[h->count - 1], hit));
     size_t i = h->count++, moved = 0;
     for (; i > 0 && hit_before(hit, &h->hits[(i - 1) / 2]); i = (i - 1) / 2, moved++)
         h->hits[i] = h->hits[(i - 1) / 2];
@@ -70,6 +73,7 @@ static gaussian_hit take_first(gaussian_hits *h)
         h->hits[i] = h->hits[(i - 1) / 2];
     h->hits[i] = last;
     h->moved += moved;
+    h->in_order = 0;
     return first;
 }
 
@@ -125,9 +129,31 @@ static int first_below(const gaussian_hits *h, double final_below)
     return h->count && h->hits[0].key < final_below;
 }
 
+/* All of h's hits, in order (h->in_order: the array is sorted). */
+static void blend_in_order(gaussian_blend *b, gaussian_hits *h, const gaussian_model *const *models)
+{
+    for (size_t k = 0; k < SH_PREFETCH_AHEAD && k < h->count; k++)
+        gaussian_prefetch_sh(models[h->hits[k].obj], h->hits[k].prim);
+    for (size_t k = 0; k < h->count && !b->done; k++) {
+        if (k + SH_PREFETCH_AHEAD < h->count) {
+            const gaussian_hit *ahead = &h->hits[k + SH_PREFETCH_AHEAD];
+            gaussian_prefetch_sh(models[ahead->obj], ahead->prim);
+        }
+        blend_one(b, &h->hits[k], models[h->hits[k].obj]);
+    }
+    h->count = 0;
+}
+
 void gaussian_blend_hits(gaussian_blend *b, gaussian_hits *h, const gaussian_model *const *models,
                          double final_below)
 {
+    /* a sorted array all below final_below (its first and last are: the
+     * order is the keys' order bits, in which no NaN lies between two
+     * numbers) is composited as it lies */
+    if (h->in_order && first_below(h, final_below) && h->hits[h->count - 1].key < final_below) {
+        blend_in_order(b, h, models);
+        return;
+    }
     gaussian_hit ahead[SH_PREFETCH_AHEAD];
     size_t taken = 0, used = 0;
     for (; taken < SH_PREFETCH_AHEAD && first_below(h, final_below); taken++) {

@@ -87,6 +87,7 @@ typedef struct {
     size_t dropped;   /* hits that found no memory */
     size_t added;     /* hits ever added (a statistic, and how windows grow: accel.c) */
     size_t moved;     /* hits moved within the heap (a statistic: at most 3 log2 n a hit, n its size) */
+    int in_order;     /* hits[0..count) ascend in compositing order (the heap's moves can be skipped) */
     struct gaussian_ray_s *rays; /* accel's per-object rays of one sample */
     size_t rays_cap;
     gaussian_candidate *candidates; /* a window's Gaussians, evaluated after its traversals (accel.c) */
