@@ -77,7 +77,7 @@ static void merge_sort_u64(uint64_t *a, uint64_t *tmp, size_t n)
 
 void rr_sort_u64(uint64_t *a, uint64_t *tmp, size_t n)
 {
-    size_t sorted = 1; /* compositing sorts its carried hits (in order) with a few new ones */
+    size_t sorted = 1; /* an ascending prefix is kept, and merged with the rest sorted */
     while (sorted < n && a[sorted - 1] < a[sorted])
         sorted++;
     if (sorted >= n)

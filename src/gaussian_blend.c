@@ -6,6 +6,31 @@
 #include <stdlib.h>
 #include <string.h>
 
+/* Compositing order: key, then object, then Gaussian (ties in key are
+ * rare but must not depend on the order the traversal found them in). Keys
+ * equal as floats but not in bits (-0 and +0) go by their order bits, as a
+ * sort by rr_float_order_bits would put them. */
+static inline __attribute__((always_inline)) int hit_before(const gaussian_hit *a, const gaussian_hit *b)
+{
+    if (a->key < b->key)
+        return 1;
+    if (b->key < a->key)
+        return 0;
+    uint32_t ka = rr_float_order_bits(a->key), kb = rr_float_order_bits(b->key);
+    if (ka != kb)
+        return ka < kb;
+    if (a->obj != b->obj)
+        return a->obj < b->obj;
+    return a->prim < b->prim;
+}
+
+/* h->hits[0..count) is a binary min-heap in compositing order: a hit goes
+ * in and the first comes out in O(log n) moves, however many wait. A
+ * ray's windows and chunks composite after each chunk only the hits below
+ * every key still to come (accel.c), and the rest wait: re-sorting the
+ * waiting hits after every chunk was quadratic where they are many: one
+ * ray through 256k Gaussians of one key took 135 s of CPU; a dense
+ * see-through 2DGS cloud is the same shape. */
 void gaussian_hits_add(gaussian_hits *h, const gaussian_hit *hit)
 {
     if (h->count == h->cap) {
@@ -17,63 +42,48 @@ void gaussian_hits_add(gaussian_hits *h, const gaussian_hit *hit)
         }
         h->hits = grown, h->cap = cap;
     }
-    h->hits[h->count++] = *hit;
+    /* hits found in compositing order (a rasterizer's key is its floor, and a
+     * chunk's candidates come in order of their floors) keep the array sorted */
+    h->in_order = !h->count || (h->in_order && hit_before(&h->hits[h->count - 1], hit));
+    size_t i = h->count++, moved = 0;
+    for (; i > 0 && hit_before(hit, &h->hits[(i - 1) / 2]); i = (i - 1) / 2, moved++)
+        h->hits[i] = h->hits[(i - 1) / 2];
+    h->hits[i] = *hit;
     h->added++;
+    h->moved += moved;
+}
+
+/* Removes and returns the first hit in compositing order (h->count > 0).
+ * Floyd's order of moves: the hole goes down to a leaf, each level to the
+ * child that comes first (one comparison a level), then the last hit,
+ * which most often belongs near the leaves, rises into it. */
+static gaussian_hit take_first(gaussian_hits *h)
+{
+    gaussian_hit first = h->hits[0], last = h->hits[--h->count];
+    size_t n = h->count, i = 0, moved = 0;
+    for (size_t c = 1; c < n; i = c, c = 2 * c + 1, moved++) {
+        if (c + 1 < n) { /* the right child if it comes first: a flag, not a branch, but on a tie */
+            const gaussian_hit *l = &h->hits[c], *r = &h->hits[c + 1];
+            int before = r->key < l->key, after = l->key < r->key;
+            c += (size_t)(before | (!(before | after) && hit_before(r, l)));
+        }
+        h->hits[i] = h->hits[c];
+    }
+    for (; i > 0 && hit_before(&last, &h->hits[(i - 1) / 2]); i = (i - 1) / 2, moved++)
+        h->hits[i] = h->hits[(i - 1) / 2];
+    h->hits[i] = last;
+    h->moved += moved;
+    h->in_order = 0;
+    return first;
 }
 
 void gaussian_hits_free(gaussian_hits *h)
 {
     free(h->hits);
-    free(h->order);
     free(h->rays);
     free(h->candidates);
     free(h->candidate_order);
     memset(h, 0, sizeof *h);
-}
-
-/* Compositing order: key, then object, then Gaussian (ties in key are
- * rare but must not depend on the order the traversal found them in). */
-static int hit_before(const gaussian_hit *a, const gaussian_hit *b)
-{
-    if (a->key != b->key)
-        return a->key < b->key;
-    if (a->obj != b->obj)
-        return a->obj < b->obj;
-    return a->prim < b->prim;
-}
-
-/* qsort_r's order of two sort words of equal key (hit_before). */
-static int tie_order(const void *a, const void *b, void *hits)
-{
-    const gaussian_hit *h = hits, *x = &h[(uint32_t)*(const uint64_t *)a], *y = &h[(uint32_t)*(const uint64_t *)b];
-    return hit_before(x, y) ? -1 : hit_before(y, x) ? 1 : 0;
-}
-
-/* h->order holds, per hit: its sort word, the merge sort's scratch word,
- * and room for the hits kept for later (gaussian_blend_hits). */
-enum { ORDER_WORDS = 2 + (sizeof(gaussian_hit) + sizeof(uint64_t) - 1) / sizeof(uint64_t) };
-
-/* Puts h->order[] in compositing order (h->hits stay where they are). */
-static int sort_hits(gaussian_hits *h)
-{
-    if (h->count > h->order_cap) {
-        uint64_t *grown = realloc(h->order, ORDER_WORDS * h->count * sizeof *grown);
-        if (!grown)
-            return -1;
-        h->order = grown, h->order_cap = h->count;
-    }
-    for (size_t k = 0; k < h->count; k++)
-        h->order[k] = (uint64_t)rr_float_order_bits(h->hits[k].key) << 32 | (uint64_t)k;
-    rr_sort_u64(h->order, h->order + h->count, h->count);
-    /* runs of equal keys: by object and Gaussian, O(m log m) (an insertion
-     * sort took 17 s for one ray with 256k equal keys, issue 32.5) */
-    for (size_t k = 0, end; k < h->count; k = end) {
-        for (end = k + 1; end < h->count && h->order[end] >> 32 == h->order[k] >> 32; end++)
-            ;
-        if (end - k > 1)
-            qsort_r(h->order + k, end - k, sizeof *h->order, tie_order, h->hits);
-    }
-    return 0;
 }
 
 void gaussian_blend_init(gaussian_blend *b)
@@ -110,44 +120,82 @@ static void blend_one(gaussian_blend *b, const gaussian_hit *g, const gaussian_m
     b->composited++;
 }
 
+/* The colour of the hit a few ahead is prefetched (gaussian_prefetch_sh):
+ * hits are taken from the heap that far ahead of compositing, into a ring. */
 enum { SH_PREFETCH_AHEAD = 4 };
+
+static int first_below(const gaussian_hits *h, double final_below)
+{
+    return h->count && h->hits[0].key < final_below;
+}
+
+/* All of h's hits, in order (h->in_order: the array is sorted). */
+static void blend_in_order(gaussian_blend *b, gaussian_hits *h, const gaussian_model *const *models)
+{
+    for (size_t k = 0; k < SH_PREFETCH_AHEAD && k < h->count; k++)
+        gaussian_prefetch_sh(models[h->hits[k].obj], h->hits[k].prim);
+    for (size_t k = 0; k < h->count && !b->done; k++) {
+        if (k + SH_PREFETCH_AHEAD < h->count) {
+            const gaussian_hit *ahead = &h->hits[k + SH_PREFETCH_AHEAD];
+            gaussian_prefetch_sh(models[ahead->obj], ahead->prim);
+        }
+        blend_one(b, &h->hits[k], models[h->hits[k].obj]);
+    }
+    h->count = 0;
+}
+
+/* Whether a few hits are all below final_below: then they are sorted in
+ * place (insertion sort: a heap of up to SMALL_SORT hits is nearly in order,
+ * and its (k - 1) / 2 moves a hit on average stay below 2 log2 k) and
+ * composited as they lie, cheaper than taking them one by one. */
+enum { SMALL_SORT = 16 };
+static int few_all_below(gaussian_hits *h, double final_below)
+{
+    if (h->count > SMALL_SORT)
+        return 0;
+    for (size_t k = 0; k < h->count; k++)
+        if (!(h->hits[k].key < final_below))
+            return 0;
+    size_t moved = 0;
+    for (size_t k = 1; k < h->count; k++) {
+        gaussian_hit g = h->hits[k];
+        size_t j = k;
+        for (; j > 0 && hit_before(&g, &h->hits[j - 1]); j--, moved++)
+            h->hits[j] = h->hits[j - 1];
+        h->hits[j] = g;
+    }
+    h->moved += moved;
+    return 1;
+}
 
 void gaussian_blend_hits(gaussian_blend *b, gaussian_hits *h, const gaussian_model *const *models,
                          double final_below)
 {
-    if (!h->count)
-        return;
-    if (sort_hits(h)) { /* no memory to order them: the hits are dropped, and counted */
-        h->dropped += h->count;
-        h->count = 0;
+    /* a sorted array all below final_below (its first and last are: the
+     * order is the keys' order bits, in which no NaN lies between two
+     * numbers) is composited as it lies */
+    if ((h->in_order && first_below(h, final_below) && h->hits[h->count - 1].key < final_below) ||
+        few_all_below(h, final_below)) {
+        blend_in_order(b, h, models);
         return;
     }
-    size_t k = 0;
-    for (size_t p = 0; p < SH_PREFETCH_AHEAD && p < h->count; p++) {
-        const gaussian_hit *g = &h->hits[(uint32_t)h->order[p]];
-        gaussian_prefetch_sh(models[g->obj], g->prim);
+    gaussian_hit ahead[SH_PREFETCH_AHEAD];
+    size_t taken = 0, used = 0;
+    for (; taken < SH_PREFETCH_AHEAD && first_below(h, final_below); taken++) {
+        ahead[taken] = take_first(h);
+        gaussian_prefetch_sh(models[ahead[taken].obj], ahead[taken].prim);
     }
-    for (; k < h->count && !b->done; k++) {
-        if (k + SH_PREFETCH_AHEAD < h->count) { /* the colour of a hit a few ahead (gaussian_prefetch_sh) */
-            const gaussian_hit *ahead = &h->hits[(uint32_t)h->order[k + SH_PREFETCH_AHEAD]];
-            gaussian_prefetch_sh(models[ahead->obj], ahead->prim);
-        }
-        const gaussian_hit *g = &h->hits[(uint32_t)h->order[k]];
-        if (!(g->key < final_below))
-            break;
+    for (; used < taken && !b->done; used++) {
+        gaussian_hit *g = &ahead[used % SH_PREFETCH_AHEAD];
         blend_one(b, g, models[g->obj]);
+        if (!b->done && first_below(h, final_below)) { /* into the place just composited */
+            gaussian_hit *next = &ahead[taken++ % SH_PREFETCH_AHEAD];
+            *next = take_first(h);
+            gaussian_prefetch_sh(models[next->obj], next->prim);
+        }
     }
-    if (b->done) {
+    if (b->done) /* nothing behind is wanted */
         h->count = 0;
-        return;
-    }
-    /* keep the rest, in order (gathered hits are appended after them) */
-    size_t rest = h->count - k;
-    gaussian_hit *kept = (gaussian_hit *)(h->order + 2 * h->count);
-    for (size_t j = 0; j < rest; j++)
-        kept[j] = h->hits[(uint32_t)h->order[k + j]];
-    memcpy(h->hits, kept, rest * sizeof *kept);
-    h->count = rest;
 }
 
 vec3 gaussian_blend_over(const gaussian_blend *b, vec3 behind) { return v3_add(b->sum, v3_scale(behind, b->T)); }

@@ -85,12 +85,12 @@ typedef struct {
 
 /* A ray's hits (grown as needed; a thread's scratch). */
 typedef struct {
-    gaussian_hit *hits;
+    gaussian_hit *hits; /* waiting to be composited: a heap in compositing order (gaussian_blend.c) */
     size_t count, cap;
     size_t dropped;   /* hits that found no memory */
     size_t added;     /* hits ever added (a statistic, and how windows grow: accel.c) */
-    uint64_t *order;  /* gaussian_blend_hits's sorting space */
-    size_t order_cap;
+    size_t moved;     /* hits moved within the heap (a statistic: at most 3 log2 n a hit, n its size) */
+    int in_order;     /* hits[0..count) ascend in compositing order (the heap's moves can be skipped) */
     struct gaussian_ray_s *rays; /* accel's per-object rays of one sample */
     size_t rays_cap;
     gaussian_candidate *candidates; /* a window's Gaussians, evaluated after its traversals (accel.c) */
@@ -241,7 +241,9 @@ void gaussian_blend_init(gaussian_blend *b);
 /* Composites, in order (key, then object, then Gaussian: the same
  * whatever order they were found in), the hits of h whose key is below
  * `final_below` (no hit still to be found has a smaller key), and removes
- * them from h. models[obj] is a hit's model. */
+ * them from h (all of h once the transmittance is spent); O(log n) moves
+ * a hit added or composited, n the hits waiting. models[obj] is a hit's
+ * model. */
 void gaussian_blend_hits(gaussian_blend *b, gaussian_hits *h, const gaussian_model *const *models,
                          double final_below);
 
