@@ -382,6 +382,14 @@ static int gathering_differs(const accel *a, const scene *s, double x, double y,
            got.done != want.done;
 }
 
+/* load_and_build, failing the test when the scene does not load. */
+static int loaded(const char *xml, scene *s, accel **a)
+{
+    int rc = load_and_build(xml, s, a);
+    CHECK(rc == 0);
+    return rc;
+}
+
 /* Loads the slab scene xml and counts, over `rays` rays (a grid, or at
  * random with an opaque surface in front of every other one), those whose
  * gathering differs from all hits at once, those with more than 64 hits,
@@ -391,10 +399,8 @@ static void check_gathering(const char *xml, int rays, int at_random, unsigned *
 {
     scene s;
     accel *a;
-    if (load_and_build(xml, &s, &a)) {
-        CHECK(0);
+    if (loaded(xml, &s, &a))
         return;
-    }
     gaussian_hits windowed = {0}, all = {0};
     for (int p = 0; p < rays; p++) {
         double x = 4 * (p % 16) + 2 + 0.37 * (p % 3), y = 4 * (p / 16) + 2 + 0.21 * (p % 5), tmax = INFINITY;
@@ -541,13 +547,11 @@ typedef struct {
 
 static void count_moves(const char *xml, int rays, double spread, unsigned *st, move_count *c)
 {
+    gaussian_hits windowed = {0}, all = {0}; /* one ray's hits through the windows, and all at once */
     scene s;
     accel *a;
-    if (load_and_build(xml, &s, &a)) {
-        CHECK(0);
+    if (loaded(xml, &s, &a))
         return;
-    }
-    gaussian_hits windowed = {0}, all = {0};
     for (int p = 0; p < rays; p++) {
         double x = 32 + spread * (2.0 * rand_r(st) / RAND_MAX - 1), y = 32 + spread * (2.0 * rand_r(st) / RAND_MAX - 1);
         if (p == 0) /* the ray through the centre */
