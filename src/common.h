@@ -88,9 +88,9 @@ static inline uint32_t rr_float_order_bits(float f)
  * runs of 16, then bottom-up merges between a and tmp; an ascending
  * prefix longer than a run is kept and merged with the rest, sorted. Its callers sort
  * tens to hundreds of words (a key above, an index below: all distinct,
- * so any correct sort gives the one order), nearly in order already;
- * through qsort's callback the Gaussian hits' sort took a fifth of the
- * render (make bench), this a tenth (issue 31). */
+ * so any correct sort gives the one order), nearly in order already:
+ * the Gaussian candidates' buckets (rr_lazy_sort). Through qsort's
+ * callback such a sort took twice as long (make bench). */
 void rr_sort_u64(uint64_t *a, uint64_t *tmp, size_t n);
 
 /* rr_sort_u64's order, finished a prefix at a time: for callers that

@@ -104,12 +104,13 @@ static void jacobian_clamp(const raster_rules *rules, double size, double f, dou
 }
 
 /* The wider of the two clamps' largest |x/z| (or |y/z|): gsplat's, as
- * max(W - cx, cx) >= W / 2 (jacobian_clamp's operations, so never below
- * either limit). */
+ * max(W - cx, cx) >= W / 2 (its limits themselves, so never below
+ * either rasterizer's). */
 static double widest_clamp(double size, double f, double c)
 {
-    double half = 0.5 * size;
-    return (RASTER_CLAMP * half + fabs(c - half)) / f;
+    double neg, pos;
+    jacobian_clamp(&gsplat_rules, size, f, c, &neg, &pos);
+    return rr_fmax(neg, pos);
 }
 
 double gaussian_view_stretch(const camera_view *v)
