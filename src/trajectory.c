@@ -339,6 +339,16 @@ static void segment_bounds(trajectory *tr)
     }
 }
 
+/* The first of the segments of shortest time. */
+static int shortest_segment(const trajectory *tr)
+{
+    int shortest = 0;
+    for (int k = 1; k + 1 < tr->count; k++)
+        if (tr->knots[k + 1].t - tr->knots[k].t < tr->knots[shortest + 1].t - tr->knots[shortest].t)
+            shortest = k;
+    return shortest;
+}
+
 /* Cubic: p' is the quadratic B-spline of the differences / dt (weights
  * >= 0 summing to 1), so |p'| <= max |P_j+1 - P_j| / dt; the body rate of
  * R_0 Exp(B1 L1) Exp(B2 L2) Exp(B3 L3) is at most sum |B_j'| |L_j| / dt,
@@ -346,9 +356,8 @@ static void segment_bounds(trajectory *tr)
  * u^2/2 <= 1/2; dt the shortest spacing. */
 static void cubic_bounds(trajectory *tr)
 {
-    double dt = INFINITY; /* the shortest spacing: check_spacing lets them differ by its slack */
-    for (int k = 0; k + 1 < tr->count; k++)
-        dt = fmin(dt, tr->knots[k + 1].t - tr->knots[k].t);
+    int shortest = shortest_segment(tr); /* check_spacing lets the spacings differ by its slack */
+    double dt = tr->knots[shortest + 1].t - tr->knots[shortest].t;
     for (int k = 0; k + 1 < tr->count; k++)
         tr->speed = fmax(tr->speed, v3_len(v3_sub(tr->knots[k + 1].p, tr->knots[k].p)) / dt);
     for (int k = 1; k + 2 < tr->count; k++) {
@@ -505,10 +514,7 @@ static int check_turns(const trajectory *tr, const char *name, rr_error *err)
  * that ends it (the shortest segment may not move at all). */
 static int overflowing_segment(const trajectory *tr)
 {
-    int shortest = 0;
-    for (int i = 1; i + 1 < tr->count; i++)
-        if (tr->knots[i + 1].t - tr->knots[i].t < tr->knots[shortest + 1].t - tr->knots[shortest].t)
-            shortest = i;
+    int shortest = shortest_segment(tr);
     if (tr->interp == TRAJECTORY_CUBIC)
         return shortest;
     for (int k = 0; k + 1 < tr->count; k++) {
