@@ -507,6 +507,7 @@ typedef struct {
 } export_output;
 
 enum { MAX_EXPORT_OUTPUTS = 3 };
+_Static_assert(MAX_EXPORT_OUTPUTS <= ATOMIC_SET_MAX, "an export's outputs are committed as one atomic_set");
 
 /* The outputs asked for, -o's first. */
 static int export_outputs(const export_options *o, export_output *out)
@@ -553,17 +554,16 @@ static int check_not_inputs(const scene *s, const export_output *out, int n, rr_
  * disk) leaves the earlier ones' files as they were. */
 static int write_outputs(const export_output *out, int n, export_job *job, rr_error *err)
 {
-    char tmp[MAX_EXPORT_OUTPUTS][PATH_MAX + 64];
-    const char *tmps[MAX_EXPORT_OUTPUTS], *paths[MAX_EXPORT_OUTPUTS];
+    atomic_set set = {0};
     for (int i = 0; i < n; i++) {
-        if (atomic_prepare_stdio(out[i].path, out[i].write, job, tmp[i], sizeof tmp[i], err)) {
-            for (int k = 0; k < i; k++)
-                atomic_discard(tmp[k]);
+        char tmp[PATH_MAX + 64];
+        if (atomic_prepare_stdio(out[i].path, out[i].write, job, tmp, sizeof tmp, err)) {
+            atomic_set_discard(&set);
             return -1;
         }
-        tmps[i] = tmp[i], paths[i] = out[i].path;
+        atomic_finish(&set, tmp, out[i].path, err);
     }
-    return atomic_commit_all(tmps, paths, n, err);
+    return atomic_set_commit(&set, err);
 }
 
 static int export_scene(const export_options *o, rr_error *err)
