@@ -7,6 +7,7 @@
 #include <time.h>
 
 #include "exact.h"
+#include "gaussian_integrator.h"
 #include "shade.h"
 
 #define TILE 16
@@ -42,7 +43,7 @@ typedef struct { /* per-thread scratch */
     sampler_scratch ss;
     double *x, *y, *t;
     exact_scratch *exact;
-    gaussian_hits gaussian;
+    gaussian_integrator gaussian;
 } thread_scratch;
 
 /* The color and coverage of a k-buffer (background when empty). */
@@ -97,18 +98,20 @@ static void samples_fixed_camera(render_job *job, static_cache *sc, double x, do
 }
 
 /* The Gaussian objects' hits on the ray, composited over the surfaces'
- * colour (the nearest surface hides what is behind it; issue 24). */
+ * colour (the nearest surface hides what is behind it: a Gaussian behind
+ * an opaque surface is not seen). */
 static void composite_gaussians(render_job *job, double x, double y, double t, vec3 org, vec3 dir,
-                                const kbuffer *kb, gaussian_hits *scratch, double rgba[4], uint64_t *overflows)
+                                const kbuffer *kb, gaussian_integrator *scratch, double rgba[4], uint64_t *overflows)
 {
     camera_view moved, *view = &job->rest_view;
     if (job->camera_moves)
         scene_camera_view(job->sc, t, view = &moved);
-    scratch->count = scratch->dropped = 0;
+    gaussian_integrator_reset(scratch);
     gaussian_blend blend;
     gaussian_blend_init(&blend);
-    accel_blend_gaussians(job->acc, view, x, y, org, dir, t, kb->count ? kb->closest : INFINITY, scratch, &blend);
-    *overflows += scratch->dropped > 0;
+    gaussian_sample smp = {view, x, y, org, dir, t};
+    gaussian_integrate(job->sc, job->acc, &smp, kb->count ? kb->closest : INFINITY, scratch, &blend);
+    *overflows += scratch->hits.dropped > 0;
     vec3 rgb = gaussian_blend_over(&blend, v3(rgba[0], rgba[1], rgba[2]));
     rgba[0] = rgb.x, rgba[1] = rgb.y, rgba[2] = rgb.z;
     rgba[3] = kb->count ? 1.0 : 1.0 - blend.T;
@@ -116,7 +119,7 @@ static void composite_gaussians(render_job *job, double x, double y, double t, v
 
 /* A moving camera (thesis eq. 3.6), or a scene with Gaussian objects:
  * every sample has its own world ray. */
-static void sample_own_ray(render_job *job, double x, double y, double t, gaussian_hits *scratch, double rgba[4],
+static void sample_own_ray(render_job *job, double x, double y, double t, gaussian_integrator *scratch, double rgba[4],
                            uint64_t *overflows)
 {
     vec3 org, dir;
@@ -346,7 +349,7 @@ static int scratch_init(thread_scratch *scr, const sampler *s)
     scr->y = malloc(n * sizeof(double));
     scr->t = malloc(n * sizeof(double));
     scr->exact = exact_scratch_new();
-    memset(&scr->gaussian, 0, sizeof scr->gaussian);
+    gaussian_integrator_init(&scr->gaussian);
     return sampler_scratch_init(&scr->ss, s) || !scr->x || !scr->y || !scr->t || !scr->exact ? -1 : 0;
 }
 
@@ -357,7 +360,7 @@ static void scratch_free(thread_scratch *scr)
     free(scr->y);
     free(scr->t);
     exact_scratch_free(scr->exact);
-    gaussian_hits_free(&scr->gaussian);
+    gaussian_integrator_free(&scr->gaussian);
 }
 
 static void *worker(void *arg)

@@ -8,6 +8,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include "gaussian_integrator.h"
 #include "render.h"
 #include "shapes.h"
 
@@ -193,7 +194,8 @@ static double disc_seconds(RTCScene discs, const scene *s, const render_settings
 /* Hits evaluated and composited per ray, over the pixel centres at mid-shutter (untimed). */
 static void count_hits(const scene *s, const accel *a, gs_result *r)
 {
-    gaussian_hits h = {0};
+    gaussian_integrator g;
+    gaussian_integrator_init(&g);
     double gathered = 0, composited = 0;
     for (int y = 0; y < s->cam.height; y++)
         for (int x = 0; x < s->cam.width; x++) {
@@ -201,16 +203,18 @@ static void count_hits(const scene *s, const accel *a, gs_result *r)
             camera_view v;
             scene_camera_ray(s, x + 0.5, y + 0.5, 0.5, &o, &d);
             scene_camera_view(s, 0.5, &v);
-            h.count = h.added = 0;
+            gaussian_integrator_reset(&g);
+            g.hits.added = 0;
             gaussian_blend b;
             gaussian_blend_init(&b);
-            accel_blend_gaussians(a, &v, x + 0.5, y + 0.5, o, d, 0.5, INFINITY, &h, &b);
-            gathered += (double)h.added;
+            gaussian_sample smp = {&v, x + 0.5, y + 0.5, o, d, 0.5};
+            gaussian_integrate(s, a, &smp, INFINITY, &g, &b);
+            gathered += (double)g.hits.added;
             composited += (double)b.composited;
         }
     double rays = (double)s->cam.width * s->cam.height;
     r->gathered = gathered / rays, r->composited = composited / rays;
-    gaussian_hits_free(&h);
+    gaussian_integrator_free(&g);
 }
 
 static double gs_render_mrays(const scene *s, const accel *a, const render_settings *rs)
@@ -390,7 +394,7 @@ static int gs_row(const gs_case *c, FILE *csv)
     return 0;
 }
 
-/* ---- benchmark scale (issue 31) ------------------------------------------ */
+/* ---- benchmark scale: a view the size trained models are judged at ----- */
 
 /* Three concentric 2DGS spheres (radii 1, 0.75, 0.5: layers of depth
  * behind each other, each ray meets the front one's both sides and the
