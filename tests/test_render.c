@@ -17,8 +17,11 @@ static const char *const MOVING_DISK =
 
 static render_settings target_settings(const scene *s, uint32_t max_batches)
 {
-    render_settings rs = {{SAMPLER_THESIS, 7, 1, 4, 4}, s->shut, 2, 0, 2, max_batches, 0.03, 0, 0, 0, 0, 0,
-                          PIXEL_FILTER_BOX, BLUR_SPACE_MODEL};
+    render_settings rs = render_settings_default();
+    rs.smp.seed = 7, rs.smp.tspp = 4, rs.smp.time_factor = 4;
+    rs.shut = s->shut;
+    rs.threads = 2;
+    rs.batches = 2, rs.max_batches = max_batches, rs.target_error = 0.03;
     return rs;
 }
 
@@ -95,4 +98,20 @@ TEST(render_refuses_an_accel_built_for_another_shutter)
     image_free(&img);
     accel_free(a);
     scene_free(&s);
+}
+
+/* render_settings_default is what render.h documents: one batch of one
+ * sample per pixel on one thread, the box shutter [0, 1], every pixel. */
+TEST(render_settings_default_is_one_sample_of_one_batch)
+{
+    render_settings rs = render_settings_default();
+    CHECK(rs.smp.kind == SAMPLER_THESIS && rs.smp.seed == 1);
+    CHECK(rs.smp.grid == 1 && rs.smp.tspp == 1 && rs.smp.time_factor == 1);
+    CHECK(rs.threads == 1 && rs.batch_begin == 0 && rs.batches == 1 && rs.max_batches == 1);
+    CHECK(render_batch_end(&rs) == 1);
+    CHECK(rs.target_error == 0 && rs.exact_time == 0);
+    CHECK(rs.crop_x0 == 0 && rs.crop_y0 == 0 && rs.crop_x1 == 0 && rs.crop_y1 == 0);
+    CHECK(rs.filter == PIXEL_FILTER_BOX && rs.blur == BLUR_SPACE_MODEL);
+    CHECK(rs.shut.open == 0 && rs.shut.close == 1 && rs.shut.kind == WEIGHT_BOX && rs.shut.table_size == 0);
+    CHECK(rs.shut.rolling.kind == ROLLING_OFF);
 }

@@ -351,8 +351,10 @@ static int may_hit_moving(const accel *a, vec3 org, vec3 dir)
 
 static render_settings bench_settings(const bench_case *c, const scene *s)
 {
-    render_settings rs = {{SAMPLER_THESIS, 1, 2, c->tspp, 4}, s->shut, c->threads, 0, 1, 1, 0, 0, 0, 0, 0, 0,
-                          PIXEL_FILTER_BOX, BLUR_SPACE_MODEL};
+    render_settings rs = render_settings_default();
+    rs.smp.grid = 2, rs.smp.tspp = c->tspp, rs.smp.time_factor = 4;
+    rs.shut = s->shut;
+    rs.threads = c->threads;
     return rs;
 }
 
