@@ -27,7 +27,7 @@ Float averages (without --procedure)
   units of the reference's noise (near 1: the difference is the reference's
   noise) and the share of pixels within 3 standard errors.
 
-Blur-synthesis procedures (--procedure, issue 30.3)
+Blur-synthesis procedures (--procedure)
   A procedure is the whole recipe by which a dataset turns sharp frames into
   its blurred image. Its parts:
     times   midpoint (k + 1/2)/N, endpoints k/(N-1) (both shutter ends

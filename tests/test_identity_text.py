@@ -1,4 +1,4 @@
-"""Issue 23, item 3: identity and attribute text is never cut silently.
+"""Identity and attribute text is never cut silently.
 The parameters and the weight function enter a render's identity whole,
 through their hashes (refrender:parametersHash, refrender:weightHash):
 their text was cut at 4095 characters, so passes rendered with -D vx=0 and

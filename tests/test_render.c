@@ -42,7 +42,7 @@ static int same_pixels(const image *a, const image *b)
  * first tile and round r - 1 for the second. Such a state is built here
  * from two renders capped at r and r + 1 batches (each pixel's batches
  * depend on that pixel only), resumed, and must give the uninterrupted
- * image for every r (issue 18.2: the loop used to stop when no pixel of the
+ * image for every r (a regression: the loop used to stop when no pixel of the
  * current round wanted a batch, although pixels a round ahead still did). */
 TEST(render_resumed_mid_round_equals_uninterrupted)
 {
@@ -82,7 +82,7 @@ TEST(render_resumed_mid_round_equals_uninterrupted)
     scene_free(&s);
 }
 
-/* Issue 23: accel's swept bounds hold only for the shutter it was built
+/* Accel's swept bounds hold only for the shutter it was built
  * for; a render over another shutter would miss hits silently. */
 TEST(render_refuses_an_accel_built_for_another_shutter)
 {
