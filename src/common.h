@@ -1,5 +1,6 @@
 /* Shared small types: error values and double-precision 3-vectors.
- * Errors are values (STYLE.md): a function that can fail returns 0 on
+ * Errors are values (they travel up to the command, which alone decides
+ * to print and exit): a function that can fail returns 0 on
  * success or -1 after filling an rr_error with "file:line: reason". */
 #ifndef RR_COMMON_H
 #define RR_COMMON_H
