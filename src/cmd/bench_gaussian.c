@@ -263,8 +263,10 @@ static void gs_run(const gs_case *c, gs_result *r)
     gs_scene(c, &s);
     const gaussian_model *m = &s.objects[0].gaussians;
     r->model_bytes = model_bytes_per_gaussian(m);
-    render_settings rs = {{SAMPLER_THESIS, 1, 2, 4, 4}, s.shut, c->threads, 0, 1, 1, 0, 0, 0, 0, 0, 0,
-                          PIXEL_FILTER_BOX, BLUR_SPACE_MODEL};
+    render_settings rs = render_settings_default();
+    rs.smp.grid = 2, rs.smp.tspp = 4, rs.smp.time_factor = 4;
+    rs.shut = s.shut;
+    rs.threads = c->threads;
     accel *a = build_timed(&s, &r->build_ms);
     r->embree_bytes = (double)accel_embree_peak_bytes(a) / (double)m->count;
     RTCDevice dev = rtcNewDevice(NULL);
@@ -451,8 +453,11 @@ static void scale_run(const void *in, void *out)
     for (int k = 0; k < s.nobjects; k++)
         count += s.objects[k].gaussians.count,
             model += model_bytes_per_gaussian(&s.objects[k].gaussians) * (double)s.objects[k].gaussians.count;
-    render_settings rs = {{SAMPLER_THESIS, 1, 1, c->tspp, 4}, s.shut, c->threads, 0, 1, 1, 0, 0, 0, 0, 0, 0,
-                          PIXEL_FILTER_POINT, BLUR_SPACE_MODEL};
+    render_settings rs = render_settings_default();
+    rs.smp.tspp = c->tspp, rs.smp.time_factor = 4;
+    rs.shut = s.shut;
+    rs.threads = c->threads;
+    rs.filter = PIXEL_FILTER_POINT;
     accel *a = build_timed(&s, &r->build_ms);
     r->embree_bytes = (double)accel_embree_peak_bytes(a) / (double)count;
     r->model_bytes = model / (double)count;

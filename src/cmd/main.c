@@ -471,9 +471,18 @@ static void setup_run(render_run *run, const scene *s, const shutter *shut, cons
     run->total_batches = total;
     run->last_progress = 0;
     run->rs = (render_settings){
-        {o->sampler, o->seed, sampler_grid_for_spp(o->spp), o->tspp, s->time_factor}, *shut,
-        o->threads, begin, end - begin, max_batches_of(o), o->target_error, o->exact_time, 0, 0, 0, 0,
-        o->filter, o->blur};
+        .smp = {.kind = o->sampler, .seed = o->seed, .grid = sampler_grid_for_spp(o->spp), .tspp = o->tspp,
+                .time_factor = s->time_factor},
+        .shut = *shut,
+        .threads = o->threads,
+        .batch_begin = begin,
+        .batches = end - begin,
+        .max_batches = max_batches_of(o),
+        .target_error = o->target_error,
+        .exact_time = o->exact_time,
+        .filter = o->filter,
+        .blur = o->blur,
+    };
     if (o->crop_set) {
         int px[4];
         crop_pixels(o, s->cam.width, s->cam.height, px);
