@@ -214,9 +214,10 @@ static void alloc_model(gaussian_model *m, size_t n)
     m->count = n;
 }
 
-/* Gaussian i with mean offset, roots of the velocity r1, r2 (so g = p' =
- * A (D - r1)(D - r2): extrema inside the interval) or random coefficients
- * of the given size. */
+/* Gaussian i of the given kind: 0 roots of the velocity r1, r2 (g = p' =
+ * A (D - r1)(D - r2): extrema inside the interval), 1 random coefficients
+ * up to 60 (fast movers), 2 a path a few ulps long at an offset of 1000,
+ * 3 a double root, 4 a parabola with its vertex inside. */
 static void random_gaussian(gaussian_model *m, size_t i, uint64_t *s, int kind)
 {
     gaussian_dynamic *d = m->dynamic;
@@ -226,9 +227,12 @@ static void random_gaussian(gaussian_model *m, size_t i, uint64_t *s, int kind)
     for (int k = 0; k < 3; k++) {
         double off = kind == 2 ? uniform(s, 500, 2000) : uniform(s, -3, 3), size = kind == 1 ? 60 : 1;
         double *c = NULL, co[3];
-        if (kind == 0) { /* roots of p' in [-1.2, 1.2] */
-            double A = uniform(s, -20, 20), r1 = uniform(s, -1.2, 1.2), r2 = uniform(s, -1.2, 1.2);
+        if (kind == 0 || kind == 3) { /* roots of p' in [-1.2, 1.2]; kind 3: a double root */
+            double A = uniform(s, -20, 20), r1 = uniform(s, -1.2, 1.2), r2 = kind == 3 ? r1 : uniform(s, -1.2, 1.2);
             co[0] = A * r1 * r2, co[1] = -A * (r1 + r2) / 2, co[2] = A / 3, c = co;
+        } else if (kind == 4) { /* a parabola (no D^3): p' linear, its root inside */
+            double a = uniform(s, -30, 30), r = uniform(s, -1.2, 1.2);
+            co[0] = -2 * a * r, co[1] = a, co[2] = 0, c = co;
         } else if (kind == 2) { /* a path of a few ulps of its offset: rounding decides */
             for (int j = 0; j < 3; j++)
                 co[j] = uniform(s, -1, 1) * 4e-13;
@@ -289,21 +293,22 @@ static int bounds_hold(const gaussian_model *m, size_t i, double t0, double t1, 
     return ok;
 }
 
-/* Random Gaussians (extrema inside the interval, fast movers of 60 units a
- * time unit and up, paths a few ulps long at offsets of 1000) over random
+/* Random Gaussians (extrema inside the interval, double roots, parabolas,
+ * fast movers of 60 units a time unit, paths a few ulps long at offsets of
+ * 1000) over random
  * intervals: every step's mean (as computed and exact) lies in the box and
  * its opacity under the bound, and the box is no wider than the samples
  * plus what the step size and the padding explain. */
 TEST(motion_bounds_hold_20000_steps_of_the_path)
 {
-    const size_t n = 300;
+    const size_t n = 400;
     gaussian_model m;
     alloc_model(&m, n);
     uint64_t seed = 12345;
     int failures = 0;
     double slack = -INFINITY;
     for (size_t i = 0; i < n; i++) {
-        random_gaussian(&m, i, &seed, (int)(i % 3));
+        random_gaussian(&m, i, &seed, (int)(i % 5));
         double c = m.dynamic->trbf_center[i], t0 = c + uniform(&seed, -1.2, 0.2), t1 = t0 + uniform(&seed, 0, 1.4);
         if (i % 50 == 7)
             t1 = t0; /* an instant */
@@ -312,6 +317,8 @@ TEST(motion_bounds_hold_20000_steps_of_the_path)
     printf("    %d of %zu Gaussians left the box; box beyond the samples by %.3g\n", failures, n, slack);
     CHECK(failures == 0);
     CHECK(slack <= 0);
+    double lo[3], hi[3], om;
+    CHECK(gaussian_dynamic_bounds(&m, 0, -1e300, 0, lo, hi, &om) == -1); /* D^3 overflows: no box */
     gaussian_model_free(&m);
 }
 
@@ -402,6 +409,7 @@ TEST(an_stg_file_is_read_and_hashed_once)
     uint64_t h = 777;
     CHECK(gaussian_read(path, GAUSSIAN_AUTO, &m, &h, &e) == 0 && m.dynamic && m.count == 1);
     CHECK(h == input_hash(777, buf, len));
+    CHECK(gaussian_write_ply(path, &m, &e) == -1 && strstr(e.msg, "SpacetimeGaussians")); /* motion would be lost */
     gaussian_model_free(&m);
     CHECK(m.dynamic == NULL);
     remove(path);
