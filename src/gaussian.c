@@ -5,6 +5,8 @@
 #include <string.h>
 
 #include "atomicfile.h"
+#include "gaussian_dynamic.h"
+#include "gaussian_stg_ply.h"
 #include "ply.h"
 #include "splat.h"
 
@@ -25,6 +27,7 @@ typedef struct {
      * 32.4: those past f_rest_44 were once ignored) */
     int rest_names, rest_max;
     unsigned char rest_seen[PLY_MAX_PROPERTIES];
+    int stg; /* a SpacetimeGaussians property was declared */
 } gaussian_sink;
 
 static int require(const char *path, const int *present, int first, int n, rr_error *err)
@@ -52,6 +55,8 @@ static int rest_index(const char *name)
 static int see_property(void *user, const char *path, long line, const char *name, rr_error *err)
 {
     gaussian_sink *s = user;
+    if (gaussian_stg_claims(name)) /* read by gaussian_stg_ply.c instead */
+        return s->stg = 1, rr_fail(err, "%s:%ld: SpacetimeGaussians property '%s'", path, line, name);
     if (!strcmp(name, "filter_3D"))
         return rr_fail(err, "%s:%ld: vertex property 'filter_3D': Mip-Splatting's 3D filter is not supported (the "
                             "model would render without it)", path, line);
@@ -233,6 +238,7 @@ void gaussian_model_free(gaussian_model *m)
     free(m->rotation);
     free(m->opacity);
     free(m->sh);
+    gaussian_dynamic_free(m->dynamic);
     gaussian_model_init(m);
 }
 
@@ -256,10 +262,14 @@ static int load(const char *name, const char *data, size_t len, gaussian_kind ki
         return rr_fail(err, "%s: out of memory", name);
     sink->m = m, sink->forced = kind;
     ply_visitor v = {begin_model, add_gaussian, sink, see_property};
+    uint64_t hash_before = content_hash ? *content_hash : 0;
     int rc = data ? ply_parse_vertices(name, data, len, &gaussian_schema, &v, err)
                   : ply_read_vertices(name, &gaussian_schema, &v, content_hash, err);
+    int stg = sink->stg;
     free(sink);
-    return finish(m, rc, name, err);
+    if (stg && content_hash) /* its own reader reads it again, hashing from the same start */
+        *content_hash = hash_before;
+    return stg ? gaussian_stg_load(name, data, len, kind, m, content_hash, err) : finish(m, rc, name, err);
 }
 
 int gaussian_parse(const char *name, const char *data, size_t len, gaussian_kind kind, gaussian_model *m,
@@ -342,6 +352,8 @@ int gaussian_write_ply(const char *path, const gaussian_model *m, rr_error *err)
     const uint16_t one = 1;
     if (*(const uint8_t *)&one != 1)
         return rr_fail(err, "%s: writing Gaussian PLYs needs a little-endian host", path);
+    if (m->dynamic) /* the official layout has no motion: it would be dropped */
+        return rr_fail(err, "%s: writing SpacetimeGaussians models is not supported", path);
     for (size_t i = 0; i < m->count; i++) /* what would not read back is not written */
         if (!(m->opacity[i] > 0 && m->opacity[i] < 1) || !(m->scale[3 * i] > 0 && m->scale[3 * i + 1] > 0))
             return rr_fail(err, "%s: Gaussian %zu has an opacity outside (0, 1) or a zero scale", path, i);

@@ -69,6 +69,9 @@ typedef struct {
     /* how it is imaged, set by the scene (the file does not say; gaussian_hit.h) */
     gaussian_formation formation;
     int tile_rule;       /* 1: only in the 16x16 tiles the rasterizer would visit */
+    /* Gaussians that move (SpacetimeGaussians, gaussian_dynamic.h), owned;
+     * NULL for a static model */
+    struct gaussian_dynamic *dynamic;
 } gaussian_model;
 
 
