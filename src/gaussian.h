@@ -95,6 +95,18 @@ int gaussian_parse(const char *name, const char *data, size_t len, gaussian_kind
  * refrender output. */
 int gaussian_write_ply(const char *path, const gaussian_model *m, rr_error *err);
 
+/* m's formation, DEFAULT resolved by its kind. */
+gaussian_formation gaussian_formation_of(const gaussian_model *m);
+/* "2dgs", "3dgs-antialiased", ...: the scene's names; NULL if unknown. */
+const char *gaussian_formation_name(gaussian_formation f);
+/* How m's hits are ordered under its formation and the scene's order
+ * (which only a 2D model's takes): "center-depth", "hit-depth" or 3DGRT's
+ * "max-response". */
+const char *gaussian_order_name(const gaussian_model *m, gaussian_order order);
+/* The formation of that name for a model of that kind; -1 for a name
+ * that is none, or one for the other kind. */
+int gaussian_formation_parse(const char *name, gaussian_kind kind, gaussian_formation *f);
+
 /* Gaussians from surfels (ply.h), for test scenes and 'refrender gen':
  * each at the surfel's center, its frame's third axis along the normal,
  * the two tangent scales half the radius (refrender's kernel sigma), a 3D
