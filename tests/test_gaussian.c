@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include "../src/gaussian.h"
+#include "../src/gaussian_ply.h"
 #include "../src/inputfile.h"
 #include "../src/ply.h"
 #include "harness.h"

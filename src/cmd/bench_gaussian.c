@@ -8,6 +8,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include "gaussian_ply.h"
 #include "render.h"
 #include "shapes.h"
 
