@@ -205,9 +205,8 @@ static int check_combinations(const render_options *o, rr_error *err)
     if (o->instant_set && (o->shutter_set || o->frames || o->exact_time))
         return rr_fail(err, "--time renders one instant: it cannot be combined with --shutter, --frame(s) or "
                             "--time-integration exact");
-    if (o->exact_time && o->blur == BLUR_SPACE_LINEAR)
-        return rr_fail(err, "--blur-space linear decodes each instant's colour before the time average, which "
-                            "exact time cannot do (it integrates colours over time): use sampled time");
+    if (render_check_exact_blur(o->exact_time, o->blur, err))
+        return -1;
     if (o->passes && o->batches < o->passes)
         return rr_fail(err, "--pass %d/%d needs --batches >= %d (each pass renders whole batches)",
                        o->pass, o->passes, o->passes);
