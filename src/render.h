@@ -14,7 +14,7 @@
 /* Where a pixel's spatial samples lie: over its area (box, the default),
  * or all at its centre (point: the official Gaussian rasterizers evaluate
  * a pixel there, so the render is the limit of averaging N sharp frames
- * as N grows; issue 24). */
+ * as N grows). */
 typedef enum { PIXEL_FILTER_BOX, PIXEL_FILTER_POINT } pixel_filter;
 /* What a pixel averages over time: the colours as the model gives them
  * (model), or those clamped to [0, 1] and decoded from sRGB first

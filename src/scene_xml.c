@@ -452,8 +452,8 @@ static int parse_object(xml_ctx *c, xmlNodePtr n, scene *s)
 
 /* <frames rate="24"/>: frame N starts at scene time N / rate; or
  * <frames at="trajectory"/>: frame N's exposure is centred on the time of
- * the camera trajectory's pose N (issue 30: a deblurring dataset's blurred
- * frame k spans its pose k's time). */
+ * the camera trajectory's pose N (a deblurring dataset's blurred frame k
+ * spans its pose k's time). */
 static int parse_frames(xml_ctx *c, xmlNodePtr n, scene *s)
 {
     static const char *const ok[] = {"rate", "at", NULL};

@@ -388,7 +388,7 @@ static int gs_row(const gs_case *c, FILE *csv)
     return 0;
 }
 
-/* ---- benchmark scale (issue 31) ------------------------------------------ */
+/* ---- benchmark scale ------------------------------------------------------ */
 
 /* Three concentric 2DGS spheres (radii 1, 0.75, 0.5: layers of depth
  * behind each other, each ray meets the front one's both sides and the

@@ -775,8 +775,8 @@ int cmd_render(int argc, char **argv)
         if (!o.sampler_given)
             o.sampler = SAMPLER_SOBOL;
     }
-    /* before loading (issue 32.10): a signal while a large model loads or its
-     * BVH builds exits 130 as during the render, not 143 */
+    /* before loading: a signal while a large model loads or its BVH builds
+     * exits 130 as during the render, not 143 */
     install_signal_handlers();
     rr_interrupt_watch(&interrupted);
     char scene_buf[PATH_MAX + 64];

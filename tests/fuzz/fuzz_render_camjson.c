@@ -1,4 +1,4 @@
-/* libFuzzer target that renders (issue 32): the input is a cameras.json;
+/* libFuzzer target that renders: the input is a cameras.json;
  * a fixed 3DGS model of three Gaussians is rendered at 4x4 from its camera
  * "A" (an input of odd length: moving from pose "A" to pose "B"), and the
  * image checked (render_check.h). */
