@@ -77,6 +77,12 @@ int rr_interrupted(void);
 /* qsort comparator for doubles, ascending. */
 int cmp_double(const void *a, const void *b);
 
+/* Room for at least need elements of elem bytes in the malloc'ed (or NULL)
+ * array *p of *cap elements, its contents kept: the capacity doubles from
+ * 64, so n appends cost O(n) copying in all. 0, or -1 when out of memory or
+ * the size overflows (then *p and *cap are unchanged, *p still valid). */
+int rr_grow(void **p, size_t *cap, size_t need, size_t elem);
+
 /* A float's bits as an unsigned that sorts as the float does (a sort
  * key's upper half, rr_sort_u64). */
 static inline uint32_t rr_float_order_bits(float f)
@@ -197,6 +203,19 @@ static inline void aabb_add_box(aabb *b, aabb o)
 {
     aabb_add_point(b, o.lo);
     aabb_add_point(b, o.hi);
+}
+
+/* x rounded outward to a float, for bounds kept in floats (Embree's boxes):
+ * the cast rounds to the nearest float, which may lie on either side of x,
+ * so one more step out makes the result strictly below (above) x, and a
+ * float box so made always holds the double one. */
+static inline float rr_float_below(double x) { return nextafterf((float)x, -INFINITY); }
+static inline float rr_float_above(double x) { return nextafterf((float)x, INFINITY); }
+/* b's corners rounded outward to floats (rr_float_below, rr_float_above). */
+static inline void aabb_round_out(aabb b, float lo[3], float hi[3])
+{
+    lo[0] = rr_float_below(b.lo.x), lo[1] = rr_float_below(b.lo.y), lo[2] = rr_float_below(b.lo.z);
+    hi[0] = rr_float_above(b.hi.x), hi[1] = rr_float_above(b.hi.y), hi[2] = rr_float_above(b.hi.z);
 }
 
 #endif

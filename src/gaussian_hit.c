@@ -4,54 +4,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-static const struct {
-    gaussian_formation f;
-    gaussian_kind kind;
-    const char *name;
-} formations[] = {
-    {GAUSSIAN_FORMATION_2DGS, GAUSSIAN_2D, "2dgs"},
-    {GAUSSIAN_FORMATION_2DGS_CENTER_NEAR, GAUSSIAN_2D, "2dgs-center-near"},
-    {GAUSSIAN_FORMATION_2DGS_UNIT_CIRCLE, GAUSSIAN_2D, "2dgs-unit-circle"},
-    {GAUSSIAN_FORMATION_3DGS, GAUSSIAN_3D, "3dgs"},
-    {GAUSSIAN_FORMATION_3DGS_ANTIALIASED, GAUSSIAN_3D, "3dgs-antialiased"},
-    {GAUSSIAN_FORMATION_GSPLAT, GAUSSIAN_3D, "gsplat"},
-    {GAUSSIAN_FORMATION_GSPLAT_ANTIALIASED, GAUSSIAN_3D, "gsplat-antialiased"},
-    {GAUSSIAN_FORMATION_3DGRT, GAUSSIAN_3D, "3dgrt"},
-};
-enum { FORMATIONS = sizeof formations / sizeof formations[0] };
-
-gaussian_formation gaussian_formation_of(const gaussian_model *m)
-{
-    if (m->formation != GAUSSIAN_FORMATION_DEFAULT)
-        return m->formation;
-    return m->kind == GAUSSIAN_3D ? GAUSSIAN_FORMATION_3DGS : GAUSSIAN_FORMATION_2DGS;
-}
-
-const char *gaussian_formation_name(gaussian_formation f)
-{
-    for (int k = 0; k < FORMATIONS; k++)
-        if (formations[k].f == f)
-            return formations[k].name;
-    return NULL;
-}
-
-const char *gaussian_order_name(const gaussian_model *m, gaussian_order order)
-{
-    if (gaussian_formation_of(m) == GAUSSIAN_FORMATION_3DGRT)
-        return "max-response";
-    return m->kind == GAUSSIAN_2D && order == GAUSSIAN_ORDER_HIT_DEPTH ? "hit-depth" : "center-depth";
-}
-
-int gaussian_formation_parse(const char *name, gaussian_kind kind, gaussian_formation *f)
-{
-    for (int k = 0; k < FORMATIONS; k++)
-        if (!strcmp(formations[k].name, name) && formations[k].kind == kind) {
-            *f = formations[k].f;
-            return 0;
-        }
-    return -1;
-}
-
 /* The 3D rasterizers' rules (issue 29), each read in its source:
  * graphdeco-inria/diff-gaussian-rasterization cuda_rasterizer/forward.cu
  * (59f5f77; the `antialiasing` flag of 9c5c202, dr_aa, the commit

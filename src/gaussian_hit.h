@@ -55,18 +55,6 @@
 #define GAUSSIAN_GRT_MIN_RESPONSE 0.0113 /* 3DGRT: responses at or below are no hit */
 #define GAUSSIAN_GRT_MIN_TRANSMITTANCE 1e-3 /* 3DGRT: hits are composited while T is above it */
 
-/* m's formation, DEFAULT resolved by its kind. */
-gaussian_formation gaussian_formation_of(const gaussian_model *m);
-/* "2dgs", "3dgs-antialiased", ...: the scene's names; NULL if unknown. */
-const char *gaussian_formation_name(gaussian_formation f);
-/* How m's hits are ordered under its formation and the scene's order
- * (which only a 2D model's takes): "center-depth", "hit-depth" or 3DGRT's
- * "max-response". */
-const char *gaussian_order_name(const gaussian_model *m, gaussian_order order);
-/* The formation of that name for a model of that kind; -1 for a name
- * that is none, or one for the other kind. */
-int gaussian_formation_parse(const char *name, gaussian_kind kind, gaussian_formation *f);
-
 /* One Gaussian's contribution to a ray. */
 typedef struct {
     float key;    /* compositing order, as a ray distance (a view depth / the ray's depth per unit t) */

@@ -30,6 +30,14 @@ render_settings render_settings_default(void)
     return rs;
 }
 
+int render_check_exact_blur(int exact_time, blur_space b, rr_error *err)
+{
+    if (exact_time && b == BLUR_SPACE_LINEAR)
+        return rr_fail(err, "--blur-space linear decodes each instant's colour before the time average, which "
+                            "exact time cannot do (it integrates colours over time): use sampled time");
+    return 0;
+}
+
 typedef struct {
     const scene *sc;
     const accel *acc;
@@ -525,9 +533,8 @@ static int check_settings(const render_settings *rs, rr_error *err)
         return rr_fail(err, "batch and thread counts must be positive");
     if (rs->target_error > 0 && rs->max_batches < rs->batches)
         return rr_fail(err, "the batch cap must be at least the batch count");
-    if (rs->exact_time && rs->blur == BLUR_SPACE_LINEAR) /* decoding must come before the time average */
-        return rr_fail(err, "--blur-space linear decodes each instant's colour before the time average: exact time "
-                            "integrates colours over time first; use sampled time");
+    if (render_check_exact_blur(rs->exact_time, rs->blur, err))
+        return -1;
     return sampler_check(&rs->smp, render_batch_end(rs), err);
 }
 

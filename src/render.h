@@ -24,6 +24,11 @@ typedef enum { BLUR_SPACE_MODEL, BLUR_SPACE_LINEAR } blur_space;
 
 const char *pixel_filter_name(pixel_filter f);
 const char *blur_space_name(blur_space b);
+/* Exact time integration with the blur space: refused (-1, err naming
+ * --blur-space) for linear, whose decoding of each instant's colour must
+ * come before the time average, while exact time integrates colours over
+ * time first. One rule for the command line and render_image. */
+int render_check_exact_blur(int exact_time, blur_space b, rr_error *err);
 
 typedef struct {
     sampler smp;            /* kind, seed, counts */

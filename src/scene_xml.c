@@ -13,6 +13,7 @@
 #include <sys/stat.h>
 
 #include "animfile.h"
+#include "gaussian_ply.h"
 #include "inputfile.h"
 #include "ply.h"
 #include "shapes.h"

@@ -233,7 +233,7 @@ static int tum_knot(const double v[8], const char *name, long lineno, trajectory
     return 0;
 }
 
-static int add_knot(trajectory *out, int *cap, const trajectory_knot *k, const char *name, long lineno,
+static int add_knot(trajectory *out, size_t *cap, const trajectory_knot *k, const char *name, long lineno,
                     rr_error *err)
 {
     if (out->count && !(k->t > out->knots[out->count - 1].t))
@@ -242,16 +242,11 @@ static int add_knot(trajectory *out, int *cap, const trajectory_knot *k, const c
     if (out->count && !isfinite(k->t - out->knots[0].t))
         return rr_fail(err, "%s:%ld: time %.17g is too far from the first line's %.17g (their difference overflows)",
                        name, lineno, k->t, out->knots[0].t);
-    if (out->count == *cap) {
-        int grown = *cap ? 2 * *cap : 64;
-        trajectory_knot *m = grown > (1 << 24) ? NULL : realloc(out->knots, (size_t)grown * sizeof *m);
-        if (m)
-            out->knots = m;
-        long *lines = m ? realloc(out->lines, (size_t)grown * sizeof *lines) : NULL;
-        if (!lines)
-            return rr_fail(err, "%s:%ld: out of memory (more than %d poses?)", name, lineno, *cap);
-        out->lines = lines, *cap = grown;
-    }
+    size_t need = (size_t)out->count + 1, knots_cap = *cap, lines_cap = *cap; /* one capacity for both */
+    if (need > (1 << 24) || rr_grow((void **)&out->knots, &knots_cap, need, sizeof *out->knots) ||
+        rr_grow((void **)&out->lines, &lines_cap, need, sizeof *out->lines))
+        return rr_fail(err, "%s:%ld: out of memory (more than %zu poses?)", name, lineno, *cap);
+    *cap = knots_cap;
     out->lines[out->count] = lineno;
     out->knots[out->count++] = *k;
     return 0;
@@ -266,7 +261,7 @@ static int blank_or_comment(const char *s, const char *end)
 
 int trajectory_parse_tum(const char *text, size_t len, const char *name, trajectory *out, rr_error *err)
 {
-    int cap = 0;
+    size_t cap = 0;
     out->knots = NULL, out->lines = NULL, out->count = 0, out->name = NULL;
     const char *s = text, *end = text + len;
     if (memchr(text, 0, len))

@@ -5,6 +5,7 @@
 
 #include "accel.h"
 #include "animation.h"
+#include "gaussian_ply.h"
 #include "harness.h"
 #include "scene_xml.h"
 

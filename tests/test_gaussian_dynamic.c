@@ -13,6 +13,7 @@
 
 #include "../src/gaussian.h"
 #include "../src/gaussian_dynamic.h"
+#include "../src/gaussian_ply.h"
 #include "../src/gaussian_stg_ply.h"
 #include "../src/inputfile.h"
 #include "harness.h"

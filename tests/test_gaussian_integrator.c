@@ -9,6 +9,7 @@
 
 #include "../src/animation.h"
 #include "../src/gaussian_integrator.h"
+#include "../src/gaussian_ply.h"
 #include "../src/scene_xml.h"
 #include "harness.h"
 

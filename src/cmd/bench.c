@@ -244,10 +244,10 @@ static void floor_bounds(const struct RTCBoundsFunctionArguments *args)
     const floor_discs *d = args->geometryUserPtr;
     const float *c = &d->disc[4 * args->primID];
     struct RTCBounds *b = args->bounds_o;
-    b->lower_x = nextafterf(c[0] - c[3], -INFINITY), b->lower_y = nextafterf(c[1] - c[3], -INFINITY);
-    b->lower_z = nextafterf(c[2] - c[3], -INFINITY);
-    b->upper_x = nextafterf(c[0] + c[3], INFINITY), b->upper_y = nextafterf(c[1] + c[3], INFINITY);
-    b->upper_z = nextafterf(c[2] + c[3], INFINITY);
+    b->lower_x = rr_float_below(c[0] - c[3]), b->lower_y = rr_float_below(c[1] - c[3]);
+    b->lower_z = rr_float_below(c[2] - c[3]);
+    b->upper_x = rr_float_above(c[0] + c[3]), b->upper_y = rr_float_above(c[1] + c[3]);
+    b->upper_z = rr_float_above(c[2] + c[3]);
 }
 
 static void floor_intersect(const struct RTCIntersectFunctionNArguments *args)

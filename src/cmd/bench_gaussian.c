@@ -9,6 +9,7 @@
 #include <unistd.h>
 
 #include "gaussian_integrator.h"
+#include "gaussian_ply.h"
 #include "render.h"
 #include "shapes.h"
 
@@ -77,10 +78,7 @@ static void gather_filter(const struct RTCFilterFunctionNArguments *args)
     for (unsigned i = 0; i < args->N; i++) {
         if (!args->valid[i])
             continue;
-        if (h->count == h->cap) {
-            h->cap = h->cap ? 2 * h->cap : 256;
-            h->t = realloc(h->t, h->cap * sizeof *h->t);
-        }
+        RR_CHECK(rr_grow((void **)&h->t, &h->cap, h->count + 1, sizeof *h->t) == 0); /* a benchmark: no recovery */
         h->t[h->count++] = ((const float *)args->ray)[8 * args->N + i]; /* tfar: SOA field 8 (rtcore_ray.h) */
         args->valid[i] = 0;
     }
