@@ -45,7 +45,7 @@ typedef struct {
     double q[4]; /* w, x, y, z; unit to 1e-14 */
 } trajectory_knot;
 
-typedef struct {
+typedef struct trajectory { /* (animation.h names it to hold one) */
     trajectory_interp interp;
     int opengl_axes; /* the file's camera axes: 1 OpenGL, 0 OpenCV */
     int count;
@@ -99,12 +99,6 @@ void trajectory_domain(const trajectory *tr, double *t0, double *t1);
 
 /* The pose at time t (clamped to the domain), OpenCV camera axes. */
 void trajectory_pose(const trajectory *tr, double t, vec3 *p, double q[4]);
-
-/* The rotation matrix of a (not necessarily unit) quaternion, and back
- * (the sign with w >= 0), and the product a b (b applied first). */
-void trajectory_quat_matrix(const double q[4], double r[3][3]);
-void trajectory_matrix_quat(const double r[3][3], double q[4]);
-void trajectory_quat_mul(const double a[4], const double b[4], double out[4]);
 
 /* An OpenCV-axes rotation q in the given axes (OpenGL: R diag(1, -1, -1)). */
 void trajectory_quat_to_axes(const double q[4], double out[4], int opengl_axes);

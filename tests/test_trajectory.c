@@ -10,6 +10,7 @@
 #include <string.h>
 
 #include "../src/camera.h"
+#include "../src/rotation.h"
 #include "../src/trajectory.h"
 #include "harness.h"
 
@@ -277,7 +278,7 @@ TEST(motion_bounds_hold_the_interpolated_path)
             trajectory_pose(&tr, t, &p, q);
             speed = fmax(speed, v3_len(v3_sub(p, p0)) / dt);
             double r[4];
-            trajectory_quat_mul(c, q, r);
+            quat_mul(c, q, r);
             turn = fmax(turn, 2.0 * atan2(sqrt(r[1] * r[1] + r[2] * r[2] + r[3] * r[3]), fabs(r[0])) / dt);
             p0 = p;
             memcpy(q0, q, sizeof q0);
@@ -461,8 +462,8 @@ static char *transforms_text(int n)
         if (k < 7)
             memcpy(q, axis_aligned[k], sizeof q);
         else
-            trajectory_quat_mul(q, d, q);
-        trajectory_quat_matrix(q, r);
+            quat_mul(q, d, q);
+        quat_matrix(q, r);
         len += (size_t)snprintf(text + len, cap - len,
                                 "%s{\"time\": %d.5, \"transform_matrix\": [[%.17g, %.17g, %.17g, %.17g], "
                                 "[%.17g, %.17g, %.17g, %.17g], [%.17g, %.17g, %.17g, %.17g], [0, 0, 0, 1]]}",
@@ -476,8 +477,8 @@ static char *transforms_text(int n)
     return text;
 }
 
-/* Read, write, read back (issue 30): the same trajectory and camera bit for
- * bit, though a rotation matrix to a quaternion and back is not exact in
+/* Read, write, read back (export writes the trajectory it read, and a
+ * method then reads it: the same trajectory and camera bit for bit), though a rotation matrix to a quaternion and back is not exact in
  * binary64: the reader keeps the quaternion its written matrix reads back as. */
 TEST(transforms_json_reads_back_what_it_writes)
 {

@@ -14,6 +14,7 @@
 #include "cli.h"
 #include "commands.h"
 #include "scene_xml.h"
+#include "rotation.h"
 #include "transforms.h"
 
 static void export_usage(FILE *f)
@@ -351,10 +352,10 @@ static void camera_pose(const scene *s, double t, vec3 *p, double q[4])
     vec3 axes[3] = {c->right, v3_scale(c->image_up, -1.0), c->forward};
     for (int i = 0; i < 3; i++)
         rest[0][i] = axes[i].x, rest[1][i] = axes[i].y, rest[2][i] = axes[i].z;
-    trajectory_matrix_quat(rest, q0);
+    quat_of_matrix(rest, q0);
     xform m = animation_pose_at(&s->camera_motion, t, qm);
     *p = v3_add(xform_point(&m, c->position), v3(0, 0, 0)); /* +0 for -0, as the readers keep them */
-    trajectory_quat_mul(qm, q0, q);
+    quat_mul(qm, q0, q);
     for (int i = 0; i < 4; i++)
         q[i] += 0.0;
 }
