@@ -1,4 +1,4 @@
-/* trajectory.c: the TUM reader names every mistake (file, line, field),
+/* trajectory.c and tum.c: the TUM reader names every mistake (file, line, field),
  * a file it wrote reads back bit for bit, and the motion bounds hold the
  * interpolated path (the poses themselves are checked against an
  * independent reference in tests/test_trajectory.py). */
@@ -12,11 +12,12 @@
 #include "../src/camera.h"
 #include "../src/rotation.h"
 #include "../src/trajectory.h"
+#include "../src/tum.h"
 #include "harness.h"
 
 static int parse(const char *text, trajectory *tr, rr_error *e)
 {
-    return trajectory_parse_tum(text, strlen(text), "p.tum", tr, e);
+    return tum_parse(text, strlen(text), "p.tum", tr, e);
 }
 
 static int fails_with(const char *text, const char *needle)
@@ -48,7 +49,7 @@ TEST(tum_reader_names_file_line_and_field)
     const char nul[] = "0 0 0 0\0 0 0 0 1\n";
     trajectory tr;
     rr_error e;
-    CHECK(trajectory_parse_tum(nul, sizeof nul - 1, "p.tum", &tr, &e) != 0 && strstr(e.msg, "NUL"));
+    CHECK(tum_parse(nul, sizeof nul - 1, "p.tum", &tr, &e) != 0 && strstr(e.msg, "NUL"));
 }
 
 TEST(tum_reader_skips_comments_and_normalises_short_quaternions)
@@ -237,7 +238,7 @@ TEST(a_written_trajectory_reads_back_bit_for_bit)
             a.interp = TRAJECTORY_LINEAR;
             vec3 p;
             trajectory_pose(&a, a.knots[k].t, &p, q);
-            trajectory_write_tum_line(f, a.knots[k].t, p, q, gl);
+            tum_write_line(f, a.knots[k].t, p, q, gl);
         }
         fclose(f);
         CHECK(parse(buf, &b, &e) == 0);
@@ -478,7 +479,8 @@ static char *transforms_text(int n)
 }
 
 /* Read, write, read back (export writes the trajectory it read, and a
- * method then reads it: the same trajectory and camera bit for bit), though a rotation matrix to a quaternion and back is not exact in
+ * method then reads that file): the same trajectory and camera bit for bit,
+ * though a rotation matrix to a quaternion and back is not exact in
  * binary64: the reader keeps the quaternion its written matrix reads back as. */
 TEST(transforms_json_reads_back_what_it_writes)
 {

@@ -16,6 +16,7 @@
 #include "scene_xml.h"
 #include "rotation.h"
 #include "transforms.h"
+#include "tum.h"
 
 static void export_usage(FILE *f)
 {
@@ -489,7 +490,7 @@ static int write_tum(FILE *f, void *ctx, rr_error *err)
         vec3 p;
         double q[4];
         camera_pose(j->s, t[i], &p, q);
-        trajectory_write_tum_line(f, t[i], p, q, j->o->tum_opengl);
+        tum_write_line(f, t[i], p, q, j->o->tum_opengl);
     }
     free(t);
     return 0;
