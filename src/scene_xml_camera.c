@@ -24,7 +24,8 @@ static int camera_from_pose(camera *cam, vec3 position, const double r[3][3], co
     return 0;
 }
 
-/* The size the model was trained at (issue 29): 3DGS and 2DGS train at the
+/* The size the model was trained at (cameras.json holds COLMAP's full
+ * size, not the size the images were loaded at): 3DGS and 2DGS train at the
  * loaded image's size, by utils/camera_utils.py loadCam (graphdeco-inria
  * gaussian-splatting; the same in hbb1/2d-gaussian-splatting 1920a23):
  * -r 1, 2, 4 or 8 divides it, rounded as Python's round (ties to even);

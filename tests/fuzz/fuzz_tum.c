@@ -1,8 +1,8 @@
 /* libFuzzer target: the TUM trajectory reader (tum.c) and every
  * interpolation of what it accepts (trajectory.c): a parsed file is
- * prepared under each interpolation, and where accepted its poses must be finite unit
- * quaternions and finite positions across the domain, and what export
- * writes must read back. */
+ * prepared under each interpolation, and where accepted its poses must be
+ * finite unit quaternions and finite positions across the domain, and what
+ * export writes must read back. */
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
