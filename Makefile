@@ -39,7 +39,7 @@ LDLIBS   := -ljson-c -lassimp -lembree3 -lOpenEXRCore -lxml2 -ldl -lpthread -lm
 # (src/preview.h): linked into refrender it cost every run 0.4 s of loading
 PREVIEW_LIBS := -lOpenImageIO -lOpenImageIO_Util
 
-LIB_SRCS := common inputfile atomicfile kbuffer splat pointmodel ply gaussian gaussian_ply gaussian_dynamic gaussian_stg_ply gaussian_hit gaussian_blend camjson transforms shapes surfelize meshload curve trajectory animation animfile camera shutter sampler scene preview \
+LIB_SRCS := common inputfile atomicfile kbuffer splat pointmodel ply gaussian gaussian_ply gaussian_dynamic gaussian_stg_ply gaussian_hit gaussian_blend camjson transforms shapes surfelize meshload rotation curve trajectory tum animation animfile camera shutter sampler scene preview \
             scene_xml scene_xml_util scene_xml_anim scene_xml_camera scene_params accel accel_build accel_collide gaussian_integrator exact exact_integrate shade film render exr output render_attrs cli
 LIB_OBJS := $(LIB_SRCS:%=$(BUILD)/%.o)
 PREVIEW_SO := $(BUILD)/refrender-preview.so

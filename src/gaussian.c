@@ -5,6 +5,7 @@
 
 #include "splat.h"
 #include "gaussian_dynamic.h"
+#include "rotation.h"
 #include "surfel.h"
 
 /* ---- formations: the scene's names ------------------------------------- */
@@ -89,28 +90,6 @@ void gaussian_model_free(gaussian_model *m)
     gaussian_model_init(m);
 }
 
-/* The unit quaternion (w, x, y, z) of the rotation whose columns are the
- * orthonormal frame (a, b, c) (Shepperd's method: the largest of the four
- * squares first, for accuracy). */
-static void quaternion_of_frame(vec3 a, vec3 b, vec3 c, double q[4])
-{
-    double m[3][3] = {{a.x, b.x, c.x}, {a.y, b.y, c.y}, {a.z, b.z, c.z}};
-    double t = m[0][0] + m[1][1] + m[2][2];
-    if (t > 0) {
-        double s = 2 * sqrt(1 + t);
-        q[0] = s / 4, q[1] = (m[2][1] - m[1][2]) / s, q[2] = (m[0][2] - m[2][0]) / s, q[3] = (m[1][0] - m[0][1]) / s;
-    } else if (m[0][0] > m[1][1] && m[0][0] > m[2][2]) {
-        double s = 2 * sqrt(1 + m[0][0] - m[1][1] - m[2][2]);
-        q[0] = (m[2][1] - m[1][2]) / s, q[1] = s / 4, q[2] = (m[0][1] + m[1][0]) / s, q[3] = (m[0][2] + m[2][0]) / s;
-    } else if (m[1][1] > m[2][2]) {
-        double s = 2 * sqrt(1 + m[1][1] - m[0][0] - m[2][2]);
-        q[0] = (m[0][2] - m[2][0]) / s, q[1] = (m[0][1] + m[1][0]) / s, q[2] = s / 4, q[3] = (m[1][2] + m[2][1]) / s;
-    } else {
-        double s = 2 * sqrt(1 + m[2][2] - m[0][0] - m[1][1]);
-        q[0] = (m[1][0] - m[0][1]) / s, q[1] = (m[0][2] + m[2][0]) / s, q[2] = (m[1][2] + m[2][1]) / s, q[3] = s / 4;
-    }
-}
-
 /* Small view-dependent coefficients for the rest bases, a fixed function of
  * the Gaussian, basis and channel: enough to exercise every SH degree. */
 static float rest_coefficient(size_t i, int k, int c) { return (float)(0.08 * sin(0.7 * (double)i + 1.3 * k + 2.1 * c)); }
@@ -129,7 +108,7 @@ int gaussian_from_surfels(const surfel *s, size_t n, gaussian_kind kind, int deg
         vec3 u, v, normal = v3_normalize(s[i].normal);
         splat_axes_from_normal(normal, 1.0, &u, &v);
         double q[4], sigma = 0.5 * s[i].radius; /* refrender's kernel: sigma = 0.5 of the splat radius */
-        quaternion_of_frame(u, v, normal, q);
+        quat_of_frame(u, v, normal, q);
         float pos[3] = {(float)s[i].center.x, (float)s[i].center.y, (float)s[i].center.z};
         double col[3] = {s[i].color.x, s[i].color.y, s[i].color.z};
         for (int k = 0; k < 3; k++) {

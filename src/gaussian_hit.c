@@ -4,6 +4,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "rotation.h"
+
 /* The 3D rasterizers' rules (issue 29), each read in its source:
  * graphdeco-inria/diff-gaussian-rasterization cuda_rasterizer/forward.cu
  * (59f5f77; the `antialiasing` flag of 9c5c202, dr_aa, the commit
@@ -97,13 +99,7 @@ void gaussian_ray_init(gaussian_ray *r, const camera_view *view, const xform *xf
 }
 
 /* The rotation of a unit quaternion (w, x, y, z), row-major. */
-static void quaternion_matrix(const float *q, double R[3][3])
-{
-    double w = q[0], x = q[1], y = q[2], z = q[3];
-    R[0][0] = 1 - 2 * (y * y + z * z), R[0][1] = 2 * (x * y - w * z), R[0][2] = 2 * (x * z + w * y);
-    R[1][0] = 2 * (x * y + w * z), R[1][1] = 1 - 2 * (x * x + z * z), R[1][2] = 2 * (y * z - w * x);
-    R[2][0] = 2 * (x * z - w * y), R[2][1] = 2 * (y * z + w * x), R[2][2] = 1 - 2 * (x * x + y * y);
-}
+static void quaternion_matrix(const float *q, double R[3][3]) { quat_unit_matrix(q[0], q[1], q[2], q[3], R); }
 
 /* m's linear part times v, and m applied to the point p. */
 static inline vec3 cam_vector(const double m[3][4], vec3 v)

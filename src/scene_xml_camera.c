@@ -4,6 +4,7 @@
  * rigidly (keyframes, or two cameras.json poses). scenes/README.md. */
 #include "camjson.h"
 #include "transforms.h"
+#include "tum.h"
 #include "scene_xml_internal.h"
 
 #include <stdlib.h>
@@ -128,7 +129,7 @@ static int load_path(xml_ctx *c, xmlNodePtr n, const char *path, int transforms,
     rr_error sub;
     transforms_camera tc;
     int rc = transforms ? transforms_load(path, tr, &tc, c->inputs_hash, &sub)
-                        : trajectory_load_tum(path, tr, c->inputs_hash, &sub);
+                        : tum_load(path, tr, c->inputs_hash, &sub);
     tr->interp = kind, tr->opengl_axes = transforms || opengl;
     if (rc || trajectory_prepare(tr, path, &sub))
         return rr_fail(c->err, "%s (trajectory of %s:%ld)", sub.msg, c->name, xmlGetLineNo(n));
