@@ -63,27 +63,52 @@ static double temporal_weight(double D, float trbf_scale)
     return exp(-(y * y));
 }
 
-void gaussian_dynamic_at(const gaussian_model *m, size_t i, double t, gaussian_dynamic_state *out)
+/* D = t - trbf_center (renderer/__init__.py:318, forward.cu:186). */
+static double offset_at(const gaussian_model *m, size_t i, double t)
 {
-    const gaussian_dynamic *dy = m->dynamic;
-    RR_DCHECK(dy && m->rgb_precomputed && i < m->count);
-    double D = t - dy->trbf_center[i], c[4], v[4], len2 = 0;
+    RR_DCHECK(m->dynamic && m->rgb_precomputed && i < m->count);
+    return t - m->dynamic->trbf_center[i];
+}
+
+static void mean_at(const gaussian_model *m, size_t i, double D, double mean[3])
+{
+    double c[4];
     for (int k = 0; k < 3; k++) {
         axis_coefficients(m, i, k, c);
-        out->mean[k] = cubic_at(c, D);
-        out->scale[k] = m->scale[3 * i + k];
-        out->rgb[k] = m->sh[3 * (size_t)m->sh_coeffs * i + (size_t)k];
+        mean[k] = cubic_at(c, D);
     }
-    /* F.normalize(rot + D omega): divided by max(|v|, eps), so 0 stays 0
-     * (ourslite.py:123-126); the CUDA does not normalise again
-     * (forward.cu:127). Components are floats plus a product with D, so
-     * |v|^2 neither overflows nor loses a nonzero v below 1e-150. */
+}
+
+/* F.normalize(rot + D omega): divided by max(|v|, eps), so 0 stays 0
+ * (ourslite.py:123-126); the CUDA does not normalise again
+ * (forward.cu:127). Components are floats plus a product with D, so |v|^2
+ * neither overflows nor loses a nonzero v below 1e-150. */
+static void rotation_at(const gaussian_model *m, size_t i, double D, double q[4])
+{
+    const gaussian_dynamic *dy = m->dynamic;
+    double v[4], len2 = 0;
     for (int k = 0; k < 4; k++)
         v[k] = dy->rot[4 * i + k] + D * dy->omega[4 * i + k], len2 += v[k] * v[k];
     double div = fmax(sqrt(len2), GAUSSIAN_DYNAMIC_NORMALIZE_EPS);
     for (int k = 0; k < 4; k++)
-        out->q[k] = v[k] / div;
-    out->opacity = m->opacity[i] * temporal_weight(D, dy->trbf_scale[i]);
+        q[k] = v[k] / div;
+}
+
+static double opacity_at(const gaussian_model *m, size_t i, double D)
+{
+    return m->opacity[i] * temporal_weight(D, m->dynamic->trbf_scale[i]);
+}
+
+void gaussian_dynamic_at(const gaussian_model *m, size_t i, double t, gaussian_dynamic_state *out)
+{
+    double D = offset_at(m, i, t);
+    mean_at(m, i, D, out->mean);
+    for (int k = 0; k < 3; k++) {
+        out->scale[k] = m->scale[3 * i + k];
+        out->rgb[k] = m->sh[3 * (size_t)m->sh_coeffs * i + (size_t)k];
+    }
+    rotation_at(m, i, D, out->q);
+    out->opacity = opacity_at(m, i, D);
 }
 
 void gaussian_dynamic_matrix(const double q[4], double R[3][3])
@@ -260,15 +285,44 @@ int gaussian_dynamic_bounds(const gaussian_model *m, size_t i, double t0, double
 
 /* ---- rendering ------------------------------------------------------------ */
 
+void gaussian_dynamic_instant_cull(const gaussian_model *m, size_t i, double t, gaussian_model *out, size_t j)
+{
+    double mean[3];
+    mean_at(m, i, offset_at(m, i, t), mean);
+    for (int k = 0; k < 3; k++)
+        out->mean[3 * j + k] = (float)mean[k], out->scale[3 * j + k] = m->scale[3 * i + k];
+}
+
+void gaussian_dynamic_instant_rest(const gaussian_model *m, size_t i, double t, gaussian_model *out, size_t j)
+{
+    double D = offset_at(m, i, t), q[4];
+    rotation_at(m, i, D, q);
+    for (int k = 0; k < 4; k++)
+        out->rotation[4 * j + k] = (float)q[k];
+    out->opacity[j] = (float)opacity_at(m, i, D);
+}
+
+void gaussian_dynamic_prefetch_cull(const gaussian_model *m, size_t i)
+{
+    __builtin_prefetch(&m->dynamic->trbf_center[i]);
+    __builtin_prefetch(&m->dynamic->motion[9 * i]);
+    __builtin_prefetch(&m->dynamic->motion[9 * i + 8]);
+    __builtin_prefetch(&m->mean[3 * i]);
+    __builtin_prefetch(&m->scale[3 * i]);
+}
+
+void gaussian_dynamic_prefetch_rest(const gaussian_model *m, size_t i)
+{
+    __builtin_prefetch(&m->dynamic->rot[4 * i]);
+    __builtin_prefetch(&m->dynamic->omega[4 * i]);
+    __builtin_prefetch(&m->dynamic->trbf_scale[i]);
+    __builtin_prefetch(&m->opacity[i]);
+}
+
 void gaussian_dynamic_instant(const gaussian_model *m, size_t i, double t, gaussian_model *out, size_t j)
 {
-    gaussian_dynamic_state st;
-    gaussian_dynamic_at(m, i, t, &st);
-    for (int k = 0; k < 3; k++)
-        out->mean[3 * j + k] = (float)st.mean[k], out->scale[3 * j + k] = m->scale[3 * i + k];
-    for (int k = 0; k < 4; k++)
-        out->rotation[4 * j + k] = (float)st.q[k];
-    out->opacity[j] = (float)st.opacity;
+    gaussian_dynamic_instant_cull(m, i, t, out, j);
+    gaussian_dynamic_instant_rest(m, i, t, out, j);
 }
 
 /* Why the box of one static Gaussian suffices (gaussian_dynamic_reach_bounds).

@@ -75,8 +75,15 @@ int gaussian_dynamic_bounds(const gaussian_model *m, size_t i, double t0, double
  * slot j; its sh is not read): the mean, the scale, q as the CUDA takes it
  * and the opacity, in floats as the CUDA holds them. The renderer maps
  * the scratch's hits back to i, so the compositing order and the colour
- * are those of Gaussian i itself. */
+ * are those of Gaussian i itself. In two parts, as the kernels read them:
+ * _cull the mean and scale (all a cull reads, gaussian_hit.h), _rest the
+ * rotation and opacity (for the candidates the cull keeps). */
 void gaussian_dynamic_instant(const gaussian_model *m, size_t i, double t, gaussian_model *out, size_t j);
+void gaussian_dynamic_instant_cull(const gaussian_model *m, size_t i, double t, gaussian_model *out, size_t j);
+void gaussian_dynamic_instant_rest(const gaussian_model *m, size_t i, double t, gaussian_model *out, size_t j);
+/* Start loading what each part reads of Gaussian i (no value changes). */
+void gaussian_dynamic_prefetch_cull(const gaussian_model *m, size_t i);
+void gaussian_dynamic_prefetch_rest(const gaussian_model *m, size_t i);
 
 /* Object-space bounds of every point through which Gaussian i can give a
  * ray alpha >= 1/255 at any time whose state gaussian_dynamic_instant
