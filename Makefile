@@ -29,8 +29,8 @@ endif
 INCLUDES  := -I/usr/include/embree3 -I/usr/include/OpenEXR -I/usr/include/libxml2
 RR_CPPFLAGS = -D_GNU_SOURCE $(INCLUDES) -DRR_SOURCE_SCENE='"$(CURDIR)/scenes/default.xml"' \
               -DRR_SOURCE_DIR='"$(CURDIR)"' -MMD -MP $(CPPFLAGS)
-# -ffp-contract=off: the Gaussian culls in AVX2 lanes give the scalar
-# cull's answers bit for bit only if neither is fused into FMA (-std=c11
+# -ffp-contract=off: the Gaussian kernels in AVX2 lanes (src/lanes.h) give
+# the scalar path's answers bit for bit only if neither is fused into FMA (-std=c11
 # implies it for GCC; clang, or -std=gnu11 with -march=native, would fuse)
 RR_CFLAGS   = -std=c11 -ffp-contract=off $(OPT) -Wall -Wextra $(CFLAGS)
 RR_CXXFLAGS = -std=c++17 $(OPT) -Wall -Wextra $(CXXFLAGS)
@@ -39,7 +39,7 @@ LDLIBS   := -ljson-c -lassimp -lembree3 -lOpenEXRCore -lxml2 -ldl -lpthread -lm
 # (src/preview.h): linked into refrender it cost every run 0.4 s of loading
 PREVIEW_LIBS := -lOpenImageIO -lOpenImageIO_Util
 
-LIB_SRCS := common inputfile atomicfile kbuffer splat pointmodel ply gaussian gaussian_hit gaussian_blend camjson transforms shapes surfelize meshload curve trajectory animation animfile camera shutter sampler scene preview \
+LIB_SRCS := common lanes inputfile atomicfile kbuffer splat pointmodel ply gaussian gaussian_hit gaussian_blend camjson transforms shapes surfelize meshload curve trajectory animation animfile camera shutter sampler scene preview \
             scene_xml scene_xml_util scene_xml_anim scene_xml_camera scene_params accel accel_build accel_collide exact exact_integrate shade film render exr output render_attrs cli
 LIB_OBJS := $(LIB_SRCS:%=$(BUILD)/%.o)
 PREVIEW_SO := $(BUILD)/refrender-preview.so
