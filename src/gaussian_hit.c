@@ -4,6 +4,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "lanes.h"
+
 static const struct {
     gaussian_formation f;
     gaussian_kind kind;
@@ -52,7 +54,9 @@ int gaussian_formation_parse(const char *name, gaussian_kind kind, gaussian_form
     return -1;
 }
 
-/* The 3D rasterizers' rules (issue 29), each read in its source:
+/* The 3D rasterizers' rules (a 3DGS model looks as the rasterizer it was
+ * trained with draws it, and its PLY does not say which: the scene names
+ * the formation), each read in its source:
  * graphdeco-inria/diff-gaussian-rasterization cuda_rasterizer/forward.cu
  * (59f5f77; the `antialiasing` flag of 9c5c202, dr_aa, the commit
  * gaussian-splatting pins) and nerfstudio gsplat v1.5.3 (937e299);
@@ -153,43 +157,83 @@ static void quaternion_matrix(const float *q, double R[3][3])
     R[2][0] = 2 * (x * z - w * y), R[2][1] = 2 * (y * z + w * x), R[2][2] = 1 - 2 * (x * x + y * y);
 }
 
-/* m's linear part times v, and m applied to the point p. */
+/* The Gaussian kernels are written once over a lane type T (lanes.h) and
+ * instantiated for one double and, where the CPU has AVX2, four in a v4d:
+ * the culls of gaussian_cull_candidates and the 2D geometry of
+ * gaussian_hits_after_cull4 run four Gaussians at a time, with the same
+ * operations in the same order, so the same bits (the lane tests). */
+
+/* Camera matrix row `row`'s linear part times (x, y, z), and the row
+ * applied to the point (x, y, z). */
+#define DEFINE_CAMERA_MAP(T)                                                                              \
+    LANES_TARGET_##T static inline T camera_linear_##T(const double row[4], T x, T y, T z)                \
+    {                                                                                                     \
+        return row[0] * x + row[1] * y + row[2] * z;                                                      \
+    }                                                                                                     \
+    LANES_TARGET_##T static inline void camera_point_##T(const double m[3][4], const T x[3], T p[3])      \
+    {                                                                                                     \
+        for (int a = 0; a < 3; a++)                                                                       \
+            p[a] = camera_linear_##T(m[a], x[0], x[1], x[2]) + m[a][3];                                   \
+    }
+DEFINE_CAMERA_MAP(double)
+#if RR_LANES
+DEFINE_CAMERA_MAP(v4d)
+#endif
+
+/* m's linear part times v. */
 static inline vec3 cam_vector(const double m[3][4], vec3 v)
 {
-    return v3(m[0][0] * v.x + m[0][1] * v.y + m[0][2] * v.z, m[1][0] * v.x + m[1][1] * v.y + m[1][2] * v.z,
-              m[2][0] * v.x + m[2][1] * v.y + m[2][2] * v.z);
-}
-
-static inline vec3 cam_point(const double m[3][4], vec3 p)
-{
-    return v3_add(cam_vector(m, p), v3(m[0][3], m[1][3], m[2][3]));
+    return v3(camera_linear_double(m[0], v.x, v.y, v.z), camera_linear_double(m[1], v.x, v.y, v.z),
+              camera_linear_double(m[2], v.x, v.y, v.z));
 }
 
 /* Gaussian i's mean in camera space. */
 static inline vec3 camera_mean(const gaussian_model *m, size_t i, const gaussian_ray *r)
 {
     const float *mu = &m->mean[3 * i];
-    return cam_point(r->m, v3(mu[0], mu[1], mu[2]));
+    double x[3] = {mu[0], mu[1], mu[2]}, p[3];
+    camera_point_double(r->m, x, p);
+    return v3(p[0], p[1], p[2]);
 }
 
 /* Rows of the 2DGS homogeneous map T = K [t_u t_v p] (u, v, 1 -> pixel x w,
- * pixel y w, w): row[2] is the view depth row. */
-static void splat_rows(const gaussian_ray *r, vec3 tu, vec3 tv, vec3 p, vec3 row[3])
-{
-    row[2] = v3(tu.z, tv.z, p.z);
-    row[0] = v3_add(v3_scale(v3(tu.x, tv.x, p.x), r->fx), v3_scale(row[2], r->cx));
-    row[1] = v3_add(v3_scale(v3(tu.y, tv.y, p.y), r->fy), v3_scale(row[2], r->cy));
-}
+ * pixel y w, w), row[k][column], from the splat's scaled axes u and v
+ * (object space) and its mean p (camera space): row[2] is the view depth
+ * row. */
+#define DEFINE_SPLAT_ROWS(T)                                                                               \
+    LANES_TARGET_##T static inline void splat_rows_##T(const gaussian_ray *r, const T u[3], const T v[3],  \
+                                                       const T p[3], T row[3][3])                          \
+    {                                                                                                      \
+        T tu[3], tv[3];                                                                                    \
+        for (int a = 0; a < 3; a++)                                                                        \
+            tu[a] = camera_linear_##T(r->m[a], u[0], u[1], u[2]),                                          \
+            tv[a] = camera_linear_##T(r->m[a], v[0], v[1], v[2]);                                          \
+        row[2][0] = tu[2], row[2][1] = tv[2], row[2][2] = p[2];                                            \
+        T first[3] = {tu[0], tv[0], p[0]}, second[3] = {tu[1], tv[1], p[1]};                               \
+        for (int a = 0; a < 3; a++)                                                                        \
+            row[0][a] = first[a] * r->fx + row[2][a] * r->cx, row[1][a] = second[a] * r->fy + row[2][a] * r->cy; \
+    }
+DEFINE_SPLAT_ROWS(double)
+#if RR_LANES
+DEFINE_SPLAT_ROWS(v4d)
+#endif
 
-/* Gaussian i's rows of T (splat_rows), its mean at camera-space p. */
-static void gaussian_splat_rows(const gaussian_model *m, size_t i, const gaussian_ray *r, vec3 p, vec3 row[3])
+/* Gaussian i's first two axes times their scales (object space). */
+static void splat_axes(const gaussian_model *m, size_t i, double u[3], double v[3])
 {
     const float *s = &m->scale[3 * i];
     double R[3][3];
     quaternion_matrix(&m->rotation[4 * i], R);
-    vec3 tu = cam_vector(r->m, v3(R[0][0] * s[0], R[1][0] * s[0], R[2][0] * s[0]));
-    vec3 tv = cam_vector(r->m, v3(R[0][1] * s[1], R[1][1] * s[1], R[2][1] * s[1]));
-    splat_rows(r, tu, tv, p, row);
+    for (int a = 0; a < 3; a++)
+        u[a] = R[a][0] * s[0], v[a] = R[a][1] * s[1];
+}
+
+/* Gaussian i's rows of T (splat_rows), its mean at camera-space p. */
+static void gaussian_splat_rows(const gaussian_model *m, size_t i, const gaussian_ray *r, vec3 p, double row[3][3])
+{
+    double u[3], v[3], pc[3] = {p.x, p.y, p.z};
+    splat_axes(m, i, u, v);
+    splat_rows_double(r, u, v, pc, row);
 }
 
 /* The radius, in scales, of the circle whose image's centre the 2DGS
@@ -202,26 +246,9 @@ static double filter_circle(const gaussian_model *m)
 }
 
 /* Entry (a, b) of the dual conic T diag(c^2, c^2, -1) T^T of the splat's
- * circle of radius c (scales), from rows a and b of T. */
-static double dual_conic(vec3 a, vec3 b, double c)
-{
-    return c * c * (a.x * b.x + a.y * b.y) - a.z * b.z;
-}
-
-/* The centre of the image of the splat's circle of radius c (scales): the
- * last column of the dual conic T diag(c^2, c^2, -1) T^T over its last
- * entry (compute_aabb's point_image). 0 when the circle reaches behind the
- * camera's plane: its image is no ellipse and has no centre to filter
- * about (the rasterizer would filter about the hyperbola's, anywhere on
- * screen; GAUSSIANS.md). */
-static int filter_centre(const vec3 *row, double c, double *px, double *py)
-{
-    double d22 = dual_conic(row[2], row[2], c);
-    if (!(d22 < 0))
-        return 0;
-    *px = dual_conic(row[0], row[2], c) / d22, *py = dual_conic(row[1], row[2], c) / d22;
-    return 1;
-}
+ * circle of radius c (scales), from rows a and b of T and cc = c^2 (either
+ * lane type). */
+#define DUAL_CONIC(a, b, cc) ((cc) * ((a)[0] * (b)[0] + (a)[1] * (b)[1]) - (a)[2] * (b)[2])
 
 static double clamp_alpha(double alpha_max, double opacity, double g) { return rr_fmin(alpha_max, opacity * g); }
 
@@ -255,11 +282,11 @@ static int in_rasterizer_tiles(const gaussian_ray *r, double cx, double cy, doub
 /* 2DGS's tile radius: at e0ed020 (preprocessCUDA) the 3-sigma circle's
  * image's half extent, at least 3 x FilterSize (0.707106), rounded up;
  * up to 3a9357f, 3 times the unit circle's image's half extent. */
-static int in_2dgs_tiles(const gaussian_ray *r, const vec3 row[3], double c, double centre_x, double centre_y)
+static int in_2dgs_tiles(const gaussian_ray *r, const double row[3][3], double c, double centre_x, double centre_y)
 {
-    double d22 = dual_conic(row[2], row[2], c);
-    double hx = centre_x * centre_x - dual_conic(row[0], row[0], c) / d22;
-    double hy = centre_y * centre_y - dual_conic(row[1], row[1], c) / d22;
+    double d22 = DUAL_CONIC(row[2], row[2], c * c);
+    double hx = centre_x * centre_x - DUAL_CONIC(row[0], row[0], c * c) / d22;
+    double hy = centre_y * centre_y - DUAL_CONIC(row[1], row[1], c * c) / d22;
     /* the extent does not depend on where the pixel grid's origin is; the
      * centre in pixel-index coordinates (ndc2pix's (W-1)/2) is 0.5 less */
     double extent = sqrt(rr_fmax(1e-4, rr_fmax(hx, hy)));
@@ -277,21 +304,14 @@ static int in_2dgs_tiles(const gaussian_ray *r, const vec3 row[3], double c, dou
  * within radius^2 / d of it: at depth 2.5 a 3-scale circle's P is
  * 1/500 of the radius from the mean, where the bounds assumed all of it.
  * P is always in front of the camera: the filter acts only where the
- * circle's image is an ellipse (filter_centre), so the circle, and the
- * disc within it, lie beyond view depth 0, and the pole of a line that
- * misses the circle lies inside it. The bounds built on P (the culls,
- * filter_2d_reach) hold every pixel within the filter's reach of P's
- * image and never ask where the pixel's ray meets the splat's plane: so
- * they hold under either near rule (hit_2d_from_geometry), also the older
- * rule's filter pixels whose rays meet the plane behind the camera. */
-static double filter_pole(double radius, double depth) { return radius * radius / depth; }
-
-/* p's image's offset from the ray's raster position, times p.z (no
- * division: the culls compare it with bounds scaled by p.z alike). */
-static void scaled_image_offset(const gaussian_ray *r, vec3 p, double *X, double *Y)
-{
-    *X = r->fx * p.x + (r->cx - r->x) * p.z, *Y = r->fy * p.y + (r->cy - r->y) * p.z;
-}
+ * circle's image is an ellipse (splat_2d_geometry's `filtered`), so the
+ * circle, and the disc within it, lie beyond view depth 0, and the pole
+ * of a line that misses the circle lies inside it. The bounds built on P
+ * (the culls, filter_2d_reach) hold every pixel within the filter's reach
+ * of P's image and never ask where the pixel's ray meets the splat's
+ * plane: so they hold under either near rule (hit_2d_from_geometry), also
+ * the older rule's filter pixels whose rays meet the plane behind the
+ * camera. (filter_pole_T: DEFINE_CULLS, below.) */
 
 /* Reaches, rounded up, that the culls, key floors and traversal pads
  * share: the kernel's 1/255 radius sqrt(2 ln 255) = 3.32901 scales (at
@@ -306,165 +326,177 @@ static void scaled_image_offset(const gaussian_ray *r, vec3 p, double *X, double
  * the subtraction's rounding where the pad is below it */
 #define TRAVERSAL_PAD_SLACK (1 + 1e-6)
 #define KEY_FLOOR_ROUNDING 1e-15
+/* The 2DGS cull's rounding room: a centre within this factor of its
+ * reach counts as near the camera plane, and the bound grows by this
+ * fraction of itself and of the depth */
+#define CULL_NEAR_SLACK (1 + 1e-9)
+#define CULL_ROUNDING 1e-6
 
-/* Can the splat (centre p in camera space, larger scale s) give the ray's
- * pixel anything? A point p + delta, |delta| <= D < p.z, projects within
- * f |delta| |p| / (p.z (p.z - |delta|)) pixels of p's image (the offset is
- * f |delta_xy p.z - p_xy delta_z| / (p.z (p.z + delta_z)), and by
- * Lagrange's identity |delta_xy p.z - p_xy delta_z| <= |delta| |p|).
- * Hits lie within the kernel's reach (3.33 scales at opacity 1); the
- * filter acts within 2.36 pixels of the image of a point of the filter's
- * circle within filter_pole of the mean. A cheap test that the boxes of
- * most candidates fail (they hold a ball; the pixel's ray is a line): the
- * pole (a thousandth of a pixel for the bench's splats, where the whole
- * circle was assumed before) cut the candidates it keeps from 1.7 to about
- * 1.1 per hit. Both reaches are bounded over the larger one's p.z - reach,
- * and the test multiplied through by p.z (p.z - reach): one division (the
- * pole's) where there were four (issue 31's profile: they led the cull),
- * never tighter than the bound itself; the 1e-6 slack covers rounding. */
-static int splat_near_pixel(const gaussian_ray *r, vec3 p, double s, double c)
-{
-    double reach_k = KERNEL_REACH * s, circle = c * s;
-    if (p.z <= rr_fmax(reach_k, circle) * (1 + 1e-9))
-        return 1; /* near the camera plane: no bound from the projection */
-    double reach_c = filter_pole(circle, p.z), reach = rr_fmax(reach_k, reach_c); /* the pole: below circle here */
-    double X, Y, depth = p.z * (p.z - reach), spread = rr_fmax(r->fx, r->fy) * v3_len(p);
-    scaled_image_offset(r, p, &X, &Y);
-    double bound = rr_fmax(spread * reach_k, spread * reach_c + FILTER_REACH_PX * depth) * (1 + 1e-6) + 1e-6 * depth;
-    return (X * X + Y * Y) * (p.z - reach) * (p.z - reach) <= bound * bound;
-}
-
-/* The 2DGS cull from the mean and the scale: the centre in front of the
- * near plane, as the rasterizer's frustum test, and near the pixel. */
-static int cull_2d(const gaussian_model *m, size_t i, const gaussian_ray *r, vec3 p)
-{
-    const float *s = &m->scale[3 * i];
-    return !(p.z <= GAUSSIAN_NEAR) && splat_near_pixel(r, p, rr_fmax(s[0], s[1]) * r->scale, filter_circle(m));
-}
-
-/* cull_2d on blocks of four Gaussians in AVX2 registers, where the CPU has
- * them (the cull led issue 31's profile: a 2DGS ray culls about 190
- * candidates). The same operations in the same order as camera_mean and
- * cull_2d, lane by lane, so the same answers bit for bit: IEEE products,
- * sums, quotients and square roots are exact per lane, and no FMA is
- * enabled to contract them; rr_fmax's values by compare and blend. */
-#if defined(__x86_64__) && defined(__GNUC__)
-#define RR_AVX2_CULL 1
-#include <immintrin.h>
-enum { CULL_LANES = 4 };
-
-__attribute__((target("avx2"))) static inline __m256d lanes_fmax(__m256d x, __m256d y)
-{
-    __m256d take_x = _mm256_or_pd(_mm256_cmp_pd(x, y, _CMP_GE_OQ), _mm256_cmp_pd(y, y, _CMP_UNORD_Q));
-    return _mm256_blendv_pd(y, x, take_x);
-}
-
-/* Component a of four Gaussians' float triples, as doubles (exact). */
-__attribute__((target("avx2"))) static inline __m256d lanes_of(const float *const v[4], int a)
-{
-    return _mm256_cvtps_pd(_mm_set_ps(v[3][a], v[2][a], v[1][a], v[0][a]));
-}
-
-/* The linear part of camera matrix row `row` times (x, y, z) (cam_vector). */
-__attribute__((target("avx2"))) static inline __m256d lanes_linear(const double row[4], __m256d x, __m256d y, __m256d z)
-{
-    __m256d sum = _mm256_add_pd(_mm256_mul_pd(_mm256_set1_pd(row[0]), x), _mm256_mul_pd(_mm256_set1_pd(row[1]), y));
-    return _mm256_add_pd(sum, _mm256_mul_pd(_mm256_set1_pd(row[2]), z));
-}
-
-/* Camera matrix row `row` applied to the point (x, y, z) (cam_point). */
-__attribute__((target("avx2"))) static inline __m256d lanes_row(const double row[4], __m256d x, __m256d y, __m256d z)
-{
-    return _mm256_add_pd(lanes_linear(row, x, y, z), _mm256_set1_pd(row[3]));
-}
-
-/* mean (mx, my, mz) and larger scale s of four Gaussians -> their camera
- * space means (px, py, pz) and a mask of those cull_2d keeps. */
-__attribute__((target("avx2"))) static int cull_2d_lanes(const gaussian_ray *r, double circle_scales, __m256d X0,
-                                                         __m256d Y0, __m256d Z0, __m256d s_in, double *px, double *py,
-                                                         double *pz, float *floor)
-{
-    __m256d x = lanes_row(r->m[0], X0, Y0, Z0), y = lanes_row(r->m[1], X0, Y0, Z0), z = lanes_row(r->m[2], X0, Y0, Z0);
-    __m256d s = _mm256_mul_pd(s_in, _mm256_set1_pd(r->scale));
-    __m256d reach_k = _mm256_mul_pd(_mm256_set1_pd(KERNEL_REACH), s), circle = _mm256_mul_pd(_mm256_set1_pd(circle_scales), s);
-    __m256d near = _mm256_cmp_pd(z, _mm256_mul_pd(lanes_fmax(reach_k, circle), _mm256_set1_pd(1 + 1e-9)), _CMP_LE_OQ);
-    __m256d reach_c = _mm256_div_pd(_mm256_mul_pd(circle, circle), z), reach = lanes_fmax(reach_k, reach_c);
-    __m256d gap = _mm256_sub_pd(z, reach), depth = _mm256_mul_pd(z, gap);
-    __m256d len2 = _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(x, x), _mm256_mul_pd(y, y)), _mm256_mul_pd(z, z));
-    __m256d spread = _mm256_mul_pd(_mm256_set1_pd(rr_fmax(r->fx, r->fy)), _mm256_sqrt_pd(len2));
-    __m256d X = _mm256_add_pd(_mm256_mul_pd(_mm256_set1_pd(r->fx), x), _mm256_mul_pd(_mm256_set1_pd(r->cx - r->x), z));
-    __m256d Y = _mm256_add_pd(_mm256_mul_pd(_mm256_set1_pd(r->fy), y), _mm256_mul_pd(_mm256_set1_pd(r->cy - r->y), z));
-    __m256d wide = lanes_fmax(_mm256_mul_pd(spread, reach_k),
-                              _mm256_add_pd(_mm256_mul_pd(spread, reach_c), _mm256_mul_pd(_mm256_set1_pd(FILTER_REACH_PX), depth)));
-    __m256d bound = _mm256_add_pd(_mm256_mul_pd(wide, _mm256_set1_pd(1 + 1e-6)), _mm256_mul_pd(_mm256_set1_pd(1e-6), depth));
-    __m256d off2 = _mm256_mul_pd(_mm256_mul_pd(_mm256_add_pd(_mm256_mul_pd(X, X), _mm256_mul_pd(Y, Y)), gap), gap);
-    __m256d within = _mm256_cmp_pd(off2, _mm256_mul_pd(bound, bound), _CMP_LE_OQ);
-    __m256d in_front = _mm256_cmp_pd(z, _mm256_set1_pd(GAUSSIAN_NEAR), _CMP_NLE_UQ);
-    _mm256_storeu_pd(px, x), _mm256_storeu_pd(py, y), _mm256_storeu_pd(pz, z);
-    /* gaussian_key_floor: the centre's depth less gaussian_traversal_pad */
-    __m256d depth_per_t = _mm256_set1_pd(r->depth_per_t), centre = _mm256_div_pd(z, depth_per_t);
-    __m256d pad = _mm256_div_pd(_mm256_mul_pd(_mm256_set1_pd(KERNEL_REACH), s), depth_per_t);
-    pad = _mm256_mul_pd(pad, _mm256_set1_pd(TRAVERSAL_PAD_SLACK));
-    __m256d below = _mm256_sub_pd(centre, pad), magnitude = _mm256_andnot_pd(_mm256_set1_pd(-0.0), centre);
-    below = _mm256_sub_pd(below, _mm256_mul_pd(_mm256_set1_pd(KEY_FLOOR_ROUNDING), magnitude));
-    _mm_storeu_ps(floor, _mm256_cvtpd_ps(below));
-    return _mm256_movemask_pd(_mm256_and_pd(in_front, _mm256_or_pd(near, within)));
-}
-
-/* cull_3d_raster the same way (mx, my, mz, s: means and largest scales). */
-__attribute__((target("avx2"))) static int cull_3d_lanes(const gaussian_ray *r, const raster_rules *rules,
-                                                         __m256d X0, __m256d Y0, __m256d Z0, __m256d s_in, double *px,
-                                                         double *py, double *pz, float *floor)
-{
-    __m256d x = lanes_row(r->m[0], X0, Y0, Z0), y = lanes_row(r->m[1], X0, Y0, Z0), z = lanes_row(r->m[2], X0, Y0, Z0);
-    __m256d in_range = _mm256_and_pd(_mm256_cmp_pd(z, _mm256_set1_pd(rules->near), _CMP_GT_OQ),
-                                     _mm256_cmp_pd(z, _mm256_set1_pd(rules->far), _CMP_LE_OQ));
-    __m256d F = _mm256_mul_pd(_mm256_set1_pd(rr_fmax(r->fx, r->fy)), s_in);
-    F = _mm256_mul_pd(_mm256_mul_pd(F, _mm256_set1_pd(r->scale)), _mm256_set1_pd(r->stretch));
-    __m256d X = _mm256_add_pd(_mm256_mul_pd(_mm256_set1_pd(r->fx), x), _mm256_mul_pd(_mm256_set1_pd(r->cx - r->x), z));
-    __m256d Y = _mm256_add_pd(_mm256_mul_pd(_mm256_set1_pd(r->fy), y), _mm256_mul_pd(_mm256_set1_pd(r->cy - r->y), z));
-    __m256d dilated = _mm256_mul_pd(_mm256_mul_pd(_mm256_set1_pd(rules->dilation), z), z);
-    __m256d bound = _mm256_mul_pd(_mm256_set1_pd(RASTER_REACH2), _mm256_add_pd(_mm256_mul_pd(F, F), dilated));
-    bound = _mm256_mul_pd(bound, _mm256_set1_pd(RASTER_REACH2_SLACK));
-    __m256d within = _mm256_cmp_pd(_mm256_add_pd(_mm256_mul_pd(X, X), _mm256_mul_pd(Y, Y)), bound, _CMP_LE_OQ);
-    _mm256_storeu_pd(px, x), _mm256_storeu_pd(py, y), _mm256_storeu_pd(pz, z);
-    _mm_storeu_ps(floor, _mm256_cvtpd_ps(_mm256_div_pd(z, _mm256_set1_pd(r->depth_per_t)))); /* gaussian_key_floor */
-    return _mm256_movemask_pd(_mm256_and_pd(in_range, within));
-}
-#else
-#define RR_AVX2_CULL 0
+/* The culls and key floors, over a lane type T (from the camera-space
+ * mean p and the larger scale s in object units; a lane computes its
+ * whole test where one double's could stop early):
+ *
+ * filter_pole: see above. scaled_image_offset: p's image's offset from
+ * the ray's raster position, times p.z (no division: the culls compare it
+ * with bounds scaled by p.z alike).
+ *
+ * cull_2d: the centre in front of the near plane, as the rasterizer's
+ * frustum test, and the splat near the pixel. A point p + delta, |delta|
+ * <= D < p.z, projects within f |delta| |p| / (p.z (p.z - |delta|)) pixels
+ * of p's image (the offset is f |delta_xy p.z - p_xy delta_z| / (p.z (p.z
+ * + delta_z)), and by Lagrange's identity |delta_xy p.z - p_xy delta_z|
+ * <= |delta| |p|). Hits lie within the kernel's reach (3.33 scales at
+ * opacity 1); the filter acts within 2.36 pixels of the image of a point
+ * of the filter's circle within filter_pole of the mean. A cheap test
+ * that the boxes of most candidates fail (they hold a ball; the pixel's
+ * ray is a line): the pole (a thousandth of a pixel for the bench's
+ * splats, where the whole circle was assumed before) cut the candidates
+ * it keeps from 1.7 to about 1.1 per hit. Both reaches are bounded over
+ * the larger one's p.z - reach, and the test multiplied through by p.z
+ * (p.z - reach): one division (the pole's) where there were four (the
+ * divisions led the cull's time in a profile of 2DGS rendering), never
+ * tighter than the bound itself; CULL_ROUNDING covers rounding.
+ *
+ * cull_3d: the 3D rasterizers' cull: the centre within the depths
+ * in_frustum keeps, and the pixel within the footprint's reach, cheap and
+ * sure: lambda_max(cov2D) <= (f_max / z)^2 (1 + lim^2) s_max^2 + dilation
+ * (gaussian_view_stretch), alpha >= 1/255 within k^2 of it, k^2 = 2 ln(255
+ * o) <= 2 ln 255; the offset times p.z^2, with room for rounding.
+ *
+ * traversal_pad: gaussian_traversal_pad's, of a larger scale s in camera
+ * lengths. centre_key: the centre's distance along the ray (a rasterizer's
+ * key, and its key floor). key_floor_2d: a 2D Gaussian's key floor
+ * (gaussian_key_floor): its centre's distance less the pad, less room
+ * for the subtraction's rounding. */
+#define DEFINE_CULLS(T)                                                                                        \
+    LANES_TARGET_##T static inline T filter_pole_##T(T radius, T depth) { return radius * radius / depth; }    \
+    LANES_TARGET_##T static inline void scaled_image_offset_##T(const gaussian_ray *r, const T p[3], T *X, T *Y) \
+    {                                                                                                          \
+        *X = r->fx * p[0] + (r->cx - r->x) * p[2], *Y = r->fy * p[1] + (r->cy - r->y) * p[2];                  \
+    }                                                                                                          \
+    LANES_TARGET_##T static inline lanes_mask_##T cull_2d_##T(const gaussian_ray *r, double circle_scales,     \
+                                                              const T p[3], T s)                               \
+    {                                                                                                          \
+        T scaled = s * r->scale, reach_k = KERNEL_REACH * scaled, circle = circle_scales * scaled;             \
+        /* near the camera plane: no bound from the projection */                                             \
+        lanes_mask_##T near = p[2] <= lanes_max(reach_k, circle) * CULL_NEAR_SLACK;                            \
+        /* the pole: below circle where the centre is not near */                                             \
+        T reach_c = filter_pole_##T(circle, p[2]), reach = lanes_max(reach_k, reach_c);                        \
+        T gap = p[2] - reach, depth = p[2] * gap, X, Y;                                                        \
+        T spread = rr_fmax(r->fx, r->fy) * lanes_sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);               \
+        scaled_image_offset_##T(r, p, &X, &Y);                                                                 \
+        T bound = lanes_max(spread * reach_k, spread * reach_c + FILTER_REACH_PX * depth) * (1 + CULL_ROUNDING) \
+                  + CULL_ROUNDING * depth;                                                                     \
+        lanes_mask_##T within = (X * X + Y * Y) * gap * gap <= bound * bound;                                  \
+        return lanes_not(p[2] <= GAUSSIAN_NEAR) & (near | within);                                             \
+    }                                                                                                          \
+    LANES_TARGET_##T static inline lanes_mask_##T cull_3d_##T(const gaussian_ray *r, const raster_rules *rules, \
+                                                              const T p[3], T s)                               \
+    {                                                                                                          \
+        T F = rr_fmax(r->fx, r->fy) * s * r->scale * r->stretch, X, Y;                                         \
+        scaled_image_offset_##T(r, p, &X, &Y);                                                                 \
+        lanes_mask_##T within =                                                                                \
+            X * X + Y * Y <= RASTER_REACH2 * (F * F + rules->dilation * p[2] * p[2]) * RASTER_REACH2_SLACK;    \
+        return (p[2] > rules->near) & (p[2] <= rules->far) & within;                                           \
+    }                                                                                                          \
+    LANES_TARGET_##T static inline T traversal_pad_##T(T s, double depth_per_t)                                \
+    {                                                                                                          \
+        return KERNEL_REACH * s / depth_per_t * TRAVERSAL_PAD_SLACK;                                           \
+    }                                                                                                          \
+    LANES_TARGET_##T static inline T centre_key_##T(const gaussian_ray *r, T z) { return z / r->depth_per_t; } \
+    LANES_TARGET_##T static inline T key_floor_2d_##T(const gaussian_ray *r, T z, T s)                         \
+    {                                                                                                          \
+        T centre = centre_key_##T(r, z);                                                                       \
+        return centre - traversal_pad_##T(s * r->scale, r->depth_per_t) - KEY_FLOOR_ROUNDING * lanes_abs(centre); \
+    }
+DEFINE_CULLS(double)
+#if RR_LANES
+DEFINE_CULLS(v4d)
 #endif
 
-/* What a 2DGS hit's rules read of the splat's geometry at the ray's
- * pixel: computed one Gaussian at a time (splat_2d_geometry_of) or four in
- * lanes (splat_2d_geometry_lanes), the same operations in the same order. */
-typedef struct {
-    vec3 row[3];             /* T's rows (splat_rows) */
-    double cz, u, v;         /* the pixel's planes' intersection (u, v, 1) cz; u, v once cz != 0 */
-    double rho3d, rho2d;     /* the kernel's and the filter's squared distances (rho2d: inf unfiltered) */
-    double centre_x, centre_y; /* the filter's centre (0 unfiltered) */
-    double plane_depth;
-    int filtered;
-} splat_2d_geometry;
-
-static void splat_2d_geometry_of(const gaussian_ray *r, double circle, splat_2d_geometry *g)
+/* Gaussian i's larger scale (2D) or largest (3D), object units. */
+static double larger_scale(const gaussian_model *m, size_t i)
 {
-    const vec3 *row = g->row;
-    /* the planes through the pixel's column and row, in (u, v, 1) */
-    vec3 k = v3_sub(v3_scale(row[2], r->x), row[0]), l = v3_sub(v3_scale(row[2], r->y), row[1]);
-    vec3 c = v3_cross(k, l);
-    g->cz = c.z;
-    if (c.z == 0)
-        return;
-    g->u = c.x / c.z, g->v = c.y / c.z, g->rho3d = g->u * g->u + g->v * g->v;
-    double centre_x = 0, centre_y = 0;
-    g->filtered = filter_centre(g->row, circle, &centre_x, &centre_y);
-    g->rho2d = INFINITY, g->centre_x = centre_x, g->centre_y = centre_y;
-    if (g->filtered) /* FilterInvSquare |pixel - centre|^2 */
-        g->rho2d = GAUSSIAN_FILTER_INV_SQUARE * ((g->centre_x - r->x) * (g->centre_x - r->x) +
-                                                 (g->centre_y - r->y) * (g->centre_y - r->y));
-    g->plane_depth = g->u * row[2].x + g->v * row[2].y + row[2].z;
+    const float *s = &m->scale[3 * i];
+    return m->kind == GAUSSIAN_2D ? rr_fmax(s[0], s[1]) : rr_fmax(s[0], rr_fmax(s[1], s[2]));
 }
+
+/* The 2DGS cull of Gaussian i, its mean at camera-space p. */
+static int cull_2d(const gaussian_model *m, size_t i, const gaussian_ray *r, vec3 p)
+{
+    double pc[3] = {p.x, p.y, p.z};
+    return cull_2d_double(r, filter_circle(m), pc, larger_scale(m, i));
+}
+
+/* What a 2DGS hit's rules read of the splat's geometry at the ray's
+ * pixel, over a lane type T: one Gaussian (splat_2d_geometry_double) or
+ * four (splat_2d_geometry_in_lanes), from T's rows (splat_rows). The
+ * filter's centre is the centre of the image of the splat's circle of
+ * `circle` scales: the last column of the dual conic T diag(c^2, c^2, -1)
+ * T^T over its last entry (compute_aabb's point_image); none when the
+ * circle reaches behind the camera's plane: its image is no ellipse and
+ * has no centre to filter about (the rasterizer would filter about the
+ * hyperbola's, anywhere on screen; GAUSSIANS.md). A lane computes every
+ * field; u, v and what follows mean something only where cz != 0. */
+#define DEFINE_SPLAT_2D_GEOMETRY(T)                                                                           \
+    typedef struct {                                                                                          \
+        T row[3][3];          /* T's rows (splat_rows) */                                                     \
+        T cz, u, v;           /* the pixel's planes' intersection (u, v, 1) cz */                             \
+        T rho3d, rho2d;       /* the kernel's and the filter's squared distances (rho2d: inf unfiltered) */   \
+        T centre_x, centre_y; /* the filter's centre (0 unfiltered) */                                        \
+        T plane_depth;                                                                                        \
+        lanes_mask_##T filtered;                                                                              \
+    } splat_2d_geometry_##T;                                                                                  \
+    LANES_TARGET_##T static inline void splat_2d_geometry_of_##T(const gaussian_ray *r, double circle,        \
+                                                                 splat_2d_geometry_##T *g)                    \
+    {                                                                                                         \
+        T(*row)[3] = g->row, k[3], l[3], zero = {0};                                                          \
+        for (int a = 0; a < 3; a++) /* the planes through the pixel's column and row, in (u, v, 1) */        \
+            k[a] = row[2][a] * r->x - row[0][a], l[a] = row[2][a] * r->y - row[1][a];                         \
+        g->cz = k[0] * l[1] - k[1] * l[0];                                                                    \
+        g->u = (k[1] * l[2] - k[2] * l[1]) / g->cz, g->v = (k[2] * l[0] - k[0] * l[2]) / g->cz;               \
+        g->rho3d = g->u * g->u + g->v * g->v;                                                                 \
+        T d22 = DUAL_CONIC(row[2], row[2], circle * circle);                                                  \
+        g->filtered = d22 < 0;                                                                                \
+        g->centre_x = lanes_select(g->filtered, DUAL_CONIC(row[0], row[2], circle * circle) / d22, zero);     \
+        g->centre_y = lanes_select(g->filtered, DUAL_CONIC(row[1], row[2], circle * circle) / d22, zero);     \
+        T dx = g->centre_x - r->x, dy = g->centre_y - r->y; /* FilterInvSquare |pixel - centre|^2 */          \
+        g->rho2d = lanes_select(g->filtered, GAUSSIAN_FILTER_INV_SQUARE * (dx * dx + dy * dy), zero + INFINITY); \
+        g->plane_depth = g->u * row[2][0] + g->v * row[2][1] + row[2][2];                                     \
+    }
+DEFINE_SPLAT_2D_GEOMETRY(double)
+#if RR_LANES
+DEFINE_SPLAT_2D_GEOMETRY(v4d)
+
+/* splat_2d_geometry_of_double of four culled Gaussians (prim; p: their
+ * camera-space means), computed in lanes. Their axes come from the scalar
+ * splat_axes (one rotation rule), gathered in registers: doubles stored
+ * one by one and loaded as a vector stalled on store forwarding (perf
+ * annotate). */
+RR_LANES_TARGET static void splat_2d_geometry_in_lanes(const gaussian_model *m, const unsigned prim[4],
+                                                       const gaussian_ray *r, const vec3 p[4],
+                                                       splat_2d_geometry_double g[4])
+{
+    double u[4][3], v[4][3];
+    for (int j = 0; j < 4; j++)
+        splat_axes(m, prim[j], u[j], v[j]);
+    v4d U[3], V[3], P[3] = {{p[0].x, p[1].x, p[2].x, p[3].x}, {p[0].y, p[1].y, p[2].y, p[3].y},
+                            {p[0].z, p[1].z, p[2].z, p[3].z}};
+    for (int a = 0; a < 3; a++)
+        U[a] = (v4d){u[0][a], u[1][a], u[2][a], u[3][a]}, V[a] = (v4d){v[0][a], v[1][a], v[2][a], v[3][a]};
+    splat_2d_geometry_v4d four;
+    splat_rows_v4d(r, U, V, P, four.row);
+    splat_2d_geometry_of_v4d(r, filter_circle(m), &four);
+    for (int j = 0; j < 4; j++) {
+        for (int a = 0; a < 3; a++)
+            for (int b = 0; b < 3; b++)
+                g[j].row[a][b] = four.row[a][b][j];
+        g[j].cz = four.cz[j], g[j].u = four.u[j], g[j].v = four.v[j], g[j].rho3d = four.rho3d[j];
+        g[j].rho2d = four.rho2d[j], g[j].centre_x = four.centre_x[j], g[j].centre_y = four.centre_y[j];
+        g[j].plane_depth = four.plane_depth[j], g[j].filtered = four.filtered[j] != 0;
+    }
+}
+#endif
 
 /* Whether the near skip takes the centre's view depth where the filter
  * wins: forward.cu renderCUDA's `depth = (rho3d <= rho2d) ? hit : Tw.z;
@@ -493,7 +525,7 @@ static int splat_edge_on(const gaussian_model *m, size_t i, const gaussian_ray *
 /* Gaussian i's 2DGS hit from its geometry at the pixel (p: its
  * camera-space mean). */
 static int hit_2d_from_geometry(const gaussian_model *m, size_t i, gaussian_order order, const gaussian_ray *r, vec3 p,
-                                const splat_2d_geometry *g, gaussian_hit *h)
+                                const splat_2d_geometry_double *g, gaussian_hit *h)
 {
     if (g->cz == 0)
         return 0;
@@ -507,7 +539,7 @@ static int hit_2d_from_geometry(const gaussian_model *m, size_t i, gaussian_orde
      * (DUAL_VISIABLE), shows nothing: under e0ed020's rule every ray meets
      * its plane at the camera centre, at view depth 0; under the older
      * one its filter pixels are culled by name */
-    double depth = g->rho3d <= g->rho2d ? g->plane_depth : g->row[2].z;
+    double depth = g->rho3d <= g->rho2d ? g->plane_depth : g->row[2][2];
     if (g->plane_depth < GAUSSIAN_NEAR) {
         if (!near_by_centre_where_filtered(m) || depth < GAUSSIAN_NEAR || splat_edge_on(m, i, r, p))
             return 0;
@@ -531,96 +563,13 @@ static int hit_2d_from_geometry(const gaussian_model *m, size_t i, gaussian_orde
     return 1;
 }
 
-#if RR_AVX2_CULL
-/* a * b - c * d, lane by lane */
-__attribute__((target("avx2"))) static inline __m256d lanes_cross_term(__m256d a, __m256d b, __m256d c, __m256d d)
-{
-    return _mm256_sub_pd(_mm256_mul_pd(a, b), _mm256_mul_pd(c, d));
-}
-
-/* dual_conic(a, b, c) with cc = c * c */
-__attribute__((target("avx2"))) static inline __m256d lanes_dual_conic(const __m256d a[3], const __m256d b[3], __m256d cc)
-{
-    __m256d across = _mm256_add_pd(_mm256_mul_pd(a[0], b[0]), _mm256_mul_pd(a[1], b[1]));
-    return _mm256_sub_pd(_mm256_mul_pd(cc, across), _mm256_mul_pd(a[2], b[2]));
-}
-
-/* gaussian_splat_rows for four Gaussians: T's rows as row[k][component]. */
-__attribute__((target("avx2"))) static void splat_rows_lanes(const gaussian_model *m, const unsigned prim[4],
-                                                             const gaussian_ray *r, const vec3 p[4], __m256d row[3][3])
-{
-    const float *q[4], *sc[4];
-    for (int j = 0; j < 4; j++)
-        q[j] = &m->rotation[4 * prim[j]], sc[j] = &m->scale[3 * prim[j]];
-    __m256d w = lanes_of(q, 0), x = lanes_of(q, 1), y = lanes_of(q, 2), z = lanes_of(q, 3);
-    __m256d one = _mm256_set1_pd(1), two = _mm256_set1_pd(2), s0 = lanes_of(sc, 0), s1 = lanes_of(sc, 1);
-    /* quaternion_matrix's first two columns, each times its scale */
-    __m256d R00 = _mm256_sub_pd(one, _mm256_mul_pd(two, _mm256_add_pd(_mm256_mul_pd(y, y), _mm256_mul_pd(z, z))));
-    __m256d R10 = _mm256_mul_pd(two, _mm256_add_pd(_mm256_mul_pd(x, y), _mm256_mul_pd(w, z)));
-    __m256d R20 = _mm256_mul_pd(two, _mm256_sub_pd(_mm256_mul_pd(x, z), _mm256_mul_pd(w, y)));
-    __m256d R01 = _mm256_mul_pd(two, _mm256_sub_pd(_mm256_mul_pd(x, y), _mm256_mul_pd(w, z)));
-    __m256d R11 = _mm256_sub_pd(one, _mm256_mul_pd(two, _mm256_add_pd(_mm256_mul_pd(x, x), _mm256_mul_pd(z, z))));
-    __m256d R21 = _mm256_mul_pd(two, _mm256_add_pd(_mm256_mul_pd(y, z), _mm256_mul_pd(w, x)));
-    __m256d ux = _mm256_mul_pd(R00, s0), uy = _mm256_mul_pd(R10, s0), uz = _mm256_mul_pd(R20, s0);
-    __m256d vx = _mm256_mul_pd(R01, s1), vy = _mm256_mul_pd(R11, s1), vz = _mm256_mul_pd(R21, s1);
-    __m256d tu[3], tv[3];
-    for (int a = 0; a < 3; a++)
-        tu[a] = lanes_linear(r->m[a], ux, uy, uz), tv[a] = lanes_linear(r->m[a], vx, vy, vz);
-    __m256d pc[3] = {_mm256_set_pd(p[3].x, p[2].x, p[1].x, p[0].x), _mm256_set_pd(p[3].y, p[2].y, p[1].y, p[0].y),
-                     _mm256_set_pd(p[3].z, p[2].z, p[1].z, p[0].z)};
-    __m256d third[3] = {tu[2], tv[2], pc[2]}, first[3] = {tu[0], tv[0], pc[0]}, second[3] = {tu[1], tv[1], pc[1]};
-    __m256d fx = _mm256_set1_pd(r->fx), fy = _mm256_set1_pd(r->fy), cx = _mm256_set1_pd(r->cx), cy = _mm256_set1_pd(r->cy);
-    for (int a = 0; a < 3; a++) { /* splat_rows */
-        row[2][a] = third[a];
-        row[0][a] = _mm256_add_pd(_mm256_mul_pd(first[a], fx), _mm256_mul_pd(third[a], cx));
-        row[1][a] = _mm256_add_pd(_mm256_mul_pd(second[a], fy), _mm256_mul_pd(third[a], cy));
-    }
-}
-
-/* splat_2d_geometry_of for four Gaussians (rows from splat_rows_lanes). */
-__attribute__((target("avx2"))) static void splat_2d_geometry_lanes(const gaussian_ray *r, double circle,
-                                                                    __m256d row[3][3], splat_2d_geometry g[4])
-{
-    __m256d rx = _mm256_set1_pd(r->x), ry = _mm256_set1_pd(r->y), k[3], l[3];
-    for (int a = 0; a < 3; a++)
-        k[a] = _mm256_sub_pd(_mm256_mul_pd(row[2][a], rx), row[0][a]),
-        l[a] = _mm256_sub_pd(_mm256_mul_pd(row[2][a], ry), row[1][a]);
-    __m256d cx = lanes_cross_term(k[1], l[2], k[2], l[1]), cy = lanes_cross_term(k[2], l[0], k[0], l[2]);
-    __m256d cz = lanes_cross_term(k[0], l[1], k[1], l[0]);
-    __m256d u = _mm256_div_pd(cx, cz), v = _mm256_div_pd(cy, cz);
-    __m256d rho3d = _mm256_add_pd(_mm256_mul_pd(u, u), _mm256_mul_pd(v, v));
-    __m256d cc = _mm256_mul_pd(_mm256_set1_pd(circle), _mm256_set1_pd(circle));
-    __m256d d22 = lanes_dual_conic(row[2], row[2], cc), filtered = _mm256_cmp_pd(d22, _mm256_setzero_pd(), _CMP_LT_OQ);
-    __m256d centre_x = _mm256_and_pd(filtered, _mm256_div_pd(lanes_dual_conic(row[0], row[2], cc), d22));
-    __m256d centre_y = _mm256_and_pd(filtered, _mm256_div_pd(lanes_dual_conic(row[1], row[2], cc), d22));
-    __m256d dx = _mm256_sub_pd(centre_x, rx), dy = _mm256_sub_pd(centre_y, ry);
-    __m256d rho2d = _mm256_mul_pd(_mm256_set1_pd(GAUSSIAN_FILTER_INV_SQUARE),
-                                  _mm256_add_pd(_mm256_mul_pd(dx, dx), _mm256_mul_pd(dy, dy)));
-    rho2d = _mm256_blendv_pd(_mm256_set1_pd(INFINITY), rho2d, filtered);
-    __m256d plane_depth = _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(u, row[2][0]), _mm256_mul_pd(v, row[2][1])), row[2][2]);
-    double out[17][4];
-    __m256d fields[17] = {row[0][0], row[0][1], row[0][2], row[1][0], row[1][1], row[1][2], row[2][0], row[2][1],
-                          row[2][2], cz, u, v, rho3d, rho2d, centre_x, centre_y, plane_depth};
-    for (int f = 0; f < 17; f++)
-        _mm256_storeu_pd(out[f], fields[f]);
-    int mask = _mm256_movemask_pd(filtered);
-    for (int j = 0; j < 4; j++) {
-        for (int a = 0; a < 3; a++)
-            g[j].row[a] = v3(out[3 * a][j], out[3 * a + 1][j], out[3 * a + 2][j]);
-        g[j].cz = out[9][j], g[j].u = out[10][j], g[j].v = out[11][j], g[j].rho3d = out[12][j];
-        g[j].rho2d = out[13][j], g[j].centre_x = out[14][j], g[j].centre_y = out[15][j];
-        g[j].plane_depth = out[16][j], g[j].filtered = mask >> j & 1;
-    }
-}
-#endif
-
 /* Gaussian i's 2DGS hit once cull_2d passed it (p: its camera-space mean). */
 static int hit_2d_after_cull(const gaussian_model *m, size_t i, gaussian_order order, const gaussian_ray *r, vec3 p,
                              gaussian_hit *h)
 {
-    splat_2d_geometry g;
+    splat_2d_geometry_double g;
     gaussian_splat_rows(m, i, r, p, g.row);
-    splat_2d_geometry_of(r, filter_circle(m), &g);
+    splat_2d_geometry_of_double(r, filter_circle(m), &g);
     return hit_2d_from_geometry(m, i, order, r, p, &g, h);
 }
 
@@ -633,9 +582,12 @@ int gaussian_hit_2d(const gaussian_model *m, size_t i, gaussian_order order, con
 
 int gaussian_filter_centre_2d(const gaussian_model *m, size_t i, const gaussian_ray *r, double *x, double *y)
 {
-    vec3 row[3];
-    gaussian_splat_rows(m, i, r, camera_mean(m, i, r), row);
-    return filter_centre(row, filter_circle(m), x, y);
+    splat_2d_geometry_double g;
+    gaussian_splat_rows(m, i, r, camera_mean(m, i, r), g.row);
+    splat_2d_geometry_of_double(r, filter_circle(m), &g);
+    if (g.filtered)
+        *x = g.centre_x, *y = g.centre_y;
+    return g.filtered;
 }
 
 /* The 3D rasterizers' image of Gaussian i at the ray's pixel (forward.cu
@@ -684,20 +636,12 @@ static int raster_alpha(const gaussian_model *m, size_t i, const raster_rules *r
     return 1;
 }
 
-/* The 3D rasterizers' cull from the mean and the scale: the centre within
- * the depths in_frustum keeps, and the pixel within the footprint's reach,
- * cheap and sure: lambda_max(cov2D) <= (f_max / z)^2 (1 + lim^2) s_max^2 +
- * dilation (gaussian_view_stretch), alpha >= 1/255 within k^2 of it, k^2
- * = 2 ln(255 o) <= 2 ln 255. */
+/* The 3D rasterizers' cull of Gaussian i (cull_3d), its mean at
+ * camera-space p. */
 static int cull_3d_raster(const gaussian_model *m, size_t i, const gaussian_ray *r, vec3 p)
 {
-    const raster_rules *rules = raster_rules_of(gaussian_formation_of(m));
-    const float *s = &m->scale[3 * i];
-    if (!(p.z > rules->near && p.z <= rules->far))
-        return 0;
-    double X, Y, F = rr_fmax(r->fx, r->fy) * rr_fmax(s[0], rr_fmax(s[1], s[2])) * r->scale * r->stretch;
-    scaled_image_offset(r, p, &X, &Y); /* times p.z^2 (no division), with room for rounding */
-    return X * X + Y * Y <= RASTER_REACH2 * (F * F + rules->dilation * p.z * p.z) * RASTER_REACH2_SLACK;
+    double pc[3] = {p.x, p.y, p.z};
+    return cull_3d_double(r, raster_rules_of(gaussian_formation_of(m)), pc, larger_scale(m, i));
 }
 
 static int hit_3d_raster_after_cull(const gaussian_model *m, size_t i, const gaussian_ray *r, vec3 p, gaussian_hit *h)
@@ -710,12 +654,6 @@ static int hit_3d_raster_after_cull(const gaussian_model *m, size_t i, const gau
     vec3 dir = v3_sub(v3(mu[0], mu[1], mu[2]), r->eye);
     *h = (gaussian_hit){(float)t, (float)t, (float)alpha, {(float)dir.x, (float)dir.y, (float)dir.z}, 0, (unsigned)i};
     return 1;
-}
-
-int gaussian_hit_3d_raster(const gaussian_model *m, size_t i, const gaussian_ray *r, gaussian_hit *h)
-{
-    vec3 p = camera_mean(m, i, r);
-    return cull_3d_raster(m, i, r, p) && hit_3d_raster_after_cull(m, i, r, p, h);
 }
 
 /* x in the Gaussian's canonical frame: S^-1 R^T x. */
@@ -767,7 +705,7 @@ double gaussian_traversal_pad(const gaussian_model *m, double s, double depth_pe
     /* the hit lies in the splat's plane within 3.33 scales of the centre
      * (rho3d <= 2 ln 255), or has the centre's depth while the filter's
      * circle point lies within 3 scales (the filter won) */
-    return KERNEL_REACH * s / depth_per_t * TRAVERSAL_PAD_SLACK;
+    return traversal_pad_double(s, depth_per_t);
 }
 
 double gaussian_key_lead(const gaussian_model *m, gaussian_order order, double s, double depth_per_t)
@@ -799,7 +737,7 @@ static void filter_2d_reach(const gaussian_model *m, size_t i, const gaussian_vi
         return;
     const float *s = &m->scale[3 * i];
     double radius = filter_circle(m) * rr_fmax(s[0], s[1]);
-    double pole = v->near > 0 ? rr_fmin(radius, filter_pole(radius, v->near)) : radius;
+    double pole = v->near > 0 ? rr_fmin(radius, filter_pole_double(radius, v->near)) : radius;
     *along_plane = pole, *across_view = sqrt(px2) * (v->distance + pole) / v->focal;
 }
 
@@ -894,19 +832,13 @@ int gaussian_cull(const gaussian_model *m, size_t i, const gaussian_ray *r, vec3
 
 float gaussian_key_floor(const gaussian_model *m, size_t i, const gaussian_ray *r, vec3 p)
 {
-    double centre = p.z / r->depth_per_t, floor;
-    if (m->kind == GAUSSIAN_2D) { /* within 3.33 scales of the centre's depth (gaussian_traversal_pad) */
-        const float *s = &m->scale[3 * i];
-        floor = centre - gaussian_traversal_pad(m, rr_fmax(s[0], s[1]) * r->scale, r->depth_per_t);
-        floor -= KEY_FLOOR_ROUNDING * fabs(centre);
-    } else if (gaussian_formation_of(m) == GAUSSIAN_FORMATION_3DGRT) {
-        return -INFINITY; /* the closest approach: not tied to the centre's depth */
-    } else {
-        floor = centre; /* the rasterizers' key is the centre's depth, computed alike */
-    }
     /* rounding is monotone: a hit's key (float)t >= (float)floor for t >=
      * floor, and compositing takes keys strictly below it */
-    return (float)floor;
+    if (m->kind == GAUSSIAN_2D) /* within 3.33 scales of the centre's depth (gaussian_traversal_pad) */
+        return (float)key_floor_2d_double(r, p.z, larger_scale(m, i));
+    if (gaussian_formation_of(m) == GAUSSIAN_FORMATION_3DGRT)
+        return -INFINITY; /* the closest approach: not tied to the centre's depth */
+    return (float)centre_key_double(r, p.z); /* the rasterizers' key is the centre's depth, computed alike */
 }
 
 /* Keeps cand[k] (k < n) that the cull passes, at the front, with p and
@@ -918,23 +850,21 @@ static size_t keep_culled(gaussian_candidate *cand, size_t kept, unsigned prim, 
 }
 
 enum { PREFETCH_AHEAD = 8 };
-#if RR_AVX2_CULL
-/* The candidates' culls four at a time in AVX2 lanes (cull_2d_lanes,
- * cull_3d_lanes); returns how many it took (a multiple of four), *kept
- * advanced as keep_culled does. */
-__attribute__((target("avx2"))) static size_t cull_in_lanes(const gaussian_model *m, const gaussian_ray *r,
-                                                            gaussian_candidate *cand, size_t n, unsigned ray,
-                                                            size_t *kept)
+#if RR_LANES
+/* The candidates' culls and key floors four at a time in lanes (cull_2d_v4d,
+ * cull_3d_v4d: the cull led the time of 2DGS rendering in a profile, a ray
+ * culls about 190 candidates); returns how many it took (a multiple of
+ * four), *kept advanced as keep_culled does. */
+RR_LANES_TARGET static size_t cull_in_lanes(const gaussian_model *m, const gaussian_ray *r, gaussian_candidate *cand,
+                                            size_t n, unsigned ray, size_t *kept)
 {
     const raster_rules *rules = m->kind == GAUSSIAN_3D ? raster_rules_of(gaussian_formation_of(m)) : NULL;
     double circle = filter_circle(m);
     size_t k = 0;
-    for (; k + CULL_LANES <= n; k += CULL_LANES) {
-        double px[CULL_LANES], py[CULL_LANES], pz[CULL_LANES];
-        float floor[CULL_LANES];
-        unsigned prim[CULL_LANES];
-        const float *mu[CULL_LANES], *sc[CULL_LANES];
-        for (int j = 0; j < CULL_LANES; j++) {
+    for (; k + 4 <= n; k += 4) {
+        unsigned prim[4];
+        const float *mu[4], *sc[4];
+        for (int j = 0; j < 4; j++) {
             if (k + j + PREFETCH_AHEAD < n)
                 gaussian_prefetch_cull(m, cand[k + j + PREFETCH_AHEAD].prim);
             prim[j] = cand[k + j].prim;
@@ -942,16 +872,19 @@ __attribute__((target("avx2"))) static size_t cull_in_lanes(const gaussian_model
         }
         /* the lanes built in registers: doubles stored one by one and
          * loaded as a vector stalled on store forwarding (perf annotate) */
-        __m256d X0 = lanes_of(mu, 0), Y0 = lanes_of(mu, 1), Z0 = lanes_of(mu, 2);
-        __m256d S = rules ? lanes_fmax(lanes_of(sc, 0), lanes_fmax(lanes_of(sc, 1), lanes_of(sc, 2)))
-                          : lanes_fmax(lanes_of(sc, 0), lanes_of(sc, 1));
-        int keep = rules ? cull_3d_lanes(r, rules, X0, Y0, Z0, S, px, py, pz, floor)
-                         : cull_2d_lanes(r, circle, X0, Y0, Z0, S, px, py, pz, floor);
+        v4d mean[3] = {v4d_gather(mu, 0), v4d_gather(mu, 1), v4d_gather(mu, 2)}, p[3], floor;
+        v4d s = rules ? v4d_max(v4d_gather(sc, 0), v4d_max(v4d_gather(sc, 1), v4d_gather(sc, 2)))
+                      : v4d_max(v4d_gather(sc, 0), v4d_gather(sc, 1)); /* larger_scale */
+        camera_point_v4d(r->m, mean, p);
+        int keep = v4l_bits(rules ? cull_3d_v4d(r, rules, p, s) : cull_2d_v4d(r, circle, p, s));
+        floor = rules ? centre_key_v4d(r, p[2]) : key_floor_2d_v4d(r, p[2], s); /* gaussian_key_floor */
+        v4f key_floor = __builtin_convertvector(floor, v4f);
         /* without a branch (whether a lane is kept is a coin toss): every
          * lane is written where the next kept one goes, at or below its own
          * slot, which the loop above has read */
-        for (int j = 0; j < CULL_LANES; j++)
-            *kept = keep_culled(cand, *kept, prim[j], v3(px[j], py[j], pz[j]), floor[j], ray) - !(keep >> j & 1);
+        for (int j = 0; j < 4; j++)
+            *kept = keep_culled(cand, *kept, prim[j], v3(p[0][j], p[1][j], p[2][j]), key_floor[j], ray) -
+                    !(keep >> j & 1);
     }
     return k;
 }
@@ -961,8 +894,8 @@ size_t gaussian_cull_candidates(const gaussian_model *m, const gaussian_ray *r, 
                                 unsigned ray)
 {
     size_t kept = 0, k = 0;
-#if RR_AVX2_CULL /* (3DGRT has no cull) */
-    if (gaussian_formation_of(m) != GAUSSIAN_FORMATION_3DGRT && __builtin_cpu_supports("avx2"))
+#if RR_LANES /* (3DGRT has no cull) */
+    if (gaussian_formation_of(m) != GAUSSIAN_FORMATION_3DGRT && rr_lanes_available())
         k = cull_in_lanes(m, r, cand, n, ray, &kept);
 #endif
     for (; k < n; k++) {
@@ -992,12 +925,10 @@ int gaussian_hits_after_cull4(const gaussian_model *m, const unsigned prim[4], g
                               const gaussian_ray *r, const vec3 p[4], gaussian_hit h[4])
 {
     int found = 0;
-#if RR_AVX2_CULL
-    if (m->kind == GAUSSIAN_2D && __builtin_cpu_supports("avx2")) {
-        __m256d row[3][3];
-        splat_2d_geometry g[4];
-        splat_rows_lanes(m, prim, r, p, row);
-        splat_2d_geometry_lanes(r, filter_circle(m), row, g);
+#if RR_LANES
+    if (m->kind == GAUSSIAN_2D && rr_lanes_available()) {
+        splat_2d_geometry_double g[4];
+        splat_2d_geometry_in_lanes(m, prim, r, p, g);
         for (int j = 0; j < 4; j++)
             found |= hit_2d_from_geometry(m, prim[j], order, r, p[j], &g[j], &h[j]) << j;
         return found;
@@ -1009,9 +940,9 @@ int gaussian_hits_after_cull4(const gaussian_model *m, const unsigned prim[4], g
 }
 
 #ifdef RR_DCHECKS
-/* The lanes whose splat_2d_geometry differs in any bit from the scalar
- * splat_2d_geometry_of's: the hits' floats hide a double's last bits. */
-static int geometry_differs(const splat_2d_geometry *a, const splat_2d_geometry *b)
+/* Whether a lane's splat_2d_geometry differs in any bit from one
+ * Gaussian's: the hits' floats hide a double's last bits. */
+static int geometry_differs(const splat_2d_geometry_double *a, const splat_2d_geometry_double *b)
 {
     if (memcmp(a->row, b->row, sizeof a->row) || memcmp(&a->cz, &b->cz, sizeof a->cz))
         return 1;
@@ -1026,16 +957,14 @@ int gaussian_2d_geometry_lanes_differ(const gaussian_model *m, const unsigned pr
                                       const vec3 p[4])
 {
     int differ = 0;
-#if RR_AVX2_CULL
-    if (m->kind != GAUSSIAN_2D || !__builtin_cpu_supports("avx2"))
+#if RR_LANES
+    if (m->kind != GAUSSIAN_2D || !rr_lanes_available())
         return 0;
-    __m256d row[3][3];
-    splat_2d_geometry four[4], one;
-    splat_rows_lanes(m, prim, r, p, row);
-    splat_2d_geometry_lanes(r, filter_circle(m), row, four);
+    splat_2d_geometry_double four[4], one;
+    splat_2d_geometry_in_lanes(m, prim, r, p, four);
     for (int j = 0; j < 4; j++) {
         gaussian_splat_rows(m, prim[j], r, p[j], one.row);
-        splat_2d_geometry_of(r, filter_circle(m), &one);
+        splat_2d_geometry_of_double(r, filter_circle(m), &one);
         differ |= geometry_differs(&one, &four[j]) << j;
     }
 #else

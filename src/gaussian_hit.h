@@ -1,6 +1,7 @@
 /* What one ray receives from a Gaussian-splat model (gaussian.h), and how
  * the hits are composited: the image formation each model defines,
- * evaluated per ray at the ray's own time (issue 24). Pure math: no
+ * evaluated per ray at the ray's own time (a moving camera or object is
+ * seen as it is at each ray's instant, not at one frame's). Pure math: no
  * Embree, no scene; accel.c gathers the hits, render.c composites them.
  *
  * 2D Gaussians (2DGS, Huang et al. 2024, Eqs. 8-10; the official
@@ -139,10 +140,10 @@ double gaussian_traversal_pad(const gaussian_model *m, double s, double depth_pe
  * the rest of its evaluation reads (rotation and opacity) and what
  * compositing it reads (its SH coefficients). A model of millions is far
  * larger than the caches: a hit's evaluation waited on those loads one
- * after another (issue 31's profile: most of gaussian_hit_2d's time), and
- * evaluating a traversal's candidates a few behind their prefetches
- * overlaps the waits; most candidates fail the cull, so only the ones
- * that pass it load the rest. No value changes. */
+ * after another (in a profile of 2DGS rendering, most of
+ * gaussian_hit_2d's time), and evaluating a traversal's candidates a few
+ * behind their prefetches overlaps the waits; most candidates fail the
+ * cull, so only the ones that pass it load the rest. No value changes. */
 void gaussian_prefetch_cull(const gaussian_model *m, size_t i);
 void gaussian_prefetch_hit(const gaussian_model *m, size_t i);
 void gaussian_prefetch_sh(const gaussian_model *m, size_t i);
@@ -156,8 +157,8 @@ int gaussian_cull(const gaussian_model *m, size_t i, const gaussian_ray *r, vec3
 int gaussian_hit_after_cull(const gaussian_model *m, size_t i, gaussian_order order, const gaussian_ray *r, vec3 p,
                             gaussian_hit *h);
 /* gaussian_hit_after_cull for four Gaussians of one ray (the same hits, bit
- * for bit; 2D geometry in AVX2 lanes where the CPU has them): bit j of the
- * result is set when prim[j] hits, h[j] its hit. */
+ * for bit; 2D geometry in AVX2 lanes where rr_lanes_available, lanes.h):
+ * bit j of the result is set when prim[j] hits, h[j] its hit. */
 int gaussian_hits_after_cull4(const gaussian_model *m, const unsigned prim[4], gaussian_order order,
                               const gaussian_ray *r, const vec3 p[4], gaussian_hit h[4]);
 #ifdef RR_DCHECKS
@@ -179,7 +180,6 @@ size_t gaussian_cull_candidates(const gaussian_model *m, const gaussian_ray *r, 
  * wait while those of smaller keys are composited (accel.c); -INFINITY
  * where no bound is known. */
 float gaussian_key_floor(const gaussian_model *m, size_t i, const gaussian_ray *r, vec3 p);
-int gaussian_hit_3d_raster(const gaussian_model *m, size_t i, const gaussian_ray *r, gaussian_hit *h);
 /* The 2DGS low-pass filter's centre (raster position) of Gaussian i seen
  * by r's camera; 0 where its circle's image is no ellipse (for tests). */
 int gaussian_filter_centre_2d(const gaussian_model *m, size_t i, const gaussian_ray *r, double *x, double *y);
@@ -222,8 +222,8 @@ aabb gaussian_bounds(const gaussian_model *m, size_t i, double view_reach);
 /* The same with the footprint's reach as it points: the screen footprint
  * lies across the view axis (a rasterizer's hit at the mean's view depth,
  * the 2DGS filter's at its point P's), so where the view axis is known to
- * within a cone the box is flatter along it (issue 31: a ball's box,
- * pierced obliquely, listed 2.5 candidates a kept one). */
+ * within a cone the box is flatter along it (a ball's box, pierced
+ * obliquely, listed 2.5 candidates a kept one). */
 aabb gaussian_view_bounds(const gaussian_model *m, size_t i, const gaussian_view_bound *v);
 
 /* Front-to-back compositing, a stretch of the ray at a time (hits are
