@@ -5,6 +5,7 @@
 #include <string.h>
 
 #include "atomicfile.h"
+#include "lanes.h"
 #include "ply.h"
 #include "splat.h"
 
@@ -121,7 +122,8 @@ static int allocate(gaussian_sink *s) { return gaussian_model_alloc(s->m, s->dec
 
 /* n floats on a cache line's boundary (NULL when out of memory): a
  * degree-3 Gaussian's SH (192 bytes) then fills three lines instead of
- * straddling four, and compositing reads a quarter fewer (issue 31). */
+ * straddling four, and compositing reads a quarter fewer (a profile of
+ * compositing waited on those lines). */
 static float *floats_on_lines(size_t n)
 {
     void *p = NULL;
@@ -437,54 +439,58 @@ static void sh_basis(int degree, double x, double y, double z, double *b)
     b[14] = C3[5] * z * (xx - yy), b[15] = C3[6] * x * (xx - 3 * yy);
 }
 
-#if defined(__x86_64__) && defined(__GNUC__)
-#include <immintrin.h>
-/* The three sums of gaussian_sh_color in one AVX2 register (the fourth
- * lane unused): per channel the same products added in the same order,
- * so the same doubles bit for bit (no FMA: -ffp-contract=off). */
-__attribute__((target("avx2"))) static vec3 sh_sums_lanes(const float *sh, const double *b, int n)
-{
-    __m128i three = _mm_set_epi32(0, -1, -1, -1); /* (the load reads no fourth float) */
-    __m256d sum = _mm256_setzero_pd();
-    for (int k = 0; k < n; k++)
-        sum = _mm256_add_pd(sum, _mm256_mul_pd(_mm256_set1_pd(b[k]), _mm256_cvtps_pd(_mm_maskload_ps(sh + 3 * k, three))));
-    double out[4];
-    _mm256_storeu_pd(out, sum);
-    return v3(out[0], out[1], out[2]);
-}
-#define RR_SH_LANES 1
-#else
-#define RR_SH_LANES 0
-#endif
+/* The three sums of gaussian_sh_color, per channel the products b[k] sh
+ * added in the order of k, over a lane type T: SH_SUMS_T sums of
+ * SH_CHANNELS_T channels each, three doubles (one channel each) or one v4d
+ * (the three channels; its fourth lane unused). The loop over the sums is
+ * unrolled so that they stay in registers: in memory (an array indexed in
+ * a loop) they cost compositing its time in a profile. */
+#define DEFINE_SH_SUMS(T)                                                                          \
+    LANES_TARGET_##T static vec3 sh_sums_##T(const float *sh, const double *b, int n)              \
+    {                                                                                              \
+        T sum[SH_SUMS_##T] = {0};                                                                  \
+        for (int k = 0; k < n; k++)                                                                \
+            _Pragma("GCC unroll 4") for (int c = 0; c < SH_SUMS_##T; c++)                          \
+                sum[c] = sum[c] + b[k] * sh_channels_##T(sh + 3 * k + c * SH_CHANNELS_##T);        \
+        return sh_sums_vec3_##T(sum);                                                              \
+    }
 
-static vec3 sh_sums_scalar(const float *sh, const double *b, int n)
+enum { SH_SUMS_double = 3, SH_CHANNELS_double = 1 };
+static inline double sh_channels_double(const float *sh) { return sh[0]; }
+static inline vec3 sh_sums_vec3_double(const double sum[3]) { return v3(sum[0], sum[1], sum[2]); }
+DEFINE_SH_SUMS(double)
+
+#if RR_LANES
+enum { SH_SUMS_v4d = 1, SH_CHANNELS_v4d = 3 };
+/* sh[0..2] in lanes 0..2 (the load reads no fourth float) */
+RR_LANES_TARGET static inline v4d sh_channels_v4d(const float *sh)
 {
-    double r = 0, g = 0, bl = 0;
-    for (int k = 0; k < n; k++) /* in registers: an array's sums went through memory (issue 31's profile) */
-        r += b[k] * sh[3 * k], g += b[k] * sh[3 * k + 1], bl += b[k] * sh[3 * k + 2];
-    return v3(r, g, bl);
+    return _mm256_cvtps_pd(_mm_maskload_ps(sh, _mm_set_epi32(0, -1, -1, -1)));
 }
+RR_LANES_TARGET static inline vec3 sh_sums_vec3_v4d(const v4d sum[1]) { return v3(sum[0][0], sum[0][1], sum[0][2]); }
+DEFINE_SH_SUMS(v4d)
+#endif
 
 static vec3 sh_sums(const float *sh, const double *b, int n)
 {
-#if RR_SH_LANES
-    if (__builtin_cpu_supports("avx2"))
-        return sh_sums_lanes(sh, b, n);
+#if RR_LANES
+    if (rr_lanes_available())
+        return sh_sums_v4d(sh, b, n);
 #endif
-    return sh_sums_scalar(sh, b, n);
+    return sh_sums_double(sh, b, n);
 }
 
 #ifdef RR_DCHECKS
 int gaussian_sh_lanes_differ(const float *sh, int degree, vec3 dir)
 {
-#if RR_SH_LANES
-    if (!__builtin_cpu_supports("avx2"))
+#if RR_LANES
+    if (!rr_lanes_available())
         return 0;
     vec3 d = v3_normalize(dir);
     double b[GAUSSIAN_MAX_SH_COEFFS];
     sh_basis(degree, d.x, d.y, d.z, b);
     int n = (degree + 1) * (degree + 1);
-    vec3 lanes = sh_sums_lanes(sh, b, n), scalar = sh_sums_scalar(sh, b, n);
+    vec3 lanes = sh_sums_v4d(sh, b, n), scalar = sh_sums_double(sh, b, n);
     return memcmp(&lanes, &scalar, sizeof lanes) != 0;
 #else
     (void)sh, (void)degree, (void)dir;
