@@ -701,7 +701,7 @@ TEST(gaussian_2d_filter_centre_lies_within_the_pole_bound_of_the_mean)
 
 /* 400,000 hits of one key (a degenerate model: every Gaussian at one
  * depth) are composited in (object, Gaussian) order, in O(n log n): the
- * insertion sort this replaced took 17 s for 256k (issue 32.5) and about
+ * insertion sort this replaced took 17 s for 256k and about
  * 40 s here; an alarm ends the test after 20 s, 100 times what it takes. */
 TEST(gaussian_equal_keys_sort_by_object_and_gaussian_in_n_log_n)
 {
