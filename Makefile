@@ -39,8 +39,8 @@ LDLIBS   := -ljson-c -lassimp -lembree3 -lOpenEXRCore -lxml2 -ldl -lpthread -lm
 # (src/preview.h): linked into refrender it cost every run 0.4 s of loading
 PREVIEW_LIBS := -lOpenImageIO -lOpenImageIO_Util
 
-LIB_SRCS := common lanes inputfile atomicfile kbuffer splat pointmodel ply gaussian gaussian_hit gaussian_blend camjson transforms shapes surfelize meshload curve trajectory animation animfile camera shutter sampler scene preview \
-            scene_xml scene_xml_util scene_xml_anim scene_xml_camera scene_params accel accel_build accel_collide exact exact_integrate shade film render exr output render_attrs cli
+LIB_SRCS := common lanes inputfile atomicfile kbuffer splat pointmodel ply gaussian gaussian_ply gaussian_dynamic gaussian_stg_ply gaussian_hit gaussian_blend camjson transforms shapes surfelize meshload rotation curve trajectory tum animation animfile camera shutter sampler scene preview \
+            scene_xml scene_xml_util scene_xml_anim scene_xml_camera scene_params accel accel_build accel_collide gaussian_integrator exact exact_integrate shade film render exr output render_attrs cli
 LIB_OBJS := $(LIB_SRCS:%=$(BUILD)/%.o)
 PREVIEW_SO := $(BUILD)/refrender-preview.so
 APP_OBJS := $(BUILD)/cmd/main.o $(BUILD)/cmd/gen_cmd.o $(BUILD)/cmd/surfel_output.o $(BUILD)/cmd/merge_cmd.o $(BUILD)/cmd/surfels_cmd.o \

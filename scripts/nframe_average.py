@@ -27,7 +27,7 @@ Float averages (without --procedure)
   units of the reference's noise (near 1: the difference is the reference's
   noise) and the share of pixels within 3 standard errors.
 
-Blur-synthesis procedures (--procedure, issue 30.3)
+Blur-synthesis procedures (--procedure)
   A procedure is the whole recipe by which a dataset turns sharp frames into
   its blurred image. Its parts:
     times   midpoint (k + 1/2)/N, endpoints k/(N-1) (both shutter ends
@@ -112,7 +112,7 @@ Blur-synthesis procedures (--procedure, issue 30.3)
   2.2)) on arrays, the very call synthe2poses.py:58,61 makes, so the emulation
   matches the source on any one machine. numpy's vectorized pow may differ from
   C's pow() by an ulp (numpy builds using AVX512 SVML), which truncation can turn
-  into a whole level; on the machine that made NFRAME_TABLE.md (numpy 1.24.2, no
+  into a whole level; on the machine that measured src/TRAJECTORIES.md's table (numpy 1.24.2, no
   AVX512) numpy's power equals C's pow for all 256 8-bit values and 1e5 points of
   [0, 1]. 3dgs-deblur's torch float32 pow on the GPU is not emulated bit for bit.
 

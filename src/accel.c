@@ -217,7 +217,7 @@ void accel_object_intersect(const struct RTCIntersectFunctionNArguments *args)
         return;
     float saved[6] = {rh->ray.org_x, rh->ray.org_y, rh->ray.org_z,
                       rh->ray.dir_x, rh->ray.dir_y, rh->ray.dir_z};
-    xform xf = a->is_static[obj] ? a->rest[obj] : animation_at(&a->sc->objects[obj].anim, c->time);
+    xform xf = accel_object_at(a, obj, c->time);
     c->xf[0] = &xf;
     c->obj = obj;
     /* from the double world ray, as trace_object_times does: the
@@ -522,15 +522,13 @@ void accel_ray_trace_times(const accel *a, const accel_ray *r, const double *tim
 
 /* ---- Gaussian objects ------------------------------------------------ */
 
-/* Per-traversal state of a gather: RTCIntersectContext first (Embree
- * hands this pointer to the callbacks). */
+/* Per-traversal state of a candidate query: RTCIntersectContext first
+ * (Embree hands this pointer to the callbacks). */
 typedef struct {
     struct RTCIntersectContext rtc;
-    const gaussian_ray *ray;
-    const scene_object *o;
-    unsigned obj;
-    gaussian_hits *out;
-} gather_context;
+    accel_candidate_fn *found;
+    void *user;
+} candidate_context;
 
 void accel_gaussian_bounds_cb(const struct RTCBoundsFunctionArguments *args)
 {
@@ -551,215 +549,47 @@ void accel_gaussian_bounds_cb(const struct RTCBoundsFunctionArguments *args)
     r->upper_z = nextafterf((float)b.hi.z, INFINITY);
 }
 
-static void evaluate(const gather_context *c, unsigned prim)
-{
-    gaussian_hit h;
-    if (gaussian_hit_any(&c->o->gaussians, prim, c->o->order, c->ray, &h)) {
-        h.obj = c->obj;
-        gaussian_hits_add(c->out, &h);
-    }
-}
-
-/* Every Gaussian the ray passes is listed (cull_candidates and
- * evaluate_window take them after the traversal): the ray is never
- * shortened, so the traversal finds them all. Listing first lets the cull
- * prefetch their loads a few ahead (a prefetch here too, a traversal
- * ahead, measured 1-9% slower: issue 31, src/cmd/BENCH.md). */
+/* Every Gaussian whose box the ray passes is handed on: the ray is never
+ * shortened, so the traversal finds them all. */
 void accel_gaussian_gather(const struct RTCIntersectFunctionNArguments *args)
 {
     if (!args->valid[0])
         return;
-    gather_context *c = (gather_context *)args->context;
-    gaussian_hits *h = c->out;
-    if (h->candidates_count == h->candidates_cap) {
-        size_t cap = h->candidates_cap ? 2 * h->candidates_cap : 1024;
-        gaussian_candidate *grown = realloc(h->candidates, cap * sizeof *grown);
-        if (!grown) { /* no room to list it: evaluated at once, as listed ones are */
-            evaluate(c, args->primID);
-            return;
-        }
-        h->candidates = grown, h->candidates_cap = cap;
-    }
-    h->candidates[h->candidates_count++].prim = args->primID;
+    candidate_context *c = (candidate_context *)args->context;
+    c->found(c->user, args->primID);
 }
 
-static void cull_candidates(const gather_context *c, size_t first, unsigned ray)
+void accel_gaussian_candidates(const accel *a, unsigned obj, vec3 org, vec3 dir, double t0, double t1,
+                               accel_candidate_fn *found, void *user)
 {
-    gaussian_hits *h = c->out;
-    size_t n = h->candidates_count - first;
-    if (n) /* (none listed yet: no array to offset) */
-        h->candidates_count =
-            first + gaussian_cull_candidates(&c->o->gaussians, c->ray, h->candidates + first, n, ray);
-}
-
-static void evaluate_kept(const accel *a, gaussian_hits *h, const gaussian_candidate *k)
-{
-    const gaussian_ray *r = &h->rays[k->ray];
-    const scene_object *o = &a->sc->objects[r->obj];
-    gaussian_hit hit;
-    if (gaussian_hit_after_cull(&o->gaussians, k->prim, o->order, r, k->p, &hit)) {
-        hit.obj = r->obj;
-        gaussian_hits_add(h, &hit);
-    }
-}
-
-/* evaluate_kept on the n candidates cand[order[k]] in turn, four at a time
- * where four in a row share a ray (gaussian_hits_after_cull4). */
-static void evaluate_chunk(const accel *a, gaussian_hits *h, const gaussian_candidate *cand, const uint64_t *order,
-                           size_t n)
-{
-    size_t k = 0;
-    while (k < n) {
-        const gaussian_candidate *c[4];
-        for (int j = 0; j < 4 && k + (size_t)j < n; j++)
-            c[j] = &cand[(uint32_t)order[k + (size_t)j]];
-        if (k + 4 > n || c[1]->ray != c[0]->ray || c[2]->ray != c[0]->ray || c[3]->ray != c[0]->ray) {
-            evaluate_kept(a, h, c[0]);
-            k++;
-            continue;
-        }
-        const gaussian_ray *r = &h->rays[c[0]->ray];
-        const scene_object *o = &a->sc->objects[r->obj];
-        unsigned prim[4] = {c[0]->prim, c[1]->prim, c[2]->prim, c[3]->prim};
-        vec3 p[4] = {c[0]->p, c[1]->p, c[2]->p, c[3]->p};
-        gaussian_hit hit[4];
-        int found = gaussian_hits_after_cull4(&o->gaussians, prim, o->order, r, p, hit);
-        for (int j = 0; j < 4; j++)
-            if (found >> j & 1) {
-                hit[j].obj = r->obj;
-                gaussian_hits_add(h, &hit[j]);
-            }
-        k += 4;
-    }
-}
-
-/* The window's kept candidates in order of their key floors, finished a
- * prefix at a time (`order`: room for 3n words): the evaluation stops
- * where the transmittance is spent, most often a third of the way in. */
-static void order_by_key_floor(const gaussian_candidate *cand, size_t n, uint64_t *order, rr_lazy_sort *sorted)
-{
-    for (size_t k = 0; k < n; k++)
-        order[k] = (uint64_t)rr_float_order_bits(cand[k].key_floor) << 32 | (uint64_t)k;
-    rr_lazy_sort_begin(sorted, order, order + n, n);
-}
-
-/* Evaluates the window's kept candidates EVALUATION_CHUNK at a time in
- * order of their key floors, compositing after each chunk the hits whose
- * keys lie below every floor left (and final_below: the later windows').
- * A ray that crosses a surface spends its transmittance a few thousandths
- * of a unit into it, and a window wide enough to reach the surface held
- * hits up to 0.05 beyond that (on make bench's sphere 58 of the 91 hits
- * a ray evaluated were never composited). The same hits are composited in
- * the same order: no hit is composited while a candidate whose key can be
- * smaller waits. */
-enum { EVALUATION_CHUNK = 16 };
-static void evaluate_window(const accel *a, gaussian_hits *h, gaussian_blend *blend, double final_below)
-{
-    size_t n = h->candidates_count;
-    const gaussian_candidate *cand = h->candidates;
-    if (n > EVALUATION_CHUNK && h->candidate_order_cap < 3 * n) {
-        uint64_t *grown = realloc(h->candidate_order, 3 * n * sizeof *grown);
-        if (grown)
-            h->candidate_order = grown, h->candidate_order_cap = 3 * n;
-    }
-    if (n <= EVALUATION_CHUNK || h->candidate_order_cap < 3 * n) { /* (no room to order them: all at once) */
-        for (size_t k = 0; k < n; k++)
-            evaluate_kept(a, h, &cand[k]);
-        gaussian_blend_hits(blend, h, a->models, final_below);
-        return;
-    }
-    rr_lazy_sort sorted;
-    order_by_key_floor(cand, n, h->candidate_order, &sorted);
-    for (size_t from = 0; from < n && !blend->done; from += EVALUATION_CHUNK) {
-        size_t to = n - from < EVALUATION_CHUNK ? n : from + EVALUATION_CHUNK;
-        rr_lazy_sort_through(&sorted, to < n ? to + 1 : n); /* the chunk, and the floor after it */
-        evaluate_chunk(a, h, cand, h->candidate_order + from, to - from);
-        double below = to < n ? cand[(uint32_t)h->candidate_order[to]].key_floor : INFINITY;
-        if (below > -INFINITY) /* (else nothing can be composited yet) */
-            gaussian_blend_hits(blend, h, a->models, rr_fmin(below, final_below));
-    }
+    candidate_context c;
+    rtcInitIntersectContext(&c.rtc);
+    c.found = found, c.user = user;
+    struct RTCRayHit rh;
+    /* Embree's float ray holds all of [t0, t1] */
+    init_rayhit1(&rh, org, dir, nextafterf((float)t1, INFINITY));
+    rh.ray.tnear = fmaxf(0.0f, nextafterf((float)t0, -INFINITY));
+    rtcIntersect1(a->object_scenes[obj], &c.rtc, &rh);
 }
 
 int accel_has_gaussians(const accel *a) { return a->ngaussian > 0; }
 
+const unsigned *accel_gaussian_objects(const accel *a, unsigned *count)
+{
+    *count = a->ngaussian;
+    return a->gaussian_ids;
+}
+
 const gaussian_model *const *accel_gaussian_models(const accel *a) { return a->models; }
 
-/* The ray in each Gaussian object's space that it meets, with the stretch
- * [enter, exit] where it can (its swept sphere); returns how many. */
-static size_t gaussian_rays(const accel *a, const camera_view *view, double x, double y, vec3 org, vec3 dir,
-                            double time, gaussian_hits *scratch)
+double accel_gaussian_largest_scale(const accel *a, unsigned obj) { return a->footprint[obj].largest; }
+
+int accel_ray_meets_object(const accel *a, unsigned obj, vec3 org, vec3 dir)
 {
-    if (scratch->rays_cap < a->ngaussian) {
-        gaussian_ray *grown = realloc(scratch->rays, a->ngaussian * sizeof *grown);
-        if (!grown)
-            return 0;
-        scratch->rays = grown, scratch->rays_cap = a->ngaussian;
-    }
-    size_t n = 0;
-    for (unsigned k = 0; k < a->ngaussian; k++) {
-        unsigned obj = a->gaussian_ids[k];
-        if (!ray_meets_swept(a, obj, org, dir))
-            continue;
-        const scene_object *o = &a->sc->objects[obj];
-        xform xf = a->is_static[obj] ? a->rest[obj] : animation_at(&o->anim, time);
-        gaussian_ray *r = &scratch->rays[n++];
-        gaussian_ray_init(r, view, &xf, x, y, org, dir);
-        const sphere_bound *b = &a->swept_sphere[obj];
-        double along = v3_dot(v3_sub(b->center, org), dir), radius = sqrt(b->radius2);
-        r->lead = gaussian_key_lead(&o->gaussians, o->order, a->footprint[obj].largest, r->depth_per_t);
-        r->pad = gaussian_traversal_pad(&o->gaussians, a->footprint[obj].largest, r->depth_per_t);
-        /* a 2D hit can lie the pad beyond where its box (inside the sphere) holds the ray */
-        r->obj = obj, r->enter = fmax(0.0, along - radius - r->pad), r->exit = along + radius + r->pad;
-    }
-    return n;
+    return ray_meets_swept(a, obj, org, dir);
 }
 
-/* Lists and culls (cull_candidates) the Gaussians of object ray `ray`
- * whose boxes its stretch [t0, t1) meets. The traversal's stretch is wider
- * by the pad: a hit's box holds a point of the ray within that of the hit
- * (gaussian_traversal_pad). */
-static void list_window(const accel *a, gaussian_hits *out, unsigned ray, double t0, double t1)
+xform accel_object_at(const accel *a, unsigned obj, double time)
 {
-    gaussian_ray *r = &out->rays[ray];
-    gather_context c;
-    rtcInitIntersectContext(&c.rtc);
-    r->tmin = t0, r->tmax = t1;
-    c.ray = r, c.o = &a->sc->objects[r->obj], c.obj = r->obj, c.out = out;
-    struct RTCRayHit rh;
-    double pad = r->pad + 1e-6 * t1;
-    init_rayhit1(&rh, r->org, r->dir, nextafterf((float)(t1 + pad), INFINITY));
-    rh.ray.tnear = fmaxf(0.0f, nextafterf((float)(t0 - pad), -INFINITY));
-    size_t first = out->candidates_count;
-    rtcIntersect1(a->object_scenes[r->obj], &c.rtc, &rh);
-    cull_candidates(&c, first, ray);
-}
-
-/* Windows start at 1/64 of the stretch the objects span and double while
- * they hold few hits: a few traversals for a ray through empty space, and
- * no evaluation far behind the hits that spend the transmittance. */
-enum { WINDOW_FRACTION = 64, WINDOW_FEW_HITS = 16 };
-
-void accel_blend_gaussians(const accel *a, const camera_view *view, double x, double y, vec3 org, vec3 dir,
-                           double time, double tmax, gaussian_hits *scratch, gaussian_blend *blend)
-{
-    size_t n = gaussian_rays(a, view, x, y, org, dir, time, scratch);
-    double start = INFINITY, end = 0, lead = 0;
-    for (size_t k = 0; k < n; k++) {
-        start = fmin(start, scratch->rays[k].enter), end = fmax(end, scratch->rays[k].exit);
-        lead = fmax(lead, scratch->rays[k].lead);
-    }
-    end = fmin(end, tmax);
-    double width = (end - start) / WINDOW_FRACTION;
-    for (double t0 = start; t0 < end && !blend->done;) {
-        double t1 = end - t0 <= width ? end : t0 + width;
-        size_t before = scratch->added;
-        scratch->candidates_count = 0;
-        for (size_t k = 0; k < n; k++)
-            if (scratch->rays[k].enter < t1 && scratch->rays[k].exit >= t0)
-                list_window(a, scratch, (unsigned)k, t0, t1);
-        evaluate_window(a, scratch, blend, t1 < end ? t1 - lead : INFINITY);
-        if (scratch->added - before < WINDOW_FEW_HITS)
-            width *= 2;
-        t0 = t1;
-    }
+    return a->is_static[obj] ? a->rest[obj] : animation_at(&a->sc->objects[obj].anim, time);
 }

@@ -15,7 +15,7 @@
 #ifndef RR_ACCEL_H
 #define RR_ACCEL_H
 
-#include "gaussian_hit.h"
+#include "gaussian.h"
 #include "kbuffer.h"
 #include "scene.h"
 
@@ -62,23 +62,40 @@ void accel_ray_begin(const accel *a, vec3 org, vec3 dir, accel_ray *r);
 void accel_ray_trace_times(const accel *a, const accel_ray *r, const double *times, int n, kbuffer *kbs,
                            const kbuffer **result);
 
-/* ---- Gaussian-splat objects (gaussian_hit.h) ---- */
+/* ---- Gaussian-splat objects (gaussian.h) ---- */
 
-/* Whether the scene has Gaussian objects (their hits are gathered apart
- * from the epsilon-blended surfaces and composited over them). */
+/* Whether the scene has Gaussian objects (they are not in the top levels:
+ * their candidates are asked for object by object, and the Gaussian
+ * integrator, render side, evaluates and composites them). */
 int accel_has_gaussians(const accel *a);
 
-/* Composites into *blend, front to back, every Gaussian hit of the world
- * ray org + t dir (dir unit) at `time` through raster (x, y) of the
- * camera `view` (the camera at that time) nearer than tmax (the opaque
- * surface behind, or infinity). The ray is gathered in windows of
- * distance, so that once the transmittance is spent nothing behind is
- * evaluated. */
-void accel_blend_gaussians(const accel *a, const camera_view *view, double x, double y, vec3 org, vec3 dir,
-                           double time, double tmax, gaussian_hits *scratch, gaussian_blend *blend);
+/* The Gaussian objects, ascending; *count of them. */
+const unsigned *accel_gaussian_objects(const accel *a, unsigned *count);
+
+/* Calls found(user, prim) for every Gaussian prim of object obj whose box
+ * the object-space ray org + t dir meets at some t in [t0, t1] (the
+ * stretch rounded outward to Embree's floats), in the order of Embree's
+ * traversal of obj's BVH: the same Gaussians in the same order for the
+ * same ray. dir is the world's unit direction moved into object space, so
+ * t is world distance. */
+typedef void accel_candidate_fn(void *user, unsigned prim);
+void accel_gaussian_candidates(const accel *a, unsigned obj, vec3 org, vec3 dir, double t0, double t1,
+                               accel_candidate_fn *found, void *user);
 
 /* models[obj]: object obj's Gaussian model, NULL for other objects. */
 const gaussian_model *const *accel_gaussian_models(const accel *a);
+
+/* The largest scale of Gaussian object obj's Gaussians over the current
+ * shutter (world units): the one its boxes were built with. */
+double accel_gaussian_largest_scale(const accel *a, unsigned obj);
+
+/* Does the world ray org + t dir (t >= 0) pass within the object's swept
+ * box and swept sphere (the tests the top levels make)? */
+int accel_ray_meets_object(const accel *a, unsigned obj, vec3 org, vec3 dir);
+
+/* The transform accel traces object obj with at scene time `time` (a
+ * static object's: the one at the shutter's open, at every time). */
+xform accel_object_at(const accel *a, unsigned obj, double time);
 
 /* ---- for exact time integration (exact.h) ---- */
 

@@ -73,8 +73,8 @@ static void embree_error(void *user, enum RTCError code, const char *str)
         snprintf(e->msg, sizeof e->msg, "Embree error %d: %s", (int)code, str ? str : "");
         return;
     }
-    /* name what was being built: out of memory on a 10M-Gaussian model
-     * named nothing (issue 32.7) */
+    /* name what was being built: an out-of-memory message on a 10M-Gaussian
+     * model must say which object and model ran out */
     const scene_object *o = &a->sc->objects[obj];
     size_t count = o->kind == OBJECT_GAUSSIANS ? o->gaussians.count : o->kind == OBJECT_POINTS ? o->model.count : 1;
     snprintf(e->msg, sizeof e->msg, "Embree error %d: %s (building the BVH of object '%s', %zu primitives%s%.200s)",

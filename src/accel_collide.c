@@ -19,24 +19,18 @@ static void query_bounds_cb(const struct RTCBoundsFunctionArguments *args)
 {
     const aabb *b = &((const aabb *)args->geometryUserPtr)[args->primID];
     struct RTCBounds *r = args->bounds_o;
-    /* rounded outwards: a float box never cuts into the double one */
-    r->lower_x = nextafterf((float)b->lo.x, -INFINITY), r->lower_y = nextafterf((float)b->lo.y, -INFINITY);
-    r->lower_z = nextafterf((float)b->lo.z, -INFINITY);
-    r->upper_x = nextafterf((float)b->hi.x, INFINITY), r->upper_y = nextafterf((float)b->hi.y, INFINITY);
-    r->upper_z = nextafterf((float)b->hi.z, INFINITY);
+    float lo[3], hi[3];
+    aabb_round_out(*b, lo, hi); /* a float box never cuts into the double one */
+    r->lower_x = lo[0], r->lower_y = lo[1], r->lower_z = lo[2];
+    r->upper_x = hi[0], r->upper_y = hi[1], r->upper_z = hi[2];
 }
 
 static void query_intersect_cb(const struct RTCIntersectFunctionNArguments *args) { (void)args; }
 
 static int prims_push(accel_prims *p, unsigned id)
 {
-    if (p->count == p->cap) {
-        size_t cap = p->cap ? 2 * p->cap : 256;
-        unsigned *ids = realloc(p->ids, cap * sizeof *ids);
-        if (!ids)
-            return -1;
-        p->ids = ids, p->cap = cap;
-    }
+    if (rr_grow((void **)&p->ids, &p->cap, p->count + 1, sizeof *p->ids))
+        return -1;
     p->ids[p->count++] = id;
     return 0;
 }

@@ -6,6 +6,7 @@
 #include <embree3/rtcore.h>
 
 #include "accel.h"
+#include "gaussian_hit.h"
 
 /* A top-level scene over a subset of the objects. Objects that do not move
  * during the shutter (static) and those that do (moving) get one each, so a

@@ -2,6 +2,8 @@
 
 #include <stdlib.h>
 
+#include "trajectory.h"
+
 double keyframes_clamp_flat(int ch) { return ch <= CH_TZ ? 0.05 * 0.01 : 0.05; }
 
 void animation_init_static(animation *a)
@@ -61,33 +63,6 @@ int animation_turns_continuously(const animation *a)
     return 1;
 }
 
-void rotation_matrix(vec3 k, double angle, double r[3][3])
-{
-    double c = cos(angle), s = sin(angle), C = 1 - c;
-    r[0][0] = c + k.x * k.x * C;
-    r[0][1] = k.x * k.y * C - k.z * s;
-    r[0][2] = k.x * k.z * C + k.y * s;
-    r[1][0] = k.y * k.x * C + k.z * s;
-    r[1][1] = c + k.y * k.y * C;
-    r[1][2] = k.y * k.z * C - k.x * s;
-    r[2][0] = k.z * k.x * C - k.y * s;
-    r[2][1] = k.z * k.y * C + k.x * s;
-    r[2][2] = c + k.z * k.z * C;
-}
-
-/* The axis and angle of the rotation r: 0 when r is (numerically) none. */
-static double rotation_axis_angle(const double r[3][3], vec3 *axis)
-{
-    vec3 s = v3(0.5 * (r[2][1] - r[1][2]), 0.5 * (r[0][2] - r[2][0]), 0.5 * (r[1][0] - r[0][1])); /* axis sin */
-    double c = 0.5 * (r[0][0] + r[1][1] + r[2][2] - 1.0), sn = v3_len(s);
-    if (!(sn > 1e-15)) {
-        *axis = v3(0, 0, 1);
-        return c > 0 ? 0.0 : M_PI; /* none, or half a turn (refused by the caller) */
-    }
-    *axis = v3_scale(s, 1.0 / sn);
-    return atan2(sn, c);
-}
-
 int animation_between_poses(vec3 pa, const double ra[3][3], vec3 pb, const double rb[3][3], double t0, double t1,
                             animation *out, vec3 *rest_position, double rest_rotation[3][3], rr_error *err)
 {
@@ -122,32 +97,6 @@ int animation_between_poses(vec3 pa, const double ra[3][3], vec3 pb, const doubl
         for (int j = 0; j < 3; j++)
             rest_rotation[i][j] = back[i][0] * ra[0][j] + back[i][1] * ra[1][j] + back[i][2] * ra[2][j];
     return 0;
-}
-
-vec3 xform_vector(const xform *x, vec3 v)
-{
-    return v3(x->r[0][0] * v.x + x->r[0][1] * v.y + x->r[0][2] * v.z,
-              x->r[1][0] * v.x + x->r[1][1] * v.y + x->r[1][2] * v.z,
-              x->r[2][0] * v.x + x->r[2][1] * v.y + x->r[2][2] * v.z);
-}
-
-vec3 xform_point(const xform *x, vec3 p) { return v3_add(xform_vector(x, p), x->t); }
-
-vec3 xform_inverse_vector(const xform *x, vec3 v)
-{
-    return v3(x->ri[0][0] * v.x + x->ri[0][1] * v.y + x->ri[0][2] * v.z,
-              x->ri[1][0] * v.x + x->ri[1][1] * v.y + x->ri[1][2] * v.z,
-              x->ri[2][0] * v.x + x->ri[2][1] * v.y + x->ri[2][2] * v.z);
-}
-
-vec3 xform_inverse_point(const xform *x, vec3 p) { return xform_inverse_vector(x, v3_sub(p, x->t)); }
-
-vec3 xform_normal(const xform *x, vec3 n)
-{
-    vec3 w = v3(x->ri[0][0] * n.x + x->ri[1][0] * n.y + x->ri[2][0] * n.z,
-                x->ri[0][1] * n.x + x->ri[1][1] * n.y + x->ri[2][1] * n.z,
-                x->ri[0][2] * n.x + x->ri[1][2] * n.y + x->ri[2][2] * n.z);
-    return x->scaled ? v3_normalize(w) : w;
 }
 
 /* ---- linear and rotation -------------------------------------------------- */
@@ -228,7 +177,7 @@ static xform path_at(const animation *a, double t)
     vec3 p;
     double q[4];
     trajectory_pose(a->path, t, &p, q);
-    trajectory_quat_matrix(q, x.r);
+    quat_matrix(q, x.r);
     for (int i = 0; i < 3; i++)
         for (int j = 0; j < 3; j++)
             x.ri[i][j] = x.r[j][i];
@@ -244,7 +193,7 @@ xform animation_pose_at(const animation *a, double t, double q[4])
     if (a->path) /* the interpolated quaternion itself, not one recovered from x.r */
         trajectory_pose(a->path, t, &p, q);
     else
-        trajectory_matrix_quat(x.r, q);
+        quat_of_matrix(x.r, q);
     return x;
 }
 

@@ -16,14 +16,9 @@
 
 #include "common.h"
 #include "curve.h"
-#include "trajectory.h"
+#include "rotation.h"
 
-typedef struct {
-    double r[3][3];  /* linear part (rotation times scale), row-major */
-    double ri[3][3]; /* its inverse */
-    vec3 t;          /* translation */
-    int scaled;      /* 0: r is a rotation (ri = r^T) */
-} xform;
+struct trajectory; /* trajectory.h: an animation only holds one */
 
 enum { CH_TX, CH_TY, CH_TZ, CH_RX, CH_RY, CH_RZ, CH_SX, CH_SY, CH_SZ, CH_COUNT };
 
@@ -48,8 +43,8 @@ typedef struct {
     vec3 axis, center;    /* rotation axis (unit) through center */
     double degrees_per_time;
     keyframes *keys;      /* keyframed (owned) instead of linear/rotation */
-    trajectory *path;     /* a camera's trajectory file (owned) instead of the above:
-                           * p_world = R(t) (p_rest + offset) + p(t), the pose's OpenCV axes */
+    struct trajectory *path; /* a camera's trajectory file (owned) instead of the above:
+                              * p_world = R(t) (p_rest + offset) + p(t), the pose's OpenCV axes */
 } animation;
 
 void animation_init_static(animation *a);
@@ -80,18 +75,6 @@ xform animation_at(const animation *a, double t);
  * quaternion (w, x, y, z): a trajectory's own, exactly as interpolated
  * (its knots come back bit for bit); other motions' from their matrix. */
 xform animation_pose_at(const animation *a, double t, double q[4]);
-
-vec3 xform_point(const xform *x, vec3 p);
-vec3 xform_vector(const xform *x, vec3 v);
-/* Exact inverse: ri (p - T) and ri v. */
-vec3 xform_inverse_point(const xform *x, vec3 p);
-vec3 xform_inverse_vector(const xform *x, vec3 v);
-/* An object-space normal in world space (inverse transpose; unit length
- * kept for rotations, renormalised under scale). */
-vec3 xform_normal(const xform *x, vec3 n);
-
-/* Rotation matrix for angle (radians) about a unit axis (Rodrigues). */
-void rotation_matrix(vec3 axis, double angle, double r[3][3]);
 
 /* The times the bounds below evaluate the motion at over [t0, t1]: a grid
  * and every key time (repeated through cycling infinities, where steps

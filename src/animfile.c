@@ -430,7 +430,8 @@ static int parse_anim(lexer *lx, keyframes *kf, char w[][ANIM_WORD], int n, cons
 /* The distinct nodes that 'anim' statements name (the 4th word: "anim
  * translate.translateX translateX joint2 0 1 0;"). */
 typedef struct {
-    int count, cap;
+    int count;
+    size_t cap;
     char **names; /* grows: a rig of any size (256 nodes were once the most recorded) */
     int failed;   /* out of memory */
 } node_list;
@@ -444,14 +445,9 @@ static void node_list_free(node_list *nodes)
 
 static void node_list_add(node_list *nodes, const char *name)
 {
-    if (nodes->count == nodes->cap) {
-        int cap = nodes->cap ? 2 * nodes->cap : 16;
-        char **grown = realloc(nodes->names, (size_t)cap * sizeof *grown);
-        if (!grown) {
-            nodes->failed = 1;
-            return;
-        }
-        nodes->names = grown, nodes->cap = cap;
+    if (rr_grow((void **)&nodes->names, &nodes->cap, (size_t)nodes->count + 1, sizeof *nodes->names)) {
+        nodes->failed = 1;
+        return;
     }
     if (!(nodes->names[nodes->count] = strdup(name)))
         nodes->failed = 1;

@@ -101,9 +101,9 @@ static int read_size(json_object *entry, const char *field, int *out)
 
 /* The camera looks along the rotation's third column from the position,
  * and a scene takes it as lookat = position + that column (scene_xml.c):
- * far out (1e16) the sum rounds back to the position (issue 32.8: blamed on
- * a lookat the file does not have). The direction must survive the sum
- * within 1e-6, which holds up to about 1e9 from the origin. */
+ * far out (1e16) the sum rounds back to the position, and the error would
+ * then blame a lookat the file does not have. The direction must survive
+ * the sum within 1e-6, which holds up to about 1e9 from the origin. */
 static int direction_survives(const double pos[3], const double r[3][3])
 {
     for (int k = 0; k < 3; k++) {
@@ -194,7 +194,7 @@ static long find_entry(const char *name, json_object *root, const char *img_name
             return rr_fail(err, "%s: camera %zu is not an object", name, i), -2;
         if (!json_object_object_get_ex(e, "img_name", &v) || !json_object_is_type(v, json_type_string))
             return rr_fail(err, "%s: camera %zu: field 'img_name' is missing or not a string", name, i), -2;
-        /* by the JSON string's length: "A\u0000x" is not "A" (issue 32.8) */
+        /* by the JSON string's length: "A\u0000x" is not "A" (strcmp would stop at the NUL) */
         if ((size_t)json_object_get_string_len(v) != strlen(img_name) ||
             memcmp(json_object_get_string(v), img_name, strlen(img_name)))
             continue;

@@ -22,8 +22,8 @@ typedef struct {
 } camjson_camera;
 
 /* A parsed cameras.json: parsed once, however many of its cameras a
- * scene names (a camera and two poses took three parses of a 236 MiB
- * file, issue 32). */
+ * scene names (one parse per use would read a 236 MiB file three times for
+ * a camera and two poses). */
 struct json_object;
 typedef struct {
     struct json_object *root; /* the array of cameras */

@@ -143,6 +143,25 @@ int cmp_double(const void *a, const void *b)
     return (x > y) - (x < y);
 }
 
+int rr_grow(void **p, size_t *cap, size_t need, size_t elem)
+{
+    if (need <= *cap)
+        return 0;
+    size_t n = *cap ? *cap : 64;
+    while (n < need) {
+        if (n > SIZE_MAX / 2)
+            return -1;
+        n *= 2;
+    }
+    if (elem && n > SIZE_MAX / elem)
+        return -1;
+    void *grown = realloc(*p, n * elem);
+    if (!grown)
+        return -1;
+    *p = grown, *cap = n;
+    return 0;
+}
+
 /* A total order on the values' bits: by value, -0 before +0. */
 static int lex_less(const double *a, const double *b, int n)
 {

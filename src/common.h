@@ -1,5 +1,6 @@
 /* Shared small types: error values and double-precision 3-vectors.
- * Errors are values (STYLE.md): a function that can fail returns 0 on
+ * Errors are values (they travel up to the command, which alone decides
+ * to print and exit): a function that can fail returns 0 on
  * success or -1 after filling an rr_error with "file:line: reason". */
 #ifndef RR_COMMON_H
 #define RR_COMMON_H
@@ -68,12 +69,19 @@ void rr_check_failed_values(const char *file, int line, const char *cond, long l
 /* The process's interrupt flag, set by a command's SIGINT/SIGTERM handler
  * (main.c), for loaders it cannot be handed to: the PLY reader is reached
  * through the scene loader, and a large model's load must stop on a signal
- * (issue 32.10). Until a flag is watched, nothing is ever interrupted. */
+ * (reading gigabytes takes long, and an interrupt must not wait for it).
+ * Until a flag is watched, nothing is ever interrupted. */
 void rr_interrupt_watch(volatile sig_atomic_t *flag);
 int rr_interrupted(void);
 
 /* qsort comparator for doubles, ascending. */
 int cmp_double(const void *a, const void *b);
+
+/* Room for at least need elements of elem bytes in the malloc'ed (or NULL)
+ * array *p of *cap elements, its contents kept: the capacity doubles from
+ * 64, so n appends cost O(n) copying in all. 0, or -1 when out of memory or
+ * the size overflows (then *p and *cap are unchanged, *p still valid). */
+int rr_grow(void **p, size_t *cap, size_t need, size_t elem);
 
 /* A float's bits as an unsigned that sorts as the float does (a sort
  * key's upper half, rr_sort_u64). */
@@ -110,14 +118,14 @@ typedef struct {
 void rr_lazy_sort_begin(rr_lazy_sort *s, uint64_t *a, uint64_t *scratch, size_t n);
 void rr_lazy_sort_through(rr_lazy_sort *s, size_t k);
 
-/* Round trips through a lossy conversion pair (issue 30: a value read from
- * a file, kept in another form and written back, e.g. a rotation matrix
- * kept as a quaternion) are made exact by keeping a fixed representative:
- * f (the write-then-read map on n <= 4 doubles) is a function on a finite
- * set, so its orbit from v ends in a cycle; v becomes the cycle's smallest
- * member (lexicographically), which f's orbit from any member of the cycle
- * finds again, so read(write(v)) == v bit for bit. Returns 0, or -1 (v
- * unchanged) if no cycle shows within 512 steps (none did in a million
+/* Round trips through a lossy conversion pair (a value read from a file, kept
+ * in another form and written back, e.g. a rotation matrix kept as a
+ * quaternion, must write back as the file had it) are made exact by keeping a
+ * fixed representative: f (the write-then-read map on n <= 4 doubles) is a
+ * function on a finite set, so its orbit from v ends in a cycle; v becomes the
+ * cycle's smallest member (lexicographically), which f's orbit from any member
+ * of the cycle finds again, so read(write(v)) == v bit for bit. Returns 0, or
+ * -1 (v unchanged) if no cycle shows within 512 steps (none did in a million
  * random rotations through transforms.c's matrices). */
 int rr_round_trip_representative(double *v, int n, void (*f)(const double *in, double *out, void *ctx), void *ctx);
 
@@ -195,6 +203,19 @@ static inline void aabb_add_box(aabb *b, aabb o)
 {
     aabb_add_point(b, o.lo);
     aabb_add_point(b, o.hi);
+}
+
+/* x rounded outward to a float, for bounds kept in floats (Embree's boxes):
+ * the cast rounds to the nearest float, which may lie on either side of x,
+ * so one more step out makes the result strictly below (above) x, and a
+ * float box so made always holds the double one. */
+static inline float rr_float_below(double x) { return nextafterf((float)x, -INFINITY); }
+static inline float rr_float_above(double x) { return nextafterf((float)x, INFINITY); }
+/* b's corners rounded outward to floats (rr_float_below, rr_float_above). */
+static inline void aabb_round_out(aabb b, float lo[3], float hi[3])
+{
+    lo[0] = rr_float_below(b.lo.x), lo[1] = rr_float_below(b.lo.y), lo[2] = rr_float_below(b.lo.z);
+    hi[0] = rr_float_above(b.hi.x), hi[1] = rr_float_above(b.hi.y), hi[2] = rr_float_above(b.hi.z);
 }
 
 #endif

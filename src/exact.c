@@ -264,23 +264,9 @@ sphere_crossing exact_sphere_crossing(const scene_object *o, const object_ray *r
 
 /* ---- step 1: candidates --------------------------------------------------- */
 
-static int grow(void **buf, size_t *cap, size_t need, size_t elem)
-{
-    if (need <= *cap)
-        return 0;
-    size_t n = *cap ? *cap : 64;
-    while (n < need)
-        n *= 2;
-    void *b = realloc(*buf, n * elem);
-    if (!b)
-        return -1;
-    *buf = b, *cap = n;
-    return 0;
-}
-
 static int push_key(exact_scratch *scr, unsigned obj, unsigned prim)
 {
-    if (grow((void **)&scr->keys, &scr->keys_cap, scr->nkeys + 1, sizeof *scr->keys))
+    if (rr_grow((void **)&scr->keys, &scr->keys_cap, scr->nkeys + 1, sizeof *scr->keys))
         return -1;
     scr->keys[scr->nkeys++] = (uint64_t)obj << 32 | prim;
     return 0;
@@ -348,7 +334,7 @@ static int gather_moving(const sample_ctx *c, unsigned obj)
     if (op->time_slices == 0)
         return gather_all(c, obj);
     size_t nboxes = (size_t)op->time_slices * BOX_DEPTH_SLICES;
-    if (grow((void **)&scr->boxes, &scr->boxes_cap, nboxes, sizeof *scr->boxes))
+    if (rr_grow((void **)&scr->boxes, &scr->boxes_cap, nboxes, sizeof *scr->boxes))
         return EXACT_NO_MEMORY;
     unsigned n = candidate_boxes(c, obj, scr->boxes);
     RR_DCHECK_LE(n, scr->boxes_cap);
@@ -408,7 +394,7 @@ static void describe(const exact_plan *p, uint64_t key, cand_info *info)
 static int describe_candidates(const sample_ctx *c)
 {
     exact_scratch *scr = c->scr;
-    if (grow((void **)&scr->info, &scr->info_cap, scr->nkeys + 1, sizeof *scr->info))
+    if (rr_grow((void **)&scr->info, &scr->info_cap, scr->nkeys + 1, sizeof *scr->info))
         return -1;
     for (size_t i = 0; i < scr->nkeys; i++)
         describe(c->p, scr->keys[i], &scr->info[i]);
@@ -449,7 +435,7 @@ void exact_candidate(const exact_scratch *scr, int i, unsigned *obj, unsigned *p
 
 int exact_context(const exact_plan *p, exact_scratch *scr, double x, double y, exact_stats *st, sample_ctx *c)
 {
-    if (grow((void **)&scr->ray_cache, &scr->ray_cache_cap, (size_t)p->sc->nobjects + 1, sizeof *scr->ray_cache))
+    if (rr_grow((void **)&scr->ray_cache, &scr->ray_cache_cap, (size_t)p->sc->nobjects + 1, sizeof *scr->ray_cache))
         return -1;
     memset(scr->ray_cache, 0, ((size_t)p->sc->nobjects + 1) * sizeof *scr->ray_cache);
     scr->evaluations = 0, scr->status = EXACT_OK;
@@ -634,8 +620,8 @@ static int emit_piece(exact_scratch *scr, double a, double b, const int *set, in
         last->b = b;
         return 0;
     }
-    if (grow((void **)&scr->leaves, &scr->leaves_cap, scr->npieces + 1, sizeof *scr->leaves) ||
-        grow((void **)&scr->sets, &scr->sets_cap, scr->nsets + (size_t)n, sizeof *scr->sets))
+    if (rr_grow((void **)&scr->leaves, &scr->leaves_cap, scr->npieces + 1, sizeof *scr->leaves) ||
+        rr_grow((void **)&scr->sets, &scr->sets_cap, scr->nsets + (size_t)n, sizeof *scr->sets))
         return -1;
     if (n > 0) /* sets may still be unallocated (NULL) for empty sets */
         memcpy(scr->sets + scr->nsets, set, (size_t)n * sizeof *set);
@@ -724,10 +710,10 @@ static int classify(const sample_ctx *c, double a, double b, int n, size_t top, 
 static int reserve_stack(exact_scratch *scr)
 {
     size_t need = (size_t)(EXACT_MAX_DEPTH + 2) * (scr->nkeys + 1) * 2;
-    return grow((void **)&scr->lists, &scr->lists_cap, need, sizeof *scr->lists) ||
-           grow((void **)&scr->evals, &scr->evals_cap, need, sizeof *scr->evals) ||
-           grow((void **)&scr->inherit, &scr->inherit_cap, need, sizeof *scr->inherit) ||
-           grow((void **)&scr->sorted, &scr->sorted_cap, scr->nkeys + 1, sizeof *scr->sorted);
+    return rr_grow((void **)&scr->lists, &scr->lists_cap, need, sizeof *scr->lists) ||
+           rr_grow((void **)&scr->evals, &scr->evals_cap, need, sizeof *scr->evals) ||
+           rr_grow((void **)&scr->inherit, &scr->inherit_cap, need, sizeof *scr->inherit) ||
+           rr_grow((void **)&scr->sorted, &scr->sorted_cap, scr->nkeys + 1, sizeof *scr->sorted);
 }
 
 int exact_partition(const sample_ctx *c)

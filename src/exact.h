@@ -4,12 +4,13 @@
  *
  * The thesis estimates the time integral of sec. 3.1 (eq. 3.3) by sampling
  * (sec. 4.5); here it is computed the way Gribel et al. resolve visibility
- * over time (seeds/gribel-semi-analytical-visibility.txt), but exactly and
- * for epsilon-blended splats:
+ * over time ("High-Quality Spatio-Temporal Rendering using Semi-Analytical
+ * Visibility", SIGGRAPH 2011, ACM TOG 30(4)), but exactly and for
+ * epsilon-blended splats:
  *  1. candidates: every splat (or sphere) the moving ray may meet during the
  *     shutter, from Embree's BVH of each object (accel_collide_boxes) with
  *     boxes around time slices of the object-space ray, padded by a bound on
- *     how fast that ray moves (animation_speed_bound);
+ *     how fast that ray moves (animation_motion_bound);
  *  2. events: the shutter is split until, on each piece, every candidate is
  *     certified covered or not covered, and in or out of the epsilon window,
  *     for the whole piece (bounds on how far the hit point and the depth can

@@ -80,10 +80,11 @@ static exr_result_t write_header(exr_context_t ctx, const exr_window *win, const
     return rc;
 }
 
-/* OpenEXRCore 3.1.5 (Debian 12) ZIP encoder bug (upstream OpenEXR issue 2306,
- * fixed by PR 2307): when zlib's output is exactly as long as the packed chunk
- * it keeps the zlib bytes, but every reader takes a chunk whose stored size
- * equals its unpacked size as raw data, so the pixels read back as garbage.
+/* OpenEXRCore 3.1.5 (Debian 12) ZIP encoder bug (upstream
+ * AcademySoftwareFoundation/openexr issue #2306, fixed by PR #2307): when
+ * zlib's output is exactly as long as the packed chunk it keeps the zlib
+ * bytes, but every reader takes a chunk whose stored size equals its
+ * unpacked size as raw data, so the pixels read back as garbage.
  * The file format's rule (OpenEXR file layout: "either the compressed or the
  * uncompressed data are stored, whichever is smaller") is enforced here after
  * the library's own compressor: a chunk that did not shrink is stored raw. */

@@ -1,16 +1,8 @@
 /* Gaussian-splat models as trained by 3D Gaussian Splatting (Kerbl et al.
- * 2023) and 2D Gaussian Splatting (Huang et al. 2024), read from their PLY
- * files (graphdeco-inria/gaussian-splatting scene/gaussian_model.py
- * save_ply; hbb1/2d-gaussian-splatting the same with two scales), with the
- * activations the official code applies on loading, and their colour from
- * real spherical harmonics (utils/sh_utils.py). Pure data and math: no
- * Embree, no scene. (Issue 24: the renderer's use of them comes next.)
- *
- * PLY vertex properties, found by name (ply.h): x y z, [nx ny nz: written as
- * zeros, ignored], f_dc_0..2, f_rest_0..(3((d+1)^2 - 1) - 1), opacity,
- * scale_0 scale_1 [scale_2], rot_0..3. The SH degree d (0 to 3) follows from
- * the number of f_rest properties; they are channel-major: all R
- * coefficients of bases 1..K-1, then all G, then all B. */
+ * 2023) and 2D Gaussian Splatting (Huang et al. 2024), with the activations
+ * the official code applies on loading (their PLY files: gaussian_ply.h),
+ * and their colour from real spherical harmonics (utils/sh_utils.py). Pure
+ * data and math: no Embree, no scene, no files. */
 #ifndef RR_GAUSSIAN_H
 #define RR_GAUSSIAN_H
 
@@ -28,7 +20,7 @@ typedef enum { GAUSSIAN_AUTO = 0, GAUSSIAN_2D = 2, GAUSSIAN_3D = 3 } gaussian_ki
 typedef enum { GAUSSIAN_ORDER_CENTER_DEPTH, GAUSSIAN_ORDER_HIT_DEPTH } gaussian_order;
 
 /* How a model is imaged: the renderer it was trained with decides what it
- * looks like, and its PLY does not say which (issue 29; src/GAUSSIANS.md).
+ * looks like, and its PLY does not say which (src/GAUSSIANS.md).
  * DEFAULT is the kind's rasterizer: 2DGS at e0ed020 for 2D models, the
  * graphdeco-inria 3DGS rasterizer for 3D ones. */
 typedef enum {
@@ -49,7 +41,7 @@ typedef enum {
 #define GAUSSIAN_MAX_SH_COEFFS 16 /* (3 + 1)^2 */
 /* The largest activated scale: stored in floats, squared in ray tests. */
 #define GAUSSIAN_MAX_SCALE 1e15
-/* The largest mean coordinate (issue 32.1). Embree drops boxes beyond about
+/* The largest mean coordinate. Embree drops boxes beyond about
  * 1.8e18 without a word, so a Gaussian at 1e19 vanished from the image; with
  * means and scales within 1e15 every box stays in Embree's range, and the
  * renderer's reach check (ACCEL_MAX_REACH, accel.h) refuses by name a scene
@@ -69,6 +61,9 @@ typedef struct {
     /* how it is imaged, set by the scene (the file does not say; gaussian_hit.h) */
     gaussian_formation formation;
     int tile_rule;       /* 1: only in the 16x16 tiles the rasterizer would visit */
+    /* Gaussians that move (SpacetimeGaussians, gaussian_dynamic.h), owned;
+     * NULL for a static model */
+    struct gaussian_dynamic *dynamic;
 } gaussian_model;
 
 
@@ -77,25 +72,19 @@ void gaussian_model_free(gaussian_model *m);
 /* Storage for n Gaussians of m's kind and SH degree (count stays 0). */
 int gaussian_model_alloc(gaussian_model *m, size_t n);
 
-/* Reads a trained model. kind GAUSSIAN_AUTO detects it (scale_2 present:
- * 3D, else 2D); forcing 2D reads a 3D file's first two scales; forcing 3D
- * on a file without scale_2 is an error. Errors name the file and the
- * property (missing or duplicated properties, an f_rest count that is no
- * SH degree, non-finite values or ones beyond float range, a mean
- * coordinate beyond GAUSSIAN_MAX_ABS, zero quaternions (others are
- * normalised whatever their size), counts the file cannot hold). The bytes
- * are folded into *content_hash unless NULL. */
-int gaussian_read(const char *path, gaussian_kind kind, gaussian_model *m, uint64_t *content_hash, rr_error *err);
-int gaussian_parse(const char *name, const char *data, size_t len, gaussian_kind kind, gaussian_model *m,
-                   rr_error *err);
+/* m's formation, DEFAULT resolved by its kind. */
+gaussian_formation gaussian_formation_of(const gaussian_model *m);
+/* "2dgs", "3dgs-antialiased", ...: the scene's names; NULL if unknown. */
+const char *gaussian_formation_name(gaussian_formation f);
+/* How m's hits are ordered under its formation and the scene's order
+ * (which only a 2D model's takes): "center-depth", "hit-depth" or 3DGRT's
+ * "max-response". */
+const char *gaussian_order_name(const gaussian_model *m, gaussian_order order);
+/* The formation of that name for a model of that kind; -1 for a name
+ * that is none, or one for the other kind. */
+int gaussian_formation_parse(const char *name, gaussian_kind kind, gaussian_formation *f);
 
-/* Writes m in the official layout (binary little endian; the activations
- * undone: logit of the opacity, log of the scales; normals zero), so the
- * official loaders and gaussian_read read it back. Atomic, as every
- * refrender output. */
-int gaussian_write_ply(const char *path, const gaussian_model *m, rr_error *err);
-
-/* Gaussians from surfels (ply.h), for test scenes and 'refrender gen':
+/* Gaussians from surfels (surfel.h), for test scenes and 'refrender gen':
  * each at the surfel's center, its frame's third axis along the normal,
  * the two tangent scales half the radius (refrender's kernel sigma), a 3D
  * Gaussian 2% as thick, opacity 0.95, the colour as the DC coefficient and

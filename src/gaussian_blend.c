@@ -27,7 +27,7 @@ static inline __attribute__((always_inline)) int hit_before(const gaussian_hit *
 /* h->hits[0..count) is a binary min-heap in compositing order: a hit goes
  * in and the first comes out in O(log n) moves, however many wait. A
  * ray's windows and chunks composite after each chunk only the hits below
- * every key still to come (accel.c), and the rest wait: re-sorting the
+ * every key still to come (gaussian_integrator.c), and the rest wait: re-sorting the
  * waiting hits after every chunk was quadratic where they are many: one
  * ray through 256k Gaussians of one key took 135 s of CPU; a dense
  * see-through 2DGS cloud is the same shape. */
@@ -80,9 +80,6 @@ static gaussian_hit take_first(gaussian_hits *h)
 void gaussian_hits_free(gaussian_hits *h)
 {
     free(h->hits);
-    free(h->rays);
-    free(h->candidates);
-    free(h->candidate_order);
     memset(h, 0, sizeof *h);
 }
 

@@ -5,54 +5,7 @@
 #include <string.h>
 
 #include "lanes.h"
-
-static const struct {
-    gaussian_formation f;
-    gaussian_kind kind;
-    const char *name;
-} formations[] = {
-    {GAUSSIAN_FORMATION_2DGS, GAUSSIAN_2D, "2dgs"},
-    {GAUSSIAN_FORMATION_2DGS_CENTER_NEAR, GAUSSIAN_2D, "2dgs-center-near"},
-    {GAUSSIAN_FORMATION_2DGS_UNIT_CIRCLE, GAUSSIAN_2D, "2dgs-unit-circle"},
-    {GAUSSIAN_FORMATION_3DGS, GAUSSIAN_3D, "3dgs"},
-    {GAUSSIAN_FORMATION_3DGS_ANTIALIASED, GAUSSIAN_3D, "3dgs-antialiased"},
-    {GAUSSIAN_FORMATION_GSPLAT, GAUSSIAN_3D, "gsplat"},
-    {GAUSSIAN_FORMATION_GSPLAT_ANTIALIASED, GAUSSIAN_3D, "gsplat-antialiased"},
-    {GAUSSIAN_FORMATION_3DGRT, GAUSSIAN_3D, "3dgrt"},
-};
-enum { FORMATIONS = sizeof formations / sizeof formations[0] };
-
-gaussian_formation gaussian_formation_of(const gaussian_model *m)
-{
-    if (m->formation != GAUSSIAN_FORMATION_DEFAULT)
-        return m->formation;
-    return m->kind == GAUSSIAN_3D ? GAUSSIAN_FORMATION_3DGS : GAUSSIAN_FORMATION_2DGS;
-}
-
-const char *gaussian_formation_name(gaussian_formation f)
-{
-    for (int k = 0; k < FORMATIONS; k++)
-        if (formations[k].f == f)
-            return formations[k].name;
-    return NULL;
-}
-
-const char *gaussian_order_name(const gaussian_model *m, gaussian_order order)
-{
-    if (gaussian_formation_of(m) == GAUSSIAN_FORMATION_3DGRT)
-        return "max-response";
-    return m->kind == GAUSSIAN_2D && order == GAUSSIAN_ORDER_HIT_DEPTH ? "hit-depth" : "center-depth";
-}
-
-int gaussian_formation_parse(const char *name, gaussian_kind kind, gaussian_formation *f)
-{
-    for (int k = 0; k < FORMATIONS; k++)
-        if (!strcmp(formations[k].name, name) && formations[k].kind == kind) {
-            *f = formations[k].f;
-            return 0;
-        }
-    return -1;
-}
+#include "rotation.h"
 
 /* The 3D rasterizers' rules (a 3DGS model looks as the rasterizer it was
  * trained with draws it, and its PLY does not say which: the scene names
@@ -149,13 +102,7 @@ void gaussian_ray_init(gaussian_ray *r, const camera_view *view, const xform *xf
 }
 
 /* The rotation of a unit quaternion (w, x, y, z), row-major. */
-static void quaternion_matrix(const float *q, double R[3][3])
-{
-    double w = q[0], x = q[1], y = q[2], z = q[3];
-    R[0][0] = 1 - 2 * (y * y + z * z), R[0][1] = 2 * (x * y - w * z), R[0][2] = 2 * (x * z + w * y);
-    R[1][0] = 2 * (x * y + w * z), R[1][1] = 1 - 2 * (x * x + z * z), R[1][2] = 2 * (y * z - w * x);
-    R[2][0] = 2 * (x * z - w * y), R[2][1] = 2 * (y * z + w * x), R[2][2] = 1 - 2 * (x * x + y * y);
-}
+static void quaternion_matrix(const float *q, double R[3][3]) { quat_unit_matrix(q[0], q[1], q[2], q[3], R); }
 
 /* The Gaussian kernels are written once over a lane type T (lanes.h) and
  * instantiated for one double and, where the CPU has AVX2, four in a v4d:

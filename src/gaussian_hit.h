@@ -1,8 +1,9 @@
 /* What one ray receives from a Gaussian-splat model (gaussian.h), and how
  * the hits are composited: the image formation each model defines,
  * evaluated per ray at the ray's own time (a moving camera or object is
- * seen as it is at each ray's instant, not at one frame's). Pure math: no
- * Embree, no scene; accel.c gathers the hits, render.c composites them.
+ * where it is at the ray's instant, not at a frame's). Pure math: no
+ * Embree, no scene; the Gaussian integrator (gaussian_integrator.c) asks
+ * accel for candidates, evaluates them here and composites the hits.
  *
  * 2D Gaussians (2DGS, Huang et al. 2024, Eqs. 8-10; the official
  * rasterizer hbb1/diff-surfel-rasterization, forward.cu renderCUDA): the
@@ -54,18 +55,6 @@
 #define GAUSSIAN_GRT_MIN_RESPONSE 0.0113 /* 3DGRT: responses at or below are no hit */
 #define GAUSSIAN_GRT_MIN_TRANSMITTANCE 1e-3 /* 3DGRT: hits are composited while T is above it */
 
-/* m's formation, DEFAULT resolved by its kind. */
-gaussian_formation gaussian_formation_of(const gaussian_model *m);
-/* "2dgs", "3dgs-antialiased", ...: the scene's names; NULL if unknown. */
-const char *gaussian_formation_name(gaussian_formation f);
-/* How m's hits are ordered under its formation and the scene's order
- * (which only a 2D model's takes): "center-depth", "hit-depth" or 3DGRT's
- * "max-response". */
-const char *gaussian_order_name(const gaussian_model *m, gaussian_order order);
-/* The formation of that name for a model of that kind; -1 for a name
- * that is none, or one for the other kind. */
-int gaussian_formation_parse(const char *name, gaussian_kind kind, gaussian_formation *f);
-
 /* One Gaussian's contribution to a ray. */
 typedef struct {
     float key;    /* compositing order, as a ray distance (a view depth / the ray's depth per unit t) */
@@ -81,7 +70,7 @@ typedef struct {
     vec3 p;
     float key_floor; /* gaussian_key_floor, once the cull has kept it */
     unsigned prim;
-    unsigned ray;    /* its object's ray among gaussian_hits.rays */
+    unsigned ray;    /* which ray it was listed for: the caller's index (gaussian_cull_candidates) */
 } gaussian_candidate;
 
 /* A ray's hits (grown as needed; a thread's scratch). */
@@ -89,22 +78,16 @@ typedef struct {
     gaussian_hit *hits; /* waiting to be composited: a heap in compositing order (gaussian_blend.c) */
     size_t count, cap;
     size_t dropped;   /* hits that found no memory */
-    size_t added;     /* hits ever added (a statistic, and how windows grow: accel.c) */
+    size_t added;     /* hits ever added (a statistic, and how windows grow: gaussian_integrator.c) */
     size_t moved;     /* hits moved within the heap (a statistic: at most 3 log2 n a hit, n its size) */
     int in_order;     /* hits[0..count) ascend in compositing order (the heap's moves can be skipped) */
-    struct gaussian_ray_s *rays; /* accel's per-object rays of one sample */
-    size_t rays_cap;
-    gaussian_candidate *candidates; /* a window's Gaussians, evaluated after its traversals (accel.c) */
-    size_t candidates_count, candidates_cap;
-    uint64_t *candidate_order;      /* their evaluation order (accel.c), with sorting space */
-    size_t candidate_order_cap;
 } gaussian_hits;
 
 void gaussian_hits_add(gaussian_hits *h, const gaussian_hit *hit);
 void gaussian_hits_free(gaussian_hits *h);
 
 /* One world ray at one time, seen in one object's space. */
-typedef struct gaussian_ray_s {
+typedef struct {
     double m[3][4];    /* object space -> camera space (camera_view's axes) */
     double fx, fy, cx, cy;
     int width, height; /* the image's (the rasterizers' tiles) */
@@ -115,8 +98,6 @@ typedef struct gaussian_ray_s {
     double depth_per_t; /* view depth gained per unit of t (world dir . camera z) */
     double tmin, tmax; /* the stretch of the ray whose hits are wanted: tmin <= t < tmax */
     double scale;      /* the object's largest scale (object lengths -> camera lengths) */
-    unsigned obj;      /* (accel's) */
-    double enter, exit, lead, pad; /* (accel's) */
 } gaussian_ray;
 
 /* Fills r for the world ray org + t dir through raster (x, y) of view,
@@ -140,10 +121,10 @@ double gaussian_traversal_pad(const gaussian_model *m, double s, double depth_pe
  * the rest of its evaluation reads (rotation and opacity) and what
  * compositing it reads (its SH coefficients). A model of millions is far
  * larger than the caches: a hit's evaluation waited on those loads one
- * after another (in a profile of 2DGS rendering, most of
- * gaussian_hit_2d's time), and evaluating a traversal's candidates a few
- * behind their prefetches overlaps the waits; most candidates fail the
- * cull, so only the ones that pass it load the rest. No value changes. */
+ * after another (a profile of a benchmark-scale render: most of gaussian_hit_2d's time), and
+ * evaluating a traversal's candidates a few behind their prefetches
+ * overlaps the waits; most candidates fail the cull, so only the ones
+ * that pass it load the rest. No value changes. */
 void gaussian_prefetch_cull(const gaussian_model *m, size_t i);
 void gaussian_prefetch_hit(const gaussian_model *m, size_t i);
 void gaussian_prefetch_sh(const gaussian_model *m, size_t i);
@@ -177,7 +158,7 @@ size_t gaussian_cull_candidates(const gaussian_model *m, const gaussian_ray *r, 
                                 unsigned ray);
 /* A float at or below the key of any hit of Gaussian i on r, in either
  * order, from its camera-space mean p (the cull's): its hits can then
- * wait while those of smaller keys are composited (accel.c); -INFINITY
+ * wait while those of smaller keys are composited (gaussian_integrator.c); -INFINITY
  * where no bound is known. */
 float gaussian_key_floor(const gaussian_model *m, size_t i, const gaussian_ray *r, vec3 p);
 /* The 2DGS low-pass filter's centre (raster position) of Gaussian i seen
@@ -222,8 +203,8 @@ aabb gaussian_bounds(const gaussian_model *m, size_t i, double view_reach);
 /* The same with the footprint's reach as it points: the screen footprint
  * lies across the view axis (a rasterizer's hit at the mean's view depth,
  * the 2DGS filter's at its point P's), so where the view axis is known to
- * within a cone the box is flatter along it (a ball's box, pierced
- * obliquely, listed 2.5 candidates a kept one). */
+ * within a cone the box is flatter along it (on the benchmark-scale view a
+ * ball's box, pierced obliquely, listed 2.5 candidates a kept one). */
 aabb gaussian_view_bounds(const gaussian_model *m, size_t i, const gaussian_view_bound *v);
 
 /* Front-to-back compositing, a stretch of the ray at a time (hits are

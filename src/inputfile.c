@@ -27,9 +27,9 @@ static int read_exactly(FILE *fp, const char *path, char *buf, size_t len, rr_er
     return 0;
 }
 
-/* Opens path for reading without blocking (issue 32.7: opening a FIFO
- * waits for a writer, so a FIFO named as an input hung before its type
- * could be checked); the type is checked on the open descriptor, so the
+/* Opens path for reading without blocking (opening a FIFO waits for a
+ * writer, so a FIFO named as an input would hang before its type could be
+ * checked); the type is checked on the open descriptor, so the
  * file checked is the file read. NULL with err filled on failure. */
 static FILE *open_regular(const char *path, struct stat *st, rr_error *err)
 {

@@ -4,7 +4,8 @@
  * regular files of a bounded size are read (a FIFO or /dev/zero named as a
  * model would otherwise be read forever), the bytes that are parsed are the
  * bytes that are hashed (a render state's identity covers the content of
- * every input, issue 18.3), and every failure names the file. */
+ * every input, so a resume never mixes two versions of a file), and every
+ * failure names the file. */
 #ifndef RR_INPUTFILE_H
 #define RR_INPUTFILE_H
 
@@ -28,7 +29,7 @@ int input_file_read(const char *path, size_t max_bytes, input_file *f, rr_error 
 void input_file_free(input_file *f);
 
 /* For inputs too large to hold twice (a trained model's PLY is as large as
- * the model it holds, issue 32): maps the file read-only instead of copying
+ * the model it holds): maps the file read-only instead of copying
  * it where it is large enough to matter, so that the parser reads it once
  * and input_file_consume drops what it has read from memory, hashing it
  * first: the bytes parsed are the bytes hashed, and the peak is the model

@@ -63,8 +63,8 @@ int meshload_points(const char *path, double **pos, double **nrm, size_t *np, rr
     FILE *f = fopen(path, "r");
     if (!f)
         return rr_fail(err, "%s: cannot open", path);
-    size_t cap = 1024, n = 0;
-    *pos = malloc(cap * 3 * sizeof **pos), *nrm = malloc(cap * 3 * sizeof **nrm);
+    size_t pos_cap = 0, nrm_cap = 0, n = 0;
+    *pos = NULL, *nrm = NULL;
     char line[1024];
     int lineno = 0, rc = 0;
     while (!rc && fgets(line, sizeof line, f)) {
@@ -84,15 +84,10 @@ int meshload_points(const char *path, double **pos, double **nrm, size_t *np, rr
             rc = rr_fail(err, "%s:%d: expected six finite numbers (x y z nx ny nz)", path, lineno);
             break;
         }
-        if (n == cap) {
-            cap *= 2;
-            double *p = realloc(*pos, cap * 3 * sizeof *p), *q = realloc(*nrm, cap * 3 * sizeof *q);
-            if (p) *pos = p;
-            if (q) *nrm = q;
-            if (!p || !q) {
-                rc = rr_fail(err, "%s: out of memory", path);
-                break;
-            }
+        if (rr_grow((void **)pos, &pos_cap, n + 1, 3 * sizeof **pos) ||
+            rr_grow((void **)nrm, &nrm_cap, n + 1, 3 * sizeof **nrm)) {
+            rc = rr_fail(err, "%s: out of memory", path);
+            break;
         }
         memcpy(&(*pos)[3 * n], v, 3 * sizeof *v);
         memcpy(&(*nrm)[3 * n], v + 3, 3 * sizeof *v);

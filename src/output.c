@@ -10,39 +10,76 @@
 
 #include "exr.h"
 
-static const char *const identity_keys[] = {
-    "refrender:sceneHash", "refrender:inputsHash", "refrender:resolution", "refrender:sampler", "refrender:spp",
-    "refrender:tspp", "refrender:seed", "refrender:epsilon", "refrender:kernelSigma",
-    "refrender:shutter", "refrender:weightFunction", "refrender:timeFactor", "refrender:batches",
-    "refrender:timeIntegration", "refrender:parameters", "refrender:parametersHash", "refrender:weightHash",
-    "refrender:pixelFilter", "refrender:blurSpace", "refrender:gaussians", "refrender:gaussiansHash",
-    "refrender:rollingShutter", NULL};
+/* What resuming and merging do with an attribute. */
+typedef enum {
+    ROLE_IDENTITY, /* must agree for states to be merged or resumed; every state has it */
+    ROLE_KEPT,     /* describes the render; read back from a state */
+    ROLE_EQUAL,    /* the frame and the camera: equal in every state of a merge, or absent from all */
+    ROLE_SUMMED,   /* the work of the states together: rays and seconds add up */
+    ROLE_WRITTEN   /* describes one run only: not read back */
+} attr_role;
 
-/* Attributes that describe a render without being its identity (README,
- * Output), and what a merge of its states writes for each: the frame and
- * the camera are those of every state, so they must agree (a misnumbered
- * pass would otherwise pass as the frame); rays and seconds are the work
- * of all states together, so they add up. */
-static const char *const equal_keys[] = {"worldToCamera", "worldToNDC", "refrender:shutterOpen",
-                                         "refrender:shutterClose", "refrender:frame", "refrender:frameRate", NULL};
-static const char *const summed_keys[] = {"refrender:rays", "refrender:renderSeconds", NULL};
-#define UNRESOLVED_KEY "refrender:exactUnresolvedShare"
+/* Every attribute refrender writes, its kind (README, Output: the counts,
+ * distances, times and camera matrices as EXR numbers, the rest as
+ * strings) and its role, in the order identity checks name a difference
+ * and states are read. The frame and the camera are those of every state,
+ * so they must agree (a misnumbered pass would otherwise pass as the
+ * frame); rays and seconds are the work of all states together. */
+static const struct {
+    const char *key;
+    rr_attr_kind kind;
+    attr_role role;
+} attr_table[] = {
+    {ATTR_SCENE_HASH, RR_ATTR_TEXT, ROLE_IDENTITY},
+    {ATTR_INPUTS_HASH, RR_ATTR_TEXT, ROLE_IDENTITY},
+    {ATTR_RESOLUTION, RR_ATTR_TEXT, ROLE_IDENTITY},
+    {ATTR_SAMPLER, RR_ATTR_TEXT, ROLE_IDENTITY},
+    {ATTR_SPP, RR_ATTR_INT, ROLE_IDENTITY},
+    {ATTR_TSPP, RR_ATTR_INT, ROLE_IDENTITY},
+    {ATTR_SEED, RR_ATTR_TEXT, ROLE_IDENTITY},
+    {ATTR_EPSILON, RR_ATTR_DOUBLE, ROLE_IDENTITY},
+    {ATTR_KERNEL_SIGMA, RR_ATTR_DOUBLE, ROLE_IDENTITY},
+    {ATTR_SHUTTER, RR_ATTR_TEXT, ROLE_IDENTITY},
+    {ATTR_WEIGHT_FUNCTION, RR_ATTR_TEXT, ROLE_IDENTITY},
+    {ATTR_TIME_FACTOR, RR_ATTR_INT, ROLE_IDENTITY},
+    {ATTR_BATCHES, RR_ATTR_INT, ROLE_IDENTITY},
+    {ATTR_TIME_INTEGRATION, RR_ATTR_TEXT, ROLE_IDENTITY},
+    {ATTR_PARAMETERS, RR_ATTR_TEXT, ROLE_IDENTITY},
+    {ATTR_PARAMETERS_HASH, RR_ATTR_TEXT, ROLE_IDENTITY},
+    {ATTR_WEIGHT_HASH, RR_ATTR_TEXT, ROLE_IDENTITY},
+    {ATTR_PIXEL_FILTER, RR_ATTR_TEXT, ROLE_IDENTITY},
+    {ATTR_BLUR_SPACE, RR_ATTR_TEXT, ROLE_IDENTITY},
+    {ATTR_GAUSSIANS, RR_ATTR_TEXT, ROLE_IDENTITY},
+    {ATTR_GAUSSIANS_HASH, RR_ATTR_TEXT, ROLE_IDENTITY},
+    {ATTR_ROLLING_SHUTTER, RR_ATTR_TEXT, ROLE_IDENTITY},
+    {ATTR_SCENE, RR_ATTR_TEXT, ROLE_KEPT},
+    {ATTR_COMMAND, RR_ATTR_TEXT, ROLE_KEPT},
+    {ATTR_SOFTWARE, RR_ATTR_TEXT, ROLE_KEPT},
+    {ATTR_BACKGROUND, RR_ATTR_TEXT, ROLE_KEPT},
+    {ATTR_ALPHA, RR_ATTR_TEXT, ROLE_KEPT},
+    {ATTR_EXACT_UNRESOLVED_SHARE, RR_ATTR_TEXT, ROLE_KEPT},
+    {ATTR_WORLD_TO_CAMERA, RR_ATTR_M44F, ROLE_EQUAL},
+    {ATTR_WORLD_TO_NDC, RR_ATTR_M44F, ROLE_EQUAL},
+    {ATTR_SHUTTER_OPEN, RR_ATTR_DOUBLE, ROLE_EQUAL},
+    {ATTR_SHUTTER_CLOSE, RR_ATTR_DOUBLE, ROLE_EQUAL},
+    {ATTR_FRAME, RR_ATTR_INT, ROLE_EQUAL},
+    {ATTR_FRAME_RATE, RR_ATTR_DOUBLE, ROLE_EQUAL},
+    {ATTR_RAYS, RR_ATTR_DOUBLE, ROLE_SUMMED},
+    {ATTR_RENDER_SECONDS, RR_ATTR_DOUBLE, ROLE_SUMMED},
+    {ATTR_LINE_TIMES, RR_ATTR_TEXT, ROLE_WRITTEN},
+    {ATTR_STATE, RR_ATTR_TEXT, ROLE_WRITTEN},
+    {ATTR_TARGET_ERROR, RR_ATTR_DOUBLE, ROLE_WRITTEN},
+    {ATTR_TARGET_REACHED, RR_ATTR_TEXT, ROLE_WRITTEN},
+    {ATTR_CROP_WINDOW, RR_ATTR_TEXT, ROLE_WRITTEN},
+};
+enum { ATTRS_KNOWN = sizeof attr_table / sizeof attr_table[0] };
 
-/* The attributes stored as EXR numbers (README, Output). */
 static rr_attr_kind attr_kind(const char *key)
 {
-    static const char *const ints[] = {"refrender:spp", "refrender:tspp", "refrender:timeFactor",
-                                       "refrender:batches", "refrender:frame", NULL};
-    static const char *const doubles[] = {"refrender:epsilon", "refrender:kernelSigma", "refrender:targetError",
-                                          "refrender:renderSeconds", "refrender:rays", "refrender:frameRate",
-                                          "refrender:shutterOpen", "refrender:shutterClose", NULL};
-    for (const char *const *k = ints; *k; k++)
-        if (!strcmp(*k, key))
-            return RR_ATTR_INT;
-    for (const char *const *k = doubles; *k; k++)
-        if (!strcmp(*k, key))
-            return RR_ATTR_DOUBLE;
-    return !strcmp(key, "worldToCamera") || !strcmp(key, "worldToNDC") ? RR_ATTR_M44F : RR_ATTR_TEXT;
+    for (int k = 0; k < ATTRS_KNOWN; k++)
+        if (!strcmp(attr_table[k].key, key))
+            return attr_table[k].kind;
+    return RR_ATTR_TEXT;
 }
 
 static void attrs_vset(attr_list *a, const char *key, const char *fmt, va_list ap)
@@ -83,11 +120,13 @@ const char *attrs_get(const attr_list *a, const char *key)
 int attrs_check_identity(const attr_list *a, const char *a_name, const attr_list *b, const char *b_name,
                          rr_error *err)
 {
-    for (const char *const *k = identity_keys; *k; k++) {
-        const char *va = attrs_get(a, *k), *vb = attrs_get(b, *k);
+    for (int k = 0; k < ATTRS_KNOWN; k++) {
+        if (attr_table[k].role != ROLE_IDENTITY)
+            continue;
+        const char *key = attr_table[k].key, *va = attrs_get(a, key), *vb = attrs_get(b, key);
         if (!va || !vb || strcmp(va, vb))
             return rr_fail(err, "%s and %s differ in %s ('%.160s' vs '%.160s'): not the same render", a_name, b_name,
-                           *k, va ? va : "missing", vb ? vb : "missing");
+                           key, va ? va : "missing", vb ? vb : "missing");
     }
     return 0;
 }
@@ -108,37 +147,41 @@ static int check_both_have(const attr_list *a, const char *a_name, const attr_li
  * are summed. */
 static void combine_unresolved(attr_list *merged, const attr_list *b)
 {
-    const char *sa = attrs_get(merged, UNRESOLVED_KEY), *sb = attrs_get(b, UNRESOLVED_KEY);
-    const char *ra = attrs_get(merged, "refrender:rays"), *rb = attrs_get(b, "refrender:rays");
+    const char *sa = attrs_get(merged, ATTR_EXACT_UNRESOLVED_SHARE), *sb = attrs_get(b, ATTR_EXACT_UNRESOLVED_SHARE);
+    const char *ra = attrs_get(merged, ATTR_RAYS), *rb = attrs_get(b, ATTR_RAYS);
     if (!sa || !sb || !ra || !rb)
         return;
     double wa = strtod(ra, NULL), wb = strtod(rb, NULL);
     double share = wa + wb > 0 ? (strtod(sa, NULL) * wa + strtod(sb, NULL) * wb) / (wa + wb) : 0.0;
-    attrs_set(merged, UNRESOLVED_KEY, "%.6g", share);
+    attrs_set(merged, ATTR_EXACT_UNRESOLVED_SHARE, "%.6g", share);
 }
 
 int attrs_combine(attr_list *merged, const char *merged_name, const attr_list *b, const char *b_name, rr_error *err)
 {
-    for (const char *const *k = equal_keys; *k; k++) {
-        if (check_both_have(merged, merged_name, b, b_name, *k, err))
+    for (int k = 0; k < ATTRS_KNOWN; k++) {
+        if (attr_table[k].role != ROLE_EQUAL)
+            continue;
+        const char *key = attr_table[k].key;
+        if (check_both_have(merged, merged_name, b, b_name, key, err))
             return -1;
-        const char *va = attrs_get(merged, *k), *vb = attrs_get(b, *k);
+        const char *va = attrs_get(merged, key), *vb = attrs_get(b, key);
         if (va && strcmp(va, vb))
             return rr_fail(err, "%s and %s differ in %s ('%.160s' vs '%.160s'): not the same frame and camera",
-                           merged_name, b_name, *k, va, vb);
+                           merged_name, b_name, key, va, vb);
     }
-    if (check_both_have(merged, merged_name, b, b_name, UNRESOLVED_KEY, err))
+    if (check_both_have(merged, merged_name, b, b_name, ATTR_EXACT_UNRESOLVED_SHARE, err))
         return -1;
-    for (const char *const *k = summed_keys; *k; k++)
-        if (check_both_have(merged, merged_name, b, b_name, *k, err))
+    for (int k = 0; k < ATTRS_KNOWN; k++)
+        if (attr_table[k].role == ROLE_SUMMED &&
+            check_both_have(merged, merged_name, b, b_name, attr_table[k].key, err))
             return -1;
     combine_unresolved(merged, b);
-    const char *rays = attrs_get(merged, "refrender:rays"), *secs = attrs_get(merged, "refrender:renderSeconds");
+    const char *rays = attrs_get(merged, ATTR_RAYS), *secs = attrs_get(merged, ATTR_RENDER_SECONDS);
     if (rays) /* a double holds counts exactly up to 2^53 rays */
-        attrs_set(merged, "refrender:rays", "%.17g", strtod(rays, NULL) + strtod(attrs_get(b, "refrender:rays"), NULL));
+        attrs_set(merged, ATTR_RAYS, "%.17g", strtod(rays, NULL) + strtod(attrs_get(b, ATTR_RAYS), NULL));
     if (secs)
-        attrs_set(merged, "refrender:renderSeconds", "%.3f",
-                  strtod(secs, NULL) + strtod(attrs_get(b, "refrender:renderSeconds"), NULL));
+        attrs_set(merged, ATTR_RENDER_SECONDS, "%.3f",
+                  strtod(secs, NULL) + strtod(attrs_get(b, ATTR_RENDER_SECONDS), NULL));
     return 0;
 }
 
@@ -273,7 +316,7 @@ int output_write_state_into(atomic_set *set, const char *path, const image *img,
         state_channel_name(k, names[k], sizeof names[k]);
         chs[4 + k] = (exr_channel){names[k], EXR_CHANNEL_UINT, words + k, 4 * STATE_WORDS};
     }
-    attrs_set(a, "refrender:state", "batches %u-%u", begin, end);
+    attrs_set(a, ATTR_STATE, "batches %u-%u", begin, end);
     exr_string_attr sa[ATTR_MAX];
     exr_window whole = {img->width, img->height, 0, 0, img->width, img->height};
     int rc = exr_write_window_into(set, path, &whole, chs, 4 + STATE_WORDS, string_attrs(a, sa), a->n, err);
@@ -283,25 +326,26 @@ int output_write_state_into(atomic_set *set, const char *path, const image *img,
 
 static int read_attrs(const char *path, attr_list *a, rr_error *err)
 {
-    static const char *const keys[] = {"refrender:scene", "refrender:command", "software", "refrender:background",
-                                       "refrender:alpha", UNRESOLVED_KEY, NULL};
-    const char *const *optional[] = {keys, equal_keys, summed_keys};
     a->n = 0;
     char buf[ATTR_TEXT_MAX];
-    for (const char *const *k = identity_keys; *k; k++) {
-        int rc = exr_read_string_attr(path, *k, buf, sizeof buf, err);
+    for (int k = 0; k < ATTRS_KNOWN; k++) {
+        if (attr_table[k].role != ROLE_IDENTITY)
+            continue;
+        const char *key = attr_table[k].key;
+        int rc = exr_read_string_attr(path, key, buf, sizeof buf, err);
         if (rc)
-            return rc > 0 ? rr_fail(err, "%s: not a refrender render state (no %s)", path, *k) : -1;
-        attrs_set(a, *k, "%s", buf);
+            return rc > 0 ? rr_fail(err, "%s: not a refrender render state (no %s)", path, key) : -1;
+        attrs_set(a, key, "%s", buf);
     }
-    for (int list = 0; list < 3; list++)
-        for (const char *const *k = optional[list]; *k; k++) {
-            int rc = exr_read_string_attr(path, *k, buf, sizeof buf, err);
-            if (rc < 0) /* longer than refrender writes: refused, not cut */
-                return -1;
-            if (!rc)
-                attrs_set(a, *k, "%s", buf);
-        }
+    for (int k = 0; k < ATTRS_KNOWN; k++) { /* the optional ones */
+        if (attr_table[k].role == ROLE_IDENTITY || attr_table[k].role == ROLE_WRITTEN)
+            continue;
+        int rc = exr_read_string_attr(path, attr_table[k].key, buf, sizeof buf, err);
+        if (rc < 0) /* longer than refrender writes: refused, not cut */
+            return -1;
+        if (!rc)
+            attrs_set(a, attr_table[k].key, "%s", buf);
+    }
     return 0;
 }
 
@@ -311,7 +355,7 @@ static int check_state_size(const char *path, const attr_list *a, int w, int h, 
 {
     int rw, rh;
     char extra;
-    const char *res = attrs_get(a, "refrender:resolution");
+    const char *res = attrs_get(a, ATTR_RESOLUTION);
     if (!res || sscanf(res, "%dx%d%c", &rw, &rh, &extra) != 2 || rw != w || rh != h)
         return rr_fail(err, "%s: data window %dx%d differs from refrender:resolution '%s'", path, w, h,
                        res ? res : "missing");
@@ -357,7 +401,7 @@ int output_read_state(const char *path, image *img, attr_list *a, uint32_t *begi
     int w, h;
     if (exr_read_size(path, &w, &h, err) || read_attrs(path, a, err))
         return -1;
-    if (exr_read_string_attr(path, "refrender:state", range, sizeof range, NULL) ||
+    if (exr_read_string_attr(path, ATTR_STATE, range, sizeof range, NULL) ||
         sscanf(range, "batches %u-%u%c", begin, end, &extra) != 2 || *end < *begin)
         return rr_fail(err, "%s: a final image, not a render state (write states with --pass or --checkpoint)", path);
     if (check_state_size(path, a, w, h, err) || check_state_fits_file(path, w, h, err))

@@ -18,6 +18,51 @@
 
 #define ATTR_MAX 48
 
+/* The name of every attribute refrender writes (README, Output). Their
+ * kinds and what resuming and merging do with each are output.c's table,
+ * the one list of them; writers name them by these macros. */
+#define ATTR_SCENE_HASH "refrender:sceneHash"
+#define ATTR_INPUTS_HASH "refrender:inputsHash"
+#define ATTR_RESOLUTION "refrender:resolution"
+#define ATTR_SAMPLER "refrender:sampler"
+#define ATTR_SPP "refrender:spp"
+#define ATTR_TSPP "refrender:tspp"
+#define ATTR_SEED "refrender:seed"
+#define ATTR_EPSILON "refrender:epsilon"
+#define ATTR_KERNEL_SIGMA "refrender:kernelSigma"
+#define ATTR_SHUTTER "refrender:shutter"
+#define ATTR_WEIGHT_FUNCTION "refrender:weightFunction"
+#define ATTR_TIME_FACTOR "refrender:timeFactor"
+#define ATTR_BATCHES "refrender:batches"
+#define ATTR_TIME_INTEGRATION "refrender:timeIntegration"
+#define ATTR_PARAMETERS "refrender:parameters"
+#define ATTR_PARAMETERS_HASH "refrender:parametersHash"
+#define ATTR_WEIGHT_HASH "refrender:weightHash"
+#define ATTR_PIXEL_FILTER "refrender:pixelFilter"
+#define ATTR_BLUR_SPACE "refrender:blurSpace"
+#define ATTR_GAUSSIANS "refrender:gaussians"
+#define ATTR_GAUSSIANS_HASH "refrender:gaussiansHash"
+#define ATTR_ROLLING_SHUTTER "refrender:rollingShutter"
+#define ATTR_SCENE "refrender:scene"
+#define ATTR_COMMAND "refrender:command"
+#define ATTR_SOFTWARE "software"
+#define ATTR_BACKGROUND "refrender:background"
+#define ATTR_ALPHA "refrender:alpha"
+#define ATTR_EXACT_UNRESOLVED_SHARE "refrender:exactUnresolvedShare"
+#define ATTR_WORLD_TO_CAMERA "worldToCamera"
+#define ATTR_WORLD_TO_NDC "worldToNDC"
+#define ATTR_SHUTTER_OPEN "refrender:shutterOpen"
+#define ATTR_SHUTTER_CLOSE "refrender:shutterClose"
+#define ATTR_FRAME "refrender:frame"
+#define ATTR_FRAME_RATE "refrender:frameRate"
+#define ATTR_RAYS "refrender:rays"
+#define ATTR_RENDER_SECONDS "refrender:renderSeconds"
+#define ATTR_LINE_TIMES "refrender:lineTimes"
+#define ATTR_STATE "refrender:state"
+#define ATTR_TARGET_ERROR "refrender:targetError"
+#define ATTR_TARGET_REACHED "refrender:targetReached"
+#define ATTR_CROP_WINDOW "refrender:cropWindow"
+
 /* A render's EXR attributes, each held as text (identity checks compare
  * text) and written as its kind (exr.h): the counts, distances, times and
  * camera matrices as EXR numbers, the rest as strings (attrs_set knows

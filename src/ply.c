@@ -166,7 +166,7 @@ static int parse_header_line(ply_reader *r, char *line, int *done)
         char extra;
         if (sscanf(rest, "%63s %llu %c", e->name, &count, &extra) != 2 || rest[0] == '-')
             return header_fail(r, "malformed 'element <name> <count>'");
-        for (int k = 0; k < r->nelements; k++) /* a second 'vertex' would be ignored (issue 32.5) */
+        for (int k = 0; k < r->nelements; k++) /* a second 'vertex' would otherwise be ignored */
             if (!strcmp(r->elements[k].name, e->name)) {
                 char what[128];
                 snprintf(what, sizeof what, "duplicate element '%s'", e->name);
@@ -316,9 +316,9 @@ static int end_ascii_line(ply_reader *r, const ply_element *e, size_t index, int
     return 0;
 }
 
-/* An ascii value must be one its declared integer type holds (issue
- * 32.5: 2.5 for an int or 300 for a uchar was taken as is); binary values
- * always are. */
+/* An ascii value must be one its declared integer type holds (2.5 for an
+ * int or 300 for a uchar must not be taken as is); binary values always
+ * are. */
 static int check_ascii_int(ply_reader *r, const ply_element *e, size_t index, const ply_property *p, int type,
                            double v)
 {
@@ -533,8 +533,8 @@ static int skip_element(ply_reader *r, const ply_element *e)
 }
 
 /* Every element is read, the ones after the vertices too, so that a binary
- * file's bytes beyond the declared elements are seen (issue 32.5: two
- * vertices' data under 'element vertex 1' read as one vertex). */
+ * file's bytes beyond the declared elements are seen (two vertices' data
+ * under 'element vertex 1' must not read as one vertex). */
 static int read_elements(ply_reader *r, const ply_visitor *v)
 {
     const ply_element *vertex = NULL;

@@ -14,6 +14,7 @@
 #define RR_PLY_H
 
 #include "pointmodel.h"
+#include "surfel.h"
 
 #include <stdint.h>
 
@@ -30,12 +31,6 @@ int ply_read(const char *path, vec3 default_color, pointmodel *m, uint64_t *cont
 
 /* The same from len bytes in memory; name is used in messages. */
 int ply_parse(const char *name, const char *data, size_t len, vec3 default_color, pointmodel *m, rr_error *err);
-
-typedef struct surfel_s {
-    vec3 center, normal;
-    double radius;
-    vec3 color;
-} surfel;
 
 /* The reader's generic layer, shared by the surfel reader above and the
  * Gaussian-splat reader (gaussian.c): vertex properties are found by name

@@ -20,21 +20,15 @@ void pointmodel_free(pointmodel *m)
     pointmodel_init(m);
 }
 
+/* Room for one more splat in the three arrays, which share one capacity. */
 static int grow(pointmodel *m, rr_error *err)
 {
-    size_t cap = m->capacity ? 2 * m->capacity : 256;
-    splat_geom *g = realloc(m->geom, cap * sizeof *g);
-    if (g)
-        m->geom = g;
-    float *sh = realloc(m->shading, cap * 6 * sizeof *sh);
-    if (sh)
-        m->shading = sh;
-    float *e = realloc(m->extent, cap * 3 * sizeof *e);
-    if (e)
-        m->extent = e;
-    if (!g || !sh || !e)
-        return rr_fail(err, "out of memory for %zu splats", cap);
-    m->capacity = cap;
+    size_t need = m->count + 1, geom_cap = m->capacity, shading_cap = m->capacity, extent_cap = m->capacity;
+    if (rr_grow((void **)&m->geom, &geom_cap, need, sizeof *m->geom) ||
+        rr_grow((void **)&m->shading, &shading_cap, need, 6 * sizeof *m->shading) ||
+        rr_grow((void **)&m->extent, &extent_cap, need, 3 * sizeof *m->extent))
+        return rr_fail(err, "out of memory for %zu splats", need);
+    m->capacity = geom_cap;
     return 0;
 }
 

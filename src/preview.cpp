@@ -1,8 +1,8 @@
 /* The preview module (refrender-preview.so): OpenImageIO's encoders behind
  * a C interface, loaded by preview.c only when a preview is asked for.
  * OpenImageIO links some 260 shared libraries; linked into refrender it
- * cost every run 0.4 s of symbol lookup before main (issue 32: the test
- * suite starts refrender over a thousand times). Depends on nothing of
+ * cost every run 0.4 s of symbol lookup before main (and the test suite
+ * starts refrender over a thousand times). Depends on nothing of
  * refrender's: errors come back as text. */
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>

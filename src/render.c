@@ -7,12 +7,36 @@
 #include <time.h>
 
 #include "exact.h"
+#include "gaussian_integrator.h"
 #include "shade.h"
 
 #define TILE 16
 
 const char *pixel_filter_name(pixel_filter f) { return f == PIXEL_FILTER_POINT ? "point" : "box"; }
 const char *blur_space_name(blur_space b) { return b == BLUR_SPACE_LINEAR ? "linear" : "model"; }
+
+render_settings render_settings_default(void)
+{
+    render_settings rs = {
+        .smp = {.kind = SAMPLER_THESIS, .seed = 1, .grid = 1, .tspp = 1, .time_factor = 1},
+        .threads = 1,
+        .batch_begin = 0,
+        .batches = 1,
+        .max_batches = 1,
+        .filter = PIXEL_FILTER_BOX,
+        .blur = BLUR_SPACE_MODEL,
+    };
+    shutter_default(&rs.shut);
+    return rs;
+}
+
+int render_check_exact_blur(int exact_time, blur_space b, rr_error *err)
+{
+    if (exact_time && b == BLUR_SPACE_LINEAR)
+        return rr_fail(err, "--blur-space linear decodes each instant's colour before the time average, which "
+                            "exact time cannot do (it integrates colours over time): use sampled time");
+    return 0;
+}
 
 typedef struct {
     const scene *sc;
@@ -42,7 +66,7 @@ typedef struct { /* per-thread scratch */
     sampler_scratch ss;
     double *x, *y, *t;
     exact_scratch *exact;
-    gaussian_hits gaussian;
+    gaussian_integrator gaussian;
 } thread_scratch;
 
 /* The color and coverage of a k-buffer (background when empty). */
@@ -97,18 +121,20 @@ static void samples_fixed_camera(render_job *job, static_cache *sc, double x, do
 }
 
 /* The Gaussian objects' hits on the ray, composited over the surfaces'
- * colour (the nearest surface hides what is behind it; issue 24). */
+ * colour (the nearest surface hides what is behind it: a Gaussian behind
+ * an opaque surface is not seen). */
 static void composite_gaussians(render_job *job, double x, double y, double t, vec3 org, vec3 dir,
-                                const kbuffer *kb, gaussian_hits *scratch, double rgba[4], uint64_t *overflows)
+                                const kbuffer *kb, gaussian_integrator *scratch, double rgba[4], uint64_t *overflows)
 {
     camera_view moved, *view = &job->rest_view;
     if (job->camera_moves)
         scene_camera_view(job->sc, t, view = &moved);
-    scratch->count = scratch->dropped = 0;
+    gaussian_integrator_reset(scratch);
     gaussian_blend blend;
     gaussian_blend_init(&blend);
-    accel_blend_gaussians(job->acc, view, x, y, org, dir, t, kb->count ? kb->closest : INFINITY, scratch, &blend);
-    *overflows += scratch->dropped > 0;
+    gaussian_sample smp = {view, x, y, org, dir, t};
+    gaussian_integrate(job->sc, job->acc, &smp, kb->count ? kb->closest : INFINITY, scratch, &blend);
+    *overflows += scratch->hits.dropped > 0;
     vec3 rgb = gaussian_blend_over(&blend, v3(rgba[0], rgba[1], rgba[2]));
     rgba[0] = rgb.x, rgba[1] = rgb.y, rgba[2] = rgb.z;
     rgba[3] = kb->count ? 1.0 : 1.0 - blend.T;
@@ -116,7 +142,7 @@ static void composite_gaussians(render_job *job, double x, double y, double t, v
 
 /* A moving camera (thesis eq. 3.6), or a scene with Gaussian objects:
  * every sample has its own world ray. */
-static void sample_own_ray(render_job *job, double x, double y, double t, gaussian_hits *scratch, double rgba[4],
+static void sample_own_ray(render_job *job, double x, double y, double t, gaussian_integrator *scratch, double rgba[4],
                            uint64_t *overflows)
 {
     vec3 org, dir;
@@ -346,7 +372,7 @@ static int scratch_init(thread_scratch *scr, const sampler *s)
     scr->y = malloc(n * sizeof(double));
     scr->t = malloc(n * sizeof(double));
     scr->exact = exact_scratch_new();
-    memset(&scr->gaussian, 0, sizeof scr->gaussian);
+    gaussian_integrator_init(&scr->gaussian);
     return sampler_scratch_init(&scr->ss, s) || !scr->x || !scr->y || !scr->t || !scr->exact ? -1 : 0;
 }
 
@@ -357,7 +383,7 @@ static void scratch_free(thread_scratch *scr)
     free(scr->y);
     free(scr->t);
     exact_scratch_free(scr->exact);
-    gaussian_hits_free(&scr->gaussian);
+    gaussian_integrator_free(&scr->gaussian);
 }
 
 static void *worker(void *arg)
@@ -507,9 +533,8 @@ static int check_settings(const render_settings *rs, rr_error *err)
         return rr_fail(err, "batch and thread counts must be positive");
     if (rs->target_error > 0 && rs->max_batches < rs->batches)
         return rr_fail(err, "the batch cap must be at least the batch count");
-    if (rs->exact_time && rs->blur == BLUR_SPACE_LINEAR) /* decoding must come before the time average */
-        return rr_fail(err, "--blur-space linear decodes each instant's colour before the time average: exact time "
-                            "integrates colours over time first; use sampled time");
+    if (render_check_exact_blur(rs->exact_time, rs->blur, err))
+        return -1;
     return sampler_check(&rs->smp, render_batch_end(rs), err);
 }
 

@@ -13,8 +13,8 @@
 
 /* Where a pixel's spatial samples lie: over its area (box, the default),
  * or all at its centre (point: the official Gaussian rasterizers evaluate
- * a pixel there, so the render is the limit of averaging N sharp frames
- * as N grows; issue 24). */
+ * a pixel there, so the render is the limit of averaging N of their sharp
+ * frames as N grows). */
 typedef enum { PIXEL_FILTER_BOX, PIXEL_FILTER_POINT } pixel_filter;
 /* What a pixel averages over time: the colours as the model gives them
  * (model), or those clamped to [0, 1] and decoded from sRGB first
@@ -24,6 +24,11 @@ typedef enum { BLUR_SPACE_MODEL, BLUR_SPACE_LINEAR } blur_space;
 
 const char *pixel_filter_name(pixel_filter f);
 const char *blur_space_name(blur_space b);
+/* Exact time integration with the blur space: refused (-1, err naming
+ * --blur-space) for linear, whose decoding of each instant's colour must
+ * come before the time average, while exact time integrates colours over
+ * time first. One rule for the command line and render_image. */
+int render_check_exact_blur(int exact_time, blur_space b, rr_error *err);
 
 typedef struct {
     sampler smp;            /* kind, seed, counts */
@@ -40,6 +45,12 @@ typedef struct {
     blur_space blur;
 } render_settings;
 
+/* One batch of one sample per pixel (the thesis sampler, seed 1, one spatial
+ * stratum, one time, time factor 1) on one thread, over the default shutter
+ * (shutter_default), every pixel, box filter, the model's colours, no
+ * target error. Callers override what they need by field name, so that a
+ * field added or moved in render_settings cannot shift their values. */
+render_settings render_settings_default(void);
 
 typedef struct {
     /* about 5 times a second, and once at the end with fraction 1 */

@@ -50,8 +50,9 @@ static void set_identity_text(attr_list *a, const char *key, const char *hash_ke
 }
 
 /* How each Gaussian-splat object is imaged ("none" without any): its PLY
- * does not say, and the default changed (3D models were 3DGRT's before
- * issue 29), so it is part of a render's identity. */
+ * does not say, and the default has changed (3D models were once imaged as
+ * 3DGRT's, now by the 3DGS rasterizer's rules), so it is part of a render's
+ * identity: states rendered under two defaults must not merge. */
 static void describe_gaussians(FILE *f, const scene *s)
 {
     int any = 0;
@@ -82,7 +83,7 @@ static void line_times(attr_list *a, const shutter *sh, int width, int height)
         return;
     int lines;
     shutter_line(sh, 0, 0, width, height, &lines);
-    attrs_set(a, "refrender:lineTimes", "line 0 [%.17g, %.17g], line %d [%.17g, %.17g], linear between",
+    attrs_set(a, ATTR_LINE_TIMES, "line 0 [%.17g, %.17g], line %d [%.17g, %.17g], linear between",
               shutter_line_time(sh, 0, lines, sh->open), shutter_line_time(sh, 0, lines, sh->close), lines - 1,
               shutter_line_time(sh, lines - 1, lines, sh->open), shutter_line_time(sh, lines - 1, lines, sh->close));
 }
@@ -110,8 +111,8 @@ static void camera_matrices(attr_list *a, const camera *cam)
     camera_world_to_camera(cam, view);
     camera_projection(cam, 1.0, 1.0, proj);
     mat4_mul(proj, view, ndc);
-    set_matrix(a, "worldToCamera", view);
-    set_matrix(a, "worldToNDC", ndc);
+    set_matrix(a, ATTR_WORLD_TO_CAMERA, view);
+    set_matrix(a, ATTR_WORLD_TO_NDC, ndc);
 }
 
 
@@ -119,37 +120,37 @@ void attrs_for_render(attr_list *a, const scene *s, const render_settings *rs, u
                       const char *command)
 {
     const sampler *smp = &rs->smp;
-    attrs_set(a, "refrender:scene", "%s", s->path);
-    attrs_set(a, "refrender:sceneHash", "%016" PRIx64, s->scene_hash);
-    attrs_set(a, "refrender:inputsHash", "%016" PRIx64, s->inputs_hash);
+    attrs_set(a, ATTR_SCENE, "%s", s->path);
+    attrs_set(a, ATTR_SCENE_HASH, "%016" PRIx64, s->scene_hash);
+    attrs_set(a, ATTR_INPUTS_HASH, "%016" PRIx64, s->inputs_hash);
     /* the parameters change the scene: part of the render's identity */
-    set_identity_text(a, "refrender:parameters", "refrender:parametersHash", parameters_text, &s->params);
-    attrs_set(a, "refrender:resolution", "%dx%d", s->cam.width, s->cam.height);
-    attrs_set(a, "refrender:sampler", "%s", sampler_name(smp->kind));
-    attrs_set(a, "refrender:spp", "%d", smp->grid * smp->grid);
-    attrs_set(a, "refrender:tspp", "%d", smp->tspp);
-    attrs_set(a, "refrender:seed", "%" PRIu64, smp->seed);
-    attrs_set(a, "refrender:epsilon", "%.17g", s->epsilon);
-    attrs_set(a, "refrender:kernelSigma", "%.17g", s->kernel_sigma);
-    attrs_set(a, "refrender:shutter", "%.17g %.17g", rs->shut.open, rs->shut.close);
-    attrs_set(a, "refrender:shutterOpen", "%.17g", rs->shut.open);
-    attrs_set(a, "refrender:shutterClose", "%.17g", rs->shut.close);
+    set_identity_text(a, ATTR_PARAMETERS, ATTR_PARAMETERS_HASH, parameters_text, &s->params);
+    attrs_set(a, ATTR_RESOLUTION, "%dx%d", s->cam.width, s->cam.height);
+    attrs_set(a, ATTR_SAMPLER, "%s", sampler_name(smp->kind));
+    attrs_set(a, ATTR_SPP, "%d", smp->grid * smp->grid);
+    attrs_set(a, ATTR_TSPP, "%d", smp->tspp);
+    attrs_set(a, ATTR_SEED, "%" PRIu64, smp->seed);
+    attrs_set(a, ATTR_EPSILON, "%.17g", s->epsilon);
+    attrs_set(a, ATTR_KERNEL_SIGMA, "%.17g", s->kernel_sigma);
+    attrs_set(a, ATTR_SHUTTER, "%.17g %.17g", rs->shut.open, rs->shut.close);
+    attrs_set(a, ATTR_SHUTTER_OPEN, "%.17g", rs->shut.open);
+    attrs_set(a, ATTR_SHUTTER_CLOSE, "%.17g", rs->shut.close);
     camera_matrices(a, &s->cam);
-    set_identity_text(a, "refrender:weightFunction", "refrender:weightHash", weight_text, &rs->shut);
+    set_identity_text(a, ATTR_WEIGHT_FUNCTION, ATTR_WEIGHT_HASH, weight_text, &rs->shut);
     char rolling[256];
     shutter_rolling_text(&rs->shut, rolling, sizeof rolling);
-    attrs_set(a, "refrender:rollingShutter", "%s", rolling);
+    attrs_set(a, ATTR_ROLLING_SHUTTER, "%s", rolling);
     line_times(a, &rs->shut, s->cam.width, s->cam.height);
-    attrs_set(a, "refrender:timeFactor", "%d", smp->time_factor);
-    attrs_set(a, "refrender:timeIntegration", "%s", rs->exact_time ? "exact" : "sampled");
-    attrs_set(a, "refrender:pixelFilter", "%s", pixel_filter_name(rs->filter));
-    attrs_set(a, "refrender:blurSpace", "%s", blur_space_name(rs->blur));
-    set_identity_text(a, "refrender:gaussians", "refrender:gaussiansHash", gaussians_text, s);
+    attrs_set(a, ATTR_TIME_FACTOR, "%d", smp->time_factor);
+    attrs_set(a, ATTR_TIME_INTEGRATION, "%s", rs->exact_time ? "exact" : "sampled");
+    attrs_set(a, ATTR_PIXEL_FILTER, "%s", pixel_filter_name(rs->filter));
+    attrs_set(a, ATTR_BLUR_SPACE, "%s", blur_space_name(rs->blur));
+    set_identity_text(a, ATTR_GAUSSIANS, ATTR_GAUSSIANS_HASH, gaussians_text, s);
     /* the convention compare.py --alpha composite relies on (README, Output) */
-    attrs_set(a, "refrender:background", "%.9g %.9g %.9g", s->background.x, s->background.y, s->background.z);
-    attrs_set(a, "refrender:alpha", "coverage; RGB already holds refrender:background where coverage < 1");
-    attrs_set(a, "refrender:batches", "%u", total_batches);
-    attrs_set(a, "refrender:command", "%s", command);
-    attrs_set(a, "software", "refrender %s", RR_VERSION);
+    attrs_set(a, ATTR_BACKGROUND, "%.9g %.9g %.9g", s->background.x, s->background.y, s->background.z);
+    attrs_set(a, ATTR_ALPHA, "coverage; RGB already holds refrender:background where coverage < 1");
+    attrs_set(a, ATTR_BATCHES, "%u", total_batches);
+    attrs_set(a, ATTR_COMMAND, "%s", command);
+    attrs_set(a, ATTR_SOFTWARE, "refrender %s", RR_VERSION);
 }
 

@@ -4,6 +4,7 @@
 #include <string.h>
 
 #include "gaussian_hit.h"
+#include "trajectory.h"
 
 void scene_init(scene *s)
 {

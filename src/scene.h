@@ -82,7 +82,8 @@ typedef struct {
     shutter shut;            /* as the file gives it: frame 0's with <frames> (scene_frame_shutter) */
     double frame_rate;       /* <frames rate>: frame N starts at time N / rate; 0: no frames */
     int frames_at_poses;     /* <frames at="trajectory">: frame N's exposure is centred on the camera
-                                trajectory's pose N (issue 30) */
+                                trajectory's pose N (a deblurring dataset's frame k spans pose k's
+                                time) */
     vec3 background, ambient;
     double epsilon, kernel_sigma;
     int time_factor;

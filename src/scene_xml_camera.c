@@ -4,6 +4,7 @@
  * rigidly (keyframes, or two cameras.json poses). scenes/README.md. */
 #include "camjson.h"
 #include "transforms.h"
+#include "tum.h"
 #include "scene_xml_internal.h"
 
 #include <stdlib.h>
@@ -23,7 +24,8 @@ static int camera_from_pose(camera *cam, vec3 position, const double r[3][3], co
     return 0;
 }
 
-/* The size the model was trained at (issue 29): 3DGS and 2DGS train at the
+/* The size the model was trained at (its cameras.json gives the dataset
+ * image's size, which training may have shrunk): 3DGS and 2DGS train at the
  * loaded image's size, by utils/camera_utils.py loadCam (graphdeco-inria
  * gaussian-splatting; the same in hbb1/2d-gaussian-splatting 1920a23):
  * -r 1, 2, 4 or 8 divides it, rounded as Python's round (ties to even);
@@ -127,7 +129,7 @@ static int load_path(xml_ctx *c, xmlNodePtr n, const char *path, int transforms,
     rr_error sub;
     transforms_camera tc;
     int rc = transforms ? transforms_load(path, tr, &tc, c->inputs_hash, &sub)
-                        : trajectory_load_tum(path, tr, c->inputs_hash, &sub);
+                        : tum_load(path, tr, c->inputs_hash, &sub);
     tr->interp = kind, tr->opengl_axes = transforms || opengl;
     if (rc || trajectory_prepare(tr, path, &sub))
         return rr_fail(c->err, "%s (trajectory of %s:%ld)", sub.msg, c->name, xmlGetLineNo(n));

@@ -4,7 +4,8 @@
 #ifndef RR_SHADE_H
 #define RR_SHADE_H
 
-#include "accel.h"
+#include "kbuffer.h"
+#include "scene.h"
 
 /* Color of a sample whose k-buffer is non-empty: weighted mean of colors,
  * normals and material parameters of the hits, then Phong (or the blended

@@ -3,7 +3,7 @@
 #ifndef RR_SHAPES_H
 #define RR_SHAPES_H
 
-#include "ply.h"
+#include "surfel.h"
 
 typedef struct {
     char kind[16];      /* "sphere", "torus" or "plane" */

@@ -10,9 +10,10 @@ typedef enum { WEIGHT_BOX, WEIGHT_LINEAR, WEIGHT_EXP, WEIGHT_TABLE } weight_kind
 
 #define SHUTTER_TABLE_MAX 256
 
-/* Rolling shutter (issue 30): the sensor's lines, read in turn, are each
- * exposed over their own window. Line r counts along the readout
- * direction (top-to-bottom: r = pixel row y; bottom-to-top: H - 1 - y;
+/* Rolling shutter (a CMOS sensor's, as 3dgs-deblur and gsplat model it):
+ * the sensor's lines, read in turn, are each exposed over their own window.
+ * Line r counts along the readout direction (top-to-bottom: r = pixel row
+ * y; bottom-to-top: H - 1 - y;
  * left-to-right: column x; right-to-left: W - 1 - x), L lines in all:
  *   lines        [open, close] + delta r, a(t) shifted with it (the general
  *                model: line delay delta, line exposure close - open)

@@ -11,7 +11,7 @@
 #ifndef RR_SURFELIZE_H
 #define RR_SURFELIZE_H
 
-#include "ply.h"
+#include "surfel.h"
 
 /* pos, nrm: 3 per vertex; tri: 3 vertex indices per triangle. Vertices in
  * no triangle are dropped. */

@@ -1,137 +1,15 @@
 #include "trajectory.h"
 
-#include "inputfile.h"
-
-#include <errno.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
-/* ---- rotations: unit quaternions (w, x, y, z) and rotation vectors ------- */
-
-void trajectory_quat_mul(const double a[4], const double b[4], double out[4])
-{
-    double r[4] = {a[0] * b[0] - a[1] * b[1] - a[2] * b[2] - a[3] * b[3],
-                   a[0] * b[1] + a[1] * b[0] + a[2] * b[3] - a[3] * b[2],
-                   a[0] * b[2] - a[1] * b[3] + a[2] * b[0] + a[3] * b[1],
-                   a[0] * b[3] + a[1] * b[2] - a[2] * b[1] + a[3] * b[0]};
-    memcpy(out, r, sizeof r);
-}
-
-static void quat_conj(const double q[4], double out[4])
-{
-    out[0] = q[0], out[1] = -q[1], out[2] = -q[2], out[3] = -q[3];
-}
-
-static vec3 quat_rotate(const double q[4], vec3 v)
-{
-    double r[3][3];
-    trajectory_quat_matrix(q, r);
-    return v3(r[0][0] * v.x + r[0][1] * v.y + r[0][2] * v.z, r[1][0] * v.x + r[1][1] * v.y + r[1][2] * v.z,
-              r[2][0] * v.x + r[2][1] * v.y + r[2][2] * v.z);
-}
-
-/* Both conversions work in long double and round once at the end: a
- * matrix written to a file and read back then moves the quaternion by at
- * most about an ulp, without the drift binary64's rounding has (issue 30:
- * transforms.c keeps the quaternion its written matrix reads back as, a
- * fixed point this map reaches in a few steps; in binary64 it wandered on). */
-void trajectory_quat_matrix(const double q[4], double r[3][3])
-{
-    long double w = q[0], x = q[1], y = q[2], z = q[3], s = 2.0L / (w * w + x * x + y * y + z * z);
-    r[0][0] = (double)(1 - s * (y * y + z * z)), r[0][1] = (double)(s * (x * y - w * z));
-    r[0][2] = (double)(s * (x * z + w * y)), r[1][0] = (double)(s * (x * y + w * z));
-    r[1][1] = (double)(1 - s * (x * x + z * z)), r[1][2] = (double)(s * (y * z - w * x));
-    r[2][0] = (double)(s * (x * z - w * y)), r[2][1] = (double)(s * (y * z + w * x));
-    r[2][2] = (double)(1 - s * (x * x + y * y));
-}
-
-void trajectory_matrix_quat(const double r[3][3], double q[4])
-{
-    /* Shepperd's method: divide by the largest of 4 w^2, 4 x^2, 4 y^2, 4 z^2 */
-    long double m[3][3];
-    for (int a = 0; a < 3; a++)
-        for (int b = 0; b < 3; b++)
-            m[a][b] = r[a][b];
-    long double tr = m[0][0] + m[1][1] + m[2][2], d[4] = {tr, m[0][0], m[1][1], m[2][2]};
-    int k = 0;
-    for (int i = 1; i < 4; i++)
-        if (d[i] > d[k])
-            k = i;
-    long double big = k ? sqrtl(1.0L + 2.0L * d[k] - tr) * 0.5L : sqrtl(1.0L + tr) * 0.5L, f = 0.25L / big;
-    long double wx = m[2][1] - m[1][2], wy = m[0][2] - m[2][0], wz = m[1][0] - m[0][1];
-    long double xy = m[0][1] + m[1][0], xz = m[0][2] + m[2][0], yz = m[1][2] + m[2][1];
-    long double all[4][4] = {{big, wx * f, wy * f, wz * f},
-                             {wx * f, big, xy * f, xz * f},
-                             {wy * f, xy * f, big, yz * f},
-                             {wz * f, xz * f, yz * f, big}};
-    int flip = all[k][0] < 0; /* the sign with w >= 0 */
-    for (int i = 0; i < 4; i++)
-        q[i] = (double)(flip ? -all[k][i] : all[k][i]);
-}
-
-/* Exp: the rotation by |phi| about phi, as a unit quaternion. */
-static void quat_exp(vec3 phi, double q[4])
-{
-    double theta = v3_len(phi), half = 0.5 * theta;
-    /* sin(theta/2)/theta, by its series where the quotient loses digits */
-    double k = theta < 1e-4 ? 0.5 - theta * theta / 48.0 : sin(half) / theta;
-    q[0] = cos(half), q[1] = k * phi.x, q[2] = k * phi.y, q[3] = k * phi.z;
-}
-
-/* Log: the rotation vector of q, the short arc (|phi| <= pi: q and -q are
- * one rotation, the sign with w >= 0 is taken). */
-static vec3 quat_log(const double q[4])
-{
-    double s = q[0] < 0 ? -1.0 : 1.0, w = s * q[0];
-    vec3 v = v3(s * q[1], s * q[2], s * q[3]);
-    double n = v3_len(v);
-    if (n == 0)
-        return v3(0, 0, 0);
-    return v3_scale(v, 2.0 * atan2(n, w) / n);
-}
-
-/* The SE(3) left Jacobian's action V(phi) rho and its inverse (Barfoot,
- * State Estimation for Robotics, 2017, eqs. 7.86 and 7.95 with J = V):
- * the translation of Exp((phi, rho)) is V(phi) rho. */
-static vec3 se3_v(vec3 phi, vec3 rho, int inverse)
-{
-    double th2 = v3_dot(phi, phi), th = sqrt(th2), a, b;
-    vec3 c1 = v3_cross(phi, rho), c2 = v3_cross(phi, c1);
-    if (inverse) {
-        a = -0.5;
-        b = th < 1e-4 ? 1.0 / 12.0 + th2 / 720.0 : (1.0 - th * sin(th) / (2.0 * (1.0 - cos(th)))) / th2;
-    } else {
-        a = th < 1e-4 ? 0.5 - th2 / 24.0 : (1.0 - cos(th)) / th2;
-        b = th < 1e-4 ? 1.0 / 6.0 - th2 / 120.0 : (th - sin(th)) / (th2 * th);
-    }
-    return v3_add(rho, v3_add(v3_scale(c1, a), v3_scale(c2, b)));
-}
-
-typedef struct {
-    vec3 phi, rho;
-} twist;
-
-static twist se3_log(vec3 p, const double q[4])
-{
-    twist x;
-    x.phi = quat_log(q);
-    x.rho = se3_v(x.phi, p, 1);
-    return x;
-}
-
-static void se3_exp(twist x, vec3 *p, double q[4])
-{
-    quat_exp(x.phi, q);
-    *p = se3_v(x.phi, x.rho, 0);
-}
+#include "rotation.h"
 
 /* (p, q) = (pa, qa)^-1 (pb, qb) */
 static void relative_pose(const trajectory_knot *a, const trajectory_knot *b, vec3 *p, double q[4])
 {
-    double ca[4];
-    quat_conj(a->q, ca);
-    trajectory_quat_mul(ca, b->q, q);
-    *p = quat_rotate(ca, v3_sub(b->p, a->p));
+    se3_relative(a->p, a->q, b->p, b->q, p, q);
 }
 
 /* ---- names --------------------------------------------------------------- */
@@ -149,159 +27,6 @@ int trajectory_interp_parse(const char *name)
 const char *trajectory_interp_name(trajectory_interp k) { return INTERP_NAMES[k]; }
 
 int trajectory_min_knots(trajectory_interp k) { return k == TRAJECTORY_CUBIC ? 4 : 2; }
-
-/* ---- the TUM reader -------------------------------------------------------- */
-
-static const char *const TUM_FIELDS[8] = {"t", "tx", "ty", "tz", "qx", "qy", "qz", "qw"};
-
-/* Up to n bytes of s for a message, quoted: printable ASCII as it is,
- * any other byte as \xHH (a byte order mark or a stray control byte is
- * otherwise invisible in the message), "..." where it is cut. */
-static const char *quoted(const char *s, size_t n, char out[96])
-{
-    size_t k = 0;
-    for (size_t i = 0; i < n; i++) {
-        unsigned char b = (unsigned char)s[i];
-        if (k + 8 >= 96) { /* room for one escape and the "..." */
-            memcpy(out + k, "...", 4);
-            return out;
-        }
-        k += (size_t)snprintf(out + k, 96 - k, b >= 0x20 && b < 0x7f ? "%c" : "\\x%02x", b);
-    }
-    out[k] = 0;
-    return out;
-}
-
-static int tum_space(char c) { return c == ' ' || c == '\t' || c == '\r'; }
-
-/* One line's fields into v; line is NUL-free and ends at end. */
-static int tum_fields(const char *line, const char *end, const char *name, long lineno, double v[8], rr_error *err)
-{
-    const char *s = line;
-    char q[96];
-    for (int f = 0; f < 8; f++) {
-        while (s < end && tum_space(*s))
-            s++;
-        if (s == end)
-            return rr_fail(err, "%s:%ld: field '%s' is missing (a TUM line is t tx ty tz qx qy qz qw)", name, lineno,
-                           TUM_FIELDS[f]);
-        char buf[64], *stop;
-        size_t n = 0;
-        while (s + n < end && !tum_space(s[n]))
-            n++;
-        if (n >= sizeof buf)
-            return rr_fail(err, "%s:%ld: field '%s' is not a number ('%s...')", name, lineno, TUM_FIELDS[f],
-                           quoted(s, 20, q));
-        memcpy(buf, s, n), buf[n] = 0;
-        errno = 0;
-        v[f] = strtod(buf, &stop);
-        if (*stop || stop == buf || !isfinite(v[f]))
-            return rr_fail(err, "%s:%ld: field '%s' is not a finite number ('%s')", name, lineno, TUM_FIELDS[f],
-                           quoted(buf, n, q));
-        s += n;
-    }
-    while (s < end && tum_space(*s))
-        s++;
-    if (s != end)
-        return rr_fail(err, "%s:%ld: more than the 8 fields t tx ty tz qx qy qz qw ('%s')", name, lineno,
-                       quoted(s, (size_t)(end - s < 20 ? end - s : 20), q));
-    return 0;
-}
-
-/* The knot of one line's values; a quaternion within 1e-14 of unit length
- * is kept as written, so that a file this program wrote reads back bit for
- * bit; one off by up to 1e-3 (written with few digits) is normalised. */
-static int tum_knot(const double v[8], const char *name, long lineno, trajectory_knot *k, rr_error *err)
-{
-    k->t = v[0];
-    k->p = v3(v[1] + 0.0, v[2] + 0.0, v[3] + 0.0); /* +0 for -0, as export writes them (export_cmd.c) */
-    double q[4] = {v[7], v[4], v[5], v[6]};
-    double n = sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
-    if (!(n > 0) || !isfinite(n))
-        return rr_fail(err, "%s:%ld: the quaternion (qx qy qz qw) = (%g %g %g %g) has no direction", name, lineno,
-                       v[4], v[5], v[6], v[7]);
-    if (fabs(n - 1.0) > 1e-3)
-        return rr_fail(err, "%s:%ld: the quaternion (qx qy qz qw) has length %.9g, not 1: is this a TUM pose?", name,
-                       lineno, n);
-    double s = fabs(n - 1.0) > 1e-14 ? 1.0 / n : 1.0;
-    for (int i = 0; i < 4; i++)
-        k->q[i] = q[i] * s + 0.0;
-    for (int i = 1; i <= 3; i++) /* the renderer traces no farther (accel.h), and Log/Exp stay finite */
-        if (!(fabs(v[i]) <= TRAJECTORY_MAX_ABS))
-            return rr_fail(err, "%s:%ld: field '%s' is %g, beyond the %g a position may reach", name, lineno,
-                           TUM_FIELDS[i], v[i], TRAJECTORY_MAX_ABS);
-    return 0;
-}
-
-static int add_knot(trajectory *out, int *cap, const trajectory_knot *k, const char *name, long lineno,
-                    rr_error *err)
-{
-    if (out->count && !(k->t > out->knots[out->count - 1].t))
-        return rr_fail(err, "%s:%ld: time %.17g does not follow the previous line's %.17g (times must increase)",
-                       name, lineno, k->t, out->knots[out->count - 1].t);
-    if (out->count && !isfinite(k->t - out->knots[0].t))
-        return rr_fail(err, "%s:%ld: time %.17g is too far from the first line's %.17g (their difference overflows)",
-                       name, lineno, k->t, out->knots[0].t);
-    if (out->count == *cap) {
-        int grown = *cap ? 2 * *cap : 64;
-        trajectory_knot *m = grown > (1 << 24) ? NULL : realloc(out->knots, (size_t)grown * sizeof *m);
-        if (m)
-            out->knots = m;
-        long *lines = m ? realloc(out->lines, (size_t)grown * sizeof *lines) : NULL;
-        if (!lines)
-            return rr_fail(err, "%s:%ld: out of memory (more than %d poses?)", name, lineno, *cap);
-        out->lines = lines, *cap = grown;
-    }
-    out->lines[out->count] = lineno;
-    out->knots[out->count++] = *k;
-    return 0;
-}
-
-static int blank_or_comment(const char *s, const char *end)
-{
-    while (s < end && tum_space(*s))
-        s++;
-    return s == end || *s == '#';
-}
-
-int trajectory_parse_tum(const char *text, size_t len, const char *name, trajectory *out, rr_error *err)
-{
-    int cap = 0;
-    out->knots = NULL, out->lines = NULL, out->count = 0, out->name = NULL;
-    const char *s = text, *end = text + len;
-    if (memchr(text, 0, len))
-        return rr_fail(err, "%s: contains a NUL byte: not a TUM text file", name);
-    if (len >= 3 && !memcmp(text, "\xEF\xBB\xBF", 3)) /* a UTF-8 byte order mark, as Windows editors write */
-        s += 3;
-    for (long lineno = 1; s < end; lineno++) {
-        const char *nl = memchr(s, '\n', (size_t)(end - s)), *eol = nl ? nl : end;
-        if (!blank_or_comment(s, eol)) {
-            double v[8];
-            trajectory_knot k;
-            if (tum_fields(s, eol, name, lineno, v, err) || tum_knot(v, name, lineno, &k, err) ||
-                add_knot(out, &cap, &k, name, lineno, err)) {
-                trajectory_free(out);
-                return -1;
-            }
-        }
-        s = nl ? nl + 1 : end;
-    }
-    return 0;
-}
-
-int trajectory_load_tum(const char *path, trajectory *out, uint64_t *content_hash, rr_error *err)
-{
-    input_file in;
-    if (input_file_read(path, TRAJECTORY_MAX_BYTES, &in, err))
-        return -1;
-    int rc = trajectory_parse_tum(in.data, in.len, path, out, err);
-    if (!rc && !(out->name = strdup(path)))
-        rc = rr_fail(err, "out of memory"), trajectory_free(out);
-    if (!rc && content_hash)
-        *content_hash = input_hash(*content_hash, in.data, in.len);
-    input_file_free(&in);
-    return rc;
-}
 
 /* ---- checks and bounds ----------------------------------------------------- */
 
@@ -324,7 +49,7 @@ static void segment_rates(const trajectory *tr, int k, double *speed, double *tu
     double dt = b->t - a->t, q[4];
     vec3 p;
     relative_pose(a, b, &p, q);
-    twist x = se3_log(p, q);
+    se3_twist x = se3_log(p, q);
     double moved = tr->interp == TRAJECTORY_SE3 ? v3_len(x.rho) : v3_len(v3_sub(b->p, a->p));
     *speed = moved / dt, *turn_rate = v3_len(x.phi) / dt;
 }
@@ -381,7 +106,7 @@ static vec3 knot_position(const trajectory *tr, int i, int part) { (void)part; r
 /* the twist of knot i (absolute, in the file's axes): part 0 phi, 1 rho */
 static vec3 knot_twist(const trajectory *tr, int i, int part)
 {
-    twist x = se3_log(tr->knots[i].p, tr->knots[i].q);
+    se3_twist x = se3_log(tr->knots[i].p, tr->knots[i].q);
     return part ? x.rho : x.phi;
 }
 
@@ -395,7 +120,7 @@ static int bezier_bounds(trajectory *tr, const char *name, rr_error *err)
     int n = tr->count - 1;
     for (int i = 1; i <= n; i++) { /* q and -q are one rotation: blend the signs nearest their neighbours */
         double *q = tr->knots[i].q, *prev = tr->knots[i - 1].q;
-        if (q[0] * prev[0] + q[1] * prev[1] + q[2] * prev[2] + q[3] * prev[3] < 0)
+        if (quat_dot(q, prev) < 0)
             for (int j = 0; j < 4; j++)
                 q[j] = -q[j];
     }
@@ -404,10 +129,10 @@ static int bezier_bounds(trajectory *tr, const char *name, rr_error *err)
     for (int i = 0; i <= n; i++)
         for (int j = 0; j < 4; j++)
             m[j] += tr->knots[i].q[j];
-    double mn = sqrt(m[0] * m[0] + m[1] * m[1] + m[2] * m[2] + m[3] * m[3]);
+    double mn = quat_norm(m);
     for (int i = 0; i <= n; i++) {
         const double *q = tr->knots[i].q;
-        c = fmin(c, (q[0] * m[0] + q[1] * m[1] + q[2] * m[2] + q[3] * m[3]) / mn);
+        c = fmin(c, quat_dot(q, m) / mn);
         if (i)
             for (int j = 0; j < 4; j++)
                 dq = fmax(dq, fabs(q[j] - tr->knots[i - 1].q[j]));
@@ -591,14 +316,11 @@ static int segment_of(const trajectory *tr, double t, int first, int last, doubl
 
 static void pose_linear(const trajectory *tr, double t, vec3 *p, double q[4])
 {
-    double u, rq[4], e[4];
+    double u;
     int k = segment_of(tr, t, 0, tr->count - 1, &u);
     const trajectory_knot *a = &tr->knots[k], *b = &tr->knots[k + 1];
     *p = v3_add(v3_scale(a->p, 1.0 - u), v3_scale(b->p, u));
-    quat_conj(a->q, rq);
-    trajectory_quat_mul(rq, b->q, rq);
-    quat_exp(v3_scale(quat_log(rq), u), e);
-    trajectory_quat_mul(a->q, e, q);
+    quat_slerp(a->q, b->q, u, q);
 }
 
 static void pose_se3(const trajectory *tr, double t, vec3 *p, double q[4])
@@ -608,11 +330,11 @@ static void pose_se3(const trajectory *tr, double t, vec3 *p, double q[4])
     const trajectory_knot *a = &tr->knots[k];
     vec3 rp, ep;
     relative_pose(a, &tr->knots[k + 1], &rp, rq);
-    twist x = se3_log(rp, rq);
+    se3_twist x = se3_log(rp, rq);
     x.phi = v3_scale(x.phi, u), x.rho = v3_scale(x.rho, u);
     se3_exp(x, &ep, eq);
     *p = v3_add(a->p, quat_rotate(a->q, ep));
-    trajectory_quat_mul(a->q, eq, q);
+    quat_mul(a->q, eq, q);
 }
 
 static void pose_cubic(const trajectory *tr, double t, vec3 *p, double q[4])
@@ -629,11 +351,9 @@ static void pose_cubic(const trajectory *tr, double t, vec3 *p, double q[4])
         *p = v3_add(*p, v3_scale(c[j].p, b[j]));
     memcpy(q, c[0].q, 4 * sizeof *q);
     for (int j = 0; j < 3; j++) { /* products on the right, in knot order */
-        double rq[4], e[4];
-        quat_conj(c[j].q, rq);
-        trajectory_quat_mul(rq, c[j + 1].q, rq);
-        quat_exp(v3_scale(quat_log(rq), cum[j]), e);
-        trajectory_quat_mul(q, e, q);
+        double e[4];
+        quat_between(c[j].q, c[j + 1].q, cum[j], e);
+        quat_mul(q, e, q);
     }
 }
 
@@ -658,7 +378,7 @@ static void pose_bezier(const trajectory *tr, double t, vec3 *p, double q[4])
     for (int i = 0; i <= n; i++) {
         const trajectory_knot *k = &tr->knots[i];
         if (se3) {
-            twist x = se3_log(k->p, k->q);
+            se3_twist x = se3_log(k->p, k->q);
             a = v3_add(a, v3_scale(x.phi, w[i])), b = v3_add(b, v3_scale(x.rho, w[i]));
             continue;
         }
@@ -667,10 +387,10 @@ static void pose_bezier(const trajectory *tr, double t, vec3 *p, double q[4])
             s[j] += w[i] * k->q[j];
     }
     if (se3) {
-        se3_exp((twist){a, b}, p, q);
+        se3_exp((se3_twist){a, b}, p, q);
         return;
     }
-    double len = sqrt(s[0] * s[0] + s[1] * s[1] + s[2] * s[2] + s[3] * s[3]);
+    double len = quat_norm(s);
     *p = a;
     for (int j = 0; j < 4; j++)
         q[j] = s[j] / len;
@@ -720,15 +440,6 @@ void trajectory_quat_to_axes(const double q[4], double out[4], int opengl_axes)
     memcpy(out, w, sizeof w);
 }
 
-void trajectory_write_tum_line(FILE *f, double t, vec3 p, const double q[4], int opengl_axes)
-{
-    double w[4];
-    trajectory_quat_to_axes(q, w, opengl_axes);
-    for (int i = 0; i < 4; i++) /* +0 for -0: the reader keeps none (tum_knot) */
-        w[i] += 0.0;
-    fprintf(f, "%.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g\n", t, p.x, p.y, p.z, w[1], w[2], w[3], w[0]);
-}
-
 void trajectory_free(trajectory *tr)
 {
     free(tr->knots);
@@ -737,3 +448,4 @@ void trajectory_free(trajectory *tr)
     tr->knots = NULL, tr->lines = NULL, tr->name = NULL;
     tr->count = 0;
 }
+

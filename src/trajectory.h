@@ -1,5 +1,7 @@
-/* A camera trajectory from a file (issue 30): knot poses at times,
- * interpolated as the deblurring methods that exchange such files do.
+/* A camera trajectory: knot poses at times, interpolated as the
+ * deblurring methods that exchange trajectory files do. This is the
+ * interpolation maths only; the files are read by tum.h (TUM text) and
+ * transforms.h (nerfstudio's transforms.json), which fill a trajectory.
  *
  * Knots are camera-to-world poses: position p and unit quaternion q
  * (w, x, y, z) of the rotation whose columns are the camera's axes in
@@ -26,9 +28,6 @@
 #ifndef RR_TRAJECTORY_H
 #define RR_TRAJECTORY_H
 
-#include <stdint.h>
-#include <stdio.h>
-
 #include "common.h"
 
 typedef enum {
@@ -45,7 +44,7 @@ typedef struct {
     double q[4]; /* w, x, y, z; unit to 1e-14 */
 } trajectory_knot;
 
-typedef struct {
+typedef struct trajectory { /* (animation.h names it to hold one) */
     trajectory_interp interp;
     int opengl_axes; /* the file's camera axes: 1 OpenGL, 0 OpenCV */
     int count;
@@ -55,7 +54,7 @@ typedef struct {
     /* over the whole domain, set by trajectory_prepare: how fast the
      * camera's origin moves and how fast it turns (radians) per unit time */
     double speed, turn_rate;
-    char *name; /* the file, for messages (trajectory_load_tum) */
+    char *name; /* the file, for messages (tum_load) */
 } trajectory;
 
 /* The largest position coordinate accepted (the reach accel.h traces). */
@@ -69,22 +68,6 @@ int trajectory_interp_parse(const char *name);
 const char *trajectory_interp_name(trajectory_interp k);
 /* Knots the interpolation needs at least. */
 int trajectory_min_knots(trajectory_interp k);
-
-/* Parses a TUM file's text (len bytes): one knot a line,
- * `t tx ty tz qx qy qz qw`, blank lines and lines starting with '#'
- * skipped, and a UTF-8 byte order mark before the first line (editors
- * write one; it is no part of the text). Refuses, naming name, the line
- * and the field (bytes outside printable ASCII as \xHH): a missing or
- * extra field, one that is not a finite number, a position coordinate
- * beyond TRAJECTORY_MAX_ABS, a zero quaternion or one
- * whose length is not 1 within 1e-3 (it is normalised), times that do not
- * increase. out->interp and out->opengl_axes are left as they are. */
-int trajectory_parse_tum(const char *text, size_t len, const char *name, trajectory *out, rr_error *err);
-
-/* Reads the TUM file at path (at most TRAJECTORY_MAX_BYTES, a regular
- * file: inputfile.h) and folds its bytes into *content_hash. */
-#define TRAJECTORY_MAX_BYTES ((size_t)1 << 30)
-int trajectory_load_tum(const char *path, trajectory *out, uint64_t *content_hash, rr_error *err);
 
 /* Checks the knots against the interpolation (how many; cubic: evenly
  * spaced; bezier: control quaternions within one hemisphere; every
@@ -100,18 +83,8 @@ void trajectory_domain(const trajectory *tr, double *t0, double *t1);
 /* The pose at time t (clamped to the domain), OpenCV camera axes. */
 void trajectory_pose(const trajectory *tr, double t, vec3 *p, double q[4]);
 
-/* The rotation matrix of a (not necessarily unit) quaternion, and back
- * (the sign with w >= 0), and the product a b (b applied first). */
-void trajectory_quat_matrix(const double q[4], double r[3][3]);
-void trajectory_matrix_quat(const double r[3][3], double q[4]);
-void trajectory_quat_mul(const double a[4], const double b[4], double out[4]);
-
 /* An OpenCV-axes rotation q in the given axes (OpenGL: R diag(1, -1, -1)). */
 void trajectory_quat_to_axes(const double q[4], double out[4], int opengl_axes);
-
-/* One TUM line for the OpenCV-axes pose (p, q) at time t, written in the
- * given axes with every digit a double needs (read back bit for bit). */
-void trajectory_write_tum_line(FILE *f, double t, vec3 p, const double q[4], int opengl_axes);
 
 void trajectory_free(trajectory *tr);
 

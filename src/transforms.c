@@ -7,6 +7,7 @@
 #include "camera.h"
 #include "camjson.h"
 #include "inputfile.h"
+#include "rotation.h"
 
 #define TRANSFORMS_MAX_BYTES ((size_t)256 << 20)
 
@@ -192,7 +193,7 @@ static int read_camera(const char *name, json_object *root, json_object *frames,
  * pose) may flip it. */
 static void matrix_to_quat(const double r[3][3], double q[4])
 {
-    trajectory_matrix_quat(r, q);
+    quat_of_matrix(r, q);
     for (int i = 0; i < 4; i++)
         q[i] += 0.0;
 }
@@ -202,7 +203,7 @@ static void matrix_round_trip(const double *q, double *out, void *ctx)
 {
     (void)ctx;
     double r[3][3];
-    trajectory_quat_matrix(q, r);
+    quat_matrix(q, r);
     matrix_to_quat(r, out);
 }
 
@@ -237,7 +238,9 @@ static int read_pose(const char *name, size_t i, json_object *frame, trajectory_
         return rr_fail(err, "%s: frames[%zu]: 'transform_matrix' rotation is not one (columns orthonormal within 1e-6, "
                             "determinant 1; a scaled world is not a camera pose)", name, i);
     matrix_to_quat(r, k->q);
-    /* the quaternion its written matrix reads back as (issue 30: read, write, read back bit for bit) */
+    /* the quaternion its written matrix reads back as: a file read, written
+     * (export, transforms_write) and read again gives the same poses bit for
+     * bit, though a matrix to a quaternion and back rounds (quat_matrix) */
     rr_round_trip_representative(k->q, 4, matrix_round_trip, NULL);
     k->p = v3(m[0][3] + 0.0, m[1][3] + 0.0, m[2][3] + 0.0); /* +0 for -0 (matrix_to_quat) */
     if (!(fabs(k->p.x) <= TRAJECTORY_MAX_ABS && fabs(k->p.y) <= TRAJECTORY_MAX_ABS &&
@@ -332,7 +335,7 @@ void transforms_write(FILE *f, const transforms_camera *cam, const double *t, co
     for (int i = 0; i < n; i++) {
         double r[3][3], gl[4];
         trajectory_quat_to_axes(q[i], gl, 1);
-        trajectory_quat_matrix(gl, r);
+        quat_matrix(gl, r);
         for (int a = 0; a < 9; a++) /* +0 for -0: the reader keeps none (matrix_to_quat) */
             r[a / 3][a % 3] += 0.0;
         vec3 pi = p[i];

@@ -1,4 +1,4 @@
-/* nerfstudio's transforms.json as a camera trajectory (issue 30): the
+/* nerfstudio's transforms.json as a camera trajectory: the
  * frames' camera-to-world `transform_matrix` (OpenGL axes: x right, y up,
  * z backward) are the knots, in file order at times 0, 1, 2, ... or at
  * each frame's `time` where every frame has one; the pinhole intrinsics
@@ -14,7 +14,7 @@
 #include <stdint.h>
 #include <stdio.h>
 
-#include "trajectory.h"
+#include "trajectory.h" /* the file is read into a trajectory's knots */
 
 typedef struct {
     double fx, fy, cx, cy; /* pixels; (cx, cy) from the top-left image corner */

@@ -1,5 +1,5 @@
 """An independent numpy reference of the official 2DGS forward pass at one
-instant, for the Gaussian splat work (issue 24): refrender's renders of a
+instant, the independent expectation of refrender's 2DGS tests: its renders of a
 2DGS model with --pixel-filter point and one time are to match it per pixel.
 
 Rules: hbb1/diff-surfel-rasterization at e0ed0207b3e0669960cfad70852200a4a5847f61

@@ -3,7 +3,7 @@
 threedgrt_tracer/include/3dgrt/kernels/slang/models/gaussianParticles.slang
 for a hit, kernels/cuda/3dgrtTracer.cuh traceVolumetricGS for the loop,
 configs/render/3dgrt.yaml for the constants), per ray, in float64, for
-issue 24's 3DGS tests:
+refrender's 3DGS ray-tracing tests:
 
 - the ray in the Gaussian's canonical frame: o' = S^-1 R^T (o - mu),
   d' = S^-1 R^T d, and d'' = d' / |d'|;

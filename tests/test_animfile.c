@@ -84,7 +84,7 @@ TEST(thrown_anim_reads_version_1_0_keys_and_fixed_angles)
     free_keys(k);
 }
 
-/* Issue 17.1: a fixed tangent's tan(angle) is value per frame of the
+/* A fixed tangent's tan(angle) is value per frame of the
  * file's timeUnit. Keys (frame 0, 0 m, fixed 45 degrees out) and (frame 24,
  * 24 m, linear): both end slopes are the secant, 1 m/frame = 24 m/s, so the
  * segment is the straight line x = 24 t (per second it was 1 m/s and the
@@ -156,7 +156,7 @@ static const char *parse_error(const char *text)
     return e.msg;
 }
 
-/* Weighted curves (issue 17.3): a fixed tangent's weight is its Bezier
+/* Weighted curves: a fixed tangent's weight is its Bezier
  * handle's length in the (frames, file value) plane, along its angle; other
  * tangents reach a third of the interval (animx). Film, cm. */
 #define WEIGHTED(keys)                                                                                    \
@@ -302,7 +302,7 @@ TEST(bad_anim_files_give_clear_errors_with_lines)
     CHECK(animfile_load("no/such.anim", NULL, &k, NULL, NULL, &e) == -1 && strstr(e.msg, "no/such.anim: cannot open"));
 }
 
-/* Issue 18.6: <animation>/dev/zero</animation> used to read forever. */
+/* Regression: <animation>/dev/zero</animation> used to read forever. */
 TEST(anim_refuses_what_is_not_a_regular_file)
 {
     keyframes *k = NULL;
@@ -311,7 +311,7 @@ TEST(anim_refuses_what_is_not_a_regular_file)
     CHECK(animfile_load("/tmp", NULL, &k, NULL, NULL, &e) == -1 && strstr(e.msg, "/tmp: not a regular file"));
 }
 
-/* Issue 17.2: a Maya export holds a hierarchy; each 'anim' line names its
+/* A Maya export holds a hierarchy; each 'anim' line names its
  * node. Two nodes here, in Maya's syntax: 'ball' moves in x (linear keys),
  * 'joint2' in y (step then linear) and x (fixed 45 degrees per frame). */
 static const char TWO_NODES[] =
@@ -368,7 +368,7 @@ TEST(placeholder_lines_are_not_animated_nodes)
           strstr(e.msg, "no curves for node 'hips'; the file animates 'hand'"));
 }
 
-/* Issue 23, items 3, 4 and 14: words are kept whole up to 255 characters
+/* Words are kept whole up to 255 characters
  * and refused beyond (a 69-character number was cut to 63 and read as 1;
  * node names sharing 63 leading characters became one node); any number
  * of nodes (the 257th was once not recorded); a tangent angle of 180

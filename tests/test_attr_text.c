@@ -1,4 +1,4 @@
-/* Attribute text (issue 23, item 3): EXR attribute strings are read whole
+/* Attribute text: EXR attribute strings are read whole
  * or refused, and text past an attr_list's storage says it was cut. */
 #include <stdlib.h>
 #include <string.h>

@@ -1,5 +1,5 @@
 """Error estimates, samplers, split-and-merge and checkpoint/resume, end to
-end (issue: ground truth you can trust)."""
+end: a ground truth must say how far to trust it and survive being split."""
 import os
 import signal
 import subprocess
@@ -192,7 +192,7 @@ def test_convergence_script_writes_csv_plot_and_slopes(tmp_path):
 
 
 def test_states_of_changed_model_or_animation_files_do_not_merge_or_resume(tmp_path):
-    """Issue 18.3: the identity covers every input file's content, not only
+    """The identity covers every input file's content, not only
     the scene file: a pass rendered after the PLY or .anim changed is refused."""
     (tmp_path / "m.ply").write_text("ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
                                     "property float z\nproperty float nx\nproperty float ny\nproperty float nz\n"

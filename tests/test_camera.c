@@ -56,7 +56,7 @@ TEST(camera_rejects_degenerate_frames)
     CHECK(camera_prepare(&huge, &e) != 0); /* more than RR_MAX_PIXELS */
 }
 
-/* Issue 23, item 14: a camera at 1e308 was blamed on its up vector (the
+/* Regression: a camera at 1e308 was blamed on its up vector (the
  * distance to lookat overflowed and the view direction came out 0). */
 TEST(camera_too_far_from_lookat_is_named_as_such)
 {

@@ -106,7 +106,7 @@ TEST(camjson_names_the_file_level_mistakes)
     CHECK(camjson_read("/nonexistent/cameras.json", "A", &c, NULL, &e) != 0 && strstr(e.msg, "/nonexistent/cameras.json"));
 }
 
-/* Issue 32.8: an img_name with an embedded NUL matched the name before it;
+/* Regressions: an img_name with an embedded NUL matched the name before it;
  * a position of 1e16 (where position + view direction rounds back to the
  * position) was blamed on a lookat the file does not have; fx = 1e-14 (a
  * field of view of 180 degrees) on the object's reach. Each is named by

@@ -1,4 +1,4 @@
-"""Issue 23, item 15: --checkpoint-every 0 means what render.h says (a
+"""--checkpoint-every 0 means what render.h says (a
 checkpoint only when interrupted), not the 60 s it silently became; the
 default stays 60 s. Periodic checkpoints are seen being written while a
 render runs with a short period, and none with 0."""

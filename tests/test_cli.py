@@ -163,7 +163,7 @@ def test_surfels_converts_meshes_and_point_clouds(tmp_path):
 
 
 def test_sigterm_while_loading_a_large_model_exits_130(tmp_path):
-    """Issue 32.10: the signal handlers were installed only after the BVH
+    """Regression: the signal handlers were installed only after the BVH
     build, so SIGTERM while a large model loaded killed the process (exit
     143, -15 here) instead of the documented 130. The handlers now come
     first, the PLY reader polls the flag, and load and build stop with 130

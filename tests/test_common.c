@@ -156,3 +156,37 @@ TEST(u64_sort_agrees_with_qsort_and_float_bits_sort_as_floats)
         CHECK(rr_float_order_bits(f[k - 1]) < rr_float_order_bits(f[k]));
     CHECK(rr_float_order_bits(0.0f) == rr_float_order_bits(-0.0f) + 1); /* -0 just before +0 */
 }
+
+/* rr_grow: the contents survive a doubling, the capacity covers the need,
+ * and a size past SIZE_MAX is refused without touching the array. */
+TEST(grow_keeps_contents_and_refuses_overflow)
+{
+    int *a = NULL;
+    size_t cap = 0;
+    for (int i = 0; i < 1000; i++) {
+        CHECK(rr_grow((void **)&a, &cap, (size_t)i + 1, sizeof *a) == 0 && cap >= (size_t)i + 1);
+        a[i] = i;
+    }
+    int intact = 1;
+    for (int i = 0; i < 1000; i++)
+        intact &= a[i] == i;
+    CHECK(intact);
+    int *before = a;
+    size_t cap_before = cap;
+    CHECK(rr_grow((void **)&a, &cap, SIZE_MAX / 2, sizeof *a) == -1 && a == before && cap == cap_before);
+    CHECK(rr_grow((void **)&a, &cap, SIZE_MAX, 1) == -1 && a == before && cap == cap_before);
+    free(a);
+}
+
+/* Rounded outward: strictly outside x whether x is a float (1) or lies
+ * between two (0.1), so a float box so made holds the double box. */
+TEST(outward_rounding_lies_strictly_outside)
+{
+    const double xs[] = {1.0, 0.1, -0.1, 1e-30, -3e7 + 0.3};
+    for (int i = 0; i < 5; i++)
+        CHECK((double)rr_float_below(xs[i]) < xs[i] && (double)rr_float_above(xs[i]) > xs[i]);
+    aabb b = {v3(0.1, -0.2, 1.0), v3(0.3, 0.7, 1.0)};
+    float lo[3], hi[3];
+    aabb_round_out(b, lo, hi);
+    CHECK(lo[0] < 0.1 && lo[1] < -0.2 && lo[2] < 1.0 && hi[0] > 0.3 && hi[1] > 0.7 && hi[2] > 1.0);
+}

@@ -1,4 +1,4 @@
-"""compare.py's figure-ready outputs (issue 15): maps at native resolution
+"""compare.py's figure-ready outputs: maps at native resolution
 (one map pixel per image pixel, integer upscale by nearest neighbour) as PNG
 and float EXR, one difference range shared by all methods, crop windows
 outlined with zoomed insets, a stable CSV schema, and a LaTeX table with

@@ -1,4 +1,4 @@
-"""scripts/cost_error.py (issue 15): error against cost for any method's
+"""scripts/cost_error.py: error against cost for any method's
 images, with hand-computed RMSEs, refrender's curves drawn from a
 convergence CSV, and clear errors for bad entries."""
 import csv

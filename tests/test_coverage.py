@@ -1,5 +1,5 @@
-"""End-to-end checks of refrender against closed-form answers (issue: core
-renderer, tests 1-3). Tolerances are stated in standard errors."""
+"""End-to-end checks of the core renderer against closed-form answers.
+Tolerances are stated in standard errors."""
 import numpy as np
 
 from conftest import focal_pixels
@@ -121,7 +121,7 @@ def test_temporal_weight_of_disk_present_in_first_half(render):
 
 
 def test_weight_zero_on_98_percent_of_the_shutter_for_every_sampler(render):
-    # Issue 23, item 2. The disk of the test above, its edge crossing the
+    # The disk of the test above, its edge crossing the
     # image center at t = 0.5, seen through a(t) that is zero but on
     # [0.49, 0.51]. With 8 times a batch, most batches draw no time where
     # a(t) > 0: the ratio estimator sum a g / sum a gave those batches 0

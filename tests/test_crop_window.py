@@ -1,4 +1,4 @@
-"""--crop-window (issue 15): only the window's pixels are rendered, into a
+"""--crop-window: only the window's pixels are rendered, into a
 full-size EXR whose data window is that region (pbrt's rounding); every
 sample is a pure function of (seed, pixel, batch), so the window's pixels
 equal the same pixels of the whole image bit for bit."""

@@ -1,4 +1,4 @@
-"""Issue 25: the documents cannot drift from the program. Every relative
+"""The documents cannot drift from the program. Every relative
 link in the READMEs and docs names an existing file and, with #anchor, a
 heading there (GitHub's slug rule), and every section of the detail
 documents is one click from README; README stays a front door (at most

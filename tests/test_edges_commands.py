@@ -1,4 +1,4 @@
-"""Issue 23, items 7 and 14 (merge): 'refrender merge' and 'refrender
+"""Edges of the commands: 'refrender merge' and 'refrender
 surfels' refuse to overwrite their input (the render already did); a state
 whose header declares more pixels than its file can hold is refused before
 anything is allocated for them; a state holding more batches than its own

@@ -306,7 +306,7 @@ TEST(exact_matches_sampled_weighted_maya_curves)
                            12, 6000) == 0);
 }
 
-/* Issue 23, item 1: a plane of splats spinning about an axis in its plane
+/* Regression: a plane of splats spinning about an axis in its plane
  * so fast that 16 candidate time slices cannot bound the motion (angular
  * speed x slice / 2 >= 1/2): the candidates were dropped and the pixel
  * rendered empty. Exact must still match the sampled average, k = 5. */
@@ -343,7 +343,7 @@ TEST(exact_matches_sampled_scale_1_to_30)
                            6, 4000) == 0);
 }
 
-/* Issue 23, item 9: a shutter at t = 1e7, where ulp(t) (1.9e-9) exceeds
+/* Regression: a shutter at t = 1e7, where ulp(t) (1.9e-9) exceeds
  * the split tolerance (1e-9 of the shutter): a piece's midpoint equals an
  * end and splitting never stopped (a heap overflow). */
 TEST(exact_matches_sampled_on_a_shutter_at_1e7)

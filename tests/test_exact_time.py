@@ -1,4 +1,4 @@
-"""--time-integration exact end to end (issue 14): the guarantees every
+"""--time-integration exact end to end: the guarantees every
 render has (same seed, same image for any thread count and pass split; no
 mixing of renders made differently), and no temporal noise: two renders
 whose spatial positions are the same give the same image whatever the
@@ -151,8 +151,9 @@ def test_cycles_flat_shutter_table_from_the_readme(tmp_path):
     assert np.allclose(coverage["table"] / coverage["box"], 0.3328982 / z, rtol=3e-5)
 
 
-# Issue 23, item 11: a small scene of many overlapping splats whose every
-# spatial sample needs more certificate evaluations than exact time allows
+# Exact time's work per sample is bounded: a small scene of many
+# overlapping splats whose every spatial sample needs more certificate
+# evaluations than exact time allows
 # (it once ran for hours, ignoring SIGINT and SIGTERM), and one spinning so
 # fast (1e6 degrees a shutter) that every one of its 100,000 splats is a
 # candidate (148 million candidate ids were once sorted for one pixel).

@@ -1,4 +1,4 @@
-"""refrender export (issue 15): a script with no refrender code projects a
+"""refrender export: a script with no refrender code projects a
 disc's model-space center with the exported matrices, object to world to
 camera to raster, and finds it where refrender renders it (the centroid of
 its coverage) within 0.1 pixel: for a still scene, a keyframed object and a
@@ -76,7 +76,7 @@ def test_export_describes_models_weights_and_frames(tmp_path):
 
 
 def test_export_refuses_non_finite_transforms_and_takes_the_renders_shutter(tmp_path):
-    """Issue 23, item 14: JSON has no number for inf (a velocity of 1e308
+    """JSON has no number for inf (a velocity of 1e308
     wrote 'inf' into the file); and --shutter, which a render may be given,
     is accepted by export with the same meaning: the frame's open and close
     are the render's."""
@@ -96,7 +96,7 @@ def test_export_refuses_non_finite_transforms_and_takes_the_renders_shutter(tmp_
 
 
 def test_a_long_shutter_is_sampled_without_overflow_or_named(tmp_path):
-    """Issue 23, item 14: the sample times were computed as (close - open)
+    """Regression: the sample times were computed as (close - open)
     * (i + 0.5) before dividing by K, which overflowed for a shutter 1e308
     long, and the inf times were blamed on the still camera's transform.
     A shutter longer than a double holds is named as such."""

@@ -55,7 +55,7 @@ TEST(exr_read_rejects_non_exr)
     unlink(path);
 }
 
-/* ---- ZIP round trip over chunk contents (issue 18, OpenEXR issue 2306) ---- */
+/* ---- ZIP round trip over chunk contents (OpenEXR's ZIP bug #2306: exr.c) ---- */
 
 static uint32_t xorshift32(uint32_t *s)
 {

@@ -1,4 +1,4 @@
-"""Issue 18.8: write faults. Every output (final EXR, render state, merge,
+"""Write faults. Every output (final EXR, render state, merge,
 preview, frames, gen and surfels PLY, scene export) either completes or leaves the previous
 file untouched, and the exit status says which: the LD_PRELOAD shim
 tests/faultinject.c makes the Nth write to a regular file (and every later

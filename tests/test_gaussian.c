@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include "../src/gaussian.h"
+#include "../src/gaussian_ply.h"
 #include "../src/inputfile.h"
 #include "../src/lanes.h"
 #include "../src/ply.h"
@@ -173,7 +174,7 @@ TEST(gaussian_bad_inputs_name_the_property)
     CHECK(refused(rest10, 23, v23, -1, "'f_rest_5' is present but 'f_rest_4' is not"));
 }
 
-/* Issue 32.1: Embree drops boxes beyond about 1.8e18, so a Gaussian far
+/* Embree drops boxes beyond about 1.8e18, so a Gaussian far
  * out vanished from the image with exit 0: a mean coordinate beyond
  * GAUSSIAN_MAX_ABS (a float's 1e38 too) is refused, naming the vertex. */
 TEST(gaussian_means_beyond_the_reach_limit_are_refused)
@@ -214,7 +215,7 @@ static int parse_ascii(const char *props, const char *values, gaussian_model *m,
     "property float scale_1\nproperty " rot_type " rot_0\nproperty " rot_type " rot_1\nproperty " rot_type       \
     " rot_2\nproperty " rot_type " rot_3\n"
 
-/* Issue 32.2: values finite as doubles but not as floats (a double
+/* Values finite as doubles but not as floats (a double
  * f_rest_0 of 1e300, ascii 1e39 for a float x) were stored as inf; they
  * are refused naming the property, the value and the vertex's line. */
 TEST(gaussian_values_beyond_float_range_are_refused)
@@ -232,7 +233,7 @@ TEST(gaussian_values_beyond_float_range_are_refused)
     gaussian_model_free(&m);
 }
 
-/* Issue 32.3: the quaternion is normalised by its largest component first:
+/* The quaternion is normalised by its largest component first:
  * components of 1e200 overflowed q.q (the rotation came out zero, later
  * taken as the identity) and a lone 1e-170 underflowed it (refused as zero
  * length though it is not). Only a zero quaternion is refused. */
@@ -269,7 +270,7 @@ static int refused_rest(int n, const char *extra, const char *expect)
     return refused(ptr, 13 + n, vals, -1, expect);
 }
 
-/* Issue 32.4: f_rest_* past f_rest_44 were ignored, so degree 4's 72 read
+/* f_rest_* past f_rest_44 were once ignored, so degree 4's 72 read
  * as degree 3 with the wrong offsets and 46 or 48 as degree 3 with extras
  * unread; every count but 0, 9, 24 and 45 is refused, naming the degree. */
 TEST(gaussian_sh_layouts_past_degree_3_are_refused)
@@ -283,7 +284,7 @@ TEST(gaussian_sh_layouts_past_degree_3_are_refused)
     CHECK(refused_rest(45, "f_rest_45", "degrees above 3 are not supported"));
 }
 
-/* Issue 32.6: Mip-Splatting's models carry a 3D smoothing filter (vertex
+/* Mip-Splatting's models carry a 3D smoothing filter (vertex
  * property filter_3D) that changes every Gaussian's extent and opacity;
  * rendering them without it would be silently wrong, so they are refused. */
 TEST(gaussian_mip_splatting_filter_3d_is_refused)
@@ -443,9 +444,9 @@ TEST(gaussians_from_surfels_round_trip_through_the_official_layout)
 }
 
 /* A model larger than the streaming threshold (64 MiB) is read from a
- * mapping released as it is parsed (issue 32: the whole file and the model
- * were held at once): the same model and the same content hash as reading
- * the bytes from memory. */
+ * mapping released as it is parsed (the whole file and the model were
+ * once held at once): the same model and the same content hash as
+ * reading the bytes from memory. */
 TEST(gaussian_a_large_model_is_streamed_to_the_same_model_and_hash)
 {
     gaussian_model m, back, ref;

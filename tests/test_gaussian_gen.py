@@ -51,7 +51,7 @@ def test_gen_refuses_unknown_kinds_and_degrees(tmp_path):
 
 
 def test_sh_degree_without_gaussians_is_refused(tmp_path):
-    """Issue 32.9: `--sh-degree` without `--gaussians` wrote surfels and
+    """Regression: `--sh-degree` without `--gaussians` wrote surfels and
     ignored the degree without a word; gen and surfels refuse it."""
     cloud = tmp_path / "c.xyz"
     cloud.write_text("".join(f"{i % 4} {i // 4} 0 0 0 1\n" for i in range(16)))

@@ -1,4 +1,4 @@
-"""3D Gaussians as their rasterizers draw them (issue 29): sharp renders
+"""3D Gaussians as their rasterizers draw them: sharp renders
 (--pixel-filter point, one --time, one sample) against
 tests/gs3d_raster_reference.py, an independent numpy reference of
 graphdeco-inria diff-gaussian-rasterization (9c5c202, dr_aa, and its

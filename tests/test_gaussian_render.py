@@ -4,7 +4,7 @@ official CUDA source, not from refrender's C): with --pixel-filter point
 (the rasterizer's pixel centres), one time (--time) and one sample, every
 pixel must agree within 1e-4 (float against double arithmetic) on models
 with SH degree 0 and 3, overlapping tilted surfels, sub-pixel surfels and a
-rotated camera (issue 24).
+rotated camera.
 
 Each scene is first checked to be one where the rules under test matter:
 the reference itself, changed in one rule (no low-pass filter; hit-depth

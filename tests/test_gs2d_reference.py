@@ -1,6 +1,6 @@
 """The 2DGS reference (tests/gs2d_reference.py) against values worked by
 hand, so that it can serve as the independent expectation of refrender's
-Gaussian renders (issue 24): a surfel facing the camera seen at its centre,
+Gaussian renders: a surfel facing the camera seen at its centre,
 the low-pass filter's value one pixel from a sub-pixel surfel's centre, the
 transmittance cut-off, centre-depth order, and near culling; and the rules
 of forward.cu at e0ed020 against independent geometric arguments: the

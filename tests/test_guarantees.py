@@ -1,4 +1,4 @@
-"""Issue 18: never a corrupt, wrong or lost result. Outputs never overwrite
+"""Never a corrupt, wrong or lost result. Outputs never overwrite
 inputs or each other, odd but valid names work, bad names fail before any
 rendering, stale temporary files of killed runs are cleaned up, and frame
 numbers at the ends of the int range do not wrap."""
@@ -118,12 +118,12 @@ def test_temporary_files_of_a_killed_run_are_removed_by_the_next(tmp_path):
 
 
 def test_models_that_would_not_read_back_are_not_written(tmp_path):
-    """Issue 18.9: surfels/gen wrote PLY files with 0 splats or inf values and
+    """Regression: surfels/gen wrote PLY files with 0 splats or inf values and
     exited 0."""
     dup = tmp_path / "dup.xyz"
     dup.write_text("0 0 0 0 0 0\n" * 8)  # zero normals
     proc = run(["surfels", dup, "-o", tmp_path / "dup.ply"])
-    # the input is at fault, not the output (issue 23, item 14)
+    # the message blames the input, which is at fault, not the output
     assert proc.returncode == 1 and "dup.xyz: no splat is left of 8 points: 8 have no normal" in proc.stderr, \
         proc.stderr
     cloud = tmp_path / "cloud.xyz"
@@ -166,7 +166,7 @@ def test_resume_refuses_pixels_with_more_batches_than_the_render_gives(tmp_path)
 
 
 def test_fifos_are_refused_without_blocking(tmp_path):
-    """Issue 32.7: a FIFO named as the scene, a Gaussian model or a
+    """Regression: a FIFO named as the scene, a Gaussian model or a
     cameras.json blocked forever: the file was opened (which waits for a
     writer) before its type was checked. Each is refused, named, at once."""
     fifo = tmp_path / "pipe"
@@ -186,7 +186,7 @@ def test_fifos_are_refused_without_blocking(tmp_path):
 
 def test_embree_out_of_memory_names_the_object_and_its_model(tmp_path):
     """A BVH build that runs out of memory (an address-space limit between what loading a 1M-Gaussian
-    model needs and what its BVH needs) names the object, its size and its file (issue 32.7: it named
+    model needs and what its BVH needs) names the object, its size and its file (it once named
     nothing)."""
     import resource
     linked = subprocess.run(["ldd", BIN], capture_output=True, text=True).stdout

@@ -1,4 +1,4 @@
-"""EXR header (issue 15): numbers are stored as EXR numbers, the rest-pose
+"""EXR header: numbers are stored as EXR numbers, the rest-pose
 camera as OpenEXR m44f worldToCamera / worldToNDC (row vectors, Imath's
 convention), and a frame render names its frame and shutter. The matrices
 are checked by projecting a small disc's center and finding it where the

@@ -1,11 +1,11 @@
-"""Issue 23, item 3: identity and attribute text is never cut silently.
+"""Identity and attribute text is never cut silently.
 The parameters and the weight function enter a render's identity whole,
 through their hashes (refrender:parametersHash, refrender:weightHash):
 their text was cut at 4095 characters, so passes rendered with -D vx=0 and
 -D vx=2.5 after a long parameter list merged. A 256-pair weight table
 written one pair per line is read whole (252 pairs were kept), and an
 over-long attribute is refused naming its length instead of being cut (a
-4110-character file= path rendered a different, existing file); item 14:
+4110-character file= path rendered a different, existing file); and
 an external entity as a model path is named (it read as an empty path,
 "point model has no splats")."""
 import json

@@ -1,5 +1,5 @@
-"""Keyframed animation, camera motion and frame sequences, end to end
-(issue: keyframes, .anim, camera motion and frames)."""
+"""Keyframed animation (keys and Maya .anim files), camera motion and frame
+sequences, end to end."""
 import numpy as np
 
 from conftest import ROOT, coverage_centroid, focal_pixels, read_exr, read_full, run
@@ -189,7 +189,7 @@ RIG = ROOT / "scenes" / "animations" / "rig.anim"
 
 def rig_hand_position(frame):
     """scenes/animations/rig.anim's node 'hand', evaluated from Maya's curve
-    definitions (issue 17), in meters; nothing of refrender's curve code.
+    definitions, in meters; nothing of refrender's curve code.
     translateX: a weighted Bezier, time controls 0, 16, 16, 24 frames (the
     fixed flat tangent's weight 16, the auto end key's handle a third of the
     interval) and values 0, 0, 100, 100 cm: x(u) = 24 (2u - 2u^2 + u^3),
@@ -214,7 +214,7 @@ def test_rig_hand_evaluates_in_closed_form():
 
 
 def test_maya_multi_node_weighted_file_renders_the_chosen_node_where_maya_puts_it(tmp_path):
-    """Issue 17's done-when: a multi-node file with weighted, fixed, auto,
+    """Maya .anim files end to end: a multi-node file with weighted, fixed, auto,
     spline and step keys renders node 'hand' at its hand-evaluated position.
     A small unlit disc at the node's pivot, an instantaneous shutter at
     frames 6 and 15: the centroid of its coverage is the pinhole projection
@@ -241,7 +241,7 @@ def test_maya_multi_node_weighted_file_renders_the_chosen_node_where_maya_puts_i
 
 
 def test_a_scale_extrapolated_through_zero_is_warned_about(tmp_path):
-    """Issue 23, item 8: a keyframed scale extrapolated below zero is held
+    """A keyframed scale extrapolated below zero is held
     at 1e-9 and the object silently vanished; now a warning names it. A
     scale that stays positive gives none."""
     def scene(s1):

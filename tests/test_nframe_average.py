@@ -7,7 +7,7 @@ times the frames must cut the error by more than 8 (a left-endpoint rule,
 times k / N, falls only as N^-1: a ratio near 4); non-box a(t) and bad
 inputs are refused by name.
 
-The blur-synthesis procedures (issue 30.3) are checked against their sources'
+The blur-synthesis procedures are checked against their sources'
 formulas as written, on 8-bit frames the tests make: Deblur-NeRF's
 scripts/synthe2poses.py and BlenderCV's scripts/images_avg.py byte for byte
 (commits and lines in nframe_average.py's docstring), the sample-time rule of
@@ -95,8 +95,8 @@ def _against(tmp_path, scene, ref, *extra):
 
 
 def test_a_reference_of_another_scene_size_or_crop_is_refused_by_name(tmp_path):
-    """A reference must be of the scene the frames are rendered from (issue 32.6): another scene, -D
-    parameters, a crop window or another --res gave a plausible table or a traceback."""
+    """A reference must be of the scene the frames are rendered from: another scene, -D
+    parameters, a crop window or another --res once gave a plausible table or a traceback."""
     scene = write_scene(tmp_path, 1.0)
     other = tmp_path / "other"
     other.mkdir()

@@ -1,5 +1,6 @@
 /* Render states (output.c): exact round trips, and every field of a state
- * read from a file checked before it is used (issue 18.4). */
+ * read from a file checked before it is used (a damaged state is refused,
+ * never merged or resumed from). */
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>

@@ -1,4 +1,4 @@
-"""Scene parameters (issue 15): -D name=value replaces $name in attribute
+"""Scene parameters: -D name=value replaces $name in attribute
 values, the scene's <default> fills in what is not given, the parameters
 applied are part of the render's identity, and mistakes are named."""
 import json
@@ -54,7 +54,7 @@ def test_parameter_mistakes_are_named(tmp_path):
 
 
 def test_substituted_attributes_grow_and_long_values_are_named(tmp_path):
-    """Issue 23, item 3: an attribute is whole after substitution however
+    """An attribute is whole after substitution however
     long (it was refused past 8191 characters): a weight table whose pairs
     are separated by a 500-character parameter of spaces, 20 times, reads
     all 21 pairs; a -D value past its 511 characters is refused naming its

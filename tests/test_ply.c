@@ -218,7 +218,7 @@ TEST(ply_writer_output_reads_back)
     pointmodel_free(&m);
 }
 
-/* ---- hostile input (issue 18.5): each a clear error naming file and line ---- */
+/* ---- hostile input: each a clear error naming file and line ---- */
 
 TEST(ply_huge_count_of_an_element_without_properties_fails_at_once)
 {
@@ -292,7 +292,7 @@ TEST(ply_content_hash_covers_the_bytes)
     pointmodel_free(&m);
 }
 
-/* Issue 32.5: data the header does not account for was taken silently:
+/* Regression: data the header does not account for was taken silently:
  * trailing bytes after a binary file's declared elements (two vertices'
  * data under 'element vertex 1'), a second 'element vertex', and ascii
  * values their declared type cannot hold (2.5 as int, 300 as uchar). */

@@ -1,4 +1,4 @@
-"""Issue 23, item 10: values Embree's float rays cannot reach (a camera at
+"""Values Embree's float rays cannot reach (a camera at
 1e19, a velocity of 1e19, a shutter of +-1e300 on a moving scene) once
 aborted the render inside Embree (SIGABRT on its ray.valid() assertion).
 They are refused before rendering, naming the scene and what is too far."""
@@ -34,7 +34,7 @@ def test_far_but_reachable_scenes_still_render(tmp_path):
 
 
 def test_a_shutter_with_more_key_times_than_bounds_can_list_is_refused(tmp_path):
-    """Issue 23, item 6: swept bounds list every key time where a step may
+    """Swept bounds list every key time where a step may
     jump; past 2^24 of them (a cycling curve over a long shutter) the render
     is refused, naming the object, rather than bounded from a cut list."""
     scene = tmp_path / "s.xml"

@@ -17,8 +17,11 @@ static const char *const MOVING_DISK =
 
 static render_settings target_settings(const scene *s, uint32_t max_batches)
 {
-    render_settings rs = {{SAMPLER_THESIS, 7, 1, 4, 4}, s->shut, 2, 0, 2, max_batches, 0.03, 0, 0, 0, 0, 0,
-                          PIXEL_FILTER_BOX, BLUR_SPACE_MODEL};
+    render_settings rs = render_settings_default();
+    rs.smp.seed = 7, rs.smp.tspp = 4, rs.smp.time_factor = 4;
+    rs.shut = s->shut;
+    rs.threads = 2;
+    rs.batches = 2, rs.max_batches = max_batches, rs.target_error = 0.03;
     return rs;
 }
 
@@ -39,7 +42,7 @@ static int same_pixels(const image *a, const image *b)
  * first tile and round r - 1 for the second. Such a state is built here
  * from two renders capped at r and r + 1 batches (each pixel's batches
  * depend on that pixel only), resumed, and must give the uninterrupted
- * image for every r (issue 18.2: the loop used to stop when no pixel of the
+ * image for every r (a regression: the loop used to stop when no pixel of the
  * current round wanted a batch, although pixels a round ahead still did). */
 TEST(render_resumed_mid_round_equals_uninterrupted)
 {
@@ -79,7 +82,7 @@ TEST(render_resumed_mid_round_equals_uninterrupted)
     scene_free(&s);
 }
 
-/* Issue 23: accel's swept bounds hold only for the shutter it was built
+/* Accel's swept bounds hold only for the shutter it was built
  * for; a render over another shutter would miss hits silently. */
 TEST(render_refuses_an_accel_built_for_another_shutter)
 {
@@ -95,4 +98,20 @@ TEST(render_refuses_an_accel_built_for_another_shutter)
     image_free(&img);
     accel_free(a);
     scene_free(&s);
+}
+
+/* render_settings_default is what render.h documents: one batch of one
+ * sample per pixel on one thread, the box shutter [0, 1], every pixel. */
+TEST(render_settings_default_is_one_sample_of_one_batch)
+{
+    render_settings rs = render_settings_default();
+    CHECK(rs.smp.kind == SAMPLER_THESIS && rs.smp.seed == 1);
+    CHECK(rs.smp.grid == 1 && rs.smp.tspp == 1 && rs.smp.time_factor == 1);
+    CHECK(rs.threads == 1 && rs.batch_begin == 0 && rs.batches == 1 && rs.max_batches == 1);
+    CHECK(render_batch_end(&rs) == 1);
+    CHECK(rs.target_error == 0 && rs.exact_time == 0);
+    CHECK(rs.crop_x0 == 0 && rs.crop_y0 == 0 && rs.crop_x1 == 0 && rs.crop_y1 == 0);
+    CHECK(rs.filter == PIXEL_FILTER_BOX && rs.blur == BLUR_SPACE_MODEL);
+    CHECK(rs.shut.open == 0 && rs.shut.close == 1 && rs.shut.kind == WEIGHT_BOX && rs.shut.table_size == 0);
+    CHECK(rs.shut.rolling.kind == ROLLING_OFF);
 }

@@ -1,4 +1,4 @@
-"""Rolling shutter (issue 30) against the analytic answer.
+"""Rolling shutter against the analytic answer.
 
 A camera translating at speed v along x sees an opaque unlit sphere (colour 1)
 over a black background. Through a pixel's centre (--pixel-filter point) the ray

@@ -1,4 +1,4 @@
-"""Issue 23, items 5 and 12, end to end: sample counts past an int and
+"""End to end: sample counts past an int and
 Sobol' batches past the sequence's 2^32 points are refused before anything
 is rendered or allocated, naming the counts."""
 from conftest import run

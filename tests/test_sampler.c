@@ -214,7 +214,7 @@ TEST(uniform_numbers_are_in_unit_interval_with_mean_half)
     CHECK_NEAR(sum / 100000, 0.5, 5 * sqrt(1 / 12.0 / 100000));
 }
 
-/* Issue 23, items 5 and 12: counts in 64 bits, and Sobol' batches inside
+/* Regression: counts in 64 bits, and Sobol' batches inside
  * the 2^32 points of the sequence (batch * n was a uint32 product, so later
  * batches repeated earlier points and the standard error shrank to 0). */
 TEST(sampler_check_refuses_counts_past_int_and_sobol_past_its_points)

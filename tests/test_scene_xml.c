@@ -205,7 +205,7 @@ TEST(keyframe_and_frame_errors_name_the_line)
     CHECK(fails_with("<scene><frames rate='-24'/><object><sphere radius='1'/></object></scene>", "rate"));
 }
 
-/* Issue 18.3: a render state's identity covers every input's content. The
+/* A render state's identity covers every input's content. The
  * inputs hash changes with a model file's bytes while the scene file's own
  * hash does not, and is the hash of the scene file then the model. */
 TEST(inputs_hash_covers_the_model_files)
@@ -240,7 +240,7 @@ TEST(inputs_hash_covers_the_model_files)
     unlink(scene_path), unlink(ply_path), rmdir(dir);
 }
 
-/* Issue 18.9: entity errors named "(scene)" instead of the file. */
+/* Regression: entity errors named "(scene)" instead of the file. */
 TEST(xml_errors_name_the_scene_file)
 {
     scene s;
@@ -249,7 +249,7 @@ TEST(xml_errors_name_the_scene_file)
     CHECK(scene_load_memory(xml, strlen(xml), "ent.xml", ".", &s, &e) != 0 && strstr(e.msg, "ent.xml:1:"));
 }
 
-/* Issue 18.9: libxml2 reported every line past 65535 as 65535. */
+/* Regression: libxml2 reported every line past 65535 as 65535. */
 TEST(errors_past_line_65535_name_their_line)
 {
     size_t lines = 70000;
@@ -263,7 +263,7 @@ TEST(errors_past_line_65535_name_their_line)
     free(xml);
 }
 
-/* Issue 17.2: <animation file="..." node="..."/> picks a node of an .anim file. */
+/* <animation file="..." node="..."/> picks a node of an .anim file. */
 TEST(animation_file_attribute_selects_a_node)
 {
     char dir[] = "/tmp/refrender-node-XXXXXX";
@@ -293,7 +293,7 @@ TEST(animation_file_attribute_selects_a_node)
     unlink(path), rmdir(dir);
 }
 
-/* Issue 23, items 3 and 14: a value longer than its buffer is refused,
+/* A value longer than its buffer is refused,
  * naming file, line and length; it was cut (a cut name could match another
  * value) or, as a <pointModel> path, reported as "point model has no
  * splats". */
@@ -341,7 +341,7 @@ TEST(resolved_paths_too_long_are_refused_with_their_length)
     free(dir);
 }
 
-/* Issue 23, item 3: a scene selects any node an .anim file can name (its
+/* A scene selects any node an .anim file can name (its
  * words run to ANIMFILE_MAX_WORD characters); node names were held in 63. */
 TEST(animation_node_names_as_long_as_anim_words_are_selected)
 {
@@ -372,7 +372,7 @@ TEST(animation_node_names_as_long_as_anim_words_are_selected)
     unlink(path), rmdir(dir);
 }
 
-/* Issue 23, item 14: an <animation> whose text is an external entity was
+/* Regression: an <animation> whose text is an external entity was
  * taken for an animation without text and left the object static without a
  * word; a CDATA path was dropped the same way. */
 TEST(animation_text_as_entity_or_cdata_is_not_dropped)

@@ -75,7 +75,7 @@ TEST(checker_colors_alternate_by_cube)
     CHECK(s[0].color.x == 1 && s[1].color.y == 1);
 }
 
-/* Issue 23, item 14: a cloud of two points, each given ten times, leaves no
+/* A cloud of two points, each given ten times, leaves no
  * splat (every point's 6th nearest neighbour is a duplicate at distance 0);
  * the reason is counted, not 'all points coincide', which they do not. */
 TEST(duplicate_points_leave_no_splat_and_say_why)

@@ -1,4 +1,4 @@
-/* trajectory.c: the TUM reader names every mistake (file, line, field),
+/* trajectory.c and tum.c: the TUM reader names every mistake (file, line, field),
  * a file it wrote reads back bit for bit, and the motion bounds hold the
  * interpolated path (the poses themselves are checked against an
  * independent reference in tests/test_trajectory.py). */
@@ -10,12 +10,14 @@
 #include <string.h>
 
 #include "../src/camera.h"
+#include "../src/rotation.h"
 #include "../src/trajectory.h"
+#include "../src/tum.h"
 #include "harness.h"
 
 static int parse(const char *text, trajectory *tr, rr_error *e)
 {
-    return trajectory_parse_tum(text, strlen(text), "p.tum", tr, e);
+    return tum_parse(text, strlen(text), "p.tum", tr, e);
 }
 
 static int fails_with(const char *text, const char *needle)
@@ -47,7 +49,7 @@ TEST(tum_reader_names_file_line_and_field)
     const char nul[] = "0 0 0 0\0 0 0 0 1\n";
     trajectory tr;
     rr_error e;
-    CHECK(trajectory_parse_tum(nul, sizeof nul - 1, "p.tum", &tr, &e) != 0 && strstr(e.msg, "NUL"));
+    CHECK(tum_parse(nul, sizeof nul - 1, "p.tum", &tr, &e) != 0 && strstr(e.msg, "NUL"));
 }
 
 TEST(tum_reader_skips_comments_and_normalises_short_quaternions)
@@ -236,7 +238,7 @@ TEST(a_written_trajectory_reads_back_bit_for_bit)
             a.interp = TRAJECTORY_LINEAR;
             vec3 p;
             trajectory_pose(&a, a.knots[k].t, &p, q);
-            trajectory_write_tum_line(f, a.knots[k].t, p, q, gl);
+            tum_write_line(f, a.knots[k].t, p, q, gl);
         }
         fclose(f);
         CHECK(parse(buf, &b, &e) == 0);
@@ -277,7 +279,7 @@ TEST(motion_bounds_hold_the_interpolated_path)
             trajectory_pose(&tr, t, &p, q);
             speed = fmax(speed, v3_len(v3_sub(p, p0)) / dt);
             double r[4];
-            trajectory_quat_mul(c, q, r);
+            quat_mul(c, q, r);
             turn = fmax(turn, 2.0 * atan2(sqrt(r[1] * r[1] + r[2] * r[2] + r[3] * r[3]), fabs(r[0])) / dt);
             p0 = p;
             memcpy(q0, q, sizeof q0);
@@ -461,8 +463,8 @@ static char *transforms_text(int n)
         if (k < 7)
             memcpy(q, axis_aligned[k], sizeof q);
         else
-            trajectory_quat_mul(q, d, q);
-        trajectory_quat_matrix(q, r);
+            quat_mul(q, d, q);
+        quat_matrix(q, r);
         len += (size_t)snprintf(text + len, cap - len,
                                 "%s{\"time\": %d.5, \"transform_matrix\": [[%.17g, %.17g, %.17g, %.17g], "
                                 "[%.17g, %.17g, %.17g, %.17g], [%.17g, %.17g, %.17g, %.17g], [0, 0, 0, 1]]}",
@@ -476,8 +478,9 @@ static char *transforms_text(int n)
     return text;
 }
 
-/* Read, write, read back (issue 30): the same trajectory and camera bit for
- * bit, though a rotation matrix to a quaternion and back is not exact in
+/* Read, write, read back (export writes the trajectory it read, and a
+ * method then reads that file): the same trajectory and camera bit for bit,
+ * though a rotation matrix to a quaternion and back is not exact in
  * binary64: the reader keeps the quaternion its written matrix reads back as. */
 TEST(transforms_json_reads_back_what_it_writes)
 {

@@ -1,4 +1,4 @@
-"""Camera trajectories from TUM files (issue 30), checked end to end.
+"""Camera trajectories from TUM files, checked end to end.
 
 - A camera turning about its own centre sees a depth-independent homography:
   the ray through pixel x at time t is R(t) K^-1 x, so its blurred pixel is the
@@ -274,7 +274,7 @@ def test_a_transforms_json_camera_projects_with_its_principal_point_everywhere(t
 
 def test_a_transforms_json_round_trips_through_export(tmp_path):
     """export --transforms writes the camera and poses back; read again and written again, the file is the same
-    byte for byte (issue 30: read, write, read back bit-identically), and its TUM path too. The identity
+    byte for byte (read, write, read back bit-identically), and its TUM path too. The identity
     and a quarter turn (exact zeros: a writer's arithmetic must not flip their signs) among the poses."""
     quarter = np.eye(4)
     quarter[:3, :3] = [[1, 0, 0], [0, 0, -1], [0, 1, 0]]
@@ -392,7 +392,7 @@ def frames_scene(tmp_path, frames='<frames at="trajectory"/>', camera=None):
 
 
 def test_frames_at_the_trajectory_centre_each_exposure_on_its_pose(tmp_path):
-    """Issue 30: a blurred frame of a dataset spans its pose's time, the exposure's length the shutter's:
+    """A blurred frame of a dataset spans its pose's time, the exposure's length the shutter's:
     frame k's window is centred on pose k (the middle of [open, close] is the pose's time, exactly as
     the shift of a binary64 sum allows)."""
     s = frames_scene(tmp_path)

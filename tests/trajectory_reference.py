@@ -60,7 +60,7 @@ pose_linear -- WU-CVGL/BAD-Gaussians @ f9784ca4c3dee046a61d79dbc187272e08248f16
   Spline.py:246-273 @ 80a590df52e9c434e1e603a028a7d8bb42da053c (log_q2r :156-157
   is the same atan form; BAD-NeRF clamps u to [1e-6, 1-1e-6], :250-253).
 pose_se3 -- textbook screw motion (no deblurring source uses it per segment;
-  NOTES.md: "linear" in the sources is split R^3 x SO(3), not screw).
+  "linear" in the sources is split R^3 x SO(3), not screw: src/TRAJECTORIES.md's table).
 pose_cubic -- BAD-Gaussians @ f9784ca.. spline_functor.py:83-142: translation
   weights :113-118, applied :121; rotation weights :124-128 (cumulative),
   relative rotations q_{i}^-1 q_{i+1} and so(3) Log :131-132, Exp :133,

@@ -244,10 +244,10 @@ static void floor_bounds(const struct RTCBoundsFunctionArguments *args)
     const floor_discs *d = args->geometryUserPtr;
     const float *c = &d->disc[4 * args->primID];
     struct RTCBounds *b = args->bounds_o;
-    b->lower_x = nextafterf(c[0] - c[3], -INFINITY), b->lower_y = nextafterf(c[1] - c[3], -INFINITY);
-    b->lower_z = nextafterf(c[2] - c[3], -INFINITY);
-    b->upper_x = nextafterf(c[0] + c[3], INFINITY), b->upper_y = nextafterf(c[1] + c[3], INFINITY);
-    b->upper_z = nextafterf(c[2] + c[3], INFINITY);
+    b->lower_x = rr_float_below(c[0] - c[3]), b->lower_y = rr_float_below(c[1] - c[3]);
+    b->lower_z = rr_float_below(c[2] - c[3]);
+    b->upper_x = rr_float_above(c[0] + c[3]), b->upper_y = rr_float_above(c[1] + c[3]);
+    b->upper_z = rr_float_above(c[2] + c[3]);
 }
 
 static void floor_intersect(const struct RTCIntersectFunctionNArguments *args)
@@ -351,8 +351,10 @@ static int may_hit_moving(const accel *a, vec3 org, vec3 dir)
 
 static render_settings bench_settings(const bench_case *c, const scene *s)
 {
-    render_settings rs = {{SAMPLER_THESIS, 1, 2, c->tspp, 4}, s->shut, c->threads, 0, 1, 1, 0, 0, 0, 0, 0, 0,
-                          PIXEL_FILTER_BOX, BLUR_SPACE_MODEL};
+    render_settings rs = render_settings_default();
+    rs.smp.grid = 2, rs.smp.tspp = c->tspp, rs.smp.time_factor = 4;
+    rs.shut = s->shut;
+    rs.threads = c->threads;
     return rs;
 }
 
@@ -522,8 +524,8 @@ static void bench_floor(int speeds, int splats, int tspp, int threads, int res, 
            "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n");
     for (int i = 0; i <= speeds; i++) {
         int last = i == speeds; /* then 4x the splats at the fastest speed */
-        bench_case c = {"rotation", 0, last ? 4 * splats : splats, tspp, threads, res, reps, 0,
-                        degrees[last ? 0 : i], 0, 1};
+        bench_case c = {.motion = "rotation", .splats = last ? 4 * splats : splats, .tspp = tspp, .threads = threads,
+                        .res = res, .reps = reps, .degrees = degrees[last ? 0 : i], .floor = 1};
         bench_result r;
         if (run_in_child(&c, &r))
             continue;
@@ -536,22 +538,48 @@ static void bench_floor(int speeds, int splats, int tspp, int threads, int res, 
     }
 }
 
-int main(int argc, char **argv)
+/* What a run measures: the scale (quick or full), the image, the
+ * repetitions, the threads, and which series (NULL: all of them). */
+typedef struct {
+    int quick, res, reps, threads;
+    int big, small, tspp; /* splat counts of the large and small model; time samples */
+    /* one series: cases, speed, splats, tspp, threads, static80, target, floor, gaussians, scale */
+    const char *only;
+    FILE *csv;
+} bench_plan;
+
+/* A rotating sphere of the plan's defaults: `splats` splats, 90 degrees a
+ * unit time, circular splats, the plan's tspp and threads. */
+static bench_case rotation_case(const bench_plan *p, int splats)
 {
-    const char *csv_path = argc > 1 ? argv[1] : "bench.csv";
-    int quick = argc > 2 && !strcmp(argv[2], "quick");
-    const char *only = argc > 3 ? argv[3] : NULL; /* one series: cases, speed, splats, tspp, threads, static80, target, floor, gaussians, scale */
-    int res = quick ? 48 : 128, reps = quick ? 1 : 3;
-    long cores = sysconf(_SC_NPROCESSORS_ONLN);
-    int threads = cores > 0 ? (int)cores : 1;
-    FILE *csv = fopen(csv_path, "w");
+    return (bench_case){.motion = "rotation", .splats = splats, .tspp = p->tspp, .threads = p->threads,
+                        .res = p->res, .reps = p->reps};
+}
+
+/* Runs one case in its own process and prints its row (nothing if it failed). */
+static int run_and_print(const bench_plan *p, const char *series, const bench_case *c, bench_result *r)
+{
+    if (run_in_child(c, r))
+        return -1;
+    print_row(p->csv, series, c, r);
+    return 0;
+}
+
+static FILE *open_csv(const char *path)
+{
+    FILE *csv = fopen(path, "w");
     if (!csv) {
-        perror(csv_path);
-        return 1;
+        perror(path);
+        return NULL;
     }
     fprintf(csv, "series,splats,motion,degrees_per_time,splat,tspp,threads,res,build_ms,baseline_build_ms,mrays,"
                  "baseline_mrays,ratio,same_rays_baseline_mrays,same_rays_ratio,peak_mb,bytes_per_splat,"
                  "base_splats_per_pixel,same_rays_splats_per_pixel,user_geometry_mrays,user_geometry_epsilon_mrays\n");
+    return csv;
+}
+
+static void print_intro(const bench_plan *p)
+{
     printf("refrender-bench: %dx%d pixels, 4 spatial samples, thesis sampler, median of %d interleaved runs\n\n"
            "'base': Embree's built-in discs, closest hit, on the world rays of the scene at rest (no motion);\n"
            "'same rays': the same discs on the object-space rays refrender traces (each time's ray moved by the\n"
@@ -559,65 +587,137 @@ int main(int argc, char **argv)
            "'splats/px': distinct discs the baseline's rays hit per covered pixel, at rest and on the same rays.\n\n"
            "| series | splats | motion | deg/t | splat | tspp | thr | build ms | base build ms | Mrays/s | base Mrays/s | ratio "
            "| same rays Mrays/s | ratio same rays | peak MB | B/splat | splats/px rest | splats/px same rays |\n"
-           "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n", res, res, reps);
+           "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n",
+           p->res, p->res, p->reps);
+}
+
+/* Every motion with circular and elliptical splats, at both model sizes. */
+static void series_cases(const bench_plan *p)
+{
     static const char *const motions[] = {"static", "linear", "rotation"};
-    int big = quick ? 20000 : 1000000, small = quick ? 5000 : 100000, tspp = quick ? 8 : 100;
     bench_result r;
-    for (int size = 0; size < 2 && wanted(only, "cases"); size++)
+    for (int size = 0; size < 2; size++)
         for (int m = 0; m < 3; m++)
             for (int e = 0; e < 2; e++) {
-                bench_case c = {motions[m], e, size ? big : small, tspp, threads, res, reps, 0, 0, 0, 0};
-                if (!run_in_child(&c, &r))
-                    print_row(csv, "cases", &c, &r);
+                bench_case c = rotation_case(p, size ? p->big : p->small);
+                c.motion = motions[m], c.elliptical = e;
+                run_and_print(p, "cases", &c, &r);
             }
-    if (only && !strcmp(only, "target")) { /* issue 7's headline case alone, for quick iterations */
-        bench_case c = {"rotation", 0, big, tspp, threads, res, reps, 0, 0, 0, 0};
-        if (!run_in_child(&c, &r))
-            print_row(csv, "target", &c, &r);
+}
+
+/* The headline case alone (the large model rotating 90 degrees a unit),
+ * for quick iterations on the surfel path. */
+static void series_target(const bench_plan *p)
+{
+    bench_result r;
+    bench_case c = rotation_case(p, p->big);
+    run_and_print(p, "target", &c, &r);
+}
+
+/* Rotation speeds of 1, 10 and 90 degrees a unit (quick: 1 only). */
+static void series_speed(const bench_plan *p)
+{
+    static const double speeds[] = {1, 10, 90};
+    bench_result r;
+    for (int i = 0; i < (p->quick ? 1 : 3); i++) {
+        bench_case c = rotation_case(p, p->big);
+        c.degrees = speeds[i];
+        run_and_print(p, "speed", &c, &r);
     }
-    double speeds[] = {1, 10, 90};
-    for (int i = 0; i < (quick ? 1 : 3) && wanted(only, "speed"); i++) {
-        bench_case c = {"rotation", 0, big, tspp, threads, res, reps, 0, speeds[i], 0, 0};
-        if (!run_in_child(&c, &r))
-            print_row(csv, "speed", &c, &r);
+}
+
+/* Model sizes from 10k to 4M splats (quick: 10k only). */
+static void series_splats(const bench_plan *p)
+{
+    static const int counts[] = {10000, 100000, 1000000, 4000000};
+    bench_result r;
+    for (int i = 0; i < (p->quick ? 1 : 4); i++) {
+        bench_case c = rotation_case(p, counts[i]);
+        run_and_print(p, "splats", &c, &r);
     }
-    int counts[] = {10000, 100000, 1000000, 4000000};
-    for (int i = 0; i < (quick ? 1 : 4) && wanted(only, "splats"); i++) {
-        bench_case c = {"rotation", 0, counts[i], tspp, threads, res, reps, 0, 0, 0, 0};
-        if (!run_in_child(&c, &r))
-            print_row(csv, "splats", &c, &r);
+}
+
+/* Time samples per spatial sample of 10, 30 and 100 (quick: 10 only). */
+static void series_tspp(const bench_plan *p)
+{
+    static const int tspps[] = {10, 30, 100};
+    bench_result r;
+    for (int i = 0; i < (p->quick ? 1 : 3); i++) {
+        bench_case c = rotation_case(p, p->big);
+        c.tspp = tspps[i];
+        run_and_print(p, "tspp", &c, &r);
     }
-    int tspps[] = {10, 30, 100};
-    for (int i = 0; i < (quick ? 1 : 3) && wanted(only, "tspp"); i++) {
-        bench_case c = {"rotation", 0, big, tspps[i], threads, res, reps, 0, 0, 0, 0};
-        if (!run_in_child(&c, &r))
-            print_row(csv, "tspp", &c, &r);
+}
+
+/* Each thread count from 1 to the cores, in separate processes; then all
+ * cores against 1, alternated in one process. */
+static void series_threads(const bench_plan *p)
+{
+    bench_result r;
+    for (int t = 1; t <= p->threads; t++) {
+        bench_case c = rotation_case(p, p->big);
+        c.threads = t;
+        run_and_print(p, "threads", &c, &r);
     }
-    for (int t = 1; t <= threads && wanted(only, "threads"); t++) {
-        bench_case c = {"rotation", 0, big, tspp, t, res, reps, 0, 0, 0, 0};
-        if (!run_in_child(&c, &r))
-            print_row(csv, "threads", &c, &r);
-    }
-    bench_case scaling = {"rotation", 0, big, tspp, threads, res, reps, 0, 0, 1, 0};
-    if (threads > 1 && wanted(only, "threads") && !run_in_child(&scaling, &r)) {
-        print_row(csv, "scaling", &scaling, &r);
-        printf("\nscaling: %d threads against 1, alternated in one process ('base' = 1 thread): %.2fx\n\n", threads,
+    bench_case scaling = rotation_case(p, p->big);
+    scaling.scaling = 1;
+    if (p->threads > 1 && !run_and_print(p, "scaling", &scaling, &r))
+        printf("\nscaling: %d threads against 1, alternated in one process ('base' = 1 thread): %.2fx\n\n", p->threads,
                r.mrays / r.base_mrays);
-    }
-    if (wanted(only, "floor"))
-        bench_floor(quick ? 1 : 3, quick ? small : big, tspp, threads, res, reps, csv);
-    bench_case c80 = {"rotation", 0, small, tspp, threads, res, reps, 1, 0, 0, 0};
-    if (wanted(only, "static80"))
-        printf("\nstatic80: a static wall fills the image, a rotating sphere covers about 15%% of it; 'base' is\n"
-               "the same render tracing every time sample separately (--no-static-reuse), 'ratio' the speed-up.\n\n");
-    if (wanted(only, "static80") && !run_in_child(&c80, &r)) {
-        print_row(csv, "static80", &c80, &r);
+}
+
+/* The small rotating sphere in front of a static wall that fills the image. */
+static void series_static80(const bench_plan *p)
+{
+    bench_result r;
+    bench_case c80 = rotation_case(p, p->small);
+    c80.background = 1;
+    printf("\nstatic80: a static wall fills the image, a rotating sphere covers about 15%% of it; 'base' is\n"
+           "the same render tracing every time sample separately (--no-static-reuse), 'ratio' the speed-up.\n\n");
+    if (!run_and_print(p, "static80", &c80, &r))
         printf("\nstatic80: %.1f%% of the pixels' rays meet the moving object's swept bounds\n", 100 * r.moving_share);
-    }
-    if (wanted(only, "gaussians") && bench_gaussians(quick, threads, csv))
+}
+
+/* Usage: refrender-bench [CSV [quick|full [SERIES]]]. */
+int main(int argc, char **argv)
+{
+    int quick = argc > 2 && !strcmp(argv[2], "quick");
+    long cores = sysconf(_SC_NPROCESSORS_ONLN);
+    bench_plan p = {
+        .quick = quick,
+        .res = quick ? 48 : 128,
+        .reps = quick ? 1 : 3,
+        .threads = cores > 0 ? (int)cores : 1,
+        .big = quick ? 20000 : 1000000,
+        .small = quick ? 5000 : 100000,
+        .tspp = quick ? 8 : 100,
+        .only = argc > 3 ? argv[3] : NULL,
+        .csv = open_csv(argc > 1 ? argv[1] : "bench.csv"),
+    };
+    if (!p.csv)
+        return 1;
+    print_intro(&p);
+    if (wanted(p.only, "cases"))
+        series_cases(&p);
+    if (p.only && !strcmp(p.only, "target"))
+        series_target(&p);
+    if (wanted(p.only, "speed"))
+        series_speed(&p);
+    if (wanted(p.only, "splats"))
+        series_splats(&p);
+    if (wanted(p.only, "tspp"))
+        series_tspp(&p);
+    if (wanted(p.only, "threads"))
+        series_threads(&p);
+    if (wanted(p.only, "floor"))
+        bench_floor(quick ? 1 : 3, quick ? p.small : p.big, p.tspp, p.threads, p.res, p.reps, p.csv);
+    if (wanted(p.only, "static80"))
+        series_static80(&p);
+    if (wanted(p.only, "gaussians") && bench_gaussians(quick, p.threads, p.csv))
         fprintf(stderr, "bench: the gaussians case failed\n");
-    if (only && !strcmp(only, "scale") && bench_gaussian_scale(quick, threads, csv)) /* alone, for quick iterations */
+    /* alone, for quick iterations */
+    if (p.only && !strcmp(p.only, "scale") && bench_gaussian_scale(quick, p.threads, p.csv))
         fprintf(stderr, "bench: the scale case failed\n");
-    fclose(csv);
+    fclose(p.csv);
     return 0;
 }

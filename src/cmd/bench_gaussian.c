@@ -8,6 +8,8 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include "gaussian_integrator.h"
+#include "gaussian_ply.h"
 #include "render.h"
 #include "shapes.h"
 
@@ -76,10 +78,7 @@ static void gather_filter(const struct RTCFilterFunctionNArguments *args)
     for (unsigned i = 0; i < args->N; i++) {
         if (!args->valid[i])
             continue;
-        if (h->count == h->cap) {
-            h->cap = h->cap ? 2 * h->cap : 256;
-            h->t = realloc(h->t, h->cap * sizeof *h->t);
-        }
+        RR_CHECK(rr_grow((void **)&h->t, &h->cap, h->count + 1, sizeof *h->t) == 0); /* a benchmark: no recovery */
         h->t[h->count++] = ((const float *)args->ray)[8 * args->N + i]; /* tfar: SOA field 8 (rtcore_ray.h) */
         args->valid[i] = 0;
     }
@@ -193,7 +192,8 @@ static double disc_seconds(RTCScene discs, const scene *s, const render_settings
 /* Hits evaluated and composited per ray, over the pixel centres at mid-shutter (untimed). */
 static void count_hits(const scene *s, const accel *a, gs_result *r)
 {
-    gaussian_hits h = {0};
+    gaussian_integrator g;
+    gaussian_integrator_init(&g);
     double gathered = 0, composited = 0;
     for (int y = 0; y < s->cam.height; y++)
         for (int x = 0; x < s->cam.width; x++) {
@@ -201,16 +201,18 @@ static void count_hits(const scene *s, const accel *a, gs_result *r)
             camera_view v;
             scene_camera_ray(s, x + 0.5, y + 0.5, 0.5, &o, &d);
             scene_camera_view(s, 0.5, &v);
-            h.count = h.added = 0;
+            gaussian_integrator_reset(&g);
+            g.hits.added = 0;
             gaussian_blend b;
             gaussian_blend_init(&b);
-            accel_blend_gaussians(a, &v, x + 0.5, y + 0.5, o, d, 0.5, INFINITY, &h, &b);
-            gathered += (double)h.added;
+            gaussian_sample smp = {&v, x + 0.5, y + 0.5, o, d, 0.5};
+            gaussian_integrate(s, a, &smp, INFINITY, &g, &b);
+            gathered += (double)g.hits.added;
             composited += (double)b.composited;
         }
     double rays = (double)s->cam.width * s->cam.height;
     r->gathered = gathered / rays, r->composited = composited / rays;
-    gaussian_hits_free(&h);
+    gaussian_integrator_free(&g);
 }
 
 static double gs_render_mrays(const scene *s, const accel *a, const render_settings *rs)
@@ -259,8 +261,10 @@ static void gs_run(const gs_case *c, gs_result *r)
     gs_scene(c, &s);
     const gaussian_model *m = &s.objects[0].gaussians;
     r->model_bytes = model_bytes_per_gaussian(m);
-    render_settings rs = {{SAMPLER_THESIS, 1, 2, 4, 4}, s.shut, c->threads, 0, 1, 1, 0, 0, 0, 0, 0, 0,
-                          PIXEL_FILTER_BOX, BLUR_SPACE_MODEL};
+    render_settings rs = render_settings_default();
+    rs.smp.grid = 2, rs.smp.tspp = 4, rs.smp.time_factor = 4;
+    rs.shut = s.shut;
+    rs.threads = c->threads;
     accel *a = build_timed(&s, &r->build_ms);
     r->embree_bytes = (double)accel_embree_peak_bytes(a) / (double)m->count;
     RTCDevice dev = rtcNewDevice(NULL);
@@ -390,7 +394,7 @@ static int gs_row(const gs_case *c, FILE *csv)
     return 0;
 }
 
-/* ---- benchmark scale (issue 31) ------------------------------------------ */
+/* ---- benchmark scale: a view the size trained models are judged at ----- */
 
 /* Three concentric 2DGS spheres (radii 1, 0.75, 0.5: layers of depth
  * behind each other, each ray meets the front one's both sides and the
@@ -447,8 +451,11 @@ static void scale_run(const void *in, void *out)
     for (int k = 0; k < s.nobjects; k++)
         count += s.objects[k].gaussians.count,
             model += model_bytes_per_gaussian(&s.objects[k].gaussians) * (double)s.objects[k].gaussians.count;
-    render_settings rs = {{SAMPLER_THESIS, 1, 1, c->tspp, 4}, s.shut, c->threads, 0, 1, 1, 0, 0, 0, 0, 0, 0,
-                          PIXEL_FILTER_POINT, BLUR_SPACE_MODEL};
+    render_settings rs = render_settings_default();
+    rs.smp.tspp = c->tspp, rs.smp.time_factor = 4;
+    rs.shut = s.shut;
+    rs.threads = c->threads;
+    rs.filter = PIXEL_FILTER_POINT;
     accel *a = build_timed(&s, &r->build_ms);
     r->embree_bytes = (double)accel_embree_peak_bytes(a) / (double)count;
     r->model_bytes = model / (double)count;

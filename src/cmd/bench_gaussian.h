@@ -1,4 +1,4 @@
-/* make bench's Gaussian-splat row (issue 24): refrender's 2DGS path
+/* make bench's Gaussian-splat rows: refrender's 2DGS and 3DGS paths
  * against Embree's built-in oriented discs gathering every hit, on the
  * same rays, in one run. */
 #ifndef RR_BENCH_GAUSSIAN_H

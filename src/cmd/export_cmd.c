@@ -14,7 +14,9 @@
 #include "cli.h"
 #include "commands.h"
 #include "scene_xml.h"
+#include "rotation.h"
 #include "transforms.h"
+#include "tum.h"
 
 static void export_usage(FILE *f)
 {
@@ -351,10 +353,10 @@ static void camera_pose(const scene *s, double t, vec3 *p, double q[4])
     vec3 axes[3] = {c->right, v3_scale(c->image_up, -1.0), c->forward};
     for (int i = 0; i < 3; i++)
         rest[0][i] = axes[i].x, rest[1][i] = axes[i].y, rest[2][i] = axes[i].z;
-    trajectory_matrix_quat(rest, q0);
+    quat_of_matrix(rest, q0);
     xform m = animation_pose_at(&s->camera_motion, t, qm);
     *p = v3_add(xform_point(&m, c->position), v3(0, 0, 0)); /* +0 for -0, as the readers keep them */
-    trajectory_quat_mul(qm, q0, q);
+    quat_mul(qm, q0, q);
     for (int i = 0; i < 4; i++)
         q[i] += 0.0;
 }
@@ -488,7 +490,7 @@ static int write_tum(FILE *f, void *ctx, rr_error *err)
         vec3 p;
         double q[4];
         camera_pose(j->s, t[i], &p, q);
-        trajectory_write_tum_line(f, t[i], p, q, j->o->tum_opengl);
+        tum_write_line(f, t[i], p, q, j->o->tum_opengl);
     }
     free(t);
     return 0;

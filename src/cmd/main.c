@@ -205,9 +205,8 @@ static int check_combinations(const render_options *o, rr_error *err)
     if (o->instant_set && (o->shutter_set || o->frames || o->exact_time))
         return rr_fail(err, "--time renders one instant: it cannot be combined with --shutter, --frame(s) or "
                             "--time-integration exact");
-    if (o->exact_time && o->blur == BLUR_SPACE_LINEAR)
-        return rr_fail(err, "--blur-space linear decodes each instant's colour before the time average, which "
-                            "exact time cannot do (it integrates colours over time): use sampled time");
+    if (render_check_exact_blur(o->exact_time, o->blur, err))
+        return -1;
     if (o->passes && o->batches < o->passes)
         return rr_fail(err, "--pass %d/%d needs --batches >= %d (each pass renders whole batches)",
                        o->pass, o->passes, o->passes);
@@ -379,8 +378,8 @@ typedef struct {
 static int write_checkpoint(void *user, const image *img, rr_error *err)
 {
     render_run *run = user;
-    attrs_set(&run->attrs, "refrender:renderSeconds", "%.3f", img->seconds);
-    attrs_set(&run->attrs, "refrender:rays", "%llu", (unsigned long long)img->rays);
+    attrs_set(&run->attrs, ATTR_RENDER_SECONDS, "%.3f", img->seconds);
+    attrs_set(&run->attrs, ATTR_RAYS, "%llu", (unsigned long long)img->rays);
     return output_write_state(run->o->checkpoint, img, run->rs.batch_begin,
                               run->rs.batch_begin + run->rs.batches, &run->attrs, err);
 }
@@ -441,7 +440,7 @@ static int resume_state(render_run *run, image *img, rr_error *err)
     if (check_resumable_counts(run, img, err))
         return -1;
     /* the work the state took goes on counting (render.c, checkpoint_paused) */
-    const char *rays = attrs_get(&saved, "refrender:rays"), *seconds = attrs_get(&saved, "refrender:renderSeconds");
+    const char *rays = attrs_get(&saved, ATTR_RAYS), *seconds = attrs_get(&saved, ATTR_RENDER_SECONDS);
     img->rays = rays ? (uint64_t)strtod(rays, NULL) : 0;
     img->seconds = seconds ? strtod(seconds, NULL) : 0.0;
     if (!run->o->quiet) { /* a log then shows the work kept */
@@ -471,9 +470,18 @@ static void setup_run(render_run *run, const scene *s, const shutter *shut, cons
     run->total_batches = total;
     run->last_progress = 0;
     run->rs = (render_settings){
-        {o->sampler, o->seed, sampler_grid_for_spp(o->spp), o->tspp, s->time_factor}, *shut,
-        o->threads, begin, end - begin, max_batches_of(o), o->target_error, o->exact_time, 0, 0, 0, 0,
-        o->filter, o->blur};
+        .smp = {.kind = o->sampler, .seed = o->seed, .grid = sampler_grid_for_spp(o->spp), .tspp = o->tspp,
+                .time_factor = s->time_factor},
+        .shut = *shut,
+        .threads = o->threads,
+        .batch_begin = begin,
+        .batches = end - begin,
+        .max_batches = max_batches_of(o),
+        .target_error = o->target_error,
+        .exact_time = o->exact_time,
+        .filter = o->filter,
+        .blur = o->blur,
+    };
     if (o->crop_set) {
         int px[4];
         crop_pixels(o, s->cam.width, s->cam.height, px);
@@ -521,7 +529,7 @@ static void report(const render_options *o, const scene *s, const image *img, in
 static void report_unresolved(const render_options *o, const image *img, const shutter *shut, attr_list *attrs)
 {
     double share = img->rays > 0 ? img->exact_unresolved / ((double)img->rays * (shut->close - shut->open)) : 0.0;
-    attrs_set(attrs, "refrender:exactUnresolvedShare", "%.6g", share);
+    attrs_set(attrs, ATTR_EXACT_UNRESOLVED_SHARE, "%.6g", share);
     if (share > 100 * EXACT_TIME_TOL && !o->quiet)
         fprintf(stderr, "refrender: warning: exact time left %.3g of the shutter (over all spatial samples) in pieces "
                         "shorter than %g of it, taken with the blended set at their middle\n",
@@ -534,8 +542,8 @@ static void report_target(const render_options *o, const image *img, attr_list *
     size_t n = (size_t)img->width * img->height, reached = 0;
     for (size_t i = 0; i < n; i++)
         reached += film_max_stderr(&img->px[i]) <= o->target_error;
-    attrs_set(attrs, "refrender:targetError", "%.17g", o->target_error);
-    attrs_set(attrs, "refrender:targetReached", "%zu of %zu pixels", reached, n);
+    attrs_set(attrs, ATTR_TARGET_ERROR, "%.17g", o->target_error);
+    attrs_set(attrs, ATTR_TARGET_REACHED, "%zu of %zu pixels", reached, n);
     if (!o->quiet)
         fprintf(stderr, "refrender: %zu of %zu pixels reached standard error <= %g; %zu stopped at %u batches\n",
                 reached, n, o->target_error, n - reached, max_batches_of(o));
@@ -573,7 +581,7 @@ static int write_final(atomic_set *set, const char *output, const image *img, re
         win = (exr_window){img->width, img->height, rs->crop_x0, rs->crop_y0, rs->crop_x1 - rs->crop_x0,
                            rs->crop_y1 - rs->crop_y0};
         const double *c = run->o->crop;
-        attrs_set(&run->attrs, "refrender:cropWindow", "%.17g %.17g %.17g %.17g", c[0], c[1], c[2], c[3]);
+        attrs_set(&run->attrs, ATTR_CROP_WINDOW, "%.17g %.17g %.17g %.17g", c[0], c[1], c[2], c[3]);
     }
     return output_write_final_into(set, output, img, (int)sampler_count(&rs->smp), &run->attrs, &win, err);
 }
@@ -634,14 +642,14 @@ static int render_one(const scene *s, const shutter *shut, long long frame, acce
         report(o, s, &img, tty);
         if (o->target_error > 0)
             report_target(o, &img, &run.attrs);
-        attrs_set(&run.attrs, "refrender:renderSeconds", "%.3f", img.seconds);
-        attrs_set(&run.attrs, "refrender:rays", "%llu", (unsigned long long)img.rays);
+        attrs_set(&run.attrs, ATTR_RENDER_SECONDS, "%.3f", img.seconds);
+        attrs_set(&run.attrs, ATTR_RAYS, "%llu", (unsigned long long)img.rays);
         if (run.rs.exact_time)
             report_unresolved(o, &img, &run.rs.shut, &run.attrs);
         if (o->frames && s->frame_rate > 0)
-            attrs_set(&run.attrs, "refrender:frameRate", "%.17g", s->frame_rate);
+            attrs_set(&run.attrs, ATTR_FRAME_RATE, "%.17g", s->frame_rate);
         if (o->frames)
-            attrs_set(&run.attrs, "refrender:frame", "%lld", frame);
+            attrs_set(&run.attrs, ATTR_FRAME, "%lld", frame);
         rc = write_outputs(&img, &run, output, preview, err);
     }
     image_free(&img);
@@ -776,8 +784,8 @@ int cmd_render(int argc, char **argv)
         if (!o.sampler_given)
             o.sampler = SAMPLER_SOBOL;
     }
-    /* before loading (issue 32.10): a signal while a large model loads or its
-     * BVH builds exits 130 as during the render, not 143 */
+    /* before loading: a signal while a large model loads or its BVH builds
+     * exits 130 as during the render, not 143 */
     install_signal_handlers();
     rr_interrupt_watch(&interrupted);
     char scene_buf[PATH_MAX + 64];

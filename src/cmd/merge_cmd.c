@@ -60,7 +60,7 @@ static int check_ranges(batch_range *r, int n, uint32_t total, rr_error *err)
  * not bring up to a range the render never gives. */
 static int check_range_in_render(const attr_list *a, const batch_range *r, rr_error *err)
 {
-    unsigned long total = strtoul(attrs_get(a, "refrender:batches"), NULL, 10);
+    unsigned long total = strtoul(attrs_get(a, ATTR_BATCHES), NULL, 10);
     if (r->end > total)
         return rr_fail(err, "%s holds batches %u-%u, beyond the %lu batches of its render (refrender:batches): "
                             "a damaged or crafted state", r->path, r->begin, r->end, total);
@@ -88,7 +88,7 @@ static int check_complete(const image *img, const batch_range *r, rr_error *err)
  * (film.h), whatever overlapping states a user or a crafted file offers. */
 static int check_batch_total(const attr_list *first, const batch_range *range, uint32_t *so_far, rr_error *err)
 {
-    unsigned long total = strtoul(attrs_get(first, "refrender:batches"), NULL, 10);
+    unsigned long total = strtoul(attrs_get(first, ATTR_BATCHES), NULL, 10);
     if (total > FILM_MAX_BATCHES)
         return rr_fail(err, "%s: refrender:batches %lu is more than %u", range->path, total, FILM_MAX_BATCHES);
     if ((uint64_t)*so_far + (range->end - range->begin) > total)
@@ -138,10 +138,10 @@ static int merge_files(char **paths, int n, const char *out, int quiet, rr_error
     for (int i = 0; i < n && !rc; i++)
         rc = add_state(paths[i], &merged, &attrs, paths[0], &ranges[i], i == 0, &so_far, err);
     if (!rc)
-        rc = check_ranges(ranges, n, (uint32_t)strtoul(attrs_get(&attrs, "refrender:batches"), NULL, 10), err);
+        rc = check_ranges(ranges, n, (uint32_t)strtoul(attrs_get(&attrs, ATTR_BATCHES), NULL, 10), err);
     if (!rc) {
-        int per_batch = atoi(attrs_get(&attrs, "refrender:spp")) * atoi(attrs_get(&attrs, "refrender:tspp"));
-        attrs_set(&attrs, "refrender:command", "refrender merge (%d states)", n);
+        int per_batch = atoi(attrs_get(&attrs, ATTR_SPP)) * atoi(attrs_get(&attrs, ATTR_TSPP));
+        attrs_set(&attrs, ATTR_COMMAND, "refrender merge (%d states)", n);
         rc = output_write_final(out, &merged, per_batch, &attrs, err);
     }
     if (!rc && !quiet)

@@ -3,6 +3,7 @@
 #include <string.h>
 
 #include "cli.h"
+#include "gaussian_ply.h"
 
 const char surfel_output_help[] =
 "  --gaussians K     write Gaussian splats instead, in the official layout of\n"

@@ -21,7 +21,7 @@ extern const char surfel_output_help[];
  * 0 parsed, -1 a bad value (err), 1 not one of these. */
 int surfel_output_option(int c, const char *arg, surfel_output *o, rr_error *err);
 
-/* After the options (issue 32.9): --sh-degree without --gaussians would be
+/* After the options: --sh-degree without --gaussians would be
  * ignored (surfels have no SH), so it is a usage error. */
 int surfel_output_check(const surfel_output *o, rr_error *err);
 

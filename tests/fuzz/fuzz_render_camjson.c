@@ -1,11 +1,11 @@
-/* libFuzzer target that renders (issue 32): the input is a cameras.json;
+/* libFuzzer target that renders: the input is a cameras.json;
  * a fixed 3DGS model of three Gaussians is rendered at 4x4 from its camera
  * "A" (an input of odd length: moving from pose "A" to pose "B"), and the
  * image checked (render_check.h). */
 #include <stdint.h>
 #include <stdio.h>
 
-#include "gaussian.h"
+#include "gaussian_ply.h"
 #include "render_check.h"
 
 static void write_model(void)

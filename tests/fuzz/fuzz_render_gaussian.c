@@ -1,4 +1,4 @@
-/* libFuzzer target that renders (issue 32): the input is a byte choosing
+/* libFuzzer target that renders: the input is a byte choosing
  * the semantics, order and tile rule, then a Gaussian-splat PLY; the model
  * is rendered at 4x4 under a moving camera and the image checked
  * (render_check.h). A target that only parses cannot reach values that

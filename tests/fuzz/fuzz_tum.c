@@ -1,13 +1,14 @@
-/* libFuzzer target: the TUM trajectory reader and every interpolation of
- * what it accepts (trajectory.c): a parsed file is prepared under each
- * interpolation, and where accepted its poses must be finite unit
- * quaternions and finite positions across the domain, and what export
- * writes must read back. */
+/* libFuzzer target: the TUM trajectory reader (tum.c) and every
+ * interpolation of what it accepts (trajectory.c): a parsed file is
+ * prepared under each interpolation, and where accepted its poses must be
+ * finite unit quaternions and finite positions across the domain, and what
+ * export writes must read back. */
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 
 #include "trajectory.h"
+#include "tum.h"
 
 static void check_poses(trajectory *tr)
 {
@@ -27,7 +28,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
     trajectory tr;
     rr_error err;
-    if (trajectory_parse_tum((const char *)data, size, "fuzz.tum", &tr, &err))
+    if (tum_parse((const char *)data, size, "fuzz.tum", &tr, &err))
         return 0;
     for (int k = TRAJECTORY_LINEAR; k <= TRAJECTORY_BEZIER_SE3; k++) {
         trajectory copy = tr;

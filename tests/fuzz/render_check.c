@@ -57,8 +57,9 @@ void fuzz_render_and_check(const char *xml, int box)
     accel *a = NULL;
     accel_settings set = {s.shut.open, s.shut.close, s.epsilon, s.kernel_sigma, 1};
     if (camera_prepare(&s.cam, &err) == 0 && accel_build(&s, &set, &a, &err) == 0) {
-        render_settings rs = {{SAMPLER_THESIS, 1, 1, 1, 1}, s.shut, 1, 0, 1, 1, 0, 0, 0, 0, 0, 0,
-                              box ? PIXEL_FILTER_BOX : PIXEL_FILTER_POINT, BLUR_SPACE_MODEL};
+        render_settings rs = render_settings_default();
+        rs.shut = s.shut;
+        rs.filter = box ? PIXEL_FILTER_BOX : PIXEL_FILTER_POINT;
         image img;
         volatile sig_atomic_t never = 0;
         if (image_alloc(&img, 4, 4) == 0) {

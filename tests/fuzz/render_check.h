@@ -1,4 +1,4 @@
-/* What the rendering fuzz targets (issue 32) share: a scene read from
+/* What the rendering fuzz targets share: a scene read from
  * memory whose inputs were written to a private directory, rendered at
  * 4x4 through the same path as 'refrender' (accel_build, render_image),
  * and the image's invariants checked: a refusal is a clean return, a

@@ -1,0 +1,417 @@
+/* gaussian_dynamic.c and gaussian_stg_ply.c: SpacetimeGaussians-lite
+ * models at a time t against values worked by hand from the official rules
+ * (SpacetimeGaussians 427abfc5: forward_lite forward.cu:186-204 and
+ * 127-138, scene/ourslite.py:40 and 123-126, renderer/__init__.py:318-343),
+ * their motion bounds against 20,000 steps of the path, and the reader's
+ * refusals. */
+#include <float.h>
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "../src/gaussian.h"
+#include "../src/gaussian_dynamic.h"
+#include "../src/gaussian_ply.h"
+#include "../src/gaussian_stg_ply.h"
+#include "../src/inputfile.h"
+#include "harness.h"
+
+/* ---- models written as ascii PLY in the save_ply order ------------------ */
+
+static const char *const STG_ORDER[] = {
+    "x", "y", "z", "trbf_center", "trbf_scale", "nx", "ny", "nz", "motion_0", "motion_1", "motion_2", "motion_3",
+    "motion_4", "motion_5", "motion_6", "motion_7", "motion_8", "f_dc_0", "f_dc_1", "f_dc_2", "opacity", "scale_0",
+    "scale_1", "scale_2", "rot_0", "rot_1", "rot_2", "rot_3", "omega_0", "omega_1", "omega_2", "omega_3"};
+enum { N_PROPS = 32 };
+
+/* One Gaussian's 32 values by name, in save_ply's order. */
+typedef struct {
+    double x[3], center, tscale, motion[9], dc[3], opacity, scale[3], rot[4], omega[4];
+} stg_row;
+
+static void row_values(const stg_row *r, double v[N_PROPS])
+{
+    double tmp[N_PROPS] = {r->x[0], r->x[1], r->x[2], r->center, r->tscale, 0, 0, 0};
+    memcpy(&tmp[8], r->motion, sizeof r->motion);
+    memcpy(&tmp[17], r->dc, sizeof r->dc);
+    tmp[20] = r->opacity;
+    memcpy(&tmp[21], r->scale, sizeof r->scale);
+    memcpy(&tmp[24], r->rot, sizeof r->rot);
+    memcpy(&tmp[28], r->omega, sizeof r->omega);
+    memcpy(v, tmp, sizeof tmp);
+}
+
+/* An ascii PLY of the rows; skip names a property to leave out (NULL:
+ * none), extra one to add (value 0). */
+static size_t write_ply(char *buf, size_t size, const stg_row *rows, int n, const char *skip, const char *extra)
+{
+    size_t len = (size_t)snprintf(buf, size, "ply\nformat ascii 1.0\nelement vertex %d\n", n);
+    for (int k = 0; k < N_PROPS; k++)
+        if (!skip || strcmp(skip, STG_ORDER[k]))
+            len += (size_t)snprintf(buf + len, size - len, "property float %s\n", STG_ORDER[k]);
+    if (extra)
+        len += (size_t)snprintf(buf + len, size - len, "property float %s\n", extra);
+    len += (size_t)snprintf(buf + len, size - len, "end_header\n");
+    for (int i = 0; i < n; i++) {
+        double v[N_PROPS];
+        row_values(&rows[i], v);
+        for (int k = 0; k < N_PROPS; k++)
+            if (!skip || strcmp(skip, STG_ORDER[k]))
+                len += (size_t)snprintf(buf + len, size - len, "%.9g ", v[k]);
+        len += (size_t)snprintf(buf + len, size - len, extra ? "0\n" : "\n");
+    }
+    return len;
+}
+
+static int parse_rows(const stg_row *rows, int n, gaussian_model *m, rr_error *e)
+{
+    static char buf[1 << 16];
+    size_t len = write_ply(buf, sizeof buf, rows, n, NULL, NULL);
+    gaussian_model_init(m);
+    return gaussian_parse("stg.ply", buf, len, GAUSSIAN_AUTO, m, e);
+}
+
+/* x = (1, 2, 3), trbf_center 0.25, exp(trbf_scale) = 1, motion in
+ * eighths (exact in floats), sigmoid(opacity) = 1/2. */
+static stg_row hand_row(void)
+{
+    stg_row r = {{1, 2, 3}, 0.25, 0, {0.5, -1, 2, 0.25, 0.125, -0.5, 1, 0, -2}, {0.25, -0.125, 1.5}, 0, {0, -1, 1},
+                 {1, 0, 0, 0}, {0, 0, 0, 1}};
+    return r;
+}
+
+/* ---- evaluation ---------------------------------------------------------- */
+
+/* mean = x + v D + a D^2 + j D^3 (forward.cu:196-198) at D = 1, -1, 2; the
+ * opacity sigmoid(0) exp(-D^2) (forward.cu:202-204: no 1/2); the scales
+ * exp(scale), constant; f_dc as the colour, not SH (no +0.5, no clamp of
+ * -0.125). */
+TEST(a_moving_gaussian_at_t_is_the_official_rules_worked_by_hand)
+{
+    stg_row r = hand_row();
+    gaussian_model m;
+    rr_error e;
+    CHECK(parse_rows(&r, 1, &m, &e) == 0 && m.dynamic && m.count == 1 && m.kind == GAUSSIAN_3D);
+    if (!m.dynamic)
+        return;
+    const double Ds[3] = {1, -1, 2};
+    for (int s = 0; s < 3; s++) {
+        double D = Ds[s], t = 0.25 + D;
+        gaussian_dynamic_state st;
+        gaussian_dynamic_at(&m, 0, t, &st);
+        for (int k = 0; k < 3; k++) {
+            double want = r.x[k] + r.motion[k] * D + r.motion[3 + k] * D * D + r.motion[6 + k] * D * D * D;
+            CHECK(st.mean[k] == want);
+            CHECK_NEAR(st.scale[k], exp(r.scale[k]), 1e-6 * exp(r.scale[k]));
+            CHECK(st.rgb[k] == r.dc[k]);
+        }
+        CHECK_NEAR(st.opacity, 0.5 * exp(-D * D), 1e-15);
+    }
+    gaussian_dynamic_state st;
+    gaussian_dynamic_at(&m, 0, 0.25, &st); /* D = 0: the peak */
+    CHECK(st.opacity == 0.5 && st.mean[0] == 1 && st.mean[1] == 2 && st.mean[2] == 3);
+    gaussian_model_free(&m);
+}
+
+/* The temporal scale divides D: exp(trbf_scale) = 2 halves the decay's
+ * exponent's root: opacity at D = 2 is sigmoid exp(-1). */
+TEST(the_temporal_scale_is_exp_of_trbf_scale)
+{
+    stg_row r = hand_row();
+    r.tscale = log(2.0), r.opacity = log(3.0); /* sigmoid(log 3) = 3/4 */
+    gaussian_model m;
+    rr_error e;
+    CHECK(parse_rows(&r, 1, &m, &e) == 0);
+    gaussian_dynamic_state st;
+    gaussian_dynamic_at(&m, 0, 0.25 + 2, &st);
+    CHECK_NEAR(st.opacity, 0.75 * exp(-1.0), 1e-7);
+    gaussian_model_free(&m);
+}
+
+/* rot + omega D normalised once (F.normalize): (1,0,0,0) + (0,0,0,1) D at
+ * D = 1 is a quarter turn about z; a non-unit rot (2,0,0,0) with omega
+ * (0,0,0,2) gives the same (normalising rot first would give
+ * (1,0,0,2)/sqrt 5). */
+TEST(the_rotation_is_rot_plus_omega_d_normalised_once)
+{
+    stg_row r[2] = {hand_row(), hand_row()};
+    r[1].rot[0] = 2, r[1].omega[3] = 2;
+    gaussian_model m;
+    rr_error e;
+    CHECK(parse_rows(r, 2, &m, &e) == 0 && m.count == 2);
+    for (size_t i = 0; i < 2; i++) {
+        gaussian_dynamic_state st;
+        gaussian_dynamic_at(&m, i, 1.25, &st);
+        double R[3][3], s = sqrt(0.5);
+        CHECK_NEAR(st.q[0], s, 1e-15);
+        CHECK(st.q[1] == 0 && st.q[2] == 0);
+        CHECK_NEAR(st.q[3], s, 1e-15);
+        gaussian_dynamic_matrix(st.q, R);
+        const double want[3][3] = {{0, -1, 0}, {1, 0, 0}, {0, 0, 1}};
+        for (int a = 0; a < 3; a++)
+            for (int b = 0; b < 3; b++)
+                CHECK_NEAR(R[a][b], want[a][b], 1e-15);
+    }
+    gaussian_model_free(&m);
+}
+
+/* rot 0 (STG adds Gaussians so: ourslite.py:1235) is read, stays 0 where
+ * rot + omega D is 0 (F.normalize divides by max(|v|, 1e-12)), and the
+ * CUDA's matrix of q = 0 is the identity (forward.cu:134-138: 1 - 2(...)
+ * on the diagonal, 2(...) off it); with omega (0,2,0,0), at D = 1/2 it is
+ * the half turn about x. Below |v| = 1e-12 the quaternion is v / 1e-12, a
+ * short one, whose matrix the CUDA takes as it is: (0, 0.1, 0, 0) gives
+ * diag(1, 0.98, 0.98), no rotation. */
+TEST(a_zero_or_tiny_rotation_is_what_the_cuda_computes)
+{
+    stg_row r[3] = {hand_row(), hand_row(), hand_row()};
+    memset(r[0].rot, 0, sizeof r[0].rot), memset(r[0].omega, 0, sizeof r[0].omega);
+    memset(r[1].rot, 0, sizeof r[1].rot), memset(r[1].omega, 0, sizeof r[1].omega), r[1].omega[1] = 2;
+    memset(r[2].rot, 0, sizeof r[2].rot), memset(r[2].omega, 0, sizeof r[2].omega), r[2].rot[1] = 1e-13;
+    gaussian_model m;
+    rr_error e;
+    CHECK(parse_rows(r, 3, &m, &e) == 0 && m.count == 3);
+    if (m.count != 3)
+        return;
+    gaussian_dynamic_state st;
+    double R[3][3];
+    gaussian_dynamic_at(&m, 0, 0.9, &st);
+    CHECK(st.q[0] == 0 && st.q[1] == 0 && st.q[2] == 0 && st.q[3] == 0);
+    gaussian_dynamic_matrix(st.q, R);
+    for (int a = 0; a < 3; a++)
+        for (int b = 0; b < 3; b++)
+            CHECK(R[a][b] == (a == b));
+    gaussian_dynamic_at(&m, 1, 0.25, &st); /* D = 0: v = 0 */
+    CHECK(st.q[0] == 0 && st.q[1] == 0 && st.q[2] == 0 && st.q[3] == 0);
+    gaussian_dynamic_at(&m, 1, 0.75, &st); /* D = 1/2: v = (0, 1, 0, 0) */
+    gaussian_dynamic_matrix(st.q, R);
+    CHECK(R[0][0] == 1 && R[1][1] == -1 && R[2][2] == -1 && R[0][1] == 0 && R[1][2] == 0);
+    gaussian_dynamic_at(&m, 2, 0.25, &st);
+    CHECK_NEAR(st.q[1], 0.1, 1e-8);
+    gaussian_dynamic_matrix(st.q, R);
+    CHECK(R[0][0] == 1);
+    CHECK_NEAR(R[1][1], 0.98, 1e-8);
+    CHECK_NEAR(R[2][2], 0.98, 1e-8);
+    gaussian_model_free(&m);
+}
+
+/* ---- bounds over [t0, t1] ----------------------------------------------- */
+
+static double uniform(uint64_t *s, double lo, double hi)
+{
+    *s = *s * 6364136223846793005ull + 1442695040888963407ull;
+    return lo + (hi - lo) * (double)(*s >> 11) / 9007199254740992.0;
+}
+
+/* A model of n Gaussians built in memory (no file). */
+static void alloc_model(gaussian_model *m, size_t n)
+{
+    gaussian_model_init(m);
+    m->kind = GAUSSIAN_3D, m->sh_degree = 0, m->sh_coeffs = 1;
+    CHECK(gaussian_model_alloc(m, n) == 0 && (m->dynamic = gaussian_dynamic_alloc(n)) != NULL);
+    m->dynamic->rgb_precomputed = 1;
+    m->count = n;
+}
+
+/* Gaussian i of the given kind: 0 roots of the velocity r1, r2 (g = p' =
+ * A (D - r1)(D - r2): extrema inside the interval), 1 random coefficients
+ * up to 60 (fast movers), 2 a path a few ulps long at an offset of 1000,
+ * 3 a double root, 4 a parabola with its vertex inside. */
+static void random_gaussian(gaussian_model *m, size_t i, uint64_t *s, int kind)
+{
+    gaussian_dynamic *d = m->dynamic;
+    d->trbf_center[i] = (float)uniform(s, 0, 1);
+    d->trbf_scale[i] = (float)uniform(s, -3, 1);
+    m->opacity[i] = (float)uniform(s, 0.01, 0.99);
+    for (int k = 0; k < 3; k++) {
+        double off = kind == 2 ? uniform(s, 500, 2000) : uniform(s, -3, 3), size = kind == 1 ? 60 : 1;
+        double *c = NULL, co[3];
+        if (kind == 0 || kind == 3) { /* roots of p' in [-1.2, 1.2]; kind 3: a double root */
+            double A = uniform(s, -20, 20), r1 = uniform(s, -1.2, 1.2), r2 = kind == 3 ? r1 : uniform(s, -1.2, 1.2);
+            co[0] = A * r1 * r2, co[1] = -A * (r1 + r2) / 2, co[2] = A / 3, c = co;
+        } else if (kind == 4) { /* a parabola (no D^3): p' linear, its root inside */
+            double a = uniform(s, -30, 30), r = uniform(s, -1.2, 1.2);
+            co[0] = -2 * a * r, co[1] = a, co[2] = 0, c = co;
+        } else if (kind == 2) { /* a path of a few ulps of its offset: rounding decides */
+            for (int j = 0; j < 3; j++)
+                co[j] = uniform(s, -1, 1) * 4e-13;
+            c = co;
+        } else {
+            for (int j = 0; j < 3; j++)
+                co[j] = uniform(s, -size, size);
+            c = co;
+        }
+        m->mean[3 * i + k] = (float)off;
+        for (int j = 0; j < 3; j++)
+            d->motion[9 * i + 3 * j + k] = (float)c[j];
+    }
+}
+
+/* The path exactly (in long double, 64-bit significand: its rounding is
+ * 2^11 times below the bound's padding). */
+static long double exact_coordinate(const gaussian_model *m, size_t i, int k, double t)
+{
+    const float *mo = &m->dynamic->motion[9 * i];
+    long double D = (long double)t - m->dynamic->trbf_center[i];
+    return m->mean[3 * i + k] + D * (mo[k] + D * (mo[3 + k] + D * (long double)mo[6 + k]));
+}
+
+/* Checks the box and opacity bound of Gaussian i over [t0, t1] against
+ * 20,000 steps; *slack gets the largest gap between the box and the
+ * sampled hull beyond what the step size explains (so a loose box shows). */
+static int bounds_hold(const gaussian_model *m, size_t i, double t0, double t1, double *slack)
+{
+    double lo[3], hi[3], omax, smin[3], smax[3];
+    if (gaussian_dynamic_bounds(m, i, t0, t1, lo, hi, &omax))
+        return 0;
+    int ok = 1;
+    const int steps = 20000;
+    for (int k = 0; k < 3; k++)
+        smin[k] = INFINITY, smax[k] = -INFINITY;
+    for (int j = 0; j <= steps; j++) {
+        double t = j == steps ? t1 : t0 + (t1 - t0) * j / steps;
+        gaussian_dynamic_state st;
+        gaussian_dynamic_at(m, i, t, &st);
+        ok &= st.opacity <= omax;
+        for (int k = 0; k < 3; k++) {
+            long double x = exact_coordinate(m, i, k, t);
+            ok &= st.mean[k] >= lo[k] && st.mean[k] <= hi[k] && x >= lo[k] && x <= hi[k];
+            smin[k] = fmin(smin[k], st.mean[k]), smax[k] = fmax(smax[k], st.mean[k]);
+        }
+    }
+    /* tightness: the nearest step to an interior extremum is dt/2 away,
+     * where p falls by at most max|p''| dt^2 / 8; plus the padding */
+    const float *mo = &m->dynamic->motion[9 * i];
+    double R = fmax(fabs(t0 - m->dynamic->trbf_center[i]), fabs(t1 - m->dynamic->trbf_center[i])), dt = (t1 - t0) / steps;
+    for (int k = 0; k < 3; k++) {
+        double curv = 2 * fabs(mo[3 + k]) + 6 * fabs(mo[6 + k]) * R;
+        double M = fabs(m->mean[3 * i + k]) + fabs(mo[k]) * R + fabs(mo[3 + k]) * R * R + fabs(mo[6 + k]) * R * R * R;
+        double explained = curv * dt * dt / 8 + 64 * DBL_EPSILON * M;
+        *slack = fmax(*slack, fmax(smin[k] - lo[k], hi[k] - smax[k]) - explained);
+    }
+    return ok;
+}
+
+/* Random Gaussians (extrema inside the interval, double roots, parabolas,
+ * fast movers of 60 units a time unit, paths a few ulps long at offsets of
+ * 1000) over random
+ * intervals: every step's mean (as computed and exact) lies in the box and
+ * its opacity under the bound, and the box is no wider than the samples
+ * plus what the step size and the padding explain. */
+TEST(motion_bounds_hold_20000_steps_of_the_path)
+{
+    const size_t n = 400;
+    gaussian_model m;
+    alloc_model(&m, n);
+    uint64_t seed = 12345;
+    int failures = 0;
+    double slack = -INFINITY;
+    for (size_t i = 0; i < n; i++) {
+        random_gaussian(&m, i, &seed, (int)(i % 5));
+        double c = m.dynamic->trbf_center[i], t0 = c + uniform(&seed, -1.2, 0.2), t1 = t0 + uniform(&seed, 0, 1.4);
+        if (i % 50 == 7)
+            t1 = t0; /* an instant */
+        failures += !bounds_hold(&m, i, t0, t1, &slack);
+    }
+    printf("    %d of %zu Gaussians left the box; box beyond the samples by %.3g\n", failures, n, slack);
+    CHECK(failures == 0);
+    CHECK(slack <= 0);
+    double lo[3], hi[3], om;
+    CHECK(gaussian_dynamic_bounds(&m, 0, -1e300, 0, lo, hi, &om) == -1); /* D^3 overflows: no box */
+    gaussian_model_free(&m);
+}
+
+/* The opacity bound is the RBF at trbf_center clamped into [t0, t1]:
+ * sigmoid(o) inside, sigmoid(o) exp(-(t0 - c)^2) after it. */
+TEST(the_opacity_bound_is_the_rbf_at_the_clamped_centre)
+{
+    stg_row r = hand_row();
+    gaussian_model m;
+    rr_error e;
+    CHECK(parse_rows(&r, 1, &m, &e) == 0);
+    double lo[3], hi[3], om;
+    CHECK(gaussian_dynamic_bounds(&m, 0, 0, 1, lo, hi, &om) == 0);
+    CHECK(om >= 0.5 && om <= 0.5 * (1 + 1e-14));
+    CHECK(gaussian_dynamic_bounds(&m, 0, 1.25, 2, lo, hi, &om) == 0);
+    CHECK(om >= 0.5 * exp(-1.0) && om <= 0.5 * exp(-1.0) * (1 + 1e-14));
+    CHECK(gaussian_dynamic_bounds(&m, 0, -2.75, -0.75, lo, hi, &om) == 0);
+    CHECK(om >= 0.5 * exp(-1.0) && om <= 0.5 * exp(-1.0) * (1 + 1e-14));
+    gaussian_model_free(&m);
+}
+
+/* ---- the reader --------------------------------------------------------- */
+
+static int refused(const char *skip, const char *extra, gaussian_kind kind, const char *needle)
+{
+    static char buf[1 << 14];
+    stg_row r = hand_row();
+    size_t len = write_ply(buf, sizeof buf, &r, 1, skip, extra);
+    gaussian_model m;
+    rr_error e = {{0}};
+    gaussian_model_init(&m);
+    int ok = gaussian_parse("stg.ply", buf, len, kind, &m, &e) == -1 && strstr(e.msg, "stg.ply") &&
+             strstr(e.msg, needle) && !m.mean && !m.dynamic;
+    if (!ok)
+        printf("    expected an error with '%s', got '%s'\n", needle, e.msg);
+    return ok;
+}
+
+TEST(stg_files_that_are_not_whole_lite_models_are_refused_by_name)
+{
+    CHECK(refused("omega_2", NULL, GAUSSIAN_AUTO, "lacks the vertex properties 'omega_2'"));
+    CHECK(refused("trbf_center", NULL, GAUSSIAN_AUTO, "lacks the vertex properties 'trbf_center'"));
+    CHECK(refused(NULL, "f_t_0", GAUSSIAN_AUTO, "'f_t_0': a SpacetimeGaussians \"full\" model"));
+    CHECK(refused(NULL, "f_dc_3", GAUSSIAN_AUTO, "needs STG's per-pixel MLP, not supported"));
+    CHECK(refused(NULL, "f_rest_0", GAUSSIAN_AUTO, "'f_rest_0'"));
+    CHECK(refused(NULL, NULL, GAUSSIAN_2D, "kind 2dgs cannot read it"));
+    /* a static model with one STG property is no static model either */
+    const char *lone = "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\n"
+                       "property float motion_0\nend_header\n0 0 0 1\n";
+    gaussian_model m;
+    rr_error e;
+    gaussian_model_init(&m);
+    CHECK(gaussian_parse("lone.ply", lone, strlen(lone), GAUSSIAN_AUTO, &m, &e) == -1 && strstr(e.msg, "lone.ply") &&
+          strstr(e.msg, "'trbf_center'") && strstr(e.msg, "'omega_3'"));
+}
+
+TEST(stg_values_beyond_what_the_official_code_holds_are_refused)
+{
+    static char buf[1 << 14];
+    stg_row r = hand_row();
+    r.tscale = -100; /* exp(-100) is no normal float */
+    size_t len = write_ply(buf, sizeof buf, &r, 1, NULL, NULL);
+    gaussian_model m;
+    rr_error e;
+    gaussian_model_init(&m);
+    CHECK(gaussian_parse("s.ply", buf, len, GAUSSIAN_AUTO, &m, &e) == -1 && strstr(e.msg, "'trbf_scale' = -100"));
+    r = hand_row(), r.x[1] = 1e16;
+    len = write_ply(buf, sizeof buf, &r, 1, NULL, NULL);
+    CHECK(gaussian_parse("s.ply", buf, len, GAUSSIAN_AUTO, &m, &e) == -1 && strstr(e.msg, "'y'"));
+}
+
+/* From a file: the static reader hands it over and the bytes are hashed
+ * once (as one read of the file would). */
+TEST(an_stg_file_is_read_and_hashed_once)
+{
+    static char buf[1 << 14];
+    stg_row r = hand_row();
+    size_t len = write_ply(buf, sizeof buf, &r, 1, NULL, NULL);
+    char path[] = "/tmp/refrender-stg-XXXXXX";
+    int fd = mkstemp(path);
+    FILE *f = fd >= 0 ? fdopen(fd, "wb") : NULL;
+    CHECK(f && fwrite(buf, 1, len, f) == len);
+    if (f)
+        fclose(f);
+    gaussian_model m;
+    rr_error e;
+    gaussian_model_init(&m);
+    uint64_t h = 777;
+    CHECK(gaussian_read(path, GAUSSIAN_AUTO, &m, &h, &e) == 0 && m.dynamic && m.count == 1);
+    CHECK(h == input_hash(777, buf, len));
+    CHECK(gaussian_write_ply(path, &m, &e) == -1 && strstr(e.msg, "SpacetimeGaussians")); /* motion would be lost */
+    gaussian_model_free(&m);
+    CHECK(m.dynamic == NULL);
+    remove(path);
+}
