@@ -11,8 +11,8 @@
  * were; see each function): quat_matrix and quat_of_matrix work in long
  * double, rounding once, so that a pose written to a file as a matrix
  * reads back as the same quaternion; quat_unit_matrix and quat_of_frame
- * stay in binary64, as the Gaussian kernels' AVX2 lanes compute the same
- * matrix (they must agree bit for bit). */
+ * stay in binary64, the Gaussian kernels' (their scalar and AVX2 paths
+ * must agree bit for bit). */
 #ifndef RR_ROTATION_H
 #define RR_ROTATION_H
 
@@ -72,7 +72,7 @@ vec3 quat_rotate(const double q[4], vec3 v);
 
 /* The matrix of a unit quaternion in binary64, 1 - 2 (y^2 + z^2) and so
  * on with no division by |q|^2: the Gaussian kernels' formula, which their
- * AVX2 lanes repeat operation for operation (gaussian_hit.c). */
+ * AVX2 lanes also take, one Gaussian at a time (gaussian_hit.c splat_axes). */
 static inline void quat_unit_matrix(double w, double x, double y, double z, double r[3][3])
 {
     r[0][0] = 1 - 2 * (y * y + z * z), r[0][1] = 2 * (x * y - w * z), r[0][2] = 2 * (x * z + w * y);
