@@ -1,7 +1,7 @@
 /* Rigid transforms at time t and their exact inverses (thesis B.2.3). */
 #include <string.h>
 
-#include "animation.h"
+#include "motion/animation.h"
 #include "harness.h"
 
 static int near3(vec3 a, vec3 b, double tol) { return v3_len(v3_sub(a, b)) <= tol; }

@@ -6,11 +6,11 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "../src/gaussian.h"
-#include "../src/gaussian_ply.h"
-#include "../src/inputfile.h"
-#include "../src/lanes.h"
-#include "../src/ply.h"
+#include "gaussians/gaussian.h"
+#include "io/gaussian_ply.h"
+#include "core/inputfile.h"
+#include "core/lanes.h"
+#include "io/ply.h"
 #include "harness.h"
 
 /* A PLY of one Gaussian per row of vals, with the given property names, in

@@ -9,9 +9,9 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "../src/animation.h"
-#include "../src/gaussian_hit.h"
-#include "../src/lanes.h"
+#include "motion/animation.h"
+#include "gaussians/gaussian_hit.h"
+#include "core/lanes.h"
 #include "harness.h"
 
 /* Why a lane test is skipped: without the vector path it would compare the

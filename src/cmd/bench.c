@@ -12,9 +12,9 @@
 #include <time.h>
 #include <unistd.h>
 
-#include "bench_gaussian.h"
-#include "render.h"
-#include "shapes.h"
+#include "cmd/bench_gaussian.h"
+#include "render/render.h"
+#include "surfels/shapes.h"
 
 typedef struct {
     const char *motion;  /* static, linear, rotation */

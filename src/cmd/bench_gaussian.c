@@ -1,4 +1,4 @@
-#include "bench_gaussian.h"
+#include "cmd/bench_gaussian.h"
 
 #include <embree3/rtcore.h>
 #include <pthread.h>
@@ -8,10 +8,10 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
-#include "gaussian_integrator.h"
-#include "gaussian_ply.h"
-#include "render.h"
-#include "shapes.h"
+#include "render/gaussian_integrator.h"
+#include "io/gaussian_ply.h"
+#include "render/render.h"
+#include "surfels/shapes.h"
 
 /* A unit sphere of 2DGS surfels or of 3DGS Gaussians 2% as thick (SH
  * degree 3, as trained models have) seen from 3.5 units by a camera
