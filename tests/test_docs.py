@@ -252,15 +252,38 @@ def test_every_make_target_the_documents_name_exists():
     assert named and not named - targets, named - targets
 
 
+def layout_folders(layout):
+    """Layout's src/ block: each folder's text (its line and the indented
+    lines continuing it)."""
+    folders, current = {}, None
+    for line in layout.splitlines():
+        m = re.match(r"    (src/\w+/)\s+(.*)", line)
+        if m:
+            current = m.group(1)
+            folders[current] = m.group(2)
+        elif current and re.match(r"\s{8,}\S", line) and not line.strip().startswith(("tests/", "scripts/")):
+            folders[current] += " " + line.strip()
+        else:
+            current = None
+    return folders
+
+
 def test_layout_places_every_source_file_and_script():
     """README's Layout names every library, command and script file (a new
-    file must be placed), and every file it names exists."""
+    file must be placed: a source file by its name in its folder's line),
+    and every file and folder it names exists."""
     layout = (ROOT / "README.md").read_text().split("\n## Layout\n", 1)[1].split("\n## ", 1)[0]
     named = set(re.findall(r"\b((?:src|tests|scripts)/[\w./*-]*\w/?)", layout))
     assert not [n for n in named if not list(ROOT.glob(n.rstrip("/")))]
-    files = [p.relative_to(ROOT).as_posix() for pat in ("src/*.c", "src/*.cpp", "src/cmd/*.c", "scripts/*")
-             for p in ROOT.glob(pat) if p.is_file() and p.suffix != ".md"]
-    assert not [f for f in files if f not in named], [f for f in files if f not in named]
+    folders = layout_folders(layout)
+
+    def placed(src):  # its name, or a prefix* covering it, in its folder's text
+        words = re.findall(r"\w+\*?", folders.get(f"src/{src.parts[1]}/", ""))
+        return any(w == src.stem or (w.endswith("*") and src.stem.startswith(w[:-1])) for w in words)
+    sources = [p.relative_to(ROOT) for pat in ("src/*/*.c", "src/*/*.cpp") for p in ROOT.glob(pat)]
+    assert not sorted(s.as_posix() for s in sources if not placed(s))
+    scripts = [p.relative_to(ROOT).as_posix() for p in ROOT.glob("scripts/*") if p.is_file() and p.suffix != ".md"]
+    assert not [f for f in scripts if f not in named], [f for f in scripts if f not in named]
 
 
 def test_every_detail_section_is_one_click_from_readme():
