@@ -1,5 +1,7 @@
 #include "gaussians/gaussian_dynamic.h"
 
+#include "core/rotation.h"
+
 #include <float.h>
 #include <math.h>
 #include <stdlib.h>
@@ -88,10 +90,7 @@ void gaussian_dynamic_at(const gaussian_model *m, size_t i, double t, gaussian_d
 
 void gaussian_dynamic_matrix(const double q[4], double R[3][3])
 {
-    double w = q[0], x = q[1], y = q[2], z = q[3];
-    R[0][0] = 1 - 2 * (y * y + z * z), R[0][1] = 2 * (x * y - w * z), R[0][2] = 2 * (x * z + w * y);
-    R[1][0] = 2 * (x * y + w * z), R[1][1] = 1 - 2 * (x * x + z * z), R[1][2] = 2 * (y * z - w * x);
-    R[2][0] = 2 * (x * z - w * y), R[2][1] = 2 * (y * z + w * x), R[2][2] = 1 - 2 * (x * x + y * y);
+    quat_unit_matrix(q[0], q[1], q[2], q[3], R); /* the unit formula on q as it is, as forward.cu does */
 }
 
 /* ---- bounds over [t0, t1] ----------------------------------------------
