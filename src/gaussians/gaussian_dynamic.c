@@ -4,6 +4,7 @@
 
 #include <float.h>
 #include <math.h>
+#include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -12,31 +13,31 @@
  * below DBL_MIN, an absolute error of at most DBL_TRUE_MIN). */
 #define U (DBL_EPSILON / 2)
 
+/* The motion's arrays share one block (trbf_center owns it): per Gaussian
+ * 1 + 1 + 9 + 4 + 4 floats. */
+enum { DYNAMIC_FLOATS = 19 };
+
 gaussian_dynamic *gaussian_dynamic_alloc(size_t n)
 {
     gaussian_dynamic *d = calloc(1, sizeof *d);
-    if (!d)
+    float *block = n <= SIZE_MAX / (DYNAMIC_FLOATS * sizeof(float)) ? malloc(n * DYNAMIC_FLOATS * sizeof(float)) : NULL;
+    if (!d || !block) {
+        free(d);
+        free(block);
         return NULL;
-    d->trbf_center = malloc(n * sizeof(float));
-    d->trbf_scale = malloc(n * sizeof(float));
-    d->motion = malloc(n * 9 * sizeof(float));
-    d->omega = malloc(n * 4 * sizeof(float));
-    d->rot = malloc(n * 4 * sizeof(float));
-    if (d->trbf_center && d->trbf_scale && d->motion && d->omega && d->rot)
-        return d;
-    gaussian_dynamic_free(d);
-    return NULL;
+    }
+    d->trbf_center = block;
+    d->trbf_scale = d->trbf_center + n;
+    d->motion = d->trbf_scale + n;
+    d->omega = d->motion + 9 * n;
+    d->rot = d->omega + 4 * n;
+    return d;
 }
 
 void gaussian_dynamic_free(gaussian_dynamic *d)
 {
-    if (!d)
-        return;
-    free(d->trbf_center);
-    free(d->trbf_scale);
-    free(d->motion);
-    free(d->omega);
-    free(d->rot);
+    if (d)
+        free(d->trbf_center); /* the whole block */
     free(d);
 }
 

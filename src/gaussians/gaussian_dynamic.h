@@ -30,7 +30,8 @@
 #define GAUSSIAN_DYNAMIC_NORMALIZE_EPS 1e-12
 
 typedef struct gaussian_dynamic {
-    float *trbf_center;   /* 1 per Gaussian: the time of its mean and its peak opacity */
+    float *trbf_center;   /* 1 per Gaussian: the time of its mean and its peak opacity (owns the block
+                           * all five arrays share: gaussian_dynamic_alloc) */
     float *trbf_scale;    /* 1 per Gaussian, as stored: the temporal scale is exp(trbf_scale) */
     float *motion;        /* 9 per Gaussian: velocity, then the D^2 and D^3 coefficients (x y z each) */
     float *omega;         /* 4 per Gaussian: the quaternion's rate, (w x y z) as rot */
