@@ -49,7 +49,7 @@ typedef struct {
     int gaussians;    /* the scene has Gaussian objects: so does every sample */
     camera_view rest_view; /* the camera at rest (Gaussian hits, still camera) */
     const render_settings *rs;
-    const exact_plan *exact; /* with rs->exact_time */
+    exact_plan *exact; /* with rs->exact_time (the job owns it) */
     shutter_cdf time_cdf;    /* times drawn from a(t) (not used for a box) */
     image *img;
     int tiles_x, tiles_y, ntiles;
@@ -547,8 +547,10 @@ static int check_settings(const render_settings *rs, rr_error *err)
     return sampler_check(&rs->smp, render_batch_end(rs), err);
 }
 
-int render_image(const scene *s, const accel *a, const render_settings *rs, image *img,
-                 const render_hooks *hooks, volatile sig_atomic_t *cancel, rr_error *err)
+/* What render_image refuses before any work: settings, a shutter other
+ * than the one accel's swept bounds were built for, and what exact time
+ * cannot integrate. */
+static int check_render_inputs(const accel *a, const render_settings *rs, const image *img, rr_error *err)
 {
     if (check_settings(rs, err))
         return -1;
@@ -561,26 +563,51 @@ int render_image(const scene *s, const accel *a, const render_settings *rs, imag
     if (rs->exact_time && rs->shut.rolling.kind != ROLLING_OFF)
         return rr_fail(err, "exact time integration does not integrate a rolling shutter (each line its own "
                             "window): use sampled time");
-    render_job job;
-    memset(&job, 0, sizeof job);
-    job.sc = s, job.acc = a, job.rs = rs, job.img = img, job.cancel = cancel;
-    job.camera_moves = scene_camera_moves(s);
-    job.gaussians = accel_has_gaussians(a);
-    camera_view_rest(&s->cam, &job.rest_view);
-    job.tiles_x = (img->width + TILE - 1) / TILE;
-    job.tiles_y = (img->height + TILE - 1) / TILE;
-    job.ntiles = job.tiles_x * job.tiles_y;
-    shutter_cdf_init(&job.time_cdf, &rs->shut);
-    exact_plan *plan = NULL;
-    if (rs->exact_time && job.gaussians)
+    if (rs->exact_time && accel_has_gaussians(a))
         return rr_fail(err, "exact time integration does not integrate Gaussian-splat objects: use sampled time");
-    if (rs->exact_time && exact_plan_new(s, a, &rs->shut, 1.0, &plan, err))
+    return 0;
+}
+
+static int job_init(render_job *job, const scene *s, const accel *a, const render_settings *rs, image *img,
+                    volatile sig_atomic_t *cancel, rr_error *err)
+{
+    memset(job, 0, sizeof *job);
+    job->sc = s, job->acc = a, job->rs = rs, job->img = img, job->cancel = cancel;
+    job->camera_moves = scene_camera_moves(s);
+    job->gaussians = accel_has_gaussians(a);
+    camera_view_rest(&s->cam, &job->rest_view);
+    job->tiles_x = (img->width + TILE - 1) / TILE;
+    job->tiles_y = (img->height + TILE - 1) / TILE;
+    job->ntiles = job->tiles_x * job->tiles_y;
+    shutter_cdf_init(&job->time_cdf, &rs->shut);
+    if (rs->exact_time && exact_plan_new(s, a, &rs->shut, 1.0, &job->exact, err))
         return -1;
-    if (plan)
-        exact_plan_watch(plan, cancel);
-    job.exact = plan;
-    pthread_mutex_init(&job.lock, NULL);
-    pthread_cond_init(&job.cond, NULL);
+    if (job->exact)
+        exact_plan_watch(job->exact, cancel);
+    pthread_mutex_init(&job->lock, NULL);
+    pthread_cond_init(&job->cond, NULL);
+    return 0;
+}
+
+/* The job's statistics into the image, and its resources released. */
+static void job_finish(render_job *job, image *img, double start)
+{
+    pthread_mutex_destroy(&job->lock);
+    pthread_cond_destroy(&job->cond);
+    exact_plan_free(job->exact);
+    img->seconds += rr_seconds() - start;
+    img->rays += atomic_load(&job->rays);
+    img->kbuffer_overflows += atomic_load(&job->overflows);
+    img->clamped += atomic_load(&job->clamped);
+    img->exact_unresolved += job->exact_unresolved;
+}
+
+int render_image(const scene *s, const accel *a, const render_settings *rs, image *img,
+                 const render_hooks *hooks, volatile sig_atomic_t *cancel, rr_error *err)
+{
+    render_job job;
+    if (check_render_inputs(a, rs, img, err) || job_init(&job, s, a, rs, img, cancel, err))
+        return -1;
     double start = rr_seconds(), last_checkpoint = start;
     uint32_t rounds = rs->target_error > 0 ? rs->max_batches : rs->batches;
     int rc = 0;
@@ -589,14 +616,7 @@ int render_image(const scene *s, const accel *a, const render_settings *rs, imag
             break;
         rc = run_round(&job, hooks, start, &last_checkpoint, err);
     }
-    pthread_mutex_destroy(&job.lock);
-    pthread_cond_destroy(&job.cond);
-    exact_plan_free(plan);
-    img->seconds += rr_seconds() - start;
-    img->rays += atomic_load(&job.rays);
-    img->kbuffer_overflows += atomic_load(&job.overflows);
-    img->clamped += atomic_load(&job.clamped);
-    img->exact_unresolved += job.exact_unresolved;
+    job_finish(&job, img, start);
     if (rc)
         return -1;
     if (*cancel) {
