@@ -234,15 +234,21 @@ void accel_object_intersect(const struct RTCIntersectFunctionNArguments *args)
     rh->ray.dir_x = saved[3], rh->ray.dir_y = saved[4], rh->ray.dir_z = saved[5];
 }
 
+/* b rounded outward into Embree's float box, so the box holds b. */
+static void embree_bounds(aabb b, struct RTCBounds *r)
+{
+    float lo[3], hi[3];
+    aabb_round_out(b, lo, hi);
+    r->lower_x = lo[0], r->lower_y = lo[1], r->lower_z = lo[2];
+    r->upper_x = hi[0], r->upper_y = hi[1], r->upper_z = hi[2];
+}
+
 void accel_object_bounds_cb(const struct RTCBoundsFunctionArguments *args)
 {
     const top_level *top = args->geometryUserPtr;
     aabb b = top->acc->swept[top->ids[args->primID]];
     struct RTCBounds *r = args->bounds_o;
-    r->lower_x = nextafterf((float)b.lo.x, -INFINITY), r->lower_y = nextafterf((float)b.lo.y, -INFINITY);
-    r->lower_z = nextafterf((float)b.lo.z, -INFINITY);
-    r->upper_x = nextafterf((float)b.hi.x, INFINITY), r->upper_y = nextafterf((float)b.hi.y, INFINITY);
-    r->upper_z = nextafterf((float)b.hi.z, INFINITY);
+    embree_bounds(b, r);
 }
 
 /* The kernel weights of the hits that stayed in the buffer (deferred: most
@@ -543,10 +549,7 @@ static gaussian_view_bound footprint_view(const gaussian_footprint *f, double di
 
 static void write_gaussian_bounds(aabb b, struct RTCBounds *r)
 {
-    r->lower_x = nextafterf((float)b.lo.x, -INFINITY), r->lower_y = nextafterf((float)b.lo.y, -INFINITY);
-    r->lower_z = nextafterf((float)b.lo.z, -INFINITY);
-    r->upper_x = nextafterf((float)b.hi.x, INFINITY), r->upper_y = nextafterf((float)b.hi.y, INFINITY);
-    r->upper_z = nextafterf((float)b.hi.z, INFINITY);
+    embree_bounds(b, r);
 }
 
 void accel_gaussian_bounds_cb(const struct RTCBoundsFunctionArguments *args)
@@ -607,8 +610,8 @@ void accel_gaussian_candidates(const accel *a, unsigned obj, vec3 org, vec3 dir,
     c.found = found, c.user = user;
     struct RTCRayHit rh;
     /* Embree's float ray holds all of [t0, t1] */
-    init_rayhit1(&rh, org, dir, nextafterf((float)t1, INFINITY));
-    rh.ray.tnear = fmaxf(0.0f, nextafterf((float)t0, -INFINITY));
+    init_rayhit1(&rh, org, dir, rr_float_above(t1));
+    rh.ray.tnear = fmaxf(0.0f, rr_float_below(t0));
     rtcIntersect1(a->object_scenes[obj], &c.rtc, &rh);
 }
 

@@ -33,14 +33,9 @@ static inline __attribute__((always_inline)) int hit_before(const gaussian_hit *
  * see-through 2DGS cloud is the same shape. */
 void gaussian_hits_add(gaussian_hits *h, const gaussian_hit *hit)
 {
-    if (h->count == h->cap) {
-        size_t cap = h->cap ? 2 * h->cap : 256;
-        gaussian_hit *grown = realloc(h->hits, cap * sizeof *grown);
-        if (!grown) {
-            h->dropped++;
-            return;
-        }
-        h->hits = grown, h->cap = cap;
+    if (rr_grow((void **)&h->hits, &h->cap, h->count + 1, sizeof *h->hits)) {
+        h->dropped++;
+        return;
     }
     /* hits found in compositing order (a rasterizer's key is its floor, and a
      * chunk's candidates come in order of their floors) keep the array sorted */

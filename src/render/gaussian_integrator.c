@@ -63,14 +63,9 @@ static void list_candidate(void *user, unsigned prim)
 {
     const listing *l = user;
     gaussian_integrator *g = l->g;
-    if (g->candidates_count == g->candidates_cap) {
-        size_t cap = g->candidates_cap ? 2 * g->candidates_cap : 1024;
-        gaussian_candidate *grown = realloc(g->candidates, cap * sizeof *grown);
-        if (!grown) { /* no room to list it: evaluated at once, as listed ones are */
-            evaluate(l, prim);
-            return;
-        }
-        g->candidates = grown, g->candidates_cap = cap;
+    if (rr_grow((void **)&g->candidates, &g->candidates_cap, g->candidates_count + 1, sizeof *g->candidates)) {
+        evaluate(l, prim); /* no room to list it: evaluated at once, as listed ones are */
+        return;
     }
     g->candidates[g->candidates_count++].prim = prim;
 }
