@@ -30,9 +30,10 @@ typedef struct {
     double radius2;
 } sphere_bound;
 
-/* What the bounds of a Gaussian object's splats need to hold the 2DGS
- * low-pass filter's footprint over the shutter (gaussian_filter_reach):
- * the farthest the camera can be from each Gaussian. */
+/* What the bounds of a Gaussian object's splats need to hold a footprint
+ * drawn on the screen (the 2DGS low-pass filter's, a rasterizer's EWA
+ * dilation) over the shutter (gaussian_view_reach, gaussian_view_bounds):
+ * the farthest the camera can be from each Gaussian, the view axis. */
 typedef struct {
     const struct accel *acc;
     unsigned obj;
