@@ -492,7 +492,8 @@ def main(argv=None):
         sys.stderr.write(f"convert_4dgs.py: {args.checkpoint}: {e.strerror or e}\n")
         return 1
     comments = ["4DGS model (fudan-zvg/4d-gaussian-splatting, rules read at 63725f21) converted by "
-                "refrender scripts/convert_4dgs.py", f"source {os.path.basename(args.checkpoint)} iteration {iteration}",
+                "refrender scripts/convert_4dgs.py",
+                f"source {os.path.basename(args.checkpoint)} iteration {iteration}",
                 f"rotation_convention {args.rotation_convention}",
                 f"time_duration {args.time_duration[0]!r} {args.time_duration[1]!r}",
                 f"prefilter_var {args.prefilter_var!r}", f"force_sh_3d {str(args.force_sh_3d).lower()}"]

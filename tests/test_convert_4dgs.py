@@ -242,7 +242,8 @@ def test_prefilter_and_the_sh_degrees_that_take_effect(tmp_path):
     (lambda c: c[:5] + (c[5] * float("nan"),) + c[6:], "capture()[5] _rotation is not finite at Gaussian 0"),
     (lambda c: c[:15] + (c[15] * 0,) + c[16:], "capture()[15] _rotation_r is zero at Gaussian 0"),
     (lambda c: c[:16] + (False,) + c[17:], "capture()[16] rot_4d is False"),
-    (lambda c: c[:3] + (c[3][:, :30],) + c[4:], "hold 31 coefficients per channel, SH degree 3 x time degree 2 needs 48"),
+    (lambda c: c[:3] + (c[3][:, :30],) + c[4:],
+     "hold 31 coefficients per channel, SH degree 3 x time degree 2 needs 48"),
 ])
 def test_a_checkpoint_that_is_not_a_4dgs_model_is_refused_naming_the_entry(tmp_path, edit, message):
     ckpt, out = tmp_path / "c.pth", tmp_path / "m.ply"
