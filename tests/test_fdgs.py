@@ -164,6 +164,28 @@ def test_sharp_instants_are_the_official_4dgs_renderer(tmp_path, convention):
         assert (T < 0.99).sum() > 500  # the Gaussians are there
 
 
+def early_capture():
+    """The mixed scene as a checkpoint saved early in training: active_sh_degree 1 and
+    active_sh_degree_t 0 (oneupSHdegree raises the spatial degree first, gaussian_model.py:253-257),
+    with all 48 coefficients stored; the rasterizer gets the active degrees
+    (gaussian_renderer/__init__.py:46-47), so the higher coefficients are not drawn."""
+    capture = list(mixed_capture())
+    capture[0], capture[18] = 1, 0
+    return tuple(capture)
+
+
+def test_an_early_checkpoint_is_drawn_with_its_active_degrees(tmp_path):
+    W, H = 64, 48
+    R, C, f = camera(W, H)
+    capture = early_capture()
+    scene = write_scene(tmp_path, capture, "after-900c592", R, C, f, W, H)
+    for t in SHARP_TIMES[1:3]:
+        img = read_exr(render(scene, tmp_path / f"early{t}.exr", "--time", t))[0]
+        expect, T = fdgs.render_instant(capture, t, "after-900c592", TIME_DURATION, R, C, f, f, W, H)
+        assert np.abs(img[..., :3] - expect).max() < TOL, t
+        assert np.abs(img[..., 3] - (1 - T)).max() < TOL, t
+
+
 def fine_average_with_bound(capture, convention, R, C, f, W, H):
     """The piecewise midpoint rule (QUAD instants) and a bound on its error: twice its distance to
     the rule at QUAD/2, plus the alpha < 1/255 jumps (at most |colour|/255 each, an error of at

@@ -231,3 +231,28 @@ def test_a_torch_checkpoint_reads_back_as_the_capture_tuple(tmp_path):
     for k in ("xyz", "features_dc", "features_rest", "scaling", "rotation", "opacity", "t", "scaling_t", "rotation_r"):
         assert np.array_equal(back[k], fdgs.unpack(cap)[k]), k
     assert back["features_dc"].shape[1:] == (1, 3) and back["features_rest"].shape[1:] == (47, 3)
+
+
+def test_prefilter_var_widens_only_the_marginal():
+    """prefilter_var > 0 (ModelParams, arguments/__init__.py:62; off by default and in every
+    config) adds to Sigma_tt in the marginal only (FWD:333), not in the conditioning (FWD:337-351)."""
+    cap = one_gaussian(rotation=(0.9, 0.2, -0.1, 0.3), rotation_r=(0.8, -0.3, 0.4, 0.1), t=1.0)
+    plain = fdgs.fdgs_at(cap, 1.3, "after-900c592", (0, 2), (0, 0, 0))
+    wide = fdgs.fdgs_at(cap, 1.3, "after-900c592", (0, 2), (0, 0, 0), prefilter_var=0.05)
+    sigma4 = fdgs.covariance_4d(*[fdgs.unpack(cap)[k][0] for k in ("scaling",)], fdgs.unpack(cap)["scaling_t"][0, 0],
+                                (0.9, 0.2, -0.1, 0.3), (0.8, -0.3, 0.4, 0.1), "after-900c592")
+    assert np.array_equal(plain["mean"], wide["mean"]) and np.array_equal(plain["cov3d_precomp"], wide["cov3d_precomp"])
+    assert wide["marginal"][0] == pytest.approx(math.exp(-0.5 * 0.09 / (sigma4[3, 3] + 0.05)), rel=1e-6)
+
+
+def test_the_early_checkpoint_differs_from_the_full_degree_one():
+    """test_fdgs.py's early checkpoint (active degrees 1 and 0): drawing all stored degrees instead
+    moves its images by more than 1e-3."""
+    W, H = 64, 48
+    R, C, f = judged.camera(W, H)
+    early = judged.early_capture()
+    t = judged.SHARP_TIMES[1]
+    a = fdgs.render_instant(early, t, "after-900c592", judged.TIME_DURATION, R, C, f, f, W, H)[0]
+    b = fdgs.render_instant(early, t, "after-900c592", judged.TIME_DURATION, R, C, f, f, W, H, sh_degree=3,
+                            sh_degree_t=2)[0]
+    assert np.abs(a - b).max() > 1e-3
