@@ -33,7 +33,7 @@ import stg_reference as stg
 from conftest import read_exr, read_full, run
 
 MODEL_ATTRS = ""             # extra <gaussianModel> attributes, if refrender needs any to read STG-lite
-CLAMP_OPTION = "--clamp-instants"  # placeholder: the clamped-instants mode's option
+CLAMP_OPTION = "--blur-space=clamped"  # the clamped-instants mode (one argument: --blur-space clamped)
 TOL = 1e-4
 FLOOR = 2e-5
 K, K_ALL, MEDIAN_MAX = 4.0, 9.0, 1.2
