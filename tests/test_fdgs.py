@@ -53,9 +53,11 @@ def require_torch():
 
 def convert(ckpt, ply, convention):
     """The converter's command line, in one place: the checkpoint, -o, the rotation convention and
-    the config values the checkpoint lacks (time_duration)."""
+    the config values the checkpoint lacks (time_duration; prefilter_var -1, i.e. none, and
+    force_sh_3d false, as fdgs_reference.fdgs_at's defaults and every 4DGS config)."""
     cmd = [sys.executable, str(CONVERTER), str(ckpt), "-o", str(ply), "--rotation-convention", convention,
-           "--time-duration", str(TIME_DURATION[0]), str(TIME_DURATION[1])]
+           "--time_duration", str(TIME_DURATION[0]), str(TIME_DURATION[1]), "--prefilter_var", "-1",
+           "--force_sh_3d", "false"]
     proc = subprocess.run(cmd, capture_output=True, text=True)
     assert proc.returncode == 0, (cmd, proc.stdout, proc.stderr)
     return ply
