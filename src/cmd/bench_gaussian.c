@@ -278,13 +278,18 @@ static void gs_run(const gs_case *c, gs_result *r)
     r->mrays = median3(ours, c->reps), r->base_mrays = median3(theirs, c->reps);
     r->base_hits = (double)hits / rays;
     count_hits(&s, a, r);
-    struct rusage ru;
-    getrusage(RUSAGE_SELF, &ru);
-    r->peak_mb = ru.ru_maxrss / 1024.0;
+    r->peak_mb = bench_peak_mb();
     rtcReleaseScene(discs);
     rtcReleaseDevice(dev);
     accel_free(a);
     scene_free(&s);
+}
+
+double bench_peak_mb(void)
+{
+    struct rusage ru;
+    getrusage(RUSAGE_SELF, &ru);
+    return ru.ru_maxrss / 1024.0;
 }
 
 int bench_in_child(void (*run)(const void *in, void *out), const void *in, void *out, size_t size)
@@ -469,9 +474,7 @@ static void scale_run(const void *in, void *out)
     }
     r->seconds = img.seconds, r->mrays = (double)img.rays / img.seconds * 1e-6;
     image_free(&img);
-    struct rusage ru;
-    getrusage(RUSAGE_SELF, &ru);
-    r->peak_mb = ru.ru_maxrss / 1024.0;
+    r->peak_mb = bench_peak_mb();
     accel_free(a);
     scene_free(&s);
 }

@@ -1,7 +1,10 @@
 #include "gaussians/gaussian_dynamic.h"
 
+#include "core/rotation.h"
+
 #include <float.h>
 #include <math.h>
+#include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -10,49 +13,51 @@
  * below DBL_MIN, an absolute error of at most DBL_TRUE_MIN). */
 #define U (DBL_EPSILON / 2)
 
+/* The motion's arrays share one block (trbf_center owns it): per Gaussian
+ * 1 + 1 + 9 + 4 + 4 floats. */
+enum { DYNAMIC_FLOATS = 19 };
+
 gaussian_dynamic *gaussian_dynamic_alloc(size_t n)
 {
     gaussian_dynamic *d = calloc(1, sizeof *d);
-    if (!d)
+    float *block = n <= SIZE_MAX / (DYNAMIC_FLOATS * sizeof(float)) ? malloc(n * DYNAMIC_FLOATS * sizeof(float)) : NULL;
+    if (!d || !block) {
+        free(d);
+        free(block);
         return NULL;
-    d->trbf_center = malloc(n * sizeof(float));
-    d->trbf_scale = malloc(n * sizeof(float));
-    d->motion = malloc(n * 9 * sizeof(float));
-    d->omega = malloc(n * 4 * sizeof(float));
-    d->rot = malloc(n * 4 * sizeof(float));
-    if (d->trbf_center && d->trbf_scale && d->motion && d->omega && d->rot)
-        return d;
-    gaussian_dynamic_free(d);
-    return NULL;
+    }
+    d->trbf_center = block;
+    d->trbf_scale = d->trbf_center + n;
+    d->motion = d->trbf_scale + n;
+    d->omega = d->motion + 9 * n;
+    d->rot = d->omega + 4 * n;
+    return d;
 }
+
+/* 4DGS's arrays share one block (t_center owns it): per Gaussian 1 + 3 + 1
+ * floats. */
+enum { FDGS_FLOATS = 5 };
 
 gaussian_dynamic *gaussian_dynamic_alloc_fdgs(size_t n)
 {
     gaussian_dynamic *d = calloc(1, sizeof *d);
-    if (!d)
+    float *block = n <= SIZE_MAX / (FDGS_FLOATS * sizeof(float)) ? malloc(n * FDGS_FLOATS * sizeof(float)) : NULL;
+    if (!d || !block) {
+        free(d);
+        free(block);
         return NULL;
+    }
     d->kind = GAUSSIAN_DYNAMIC_FDGS;
-    d->t_center = malloc(n * sizeof(float));
-    d->velocity = malloc(n * 3 * sizeof(float));
-    d->t_var = malloc(n * sizeof(float));
-    if (d->t_center && d->velocity && d->t_var)
-        return d;
-    gaussian_dynamic_free(d);
-    return NULL;
+    d->t_center = block;
+    d->velocity = d->t_center + n;
+    d->t_var = d->velocity + 3 * n;
+    return d;
 }
 
 void gaussian_dynamic_free(gaussian_dynamic *d)
 {
-    if (!d)
-        return;
-    free(d->trbf_center);
-    free(d->trbf_scale);
-    free(d->motion);
-    free(d->omega);
-    free(d->rot);
-    free(d->t_center);
-    free(d->velocity);
-    free(d->t_var);
+    if (d)
+        free(d->kind == GAUSSIAN_DYNAMIC_FDGS ? d->t_center : d->trbf_center); /* the whole block */
     free(d);
 }
 
@@ -70,17 +75,21 @@ static double fdgs_opacity(const gaussian_model *m, size_t i, double D)
     return marginal > GAUSSIAN_FDGS_MARGINAL_CUT ? m->opacity[i] * marginal : 0.0;
 }
 
-/* The mean x + vel D (forward.cu:347-350; dt = timestamp - t, :283), the
- * constant conditional covariance's scale and unit quaternion. */
+/* The mean x + vel D (forward.cu:347-350; dt = timestamp - t, :283). */
+static void fdgs_mean(const gaussian_model *m, size_t i, double D, double mean[3])
+{
+    for (int k = 0; k < 3; k++)
+        mean[k] = m->mean[3 * i + k] + m->dynamic->velocity[3 * i + k] * D;
+}
+
+/* The mean, and the constant conditional covariance's scale and unit
+ * quaternion. */
 static void fdgs_at(const gaussian_model *m, size_t i, double t, gaussian_dynamic_state *out)
 {
-    const gaussian_dynamic *dy = m->dynamic;
-    double D = t - dy->t_center[i];
-    for (int k = 0; k < 3; k++) {
-        out->mean[k] = m->mean[3 * i + k] + dy->velocity[3 * i + k] * D;
-        out->scale[k] = m->scale[3 * i + k];
-        out->rgb[k] = 0.0;
-    }
+    double D = t - m->dynamic->t_center[i];
+    fdgs_mean(m, i, D, out->mean);
+    for (int k = 0; k < 3; k++)
+        out->scale[k] = m->scale[3 * i + k], out->rgb[k] = 0.0;
     for (int k = 0; k < 4; k++)
         out->q[k] = m->rotation[4 * i + k];
     out->opacity = fdgs_opacity(m, i, D);
@@ -125,39 +134,61 @@ static double temporal_weight(double D, float trbf_scale)
     return exp(-(y * y));
 }
 
-void gaussian_dynamic_at(const gaussian_model *m, size_t i, double t, gaussian_dynamic_state *out)
+/* D = t - trbf_center (renderer/__init__.py:318, forward.cu:186). */
+static double offset_at(const gaussian_model *m, size_t i, double t)
 {
-    const gaussian_dynamic *dy = m->dynamic;
-    if (dy->kind == GAUSSIAN_DYNAMIC_FDGS) {
-        fdgs_at(m, i, t, out);
-        return;
-    }
-    RR_DCHECK(dy && m->rgb_precomputed && i < m->count);
-    double D = t - dy->trbf_center[i], c[4], v[4], len2 = 0;
+    RR_DCHECK(m->dynamic && m->rgb_precomputed && i < m->count);
+    return t - m->dynamic->trbf_center[i];
+}
+
+static void mean_at(const gaussian_model *m, size_t i, double D, double mean[3])
+{
+    double c[4];
     for (int k = 0; k < 3; k++) {
         axis_coefficients(m, i, k, c);
-        out->mean[k] = cubic_at(c, D);
-        out->scale[k] = m->scale[3 * i + k];
-        out->rgb[k] = m->sh[3 * (size_t)m->sh_coeffs * i + (size_t)k];
+        mean[k] = cubic_at(c, D);
     }
-    /* F.normalize(rot + D omega): divided by max(|v|, eps), so 0 stays 0
-     * (ourslite.py:123-126); the CUDA does not normalise again
-     * (forward.cu:127). Components are floats plus a product with D, so
-     * |v|^2 neither overflows nor loses a nonzero v below 1e-150. */
+}
+
+/* F.normalize(rot + D omega): divided by max(|v|, eps), so 0 stays 0
+ * (ourslite.py:123-126); the CUDA does not normalise again
+ * (forward.cu:127). Components are floats plus a product with D, so |v|^2
+ * neither overflows nor loses a nonzero v below 1e-150. */
+static void rotation_at(const gaussian_model *m, size_t i, double D, double q[4])
+{
+    const gaussian_dynamic *dy = m->dynamic;
+    double v[4], len2 = 0;
     for (int k = 0; k < 4; k++)
         v[k] = dy->rot[4 * i + k] + D * dy->omega[4 * i + k], len2 += v[k] * v[k];
     double div = fmax(sqrt(len2), GAUSSIAN_DYNAMIC_NORMALIZE_EPS);
     for (int k = 0; k < 4; k++)
-        out->q[k] = v[k] / div;
-    out->opacity = m->opacity[i] * temporal_weight(D, dy->trbf_scale[i]);
+        q[k] = v[k] / div;
+}
+
+static double opacity_at(const gaussian_model *m, size_t i, double D)
+{
+    return m->opacity[i] * temporal_weight(D, m->dynamic->trbf_scale[i]);
+}
+
+void gaussian_dynamic_at(const gaussian_model *m, size_t i, double t, gaussian_dynamic_state *out)
+{
+    if (m->dynamic->kind == GAUSSIAN_DYNAMIC_FDGS) {
+        fdgs_at(m, i, t, out);
+        return;
+    }
+    double D = offset_at(m, i, t);
+    mean_at(m, i, D, out->mean);
+    for (int k = 0; k < 3; k++) {
+        out->scale[k] = m->scale[3 * i + k];
+        out->rgb[k] = m->sh[3 * (size_t)m->sh_coeffs * i + (size_t)k];
+    }
+    rotation_at(m, i, D, out->q);
+    out->opacity = opacity_at(m, i, D);
 }
 
 void gaussian_dynamic_matrix(const double q[4], double R[3][3])
 {
-    double w = q[0], x = q[1], y = q[2], z = q[3];
-    R[0][0] = 1 - 2 * (y * y + z * z), R[0][1] = 2 * (x * y - w * z), R[0][2] = 2 * (x * z + w * y);
-    R[1][0] = 2 * (x * y + w * z), R[1][1] = 1 - 2 * (x * x + z * z), R[1][2] = 2 * (y * z - w * x);
-    R[2][0] = 2 * (x * z - w * y), R[2][1] = 2 * (y * z + w * x), R[2][2] = 1 - 2 * (x * x + y * y);
+    quat_unit_matrix(q[0], q[1], q[2], q[3], R); /* the unit formula on q as it is, as forward.cu does */
 }
 
 /* ---- bounds over [t0, t1] ----------------------------------------------
@@ -370,15 +401,73 @@ int gaussian_dynamic_bounds(const gaussian_model *m, size_t i, double t0, double
 
 /* ---- rendering ------------------------------------------------------------ */
 
+void gaussian_dynamic_instant_cull(const gaussian_model *m, size_t i, double t, gaussian_model *out, size_t j)
+{
+    double mean[3];
+    if (m->dynamic->kind == GAUSSIAN_DYNAMIC_FDGS)
+        fdgs_mean(m, i, t - m->dynamic->t_center[i], mean);
+    else
+        mean_at(m, i, offset_at(m, i, t), mean);
+    for (int k = 0; k < 3; k++)
+        out->mean[3 * j + k] = (float)mean[k], out->scale[3 * j + k] = m->scale[3 * i + k];
+}
+
+/* 4DGS's rest: the quaternion as loaded (constant), the opacity with its
+ * cut. */
+static void fdgs_instant_rest(const gaussian_model *m, size_t i, double t, gaussian_model *out, size_t j)
+{
+    for (int k = 0; k < 4; k++)
+        out->rotation[4 * j + k] = m->rotation[4 * i + k];
+    out->opacity[j] = (float)fdgs_opacity(m, i, t - m->dynamic->t_center[i]);
+}
+
+void gaussian_dynamic_instant_rest(const gaussian_model *m, size_t i, double t, gaussian_model *out, size_t j)
+{
+    if (m->dynamic->kind == GAUSSIAN_DYNAMIC_FDGS) {
+        fdgs_instant_rest(m, i, t, out, j);
+        return;
+    }
+    double D = offset_at(m, i, t), q[4];
+    rotation_at(m, i, D, q);
+    for (int k = 0; k < 4; k++)
+        out->rotation[4 * j + k] = (float)q[k];
+    out->opacity[j] = (float)opacity_at(m, i, D);
+}
+
+void gaussian_dynamic_prefetch_cull(const gaussian_model *m, size_t i)
+{
+    if (m->dynamic->kind == GAUSSIAN_DYNAMIC_FDGS) {
+        __builtin_prefetch(&m->dynamic->t_center[i]);
+        __builtin_prefetch(&m->dynamic->velocity[3 * i]);
+        __builtin_prefetch(&m->mean[3 * i]);
+        __builtin_prefetch(&m->scale[3 * i]);
+        return;
+    }
+    __builtin_prefetch(&m->dynamic->trbf_center[i]);
+    __builtin_prefetch(&m->dynamic->motion[9 * i]);
+    __builtin_prefetch(&m->dynamic->motion[9 * i + 8]);
+    __builtin_prefetch(&m->mean[3 * i]);
+    __builtin_prefetch(&m->scale[3 * i]);
+}
+
+void gaussian_dynamic_prefetch_rest(const gaussian_model *m, size_t i)
+{
+    if (m->dynamic->kind == GAUSSIAN_DYNAMIC_FDGS) {
+        __builtin_prefetch(&m->rotation[4 * i]);
+        __builtin_prefetch(&m->dynamic->t_var[i]);
+        __builtin_prefetch(&m->opacity[i]);
+        return;
+    }
+    __builtin_prefetch(&m->dynamic->rot[4 * i]);
+    __builtin_prefetch(&m->dynamic->omega[4 * i]);
+    __builtin_prefetch(&m->dynamic->trbf_scale[i]);
+    __builtin_prefetch(&m->opacity[i]);
+}
+
 void gaussian_dynamic_instant(const gaussian_model *m, size_t i, double t, gaussian_model *out, size_t j)
 {
-    gaussian_dynamic_state st;
-    gaussian_dynamic_at(m, i, t, &st);
-    for (int k = 0; k < 3; k++)
-        out->mean[3 * j + k] = (float)st.mean[k], out->scale[3 * j + k] = m->scale[3 * i + k];
-    for (int k = 0; k < 4; k++)
-        out->rotation[4 * j + k] = (float)st.q[k];
-    out->opacity[j] = (float)st.opacity;
+    gaussian_dynamic_instant_cull(m, i, t, out, j);
+    gaussian_dynamic_instant_rest(m, i, t, out, j);
 }
 
 /* Why the box of one static Gaussian suffices (gaussian_dynamic_reach_bounds).

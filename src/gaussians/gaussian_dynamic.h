@@ -53,13 +53,15 @@ typedef enum { GAUSSIAN_DYNAMIC_STG, GAUSSIAN_DYNAMIC_FDGS } gaussian_dynamic_ki
 typedef struct gaussian_dynamic {
     gaussian_dynamic_kind kind;
     /* SpacetimeGaussians-lite (kind STG) */
-    float *trbf_center;   /* 1 per Gaussian: the time of its mean and its peak opacity */
+    float *trbf_center;   /* 1 per Gaussian: the time of its mean and its peak opacity (owns the block
+                           * all five arrays share: gaussian_dynamic_alloc) */
     float *trbf_scale;    /* 1 per Gaussian, as stored: the temporal scale is exp(trbf_scale) */
     float *motion;        /* 9 per Gaussian: velocity, then the D^2 and D^3 coefficients (x y z each) */
     float *omega;         /* 4 per Gaussian: the quaternion's rate, (w x y z) as rot */
     float *rot;           /* 4 per Gaussian: rot_0..3 as stored (any length, zero allowed) */
     /* 4DGS (kind FDGS) */
-    float *t_center;      /* 1 per Gaussian: the time of its canonical mean and its peak opacity */
+    float *t_center;      /* 1 per Gaussian: the time of its canonical mean and its peak opacity (owns the
+                           * block the three arrays share: gaussian_dynamic_alloc_fdgs) */
     float *velocity;      /* 3 per Gaussian: vel_0..2, the mean's (constant) rate */
     float *t_var;         /* 1 per Gaussian: the temporal marginal's variance (> 0) */
     double time_duration; /* T of the time harmonics (> 0) */
@@ -118,8 +120,15 @@ int gaussian_dynamic_bounds(const gaussian_model *m, size_t i, double t0, double
  * slot j; its sh is not read): the mean, the scale, q as the CUDA takes it
  * and the opacity, in floats as the CUDA holds them. The renderer maps
  * the scratch's hits back to i, so the compositing order and the colour
- * are those of Gaussian i itself. */
+ * are those of Gaussian i itself. In two parts, as the kernels read them:
+ * _cull the mean and scale (all a cull reads, gaussian_hit.h), _rest the
+ * rotation and opacity (for the candidates the cull keeps). */
 void gaussian_dynamic_instant(const gaussian_model *m, size_t i, double t, gaussian_model *out, size_t j);
+void gaussian_dynamic_instant_cull(const gaussian_model *m, size_t i, double t, gaussian_model *out, size_t j);
+void gaussian_dynamic_instant_rest(const gaussian_model *m, size_t i, double t, gaussian_model *out, size_t j);
+/* Start loading what each part reads of Gaussian i (no value changes). */
+void gaussian_dynamic_prefetch_cull(const gaussian_model *m, size_t i);
+void gaussian_dynamic_prefetch_rest(const gaussian_model *m, size_t i);
 
 /* Object-space bounds of every point through which Gaussian i can give a
  * ray alpha >= 1/255 at any time whose state gaussian_dynamic_instant

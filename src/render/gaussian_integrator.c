@@ -110,15 +110,22 @@ static int instant_room(gaussian_instant *in, size_t n)
     return 1;
 }
 
+/* How far ahead an instant's loads are started (the Gaussians are spread
+ * over a model far larger than the caches, as gaussian_prefetch_cull's). */
+enum { INSTANT_PREFETCH_AHEAD = 8 };
+
 /* A dynamic model's window: the candidates listed from `first` on
  * (Gaussians of model m) become the slots of the ray's instant model that
  * hold them at the ray's time, so that the cull and the kernels draw each
  * as the static Gaussian of its instant (gaussian_dynamic_instant); their
- * hits go back to the Gaussian's own index (original_prim). A window's
+ * hits go back to the Gaussian's own index (original_prim). Here the mean
+ * and scale, all the cull reads; instantiate_kept adds the rest for the
+ * candidates it keeps (most fail it: on a sphere of 20k, the instants'
+ * full state before the cull took 45% of the render). A window's
  * candidates are evaluated before the next window's are listed, so the
  * slots are reused from window to window. With no room they are dropped,
  * as hits that find no memory are. */
-static void instantiate(gaussian_integrator *g, const gaussian_model *m, gaussian_object_ray *r, size_t first)
+static void instantiate_for_cull(gaussian_integrator *g, const gaussian_model *m, gaussian_object_ray *r, size_t first)
 {
     gaussian_instant *in = r->instant;
     size_t n = g->candidates_count - first;
@@ -130,11 +137,26 @@ static void instantiate(gaussian_integrator *g, const gaussian_model *m, gaussia
     }
     for (size_t k = 0; k < n; k++) {
         gaussian_candidate *c = &g->candidates[first + k];
-        gaussian_dynamic_instant(m, c->prim, r->time, &in->model, k);
+        if (k + INSTANT_PREFETCH_AHEAD < n)
+            gaussian_dynamic_prefetch_cull(m, c[INSTANT_PREFETCH_AHEAD].prim);
+        gaussian_dynamic_instant_cull(m, c->prim, r->time, &in->model, k);
         in->prim[k] = c->prim;
         c->prim = (unsigned)k;
     }
     in->model.count = n;
+}
+
+/* The rotation and opacity of the candidates the cull kept from `first` on. */
+static void instantiate_kept(const gaussian_integrator *g, const gaussian_model *m, gaussian_object_ray *r,
+                             size_t first)
+{
+    gaussian_instant *in = r->instant;
+    for (size_t k = first; k < g->candidates_count; k++) {
+        if (k + INSTANT_PREFETCH_AHEAD < g->candidates_count)
+            gaussian_dynamic_prefetch_rest(m, in->prim[g->candidates[k + INSTANT_PREFETCH_AHEAD].prim]);
+        unsigned slot = g->candidates[k].prim;
+        gaussian_dynamic_instant_rest(m, in->prim[slot], r->time, &in->model, slot);
+    }
 }
 
 /* The index in the object's model of a hit's Gaussian, which is the
@@ -169,8 +191,10 @@ static void list_window(const scene *s, const accel *a, gaussian_integrator *g, 
     size_t first = g->candidates_count;
     accel_gaussian_candidates(a, r->obj, r->ray.org, r->ray.dir, t0 - pad, t1 + pad, list_candidate, &l);
     if (r->instant)
-        instantiate(g, &l.o->gaussians, r, first);
+        instantiate_for_cull(g, &l.o->gaussians, r, first);
     cull_candidates(&l, first, ray);
+    if (r->instant)
+        instantiate_kept(g, &l.o->gaussians, r, first);
 }
 
 /* ---- evaluating a window's candidates ---------------------------------- */

@@ -152,43 +152,33 @@ static void jittered3d_batch(const sampler *s, double t0, double t1, uint64_t se
 
 /* ---- Owen-scrambled Sobol' ----------------------------------------------- */
 
-/* Direction numbers v[j] = m_j << (31 - j): dimension 0 is van der Corput;
- * dimensions 1 and 2 use the primitive polynomials x + 1 (m_1 = 1) and
- * x^2 + x + 1 (m_1 = 1, m_2 = 3; Joe & Kuo's first entries) with the
- * recurrences m_k = 2 m_{k-1} ^ m_{k-1} and m_k = 2 m_{k-1} ^ 4 m_{k-2} ^ m_{k-2}.
- * (Precomputed; tests/test_sampler.c recomputes them from the recurrences.) */
-static const uint32_t sobol_directions[3][32] = {
-    {
-     0x80000000u, 0x40000000u, 0x20000000u, 0x10000000u, 0x08000000u, 0x04000000u,
-     0x02000000u, 0x01000000u, 0x00800000u, 0x00400000u, 0x00200000u, 0x00100000u,
-     0x00080000u, 0x00040000u, 0x00020000u, 0x00010000u, 0x00008000u, 0x00004000u,
-     0x00002000u, 0x00001000u, 0x00000800u, 0x00000400u, 0x00000200u, 0x00000100u,
-     0x00000080u, 0x00000040u, 0x00000020u, 0x00000010u, 0x00000008u, 0x00000004u,
-     0x00000002u, 0x00000001u,
-    },
-    {
-     0x80000000u, 0xc0000000u, 0xa0000000u, 0xf0000000u, 0x88000000u, 0xcc000000u,
-     0xaa000000u, 0xff000000u, 0x80800000u, 0xc0c00000u, 0xa0a00000u, 0xf0f00000u,
-     0x88880000u, 0xcccc0000u, 0xaaaa0000u, 0xffff0000u, 0x80008000u, 0xc000c000u,
-     0xa000a000u, 0xf000f000u, 0x88008800u, 0xcc00cc00u, 0xaa00aa00u, 0xff00ff00u,
-     0x80808080u, 0xc0c0c0c0u, 0xa0a0a0a0u, 0xf0f0f0f0u, 0x88888888u, 0xccccccccu,
-     0xaaaaaaaau, 0xffffffffu,
-    },
-    {
-     0x80000000u, 0xc0000000u, 0x60000000u, 0x90000000u, 0xe8000000u, 0x5c000000u,
-     0x8e000000u, 0xc5000000u, 0x68800000u, 0x9cc00000u, 0xee600000u, 0x55900000u,
-     0x80680000u, 0xc09c0000u, 0x60ee0000u, 0x90550000u, 0xe8808000u, 0x5cc0c000u,
-     0x8e606000u, 0xc5909000u, 0x6868e800u, 0x9c9c5c00u, 0xeeee8e00u, 0x5555c500u,
-     0x8000e880u, 0xc0005cc0u, 0x60008e60u, 0x9000c590u, 0xe8006868u, 0x5c009c9cu,
-     0x8e00eeeeu, 0xc5005555u,
-    }};
+/* Direction numbers v[j] = m_j << (31 - j): dimension 0 is van der Corput
+ * (m_j = 1); dimensions 1 and 2 use the primitive polynomials x + 1 (m_1 =
+ * 1) and x^2 + x + 1 (m_1 = 1, m_2 = 3; Joe & Kuo's first entries) with the
+ * recurrences m_k = 2 m_{k-1} ^ m_{k-1} and m_k = 2 m_{k-1} ^ 4 m_{k-2} ^
+ * m_{k-2}, generated as the index's bits are read (tests/test_sampler.c
+ * checks them against the recurrences independently). */
+static uint32_t sobol_next_m(int dim, uint32_t m1, uint32_t m2)
+{
+    if (dim == 0)
+        return 1;
+    if (dim == 1)
+        return 2 * m1 ^ m1;
+    return 2 * m1 ^ 4 * m2 ^ m2;
+}
 
 uint32_t sobol_u32(uint32_t index, int dim)
 {
-    uint32_t r = 0;
-    for (int j = 0; index; index >>= 1, j++)
+    uint32_t r = 0, m1 = 1, m2 = 0; /* m_j and m_{j-1} */
+    for (int j = 0; index; index >>= 1, j++) {
+        if (j > 0) {
+            /* x^2 + x + 1 starts with two initial values (1, 3) */
+            uint32_t next = j == 1 && dim == 2 ? 3 : sobol_next_m(dim, m1, m2);
+            m2 = m1, m1 = next;
+        }
         if (index & 1)
-            r ^= sobol_directions[dim][j];
+            r ^= m1 << (31 - j);
+    }
     return r;
 }
 
