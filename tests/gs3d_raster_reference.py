@@ -135,7 +135,10 @@ SpacetimeGaussians, tests/stg_reference.py)
   arrives, not normalised (MAIN and forward_lite forward.cu:127, `q = rot;//
   / glm::length(rot)`, matrix :134-138): for q = 0 every product vanishes
   and R = I; for a non-unit q, R is not a rotation (quat_to_rot_as_given).
-  Without these keys nothing changes: SH colours, normalised quaternions.
+  model["cov3d_precomp"] (N, 3, 3): the cov3D_precomp path (world_covariance), for models whose
+  own code forms each 3D covariance, e.g. real-time 4DGS's conditional covariance at t
+  (tests/fdgs_reference.py); "scale" and "rot" are then not read.
+  Without these keys nothing changes: SH colours, normalised quaternions, covariances from them.
 
 Culling (applied here in both modes)
   INRIA in_frustum: view z <= 0.2 culled (auxiliary.h:151-175, :166).
@@ -317,6 +320,20 @@ def inria_point_image(x, y, z, fx, fy, W, H, cx, cy):
     return ((ndc_x + 1.0) * W - 1.0) * 0.5, ((ndc_y + 1.0) * H - 1.0) * 0.5
 
 
+def world_covariance(model, n):
+    """Gaussian n's 3D covariance in world space: model["cov3d_precomp"][n] (3, 3) when given (the
+    rasterizer's cov3D_precomp path: preprocessCUDA takes the six stored entries as they are and
+    skips computeCov3D, e.g. fudan-zvg/4d-gaussian-splatting 63725f21 diff-gaussian-rasterization/
+    cuda_rasterizer/forward.cu:411-414, Inria's own `if (cov3D_precomp != nullptr)` branch), else
+    R(q) diag(s^2) R(q)^T from the scales and quaternion."""
+    if "cov3d_precomp" in model:
+        cov = np.asarray(model["cov3d_precomp"][n], np.float64)
+        return 0.5 * (cov + cov.T)
+    Rq = (quat_to_rot_as_given if model.get("quaternion_as_given") else quat_to_rot)(model["rot"][n])
+    s = np.asarray(model["scale"][n], np.float64)
+    return Rq @ np.diag(s * s) @ Rq.T
+
+
 def project(model, R_c2w, C, fx, fy, W, H, variant="inria", cx=None, cy=None, inria_off_centre_extension=False):
     """Per Gaussian, what the preprocess step produces. Returns a list (index order) of dicts, or
     None where the Gaussian is culled whatever the tiling. Keys: index, depth (view z), xy (the
@@ -343,9 +360,7 @@ def project(model, R_c2w, C, fx, fy, W, H, variant="inria", cx=None, cy=None, in
         if family == "gsplat" and (z < GSPLAT_NEAR or z > GSPLAT_FAR):
             out.append(None)
             continue
-        Rq = (quat_to_rot_as_given if model.get("quaternion_as_given") else quat_to_rot)(model["rot"][n])
-        s = np.asarray(model["scale"][n], np.float64)
-        sigma_c = Rw2c @ (Rq @ np.diag(s * s) @ Rq.T) @ Rw2c.T
+        sigma_c = Rw2c @ world_covariance(model, n) @ Rw2c.T
         txz, tyz = jacobian_tangents(family, x, y, z, fx, fy, W, H, cx, cy)
         J = np.array([[fx / z, 0.0, -fx * txz / z], [0.0, fy / z, -fy * tyz / z]])
         raw = J @ sigma_c @ J.T

@@ -226,3 +226,20 @@ vec3 gaussian_sh_color(const float *sh, int degree, vec3 dir)
     vec3 sum = sh_sums(sh, b, (degree + 1) * (degree + 1));
     return v3(rr_fmax(sum.x + 0.5, 0.0), rr_fmax(sum.y + 0.5, 0.0), rr_fmax(sum.z + 0.5, 0.0));
 }
+
+/* computeColorFromSH_4D (4DGS forward.cu:73-195): block k of S =
+ * (degree + 1)^2 coefficients weighted by cos(2 pi k dir_t / duration),
+ * the blocks k >= 1 only when the degree is 3 (:123, :142), at most two
+ * (:144, :163). */
+vec3 gaussian_sh4d_color(const float *sh, int degree, int degree_t, double dir_t, double duration, vec3 dir)
+{
+    RR_DCHECK(degree >= 0 && degree <= GAUSSIAN_MAX_SH_DEGREE && degree_t >= 0 && degree_t <= 2);
+    vec3 d = v3_normalize(dir);
+    double b[GAUSSIAN_MAX_SH_COEFFS];
+    sh_basis(degree, d.x, d.y, d.z, b);
+    int n = (degree + 1) * (degree + 1), blocks = degree == 3 ? degree_t + 1 : 1;
+    vec3 sum = sh_sums(sh, b, n);
+    for (int k = 1; k < blocks; k++)
+        sum = v3_add(sum, v3_scale(sh_sums(sh + (size_t)3 * n * k, b, n), cos(2 * M_PI * k * dir_t / duration)));
+    return v3(rr_fmax(sum.x + 0.5, 0.0), rr_fmax(sum.y + 0.5, 0.0), rr_fmax(sum.z + 0.5, 0.0));
+}

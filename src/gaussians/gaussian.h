@@ -52,7 +52,7 @@ typedef struct {
     size_t count;
     gaussian_kind kind;  /* 2D: surfels (two scales), 3D: ellipsoids */
     int sh_degree;       /* 0 to 3 */
-    int sh_coeffs;       /* (sh_degree + 1)^2 */
+    int sh_coeffs;       /* (sh_degree + 1)^2; times (sh_degree_t + 1) for 4DGS (gaussian_dynamic.h) */
     float *mean;         /* 3 per Gaussian */
     float *scale;        /* 3 per Gaussian: exp(scale_i); a 2D Gaussian's third is 0 */
     float *rotation;     /* 4 per Gaussian: the unit quaternion (w, x, y, z) of rot_0..3 */
@@ -99,6 +99,11 @@ int gaussian_from_surfels(const struct surfel_s *s, size_t n, gaussian_kind kind
  * the given degree seen along dir (need not be unit): the real SH series
  * plus 0.5, clamped below at 0 (not above), as the official renderers do. */
 vec3 gaussian_sh_color(const float *sh, int degree, vec3 dir);
+/* A 4DGS model's colour (gaussian_dynamic.h): sh holds degree_t + 1
+ * blocks of (degree + 1)^2 coefficients (3 each, as above), block k
+ * weighted by cos(2 pi k dir_t / duration) (k = 0: 1); the time blocks
+ * count only at degree 3 (4DGS's rasterizer); + 0.5, clamped below at 0. */
+vec3 gaussian_sh4d_color(const float *sh, int degree, int degree_t, double dir_t, double duration, vec3 dir);
 #ifdef RR_DCHECKS
 /* Test hook: whether the SH sums in AVX2 lanes differ in any bit from the
  * scalar sums (0 without the lanes). */

@@ -6,6 +6,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "gaussians/gaussian_dynamic.h"
+
 /* Compositing order: key, then object, then Gaussian (ties in key are
  * rare but must not depend on the order the traversal found them in). Keys
  * equal as floats but not in bits (-0 and +0) go by their order bits, as a
@@ -80,7 +82,7 @@ void gaussian_hits_free(gaussian_hits *h)
 
 void gaussian_blend_init(gaussian_blend *b)
 {
-    b->T = 1.0, b->sum = v3(0, 0, 0), b->composited = 0, b->done = 0;
+    b->T = 1.0, b->sum = v3(0, 0, 0), b->composited = 0, b->done = 0, b->time = 0.0;
 }
 
 /* Each formation's own stopping rule (gaussian_hit.h): the rasterizers do
@@ -101,13 +103,18 @@ static int blend_stops(const gaussian_blend *b, const gaussian_hit *g, const gau
 /* A hit's colour: its SH seen along the hit's direction, or a model's
  * precomputed RGB as stored (SpacetimeGaussians-lite hands f_dc to the
  * rasterizer as colors_precomp: renderer/__init__.py:339, and the blend
- * reads it without the SH step's +0.5 and clamp, forward.cu:316, 430). */
-static vec3 hit_color(const gaussian_hit *g, const gaussian_model *m)
+ * reads it without the SH step's +0.5 and clamp, forward.cu:316, 430), or
+ * a 4DGS model's 4D SH at the ray's time (the hit's direction is then the
+ * canonical mean's: gaussian_dynamic_view_dir). */
+static vec3 hit_color(const gaussian_blend *b, const gaussian_hit *g, const gaussian_model *m)
 {
     const float *sh = &m->sh[(size_t)3 * m->sh_coeffs * g->prim];
+    vec3 dir = v3(g->dir[0], g->dir[1], g->dir[2]);
     if (m->rgb_precomputed)
         return v3(sh[0], sh[1], sh[2]);
-    return gaussian_sh_color(sh, m->sh_degree, v3(g->dir[0], g->dir[1], g->dir[2]));
+    if (m->dynamic && m->dynamic->kind == GAUSSIAN_DYNAMIC_FDGS)
+        return gaussian_dynamic_color(m, g->prim, b->time, dir);
+    return gaussian_sh_color(sh, m->sh_degree, dir);
 }
 
 static void blend_one(gaussian_blend *b, const gaussian_hit *g, const gaussian_model *m)
@@ -117,7 +124,7 @@ static void blend_one(gaussian_blend *b, const gaussian_hit *g, const gaussian_m
         return;
     }
     double next = b->T * (1.0 - g->alpha);
-    vec3 c = hit_color(g, m);
+    vec3 c = hit_color(b, g, m);
     b->sum = v3_add(b->sum, v3_scale(c, g->alpha * b->T));
     b->T = next;
     b->composited++;

@@ -34,11 +34,79 @@ gaussian_dynamic *gaussian_dynamic_alloc(size_t n)
     return d;
 }
 
+/* 4DGS's arrays share one block (t_center owns it): per Gaussian 1 + 3 + 1
+ * floats. */
+enum { FDGS_FLOATS = 5 };
+
+gaussian_dynamic *gaussian_dynamic_alloc_fdgs(size_t n)
+{
+    gaussian_dynamic *d = calloc(1, sizeof *d);
+    float *block = n <= SIZE_MAX / (FDGS_FLOATS * sizeof(float)) ? malloc(n * FDGS_FLOATS * sizeof(float)) : NULL;
+    if (!d || !block) {
+        free(d);
+        free(block);
+        return NULL;
+    }
+    d->kind = GAUSSIAN_DYNAMIC_FDGS;
+    d->t_center = block;
+    d->velocity = d->t_center + n;
+    d->t_var = d->velocity + 3 * n;
+    return d;
+}
+
 void gaussian_dynamic_free(gaussian_dynamic *d)
 {
     if (d)
-        free(d->trbf_center); /* the whole block */
+        free(d->kind == GAUSSIAN_DYNAMIC_FDGS ? d->t_center : d->trbf_center); /* the whole block */
     free(d);
+}
+
+/* ---- 4DGS at t ---------------------------------------------------------- */
+
+/* The temporal marginal exp(-0.5 D^2 / t_var) (forward.cu:333, t_var
+ * holding cov_t plus any prefilter_var: the converter's). */
+static double fdgs_marginal(double D, float t_var) { return exp(-0.5 * D * D / t_var); }
+
+/* sigmoid(opacity) marginal where the marginal is above the cut, else 0:
+ * the CUDA drops the Gaussian (forward.cu:334-336). */
+static double fdgs_opacity(const gaussian_model *m, size_t i, double D)
+{
+    double marginal = fdgs_marginal(D, m->dynamic->t_var[i]);
+    return marginal > GAUSSIAN_FDGS_MARGINAL_CUT ? m->opacity[i] * marginal : 0.0;
+}
+
+/* The mean x + vel D (forward.cu:347-350; dt = timestamp - t, :283). */
+static void fdgs_mean(const gaussian_model *m, size_t i, double D, double mean[3])
+{
+    for (int k = 0; k < 3; k++)
+        mean[k] = m->mean[3 * i + k] + m->dynamic->velocity[3 * i + k] * D;
+}
+
+/* The mean, and the constant conditional covariance's scale and unit
+ * quaternion. */
+static void fdgs_at(const gaussian_model *m, size_t i, double t, gaussian_dynamic_state *out)
+{
+    double D = t - m->dynamic->t_center[i];
+    fdgs_mean(m, i, D, out->mean);
+    for (int k = 0; k < 3; k++)
+        out->scale[k] = m->scale[3 * i + k], out->rgb[k] = 0.0;
+    for (int k = 0; k < 4; k++)
+        out->q[k] = m->rotation[4 * i + k];
+    out->opacity = fdgs_opacity(m, i, D);
+}
+
+vec3 gaussian_dynamic_color(const gaussian_model *m, size_t i, double t, vec3 dir)
+{
+    const gaussian_dynamic *dy = m->dynamic;
+    RR_DCHECK(dy && dy->kind == GAUSSIAN_DYNAMIC_FDGS && i < m->count);
+    return gaussian_sh4d_color(&m->sh[(size_t)3 * m->sh_coeffs * i], m->sh_degree, dy->sh_degree_t,
+                               dy->t_center[i] - t, dy->time_duration, dir);
+}
+
+void gaussian_dynamic_view_dir(const gaussian_model *m, size_t i, vec3 eye, float dir[3])
+{
+    const float *mu = &m->mean[3 * i];
+    dir[0] = (float)(mu[0] - eye.x), dir[1] = (float)(mu[1] - eye.y), dir[2] = (float)(mu[2] - eye.z);
 }
 
 /* ---- evaluation at t ---------------------------------------------------- */
@@ -104,6 +172,10 @@ static double opacity_at(const gaussian_model *m, size_t i, double D)
 
 void gaussian_dynamic_at(const gaussian_model *m, size_t i, double t, gaussian_dynamic_state *out)
 {
+    if (m->dynamic->kind == GAUSSIAN_DYNAMIC_FDGS) {
+        fdgs_at(m, i, t, out);
+        return;
+    }
     double D = offset_at(m, i, t);
     mean_at(m, i, D, out->mean);
     for (int k = 0; k < 3; k++) {
@@ -267,10 +339,54 @@ static double opacity_max(const gaussian_model *m, size_t i, double t0, double t
     return m->opacity[i] * temporal_weight(tc - c, m->dynamic->trbf_scale[i]) * (1 + 4 * DBL_EPSILON);
 }
 
+/* ---- 4DGS over [t0, t1] ----------------------------------------------------
+ *
+ * The mean's coordinate x + vel D is linear in D, and as computed,
+ * fl(x + fl(vel D)), monotone in D (each rounding is); D = fl(t - c) is
+ * monotone in t. So both the exact and the computed path lie between
+ * their values at the ends a, b of the D-interval (gaussian_dynamic_bounds'
+ * nextafter step holds the exact t - c too), and the computed ends are
+ * within 2 U (|x| + |vel| R) of the exact ones (two roundings), R =
+ * max(|a|, |b|): the pad 4 eps (|x| + |vel| R) holds both. */
+static int fdgs_axis_bounds(double x, double vel, double a, double b, double *lo, double *hi)
+{
+    double pa = x + vel * a, pb = x + vel * b;
+    double pad = 4 * DBL_EPSILON * (fabs(x) + fabs(vel) * fmax(fabs(a), fabs(b)));
+    *lo = fmin(pa, pb) - pad, *hi = fmax(pa, pb) + pad;
+    return isfinite(*lo) && isfinite(*hi) ? 0 : -1;
+}
+
+/* The largest opacity over [t0, t1]: the marginal peaks at D = 0, so at
+ * t_center clamped into the interval (fl(t - c) monotone in t, the rest
+ * monotone but for exp, within 1 ulp in glibc: 4 eps covers it). 0 when
+ * even that is at or below the cut: no instant of the interval draws the
+ * Gaussian (fdgs_opacity). */
+static double fdgs_opacity_max(const gaussian_model *m, size_t i, double t0, double t1)
+{
+    double c = m->dynamic->t_center[i], tc = fmin(fmax(c, t0), t1);
+    double marginal = fdgs_marginal(tc - c, m->dynamic->t_var[i]) * (1 + 4 * DBL_EPSILON);
+    return marginal > GAUSSIAN_FDGS_MARGINAL_CUT ? m->opacity[i] * marginal : 0.0;
+}
+
+static int fdgs_bounds(const gaussian_model *m, size_t i, double t0, double t1, double lo[3], double hi[3],
+                       double *opacity_bound)
+{
+    double center = m->dynamic->t_center[i], l[3], h[3];
+    double a = nextafter(t0 - center, -INFINITY), b = nextafter(t1 - center, INFINITY);
+    for (int k = 0; k < 3; k++)
+        if (fdgs_axis_bounds(m->mean[3 * i + k], m->dynamic->velocity[3 * i + k], a, b, &l[k], &h[k]))
+            return -1;
+    memcpy(lo, l, sizeof l), memcpy(hi, h, sizeof h);
+    *opacity_bound = fdgs_opacity_max(m, i, t0, t1);
+    return 0;
+}
+
 int gaussian_dynamic_bounds(const gaussian_model *m, size_t i, double t0, double t1, double lo[3], double hi[3],
                             double *opacity_bound)
 {
     RR_DCHECK(m->dynamic && i < m->count && t0 <= t1);
+    if (m->dynamic->kind == GAUSSIAN_DYNAMIC_FDGS)
+        return fdgs_bounds(m, i, t0, t1, lo, hi, opacity_bound);
     double center = m->dynamic->trbf_center[i];
     double a = nextafter(t0 - center, -INFINITY), b = nextafter(t1 - center, INFINITY), l[3], h[3], c[4];
     for (int k = 0; k < 3; k++) {
@@ -288,13 +404,29 @@ int gaussian_dynamic_bounds(const gaussian_model *m, size_t i, double t0, double
 void gaussian_dynamic_instant_cull(const gaussian_model *m, size_t i, double t, gaussian_model *out, size_t j)
 {
     double mean[3];
-    mean_at(m, i, offset_at(m, i, t), mean);
+    if (m->dynamic->kind == GAUSSIAN_DYNAMIC_FDGS)
+        fdgs_mean(m, i, t - m->dynamic->t_center[i], mean);
+    else
+        mean_at(m, i, offset_at(m, i, t), mean);
     for (int k = 0; k < 3; k++)
         out->mean[3 * j + k] = (float)mean[k], out->scale[3 * j + k] = m->scale[3 * i + k];
 }
 
+/* 4DGS's rest: the quaternion as loaded (constant), the opacity with its
+ * cut. */
+static void fdgs_instant_rest(const gaussian_model *m, size_t i, double t, gaussian_model *out, size_t j)
+{
+    for (int k = 0; k < 4; k++)
+        out->rotation[4 * j + k] = m->rotation[4 * i + k];
+    out->opacity[j] = (float)fdgs_opacity(m, i, t - m->dynamic->t_center[i]);
+}
+
 void gaussian_dynamic_instant_rest(const gaussian_model *m, size_t i, double t, gaussian_model *out, size_t j)
 {
+    if (m->dynamic->kind == GAUSSIAN_DYNAMIC_FDGS) {
+        fdgs_instant_rest(m, i, t, out, j);
+        return;
+    }
     double D = offset_at(m, i, t), q[4];
     rotation_at(m, i, D, q);
     for (int k = 0; k < 4; k++)
@@ -304,6 +436,13 @@ void gaussian_dynamic_instant_rest(const gaussian_model *m, size_t i, double t, 
 
 void gaussian_dynamic_prefetch_cull(const gaussian_model *m, size_t i)
 {
+    if (m->dynamic->kind == GAUSSIAN_DYNAMIC_FDGS) {
+        __builtin_prefetch(&m->dynamic->t_center[i]);
+        __builtin_prefetch(&m->dynamic->velocity[3 * i]);
+        __builtin_prefetch(&m->mean[3 * i]);
+        __builtin_prefetch(&m->scale[3 * i]);
+        return;
+    }
     __builtin_prefetch(&m->dynamic->trbf_center[i]);
     __builtin_prefetch(&m->dynamic->motion[9 * i]);
     __builtin_prefetch(&m->dynamic->motion[9 * i + 8]);
@@ -313,6 +452,12 @@ void gaussian_dynamic_prefetch_cull(const gaussian_model *m, size_t i)
 
 void gaussian_dynamic_prefetch_rest(const gaussian_model *m, size_t i)
 {
+    if (m->dynamic->kind == GAUSSIAN_DYNAMIC_FDGS) {
+        __builtin_prefetch(&m->rotation[4 * i]);
+        __builtin_prefetch(&m->dynamic->t_var[i]);
+        __builtin_prefetch(&m->opacity[i]);
+        return;
+    }
     __builtin_prefetch(&m->dynamic->rot[4 * i]);
     __builtin_prefetch(&m->dynamic->omega[4 * i]);
     __builtin_prefetch(&m->dynamic->trbf_scale[i]);

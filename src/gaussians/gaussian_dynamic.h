@@ -19,7 +19,24 @@
  * gaussian_stg_ply.c. A model carries this through gaussian_model.dynamic
  * (NULL for static models); its static arrays hold x (mean), exp(scale)
  * (scale), sigmoid(opacity) (opacity), normalize(rot) or 0 (rotation, the
- * state at D = 0) and f_dc as sh[0..2] (sh_degree 0, rgb_precomputed). */
+ * state at D = 0) and f_dc as sh[0..2] (sh_degree 0, rgb_precomputed).
+ *
+ * A second kind: real-time 4DGS (Yang et al., ICLR 2024;
+ * fudan-zvg/4d-gaussian-splatting at 63725f21), each 4D Gaussian
+ * conditioned on t as its rasterizer does it (forward.cu:279-352),
+ * converted by scripts/convert_4dgs.py (its PLY: gaussian_fdgs_ply.h).
+ * With D = t - t_center:
+ *   mean     x + vel D, vel = Sigma_xt / Sigma_tt (forward.cu:347-350)
+ *   rotation, scale  the conditional covariance, the same at every t
+ *            (forward.cu:337-339): rot normalised on load as 3DGS's are
+ *   opacity  sigmoid(opacity) marginal, marginal = exp(-0.5 D^2 / t_var),
+ *            and 0 (not drawn) unless marginal > 0.05 (forward.cu:333-336)
+ *   colour   4D SH (gaussian_sh4d_color) seen from the camera toward the
+ *            CANONICAL mean x, not the moved one (forward.cu:79-81,
+ *            480-482: orig_points), at dir_t = t_center - t (:83)
+ * Its static arrays hold x, exp(scale), normalize(rot), sigmoid(opacity)
+ * and sh4d as sh (sh_degree the spatial degree, sh_coeffs
+ * (sh_degree + 1)^2 (sh_degree_t + 1)). */
 #ifndef RR_GAUSSIAN_DYNAMIC_H
 #define RR_GAUSSIAN_DYNAMIC_H
 
@@ -30,14 +47,30 @@
 /* torch.nn.functional.normalize's eps (the default, ourslite.py:40). */
 #define GAUSSIAN_DYNAMIC_NORMALIZE_EPS 1e-12
 
+/* Which rules a dynamic model follows. */
+typedef enum { GAUSSIAN_DYNAMIC_STG, GAUSSIAN_DYNAMIC_FDGS } gaussian_dynamic_kind;
+
 typedef struct gaussian_dynamic {
+    gaussian_dynamic_kind kind;
+    /* SpacetimeGaussians-lite (kind STG) */
     float *trbf_center;   /* 1 per Gaussian: the time of its mean and its peak opacity (owns the block
                            * all five arrays share: gaussian_dynamic_alloc) */
     float *trbf_scale;    /* 1 per Gaussian, as stored: the temporal scale is exp(trbf_scale) */
     float *motion;        /* 9 per Gaussian: velocity, then the D^2 and D^3 coefficients (x y z each) */
     float *omega;         /* 4 per Gaussian: the quaternion's rate, (w x y z) as rot */
     float *rot;           /* 4 per Gaussian: rot_0..3 as stored (any length, zero allowed) */
+    /* 4DGS (kind FDGS) */
+    float *t_center;      /* 1 per Gaussian: the time of its canonical mean and its peak opacity (owns the
+                           * block the three arrays share: gaussian_dynamic_alloc_fdgs) */
+    float *velocity;      /* 3 per Gaussian: vel_0..2, the mean's (constant) rate */
+    float *t_var;         /* 1 per Gaussian: the temporal marginal's variance (> 0) */
+    double time_duration; /* T of the time harmonics (> 0) */
+    int sh_degree_t;      /* time harmonics k = 1..sh_degree_t (0 to 2; 0 unless sh_degree is 3) */
 } gaussian_dynamic;
+
+/* 4DGS draws a Gaussian only where its marginal is above this
+ * (forward.cu:334: mask = marginal_t > 0.05). */
+#define GAUSSIAN_FDGS_MARGINAL_CUT 0.05
 
 /* One Gaussian at one time, as the official renderer draws it. */
 typedef struct {
@@ -45,15 +78,26 @@ typedef struct {
     double q[4];       /* (w x y z): unit, or shorter than 1 when |rot + omega D| < 1e-12, or 0 */
     double scale[3];
     double opacity;
-    double rgb[3];
+    double rgb[3];     /* STG only: a 4DGS colour depends on the view (gaussian_dynamic_color) */
 } gaussian_dynamic_state;
 
-/* Storage for n Gaussians' motion (NULL when out of memory). */
+/* Storage for n Gaussians' motion (NULL when out of memory): STG's, or
+ * 4DGS's (_fdgs: time_duration and sh_degree_t left for the reader). */
 gaussian_dynamic *gaussian_dynamic_alloc(size_t n);
+gaussian_dynamic *gaussian_dynamic_alloc_fdgs(size_t n);
 void gaussian_dynamic_free(gaussian_dynamic *d);
 
 /* Gaussian i of m (m->dynamic not NULL) at time t. */
 void gaussian_dynamic_at(const gaussian_model *m, size_t i, double t, gaussian_dynamic_state *out);
+
+/* The colour of Gaussian i of a 4DGS model m at time t seen along dir
+ * (gaussian_dynamic_view_dir's): its 4D SH, time argument t_center - t
+ * (forward.cu:83). */
+vec3 gaussian_dynamic_color(const gaussian_model *m, size_t i, double t, vec3 dir);
+/* The view direction of that colour, from the camera centre eye (object
+ * space) to the CANONICAL mean x, not the moved one (forward.cu:79-81,
+ * 480-482 pass orig_points), as a hit holds it (gaussian_hit.dir). */
+void gaussian_dynamic_view_dir(const gaussian_model *m, size_t i, vec3 eye, float dir[3]);
 
 /* The rotation matrix (row-major) forward.cu:134-138 builds from q: the
  * unit quaternion's formula applied to q as it is, so q = 0 gives the

@@ -215,6 +215,7 @@ typedef struct {
     vec3 sum;          /* colour so far */
     size_t composited; /* hits composited */
     int done;          /* the next hit would have brought T below the minimum: stop */
+    double time;       /* the ray's scene time (a 4DGS colour depends on it; 0 from init) */
 } gaussian_blend;
 
 void gaussian_blend_init(gaussian_blend *b);

@@ -7,6 +7,7 @@
 #include <string.h>
 
 #include "core/atomicfile.h"
+#include "io/gaussian_fdgs_ply.h"
 #include "io/gaussian_stg_ply.h"
 #include "io/ply.h"
 
@@ -28,7 +29,8 @@ typedef struct {
      * degree 4 must be refused, not read as degree 3) */
     int rest_names, rest_max;
     unsigned char rest_seen[PLY_MAX_PROPERTIES];
-    int stg; /* a SpacetimeGaussians property was declared */
+    int stg;  /* a SpacetimeGaussians property was declared */
+    int fdgs; /* a 4DGS property was declared */
 } gaussian_sink;
 
 static int require(const char *path, const int *present, int first, int n, rr_error *err)
@@ -58,6 +60,8 @@ static int see_property(void *user, const char *path, long line, const char *nam
     gaussian_sink *s = user;
     if (gaussian_stg_claims(name)) /* read by gaussian_stg_ply.c instead */
         return s->stg = 1, rr_fail(err, "%s:%ld: SpacetimeGaussians property '%s'", path, line, name);
+    if (gaussian_fdgs_claims(name)) /* read by gaussian_fdgs_ply.c instead */
+        return s->fdgs = 1, rr_fail(err, "%s:%ld: 4DGS property '%s'", path, line, name);
     if (!strcmp(name, "filter_3D"))
         return rr_fail(err, "%s:%ld: vertex property 'filter_3D': Mip-Splatting's 3D filter is not supported (the "
                             "model would render without it)", path, line);
@@ -233,10 +237,12 @@ static int load(const char *name, const char *data, size_t len, gaussian_kind ki
     uint64_t hash_before = content_hash ? *content_hash : 0;
     int rc = data ? ply_parse_vertices(name, data, len, &gaussian_schema, &v, err)
                   : ply_read_vertices(name, &gaussian_schema, &v, content_hash, err);
-    int stg = sink->stg;
+    int stg = sink->stg, fdgs = sink->fdgs;
     free(sink);
-    if (stg && content_hash) /* its own reader reads it again, hashing from the same start */
+    if ((stg || fdgs) && content_hash) /* its own reader reads it again, hashing from the same start */
         *content_hash = hash_before;
+    if (fdgs)
+        return gaussian_fdgs_load(name, data, len, kind, m, content_hash, err);
     return stg ? gaussian_stg_load(name, data, len, kind, m, content_hash, err) : finish(m, rc, name, err);
 }
 

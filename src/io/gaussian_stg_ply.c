@@ -7,6 +7,7 @@
 #include <string.h>
 
 #include "gaussians/gaussian_dynamic.h"
+#include "io/gaussian_fdgs_ply.h"
 #include "io/ply.h"
 
 /* ---- the layout (ourslite.py:335-359) ---------------------------------- */
@@ -51,6 +52,9 @@ typedef struct {
 static int see_property(void *user, const char *path, long line, const char *name, rr_error *err)
 {
     (void)user;
+    if (gaussian_fdgs_claims(name))
+        return rr_fail(err, "%s:%ld: vertex property '%s' is 4DGS's beside SpacetimeGaussians ones (trbf_*, "
+                            "motion_*, omega_*): a layout mixing the two is refused", path, line, name);
     if (numbered(name, "f_t_") >= 0 || numbered(name, "f_dc_") >= 3)
         return rr_fail(err, "%s:%ld: vertex property '%s': a SpacetimeGaussians \"full\" model (f_t_*, f_dc_3 and "
                             "up) needs STG's per-pixel MLP, not supported (the \"lite\" model is)", path, line, name);

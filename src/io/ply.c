@@ -504,7 +504,8 @@ static int read_vertices(ply_reader *r, const ply_element *e, const ply_visitor 
     if (v->begin(v->user, r->path, present, e->count, r->err) || check_element_size(r, e))
         return -1;
     for (size_t i = 0; i < e->count; i++) {
-        double vals[PLY_MAX_SLOTS] = {0};
+        double vals[PLY_MAX_SLOTS];
+        memset(vals, 0, (size_t)r->schema->count * sizeof *vals); /* (only the schema's slots are read) */
         char why[512];
         if (i % 65536 == 0 && rr_interrupted()) /* millions of vertices take seconds */
             return rr_fail(r->err, "%s: interrupted while reading vertex %zu of %zu", r->path, i, e->count);

@@ -37,7 +37,10 @@ int ply_parse(const char *name, const char *data, size_t len, vec3 default_color
  * (any order, any scalar type; others are skipped), a name declared twice
  * is an error naming it, and the declared count is checked against the
  * file's size before anything is read. */
-#define PLY_MAX_SLOTS 128
+/* Slots: a converted 4DGS model has 163 properties (degree-3 SH with two
+ * time harmonics); the reader's per-vertex arrays of this size are on the
+ * stack (3 KB). */
+#define PLY_MAX_SLOTS 256
 /* Properties of one element: 3DGS models have 62 (degree-3 SH), and
  * trainers add their own. */
 #define PLY_MAX_PROPERTIES 256

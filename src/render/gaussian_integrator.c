@@ -161,6 +161,18 @@ static inline unsigned original_prim(const gaussian_object_ray *r, unsigned prim
     return r->instant ? r->instant->prim[prim] : prim;
 }
 
+/* A hit of object o's model found by ray r, as o's own: its object, its
+ * Gaussian's index there (original_prim), and for a 4DGS model the SH
+ * direction from the camera to the canonical mean (the instant's is the
+ * moved mean's; gaussian_dynamic_view_dir). */
+static inline void own_hit(const gaussian_object_ray *r, const scene_object *o, gaussian_hit *h)
+{
+    h->obj = r->obj, h->prim = original_prim(r, h->prim);
+    const gaussian_model *m = &o->gaussians;
+    if (m->dynamic && m->dynamic->kind == GAUSSIAN_DYNAMIC_FDGS)
+        gaussian_dynamic_view_dir(m, h->prim, r->ray.eye, h->dir);
+}
+
 /* Lists and culls (cull_candidates) the Gaussians of object ray `ray`
  * whose boxes its stretch [t0, t1) meets. The traversal's stretch is wider
  * by the pad: a hit's box holds a point of the ray within that of the hit
@@ -188,7 +200,7 @@ static void evaluate_kept(const scene *s, gaussian_integrator *g, const gaussian
     const scene_object *o = &s->objects[r->obj];
     gaussian_hit hit;
     if (gaussian_hit_after_cull(r->model, k->prim, o->order, &r->ray, k->p, &hit)) {
-        hit.obj = r->obj, hit.prim = original_prim(r, hit.prim);
+        own_hit(r, o, &hit);
         gaussian_hits_add(&g->hits, &hit);
     }
 }
@@ -216,7 +228,7 @@ static void evaluate_chunk(const scene *s, gaussian_integrator *g, const gaussia
         int found = gaussian_hits_after_cull4(r->model, prim, o->order, &r->ray, p, hit);
         for (int j = 0; j < 4; j++)
             if (found >> j & 1) {
-                hit[j].obj = r->obj, hit[j].prim = original_prim(r, hit[j].prim);
+                own_hit(r, o, &hit[j]);
                 gaussian_hits_add(&g->hits, &hit[j]);
             }
         k += 4;
@@ -349,6 +361,7 @@ void gaussian_integrate(const scene *s, const accel *a, const gaussian_sample *s
                         gaussian_blend *blend)
 {
     size_t n = object_rays(s, a, smp, g);
+    blend->time = smp->time; /* (a 4DGS colour's time) */
     double start = INFINITY, end = 0, lead = 0;
     for (size_t k = 0; k < n; k++) {
         start = fmin(start, g->rays[k].enter), end = fmax(end, g->rays[k].exit);
