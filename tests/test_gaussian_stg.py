@@ -147,3 +147,16 @@ def test_moving_gaussians_compose_with_threads_passes_crops_and_a_rolling_shutte
         line = sharp(path, T + d * r, tmp_path / f"line{r}.exr")[r]
         assert np.array_equal(rows[r], line), r
     assert drawn > 0 and not np.array_equal(rows[drawn], still[drawn])
+
+
+def test_export_says_the_gaussians_move(tmp_path):
+    """refrender export describes the scene for another renderer: a model whose Gaussians move must
+    not read as a still 3DGS model there (regression: it said only "kind": "3dgs")."""
+    import json
+    ply = tmp_path / "stg.ply"
+    write_stg_lite(ply)
+    out = tmp_path / "scene.json"
+    proc = run(["export", scene(tmp_path, "moving", ply, ""), "-o", out])
+    assert proc.returncode == 0, proc.stderr
+    model = json.loads(out.read_text())["objects"][0]["model"]["gaussians"]
+    assert model["motion"] == "stg-lite" and model["kind"] == "3dgs"

@@ -10,6 +10,7 @@
 #include <string.h>
 
 #include "core/atomicfile.h"
+#include "gaussians/gaussian_dynamic.h"
 #include "gaussians/gaussian_hit.h"
 #include "cmd/cli.h"
 #include "cmd/commands.h"
@@ -218,11 +219,13 @@ static void write_model(FILE *f, const scene_object *o)
         const gaussian_model *m = &o->gaussians;
         fputs("{\"gaussians\": {\"file\": ", f);
         json_string(f, o->model_file);
+        /* a renderer reading the export must know the Gaussians move on their own (the file says how) */
+        const char *motion = !m->dynamic ? "none" : m->dynamic->kind == GAUSSIAN_DYNAMIC_FDGS ? "4dgs" : "stg-lite";
         fprintf(f,
                 ", \"kind\": \"%s\", \"semantics\": \"%s\", \"tileRule\": \"%s\", \"order\": \"%s\", "
-                "\"count\": %zu, \"sh_degree\": %d}}",
+                "\"count\": %zu, \"sh_degree\": %d, \"motion\": \"%s\"}}",
                 m->kind == GAUSSIAN_3D ? "3dgs" : "2dgs", gaussian_formation_name(gaussian_formation_of(m)),
-                m->tile_rule ? "on" : "off", gaussian_order_name(m, o->order), m->count, m->sh_degree);
+                m->tile_rule ? "on" : "off", gaussian_order_name(m, o->order), m->count, m->sh_degree, motion);
         return;
     }
     if (o->kind == OBJECT_SPHERE) {
