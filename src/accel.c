@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "accel_internal.h"
+#include "gaussian_dynamic.h"
 #include "hitrules.h"
 
 static float *lane_f(void *rayhit, unsigned n, unsigned field, unsigned i)
@@ -530,23 +531,62 @@ typedef struct {
     void *user;
 } candidate_context;
 
+/* What a Gaussian's bounds hold of the camera, the farthest it gets from
+ * the Gaussian being `distance` (world): in object units, the focal length
+ * shrunk by the scale's spread. */
+static gaussian_view_bound footprint_view(const gaussian_footprint *f, double distance)
+{
+    gaussian_view_bound view = {distance / f->min_scale, f->focal * f->min_scale / f->max_scale, f->stretch,
+                                gaussian_filter_near(f->min_scale, f->max_scale), f->view_axis, f->view_cone};
+    return view;
+}
+
+static void write_gaussian_bounds(aabb b, struct RTCBounds *r)
+{
+    r->lower_x = nextafterf((float)b.lo.x, -INFINITY), r->lower_y = nextafterf((float)b.lo.y, -INFINITY);
+    r->lower_z = nextafterf((float)b.lo.z, -INFINITY);
+    r->upper_x = nextafterf((float)b.hi.x, INFINITY), r->upper_y = nextafterf((float)b.hi.y, INFINITY);
+    r->upper_z = nextafterf((float)b.hi.z, INFINITY);
+}
+
 void accel_gaussian_bounds_cb(const struct RTCBoundsFunctionArguments *args)
 {
     const gaussian_footprint *f = args->geometryUserPtr;
     const gaussian_model *m = f->acc->models[f->obj];
     const float *mu = &m->mean[3 * args->primID];
-    /* the farthest the camera gets from the Gaussian (world), in object
-     * units; the focal length shrunk by the scale's spread */
+    /* the farthest the camera gets from the Gaussian (world) */
     vec3 at_open = xform_point(&f->at_open, v3(mu[0], mu[1], mu[2]));
     double distance = v3_len(v3_sub(at_open, f->camera_center)) + f->camera_radius + f->travel;
-    gaussian_view_bound view = {distance / f->min_scale, f->focal * f->min_scale / f->max_scale, f->stretch,
-                                gaussian_filter_near(f->min_scale, f->max_scale), f->view_axis, f->view_cone};
-    aabb b = gaussian_view_bounds(m, args->primID, &view);
-    struct RTCBounds *r = args->bounds_o;
-    r->lower_x = nextafterf((float)b.lo.x, -INFINITY), r->lower_y = nextafterf((float)b.lo.y, -INFINITY);
-    r->lower_z = nextafterf((float)b.lo.z, -INFINITY);
-    r->upper_x = nextafterf((float)b.hi.x, INFINITY), r->upper_y = nextafterf((float)b.hi.y, INFINITY);
-    r->upper_z = nextafterf((float)b.hi.z, INFINITY);
+    gaussian_view_bound view = footprint_view(f, distance);
+    write_gaussian_bounds(gaussian_view_bounds(m, args->primID, &view), args->bounds_o);
+}
+
+/* A Gaussian that moves (gaussian_dynamic.h), over every time of the
+ * shutter the BVH is built for (accel_build.c gives each line of a rolling
+ * shutter its time within it): its mean stays in the box of its path and
+ * its opacity below the bound (gaussian_dynamic_bounds: proved, not
+ * sampled), so every instant's reach, kernel and screen footprint, lies in
+ * that box grown by the reach of a Gaussian of its largest scale in every
+ * direction at the largest opacity (gaussian_dynamic_reach_bounds: the
+ * rotation turns, and a turned scale reaches no farther than the largest).
+ * The camera's distance is the farthest corner's: the box placed by the
+ * object's transform at the open is a parallelepiped, and the distance
+ * from a point, convex, is largest at a corner; the object's own motion
+ * and the camera's are added as for a static Gaussian (f->travel holds the
+ * paths' box). A fast mover is listed wherever it is at any time. */
+void accel_dynamic_gaussian_bounds_cb(const struct RTCBoundsFunctionArguments *args)
+{
+    const gaussian_footprint *f = args->geometryUserPtr;
+    const gaussian_model *m = f->acc->models[f->obj];
+    const double *path = &f->paths[PATH_DOUBLES * args->primID];
+    double farthest = 0;
+    for (int c = 0; c < 8; c++) {
+        vec3 corner = v3(path[c & 1 ? 3 : 0], path[c & 2 ? 4 : 1], path[c & 4 ? 5 : 2]);
+        farthest = fmax(farthest, v3_len(v3_sub(xform_point(&f->at_open, corner), f->camera_center)));
+    }
+    gaussian_view_bound view = footprint_view(f, farthest + f->camera_radius + f->travel);
+    write_gaussian_bounds(gaussian_dynamic_reach_bounds(m, args->primID, path, path + 3, path[6], &view),
+                          args->bounds_o);
 }
 
 /* Every Gaussian whose box the ray passes is handed on: the ray is never

@@ -1,7 +1,9 @@
 /* Building accel: one Embree user-geometry BVH per object (object space)
  * and the two top levels over the objects' swept bounds (accel.h). */
 #include "accel_internal.h"
+#include "gaussian_dynamic.h"
 
+#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -102,8 +104,25 @@ static void gaussian_view_axis(const scene *s, const gaussian_footprint *f, cons
     *cone = turn * 0.5 * (close - open) * (1 + 1e-9) + 1e-9;
 }
 
-/* A Gaussian object's footprint parameters for the shutter [open, close]. */
-static void gaussian_footprint_for(accel *a, unsigned obj, double open, double close)
+/* How far any point of a Gaussian object moves with the object over
+ * [open, close] (world): every point stays in the swept sphere, so it
+ * moves at most its diameter. The sphere of a dynamic model's is about the
+ * box of its Gaussians' paths (paths_box): a mean can leave the model's
+ * box at rest. */
+static double object_travel(const scene_object *o, const aabb *paths_box, double open, double close)
+{
+    if (animation_is_static(&o->anim))
+        return 0.0;
+    if (!paths_box)
+        return 2.0 * sqrt(accel_swept_sphere(o, open, close).radius2);
+    vec3 c = v3_scale(v3_add(paths_box->lo, paths_box->hi), 0.5);
+    double r = 0.5 * v3_len(v3_sub(paths_box->hi, paths_box->lo));
+    return 2.0 * sqrt(accel_swept_sphere_about(&o->anim, c, r, open, close).radius2);
+}
+
+/* A Gaussian object's footprint parameters for the shutter [open, close]
+ * (paths_box: a dynamic model's, object_travel). */
+static void gaussian_footprint_for(accel *a, unsigned obj, double open, double close, const aabb *paths_box)
 {
     const scene *s = a->sc;
     const scene_object *o = &s->objects[obj];
@@ -113,8 +132,7 @@ static void gaussian_footprint_for(accel *a, unsigned obj, double open, double c
     aabb cam = animation_swept_bounds(&s->camera_motion, (aabb){s->cam.position, s->cam.position}, open, close);
     f->camera_center = v3_scale(v3_add(cam.lo, cam.hi), 0.5);
     f->camera_radius = 0.5 * v3_len(v3_sub(cam.hi, cam.lo)) * (1 + 1e-6);
-    /* every point stays in the swept sphere: it moves at most its diameter */
-    f->travel = animation_is_static(&o->anim) ? 0.0 : 2.0 * sqrt(accel_swept_sphere(o, open, close).radius2);
+    f->travel = object_travel(o, paths_box, open, close);
     f->min_scale = animation_min_scale(&o->anim, open, close);
     f->max_scale = animation_max_scale(&o->anim, open, close);
     camera_view v;
@@ -128,17 +146,75 @@ static void gaussian_footprint_for(accel *a, unsigned obj, double open, double c
     gaussian_view_axis(s, f, o, open, close, &f->view_axis, &f->view_cone);
 }
 
+/* A build failure of object obj, named (the first one is kept). */
+static void build_failed(accel *a, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+static void build_failed(accel *a, const char *fmt, ...)
+{
+    if (a->build_error.msg[0])
+        return;
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(a->build_error.msg, sizeof a->build_error.msg, fmt, ap);
+    va_end(ap);
+}
+
+/* A dynamic model's paths over [open, close] (gaussian_footprint.paths)
+ * and their box; NULL (the error named) where a path's box is not finite
+ * or passes GAUSSIAN_MAX_ABS, the reach of the static models' means
+ * (beyond it Embree's float boxes and rays fail without a word), or
+ * memory is short. */
+static double *dynamic_paths(accel *a, const scene_object *o, double open, double close, aabb *box)
+{
+    const gaussian_model *m = &o->gaussians;
+    double *paths = malloc(m->count * PATH_DOUBLES * sizeof *paths);
+    if (!paths) {
+        build_failed(a, "out of memory for the motion bounds of object '%s' (%zu Gaussians)", o->name, m->count);
+        return NULL;
+    }
+    *box = aabb_empty();
+    for (size_t i = 0; i < m->count; i++) {
+        double *p = &paths[PATH_DOUBLES * i], reach = 0;
+        int finite = !gaussian_dynamic_bounds(m, i, open, close, p, p + 3, p + 6);
+        for (int k = 0; finite && k < 6; k++)
+            reach = fmax(reach, fabs(p[k]));
+        if (!finite || !(reach <= GAUSSIAN_MAX_ABS)) {
+            char far[64] = "beyond double range";
+            if (finite)
+                snprintf(far, sizeof far, "%g", reach);
+            build_failed(a, "%s: Gaussian %zu of object '%s' moves %s from the origin during the shutter [%g, %g]; "
+                            "a Gaussian may only reach %g (GAUSSIAN_MAX_ABS)", o->model_file, i, o->name, far, open,
+                         close, GAUSSIAN_MAX_ABS);
+            free(paths);
+            return NULL;
+        }
+        aabb_add_box(box, (aabb){v3(p[0], p[1], p[2]), v3(p[3], p[4], p[5])});
+    }
+    return paths;
+}
+
 /* A Gaussian object's BVH depends on the shutter (the filter's footprint
- * follows the camera's distance): rebuilt for each one, and its swept
- * bounds are those of its BVH's. */
+ * follows the camera's distance, a dynamic model's Gaussians their paths):
+ * rebuilt for each one, and its swept bounds are those of its BVH's. */
 static void build_gaussian_object(accel *a, unsigned obj, double open, double close)
 {
     const scene_object *o = &a->sc->objects[obj];
+    gaussian_footprint *f = &a->footprint[obj];
     if (a->object_scenes[obj])
         rtcReleaseScene(a->object_scenes[obj]);
-    gaussian_footprint_for(a, obj, open, close);
-    a->object_scenes[obj] = accel_user_scene(a->device, (unsigned)o->gaussians.count, &a->footprint[obj],
-                                             accel_gaussian_bounds_cb, accel_gaussian_gather, 1);
+    a->object_scenes[obj] = NULL;
+    aabb paths_box;
+    f->paths = o->gaussians.dynamic ? dynamic_paths(a, o, open, close, &paths_box) : NULL;
+    if (o->gaussians.dynamic && !f->paths) { /* (named: accel_set_shutter fails) */
+        a->swept[obj] = (aabb){v3(0, 0, 0), v3(0, 0, 0)};
+        a->swept_sphere[obj] = (sphere_bound){v3(0, 0, 0), 0};
+        return;
+    }
+    gaussian_footprint_for(a, obj, open, close, f->paths ? &paths_box : NULL);
+    a->object_scenes[obj] = accel_user_scene(a->device, (unsigned)o->gaussians.count, f,
+                                             f->paths ? accel_dynamic_gaussian_bounds_cb : accel_gaussian_bounds_cb,
+                                             accel_gaussian_gather, 1);
+    free(f->paths); /* (the bounds are taken while the BVH is built) */
+    f->paths = NULL;
     struct RTCBounds rb;
     rtcGetSceneBounds(a->object_scenes[obj], &rb);
     aabb box = {v3(rb.lower_x, rb.lower_y, rb.lower_z), v3(rb.upper_x, rb.upper_y, rb.upper_z)};

@@ -46,7 +46,12 @@ typedef struct {
     double largest;      /* the largest scale of a Gaussian over the shutter, world units */
     vec3 view_axis;      /* the camera's view axis in object space at mid-shutter, and how far */
     double view_cone;    /* it can turn from it (gaussian_view_bound); a zero axis: not known */
+    double *paths;       /* a dynamic model's, while its BVH is built: per Gaussian the box of its mean
+                          * over the shutter (lo[3], hi[3]) and its largest opacity then
+                          * (gaussian_dynamic_bounds), PATH_DOUBLES each; NULL otherwise */
 } gaussian_footprint;
+
+enum { PATH_DOUBLES = 7 };
 
 struct accel {
     RTCDevice device;
@@ -105,6 +110,7 @@ void accel_no_occluded(const struct RTCOccludedFunctionNArguments *args);
 void accel_object_intersect(const struct RTCIntersectFunctionNArguments *args);
 void accel_object_bounds_cb(const struct RTCBoundsFunctionArguments *args);
 void accel_gaussian_bounds_cb(const struct RTCBoundsFunctionArguments *args);
+void accel_dynamic_gaussian_bounds_cb(const struct RTCBoundsFunctionArguments *args);
 void accel_gaussian_gather(const struct RTCIntersectFunctionNArguments *args);
 /* A committed scene of one user geometry (accel_build.c); compact: a
  * smaller BVH built faster, at some cost in traversal. */

@@ -58,6 +58,8 @@ typedef struct {
     float *rotation;     /* 4 per Gaussian: the unit quaternion (w, x, y, z) of rot_0..3 */
     float *opacity;      /* 1 per Gaussian: sigmoid(opacity) */
     float *sh;           /* 3 * sh_coeffs per Gaussian: coefficient k of channel c at [3 k + c] */
+    int rgb_precomputed; /* 1: sh[0..2] are plain RGB colours, composited as they are (no SH, no +0.5,
+                          * no clamp: SpacetimeGaussians-lite's f_dc, gaussian_dynamic.h) */
     /* how it is imaged, set by the scene (the file does not say; gaussian_hit.h) */
     gaussian_formation formation;
     int tile_rule;       /* 1: only in the 16x16 tiles the rasterizer would visit */

@@ -103,6 +103,18 @@ static int blend_stops(const gaussian_blend *b, const gaussian_hit *g, const gau
     }
 }
 
+/* A hit's colour: its SH seen along the hit's direction, or a model's
+ * precomputed RGB as stored (SpacetimeGaussians-lite hands f_dc to the
+ * rasterizer as colors_precomp: renderer/__init__.py:339, and the blend
+ * reads it without the SH step's +0.5 and clamp, forward.cu:316, 430). */
+static vec3 hit_color(const gaussian_hit *g, const gaussian_model *m)
+{
+    const float *sh = &m->sh[(size_t)3 * m->sh_coeffs * g->prim];
+    if (m->rgb_precomputed)
+        return v3(sh[0], sh[1], sh[2]);
+    return gaussian_sh_color(sh, m->sh_degree, v3(g->dir[0], g->dir[1], g->dir[2]));
+}
+
 static void blend_one(gaussian_blend *b, const gaussian_hit *g, const gaussian_model *m)
 {
     if (blend_stops(b, g, m)) {
@@ -110,8 +122,7 @@ static void blend_one(gaussian_blend *b, const gaussian_hit *g, const gaussian_m
         return;
     }
     double next = b->T * (1.0 - g->alpha);
-    vec3 c = gaussian_sh_color(&m->sh[(size_t)3 * m->sh_coeffs * g->prim], m->sh_degree,
-                               v3(g->dir[0], g->dir[1], g->dir[2]));
+    vec3 c = hit_color(g, m);
     b->sum = v3_add(b->sum, v3_scale(c, g->alpha * b->T));
     b->T = next;
     b->composited++;

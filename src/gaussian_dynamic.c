@@ -66,7 +66,7 @@ static double temporal_weight(double D, float trbf_scale)
 void gaussian_dynamic_at(const gaussian_model *m, size_t i, double t, gaussian_dynamic_state *out)
 {
     const gaussian_dynamic *dy = m->dynamic;
-    RR_DCHECK(dy && dy->rgb_precomputed && i < m->count);
+    RR_DCHECK(dy && m->rgb_precomputed && i < m->count);
     double D = t - dy->trbf_center[i], c[4], v[4], len2 = 0;
     for (int k = 0; k < 3; k++) {
         axis_coefficients(m, i, k, c);
@@ -256,4 +256,61 @@ int gaussian_dynamic_bounds(const gaussian_model *m, size_t i, double t0, double
     memcpy(lo, l, sizeof l), memcpy(hi, h, sizeof h);
     *opacity_bound = opacity_max(m, i, t0, t1);
     return 0;
+}
+
+/* ---- rendering ------------------------------------------------------------ */
+
+void gaussian_dynamic_instant(const gaussian_model *m, size_t i, double t, gaussian_model *out, size_t j)
+{
+    gaussian_dynamic_state st;
+    gaussian_dynamic_at(m, i, t, &st);
+    for (int k = 0; k < 3; k++)
+        out->mean[3 * j + k] = (float)st.mean[k], out->scale[3 * j + k] = m->scale[3 * i + k];
+    for (int k = 0; k < 4; k++)
+        out->rotation[4 * j + k] = (float)st.q[k];
+    out->opacity[j] = (float)st.opacity;
+}
+
+/* Why the box of one static Gaussian suffices (gaussian_dynamic_reach_bounds).
+ * At a time t the instant is the static Gaussian G(t): mean mu(t) in
+ * [lo, hi], the constant scales s, opacity o(t) <= opacity_max, and the
+ * matrix R of q(t). gaussian_view_bounds(G(t)) is mu(t) +- e per axis,
+ * e_a the larger of
+ *   - the kernel's reach k(o) |row a of R S|, k(o) = sqrt(2 ln(255 o))
+ *     growing with o; |row a of R S| <= s_max |row a of R|, and
+ *     |row a of R| <= 1 however q turns: q = normalize(rot + omega D) has
+ *     |q| = 1, or |q| < 1 (below torch's eps), or q = 0, and the unit
+ *     formula of q = |q| u is |q|^2 R(u) + (1 - |q|^2) I, a convex
+ *     combination of two orthogonal matrices (q in floats: |q| <= 1 +
+ *     2^-23);
+ *   - the screen footprint's reach, from s_max, the opacity (growing with
+ *     it) and the view bound alone (footprint_3d_reach, filter_2d_reach:
+ *     not the rotation, not the mean but through v's distance).
+ * So the static Gaussian at the origin with scales (s_max, s_max, s_max),
+ * no rotation and opacity_max (rounded up to a float, as the instant's
+ * opacity is rounded to one) has e_a at least every instant's: the
+ * Minkowski sum of [lo, hi] and its box holds every instant's box. Its
+ * own padding (1e-5 e) covers |q| up to 1 + 2^-23; the instant's mean,
+ * rounded to floats, leaves [lo, hi] by at most 2^-24 |mu|, and the
+ * instant's box is padded by 1e-6 |mu| for float rounding: the 2e-6 pad
+ * below holds both. */
+aabb gaussian_dynamic_reach_bounds(const gaussian_model *m, size_t i, const double lo[3], const double hi[3],
+                                   double opacity_max, const gaussian_view_bound *v)
+{
+    const float *s = &m->scale[3 * i];
+    float s_max = fmaxf(s[0], fmaxf(s[1], s[2])), o = (float)opacity_max;
+    if (o < opacity_max)
+        o = nextafterf(o, INFINITY);
+    float mean[3] = {0, 0, 0}, scale[3] = {s_max, s_max, s_max}, rotation[4] = {1, 0, 0, 0};
+    gaussian_model one = *m;
+    one.count = 1, one.dynamic = NULL, one.sh = NULL;
+    one.mean = mean, one.scale = scale, one.rotation = rotation, one.opacity = &o;
+    aabb reach = gaussian_view_bounds(&one, 0, v), b;
+    double l[3] = {reach.lo.x, reach.lo.y, reach.lo.z}, h[3] = {reach.hi.x, reach.hi.y, reach.hi.z};
+    for (int k = 0; k < 3; k++) {
+        double pad = 2e-6 * fmax(fabs(lo[k]), fabs(hi[k]));
+        l[k] += lo[k] - pad, h[k] += hi[k] + pad;
+    }
+    b.lo = v3(l[0], l[1], l[2]), b.hi = v3(h[0], h[1], h[2]);
+    return b;
 }

@@ -19,12 +19,13 @@
  * gaussian_stg_ply.c. A model carries this through gaussian_model.dynamic
  * (NULL for static models); its static arrays hold x (mean), exp(scale)
  * (scale), sigmoid(opacity) (opacity), normalize(rot) or 0 (rotation, the
- * state at D = 0) and f_dc as sh[0..2] (sh_degree 0). */
+ * state at D = 0) and f_dc as sh[0..2] (sh_degree 0, rgb_precomputed). */
 #ifndef RR_GAUSSIAN_DYNAMIC_H
 #define RR_GAUSSIAN_DYNAMIC_H
 
 #include "common.h"
 #include "gaussian.h"
+#include "gaussian_hit.h"
 
 /* torch.nn.functional.normalize's eps (the default, ourslite.py:40). */
 #define GAUSSIAN_DYNAMIC_NORMALIZE_EPS 1e-12
@@ -35,7 +36,6 @@ typedef struct gaussian_dynamic {
     float *motion;        /* 9 per Gaussian: velocity, then the D^2 and D^3 coefficients (x y z each) */
     float *omega;         /* 4 per Gaussian: the quaternion's rate, (w x y z) as rot */
     float *rot;           /* 4 per Gaussian: rot_0..3 as stored (any length, zero allowed) */
-    int rgb_precomputed;  /* 1: the model's sh[0..2] are plain RGB colours, not SH (STG-lite's f_dc) */
 } gaussian_dynamic;
 
 /* One Gaussian at one time, as the official renderer draws it. */
@@ -65,5 +65,26 @@ void gaussian_dynamic_matrix(const double q[4], double R[3][3]);
  * *opacity_max. Returns -1 (nothing written) if the box is not finite. */
 int gaussian_dynamic_bounds(const gaussian_model *m, size_t i, double t0, double t1, double lo[3], double hi[3],
                             double *opacity_max);
+
+/* ---- rendering: a moving Gaussian as the static one of its instant ----
+ *
+ * The kernels (gaussian_hit.h) draw static Gaussians. A ray at time t
+ * draws Gaussian i of a dynamic model as the static Gaussian of its state
+ * at t, written into slot j of a scratch model `out` of m's kind and
+ * formation (its mean, scale, rotation and opacity arrays have room for
+ * slot j; its sh is not read): the mean, the scale, q as the CUDA takes it
+ * and the opacity, in floats as the CUDA holds them. The renderer maps
+ * the scratch's hits back to i, so the compositing order and the colour
+ * are those of Gaussian i itself. */
+void gaussian_dynamic_instant(const gaussian_model *m, size_t i, double t, gaussian_model *out, size_t j);
+
+/* Object-space bounds of every point through which Gaussian i can give a
+ * ray alpha >= 1/255 at any time whose state gaussian_dynamic_instant
+ * draws with its mean in [lo, hi] and its opacity at most opacity_max
+ * (gaussian_dynamic_bounds' box and bound over the times): the box of
+ * gaussian_view_bounds for every such instant, under the view bound v
+ * (whose distance must hold the camera's from every point of [lo, hi]). */
+aabb gaussian_dynamic_reach_bounds(const gaussian_model *m, size_t i, const double lo[3], const double hi[3],
+                                   double opacity_max, const gaussian_view_bound *v);
 
 #endif

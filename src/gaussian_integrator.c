@@ -5,13 +5,27 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "gaussian_dynamic.h"
+
 void gaussian_integrator_init(gaussian_integrator *g) { memset(g, 0, sizeof *g); }
 
 void gaussian_integrator_reset(gaussian_integrator *g) { g->hits.count = g->hits.dropped = 0; }
 
+static void instant_free(gaussian_instant *in)
+{
+    free(in->model.mean);
+    free(in->model.scale);
+    free(in->model.rotation);
+    free(in->model.opacity);
+    free(in->prim);
+}
+
 void gaussian_integrator_free(gaussian_integrator *g)
 {
     gaussian_hits_free(&g->hits);
+    for (size_t k = 0; g->instants && k < g->rays_cap; k++)
+        instant_free(&g->instants[k]);
+    free(g->instants);
     free(g->rays);
     free(g->candidates);
     free(g->candidate_order);
@@ -30,7 +44,11 @@ typedef struct {
 static void evaluate(const listing *l, unsigned prim)
 {
     gaussian_hit h;
-    if (gaussian_hit_any(&l->o->gaussians, prim, l->o->order, &l->r->ray, &h)) {
+    if (l->r->instant) { /* (no room for its state at the ray's time either) */
+        l->g->hits.dropped++;
+        return;
+    }
+    if (gaussian_hit_any(l->r->model, prim, l->o->order, &l->r->ray, &h)) {
         h.obj = l->r->obj;
         gaussian_hits_add(&l->g->hits, &h);
     }
@@ -62,8 +80,68 @@ static void cull_candidates(const listing *l, size_t first, unsigned ray)
     gaussian_integrator *g = l->g;
     size_t n = g->candidates_count - first;
     if (n) /* (none listed yet: no array to offset) */
-        g->candidates_count =
-            first + gaussian_cull_candidates(&l->o->gaussians, &l->r->ray, g->candidates + first, n, ray);
+        g->candidates_count = first + gaussian_cull_candidates(l->r->model, &l->r->ray, g->candidates + first, n, ray);
+}
+
+/* Room for n Gaussians in an instant model. */
+static int instant_room(gaussian_instant *in, size_t n)
+{
+    if (n <= in->cap)
+        return 1;
+    size_t cap = n < 2 * in->cap ? 2 * in->cap : n < 256 ? 256 : n;
+    float *mean = realloc(in->model.mean, 3 * cap * sizeof *mean);
+    if (mean)
+        in->model.mean = mean;
+    float *scale = realloc(in->model.scale, 3 * cap * sizeof *scale);
+    if (scale)
+        in->model.scale = scale;
+    float *rotation = realloc(in->model.rotation, 4 * cap * sizeof *rotation);
+    if (rotation)
+        in->model.rotation = rotation;
+    float *opacity = realloc(in->model.opacity, cap * sizeof *opacity);
+    if (opacity)
+        in->model.opacity = opacity;
+    unsigned *prim = realloc(in->prim, cap * sizeof *prim);
+    if (prim)
+        in->prim = prim;
+    if (!mean || !scale || !rotation || !opacity || !prim)
+        return 0;
+    in->cap = cap;
+    return 1;
+}
+
+/* A dynamic model's window: the candidates listed from `first` on
+ * (Gaussians of model m) become the slots of the ray's instant model that
+ * hold them at the ray's time, so that the cull and the kernels draw each
+ * as the static Gaussian of its instant (gaussian_dynamic_instant); their
+ * hits go back to the Gaussian's own index (original_prim). A window's
+ * candidates are evaluated before the next window's are listed, so the
+ * slots are reused from window to window. With no room they are dropped,
+ * as hits that find no memory are. */
+static void instantiate(gaussian_integrator *g, const gaussian_model *m, gaussian_object_ray *r, size_t first)
+{
+    gaussian_instant *in = r->instant;
+    size_t n = g->candidates_count - first;
+    in->model.count = 0;
+    if (!instant_room(in, n)) {
+        g->hits.dropped += n;
+        g->candidates_count = first;
+        return;
+    }
+    for (size_t k = 0; k < n; k++) {
+        gaussian_candidate *c = &g->candidates[first + k];
+        gaussian_dynamic_instant(m, c->prim, r->time, &in->model, k);
+        in->prim[k] = c->prim;
+        c->prim = (unsigned)k;
+    }
+    in->model.count = n;
+}
+
+/* The index in the object's model of a hit's Gaussian, which is the
+ * index in the ray's instant model for a dynamic one. */
+static inline unsigned original_prim(const gaussian_object_ray *r, unsigned prim)
+{
+    return r->instant ? r->instant->prim[prim] : prim;
 }
 
 /* Lists and culls (cull_candidates) the Gaussians of object ray `ray`
@@ -78,6 +156,8 @@ static void list_window(const scene *s, const accel *a, gaussian_integrator *g, 
     double pad = r->pad + 1e-6 * t1;
     size_t first = g->candidates_count;
     accel_gaussian_candidates(a, r->obj, r->ray.org, r->ray.dir, t0 - pad, t1 + pad, list_candidate, &l);
+    if (r->instant)
+        instantiate(g, &l.o->gaussians, r, first);
     cull_candidates(&l, first, ray);
 }
 
@@ -88,8 +168,8 @@ static void evaluate_kept(const scene *s, gaussian_integrator *g, const gaussian
     const gaussian_object_ray *r = &g->rays[k->ray];
     const scene_object *o = &s->objects[r->obj];
     gaussian_hit hit;
-    if (gaussian_hit_after_cull(&o->gaussians, k->prim, o->order, &r->ray, k->p, &hit)) {
-        hit.obj = r->obj;
+    if (gaussian_hit_after_cull(r->model, k->prim, o->order, &r->ray, k->p, &hit)) {
+        hit.obj = r->obj, hit.prim = original_prim(r, hit.prim);
         gaussian_hits_add(&g->hits, &hit);
     }
 }
@@ -114,10 +194,10 @@ static void evaluate_chunk(const scene *s, gaussian_integrator *g, const gaussia
         unsigned prim[4] = {c[0]->prim, c[1]->prim, c[2]->prim, c[3]->prim};
         vec3 p[4] = {c[0]->p, c[1]->p, c[2]->p, c[3]->p};
         gaussian_hit hit[4];
-        int found = gaussian_hits_after_cull4(&o->gaussians, prim, o->order, &r->ray, p, hit);
+        int found = gaussian_hits_after_cull4(r->model, prim, o->order, &r->ray, p, hit);
         for (int j = 0; j < 4; j++)
             if (found >> j & 1) {
-                hit[j].obj = r->obj;
+                hit[j].obj = r->obj, hit[j].prim = original_prim(r, hit[j].prim);
                 gaussian_hits_add(&g->hits, &hit[j]);
             }
         k += 4;
@@ -180,12 +260,29 @@ static void evaluate_window(const scene *s, const gaussian_model *const *models,
 
 /* ---- the sample -------------------------------------------------------- */
 
+/* The instant model of a dynamic model m: m's kind, formation and rules
+ * over the instant's own arrays. */
+static void instant_of(gaussian_instant *in, const gaussian_model *m)
+{
+    gaussian_model arrays = in->model;
+    in->model = *m;
+    in->model.count = 0, in->model.dynamic = NULL, in->model.sh = NULL;
+    in->model.mean = arrays.mean, in->model.scale = arrays.scale;
+    in->model.rotation = arrays.rotation, in->model.opacity = arrays.opacity;
+}
+
 /* The sample's ray in Gaussian object obj's space, with the stretch
- * [enter, exit] where it can meet it (its swept sphere). */
+ * [enter, exit] where it can meet it (its swept sphere); a dynamic model's
+ * is evaluated through `instant`. */
 static void object_ray(const scene *s, const accel *a, const gaussian_sample *smp, unsigned obj,
-                       gaussian_object_ray *r)
+                       gaussian_object_ray *r, gaussian_instant *instant)
 {
     const scene_object *o = &s->objects[obj];
+    r->time = smp->time, r->model = &o->gaussians, r->instant = NULL;
+    if (o->gaussians.dynamic) {
+        instant_of(instant, &o->gaussians);
+        r->model = &instant->model, r->instant = instant;
+    }
     xform xf = accel_object_at(a, obj, smp->time);
     gaussian_ray_init(&r->ray, smp->view, &xf, smp->x, smp->y, smp->org, smp->dir);
     vec3 centre;
@@ -208,12 +305,19 @@ static size_t object_rays(const scene *s, const accel *a, const gaussian_sample 
         gaussian_object_ray *grown = realloc(g->rays, count * sizeof *grown);
         if (!grown)
             return 0;
-        g->rays = grown, g->rays_cap = count;
+        g->rays = grown;
+        gaussian_instant *instants = realloc(g->instants, count * sizeof *instants);
+        if (!instants)
+            return 0;
+        memset(instants + g->rays_cap, 0, (count - g->rays_cap) * sizeof *instants);
+        g->instants = instants, g->rays_cap = count;
     }
     size_t n = 0;
     for (unsigned k = 0; k < count; k++)
-        if (accel_ray_meets_object(a, objects[k], smp->org, smp->dir))
-            object_ray(s, a, smp, objects[k], &g->rays[n++]);
+        if (accel_ray_meets_object(a, objects[k], smp->org, smp->dir)) {
+            object_ray(s, a, smp, objects[k], &g->rays[n], &g->instants[n]);
+            n++;
+        }
     return n;
 }
 

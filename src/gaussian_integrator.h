@@ -12,10 +12,23 @@
 #include "accel.h"
 #include "gaussian_hit.h"
 
+/* A dynamic model's Gaussians at one ray's time, as static ones: slot j
+ * of `model` (the object's model's kind and formation over scratch arrays)
+ * holds Gaussian prim[j] of the object's model at that time
+ * (gaussian_dynamic_instant), for a window's candidates. */
+typedef struct {
+    gaussian_model model;
+    unsigned *prim;
+    size_t cap;
+} gaussian_instant;
+
 /* One world ray at one time seen in a Gaussian object's space, and the
  * stretch of the ray where that object can be. */
 typedef struct {
     gaussian_ray ray;
+    double time;        /* the ray's scene time */
+    const gaussian_model *model; /* what its candidates are evaluated with: the object's, or instant's */
+    gaussian_instant *instant;   /* a dynamic model's Gaussians at the ray's time; NULL for a static one */
     unsigned obj;
     double enter, exit; /* the stretch of the world ray inside the object's swept sphere, padded */
     double lead;        /* gaussian_key_lead: how far below its hit's t a key can lie */
@@ -27,6 +40,8 @@ typedef struct {
 typedef struct {
     gaussian_hits hits;                /* the hits waiting to be composited (gaussian_blend.c's heap) */
     gaussian_object_ray *rays;         /* the sample's ray in each Gaussian object it may meet */
+    gaussian_instant *instants;        /* and its dynamic model's Gaussians at the ray's time (rays[k]'s is
+                                        * instants[k]) */
     size_t rays_cap;
     gaussian_candidate *candidates;    /* a window's Gaussians, evaluated after its traversals */
     size_t candidates_count, candidates_cap;

@@ -151,7 +151,7 @@ static int add_gaussian(void *user, const double *v, const int *present, char *w
     size_t n = s->declared ? s->declared : 1;
     if (!m->mean && (gaussian_model_alloc(m, n) || !(m->dynamic = gaussian_dynamic_alloc(n))))
         return snprintf(why, why_size, "out of memory for %zu Gaussians", s->declared), -1;
-    m->dynamic->rgb_precomputed = 1;
+    m->rgb_precomputed = 1;
     for (int k = 0; k < S_SLOTS; k++)
         if (present[k] && !isfinite(v[k]))
             return bad(why, why_size, "property '%s' is %g", stg_names[k], v[k]);

@@ -13,7 +13,10 @@
 #define TILE 16
 
 const char *pixel_filter_name(pixel_filter f) { return f == PIXEL_FILTER_POINT ? "point" : "box"; }
-const char *blur_space_name(blur_space b) { return b == BLUR_SPACE_LINEAR ? "linear" : "model"; }
+const char *blur_space_name(blur_space b)
+{
+    return b == BLUR_SPACE_LINEAR ? "linear" : b == BLUR_SPACE_CLAMPED ? "clamped" : "model";
+}
 
 render_settings render_settings_default(void)
 {
@@ -32,9 +35,10 @@ render_settings render_settings_default(void)
 
 int render_check_exact_blur(int exact_time, blur_space b, rr_error *err)
 {
-    if (exact_time && b == BLUR_SPACE_LINEAR)
-        return rr_fail(err, "--blur-space linear decodes each instant's colour before the time average, which "
-                            "exact time cannot do (it integrates colours over time): use sampled time");
+    if (exact_time && b != BLUR_SPACE_MODEL)
+        return rr_fail(err, "--blur-space %s %s each instant's colour before the time average, which exact time "
+                            "cannot do (it integrates colours over time): use sampled time",
+                       blur_space_name(b), b == BLUR_SPACE_LINEAR ? "decodes" : "clamps");
     return 0;
 }
 
@@ -196,11 +200,13 @@ static int batch_samples(const render_job *job, int px, int py, uint32_t batch, 
     return count;
 }
 
+static double clamp01(double v) { return fmin(fmax(v, 0.0), 1.0); }
+
 /* The sRGB transfer function's inverse (IEC 61966-2-1) of a value clamped
  * to [0, 1], as an 8-bit frame would hold it. */
 static double srgb_to_linear(double v)
 {
-    v = fmin(fmax(v, 0.0), 1.0);
+    v = clamp01(v);
     return v <= 0.04045 ? v / 12.92 : pow((v + 0.055) / 1.055, 2.4);
 }
 
@@ -210,6 +216,9 @@ static void to_blur_space(const render_job *job, double rgba[4])
     if (job->rs->blur == BLUR_SPACE_LINEAR)
         for (int c = 0; c < 3; c++)
             rgba[c] = srgb_to_linear(rgba[c]);
+    else if (job->rs->blur == BLUR_SPACE_CLAMPED)
+        for (int c = 0; c < 3; c++)
+            rgba[c] = clamp01(rgba[c]);
 }
 
 /* One batch of a pixel (thesis sec. 4.5): the mean of its samples' colors.

@@ -19,15 +19,17 @@ typedef enum { PIXEL_FILTER_BOX, PIXEL_FILTER_POINT } pixel_filter;
 /* What a pixel averages over time: the colours as the model gives them
  * (model), or those clamped to [0, 1] and decoded from sRGB first
  * (linear): the two conventions deblurring benchmarks use when they
- * average sharp frames. */
-typedef enum { BLUR_SPACE_MODEL, BLUR_SPACE_LINEAR } blur_space;
+ * average sharp frames; or those clamped to [0, 1] and nothing more
+ * (clamped), as SpacetimeGaussians' test.py:131 clamps each rendered
+ * instant before it is scored. */
+typedef enum { BLUR_SPACE_MODEL, BLUR_SPACE_LINEAR, BLUR_SPACE_CLAMPED } blur_space;
 
 const char *pixel_filter_name(pixel_filter f);
 const char *blur_space_name(blur_space b);
 /* Exact time integration with the blur space: refused (-1, err naming
- * --blur-space) for linear, whose decoding of each instant's colour must
- * come before the time average, while exact time integrates colours over
- * time first. One rule for the command line and render_image. */
+ * --blur-space) for linear and clamped, whose change of each instant's
+ * colour must come before the time average, while exact time integrates
+ * colours over time first. One rule for the command line and render_image. */
 int render_check_exact_blur(int exact_time, blur_space b, rr_error *err);
 
 typedef struct {

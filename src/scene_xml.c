@@ -393,9 +393,6 @@ static int parse_gaussian_model(xml_ctx *c, xmlNodePtr n, scene_object *o)
     if (gaussian_read(path, kind, &o->gaussians, c->inputs_hash, &sub))
         return rr_fail(c->err, "%s (gaussianModel of %s:%ld)%s", sub.msg, c->name, xmlGetLineNo(n),
                        missing_model_hint(path));
-    if (o->gaussians.dynamic) /* drawn frozen at one time it would be wrong without a word */
-        return rr_fail(c->err, "%s: a SpacetimeGaussians model (Gaussians that move; gaussianModel of %s:%ld): "
-                               "dynamic models are not rendered yet", path, c->name, xmlGetLineNo(n));
     if (o->gaussians.kind == GAUSSIAN_3D && xmlHasProp(n, (const xmlChar *)"order"))
         return xml_fail(c, n, "'order' is for 2D Gaussian models: 3D ones go by the centre's view depth (the "
                                "rasterizers) or by the distance to each Gaussian's maximum response (3dgrt)");

@@ -121,6 +121,22 @@ Dilation, antialiasing
   it (rendering.py:452-453). So both: factor = sqrt(det(S)/det(S + 0.3 I)),
   the floors differ (INRIA 0.005 after the sqrt, GSPLAT 0).
 
+Precomputed colours and quaternions as given (both optional, for models whose
+own code forms per-Gaussian colours and rotations before the rasterizer, e.g.
+SpacetimeGaussians, tests/stg_reference.py)
+  model["colors_precomp"] (N, 3): INRIA's colors_precomp path: the SH step
+  is skipped (MAIN forward.cu:241-247, `if (colors_precomp == nullptr)`),
+  and the blend reads the given colours (MAIN rasterizer_impl.cu:321,
+  feature_ptr): no + 0.5, no clamp at 0, no upper clamp. The same lines in
+  SpacetimeGaussians' forward_lite (427abfc5, thirdparty/gaussian_splatting/
+  submodules/forward_lite/cuda_rasterizer/forward.cu:316-322,
+  rasterizer_impl.cu:374).
+  model["quaternion_as_given"] = True: R(q) is the CUDA's matrix of q as it
+  arrives, not normalised (MAIN and forward_lite forward.cu:127, `q = rot;//
+  / glm::length(rot)`, matrix :134-138): for q = 0 every product vanishes
+  and R = I; for a non-unit q, R is not a rotation (quat_to_rot_as_given).
+  Without these keys nothing changes: SH colours, normalised quaternions.
+
 Culling (applied here in both modes)
   INRIA in_frustum: view z <= 0.2 culled (auxiliary.h:151-175, :166).
   GSPLAT: z < near_plane = 0.01 or z > far_plane = 1e10 culled
@@ -222,7 +238,13 @@ GSPLAT_EXTEND = 3.33   # ProjectionEWA3DGSFused.cu:164
 
 def quat_to_rot(q):
     """Unit quaternion (w, x, y, z) to its rotation matrix (normalised first, as GSPLAT)."""
-    w, x, y, z = np.asarray(q, np.float64) / np.linalg.norm(q)
+    return quat_to_rot_as_given(np.asarray(q, np.float64) / np.linalg.norm(q))
+
+
+def quat_to_rot_as_given(q):
+    """The CUDA's matrix of q = (w, x, y, z) WITHOUT normalising it (MAIN forward.cu:127-138): the
+    unit-quaternion formula applied to q as it is. q = 0 gives the identity."""
+    w, x, y, z = np.asarray(q, np.float64)
     return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
                      [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
                      [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
@@ -321,7 +343,7 @@ def project(model, R_c2w, C, fx, fy, W, H, variant="inria", cx=None, cy=None, in
         if family == "gsplat" and (z < GSPLAT_NEAR or z > GSPLAT_FAR):
             out.append(None)
             continue
-        Rq = quat_to_rot(model["rot"][n])
+        Rq = (quat_to_rot_as_given if model.get("quaternion_as_given") else quat_to_rot)(model["rot"][n])
         s = np.asarray(model["scale"][n], np.float64)
         sigma_c = Rw2c @ (Rq @ np.diag(s * s) @ Rq.T) @ Rw2c.T
         txz, tyz = jacobian_tangents(family, x, y, z, fx, fy, W, H, cx, cy)
@@ -344,8 +366,11 @@ def project(model, R_c2w, C, fx, fy, W, H, variant="inria", cx=None, cy=None, in
         conic = (cov[1, 1] / det, -cov[0, 1] / det, cov[0, 0] / det)
         opacity = float(model["opacity"][n]) * factor
         d = mean - C
-        colour = sh_colour(np.asarray(model["sh"][n])[: (model["degree"] + 1) ** 2], model["degree"],
-                           d / np.linalg.norm(d))
+        if "colors_precomp" in model:  # MAIN forward.cu:241 skips the SH; rasterizer_impl.cu:321 blends these
+            colour = np.asarray(model["colors_precomp"][n], np.float64)
+        else:
+            colour = sh_colour(np.asarray(model["sh"][n])[: (model["degree"] + 1) ** 2], model["degree"],
+                               d / np.linalg.norm(d))
         g = {"index": n, "depth": z, "cov2d_raw": raw, "cov2d": cov, "conic": conic, "opacity": opacity,
              "aa_factor": factor, "colour": colour, "jacobian_txz": (txz, tyz)}
         if family == "inria":

@@ -182,8 +182,9 @@ def test_what_cannot_be_combined_is_refused_with_its_reason(tmp_path):
     cases = [(["--time-integration", "exact"], 1, "does not integrate Gaussian-splat objects"),
              (["--time", 0.5, "--shutter", "0,1"], 2, "--time renders one instant"),
              (["--blur-space", "linear", "--time-integration", "exact"], 2, "exact time cannot do"),
+             (["--blur-space", "clamped", "--time-integration", "exact"], 2, "clamps each instant's colour"),
              (["--pixel-filter", "gauss"], 2, "expected box or point"),
-             (["--blur-space", "srgb"], 2, "expected model or linear")]
+             (["--blur-space", "srgb"], 2, "expected model, linear or clamped")]
     for args, status, why in cases:
         proc = run([scene, "--spp", 1, "-o", out, "--quiet", *args])
         assert proc.returncode == status and why in proc.stderr, (args, proc.stderr)

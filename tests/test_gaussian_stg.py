@@ -1,40 +1,106 @@
 """A SpacetimeGaussians "lite" model (its Gaussians move; the layout of
 oppo-us-research/SpacetimeGaussians 427abfc5 scene/ourslite.py save_ply,
-lines 335-387) is refused with its file named until the renderer evaluates
-it at each time: rendered as a static 3DGS model it would be wrong without
-a word. Its evaluation and bounds: tests/test_gaussian_dynamic.c."""
+lines 335-387) through the renderer's object placement and refusals.
+Each instant of such a model is, by the official renderer's construction
+(renderer/__init__.py:318-343 hands the rasterizer static Gaussians), the
+static 3DGS model of its Gaussians at that time: so a sharp render of the
+STG file at t equals the sharp render of a static 3DGS file holding the
+states at t (tests/stg_reference.py's stg_lite_at; colours as SH DC
+coefficients whose +0.5 gives the same RGB), also when the object is
+placed and turns. Against the official rasterizer itself:
+tests/test_stg_lite.py; the evaluation and the bounds:
+tests/test_gaussian_dynamic.c."""
 import numpy as np
 
 import gsply
-from conftest import run
+import stg_reference as stg
+from conftest import read_exr, run
 
+SH_C0 = 0.28209479177387814
+W, H, F = 48, 32, 80.0
 NAMES = (["x", "y", "z", "trbf_center", "trbf_scale", "nx", "ny", "nz"] + [f"motion_{i}" for i in range(9)] +
          ["f_dc_0", "f_dc_1", "f_dc_2", "opacity", "scale_0", "scale_1", "scale_2"] +
          [f"rot_{i}" for i in range(4)] + [f"omega_{i}" for i in range(4)])
 
 
-def write_stg_lite(path, n=4):
-    """n Gaussians in front of the camera, moving along x, as float32 binary little endian."""
+def write_stg_lite(path, n=4, cubic=0.0):
+    """n Gaussians about the object's origin, moving along x and turning, as float32 binary
+    little endian (the stored values, no activation); cubic: motion_6 of the last one."""
     v = np.zeros((n, len(NAMES)))
     col = {p: i for i, p in enumerate(NAMES)}
     v[:, col["x"]] = np.linspace(-0.5, 0.5, n)
+    v[:, col["y"]] = np.linspace(0.2, -0.2, n)
+    v[:, col["trbf_center"]] = np.linspace(0.2, 0.7, n)
+    v[:, col["trbf_scale"]] = np.log(0.6)
     v[:, col["motion_0"]] = 1.0
-    v[:, col["f_dc_0"]] = 0.8
-    v[:, [col["scale_0"], col["scale_1"], col["scale_2"]]] = np.log(0.1)
-    v[:, col["rot_0"]] = 1.0
+    v[:, col["motion_4"]] = -0.5           # D^2 along y
+    v[-1, col["motion_6"]] = cubic
+    v[:, col["f_dc_0"]] = np.linspace(0.2, 0.9, n)
+    v[:, col["f_dc_1"]] = 0.4
+    v[:, col["f_dc_2"]] = np.linspace(0.8, 0.1, n)
+    v[:, col["opacity"]] = 1.5
+    v[:, [col["scale_0"], col["scale_1"], col["scale_2"]]] = np.log([0.12, 0.05, 0.08])
+    v[:, col["rot_0"]], v[:, col["rot_2"]] = 1.0, 0.3
+    v[:, col["omega_1"]], v[:, col["omega_3"]] = 1.2, -0.7
     head = "ply\nformat binary_little_endian 1.0\nelement vertex %d\n" % n
     head += "".join(f"property float {p}\n" for p in NAMES) + "end_header\n"
     path.write_bytes(head.encode() + v.astype("<f4").tobytes())
 
 
-def test_an_stg_lite_model_is_refused_naming_its_file(tmp_path):
-    ply = tmp_path / "stg_lite.ply"
+def scene(tmp_path, name, ply, placement):
+    path = tmp_path / f"{name}.xml"
+    path.write_text(f'<scene>{gsply.camera_xml(np.eye(3), np.zeros(3), F, W, H)}<background color="0.1 0.2 0.3"/>'
+                    f'<object name="g" position="0 0 4"><gaussianModel file="{ply}"/>{placement}</object></scene>')
+    return path
+
+
+def sharp(path, t, out):
+    proc = run([path, "--time", t, "--pixel-filter", "point", "--spp", 1, "-o", out, "--quiet"])
+    assert proc.returncode == 0, proc.stderr
+    return read_exr(out)[0]
+
+
+def test_an_instant_is_the_static_3dgs_model_of_its_gaussians_then(tmp_path):
+    """At three times, with the object placed still and turning about y: the STG render equals
+    the static model of the Gaussians' states then (mean, quaternion, opacity), within float
+    rounding of the stored opacity's logit and of the colour's SH coefficient."""
+    ply = tmp_path / "stg.ply"
     write_stg_lite(ply)
-    scene = tmp_path / "s.xml"
-    scene.write_text(f'<scene>{gsply.camera_xml(np.eye(3), np.zeros(3), 100.0, 16, 16)}'
-                     f'<object name="g" position="0 0 4"><gaussianModel file="{ply}"/></object></scene>')
+    raw = stg.read_stg_lite_ply(ply)
+    turning = '<animation><rotation axis="0 1 0" center="0 0 4" degrees_per_unit_time="50"/></animation>'
+    for placement in ("", turning):
+        for t in (0.1, 0.45, 0.9):
+            state = stg.stg_lite_at(raw, t)
+            still = tmp_path / f"still{t}.ply"
+            gsply.write(still, {"mean": state["mean"], "scale": state["scale"], "rot": state["rot"],
+                                "opacity": state["opacity"],
+                                "sh": ((state["colors_precomp"] - 0.5) / SH_C0)[:, None, :]})
+            got = sharp(scene(tmp_path, "stg", ply, placement), t, tmp_path / "stg.exr")
+            want = sharp(scene(tmp_path, "still", still, placement), t, tmp_path / "still.exr")
+            assert np.abs(got - want).max() < 1e-5, (placement, t, np.abs(got - want).max())
+            assert (got[..., 3] > 0.1).sum() > 60, (placement, t)  # the Gaussians are in view
+
+
+def test_a_gaussian_that_moves_beyond_the_reach_of_rays_is_refused_by_name(tmp_path):
+    """A cubic coefficient of 1e20 takes the last Gaussian past 1e15 (GAUSSIAN_MAX_ABS) during the
+    shutter: refused naming the file, the Gaussian and the object, nothing written; at an instant
+    where it is near, the same model renders."""
+    ply = tmp_path / "far.ply"
+    write_stg_lite(ply, cubic=1e20)
+    path = scene(tmp_path, "far", ply, "")
     out = tmp_path / "x.exr"
-    proc = run([scene, "--spp", 1, "-o", out, "--quiet"])
+    proc = run([path, "--shutter", "0,1", "--spp", 1, "-o", out, "--quiet"])
     assert proc.returncode == 1, proc.stderr
-    assert str(ply) in proc.stderr and "dynamic models are not rendered yet" in proc.stderr, proc.stderr
+    for part in (str(ply), "Gaussian 3 of object 'g'", "GAUSSIAN_MAX_ABS"):
+        assert part in proc.stderr, proc.stderr
+    assert not out.exists()
+    sharp(path, 0.7, out)  # its trbf_center: D = 0
+
+
+def test_exact_time_refuses_a_dynamic_model_as_any_gaussian_model(tmp_path):
+    ply = tmp_path / "stg.ply"
+    write_stg_lite(ply)
+    out = tmp_path / "x.exr"
+    proc = run([scene(tmp_path, "stg", ply, ""), "--time-integration", "exact", "--spp", 1, "-o", out, "--quiet"])
+    assert proc.returncode == 1 and "does not integrate Gaussian-splat objects: use sampled time" in proc.stderr
     assert not out.exists()

@@ -52,7 +52,8 @@ static void usage(FILE *f)
 "  --frames A-B       render frames A to B into -o out.%04d.exr\n"
 "  --time T           a sharp image at the instant T (default --tspp 1); a rolling\n"
 "                     shutter's lines at T plus their readout offsets\n"
-"  --blur-space S     model (default): average colours as given; linear: decode sRGB first\n"
+"  --blur-space S     model (default): average colours as given; linear: decode sRGB first;\n"
+"                     clamped: clamp each instant to [0, 1] (as SpacetimeGaussians scores)\n"
 "Output:\n"
 "  -o, --output F     output EXR (default render.exr), written atomically\n"
 "  --preview F        also an 8-bit sRGB preview (PNG, by extension)\n"
@@ -170,10 +171,10 @@ static int parse_option(int c, const char *arg, render_options *o, rr_error *err
         o->filter = strcmp(arg, "point") ? PIXEL_FILTER_BOX : PIXEL_FILTER_POINT;
         return 0;
     case OPT_BLUR_SPACE:
-        if (strcmp(arg, "model") && strcmp(arg, "linear"))
-            return rr_fail(err, "--blur-space: expected model or linear, got '%s'", arg);
-        o->blur = strcmp(arg, "linear") ? BLUR_SPACE_MODEL : BLUR_SPACE_LINEAR;
-        return 0;
+        for (blur_space b = BLUR_SPACE_MODEL; b <= BLUR_SPACE_CLAMPED; b++)
+            if (!strcmp(arg, blur_space_name(b)))
+                return o->blur = b, 0;
+        return rr_fail(err, "--blur-space: expected model, linear or clamped, got '%s'", arg);
     case OPT_TIME_INTEGRATION:
         if (strcmp(arg, "sampled") && strcmp(arg, "exact"))
             return rr_fail(err, "--time-integration: expected sampled or exact, got '%s'", arg);
