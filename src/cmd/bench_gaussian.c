@@ -562,8 +562,8 @@ static void stg_set_motion(gaussian_model *m, size_t i, uint64_t *rng)
         m->sh[3 * i + k] = (float)(0.28209479177387814 * m->sh[3 * i + k] + 0.5);
 }
 
-/* The same Gaussians at STG_MID as a static model: SH degree 0 whose
- * colour (DC x C0 + 0.5, gaussian_sh_color) is the state's RGB. */
+/* The same Gaussians at STG_MID as a static model, its colours the
+ * same precomputed RGB. */
 static void stg_freeze(gaussian_model *m)
 {
     gaussian_model f = *m;
@@ -577,7 +577,7 @@ static void stg_freeze(gaussian_model *m)
         gaussian_dynamic_at(m, i, STG_MID, &st);
         for (int k = 0; k < 3; k++) {
             f.mean[3 * i + k] = (float)st.mean[k], f.scale[3 * i + k] = (float)st.scale[k];
-            f.sh[3 * i + k] = (float)((st.rgb[k] - 0.5) / 0.28209479177387814);
+            f.sh[3 * i + k] = (float)st.rgb[k];
         }
         for (int k = 0; k < 4; k++)
             f.rotation[4 * i + k] = (float)st.q[k];
@@ -618,7 +618,7 @@ static void stg_scene(const stg_case *c, scene *s)
         fprintf(stderr, "bench: out of memory\n");
         exit(1);
     }
-    m->dynamic->rgb_precomputed = 1;
+    m->rgb_precomputed = 1;
     uint64_t rng = 1;
     for (size_t i = 0; i < m->count; i++)
         stg_set_motion(m, i, &rng);
