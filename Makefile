@@ -27,20 +27,27 @@ endif
 # The user's CFLAGS/CXXFLAGS/CPPFLAGS come last (make CFLAGS=-O0 still
 # builds); -MMD -MP track header dependencies.
 INCLUDES  := -I/usr/include/embree3 -I/usr/include/OpenEXR -I/usr/include/libxml2
-RR_CPPFLAGS = -D_GNU_SOURCE $(INCLUDES) -DRR_SOURCE_SCENE='"$(CURDIR)/scenes/default.xml"' \
+RR_CPPFLAGS = -D_GNU_SOURCE -Isrc $(INCLUDES) -DRR_SOURCE_SCENE='"$(CURDIR)/scenes/default.xml"' \
               -DRR_SOURCE_DIR='"$(CURDIR)"' -MMD -MP $(CPPFLAGS)
-# -ffp-contract=off: the Gaussian culls in AVX2 lanes give the scalar
-# cull's answers bit for bit only if neither is fused into FMA (-std=c11
+# -ffp-contract=off: the Gaussian kernels in AVX2 lanes (src/core/lanes.h) give
+# the scalar path's answers bit for bit only if neither is fused into FMA (-std=c11
 # implies it for GCC; clang, or -std=gnu11 with -march=native, would fuse)
 RR_CFLAGS   = -std=c11 -ffp-contract=off $(OPT) -Wall -Wextra $(CFLAGS)
 RR_CXXFLAGS = -std=c++17 $(OPT) -Wall -Wextra $(CXXFLAGS)
 LDLIBS   := -ljson-c -lassimp -lembree3 -lOpenEXRCore -lxml2 -ldl -lpthread -lm
 # OpenImageIO only in the preview module, opened when a preview is written
-# (src/preview.h): linked into refrender it cost every run 0.4 s of loading
+# (src/io/preview.h): linked into refrender it cost every run 0.4 s of loading
 PREVIEW_LIBS := -lOpenImageIO -lOpenImageIO_Util
 
-LIB_SRCS := common inputfile atomicfile kbuffer splat pointmodel ply gaussian gaussian_ply gaussian_dynamic gaussian_stg_ply gaussian_hit gaussian_blend camjson transforms shapes surfelize meshload rotation curve trajectory tum animation animfile camera shutter sampler scene preview \
-            scene_xml scene_xml_util scene_xml_anim scene_xml_camera scene_params accel accel_build accel_collide gaussian_integrator exact exact_integrate shade film render exr output render_attrs cli
+LIB_SRCS := core/common core/lanes core/inputfile core/atomicfile accel/kbuffer surfels/splat \
+            surfels/pointmodel io/ply gaussians/gaussian io/gaussian_ply gaussians/gaussian_dynamic \
+            io/gaussian_stg_ply gaussians/gaussian_hit gaussians/gaussian_blend io/camjson io/transforms \
+            surfels/shapes surfels/surfelize io/meshload core/rotation motion/curve motion/trajectory io/tum \
+            motion/animation io/animfile core/camera motion/shutter render/sampler scene/scene io/preview \
+            io/scene_xml io/scene_xml_util io/scene_xml_anim io/scene_xml_camera io/scene_params accel/accel \
+            accel/accel_build accel/accel_collide render/gaussian_integrator render/exact \
+            render/exact_integrate render/shade render/film render/render io/exr io/output io/render_attrs \
+            cmd/cli
 LIB_OBJS := $(LIB_SRCS:%=$(BUILD)/%.o)
 PREVIEW_SO := $(BUILD)/refrender-preview.so
 APP_OBJS := $(BUILD)/cmd/main.o $(BUILD)/cmd/gen_cmd.o $(BUILD)/cmd/surfel_output.o $(BUILD)/cmd/merge_cmd.o $(BUILD)/cmd/surfels_cmd.o \
@@ -58,19 +65,21 @@ all: $(BIN) $(BUILD)/refrender-bench
 # .d was lost) depends on a missing file and is rebuilt; objects are touched
 # after compiling because clang writes the .d after the object.
 $(BUILD)/%.o: src/%.c $(BUILD)/%.d | $(BUILD)
+	@mkdir -p $(@D)
 	$(CC) $(RR_CPPFLAGS) $(RR_CFLAGS) -c $< -o $@
 	@touch $@
 $(BUILD)/cmd/%.o: src/cmd/%.c $(BUILD)/cmd/%.d | $(BUILD)
 	@mkdir -p $(@D)
 	$(CC) $(RR_CPPFLAGS) $(RR_CFLAGS) -Isrc -c $< -o $@
 	@touch $@
-$(PREVIEW_SO): src/preview.cpp $(BUILD)/refrender-preview.d | $(BUILD)
-	$(CXX) $(RR_CPPFLAGS) $(RR_CXXFLAGS) -MF $(BUILD)/refrender-preview.d -fPIC -shared $< -o $@ $(SANLD) $(PREVIEW_LIBS)
+$(PREVIEW_SO): src/io/preview.cpp $(BUILD)/io/preview-so.d | $(BUILD)
+	@mkdir -p $(BUILD)/io
+	$(CXX) $(RR_CPPFLAGS) $(RR_CXXFLAGS) -MF $(BUILD)/io/preview-so.d -fPIC -shared $< -o $@ $(SANLD) $(PREVIEW_LIBS)
 $(BUILD)/tests/%.o: tests/%.c $(BUILD)/tests/%.d | $(BUILD)
 	$(CC) $(RR_CPPFLAGS) $(RR_CFLAGS) -Isrc -c $< -o $@
 	@touch $@
 DEPFILES := $(LIB_OBJS:.o=.d) $(APP_OBJS:.o=.d) $(TEST_OBJS:.o=.d) $(BUILD)/cmd/bench.d $(BUILD)/cmd/bench_gaussian.d \
-            $(BUILD)/refrender-preview.d
+            $(BUILD)/io/preview-so.d
 $(DEPFILES):
 -include $(wildcard $(DEPFILES))
 $(BUILD):
@@ -114,7 +123,7 @@ test-cluster:
 	$(MAKE) SAN=0 DCHECKS=0 build/refrender
 	$(PYTHON) -m pytest -q -rs -p no:xdist tests/cluster_slurm.py
 
-# Tests run with the RR_DCHECK invariant checks on (src/common.h): the plain
+# Tests run with the RR_DCHECK invariant checks on (src/core/common.h): the plain
 # build stays the one users run, without them.
 ifeq ($(SAN)$(DCHECKS),00)
 test:
@@ -135,12 +144,12 @@ FUZZ_TARGETS := scene ply anim state gaussian camjson render_gaussian render_cam
 FUZZ_SECONDS ?= 60
 FUZZ_DIR     := build-fuzz
 FUZZ_FLAGS   := -O1 -g -fno-omit-frame-pointer -fsanitize=address,undefined -fno-sanitize-recover=undefined
-FUZZ_CFLAGS  := -std=c11 -ffp-contract=off -D_GNU_SOURCE -DRR_DCHECKS $(FUZZ_FLAGS) -fsanitize=fuzzer-no-link -Wall -Wextra $(INCLUDES) \
+FUZZ_CFLAGS  := -std=c11 -ffp-contract=off -D_GNU_SOURCE -DRR_DCHECKS $(FUZZ_FLAGS) -fsanitize=fuzzer-no-link -Wall -Wextra -Isrc $(INCLUDES) \
                 -DSCENE_MAX_GENERATED=1e4
 FUZZ_OBJS    := $(LIB_SRCS:%=$(FUZZ_DIR)/%.o)
 
 $(FUZZ_DIR)/%.o: src/%.c $(FUZZ_DIR)/%.d
-	@mkdir -p $(FUZZ_DIR)
+	@mkdir -p $(@D)
 	clang $(FUZZ_CFLAGS) -MMD -MP -c $< -o $@
 	@touch $@
 $(FUZZ_DIR)/fuzz_%.o: tests/fuzz/fuzz_%.c $(FUZZ_DIR)/fuzz_%.d

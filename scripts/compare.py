@@ -176,7 +176,8 @@ def format_value(v):
     return str(v)
 
 
-def print_table(rows, out=sys.stdout):
+def print_table(rows, out=None):
+    out = out or sys.stdout  # looked up at the call, so that a caller's redirection of stdout holds
     extra = sorted({k for r in rows for k in r if k.startswith(">")})
     frame = ["frame"] if any("frame" in r for r in rows) else []
     cols = ["image"] + frame + ["window", "pixels", "nonfinite"] + COLUMNS + extra

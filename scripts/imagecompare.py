@@ -14,7 +14,6 @@ Images are read with OpenImageIO and converted to linear float RGB. Metrics
 """
 import numpy as np
 import OpenImageIO as oiio
-from skimage.metrics import structural_similarity
 
 import flip
 
@@ -138,6 +137,9 @@ def ssim_map(ref, test, peak=1.0):
     # scikit-image's Gaussian window (sigma 1.5, truncated at 3.5 sigma) is 11 pixels wide
     if min(r.shape[:2]) < 11:
         raise CompareError("SSIM needs images (or crops) of at least 11x11 pixels")
+    # imported here, not at the top: skimage.metrics pulls in scipy.stats, a third of a second of
+    # start-up that every script reading an image paid, though only SSIM uses it
+    from skimage.metrics import structural_similarity
     _, full = structural_similarity(r, t, channel_axis=-1, data_range=peak, gaussian_weights=True,
                                     sigma=1.5, use_sample_covariance=False, full=True)
     return full.mean(axis=-1)

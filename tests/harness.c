@@ -10,6 +10,7 @@ static struct test_entry {
     test_fn fn;
 } *tests;
 static int ntests, capacity, current_failed;
+static const char *current_skip; /* why the running test was skipped; NULL: it ran */
 
 void harness_register(const char *name, test_fn fn)
 {
@@ -46,9 +47,11 @@ void harness_check_near(double a, double b, double tol, const char *expr, const 
 
 int harness_failed_now(void) { return current_failed; }
 
+void harness_skip(const char *why) { current_skip = why; }
+
 int main(int argc, char **argv)
 {
-    int passed = 0, failed = 0;
+    int passed = 0, failed = 0, skipped = 0;
     if (argc > 1 && !strcmp(argv[1], "--list")) { /* tests/test_harness.py counts them */
         for (int i = 0; i < ntests; i++)
             printf("%s\n", tests[i].name);
@@ -58,18 +61,22 @@ int main(int argc, char **argv)
     for (int i = 0; i < ntests; i++) {
         if (argc > 1 && !strstr(tests[i].name, argv[1]))
             continue;
-        current_failed = 0;
+        current_failed = 0, current_skip = NULL;
         tests[i].fn();
-        printf("%s %s\n", current_failed ? "FAIL" : "ok  ", tests[i].name);
         if (current_failed)
-            failed++;
+            printf("FAIL %s\n", tests[i].name), failed++;
+        else if (current_skip)
+            printf("SKIP %s: %s\n", tests[i].name, current_skip), skipped++;
         else
-            passed++;
+            printf("ok   %s\n", tests[i].name), passed++;
     }
-    printf("%d passed, %d failed\n", passed, failed);
+    if (skipped)
+        printf("%d passed, %d failed, %d skipped\n", passed, failed, skipped);
+    else
+        printf("%d passed, %d failed\n", passed, failed);
     free(tests);
     /* A filter that names no test ran nothing: that is a failure, not a pass. */
-    if (passed + failed == 0) {
+    if (passed + failed + skipped == 0) {
         fprintf(stderr, "harness: no test matches '%s'\n", argc > 1 ? argv[1] : "");
         return 1;
     }

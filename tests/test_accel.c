@@ -3,11 +3,11 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "accel.h"
-#include "animation.h"
-#include "gaussian_ply.h"
+#include "accel/accel.h"
+#include "motion/animation.h"
+#include "io/gaussian_ply.h"
 #include "harness.h"
-#include "scene_xml.h"
+#include "io/scene_xml.h"
 
 static surface_hit hit_at(float t, unsigned prim)
 {

@@ -1,7 +1,7 @@
 /* Rigid transforms at time t and their exact inverses (thesis B.2.3). */
 #include <string.h>
 
-#include "animation.h"
+#include "motion/animation.h"
 #include "harness.h"
 
 static int near3(vec3 a, vec3 b, double tol) { return v3_len(v3_sub(a, b)) <= tol; }
@@ -231,7 +231,7 @@ TEST(keyed_swept_bounds_contain_splines_steps_and_cycles)
     animation_free(&a);
 }
 
-/* Issue 18.6: a cycled curve with the shutter ~3.5e19 s from its keys used to
+/* Regression: a cycled curve with the shutter ~3.5e19 s from its keys used to
  * hang the key-time loop (there m + 1 == m in doubles and no listed key time
  * fell inside the shutter, so neither bound stopped it); the bounds must
  * come back (this test would not end) and still hold the cycled motion. */
@@ -251,7 +251,7 @@ TEST(cycled_swept_bounds_far_from_the_keys_terminate)
     animation_free(&a);
 }
 
-/* Issue 23, item 6: a stepped cycleRelative curve on x lists 240,000 key
+/* Regression: a stepped cycleRelative curve on x lists 240,000 key
  * times over 40,000 spans, past the 65,536 once kept; after the cap the
  * other channels' key times were dropped, so a 0.1 s step pulse of y at
  * t = 30,000 (between two grid samples) fell out of the bounds. */
@@ -274,7 +274,7 @@ TEST(swept_bounds_list_every_key_time_of_long_cycles)
     animation_free(&a);
 }
 
-/* Issue 23, item 8: a scale held at 1e-9 (where it goes through zero) is
+/* Regression: a scale held at 1e-9 (where it goes through zero) is
  * reported, even when a spline overshoots below zero between two positive
  * keys and no sample time falls in the dip: over a shutter of 1000 s the
  * grid steps 15.6 s, and the dip lies inside (1, 2) between two key times. */

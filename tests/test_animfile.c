@@ -3,7 +3,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "animfile.h"
+#include "io/animfile.h"
 #include "harness.h"
 
 static rr_warnings last_warnings; /* of the last load */

@@ -4,9 +4,9 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "exr.h"
+#include "io/exr.h"
 #include "harness.h"
-#include "output.h"
+#include "io/output.h"
 
 /* A string attribute longer than the reader's buffer was cut to fit, so
  * two different long values could read back equal. */

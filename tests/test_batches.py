@@ -1,5 +1,5 @@
 """Error estimates, samplers, split-and-merge and checkpoint/resume, end to
-end (issue: ground truth you can trust)."""
+end: a ground truth must say how far to trust it and survive being split."""
 import os
 import signal
 import subprocess

@@ -1,7 +1,7 @@
 /* camera.c: the raster convention and field of view, by construction. */
 #include <string.h>
 
-#include "camera.h"
+#include "core/camera.h"
 #include "harness.h"
 
 /* A camera at `position` looking at `lookat`, prepared or not. */

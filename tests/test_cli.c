@@ -4,7 +4,7 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "cli.h"
+#include "cmd/cli.h"
 #include "harness.h"
 
 TEST(cli_numbers_are_checked_whole_and_in_range)

@@ -7,7 +7,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
-#include "../src/common.h"
+#include "core/common.h"
 #include "harness.h"
 
 /* "Did you mean": distances worked by hand (one deletion, one swap of

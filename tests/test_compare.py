@@ -1,9 +1,12 @@
 """scripts/compare.py: metrics on constructed images with hand-computed
 values, FLIP's properties from the paper, colorspace handling, every bad
 input, and the machine-readable and picture outputs."""
+import contextlib
 import csv
+import io
 import json
 import subprocess
+import types
 
 import numpy as np
 import OpenImageIO as oiio
@@ -12,6 +15,8 @@ import pytest
 import flip
 from conftest import BIN, ROOT
 from imagecompare import basic_metrics, composite, read_image
+
+import compare as compare_script  # noqa: E402 (scripts/, put on the path by conftest)
 
 COMPARE = ROOT / "scripts" / "compare.py"
 
@@ -28,8 +33,27 @@ def write_image(path, pixels, channels=None, fmt=oiio.FLOAT):
     return path
 
 
-def compare(*args):
+def compare_process(*args):
+    """compare.py run as a command."""
     return subprocess.run(["/usr/bin/python3", str(COMPARE), *map(str, args)], capture_output=True, text=True)
+
+
+def compare(*args):
+    """compare.py's main in this process, with the exit status, stdout and stderr a run of the command
+    gives (its __main__ is sys.exit(main())): a Python start-up importing numpy, OpenImageIO and
+    matplotlib a call was most of these tests' time. compare_process runs the command itself
+    (test_bad_inputs_give_clear_errors, test_crops_and_outputs); an exception main lets through (a
+    traceback from the command) fails the test here."""
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        try:
+            code = compare_script.main([str(a) for a in args])
+        except SystemExit as stop:
+            code = stop.code
+    if isinstance(code, str):  # sys.exit(message): printed, status 1
+        err.write(code + "\n")
+        code = 1
+    return types.SimpleNamespace(returncode=code or 0, stdout=out.getvalue(), stderr=err.getvalue())
 
 
 def compare_json(*args):
@@ -205,7 +229,7 @@ def test_crops_and_outputs(tmp_path):
     ref = write_image(tmp_path / "ref.exr", rng.random((40, 50, 3)).astype(np.float32))
     t1 = write_image(tmp_path / "t1.exr", rng.random((40, 50, 3)).astype(np.float32))
     t2 = write_image(tmp_path / "t2.exr", rng.random((40, 50, 3)).astype(np.float32))
-    proc = compare(ref, t1, t2, "--crop", "0,0,20,20", "--crop", "10,5,30,30", "--csv", tmp_path / "r.csv",
+    proc = compare_process(ref, t1, t2, "--crop", "0,0,20,20", "--crop", "10,5,30,30", "--csv", tmp_path / "r.csv",
                    "--heatmaps", tmp_path / "maps", "--report", tmp_path / "rep")
     assert proc.returncode == 0, proc.stderr
     assert proc.stdout.splitlines()[0] == "metrics space: linear (FLIP: linear)"
@@ -225,7 +249,7 @@ def test_crops_and_outputs(tmp_path):
 def test_bad_inputs_give_clear_errors(tmp_path):
     ref = write_image(tmp_path / "ref.exr", np.zeros((16, 16, 3), np.float32))
     small = write_image(tmp_path / "small.exr", np.zeros((8, 16, 3), np.float32))
-    missing = compare(ref, tmp_path / "nope.exr")
+    missing = compare_process(ref, tmp_path / "nope.exr")
     assert missing.returncode == 2 and "nope.exr: no such file" in missing.stderr
     size = compare(ref, small)
     assert size.returncode == 2 and "small.exr: size 16x8 differs" in size.stderr

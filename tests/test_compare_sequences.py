@@ -1,5 +1,5 @@
-"""compare.py on frame sequences, with labels, in sRGB metric space (issue
-15): frames pair by number (patterns or directories) and a frame that names
+"""compare.py on frame sequences, with labels, in sRGB metric space:
+frames pair by number (patterns or directories) and a frame that names
 another frame in its header is refused; the summary's mean and worst frame
 are the per-frame values' mean and maximum; labels name rows and pictures
 so two inputs with the same file name never overwrite each other. The

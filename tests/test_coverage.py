@@ -1,5 +1,5 @@
-"""End-to-end checks of refrender against closed-form answers (issue: core
-renderer, tests 1-3). Tolerances are stated in standard errors."""
+"""End-to-end checks of the core renderer against closed-form answers.
+Tolerances are stated in standard errors."""
 import numpy as np
 
 from conftest import focal_pixels

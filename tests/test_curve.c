@@ -3,7 +3,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "curve.h"
+#include "motion/curve.h"
 #include "harness.h"
 
 /* A curve from (time, value) pairs, all keys with the same tangents. */

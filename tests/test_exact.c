@@ -6,10 +6,10 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "../src/exact.h"
-#include "../src/sampler.h"
-#include "../src/scene_xml.h"
-#include "../src/shade.h"
+#include "render/exact.h"
+#include "render/sampler.h"
+#include "io/scene_xml.h"
+#include "render/shade.h"
 #include "harness.h"
 
 typedef struct {

@@ -3,7 +3,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "film.h"
+#include "render/film.h"
 #include "harness.h"
 
 static void add_all(pixel_state *p, const double (*est)[4], const int *order, int n)

@@ -12,13 +12,13 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "../src/accel.h"
-#include "../src/gaussian.h"
-#include "../src/gaussian_dynamic.h"
-#include "../src/gaussian_ply.h"
-#include "../src/gaussian_stg_ply.h"
-#include "../src/inputfile.h"
-#include "../src/scene_xml.h"
+#include "accel/accel.h"
+#include "core/inputfile.h"
+#include "gaussians/gaussian.h"
+#include "gaussians/gaussian_dynamic.h"
+#include "io/gaussian_ply.h"
+#include "io/gaussian_stg_ply.h"
+#include "io/scene_xml.h"
 #include "harness.h"
 
 /* ---- models written as ascii PLY in the save_ply order ------------------ */

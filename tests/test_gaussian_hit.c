@@ -9,9 +9,14 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "../src/animation.h"
-#include "../src/gaussian_hit.h"
+#include "motion/animation.h"
+#include "gaussians/gaussian_hit.h"
+#include "core/lanes.h"
 #include "harness.h"
+
+/* Why a lane test is skipped: without the vector path it would compare the
+ * scalar code with itself. */
+#define NO_LANES "no AVX2 lanes on this CPU (or RR_NO_LANES is set)"
 
 static double uniform(unsigned *state) { return (double)rand_r(state) / RAND_MAX; }
 
@@ -253,27 +258,35 @@ static void needle_at_its_reach(gaussian_model *m, const camera_view *v, unsigne
     *x = v->fx * rx + v->cx + u * ax + (uniform(st) - 0.5), *y = v->fy * ry + v->cy + u * ay + (uniform(st) - 0.5);
 }
 
-/* With the principal point off the centre (a transforms.json camera's),
- * the cull's reach (gaussian_view_stretch) and the bounds hold the wider
- * clamp: the cull never drops a hit and every hit lies in its bounds, for
- * needles beyond either clamp at the edge of their footprints under the
- * four rasterizer semantics; and the AVX2 lanes' cull keeps exactly the
- * scalar's, bit for bit, on such Gaussians. */
+/* The four rasterizer semantics (3DGRT has no screen footprint). */
+static const gaussian_formation raster_formations[4] = {GAUSSIAN_FORMATION_3DGS, GAUSSIAN_FORMATION_3DGS_ANTIALIASED,
+                                                        GAUSSIAN_FORMATION_GSPLAT,
+                                                        GAUSSIAN_FORMATION_GSPLAT_ANTIALIASED};
+
+/* A 100 x 80 camera at the origin with its principal point off the centre
+ * (a transforms.json camera's): anywhere in the middle 90% of the image. */
+static camera_view off_centre_view(unsigned *st)
+{
+    camera_view v = {v3(0, 0, 0), {v3(1, 0, 0), v3(0, 1, 0), v3(0, 0, 1)}, 50, 50 + 20 * uniform(st),
+                     100 * (0.05 + 0.9 * uniform(st)), 80 * (0.05 + 0.9 * uniform(st)), 100, 80};
+    return v;
+}
+
+/* With the principal point off the centre, the cull's reach
+ * (gaussian_view_stretch) and the bounds hold the wider clamp: the cull
+ * never drops a hit and every hit lies in its bounds, for needles beyond
+ * either clamp at the edge of their footprints under the four rasterizer
+ * semantics. */
 TEST(gaussian_3d_raster_culls_and_bounds_hold_an_off_centre_principal_point)
 {
-    const gaussian_formation kinds[] = {GAUSSIAN_FORMATION_3DGS, GAUSSIAN_FORMATION_3DGS_ANTIALIASED,
-                                        GAUSSIAN_FORMATION_GSPLAT, GAUSSIAN_FORMATION_GSPLAT_ANTIALIASED};
     xform id = {{{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}, {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}, {0, 0, 0}, 0};
-    enum { N = 1027 };
     unsigned st = 57;
-    long hits = 0, dropped = 0, outside = 0, far_out = 0, mismatched = 0;
-    gaussian_candidate *cand = malloc(N * sizeof *cand);
+    long hits = 0, dropped = 0, outside = 0, far_out = 0;
     for (int trial = 0; trial < 64; trial++) {
-        camera_view v = {v3(0, 0, 0), {v3(1, 0, 0), v3(0, 1, 0), v3(0, 0, 1)}, 50, 50 + 20 * uniform(&st),
-                         100 * (0.05 + 0.9 * uniform(&st)), 80 * (0.05 + 0.9 * uniform(&st)), 100, 80};
-        gaussian_model one, batch;
-        model_of(&one, 1, GAUSSIAN_3D), model_of(&batch, N, GAUSSIAN_3D);
-        one.formation = batch.formation = kinds[trial % 4];
+        camera_view v = off_centre_view(&st);
+        gaussian_model one;
+        model_of(&one, 1, GAUSSIAN_3D);
+        one.formation = raster_formations[trial % 4];
         for (int k = 0; k < 400; k++) {
             double x, y;
             vec3 p;
@@ -290,10 +303,35 @@ TEST(gaussian_3d_raster_culls_and_bounds_hold_an_off_centre_principal_point)
                 outside += !inside(gaussian_view_bounds(&one, 0, &vb), v3_scale(dir, h.t));
             }
         }
+        gaussian_model_free(&one);
+    }
+    printf("    hits %ld (beyond 1.3 tan(fov/2) %ld): dropped by the cull %ld, outside their bounds %ld\n", hits,
+           far_out, dropped, outside);
+    CHECK(hits > 5000 && far_out > 1000);
+    CHECK(dropped == 0 && outside == 0);
+}
+
+/* The same needles, N of them about one ray's pixel (their means moved by
+ * their offsets), under an off-centre principal point (the stretch of the
+ * wider clamp): the cull in lanes (gaussian_cull_candidates) keeps exactly
+ * the Gaussians the scalar cull keeps, with the same means, bit for bit. */
+TEST(gaussian_3d_cull_in_lanes_is_the_scalar_cull_under_an_off_centre_principal_point)
+{
+    SKIP_UNLESS(rr_lanes_available(), NO_LANES);
+    xform id = {{{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}, {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}, {0, 0, 0}, 0};
+    enum { N = 1027 };
+    unsigned st = 58;
+    long kept_total = 0, mismatched = 0;
+    gaussian_candidate *cand = malloc(N * sizeof *cand);
+    for (int trial = 0; trial < 64; trial++) {
+        camera_view v = off_centre_view(&st);
+        gaussian_model one, batch;
+        model_of(&one, 1, GAUSSIAN_3D), model_of(&batch, N, GAUSSIAN_3D);
+        one.formation = batch.formation = raster_formations[trial % 4];
         double x = 100 * uniform(&st), y = 80 * uniform(&st);
         gaussian_ray r;
         gaussian_ray_init(&r, &v, &id, x, y, v3(0, 0, 0), v3_normalize(v3((x - v.cx) / v.fx, (y - v.cy) / v.fy, 1)));
-        for (size_t i = 0; i < N; i++) { /* needles about this ray's pixel: their means moved by their offsets */
+        for (size_t i = 0; i < N; i++) {
             double gx, gy;
             needle_at_its_reach(&one, &v, &st, &gx, &gy);
             memcpy(&batch.rotation[4 * i], one.rotation, sizeof(float[4])), memcpy(&batch.scale[3 * i], one.scale, sizeof(float[3]));
@@ -309,13 +347,13 @@ TEST(gaussian_3d_raster_culls_and_bounds_hold_an_off_centre_principal_point)
                 mismatched += j >= kept || cand[j].prim != i || memcmp(&cand[j].p, &p, sizeof p), j++;
         }
         mismatched += j != kept;
+        kept_total += (long)kept;
         gaussian_model_free(&one), gaussian_model_free(&batch);
     }
     free(cand);
-    printf("    hits %ld (beyond 1.3 tan(fov/2) %ld): dropped by the cull %ld, outside their bounds %ld; lanes "
-           "differing %ld\n", hits, far_out, dropped, outside, mismatched);
-    CHECK(hits > 5000 && far_out > 1000);
-    CHECK(dropped == 0 && outside == 0 && mismatched == 0);
+    printf("    kept %ld of %d, differing from the scalar cull %ld\n", kept_total, 64 * N, mismatched);
+    CHECK(kept_total > 64 * N / 2); /* (at their reach: most are kept, their means compared) */
+    CHECK(mismatched == 0);
 }
 
 /* The 2DGS semantics (both circle rules, both near rules) and the four
@@ -436,6 +474,7 @@ static void cull_trial(int trial, unsigned *st, gaussian_model *m, gaussian_ray 
 
 TEST(gaussian_cull_candidates_keeps_what_gaussian_cull_keeps)
 {
+    SKIP_UNLESS(rr_lanes_available(), NO_LANES);
     unsigned st = 91;
     enum { N = CULL_TRIAL_N };
     gaussian_candidate *cand = malloc(N * sizeof *cand);
@@ -462,8 +501,7 @@ TEST(gaussian_cull_candidates_keeps_what_gaussian_cull_keeps)
         gaussian_model_free(&m);
     }
     free(cand);
-    printf("    kept %ld, culled %ld, differing from gaussian_cull %ld (AVX2 lanes %s)\n", kept_total, culled_total,
-           mismatched, __builtin_cpu_supports("avx2") ? "in use" : "absent: the scalar cull against itself");
+    printf("    kept %ld, culled %ld, differing from gaussian_cull %ld\n", kept_total, culled_total, mismatched);
     CHECK(kept_total > 15000 && culled_total > 15000);
     CHECK(mismatched == 0);
 }
@@ -477,6 +515,7 @@ TEST(gaussian_cull_candidates_keeps_what_gaussian_cull_keeps)
  * compares every double of the geometry too. */
 TEST(gaussian_hits_after_cull4_are_the_hits_one_at_a_time)
 {
+    SKIP_UNLESS(rr_lanes_available(), NO_LANES);
     unsigned st = 17;
     enum { N = CULL_TRIAL_N };
     gaussian_candidate *cand = malloc(N * sizeof *cand);
@@ -511,9 +550,8 @@ TEST(gaussian_hits_after_cull4_are_the_hits_one_at_a_time)
         gaussian_model_free(&m);
     }
     free(cand);
-    printf("    2D hits %ld, misses %ld, differing %ld, geometry differing in a bit %ld (AVX2 lanes %s)\n", hits2d,
-           misses2d, mismatched, geometry_differs,
-           __builtin_cpu_supports("avx2") ? "in use" : "absent: the scalar path against itself");
+    printf("    2D hits %ld, misses %ld, differing %ld, geometry differing in a bit %ld\n", hits2d, misses2d, mismatched,
+           geometry_differs);
     CHECK(hits2d > 2000 && misses2d > 2000);
     CHECK(mismatched == 0 && geometry_differs == 0);
 }
@@ -701,8 +739,8 @@ TEST(gaussian_2d_filter_centre_lies_within_the_pole_bound_of_the_mean)
 
 /* 400,000 hits of one key (a degenerate model: every Gaussian at one
  * depth) are composited in (object, Gaussian) order, in O(n log n): the
- * insertion sort this replaced took 17 s for 256k (issue 32.5) and about
- * 40 s here; an alarm ends the test after 20 s, 100 times what it takes. */
+ * insertion sort this replaced took 17 s for 256k and about 40 s here;
+ * an alarm ends the test after 20 s, 100 times what it takes. */
 TEST(gaussian_equal_keys_sort_by_object_and_gaussian_in_n_log_n)
 {
     enum { N = 400000 };

@@ -7,10 +7,10 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "../src/animation.h"
-#include "../src/gaussian_integrator.h"
-#include "../src/gaussian_ply.h"
-#include "../src/scene_xml.h"
+#include "motion/animation.h"
+#include "render/gaussian_integrator.h"
+#include "io/gaussian_ply.h"
+#include "io/scene_xml.h"
 #include "harness.h"
 
 /* An in-memory scene and its BVHs, with static reuse; fails the test when

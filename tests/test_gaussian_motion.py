@@ -3,7 +3,7 @@
 the numpy reference of the official forward pass (tests/gs2d_reference.py)
 at 2000 instants of the shutter. Expectations: the pixel the Gaussian
 crosses at mid-shutter agrees within k = 3 standard errors (its 32
-batches' own) for every seed; and a Sobol' render of 2^18 times per pixel
+batches' own) for every seed; and a Sobol' render of 2^16 times per pixel
 agrees with the quadrature within 2e-5 at every pixel of the streak (the
 midpoint rule's error at the few kinks, where the filter takes over or
 alpha drops below 1/255, is below 1e-5 here; the render's standard error
@@ -35,15 +35,27 @@ def model(scale):
             "opacity": np.array([0.8]), "sh": ((colour - 0.5) / ref.SH_C0).reshape(1, 1, 3), "degree": 0}
 
 
-def pixel_colour(m, mean, C, px, py, R=np.eye(3)):
-    """The reference's colour of pixel centre (px, py) with the Gaussian's mean and camera centre at
-    one instant (camera axes R_c2w, by default x right, y down, z forward)."""
+def instant_items(m, mean, C, R=np.eye(3)):
+    """The reference's splat of the Gaussian with its mean and the camera centre at one instant
+    (camera axes R_c2w, by default x right, y down, z forward): the same for every pixel, so made
+    once an instant."""
     T, depth = ref.splat_transform(mean, m["scale"][0], m["rot"][0], R, C, F, F, W, H)
     items = []
     if depth > 0.2:
         d = mean - C
         items.append((depth, 0, T, ref.projected_centre(T), ref.sh_to_rgb(m["sh"][0], 0, d / np.linalg.norm(d))))
-    return ref.shade_pixel(items, m, px, py, BACKGROUND)[0]
+    return items
+
+
+def pixel_colour(m, mean, C, px, py, R=np.eye(3)):
+    """The reference's colour of pixel centre (px, py) at one instant (see instant_items)."""
+    return ref.shade_pixel(instant_items(m, mean, C, R), m, px, py, BACKGROUND)[0]
+
+
+def row_colours(m, mean, C, R=np.eye(3)):
+    """The reference's colours of the middle row's pixel centres at one instant."""
+    items = instant_items(m, mean, C, R)
+    return np.array([ref.shade_pixel(items, m, i + 0.5, H // 2 + 0.5, BACKGROUND)[0] for i in range(W)])
 
 
 def quadrature(m, moving):
@@ -55,8 +67,7 @@ def quadrature(m, moving):
         shift = np.array([TRAVEL * t, 0, 0])
         mean, C = (start + shift, np.zeros(3)) if moving == "gaussian" else (start + [TRAVEL / 2, 0, 0], -shift
                                                                              + [TRAVEL / 2, 0, 0])
-        for i in range(W):
-            out[i] += pixel_colour(m, mean, C, i + 0.5, H // 2 + 0.5) / QUAD
+        out += row_colours(m, mean, C) / QUAD
     return out
 
 
@@ -100,8 +111,7 @@ def turning_quadrature(m, mean):
     out = np.zeros((W, 3))
     for k in range(QUAD):
         R = turned_y(TURN * ((k + 0.5) / QUAD - 0.5))
-        for i in range(W):
-            out[i] += pixel_colour(m, mean, np.zeros(3), i + 0.5, H // 2 + 0.5, R) / QUAD
+        out += row_colours(m, mean, np.zeros(3), R) / QUAD
     return out
 
 
@@ -128,23 +138,27 @@ def test_the_time_integral_under_a_turning_camera_is_the_quadrature(tmp_path):
 
 def _check_integral(tmp_path, scene, expect):
     """The middle row's pixel at mid-shutter within K standard errors for seeds 1-4 (32 batches of 256
-    times), and the whole row within 2e-5 of the quadrature at 2^18 Sobol' times."""
+    times), and the whole row within 2e-5 of the quadrature at 2^16 Sobol' times (16 batches of 4096),
+    whose standard error, below 1e-6, is checked: its error against the quadrature is below 1e-6 on
+    the 2DGS cases, as at 2^18, so no bias of 2e-5 and more passes."""
     row, mid = H // 2, W // 2
     for seed in range(1, 5):
         ch = _render(tmp_path, scene, seed, "thesis", 256, 32)
         for c, name in enumerate("RGB"):
             got, se = ch[name][row, mid], ch[f"stderr.{name}"][row, mid]
             assert abs(got - expect[mid, c]) < K * se, (seed, name, got, expect[mid, c], se)
-    ch = _render(tmp_path, scene, 1, "sobol", 4096, 64)
+    ch = _render(tmp_path, scene, 1, "sobol", 4096, 16)
     for c, name in enumerate("RGB"):
+        assert ch[f"stderr.{name}"][row].max() < 1e-6, (name, ch[f"stderr.{name}"][row])
         assert np.abs(ch[name][row] - expect[:, c]).max() < 2e-5, (name, ch[name][row], expect[:, c])
 
 
-def _render(tmp_path, scene, seed, sampler, tspp, batches):
+def _render(tmp_path, scene, seed, sampler, tspp, batches, *extra):
     """Only the middle row, which the checks read (a crop window: a fifth of the work)."""
-    out = tmp_path / f"out{seed}{sampler}.exr"
+    out = tmp_path / f"out{seed}{sampler}{'_'.join(extra)}.exr"
     proc = run([scene, "--pixel-filter", "point", "--spp", 1, "--tspp", tspp, "--batches", batches, "--seed", seed,
-                "--sampler", sampler, "--crop-window", f"0,1,{(H // 2) / H},{(H // 2 + 1) / H}", "-o", out, "--quiet"])
+                "--sampler", sampler, "--crop-window", f"0,1,{(H // 2) / H},{(H // 2 + 1) / H}", "-o", out, "--quiet",
+                *extra])
     assert proc.returncode == 0, proc.stderr
     ch, header = read_full(out)
     # the window's row, at index H // 2 of a full-size array
@@ -175,12 +189,8 @@ def test_blur_space_linear_decodes_each_instant_before_the_time_average(tmp_path
     for k in range(QUAD):
         mean = start + [TRAVEL * (k + 0.5) / QUAD, 0, 0]
         expect += srgb_to_linear(pixel_colour(read, mean, np.zeros(3), W // 2 + 0.5, H // 2 + 0.5)) / QUAD
-    out = tmp_path / "linear.exr"
-    proc = run([scene, "--pixel-filter", "point", "--spp", 1, "--tspp", 4096, "--batches", 16, "--sampler", "sobol",
-                "--blur-space", "linear", "-o", out, "--quiet"])
-    assert proc.returncode == 0, proc.stderr
-    ch, header = read_full(out)
-    assert header["refrender:blurSpace"] == "linear"
+    ch = _render(tmp_path, scene, 1, "sobol", 4096, 16, "--blur-space", "linear")
+    assert read_full(tmp_path / "out1sobol--blur-space_linear.exr")[1]["refrender:blurSpace"] == "linear"
     model_space = _render(tmp_path, scene, 1, "sobol", 4096, 16)
     decoded_average = np.zeros(3)
     for c, name in enumerate("RGB"):
@@ -203,7 +213,7 @@ def _write_3d(tmp_path, middle_scale):
 
 def test_the_time_integral_of_a_moving_3dgrt_gaussian_is_the_quadrature(tmp_path):
     """The same for a 3D Gaussian with 3DGRT's rules (tests/gs3d_grt_reference.py): its object moves
-    across the middle row; k = 3 standard errors for every seed, 2e-5 at 2^18 Sobol' times."""
+    across the middle row; k = 3 standard errors for every seed, 2e-5 at 2^16 Sobol' times."""
     import gs3d_grt_reference as grt
     ply = _write_3d(tmp_path, 0.07)
     camera = gsply.camera_xml(np.eye(3), np.zeros(3), F, W, H)
@@ -229,7 +239,7 @@ def test_the_time_integral_of_a_moving_rasterized_3dgs_gaussian_is_the_quadratur
     """A 3D Gaussian under the graphdeco-inria rasterizer's semantics (the default for 3D models;
     tests/gs3d_raster_reference.py), its object or the camera moving: the EWA footprint, its clamp and
     dilation taken with the camera of each instant. k = 3 standard errors for every seed, 2e-5 at
-    2^18 Sobol' times."""
+    2^16 Sobol' times."""
     import gs3d_raster_reference as raster
     ply = _write_3d(tmp_path, 0.05)
     scene = tmp_path / "scene3.xml"

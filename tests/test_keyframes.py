@@ -1,5 +1,5 @@
-"""Keyframed animation, camera motion and frame sequences, end to end
-(issue: keyframes, .anim, camera motion and frames)."""
+"""Keyframed animation (keys and Maya .anim files), camera motion and frame
+sequences, end to end."""
 import numpy as np
 
 from conftest import ROOT, coverage_centroid, focal_pixels, read_exr, read_full, run

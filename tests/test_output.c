@@ -5,9 +5,9 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "exr.h"
+#include "io/exr.h"
 #include "harness.h"
-#include "output.h"
+#include "io/output.h"
 
 static const char *state_path(const char *name)
 {

@@ -6,8 +6,8 @@
 #include <unistd.h>
 
 #include "harness.h"
-#include "inputfile.h"
-#include "ply.h"
+#include "core/inputfile.h"
+#include "io/ply.h"
 
 static const char *tmp_path(const char *name)
 {

@@ -3,8 +3,8 @@
 #include <string.h>
 
 #include "harness.h"
-#include "pointmodel.h"
-#include "shapes.h"
+#include "surfels/pointmodel.h"
+#include "surfels/shapes.h"
 
 static double mean_step(const pointmodel *m)
 {

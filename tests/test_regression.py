@@ -1,4 +1,4 @@
-"""Statistical regression tests (issue: scene suite): a fast render of every
+"""Statistical regression tests of the scene suite: a fast render of every
 scene in scenes/ with another seed must be consistent with its committed
 reference in reference_images/ (criteria in scripts/regress.py), and the
 check must reject renders with a deliberately broken feature."""

@@ -3,8 +3,8 @@
 #include <string.h>
 
 #include "harness.h"
-#include "render.h"
-#include "scene_xml.h"
+#include "render/render.h"
+#include "io/scene_xml.h"
 
 /* A disk moving across a 32x16 image: two 16x16 tiles, and pixels whose
  * noise differs (edges, interior, background), so a target error stops them

@@ -10,7 +10,7 @@
 #include <float.h>
 #include <math.h>
 
-#include "../src/rotation.h"
+#include "core/rotation.h"
 #include "harness.h"
 
 /* A spread of unit quaternions: angles up to 3 (short of pi) about varied axes. */

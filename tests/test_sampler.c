@@ -4,7 +4,7 @@
 #include <string.h>
 
 #include "harness.h"
-#include "sampler.h"
+#include "render/sampler.h"
 
 typedef struct {
     double x[4096], y[4096], t[4096];

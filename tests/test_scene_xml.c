@@ -4,10 +4,10 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "animfile.h"
+#include "io/animfile.h"
 #include "harness.h"
-#include "inputfile.h"
-#include "scene_xml.h"
+#include "core/inputfile.h"
+#include "io/scene_xml.h"
 
 static int load_text(const char *xml, scene *s, rr_error *e)
 {

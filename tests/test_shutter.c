@@ -1,7 +1,7 @@
 #include <string.h>
 /* Temporal weights a(t) (thesis eq. 3.1, Figure 3.1). */
 #include "harness.h"
-#include "shutter.h"
+#include "motion/shutter.h"
 
 TEST(box_weight_is_constant)
 {

@@ -1,7 +1,7 @@
 /* Ray/ellipse intersection and kernel weight (thesis eq. 4.2). Expected
  * values are worked out by hand in the comments. */
 #include "harness.h"
-#include "splat.h"
+#include "surfels/splat.h"
 
 static splat_geom make(vec3 c, vec3 u, vec3 v)
 {

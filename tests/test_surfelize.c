@@ -3,7 +3,7 @@
 #include <string.h>
 
 #include "harness.h"
-#include "surfelize.h"
+#include "surfels/surfelize.h"
 
 #define N 9 /* grid vertices per side, spacing H */
 #define H 0.1

@@ -9,10 +9,10 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "../src/camera.h"
-#include "../src/rotation.h"
-#include "../src/trajectory.h"
-#include "../src/tum.h"
+#include "core/camera.h"
+#include "core/rotation.h"
+#include "motion/trajectory.h"
+#include "io/tum.h"
 #include "harness.h"
 
 static int parse(const char *text, trajectory *tr, rr_error *e)
@@ -294,7 +294,7 @@ TEST(motion_bounds_hold_the_interpolated_path)
 
 /* ---- nerfstudio transforms.json ---------------------------------------- */
 
-#include "../src/transforms.h"
+#include "io/transforms.h"
 
 #define CAMERA "\"fl_x\": 50, \"fl_y\": 52, \"cx\": 20.5, \"cy\": 14, \"w\": 40, \"h\": 30"
 #define FRAME(t) "{\"file_path\": \"a.png\", " t "\"transform_matrix\": [[1,0,0,1],[0,1,0,2],[0,0,1,3],[0,0,0,1]]}"

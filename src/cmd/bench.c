@@ -8,13 +8,12 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/resource.h>
 #include <time.h>
 #include <unistd.h>
 
-#include "bench_gaussian.h"
-#include "render.h"
-#include "shapes.h"
+#include "cmd/bench_gaussian.h"
+#include "render/render.h"
+#include "surfels/shapes.h"
 
 typedef struct {
     const char *motion;  /* static, linear, rotation */
@@ -406,9 +405,7 @@ static void run_pair_case(const bench_case *c, bench_result *r)
     r->base_build_ms = 0;
     r->same_rays_mrays = 0;
     r->base_splats_px = r->same_splats_px = 0;
-    struct rusage ru;
-    getrusage(RUSAGE_SELF, &ru);
-    r->peak_mb = ru.ru_maxrss / 1024.0;
+    r->peak_mb = bench_peak_mb();
     r->bytes_per_splat = 0;
     int meets = 0;
     for (int y = 0; y < c->res; y++)
@@ -462,9 +459,7 @@ static void run_case(const bench_case *c, bench_result *r)
     r->mrays = median(ours, c->reps);
     r->base_mrays = median(theirs, c->reps);
     r->same_rays_mrays = median(same, c->reps);
-    struct rusage ru;
-    getrusage(RUSAGE_SELF, &ru);
-    r->peak_mb = ru.ru_maxrss / 1024.0;
+    r->peak_mb = bench_peak_mb();
     rtcReleaseScene(base);
     rtcReleaseDevice(dev);
     accel_free(acc);

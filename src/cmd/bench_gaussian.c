@@ -1,4 +1,4 @@
-#include "bench_gaussian.h"
+#include "cmd/bench_gaussian.h"
 
 #include <embree3/rtcore.h>
 #include <pthread.h>
@@ -8,11 +8,11 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
-#include "gaussian_dynamic.h"
-#include "gaussian_integrator.h"
-#include "gaussian_ply.h"
-#include "render.h"
-#include "shapes.h"
+#include "gaussians/gaussian_dynamic.h"
+#include "render/gaussian_integrator.h"
+#include "io/gaussian_ply.h"
+#include "render/render.h"
+#include "surfels/shapes.h"
 
 /* A unit sphere of 2DGS surfels or of 3DGS Gaussians 2% as thick (SH
  * degree 3, as trained models have) seen from 3.5 units by a camera
@@ -283,13 +283,18 @@ static void gs_run(const gs_case *c, gs_result *r)
     r->mrays = median3(ours, c->reps), r->base_mrays = median3(theirs, c->reps);
     r->base_hits = (double)hits / rays;
     count_hits(&s, a, r);
-    struct rusage ru;
-    getrusage(RUSAGE_SELF, &ru);
-    r->peak_mb = ru.ru_maxrss / 1024.0;
+    r->peak_mb = bench_peak_mb();
     rtcReleaseScene(discs);
     rtcReleaseDevice(dev);
     accel_free(a);
     scene_free(&s);
+}
+
+double bench_peak_mb(void)
+{
+    struct rusage ru;
+    getrusage(RUSAGE_SELF, &ru);
+    return ru.ru_maxrss / 1024.0;
 }
 
 int bench_in_child(void (*run)(const void *in, void *out), const void *in, void *out, size_t size)
@@ -474,9 +479,7 @@ static void scale_run(const void *in, void *out)
     }
     r->seconds = img.seconds, r->mrays = (double)img.rays / img.seconds * 1e-6;
     image_free(&img);
-    struct rusage ru;
-    getrusage(RUSAGE_SELF, &ru);
-    r->peak_mb = ru.ru_maxrss / 1024.0;
+    r->peak_mb = bench_peak_mb();
     accel_free(a);
     scene_free(&s);
 }
@@ -651,9 +654,7 @@ static void stg_run(const void *in, void *out)
     }
     r->seconds = img.seconds, r->mrays = (double)img.rays / img.seconds * 1e-6;
     image_free(&img);
-    struct rusage ru;
-    getrusage(RUSAGE_SELF, &ru);
-    r->peak_mb = ru.ru_maxrss / 1024.0;
+    r->peak_mb = bench_peak_mb();
     accel_free(a);
     scene_free(&s);
 }

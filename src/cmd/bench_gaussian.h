@@ -10,6 +10,9 @@
 /* Runs run(in, out) in a forked child (so a case's peak memory is its
  * own) and copies its `size`-byte result back; -1 if the child failed. */
 int bench_in_child(void (*run)(const void *in, void *out), const void *in, void *out, size_t size);
+/* The process's peak resident memory so far (MB): in a bench_in_child
+ * child, the case's own. */
+double bench_peak_mb(void);
 
 /* Runs the case (in a child process, for its own peak memory) and prints
  * its table; quick: a small model. Returns 0, or -1 if the case failed. */

@@ -9,14 +9,14 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "atomicfile.h"
-#include "gaussian_hit.h"
-#include "cli.h"
-#include "commands.h"
-#include "scene_xml.h"
-#include "rotation.h"
-#include "transforms.h"
-#include "tum.h"
+#include "core/atomicfile.h"
+#include "gaussians/gaussian_hit.h"
+#include "cmd/cli.h"
+#include "cmd/commands.h"
+#include "io/scene_xml.h"
+#include "core/rotation.h"
+#include "io/transforms.h"
+#include "io/tum.h"
 
 static void export_usage(FILE *f)
 {

@@ -4,10 +4,10 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "cli.h"
-#include "commands.h"
-#include "shapes.h"
-#include "surfel_output.h"
+#include "cmd/cli.h"
+#include "cmd/commands.h"
+#include "surfels/shapes.h"
+#include "cmd/surfel_output.h"
 
 static void gen_usage(FILE *f)
 {

@@ -7,13 +7,13 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "cli.h"
-#include "commands.h"
-#include "exact.h"
-#include "output.h"
-#include "render_attrs.h"
-#include "preview.h"
-#include "scene_xml.h"
+#include "cmd/cli.h"
+#include "cmd/commands.h"
+#include "render/exact.h"
+#include "io/output.h"
+#include "io/render_attrs.h"
+#include "io/preview.h"
+#include "io/scene_xml.h"
 
 #ifndef RR_SOURCE_SCENE
 #define RR_SOURCE_SCENE "scenes/default.xml"

@@ -6,9 +6,9 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "cli.h"
-#include "commands.h"
-#include "output.h"
+#include "cmd/cli.h"
+#include "cmd/commands.h"
+#include "io/output.h"
 
 static void merge_usage(FILE *f)
 {

@@ -1,9 +1,9 @@
-#include "surfel_output.h"
+#include "cmd/surfel_output.h"
 
 #include <string.h>
 
-#include "cli.h"
-#include "gaussian_ply.h"
+#include "cmd/cli.h"
+#include "io/gaussian_ply.h"
 
 const char surfel_output_help[] =
 "  --gaussians K     write Gaussian splats instead, in the official layout of\n"

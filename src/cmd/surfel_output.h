@@ -4,8 +4,8 @@
 #ifndef RR_SURFEL_OUTPUT_H
 #define RR_SURFEL_OUTPUT_H
 
-#include "gaussian.h"
-#include "ply.h"
+#include "gaussians/gaussian.h"
+#include "io/ply.h"
 
 typedef struct {
     const char *out;

@@ -5,11 +5,11 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "cli.h"
-#include "commands.h"
-#include "meshload.h"
-#include "surfel_output.h"
-#include "surfelize.h"
+#include "cmd/cli.h"
+#include "cmd/commands.h"
+#include "io/meshload.h"
+#include "cmd/surfel_output.h"
+#include "surfels/surfelize.h"
 
 static void surfels_usage(FILE *f)
 {

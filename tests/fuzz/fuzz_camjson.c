@@ -1,7 +1,7 @@
 /* libFuzzer target: the cameras.json reader (camjson.c, through json-c). */
 #include <stdint.h>
 
-#include "camjson.h"
+#include "io/camjson.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {

@@ -5,8 +5,8 @@
 #include <stdint.h>
 #include <stdlib.h>
 
-#include "camera.h"
-#include "transforms.h"
+#include "core/camera.h"
+#include "io/transforms.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {

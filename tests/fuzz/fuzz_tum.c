@@ -7,8 +7,8 @@
 #include <stdio.h>
 #include <stdlib.h>
 
-#include "trajectory.h"
-#include "tum.h"
+#include "motion/trajectory.h"
+#include "io/tum.h"
 
 static void check_poses(trajectory *tr)
 {

@@ -5,8 +5,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "render.h"
-#include "scene_xml.h"
+#include "render/render.h"
+#include "io/scene_xml.h"
 
 const char *fuzz_dir(void)
 {

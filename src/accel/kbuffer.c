@@ -1,0 +1,53 @@
+#include "accel/kbuffer.h"
+
+#include "core/common.h"
+
+#include <math.h>
+#include <string.h>
+
+void kbuffer_reset(kbuffer *kb, float epsilon)
+{
+    kb->count = 0;
+    kb->dropped = 0;
+    kb->closest = INFINITY;
+    kb->epsilon = epsilon;
+}
+
+static int hit_before(const surface_hit *a, const surface_hit *b)
+{
+    if (a->t != b->t)
+        return a->t < b->t;
+    if (a->obj != b->obj)
+        return a->obj < b->obj;
+    return a->prim < b->prim;
+}
+
+void kbuffer_insert(kbuffer *kb, const surface_hit *h)
+{
+    if (!(h->t <= kb->closest + kb->epsilon))
+        return;
+    int pos = kb->count;
+    while (pos > 0 && hit_before(h, &kb->hits[pos - 1]))
+        pos--;
+    if (kb->count == KBUFFER_MAX) {
+        kb->dropped++;
+        if (pos == KBUFFER_MAX)
+            return;
+        kb->count--; /* the farthest entry makes room */
+    }
+    RR_DCHECK(pos >= 0 && pos <= kb->count && kb->count < KBUFFER_MAX); /* room for one more */
+    memmove(&kb->hits[pos + 1], &kb->hits[pos], (size_t)(kb->count - pos) * sizeof *h);
+    kb->hits[pos] = *h;
+    kb->count++;
+    if (h->t < kb->closest) {
+        kb->closest = h->t;
+        /* entries are sorted by t: drop the tail now beyond the window */
+        while (kb->count > 0 && kb->hits[kb->count - 1].t > kb->closest + kb->epsilon)
+            kb->count--;
+    }
+}
+
+float kbuffer_cutoff(const kbuffer *kb)
+{
+    return nextafterf(kb->closest + kb->epsilon, INFINITY);
+}

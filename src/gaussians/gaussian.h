@@ -1,0 +1,108 @@
+/* Gaussian-splat models as trained by 3D Gaussian Splatting (Kerbl et al.
+ * 2023) and 2D Gaussian Splatting (Huang et al. 2024), with the activations
+ * the official code applies on loading (their PLY files: gaussian_ply.h),
+ * and their colour from real spherical harmonics (utils/sh_utils.py). Pure
+ * data and math: no Embree, no scene, no files. */
+#ifndef RR_GAUSSIAN_H
+#define RR_GAUSSIAN_H
+
+#include <stdint.h>
+
+#include "core/common.h"
+
+typedef enum { GAUSSIAN_AUTO = 0, GAUSSIAN_2D = 2, GAUSSIAN_3D = 3 } gaussian_kind;
+
+/* The order in which a ray composites a 2D model's hits: by the view depth
+ * of each Gaussian's centre (the official rasterizer's sort; the default,
+ * so a sharp render matches it) or by the depth of the ray's own hit (the
+ * physically ordered variant). 3D models go by the distance to each
+ * Gaussian's maximum response along the ray, as 3DGRT does. */
+typedef enum { GAUSSIAN_ORDER_CENTER_DEPTH, GAUSSIAN_ORDER_HIT_DEPTH } gaussian_order;
+
+/* How a model is imaged: the renderer it was trained with decides what it
+ * looks like, and its PLY does not say which (src/GAUSSIANS.md).
+ * DEFAULT is the kind's rasterizer: 2DGS at e0ed020 for 2D models, the
+ * graphdeco-inria 3DGS rasterizer for 3D ones. */
+typedef enum {
+    GAUSSIAN_FORMATION_DEFAULT = 0,
+    GAUSSIAN_FORMATION_2DGS,             /* diff-surfel-rasterization e0ed020: filter about the 3-sigma circle's centre */
+    GAUSSIAN_FORMATION_2DGS_CENTER_NEAR, /* 909dd85 to 7bdbd51 (2DGS's pins 2024-06-28 to 11-10): the same,
+                                          * and where the filter wins the near skip takes the centre's depth */
+    GAUSSIAN_FORMATION_2DGS_UNIT_CIRCLE, /* before 909dd85 (2024-06-28): about the unit circle's centre, the
+                                          * near skip as 2DGS_CENTER_NEAR's */
+    GAUSSIAN_FORMATION_3DGS,             /* diff-gaussian-rasterization: EWA, +0.3 dilation */
+    GAUSSIAN_FORMATION_3DGS_ANTIALIASED, /* the same with its `antialiasing` opacity compensation */
+    GAUSSIAN_FORMATION_GSPLAT,           /* nerfstudio gsplat, rasterize_mode classic */
+    GAUSSIAN_FORMATION_GSPLAT_ANTIALIASED,
+    GAUSSIAN_FORMATION_3DGRT             /* ray traced (nv-tlabs/3dgrut, kernel degree 2) */
+} gaussian_formation;
+
+#define GAUSSIAN_MAX_SH_DEGREE 3
+#define GAUSSIAN_MAX_SH_COEFFS 16 /* (3 + 1)^2 */
+/* The largest activated scale: stored in floats, squared in ray tests. */
+#define GAUSSIAN_MAX_SCALE 1e15
+/* The largest mean coordinate. Embree drops boxes beyond about
+ * 1.8e18 without a word, so a Gaussian at 1e19 vanished from the image; with
+ * means and scales within 1e15 every box stays in Embree's range, and the
+ * renderer's reach check (ACCEL_MAX_REACH, accel.h) refuses by name a scene
+ * that reaches past 1e15. */
+#define GAUSSIAN_MAX_ABS 1e15
+
+typedef struct {
+    size_t count;
+    gaussian_kind kind;  /* 2D: surfels (two scales), 3D: ellipsoids */
+    int sh_degree;       /* 0 to 3 */
+    int sh_coeffs;       /* (sh_degree + 1)^2 */
+    float *mean;         /* 3 per Gaussian */
+    float *scale;        /* 3 per Gaussian: exp(scale_i); a 2D Gaussian's third is 0 */
+    float *rotation;     /* 4 per Gaussian: the unit quaternion (w, x, y, z) of rot_0..3 */
+    float *opacity;      /* 1 per Gaussian: sigmoid(opacity) */
+    float *sh;           /* 3 * sh_coeffs per Gaussian: coefficient k of channel c at [3 k + c] */
+    int rgb_precomputed; /* 1: sh[0..2] are plain RGB colours, composited as they are (no SH, no +0.5,
+                          * no clamp: SpacetimeGaussians-lite's f_dc, gaussian_dynamic.h) */
+    /* how it is imaged, set by the scene (the file does not say; gaussian_hit.h) */
+    gaussian_formation formation;
+    int tile_rule;       /* 1: only in the 16x16 tiles the rasterizer would visit */
+    /* Gaussians that move (SpacetimeGaussians, gaussian_dynamic.h), owned;
+     * NULL for a static model */
+    struct gaussian_dynamic *dynamic;
+} gaussian_model;
+
+
+void gaussian_model_init(gaussian_model *m);
+void gaussian_model_free(gaussian_model *m);
+/* Storage for n Gaussians of m's kind and SH degree (count stays 0). */
+int gaussian_model_alloc(gaussian_model *m, size_t n);
+
+/* m's formation, DEFAULT resolved by its kind. */
+gaussian_formation gaussian_formation_of(const gaussian_model *m);
+/* "2dgs", "3dgs-antialiased", ...: the scene's names; NULL if unknown. */
+const char *gaussian_formation_name(gaussian_formation f);
+/* How m's hits are ordered under its formation and the scene's order
+ * (which only a 2D model's takes): "center-depth", "hit-depth" or 3DGRT's
+ * "max-response". */
+const char *gaussian_order_name(const gaussian_model *m, gaussian_order order);
+/* The formation of that name for a model of that kind; -1 for a name
+ * that is none, or one for the other kind. */
+int gaussian_formation_parse(const char *name, gaussian_kind kind, gaussian_formation *f);
+
+/* Gaussians from surfels (surfel.h), for test scenes and 'refrender gen':
+ * each at the surfel's center, its frame's third axis along the normal,
+ * the two tangent scales half the radius (refrender's kernel sigma), a 3D
+ * Gaussian 2% as thick, opacity 0.95, the colour as the DC coefficient and
+ * small fixed view-dependent coefficients up to the SH degree. */
+struct surfel_s;
+int gaussian_from_surfels(const struct surfel_s *s, size_t n, gaussian_kind kind, int degree, gaussian_model *m,
+                          rr_error *err);
+
+/* The colour of SH coefficients sh (3 per coefficient, as stored above) of
+ * the given degree seen along dir (need not be unit): the real SH series
+ * plus 0.5, clamped below at 0 (not above), as the official renderers do. */
+vec3 gaussian_sh_color(const float *sh, int degree, vec3 dir);
+#ifdef RR_DCHECKS
+/* Test hook: whether the SH sums in AVX2 lanes differ in any bit from the
+ * scalar sums (0 without the lanes). */
+int gaussian_sh_lanes_differ(const float *sh, int degree, vec3 dir);
+#endif
+
+#endif

@@ -1,0 +1,331 @@
+/* Gaussian-splat models' PLY files (gaussian_ply.h): the official layout
+ * read through the PLY reader's generic layer (ply.h) and written back. */
+#include "io/gaussian_ply.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "core/atomicfile.h"
+#include "io/gaussian_stg_ply.h"
+#include "io/ply.h"
+
+/* ---- the PLY layout --------------------------------------------------- */
+
+enum { G_X = 0, G_NX = 3, G_DC = 6, G_REST = 9, G_OPACITY = 54, G_SCALE = 55, G_ROT = 58, G_SLOTS = 62 };
+static const char *const slot_names[G_SLOTS] = {
+    "x", "y", "z", "nx", "ny", "nz", "f_dc_0", "f_dc_1", "f_dc_2",
+    "f_rest_0", "f_rest_1", "f_rest_2", "f_rest_3", "f_rest_4", "f_rest_5", "f_rest_6", "f_rest_7", "f_rest_8", "f_rest_9", "f_rest_10", "f_rest_11", "f_rest_12", "f_rest_13", "f_rest_14", "f_rest_15", "f_rest_16", "f_rest_17", "f_rest_18", "f_rest_19", "f_rest_20", "f_rest_21", "f_rest_22", "f_rest_23", "f_rest_24", "f_rest_25", "f_rest_26", "f_rest_27", "f_rest_28", "f_rest_29", "f_rest_30", "f_rest_31", "f_rest_32", "f_rest_33", "f_rest_34", "f_rest_35", "f_rest_36", "f_rest_37", "f_rest_38", "f_rest_39", "f_rest_40", "f_rest_41", "f_rest_42", "f_rest_43", "f_rest_44",
+    "opacity", "scale_0", "scale_1", "scale_2", "rot_0", "rot_1", "rot_2", "rot_3"};
+static const ply_schema gaussian_schema = {slot_names, G_SLOTS, G_SLOTS /* no integer scaling */};
+
+typedef struct {
+    gaussian_model *m;
+    gaussian_kind forced;
+    size_t declared, next;
+    /* every f_rest_<k> the header declares, schema slot or not: those past
+     * f_rest_44 have no slot, yet they decide the SH degree (a file of
+     * degree 4 must be refused, not read as degree 3) */
+    int rest_names, rest_max;
+    unsigned char rest_seen[PLY_MAX_PROPERTIES];
+    int stg; /* a SpacetimeGaussians property was declared */
+} gaussian_sink;
+
+static int require(const char *path, const int *present, int first, int n, rr_error *err)
+{
+    for (int s = first; s < first + n; s++)
+        if (!present[s])
+            return rr_fail(err, "%s: Gaussian model lacks the vertex property '%s'", path, slot_names[s]);
+    return 0;
+}
+
+/* k of a property named f_rest_<k> (decimal digits), else -1. */
+static int rest_index(const char *name)
+{
+    if (strncmp(name, "f_rest_", 7) || name[7] < '0' || name[7] > '9')
+        return -1;
+    char *end;
+    long k = strtol(name + 7, &end, 10);
+    return *end || k > 1000000 ? -1 : (int)k;
+}
+
+/* The header's vertex properties as declared: counts every f_rest_<k>
+ * (the schema holds only degree 3's 45), and refuses Mip-Splatting's
+ * filter_3D (its 3D smoothing filter changes every Gaussian's extent and
+ * opacity, so ignoring it would render another model). */
+static int see_property(void *user, const char *path, long line, const char *name, rr_error *err)
+{
+    gaussian_sink *s = user;
+    if (gaussian_stg_claims(name)) /* read by gaussian_stg_ply.c instead */
+        return s->stg = 1, rr_fail(err, "%s:%ld: SpacetimeGaussians property '%s'", path, line, name);
+    if (!strcmp(name, "filter_3D"))
+        return rr_fail(err, "%s:%ld: vertex property 'filter_3D': Mip-Splatting's 3D filter is not supported (the "
+                            "model would render without it)", path, line);
+    int k = rest_index(name);
+    if (k < 0)
+        return 0;
+    if (k < PLY_MAX_PROPERTIES && s->rest_seen[k]) /* slots below 45 were refused as duplicates already */
+        return rr_fail(err, "%s:%ld: duplicate vertex property '%s'", path, line, name);
+    if (k < PLY_MAX_PROPERTIES)
+        s->rest_seen[k] = 1;
+    s->rest_names++;
+    s->rest_max = k > s->rest_max ? k : s->rest_max;
+    return 0;
+}
+
+/* The SH degree d from the f_rest properties: a contiguous run from
+ * f_rest_0 of 3((d + 1)^2 - 1) (0, 9, 24, 45 for degrees 0 to 3); degree 4's
+ * 72 and others are refused, naming the degree they would need. */
+static int sh_degree_of(const char *path, const gaussian_sink *s, rr_error *err)
+{
+    int n = s->rest_names;
+    if (n && s->rest_max != n - 1) { /* distinct names, so a gap: the first missing and the next present */
+        int gap = 0, next;
+        while (s->rest_seen[gap])
+            gap++;
+        for (next = gap + 1; next < PLY_MAX_PROPERTIES && !s->rest_seen[next]; next++)
+            ;
+        return rr_fail(err, "%s: property 'f_rest_%d' is present but 'f_rest_%d' is not (f_rest_* must run from "
+                            "f_rest_0 without gaps)", path, next < PLY_MAX_PROPERTIES ? next : s->rest_max, gap);
+    }
+    int d = 0;
+    while (3 * ((d + 1) * (d + 1) - 1) < n)
+        d++;
+    int need = 3 * ((d + 1) * (d + 1) - 1), below = 3 * (d * d - 1);
+    if (need == n && d <= GAUSSIAN_MAX_SH_DEGREE)
+        return d;
+    if (need == n)
+        return rr_fail(err, "%s: %d f_rest properties make SH degree %d (degree d has 3((d+1)^2-1)): degrees above 3 "
+                            "are not supported", path, n, d);
+    return rr_fail(err, "%s: %d f_rest properties are no SH degree (degree d has 3((d+1)^2-1): 0, 9, 24 or 45 for "
+                        "degrees 0 to 3): %d lies between degree %d's %d and degree %d's %d%s",
+                   path, n, n, d - 1, below, d, need, d > GAUSSIAN_MAX_SH_DEGREE ? "; degrees above 3 are not supported" : "");
+}
+
+static int begin_model(void *user, const char *path, const int *present, size_t count, rr_error *err)
+{
+    gaussian_sink *s = user;
+    gaussian_model *m = s->m;
+    if (require(path, present, G_X, 3, err) || require(path, present, G_DC, 3, err) ||
+        require(path, present, G_OPACITY, 1, err) || require(path, present, G_SCALE, 2, err) ||
+        require(path, present, G_ROT, 4, err))
+        return -1;
+    m->kind = s->forced ? s->forced : present[G_SCALE + 2] ? GAUSSIAN_3D : GAUSSIAN_2D;
+    if (m->kind == GAUSSIAN_3D && require(path, present, G_SCALE + 2, 1, err))
+        return -1;
+    int degree = sh_degree_of(path, s, err);
+    if (degree < 0)
+        return -1;
+    m->sh_degree = degree, m->sh_coeffs = (degree + 1) * (degree + 1);
+    s->declared = count, s->next = 0;
+    return 0;
+}
+
+/* Storage for every declared Gaussian, on the first one (after the reader
+ * has checked that the file can hold them all). */
+static int allocate(gaussian_sink *s) { return gaussian_model_alloc(s->m, s->declared ? s->declared : 1); }
+static int bad(char *why, size_t size, const char *fmt, const char *name, double value)
+{
+    snprintf(why, size, fmt, name, value);
+    return -1;
+}
+
+/* Stores v as the float the model holds: a value finite as a double but
+ * not as a float (a double property of 1e300, ascii 1e39) would be stored
+ * as inf, so it is refused naming the property and its value. */
+static int store(float *dst, double v, int slot, char *why, size_t why_size)
+{
+    *dst = (float)v;
+    return isfinite(*dst) ? 0 : bad(why, why_size, "property '%s' = %g is beyond float range (3.4e38)",
+                                    slot_names[slot], v);
+}
+
+/* The unit quaternion of rot_0..3: divided by its largest component
+ * before squaring, so that components of 1e200 do not overflow q.q and a
+ * lone 1e-170 does not underflow it; only zero is refused. */
+static int normalised_rotation(const double *v, float *q, char *why, size_t why_size)
+{
+    double big = 0, u[4], len2 = 0;
+    for (int k = 0; k < 4; k++)
+        big = fmax(big, fabs(v[G_ROT + k]));
+    if (!(big > 0))
+        return snprintf(why, why_size, "zero-length quaternion (rot_0..rot_3)"), -1;
+    for (int k = 0; k < 4; k++)
+        u[k] = v[G_ROT + k] / big, len2 += u[k] * u[k];
+    for (int k = 0; k < 4; k++)
+        q[k] = (float)(u[k] / sqrt(len2));
+    return 0;
+}
+
+/* Means within GAUSSIAN_MAX_ABS and scales, after exp, within
+ * GAUSSIAN_MAX_SCALE (gaussian.h: Embree's range). */
+static int store_geometry(gaussian_model *m, size_t i, const double *v, char *why, size_t why_size)
+{
+    int scales = m->kind == GAUSSIAN_3D ? 3 : 2;
+    for (int k = 0; k < 3; k++) {
+        if (!(fabs(v[G_X + k]) <= GAUSSIAN_MAX_ABS))
+            return bad(why, why_size, "property '%s' = %g is beyond 1e+15 (GAUSSIAN_MAX_ABS) from the origin, "
+                       "where rays can be traced", slot_names[G_X + k], v[G_X + k]);
+        double e = k < scales ? exp(v[G_SCALE + k]) : 0.0;
+        if (!(e <= GAUSSIAN_MAX_SCALE))
+            return bad(why, why_size, "property '%s' = %g: exp() of it is beyond 1e15 (GAUSSIAN_MAX_SCALE)",
+                       slot_names[G_SCALE + k], v[G_SCALE + k]);
+        m->mean[3 * i + k] = (float)v[G_X + k];
+        m->scale[3 * i + k] = (float)e;
+    }
+    return normalised_rotation(v, &m->rotation[4 * i], why, why_size);
+}
+
+/* The SH coefficients, rest channel-major in the file. */
+static int store_sh(gaussian_model *m, size_t i, const double *v, char *why, size_t why_size)
+{
+    float *sh = m->sh + 3 * (size_t)m->sh_coeffs * i;
+    int rest = m->sh_coeffs - 1;
+    for (int c = 0; c < 3; c++) {
+        if (store(&sh[c], v[G_DC + c], G_DC + c, why, why_size))
+            return -1;
+        for (int k = 1; k <= rest; k++)
+            if (store(&sh[3 * k + c], v[G_REST + c * rest + (k - 1)], G_REST + c * rest + (k - 1), why, why_size))
+                return -1;
+    }
+    return 0;
+}
+
+/* The activations of the official loader: exp for scales, sigmoid for
+ * opacity, the quaternion normalised (w first). */
+static int add_gaussian(void *user, const double *v, const int *present, char *why, size_t why_size)
+{
+    gaussian_sink *s = user;
+    gaussian_model *m = s->m;
+    if (!m->mean && allocate(s))
+        return snprintf(why, why_size, "out of memory for %zu Gaussians", s->declared), -1;
+    for (int k = 0; k < G_SLOTS; k++)
+        if (present[k] && !isfinite(v[k]))
+            return bad(why, why_size, "property '%s' is %g", slot_names[k], v[k]);
+    size_t i = s->next;
+    if (store_geometry(m, i, v, why, why_size) || store_sh(m, i, v, why, why_size))
+        return -1;
+    m->opacity[i] = (float)(1.0 / (1.0 + exp(-v[G_OPACITY]))); /* in [0, 1] for any finite value */
+    m->count = ++s->next;
+    return 0;
+}
+
+/* A parse's end: on failure, or with no Gaussian, the model is left empty. */
+static int finish(gaussian_model *m, int rc, const char *name, rr_error *err)
+{
+    if (!rc && m->count == 0)
+        rc = rr_fail(err, "%s: the model has no Gaussians", name);
+    if (rc)
+        gaussian_model_free(m);
+    return rc;
+}
+
+/* Parses from memory (data) or reads the file at name (data NULL). */
+static int load(const char *name, const char *data, size_t len, gaussian_kind kind, gaussian_model *m,
+                uint64_t *content_hash, rr_error *err)
+{
+    gaussian_model_free(m);
+    gaussian_sink *sink = calloc(1, sizeof *sink);
+    if (!sink)
+        return rr_fail(err, "%s: out of memory", name);
+    sink->m = m, sink->forced = kind;
+    ply_visitor v = {begin_model, add_gaussian, sink, see_property};
+    uint64_t hash_before = content_hash ? *content_hash : 0;
+    int rc = data ? ply_parse_vertices(name, data, len, &gaussian_schema, &v, err)
+                  : ply_read_vertices(name, &gaussian_schema, &v, content_hash, err);
+    int stg = sink->stg;
+    free(sink);
+    if (stg && content_hash) /* its own reader reads it again, hashing from the same start */
+        *content_hash = hash_before;
+    return stg ? gaussian_stg_load(name, data, len, kind, m, content_hash, err) : finish(m, rc, name, err);
+}
+
+int gaussian_parse(const char *name, const char *data, size_t len, gaussian_kind kind, gaussian_model *m,
+                   rr_error *err)
+{
+    return load(name, data ? data : "", len, kind, m, NULL, err);
+}
+
+int gaussian_read(const char *path, gaussian_kind kind, gaussian_model *m, uint64_t *content_hash, rr_error *err)
+{
+    return load(path, NULL, 0, kind, m, content_hash, err);
+}
+
+/* ---- writing ------------------------------------------------------------ */
+
+static int put_f32(FILE *f, double v)
+{
+    float x = (float)v;
+    return fwrite(&x, 4, 1, f) == 1; /* little endian hosts only: checked in gaussian_write_ply */
+}
+
+static void write_header(FILE *f, const gaussian_model *m)
+{
+    int rest = 3 * (m->sh_coeffs - 1), scales = m->kind == GAUSSIAN_3D ? 3 : 2;
+    fprintf(f, "ply\nformat binary_little_endian 1.0\ncomment written by refrender %s (%s)\nelement vertex %zu\n",
+            RR_VERSION, m->kind == GAUSSIAN_3D ? "3DGS" : "2DGS", m->count);
+    for (int k = 0; k < G_REST; k++)
+        fprintf(f, "property float %s\n", slot_names[k]);
+    for (int k = 0; k < rest; k++)
+        fprintf(f, "property float %s\n", slot_names[G_REST + k]);
+    for (int k = G_OPACITY; k < G_SCALE + scales; k++)
+        fprintf(f, "property float %s\n", slot_names[k]);
+    for (int k = G_ROT; k < G_SLOTS; k++)
+        fprintf(f, "property float %s\n", slot_names[k]);
+    fputs("end_header\n", f);
+}
+
+/* One Gaussian as the official save_ply stores it: the activations undone
+ * (logit of the opacity, log of the scales), rest coefficients
+ * channel-major, normals zero. */
+static int write_gaussian(FILE *f, const gaussian_model *m, size_t i)
+{
+    int ok = 1, rest = m->sh_coeffs - 1, scales = m->kind == GAUSSIAN_3D ? 3 : 2;
+    const float *sh = m->sh + 3 * (size_t)m->sh_coeffs * i;
+    for (int k = 0; k < 3; k++)
+        ok &= put_f32(f, m->mean[3 * i + k]);
+    for (int k = 0; k < 3; k++)
+        ok &= put_f32(f, 0.0);
+    for (int c = 0; c < 3; c++)
+        ok &= put_f32(f, sh[c]);
+    for (int c = 0; c < 3; c++)
+        for (int k = 1; k <= rest; k++)
+            ok &= put_f32(f, sh[3 * k + c]);
+    double o = m->opacity[i];
+    ok &= put_f32(f, log(o / (1.0 - o)));
+    for (int k = 0; k < scales; k++)
+        ok &= put_f32(f, log(m->scale[3 * i + k]));
+    for (int k = 0; k < 4; k++)
+        ok &= put_f32(f, m->rotation[4 * i + k]);
+    return ok;
+}
+
+typedef struct {
+    const char *path;
+    const gaussian_model *m;
+} model_file;
+
+static int write_model(FILE *f, void *ctx, rr_error *err)
+{
+    const model_file *mf = ctx;
+    write_header(f, mf->m);
+    int ok = 1;
+    for (size_t i = 0; i < mf->m->count && ok; i++)
+        ok = write_gaussian(f, mf->m, i);
+    return ok && !ferror(f) ? 0 : rr_fail(err, "%s: write failed (disk full?)", mf->path);
+}
+
+int gaussian_write_ply(const char *path, const gaussian_model *m, rr_error *err)
+{
+    const uint16_t one = 1;
+    if (*(const uint8_t *)&one != 1)
+        return rr_fail(err, "%s: writing Gaussian PLYs needs a little-endian host", path);
+    if (m->dynamic) /* the official layout has no motion: it would be dropped */
+        return rr_fail(err, "%s: writing SpacetimeGaussians models is not supported", path);
+    for (size_t i = 0; i < m->count; i++) /* what would not read back is not written */
+        if (!(m->opacity[i] > 0 && m->opacity[i] < 1) || !(m->scale[3 * i] > 0 && m->scale[3 * i + 1] > 0))
+            return rr_fail(err, "%s: Gaussian %zu has an opacity outside (0, 1) or a zero scale", path, i);
+    model_file mf = {path, m};
+    return atomic_write_stdio(path, write_model, &mf, err);
+}
+

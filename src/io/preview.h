@@ -1,0 +1,32 @@
+/* sRGB preview PNG (or any 8-bit format OpenImageIO writes, chosen by the
+ * file extension), through OpenImageIO in a module (preview.cpp built as
+ * refrender-preview.so next to the executable) opened on first use, so
+ * that a run without a preview does not load OpenImageIO at all. */
+#ifndef RR_PREVIEW_H
+#define RR_PREVIEW_H
+
+#include "core/atomicfile.h"
+#include "core/common.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* Writes RGB of interleaved float RGBA: each channel clamped to [0, 1]
+ * (no exposure change) and encoded with the sRGB transfer function.
+ * Atomic like the EXR output (atomicfile.h), and read back before it
+ * replaces anything. Returns 0, or -1 with the reason in err. */
+int preview_write_srgb(const char *path, int w, int h, const float *rgba, rr_error *err);
+/* The same, its file left in set for atomic_set_commit (set NULL: now). */
+int preview_write_srgb_into(atomic_set *set, const char *path, int w, int h, const float *rgba, rr_error *err);
+
+/* 0 if OpenImageIO can write the format of path's extension; checked before
+ * a render so that a bad --preview name (or a missing module) fails at
+ * once, naming the file. */
+int preview_check_format(const char *path, rr_error *err);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif

@@ -1,0 +1,156 @@
+#include "io/render_attrs.h"
+
+#include <inttypes.h>
+#include <stdio.h>
+#include <stdlib.h>
+
+#include "gaussians/gaussian_hit.h"
+#include "core/inputfile.h"
+
+static void describe_weight(FILE *f, const shutter *sh)
+{
+    if (sh->kind == WEIGHT_LINEAR)
+        fprintf(f, "linear center=%.17g", sh->center);
+    else if (sh->kind == WEIGHT_EXP)
+        fprintf(f, "exp center=%.17g rate=%.17g", sh->center, sh->rate);
+    else if (sh->kind == WEIGHT_TABLE) {
+        fputs("table", f);
+        for (int i = 0; i < sh->table_size; i++)
+            fprintf(f, " %.17g %.17g", sh->table_t[i], sh->table_w[i]);
+    } else
+        fputs("box", f);
+}
+
+/* The scene parameters applied, "name=value ..." ("none" without any). */
+static void describe_parameters(FILE *f, const scene_params *p)
+{
+    for (int i = 0; i < p->n; i++)
+        fprintf(f, "%s%s=%s", i ? " " : "", p->name[i], p->value[i]);
+    if (!p->n)
+        fputs("none", f);
+}
+
+/* An identity text of any length (a 256-pair weight table, many -D
+ * parameters): the text under key, cut visibly where an EXR attribute
+ * cannot hold it, and its FNV-1a under hash_key, which is what identity
+ * checks compare whole. Cut at 4095 characters, the text alone once let
+ * passes rendered with different parameters merge. */
+static void set_identity_text(attr_list *a, const char *key, const char *hash_key,
+                              void (*describe)(FILE *, const void *), const void *what)
+{
+    char *text = NULL;
+    size_t len = 0;
+    FILE *f = open_memstream(&text, &len);
+    RR_CHECK(f != NULL); /* out of memory for a few KB: nothing sensible is left to do */
+    describe(f, what);
+    RR_CHECK(fclose(f) == 0 && text != NULL);
+    attrs_set(a, hash_key, "%016" PRIx64, input_hash(INPUT_HASH_INIT, text, len));
+    attrs_set(a, key, len < ATTR_TEXT_MAX ? "%s" : "%.4000s ... (cut: the whole text's hash is the identity)", text);
+    free(text);
+}
+
+/* How each Gaussian-splat object is imaged ("none" without any): its PLY
+ * does not say, and the default has changed (3D models were once imaged as
+ * 3DGRT's, now by the 3DGS rasterizer's rules), so it is part of a render's
+ * identity: states rendered under two defaults must not merge. */
+static void describe_gaussians(FILE *f, const scene *s)
+{
+    int any = 0;
+    for (int i = 0; i < s->nobjects; i++) {
+        const scene_object *o = &s->objects[i];
+        if (o->kind != OBJECT_GAUSSIANS)
+            continue;
+        const gaussian_model *m = &o->gaussians;
+        fprintf(f, "%s%s: semantics=%s tileRule=%s order=%s", any++ ? "; " : "", o->name,
+                gaussian_formation_name(gaussian_formation_of(m)), m->tile_rule ? "on" : "off",
+                gaussian_order_name(m, o->order));
+    }
+    if (!any)
+        fputs("none", f);
+}
+
+static void weight_text(FILE *f, const void *sh) { describe_weight(f, sh); }
+static void gaussians_text(FILE *f, const void *s) { describe_gaussians(f, s); }
+static void parameters_text(FILE *f, const void *p) { describe_parameters(f, p); }
+
+/* A rolling shutter's windows, the first and the last line's, for a reader
+ * who does not know the presets' rules (with --time the shutter is [T, T]
+ * but the lines are not all at T); each preset's window moves linearly with
+ * the line, so these two give every line's. */
+static void line_times(attr_list *a, const shutter *sh, int width, int height)
+{
+    if (sh->rolling.kind == ROLLING_OFF)
+        return;
+    int lines;
+    shutter_line(sh, 0, 0, width, height, &lines);
+    attrs_set(a, ATTR_LINE_TIMES, "line 0 [%.17g, %.17g], line %d [%.17g, %.17g], linear between",
+              shutter_line_time(sh, 0, lines, sh->open), shutter_line_time(sh, 0, lines, sh->close), lines - 1,
+              shutter_line_time(sh, lines - 1, lines, sh->open), shutter_line_time(sh, lines - 1, lines, sh->close));
+}
+
+/* Writes the column-vector matrix m (p' = m p) as OpenEXR stores it: for
+ * Imath's row vectors (p' = p M), i.e. transposed, row after row. */
+static void set_matrix(attr_list *a, const char *key, double m[4][4])
+{
+    char buf[512];
+    size_t len = 0;
+    for (int r = 0; r < 4; r++)
+        for (int c = 0; c < 4; c++)
+            len += (size_t)snprintf(buf + len, sizeof buf - len, "%s%.9g", len ? " " : "", m[c][r]);
+    attrs_set(a, key, "%s", buf);
+}
+
+/* The rest-pose camera (no camera motion) as pbrt-v4 and OpenEXR's
+ * standard attributes name it. Camera space: x right, y up, z forward (the
+ * view direction; left-handed, as pbrt's). NDC: x = raster x / width,
+ * y = raster y / height (0, 0 the top-left image corner, as refrender's
+ * raster), z = 1 / depth, after dividing by w = depth. */
+static void camera_matrices(attr_list *a, const camera *cam)
+{
+    double view[4][4], proj[4][4], ndc[4][4];
+    camera_world_to_camera(cam, view);
+    camera_projection(cam, 1.0, 1.0, proj);
+    mat4_mul(proj, view, ndc);
+    set_matrix(a, ATTR_WORLD_TO_CAMERA, view);
+    set_matrix(a, ATTR_WORLD_TO_NDC, ndc);
+}
+
+
+void attrs_for_render(attr_list *a, const scene *s, const render_settings *rs, uint32_t total_batches,
+                      const char *command)
+{
+    const sampler *smp = &rs->smp;
+    attrs_set(a, ATTR_SCENE, "%s", s->path);
+    attrs_set(a, ATTR_SCENE_HASH, "%016" PRIx64, s->scene_hash);
+    attrs_set(a, ATTR_INPUTS_HASH, "%016" PRIx64, s->inputs_hash);
+    /* the parameters change the scene: part of the render's identity */
+    set_identity_text(a, ATTR_PARAMETERS, ATTR_PARAMETERS_HASH, parameters_text, &s->params);
+    attrs_set(a, ATTR_RESOLUTION, "%dx%d", s->cam.width, s->cam.height);
+    attrs_set(a, ATTR_SAMPLER, "%s", sampler_name(smp->kind));
+    attrs_set(a, ATTR_SPP, "%d", smp->grid * smp->grid);
+    attrs_set(a, ATTR_TSPP, "%d", smp->tspp);
+    attrs_set(a, ATTR_SEED, "%" PRIu64, smp->seed);
+    attrs_set(a, ATTR_EPSILON, "%.17g", s->epsilon);
+    attrs_set(a, ATTR_KERNEL_SIGMA, "%.17g", s->kernel_sigma);
+    attrs_set(a, ATTR_SHUTTER, "%.17g %.17g", rs->shut.open, rs->shut.close);
+    attrs_set(a, ATTR_SHUTTER_OPEN, "%.17g", rs->shut.open);
+    attrs_set(a, ATTR_SHUTTER_CLOSE, "%.17g", rs->shut.close);
+    camera_matrices(a, &s->cam);
+    set_identity_text(a, ATTR_WEIGHT_FUNCTION, ATTR_WEIGHT_HASH, weight_text, &rs->shut);
+    char rolling[256];
+    shutter_rolling_text(&rs->shut, rolling, sizeof rolling);
+    attrs_set(a, ATTR_ROLLING_SHUTTER, "%s", rolling);
+    line_times(a, &rs->shut, s->cam.width, s->cam.height);
+    attrs_set(a, ATTR_TIME_FACTOR, "%d", smp->time_factor);
+    attrs_set(a, ATTR_TIME_INTEGRATION, "%s", rs->exact_time ? "exact" : "sampled");
+    attrs_set(a, ATTR_PIXEL_FILTER, "%s", pixel_filter_name(rs->filter));
+    attrs_set(a, ATTR_BLUR_SPACE, "%s", blur_space_name(rs->blur));
+    set_identity_text(a, ATTR_GAUSSIANS, ATTR_GAUSSIANS_HASH, gaussians_text, s);
+    /* the convention compare.py --alpha composite relies on (README, Output) */
+    attrs_set(a, ATTR_BACKGROUND, "%.9g %.9g %.9g", s->background.x, s->background.y, s->background.z);
+    attrs_set(a, ATTR_ALPHA, "coverage; RGB already holds refrender:background where coverage < 1");
+    attrs_set(a, ATTR_BATCHES, "%u", total_batches);
+    attrs_set(a, ATTR_COMMAND, "%s", command);
+    attrs_set(a, ATTR_SOFTWARE, "refrender %s", RR_VERSION);
+}
+

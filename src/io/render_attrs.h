@@ -1,0 +1,13 @@
+/* The identity and provenance attributes of a render, written into its
+ * EXR header (output.h checks the identity ones when states are merged or
+ * resumed). */
+#ifndef RR_RENDER_ATTRS_H
+#define RR_RENDER_ATTRS_H
+
+#include "io/output.h"
+#include "render/render.h"
+
+void attrs_for_render(attr_list *a, const scene *s, const render_settings *rs, uint32_t total_batches,
+                      const char *command);
+
+#endif

@@ -1,0 +1,156 @@
+/* Exact time integration, step 3 (exact.h): on each piece of fixed blended
+ * set, the integral of a(t) (rgb(t), coverage(t)) by adaptive
+ * Gauss-Kronrod, each node shaded as the sampled path shades one time. */
+#include "render/exact_internal.h"
+
+#include "render/shade.h"
+
+/* Components: a r, a g, a b, a coverage, and a itself (the normaliser). */
+enum { NCOMP = 5 };
+
+/* One blended candidate at time t, as accel's callbacks would report it
+ * (same side rule, world normal, kernel weight). Returns 0 when the ray is
+ * parallel to the splat's plane (no hit, as in splat_intersect). */
+static int candidate_hit(const sample_ctx *c, int index, double t, surface_hit *h)
+{
+    const cand_info *info = &c->scr->info[index];
+    const scene_object *o = &c->p->sc->objects[info->obj];
+    const object_ray *r = exact_object_ray(c, info->obj, t);
+    vec3 normal, color;
+    double s, r2 = 0.0;
+    if (o->kind == OBJECT_SPHERE) {
+        exact_sphere_crossing(o, r, &s);
+        normal = v3_scale(v3_sub(v3_add(r->org, v3_scale(r->dir, s)), o->sphere_center), 1.0 / o->sphere_radius);
+        color = o->sphere_color;
+    } else {
+        plane_crossing pc = exact_plane_crossing(info, r);
+        if (pc.denom == 0)
+            return 0;
+        s = pc.s, r2 = pc.r2;
+        const float *sc = pointmodel_color(&o->model, info->prim);
+        normal = info->shading_normal;
+        color = v3(sc[0], sc[1], sc[2]);
+    }
+    vec3 wn = xform_normal(&r->xf, normal_facing_eye(normal, r->dir));
+    double w = hit_weight(o->kind == OBJECT_SPHERE, r2, accel_sigma(c->p->acc));
+    *h = (surface_hit){(float)s, info->obj, info->prim, (float)w, (float)r2,
+                       {(float)color.x, (float)color.y, (float)color.z}, {(float)wn.x, (float)wn.y, (float)wn.z}};
+    return 1;
+}
+
+/* a(t) (rgb, coverage, 1) with the piece's blended set at time t. */
+static void integrand(const sample_ctx *c, const piece *pc, double t, double out[NCOMP], int *overflow)
+{
+    const scene *s = c->p->sc;
+    double w = shutter_weight(&c->p->shut, t);
+    kbuffer kb;
+    kbuffer_reset(&kb, (float)accel_epsilon(c->p->acc));
+    for (int k = 0; k < pc->count; k++) {
+        surface_hit h;
+        if (candidate_hit(c, c->scr->sets[pc->first + (size_t)k], t, &h))
+            kbuffer_insert(&kb, &h);
+    }
+    *overflow |= kb.dropped > 0;
+    vec3 col = s->background;
+    if (kb.count) {
+        vec3 org, dir;
+        exact_world_ray(c, t, &org, &dir);
+        col = shade_hits(s, &kb, org, dir);
+    }
+    out[0] = w * col.x, out[1] = w * col.y, out[2] = w * col.z;
+    out[3] = kb.count ? w : 0.0, out[4] = w;
+}
+
+/* Gauss-Kronrod 7-15 nodes on [-1, 1] (Kronrod's extension of the 7-point
+ * Gauss-Legendre rule; the values of QUADPACK's qk15): xk[1], xk[3], xk[5]
+ * and xk[7] = 0 are the Gauss nodes. */
+static const double xk[8] = {0.991455371120812639206854697526329, 0.949107912342758524526189684047851,
+                             0.864864423359769072789712788640926, 0.741531185599394439863864773280788,
+                             0.586087235467691130294144845693013, 0.405845151377397166906606412076961,
+                             0.207784955007898467600689403773245, 0.0};
+static const double wk[8] = {0.022935322010529224963732008058970, 0.063092092629978553290700663189204,
+                             0.104790010322250183839876322541518, 0.140653259715525918745189590510238,
+                             0.169004726639267902826583426598550, 0.190350578064785409913256402421014,
+                             0.204432940075298892414161999234649, 0.209482141084727828012999174891714};
+static const double wg[4] = {0.129484966168869693270611432679082, 0.279705391489276667901467771423780,
+                             0.381830050505118944950369775488975, 0.417959183673469387755102040816327};
+
+/* Both rules on [a, b]: returns the largest difference of their components. */
+static double gauss_kronrod(const sample_ctx *c, const piece *pc, double a, double b, double kron[NCOMP],
+                            int *overflow)
+{
+    double half = 0.5 * (b - a), mid = 0.5 * (a + b), gauss[NCOMP] = {0};
+    for (int j = 0; j < NCOMP; j++)
+        kron[j] = 0;
+    for (int i = 0; i < 8; i++) {
+        int nodes = i == 7 ? 1 : 2;
+        for (int side = 0; side < nodes; side++) {
+            double f[NCOMP];
+            integrand(c, pc, mid + (side ? -1 : 1) * half * xk[i], f, overflow);
+            for (int j = 0; j < NCOMP; j++) {
+                kron[j] += wk[i] * f[j];
+                if (i & 1)
+                    gauss[j] += wg[i / 2] * f[j];
+            }
+        }
+    }
+    double diff = 0;
+    for (int j = 0; j < NCOMP; j++) {
+        kron[j] *= half, gauss[j] *= half;
+        diff = fmax(diff, fabs(kron[j] - gauss[j]));
+    }
+    if (c->st)
+        c->st->nodes += 15;
+    exact_spend(c, 15 * ((uint64_t)pc->count + 1));
+    return diff;
+}
+
+/* Adaptive: halves [a, b] until the two rules agree to EXACT_REL_TOL of the
+ * piece's largest component (the weight integral is one, so colors near 0
+ * are held to the same absolute accuracy), or the halves are shorter than
+ * the time tolerance, or the midpoint rounds to an end (far from t = 0),
+ * or the depth the partition allows is reached. Stops early when the
+ * sample's budget is spent or it is interrupted (scratch status). */
+static void integrate(const sample_ctx *c, const piece *pc, double a, double b, int depth, double sum[NCOMP],
+                      int *overflow)
+{
+    double kron[NCOMP];
+    double diff = gauss_kronrod(c, pc, a, b, kron, overflow);
+    double scale = 0, mid = 0.5 * (a + b);
+    for (int j = 0; j < NCOMP; j++)
+        scale = fmax(scale, fabs(kron[j]));
+    if (diff <= EXACT_REL_TOL * scale || b - a <= c->p->tol || !(a < mid && mid < b) || depth >= EXACT_MAX_DEPTH ||
+        c->scr->status) {
+        for (int j = 0; j < NCOMP; j++)
+            sum[j] += kron[j];
+        return;
+    }
+    integrate(c, pc, a, mid, depth + 1, sum, overflow);
+    integrate(c, pc, mid, b, depth + 1, sum, overflow);
+}
+
+int exact_sample(const exact_plan *p, exact_scratch *scr, double x, double y, double rgba[4], exact_stats *st)
+{
+    sample_ctx c;
+    if (exact_context(p, scr, x, y, st, &c))
+        return EXACT_NO_MEMORY;
+    int rc = exact_gather(&c);
+    if (!rc)
+        rc = exact_partition(&c);
+    if (rc)
+        return rc;
+    double sum[NCOMP] = {0};
+    int overflow = 0;
+    for (size_t i = 0; i < scr->npieces && !scr->status; i++)
+        integrate(&c, &scr->leaves[i], scr->leaves[i].a, scr->leaves[i].b, 0, sum, &overflow);
+    if (scr->status)
+        return scr->status;
+    for (int j = 0; j < 4; j++)
+        rgba[j] = sum[4] > 0 ? sum[j] / sum[4] : 0.0;
+    if (st) {
+        st->candidates += scr->nkeys;
+        st->pieces += scr->npieces;
+        st->overflows += (uint64_t)overflow;
+    }
+    return EXACT_OK;
+}

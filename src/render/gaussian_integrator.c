@@ -1,0 +1,377 @@
+/* The Gaussian integrator (gaussian_integrator.h): windows, chunks in order
+ * of key floors, and compositing between them. */
+#include "render/gaussian_integrator.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+#include "gaussians/gaussian_dynamic.h"
+
+void gaussian_integrator_init(gaussian_integrator *g) { memset(g, 0, sizeof *g); }
+
+void gaussian_integrator_reset(gaussian_integrator *g) { g->hits.count = g->hits.dropped = 0; }
+
+static void instant_free(gaussian_instant *in)
+{
+    free(in->model.mean);
+    free(in->model.scale);
+    free(in->model.rotation);
+    free(in->model.opacity);
+    free(in->prim);
+}
+
+void gaussian_integrator_free(gaussian_integrator *g)
+{
+    gaussian_hits_free(&g->hits);
+    for (size_t k = 0; g->instants && k < g->rays_cap; k++)
+        instant_free(&g->instants[k]);
+    free(g->instants);
+    free(g->rays);
+    free(g->candidates);
+    free(g->candidate_order);
+    memset(g, 0, sizeof *g);
+}
+
+/* ---- listing a window's candidates ------------------------------------ */
+
+/* What the candidate callback needs: the object ray being traversed. */
+typedef struct {
+    gaussian_integrator *g;
+    const scene_object *o;
+    const gaussian_object_ray *r;
+} listing;
+
+static void evaluate(const listing *l, unsigned prim)
+{
+    gaussian_hit h;
+    if (l->r->instant) { /* (no room for its state at the ray's time either) */
+        l->g->hits.dropped++;
+        return;
+    }
+    if (gaussian_hit_any(l->r->model, prim, l->o->order, &l->r->ray, &h)) {
+        h.obj = l->r->obj;
+        gaussian_hits_add(&l->g->hits, &h);
+    }
+}
+
+/* Every Gaussian the ray passes is listed (cull_candidates and
+ * evaluate_window take them after the traversal). Listing first lets the
+ * cull prefetch their loads a few ahead (a prefetch here too, a traversal
+ * ahead, measured 1-9% slower on the benchmark-scale view:
+ * src/cmd/BENCH.md). */
+static void list_candidate(void *user, unsigned prim)
+{
+    const listing *l = user;
+    gaussian_integrator *g = l->g;
+    if (g->candidates_count == g->candidates_cap) {
+        size_t cap = g->candidates_cap ? 2 * g->candidates_cap : 1024;
+        gaussian_candidate *grown = realloc(g->candidates, cap * sizeof *grown);
+        if (!grown) { /* no room to list it: evaluated at once, as listed ones are */
+            evaluate(l, prim);
+            return;
+        }
+        g->candidates = grown, g->candidates_cap = cap;
+    }
+    g->candidates[g->candidates_count++].prim = prim;
+}
+
+static void cull_candidates(const listing *l, size_t first, unsigned ray)
+{
+    gaussian_integrator *g = l->g;
+    size_t n = g->candidates_count - first;
+    if (n) /* (none listed yet: no array to offset) */
+        g->candidates_count = first + gaussian_cull_candidates(l->r->model, &l->r->ray, g->candidates + first, n, ray);
+}
+
+/* Room for n Gaussians in an instant model. */
+static int instant_room(gaussian_instant *in, size_t n)
+{
+    if (n <= in->cap)
+        return 1;
+    size_t cap = n < 2 * in->cap ? 2 * in->cap : n < 256 ? 256 : n;
+    float *mean = realloc(in->model.mean, 3 * cap * sizeof *mean);
+    if (mean)
+        in->model.mean = mean;
+    float *scale = realloc(in->model.scale, 3 * cap * sizeof *scale);
+    if (scale)
+        in->model.scale = scale;
+    float *rotation = realloc(in->model.rotation, 4 * cap * sizeof *rotation);
+    if (rotation)
+        in->model.rotation = rotation;
+    float *opacity = realloc(in->model.opacity, cap * sizeof *opacity);
+    if (opacity)
+        in->model.opacity = opacity;
+    unsigned *prim = realloc(in->prim, cap * sizeof *prim);
+    if (prim)
+        in->prim = prim;
+    if (!mean || !scale || !rotation || !opacity || !prim)
+        return 0;
+    in->cap = cap;
+    return 1;
+}
+
+/* How far ahead an instant's loads are started (the Gaussians are spread
+ * over a model far larger than the caches, as gaussian_prefetch_cull's). */
+enum { INSTANT_PREFETCH_AHEAD = 8 };
+
+/* A dynamic model's window: the candidates listed from `first` on
+ * (Gaussians of model m) become the slots of the ray's instant model that
+ * hold them at the ray's time, so that the cull and the kernels draw each
+ * as the static Gaussian of its instant (gaussian_dynamic_instant); their
+ * hits go back to the Gaussian's own index (original_prim). Here the mean
+ * and scale, all the cull reads; instantiate_kept adds the rest for the
+ * candidates it keeps (most fail it: on a sphere of 20k, the instants'
+ * full state before the cull took 45% of the render). A window's
+ * candidates are evaluated before the next window's are listed, so the
+ * slots are reused from window to window. With no room they are dropped,
+ * as hits that find no memory are. */
+static void instantiate_for_cull(gaussian_integrator *g, const gaussian_model *m, gaussian_object_ray *r, size_t first)
+{
+    gaussian_instant *in = r->instant;
+    size_t n = g->candidates_count - first;
+    in->model.count = 0;
+    if (!instant_room(in, n)) {
+        g->hits.dropped += n;
+        g->candidates_count = first;
+        return;
+    }
+    for (size_t k = 0; k < n; k++) {
+        gaussian_candidate *c = &g->candidates[first + k];
+        if (k + INSTANT_PREFETCH_AHEAD < n)
+            gaussian_dynamic_prefetch_cull(m, c[INSTANT_PREFETCH_AHEAD].prim);
+        gaussian_dynamic_instant_cull(m, c->prim, r->time, &in->model, k);
+        in->prim[k] = c->prim;
+        c->prim = (unsigned)k;
+    }
+    in->model.count = n;
+}
+
+/* The rotation and opacity of the candidates the cull kept from `first` on. */
+static void instantiate_kept(const gaussian_integrator *g, const gaussian_model *m, gaussian_object_ray *r,
+                             size_t first)
+{
+    gaussian_instant *in = r->instant;
+    for (size_t k = first; k < g->candidates_count; k++) {
+        if (k + INSTANT_PREFETCH_AHEAD < g->candidates_count)
+            gaussian_dynamic_prefetch_rest(m, in->prim[g->candidates[k + INSTANT_PREFETCH_AHEAD].prim]);
+        unsigned slot = g->candidates[k].prim;
+        gaussian_dynamic_instant_rest(m, in->prim[slot], r->time, &in->model, slot);
+    }
+}
+
+/* The index in the object's model of a hit's Gaussian, which is the
+ * index in the ray's instant model for a dynamic one. */
+static inline unsigned original_prim(const gaussian_object_ray *r, unsigned prim)
+{
+    return r->instant ? r->instant->prim[prim] : prim;
+}
+
+/* Lists and culls (cull_candidates) the Gaussians of object ray `ray`
+ * whose boxes its stretch [t0, t1) meets. The traversal's stretch is wider
+ * by the pad: a hit's box holds a point of the ray within that of the hit
+ * (gaussian_traversal_pad). */
+static void list_window(const scene *s, const accel *a, gaussian_integrator *g, unsigned ray, double t0, double t1)
+{
+    gaussian_object_ray *r = &g->rays[ray];
+    r->ray.tmin = t0, r->ray.tmax = t1;
+    listing l = {g, &s->objects[r->obj], r};
+    double pad = r->pad + 1e-6 * t1;
+    size_t first = g->candidates_count;
+    accel_gaussian_candidates(a, r->obj, r->ray.org, r->ray.dir, t0 - pad, t1 + pad, list_candidate, &l);
+    if (r->instant)
+        instantiate_for_cull(g, &l.o->gaussians, r, first);
+    cull_candidates(&l, first, ray);
+    if (r->instant)
+        instantiate_kept(g, &l.o->gaussians, r, first);
+}
+
+/* ---- evaluating a window's candidates ---------------------------------- */
+
+static void evaluate_kept(const scene *s, gaussian_integrator *g, const gaussian_candidate *k)
+{
+    const gaussian_object_ray *r = &g->rays[k->ray];
+    const scene_object *o = &s->objects[r->obj];
+    gaussian_hit hit;
+    if (gaussian_hit_after_cull(r->model, k->prim, o->order, &r->ray, k->p, &hit)) {
+        hit.obj = r->obj, hit.prim = original_prim(r, hit.prim);
+        gaussian_hits_add(&g->hits, &hit);
+    }
+}
+
+/* evaluate_kept on the n candidates cand[order[k]] in turn, four at a time
+ * where four in a row share a ray (gaussian_hits_after_cull4). */
+static void evaluate_chunk(const scene *s, gaussian_integrator *g, const gaussian_candidate *cand,
+                           const uint64_t *order, size_t n)
+{
+    size_t k = 0;
+    while (k < n) {
+        const gaussian_candidate *c[4];
+        for (int j = 0; j < 4 && k + (size_t)j < n; j++)
+            c[j] = &cand[(uint32_t)order[k + (size_t)j]];
+        if (k + 4 > n || c[1]->ray != c[0]->ray || c[2]->ray != c[0]->ray || c[3]->ray != c[0]->ray) {
+            evaluate_kept(s, g, c[0]);
+            k++;
+            continue;
+        }
+        const gaussian_object_ray *r = &g->rays[c[0]->ray];
+        const scene_object *o = &s->objects[r->obj];
+        unsigned prim[4] = {c[0]->prim, c[1]->prim, c[2]->prim, c[3]->prim};
+        vec3 p[4] = {c[0]->p, c[1]->p, c[2]->p, c[3]->p};
+        gaussian_hit hit[4];
+        int found = gaussian_hits_after_cull4(r->model, prim, o->order, &r->ray, p, hit);
+        for (int j = 0; j < 4; j++)
+            if (found >> j & 1) {
+                hit[j].obj = r->obj, hit[j].prim = original_prim(r, hit[j].prim);
+                gaussian_hits_add(&g->hits, &hit[j]);
+            }
+        k += 4;
+    }
+}
+
+/* The window's kept candidates in order of their key floors, finished a
+ * prefix at a time (`order`: room for 3n words): the evaluation stops
+ * where the transmittance is spent, most often a third of the way in. */
+static void order_by_key_floor(const gaussian_candidate *cand, size_t n, uint64_t *order, rr_lazy_sort *sorted)
+{
+    for (size_t k = 0; k < n; k++)
+        order[k] = (uint64_t)rr_float_order_bits(cand[k].key_floor) << 32 | (uint64_t)k;
+    rr_lazy_sort_begin(sorted, order, order + n, n);
+}
+
+/* Room to order n candidates (3n words), if it can be had. */
+static int order_room(gaussian_integrator *g, size_t n)
+{
+    if (g->candidate_order_cap < 3 * n) {
+        uint64_t *grown = realloc(g->candidate_order, 3 * n * sizeof *grown);
+        if (grown)
+            g->candidate_order = grown, g->candidate_order_cap = 3 * n;
+    }
+    return g->candidate_order_cap >= 3 * n;
+}
+
+/* Evaluates the window's kept candidates EVALUATION_CHUNK at a time in
+ * order of their key floors, compositing after each chunk the hits whose
+ * keys lie below every floor left (and final_below: the later windows').
+ * A ray that crosses a surface spends its transmittance a few thousandths
+ * of a unit into it, and a window wide enough to reach the surface held
+ * hits up to 0.05 beyond that (on make bench's sphere 58 of the 91 hits
+ * a ray evaluated were never composited). The same hits are composited in
+ * the same order: no hit is composited while a candidate whose key can be
+ * smaller waits. */
+enum { EVALUATION_CHUNK = 16 };
+static void evaluate_window(const scene *s, const gaussian_model *const *models, gaussian_integrator *g,
+                            gaussian_blend *blend, double final_below)
+{
+    size_t n = g->candidates_count;
+    const gaussian_candidate *cand = g->candidates;
+    if (n <= EVALUATION_CHUNK || !order_room(g, n)) { /* (no room to order them: all at once) */
+        for (size_t k = 0; k < n; k++)
+            evaluate_kept(s, g, &cand[k]);
+        gaussian_blend_hits(blend, &g->hits, models, final_below);
+        return;
+    }
+    rr_lazy_sort sorted;
+    order_by_key_floor(cand, n, g->candidate_order, &sorted);
+    for (size_t from = 0; from < n && !blend->done; from += EVALUATION_CHUNK) {
+        size_t to = n - from < EVALUATION_CHUNK ? n : from + EVALUATION_CHUNK;
+        rr_lazy_sort_through(&sorted, to < n ? to + 1 : n); /* the chunk, and the floor after it */
+        evaluate_chunk(s, g, cand, g->candidate_order + from, to - from);
+        double below = to < n ? cand[(uint32_t)g->candidate_order[to]].key_floor : INFINITY;
+        if (below > -INFINITY) /* (else nothing can be composited yet) */
+            gaussian_blend_hits(blend, &g->hits, models, rr_fmin(below, final_below));
+    }
+}
+
+/* ---- the sample -------------------------------------------------------- */
+
+/* The instant model of a dynamic model m: m's kind, formation and rules
+ * over the instant's own arrays. */
+static void instant_of(gaussian_instant *in, const gaussian_model *m)
+{
+    gaussian_model arrays = in->model;
+    in->model = *m;
+    in->model.count = 0, in->model.dynamic = NULL, in->model.sh = NULL;
+    in->model.mean = arrays.mean, in->model.scale = arrays.scale;
+    in->model.rotation = arrays.rotation, in->model.opacity = arrays.opacity;
+}
+
+/* The sample's ray in Gaussian object obj's space, with the stretch
+ * [enter, exit] where it can meet it (its swept sphere); a dynamic model's
+ * is evaluated through `instant`. */
+static void object_ray(const scene *s, const accel *a, const gaussian_sample *smp, unsigned obj,
+                       gaussian_object_ray *r, gaussian_instant *instant)
+{
+    const scene_object *o = &s->objects[obj];
+    r->time = smp->time, r->model = &o->gaussians, r->instant = NULL;
+    if (o->gaussians.dynamic) {
+        instant_of(instant, &o->gaussians);
+        r->model = &instant->model, r->instant = instant;
+    }
+    xform xf = accel_object_at(a, obj, smp->time);
+    gaussian_ray_init(&r->ray, smp->view, &xf, smp->x, smp->y, smp->org, smp->dir);
+    vec3 centre;
+    double radius, largest = accel_gaussian_largest_scale(a, obj);
+    accel_object_swept_sphere(a, obj, &centre, &radius);
+    double along = v3_dot(v3_sub(centre, smp->org), smp->dir);
+    r->lead = gaussian_key_lead(&o->gaussians, o->order, largest, r->ray.depth_per_t);
+    r->pad = gaussian_traversal_pad(&o->gaussians, largest, r->ray.depth_per_t);
+    /* a 2D hit can lie the pad beyond where its box (inside the sphere) holds the ray */
+    r->obj = obj, r->enter = fmax(0.0, along - radius - r->pad), r->exit = along + radius + r->pad;
+}
+
+/* The sample's ray in each Gaussian object whose swept bounds it meets;
+ * returns how many. */
+static size_t object_rays(const scene *s, const accel *a, const gaussian_sample *smp, gaussian_integrator *g)
+{
+    unsigned count;
+    const unsigned *objects = accel_gaussian_objects(a, &count);
+    if (g->rays_cap < count) {
+        gaussian_object_ray *grown = realloc(g->rays, count * sizeof *grown);
+        if (!grown)
+            return 0;
+        g->rays = grown;
+        gaussian_instant *instants = realloc(g->instants, count * sizeof *instants);
+        if (!instants)
+            return 0;
+        memset(instants + g->rays_cap, 0, (count - g->rays_cap) * sizeof *instants);
+        g->instants = instants, g->rays_cap = count;
+    }
+    size_t n = 0;
+    for (unsigned k = 0; k < count; k++)
+        if (accel_ray_meets_object(a, objects[k], smp->org, smp->dir)) {
+            object_ray(s, a, smp, objects[k], &g->rays[n], &g->instants[n]);
+            n++;
+        }
+    return n;
+}
+
+/* Windows start at 1/64 of the stretch the objects span and double while
+ * they hold few hits: a few traversals for a ray through empty space, and
+ * no evaluation far behind the hits that spend the transmittance. */
+enum { WINDOW_FRACTION = 64, WINDOW_FEW_HITS = 16 };
+
+void gaussian_integrate(const scene *s, const accel *a, const gaussian_sample *smp, double tmax, gaussian_integrator *g,
+                        gaussian_blend *blend)
+{
+    size_t n = object_rays(s, a, smp, g);
+    double start = INFINITY, end = 0, lead = 0;
+    for (size_t k = 0; k < n; k++) {
+        start = fmin(start, g->rays[k].enter), end = fmax(end, g->rays[k].exit);
+        lead = fmax(lead, g->rays[k].lead);
+    }
+    end = fmin(end, tmax);
+    double width = (end - start) / WINDOW_FRACTION;
+    const gaussian_model *const *models = accel_gaussian_models(a);
+    for (double t0 = start; t0 < end && !blend->done;) {
+        double t1 = end - t0 <= width ? end : t0 + width;
+        size_t before = g->hits.added;
+        g->candidates_count = 0;
+        for (size_t k = 0; k < n; k++)
+            if (g->rays[k].enter < t1 && g->rays[k].exit >= t0)
+                list_window(s, a, g, (unsigned)k, t0, t1);
+        evaluate_window(s, models, g, blend, t1 < end ? t1 - lead : INFINITY);
+        if (g->hits.added - before < WINDOW_FEW_HITS)
+            width *= 2;
+        t0 = t1;
+    }
+}

@@ -1,0 +1,75 @@
+/* The Gaussian integrator: one sample's Gaussian-splat objects along its
+ * world ray, composited front to back (gaussian_hit.h's image formation).
+ * It asks accel only which Gaussians a ray may meet in a stretch
+ * (accel_gaussian_candidates); the per-object rays, the windows of
+ * distance, the chunks evaluated in order of their key floors and the
+ * compositing calls are its own, and so is their scratch. */
+#ifndef RR_GAUSSIAN_INTEGRATOR_H
+#define RR_GAUSSIAN_INTEGRATOR_H
+
+#include <stdint.h>
+
+#include "accel/accel.h"
+#include "gaussians/gaussian_hit.h"
+
+/* A dynamic model's Gaussians at one ray's time, as static ones: slot j
+ * of `model` (the object's model's kind and formation over scratch arrays)
+ * holds Gaussian prim[j] of the object's model at that time
+ * (gaussian_dynamic_instant), for a window's candidates. */
+typedef struct {
+    gaussian_model model;
+    unsigned *prim;
+    size_t cap;
+} gaussian_instant;
+
+/* One world ray at one time seen in a Gaussian object's space, and the
+ * stretch of the ray where that object can be. */
+typedef struct {
+    gaussian_ray ray;
+    double time;        /* the ray's scene time */
+    const gaussian_model *model; /* what its candidates are evaluated with: the object's, or instant's */
+    gaussian_instant *instant;   /* a dynamic model's Gaussians at the ray's time; NULL for a static one */
+    unsigned obj;
+    double enter, exit; /* the stretch of the world ray inside the object's swept sphere, padded */
+    double lead;        /* gaussian_key_lead: how far below its hit's t a key can lie */
+    double pad;         /* gaussian_traversal_pad: how far a hit's t can lie outside its box's stretch */
+} gaussian_object_ray;
+
+/* A thread's scratch (grown as needed): zero it with _init, clear the
+ * hits of a sample with _reset, release it with _free. */
+typedef struct {
+    gaussian_hits hits;                /* the hits waiting to be composited (gaussian_blend.c's heap) */
+    gaussian_object_ray *rays;         /* the sample's ray in each Gaussian object it may meet */
+    gaussian_instant *instants;        /* and its dynamic model's Gaussians at the ray's time (rays[k]'s is
+                                        * instants[k]) */
+    size_t rays_cap;
+    gaussian_candidate *candidates;    /* a window's Gaussians, evaluated after its traversals */
+    size_t candidates_count, candidates_cap;
+    uint64_t *candidate_order;         /* their evaluation order, with sorting space */
+    size_t candidate_order_cap;
+} gaussian_integrator;
+
+void gaussian_integrator_init(gaussian_integrator *g);
+/* A new sample: no hits waiting, none dropped (hits.added and hits.moved
+ * keep counting: statistics). */
+void gaussian_integrator_reset(gaussian_integrator *g);
+void gaussian_integrator_free(gaussian_integrator *g);
+
+/* One sample: the world ray org + t dir (dir unit) at scene time `time`
+ * through raster (x, y) of the camera `view` (the camera at that time). */
+typedef struct {
+    const camera_view *view;
+    double x, y;
+    vec3 org, dir;
+    double time;
+} gaussian_sample;
+
+/* Composites into *blend, front to back, every Gaussian hit of the
+ * sample's ray nearer than tmax (the opaque surface behind, or infinity),
+ * with the scene s that accel a was built for. The ray is gathered in
+ * windows of distance, so that once the transmittance is spent nothing
+ * behind is evaluated. */
+void gaussian_integrate(const scene *s, const accel *a, const gaussian_sample *smp, double tmax, gaussian_integrator *g,
+                        gaussian_blend *blend);
+
+#endif

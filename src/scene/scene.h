@@ -1,0 +1,133 @@
+/* In-memory scene description: camera, shutter, lights, objects. Built by
+ * scene_xml.c, consumed by accel.c and render.c; knows nothing of either. */
+#ifndef RR_SCENE_H
+#define RR_SCENE_H
+
+#include <stdint.h>
+
+#include "motion/animation.h"
+#include "core/camera.h"
+#include "gaussians/gaussian.h"
+#include "surfels/pointmodel.h"
+#include "surfels/shapes.h"
+#include "motion/shutter.h"
+
+typedef enum { SHADING_PHONG, SHADING_UNLIT } shading_kind;
+
+typedef struct {
+    shading_kind shading;
+    double diffuse;   /* scale of the splat color for ambient and diffuse terms */
+    double specular;  /* white specular coefficient */
+    double shininess; /* Phong exponent */
+} material;
+
+/* README's defaults: Phong, diffuse 1, specular 0, shininess 32. */
+static inline material material_default(void)
+{
+    material m = {SHADING_PHONG, 1.0, 0.0, 32.0};
+    return m;
+}
+
+typedef enum { OBJECT_POINTS, OBJECT_SPHERE, OBJECT_GAUSSIANS } object_kind;
+
+typedef struct {
+    object_kind kind;
+    char name[64];
+    pointmodel model;  /* OBJECT_POINTS */
+    /* where the splats came from, for 'refrender export' (any of the three) */
+    char model_file[8192];   /* the PLY read, resolved; "" if none */
+    int generated;           /* 1: splats from the generator with these parameters */
+    shape_params generator;
+    size_t inline_splats;    /* <splat> children */
+    gaussian_model gaussians; /* OBJECT_GAUSSIANS: a trained model (alpha-composited, unlit) */
+    gaussian_order order;     /* and its 2D hits' compositing order */
+    vec3 sphere_center;/* OBJECT_SPHERE, object space */
+    double sphere_radius;
+    vec3 sphere_color;
+    material mat;
+    animation anim;
+} scene_object;
+
+/* Scene parameters: -D name=value on the command line, <default> in the
+ * file, $name in attribute values (scene_params.c). */
+#define SCENE_MAX_PARAMS 32
+#define SCENE_PARAM_NAME 64
+#define SCENE_PARAM_VALUE 512
+typedef struct {
+    int n;
+    char name[SCENE_MAX_PARAMS][SCENE_PARAM_NAME];
+    char value[SCENE_MAX_PARAMS][SCENE_PARAM_VALUE];
+    int used[SCENE_MAX_PARAMS];
+} scene_params;
+
+typedef enum { LIGHT_POINT, LIGHT_DIRECTIONAL } light_kind;
+
+typedef struct {
+    light_kind kind;
+    vec3 position;  /* point light */
+    vec3 direction; /* directional: the direction light travels (unit) */
+    vec3 color;
+} light;
+
+typedef struct {
+    char path[4096]; /* scene file, for messages and EXR metadata */
+    uint64_t scene_hash;  /* content of the scene file (scene_xml.h) */
+    uint64_t inputs_hash; /* content of the scene file and every file it names */
+    char **inputs;        /* those files' paths (owned), for refusing outputs onto them */
+    int ninputs;
+    rr_warnings warnings; /* from reading the scene and its files, for the caller to print */
+    scene_params params;  /* the parameters applied (given and defaults), for the render's identity */
+    camera cam;
+    animation camera_motion; /* the camera's rest pose moved like an object (rigid) */
+    shutter shut;            /* as the file gives it: frame 0's with <frames> (scene_frame_shutter) */
+    double frame_rate;       /* <frames rate>: frame N starts at time N / rate; 0: no frames */
+    int frames_at_poses;     /* <frames at="trajectory">: frame N's exposure is centred on the camera
+                                trajectory's pose N (a deblurring dataset's frame k spans pose k's
+                                time) */
+    vec3 background, ambient;
+    double epsilon, kernel_sigma;
+    int time_factor;
+    int nlights, nobjects;
+    light *lights;
+    scene_object *objects;
+} scene;
+
+void scene_init(scene *s);
+
+/* Whether the camera moves during [t0, t1] (then no static-hit reuse). */
+int scene_camera_moves(const scene *s);
+
+/* The world ray through raster (x, y) at time t: origin and unit direction
+ * (the camera's animation applied; callers skip this for a still camera). */
+void scene_camera_ray(const scene *s, double x, double y, double t, vec3 *org, vec3 *dir);
+
+/* The camera at time t (its animation applied to the rest pose). */
+void scene_camera_view(const scene *s, double t, camera_view *v);
+
+/* Frame N's shutter: s->shut (frame 0's) shifted by N / frame_rate; with
+ * frames_at_poses, s->shut shifted so that its middle is the camera
+ * trajectory's pose N's time. Returns -1 if the scene has no frames or no
+ * pose N. Without --frame or --frames, callers render s->shut itself. */
+int scene_frame_shutter(const scene *s, int frame, shutter *out, rr_error *err);
+void scene_free(scene *s);
+
+/* A trajectory file holds poses over its own times only: -1 (err names
+ * the file, the times and the interpolation's domain) if [open, close]
+ * reaches past them, where the camera would be held still. */
+int scene_check_trajectory_times(const scene *s, double open, double close, rr_error *err);
+
+/* The rule every command that takes a frame's shutter applies (render and
+ * export): every time a line of the camera's image is exposed, with a
+ * rolling shutter past [open, close] (shutter_span), lies within the camera
+ * trajectory's poses; -1 with err naming the scene, the shutter, the lines'
+ * times and the trajectory's domain otherwise. */
+int scene_check_shutter_in_trajectory(const scene *s, const shutter *sh, rr_error *err);
+
+/* Records an input file's path; -1 when out of memory. */
+int scene_add_input(scene *s, const char *path);
+
+/* Object-space bounds of an object (before its animation; a Gaussian
+ * model's at the kernel radius, without its screen-space filter). */
+aabb scene_object_bounds(const scene_object *o);
+
+#endif

@@ -1,0 +1,68 @@
+#!/usr/bin/python3
+"""src/ is layered: each folder includes only its own folder and the folders
+below it (README "Layout"), so the maths at the bottom never depends on a
+reader or the renderer above it, and each library has one user folder
+(Embree only in accel/, libxml2 only in io/'s scene reader, OpenEXR only in
+io/). The check parses every #include of src/ and is tried on a planted
+violation, so it can fail."""
+import os
+import re
+import pathlib
+
+ROOT = pathlib.Path(__file__).resolve().parent.parent
+# bottom to top
+LAYERS = ['core', 'motion', 'surfels', 'gaussians', 'scene', 'accel', 'render', 'io', 'cmd']
+# a system library and the one folder that may include it
+LIBRARY_OWNER = {'embree3/': 'accel', 'libxml/': 'io', 'openexr.h': 'io', 'OpenImageIO/': 'io',
+                 'json-c/': 'io', 'assimp/': 'io'}
+# make bench measures refrender against Embree's own disc primitive, so the
+# benchmark (and only it) calls Embree directly
+LIBRARY_EXCEPTIONS = {('cmd/bench.c', 'embree3/'), ('cmd/bench_gaussian.c', 'embree3/')}
+
+
+def violations(src):
+    found = []
+    for path in sorted(pathlib.Path(src).rglob('*')):
+        if path.suffix not in ('.c', '.h', '.cpp'):
+            continue
+        rel = path.relative_to(src)
+        if len(rel.parts) != 2 or rel.parts[0] not in LAYERS:
+            found.append(f'{rel}: not in a layer folder')
+            continue
+        here = LAYERS.index(rel.parts[0])
+        for n, line in enumerate(path.read_text(errors='replace').splitlines(), 1):
+            m = re.match(r'\s*#\s*include\s*([<"])([^>"]+)[>"]', line)
+            if not m:
+                continue
+            name = m.group(2)
+            if m.group(1) == '<':
+                for lib, owner in LIBRARY_OWNER.items():
+                    if name.startswith(lib) and rel.parts[0] != owner \
+                            and (str(rel), lib) not in LIBRARY_EXCEPTIONS:
+                        found.append(f'{rel}:{n}: includes <{name}>, which only {owner}/ may use')
+                continue
+            parts = name.split('/')
+            if len(parts) != 2 or parts[0] not in LAYERS:
+                found.append(f'{rel}:{n}: "{name}" does not name its folder')
+            elif not (pathlib.Path(src) / name).exists():
+                found.append(f'{rel}:{n}: "{name}" does not exist')
+            elif LAYERS.index(parts[0]) > here:
+                found.append(f'{rel}:{n}: {rel.parts[0]}/ includes "{name}" from the higher layer {parts[0]}/')
+    return found
+
+
+def test_src_includes_only_lower_layers():
+    assert violations(ROOT / 'src') == []
+
+
+def test_planted_upward_include_is_found(tmp_path):
+    for folder, text in [('core', '#include "io/ply.h"\n'), ('io', '#include "core/common.h"\n'),
+                         ('motion', '#include <embree3/rtcore.h>\n')]:
+        (tmp_path / folder).mkdir()
+        (tmp_path / folder / 'x.c').write_text(text)
+    (tmp_path / 'io' / 'ply.h').write_text('')
+    (tmp_path / 'core' / 'common.h').write_text('')
+    found = violations(tmp_path)
+    assert len(found) == 2, found
+    assert 'core/x.c:1: core/ includes "io/ply.h" from the higher layer io/' in found
+    assert any('<embree3/rtcore.h>' in f for f in found)
