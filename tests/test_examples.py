@@ -102,3 +102,30 @@ def test_the_documented_commands_run_as_written(doc, tmp_path):
             else:
                 assert (tmp_path / out).is_file(), (cmd, out)
     print(f"{doc}: {len(cmds)} commands in {time.monotonic() - start:.1f} s")
+
+
+def test_the_stg_example_is_what_its_script_writes(tmp_path):
+    """scenes/examples/stg_lite.ply is scripts/make_stg_example.py's output, in the layout
+    SpacetimeGaussians' save_ply writes (427abfc5, scene/ourslite.py:335-359: construct_list_of_attributes,
+    all float32), and its two blobs cross at the segment's middle, t = 0.5 (mean = xyz + motion_0..2 D +
+    motion_3..5 D^2 + motion_6..8 D^3, D = t - trbf_center: forward_lite forward.cu:186-198)."""
+    import numpy as np
+    out = tmp_path / "stg.ply"
+    proc = subprocess.run(["/usr/bin/python3", ROOT / "scripts" / "make_stg_example.py", "--out", out],
+                          capture_output=True, text=True, timeout=60)
+    assert proc.returncode == 0, proc.stderr
+    committed = (EXAMPLES / "stg_lite.ply").read_bytes()
+    assert out.read_bytes() == committed
+    head, _, body = committed.partition(b"end_header\n")
+    names = ["x", "y", "z", "trbf_center", "trbf_scale", "nx", "ny", "nz", *[f"motion_{i}" for i in range(9)],
+             "f_dc_0", "f_dc_1", "f_dc_2", "opacity", "scale_0", "scale_1", "scale_2",
+             "rot_0", "rot_1", "rot_2", "rot_3", "omega_0", "omega_1", "omega_2", "omega_3"]
+    lines = head.decode().splitlines()
+    assert lines[1] == "format binary_little_endian 1.0"
+    assert [line.split() for line in lines if line.startswith("property")] == [["property", "float", n] for n in names]
+    v = np.frombuffer(body, "<f4").reshape(-1, len(names)).astype(np.float64)
+    D = 0.5 - v[:, 3]
+    mean = v[:, 0:3] + v[:, 8:11] * D[:, None] + v[:, 11:14] * (D * D)[:, None] + v[:, 14:17] * (D ** 3)[:, None]
+    half = len(v) // 2
+    for blob in (mean[:half], mean[half:]):
+        assert np.linalg.norm(blob.mean(axis=0)) < 0.15

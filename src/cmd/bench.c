@@ -538,7 +538,7 @@ static void bench_floor(int speeds, int splats, int tspp, int threads, int res, 
 typedef struct {
     int quick, res, reps, threads;
     int big, small, tspp; /* splat counts of the large and small model; time samples */
-    /* one series: cases, speed, splats, tspp, threads, static80, target, floor, gaussians, scale */
+    /* one series: cases, speed, splats, tspp, threads, static80, target, floor, gaussians, scale, stg */
     const char *only;
     FILE *csv;
 } bench_plan;
@@ -713,6 +713,8 @@ int main(int argc, char **argv)
     /* alone, for quick iterations */
     if (p.only && !strcmp(p.only, "scale") && bench_gaussian_scale(quick, p.threads, p.csv))
         fprintf(stderr, "bench: the scale case failed\n");
+    if (p.only && !strcmp(p.only, "stg") && bench_gaussian_stg(quick, p.threads, p.csv))
+        fprintf(stderr, "bench: the stg case failed\n");
     fclose(p.csv);
     return 0;
 }

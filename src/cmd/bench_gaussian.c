@@ -8,6 +8,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include "gaussians/gaussian_dynamic.h"
 #include "render/gaussian_integrator.h"
 #include "io/gaussian_ply.h"
 #include "render/render.h"
@@ -29,10 +30,14 @@ typedef struct {
 } gs_result;
 
 /* A model's own bytes per Gaussian: mean, scale, quaternion, opacity and
- * its SH coefficients, as floats (gaussian.h). */
+ * its SH coefficients, as floats (gaussian.h), and a moving model's
+ * trbf_center, trbf_scale, motion, omega and rot (gaussian_dynamic.h). */
 static double model_bytes_per_gaussian(const gaussian_model *m)
 {
-    return (double)((3 + 3 + 4 + 1 + 3 * (size_t)m->sh_coeffs) * sizeof(float));
+    size_t floats = 3 + 3 + 4 + 1 + 3 * (size_t)m->sh_coeffs;
+    if (m->dynamic)
+        floats += 1 + 1 + 9 + 4 + 4;
+    return (double)(floats * sizeof(float));
 }
 
 static void gs_scene(const gs_case *c, scene *s)
@@ -500,6 +505,206 @@ int bench_gaussian_scale(int quick, int threads, FILE *csv)
     return 0;
 }
 
+/* ---- moving Gaussians: SpacetimeGaussians lite against itself frozen --- */
+
+/* A sphere of `count` 3D Gaussians made a SpacetimeGaussians-lite model
+ * (gaussian_dynamic.h) that passes through the sphere at mid-shutter,
+ * seen by a fixed camera (STG's datasets are fixed multi-view rigs) over
+ * frame 25 of a 50-frame segment at half a frame's exposure: the shutter
+ * [0.5, 0.51] of model time. Frozen: the same Gaussians as a static model,
+ * each gaussian_dynamic_at the shutter's middle. */
+typedef struct {
+    size_t count;
+    int width, height, tspp, threads, frozen;
+} stg_case;
+
+#define STG_OPEN 0.5
+#define STG_CLOSE 0.51
+#define STG_MID (0.5 * (STG_OPEN + STG_CLOSE))
+
+/* Uniform in [-1, 1), from a fixed 64-bit LCG (Knuth's MMIX constants):
+ * the same model in every process. */
+static double stg_uniform(uint64_t *state)
+{
+    *state = *state * 6364136223846793005ULL + 1442695040888963407ULL;
+    return (double)(*state >> 11) * 0x1.0p-52 - 1.0;
+}
+
+/* Gaussian i's motion. Moderate: a swirl about the vertical axis of 1.2
+ * units a time unit at the equator plus a random 0.3 (about 3 pixels over
+ * the 0.01 exposure at this view: 0.0045 units a pixel at the sphere's
+ * front), acceleration and jerk terms, a quaternion rate of about 5 (a few
+ * degrees over the exposure), peaks of opacity within 0.03 of mid-shutter
+ * and temporal scales 0.03-0.1 (so the opacity changes by up to a third
+ * over the exposure). The stored x and rot put it at the sphere's
+ * Gaussian at STG_MID. */
+static void stg_set_motion(gaussian_model *m, size_t i, uint64_t *rng)
+{
+    gaussian_dynamic *d = m->dynamic;
+    float *x = &m->mean[3 * i], *mo = &d->motion[9 * i];
+    double p[3] = {x[0], x[1], x[2]};
+    d->trbf_center[i] = (float)(STG_MID + 0.03 * stg_uniform(rng));
+    d->trbf_scale[i] = (float)log(0.065 + 0.035 * stg_uniform(rng));
+    double D = STG_MID - d->trbf_center[i];
+    double swirl[3] = {-1.2 * p[2], 0, 1.2 * p[0]};
+    for (int k = 0; k < 3; k++) {
+        mo[k] = (float)(swirl[k] + 0.3 * stg_uniform(rng));
+        mo[3 + k] = (float)(2.0 * stg_uniform(rng));
+        mo[6 + k] = (float)(5.0 * stg_uniform(rng));
+        x[k] = (float)(p[k] - (D * mo[k] + D * D * mo[3 + k] + D * D * D * mo[6 + k]));
+    }
+    double len2 = 0;
+    for (int k = 0; k < 4; k++) {
+        d->omega[4 * i + k] = (float)(5.0 * stg_uniform(rng));
+        d->rot[4 * i + k] = (float)(m->rotation[4 * i + k] - D * d->omega[4 * i + k]);
+        len2 += (double)d->rot[4 * i + k] * d->rot[4 * i + k];
+    }
+    for (int k = 0; k < 4; k++) /* the static array: normalize(rot), the state at D = 0 */
+        m->rotation[4 * i + k] = (float)(d->rot[4 * i + k] / sqrt(len2));
+    for (int k = 0; k < 3; k++) /* f_dc: the colour itself */
+        m->sh[3 * i + k] = (float)(0.28209479177387814 * m->sh[3 * i + k] + 0.5);
+}
+
+/* The same Gaussians at STG_MID as a static model, its colours the
+ * same precomputed RGB. */
+static void stg_freeze(gaussian_model *m)
+{
+    gaussian_model f = *m;
+    f.dynamic = NULL;
+    if (gaussian_model_alloc(&f, m->count)) {
+        fprintf(stderr, "bench: out of memory\n");
+        exit(1);
+    }
+    for (size_t i = 0; i < m->count; i++) {
+        gaussian_dynamic_state st;
+        gaussian_dynamic_at(m, i, STG_MID, &st);
+        for (int k = 0; k < 3; k++) {
+            f.mean[3 * i + k] = (float)st.mean[k], f.scale[3 * i + k] = (float)st.scale[k];
+            f.sh[3 * i + k] = (float)st.rgb[k];
+        }
+        for (int k = 0; k < 4; k++)
+            f.rotation[4 * i + k] = (float)st.q[k];
+        f.opacity[i] = (float)st.opacity;
+    }
+    f.count = m->count;
+    gaussian_model_free(m);
+    *m = f;
+}
+
+static void stg_scene(const stg_case *c, scene *s)
+{
+    scene_init(s);
+    s->cam.position = v3(0, 0, 3.5);
+    s->cam.width = c->width, s->cam.height = c->height;
+    s->cam.fov_degrees = 40;
+    camera_prepare(&s->cam, NULL);
+    s->shut.open = STG_OPEN, s->shut.close = STG_CLOSE;
+    shape_params p;
+    shape_params_default(&p);
+    p.count = c->count;
+    surfel *sf;
+    size_t n;
+    rr_error err;
+    s->objects = calloc(1, sizeof *s->objects);
+    scene_object *o = &s->objects[0];
+    s->nobjects = 1;
+    o->kind = OBJECT_GAUSSIANS;
+    animation_init_static(&o->anim);
+    gaussian_model *m = &o->gaussians;
+    gaussian_model_init(m);
+    if (shape_generate(&p, &sf, &n, &err) || gaussian_from_surfels(sf, n, GAUSSIAN_3D, 0, m, &err)) {
+        fprintf(stderr, "bench: %s\n", err.msg);
+        exit(1);
+    }
+    free(sf);
+    if (!(m->dynamic = gaussian_dynamic_alloc(m->count))) {
+        fprintf(stderr, "bench: out of memory\n");
+        exit(1);
+    }
+    m->rgb_precomputed = 1;
+    uint64_t rng = 1;
+    for (size_t i = 0; i < m->count; i++)
+        stg_set_motion(m, i, &rng);
+    if (c->frozen)
+        stg_freeze(m);
+}
+
+static void stg_run(const void *in, void *out)
+{
+    const stg_case *c = in;
+    scale_result *r = out;
+    scene s;
+    stg_scene(c, &s);
+    const gaussian_model *m = &s.objects[0].gaussians;
+    r->model_bytes = model_bytes_per_gaussian(m);
+    render_settings rs = render_settings_default();
+    rs.smp.tspp = c->tspp, rs.smp.time_factor = 4;
+    rs.shut = s.shut;
+    rs.threads = c->threads;
+    rs.filter = PIXEL_FILTER_POINT;
+    accel *a = build_timed(&s, &r->build_ms);
+    r->embree_bytes = (double)accel_embree_peak_bytes(a) / (double)m->count;
+    image img;
+    volatile sig_atomic_t never = 0;
+    rr_error err;
+    image_alloc(&img, s.cam.width, s.cam.height);
+    if (render_image(&s, a, &rs, &img, NULL, &never, &err)) {
+        fprintf(stderr, "bench: %s\n", err.msg);
+        exit(1);
+    }
+    r->seconds = img.seconds, r->mrays = (double)img.rays / img.seconds * 1e-6;
+    image_free(&img);
+    r->peak_mb = bench_peak_mb();
+    accel_free(a);
+    scene_free(&s);
+}
+
+static void stg_print_row(const char *name, const stg_case *c, const double *seconds, int reps, const scale_result *r,
+                          FILE *csv)
+{
+    double sorted[16];
+    memcpy(sorted, seconds, (size_t)reps * sizeof *sorted);
+    double median = median3(sorted, reps), rays = (double)c->width * c->height * c->tspp;
+    printf("| %s | %zu | %.0f | **%.1f**", name, c->count, r->build_ms, median);
+    for (int k = 0; k < reps && reps > 1; k++)
+        printf("%s%.1f", k ? ", " : " (", seconds[k]);
+    printf("%s | %.3f | %.0f | %.0f | %.0f |\n", reps > 1 ? ")" : "", rays / median * 1e-6, r->model_bytes, r->embree_bytes, r->peak_mb);
+    fprintf(csv, "gaussians-stg-%s,%zu,gaussians,0,3dgs,%d,%d,%dx%d,%.1f,0,%.4f,0,0,0,0,%.1f,%.1f,0,0\n",
+            c->frozen ? "frozen" : "moving", c->count, c->tspp, c->threads, c->width, c->height, r->build_ms,
+            rays / median * 1e-6, r->peak_mb, r->model_bytes + r->embree_bytes);
+}
+
+int bench_gaussian_stg(int quick, int threads, FILE *csv)
+{
+    stg_case moving = {quick ? 20000 : 300000, quick ? 150 : 600, quick ? 100 : 400, quick ? 8 : 64, threads, 0};
+    stg_case frozen = moving;
+    frozen.frozen = 1;
+    int reps = quick ? 1 : 3;
+    printf("\nstg: a SpacetimeGaussians-lite model (a sphere of %zu 3D Gaussians, each moving on its own cubic\n"
+           "path, turning and fading: src/cmd/bench_gaussian.c) over a half-frame exposure [%.2f, %.2f], a fixed\n"
+           "camera, %dx%d, --pixel-filter point, 1 x %d samples a pixel, %d threads; against the same Gaussians\n"
+           "frozen at %.3f (a static model) on the same rays. Moving and frozen alternate, %d run(s) each,\n"
+           "each in its own process; seconds: the median (each run).\n\n"
+           "| model | Gaussians | build ms | seconds per view | Mrays/s | model B/G | Embree peak B/G | peak RSS MB |\n"
+           "| --- | --- | --- | --- | --- | --- | --- | --- |\n", moving.count, STG_OPEN, STG_CLOSE, moving.width,
+           moving.height, moving.tspp, threads, STG_MID, reps);
+    fflush(stdout);
+    double sec[2][16];
+    scale_result r[2];
+    for (int k = 0; k < reps; k++)
+        for (int f = 0; f < 2; f++) {
+            if (bench_in_child(stg_run, f ? &frozen : &moving, &r[f], sizeof r[f]))
+                return -1;
+            sec[f][k] = r[f].seconds;
+        }
+    stg_print_row("stg-lite, moving", &moving, sec[0], reps, &r[0], csv);
+    stg_print_row("frozen at mid-shutter", &frozen, sec[1], reps, &r[1], csv);
+    double m0 = median3(sec[0], reps), m1 = median3(sec[1], reps);
+    printf("\nmoving / frozen: %.2fx the time (medians)\n", m0 / m1);
+    fflush(stdout);
+    return 0;
+}
+
 int bench_gaussians(int quick, int threads, FILE *csv)
 {
     gs_case c = {quick ? 20000 : 1000000, quick ? 64 : 256, threads, quick ? 1 : 3, GAUSSIAN_2D};
@@ -514,5 +719,6 @@ int bench_gaussians(int quick, int threads, FILE *csv)
     c.kind = GAUSSIAN_3D;
     failed |= gs_row(&c, csv);
     failed |= gs_load_row(c.count);
+    failed |= bench_gaussian_stg(quick, threads, csv);
     return bench_gaussian_scale(quick, threads, csv) || failed ? -1 : 0;
 }

@@ -22,4 +22,9 @@ int bench_gaussians(int quick, int threads, FILE *csv);
  * "scale"): seconds per 600x400 view of 3M layered Gaussians. */
 int bench_gaussian_scale(int quick, int threads, FILE *csv);
 
+/* The moving-Gaussians rows alone (part of bench_gaussians; series
+ * "stg"): a SpacetimeGaussians-lite model against the same Gaussians
+ * frozen at mid-shutter, seconds per 600x400 view. */
+int bench_gaussian_stg(int quick, int threads, FILE *csv);
+
 #endif
