@@ -272,6 +272,14 @@ static const char *missing_model_hint(const char *path)
     return " (run `make scenes` to convert the scanned models)";
 }
 
+/* A model file's reader failed: its message, which element of the scene
+ * asked for it, and the hint for a scanned model not yet converted. */
+static int model_failed(xml_ctx *c, xmlNodePtr n, const rr_error *sub, const char *element, const char *path)
+{
+    return rr_fail(c->err, "%s (%s of %s:%ld)%s", sub->msg, element, c->name, xmlGetLineNo(n),
+                   missing_model_hint(path));
+}
+
 static int parse_point_model(xml_ctx *c, xmlNodePtr n, scene_object *o)
 {
     static const char *const ok[] = {"file", "generate", "count", "radius", "minor_radius",
@@ -291,8 +299,7 @@ static int parse_point_model(xml_ctx *c, xmlNodePtr n, scene_object *o)
             return -1;
         rr_error sub;
         if (ply_read(path, default_color, &o->model, c->inputs_hash, &sub))
-            return rr_fail(c->err, "%s (point model of %s:%ld)%s", sub.msg, c->name, xmlGetLineNo(n),
-                           missing_model_hint(path));
+            return model_failed(c, n, &sub, "point model", path);
         if (scene_add_input(c->sc, path))
             return xml_fail(c, n, "out of memory");
         snprintf(o->model_file, sizeof o->model_file, "%s", path);
@@ -391,8 +398,7 @@ static int parse_gaussian_model(xml_ctx *c, xmlNodePtr n, scene_object *o)
         return -1;
     rr_error sub;
     if (gaussian_read(path, kind, &o->gaussians, c->inputs_hash, &sub))
-        return rr_fail(c->err, "%s (gaussianModel of %s:%ld)%s", sub.msg, c->name, xmlGetLineNo(n),
-                       missing_model_hint(path));
+        return model_failed(c, n, &sub, "gaussianModel", path);
     if (o->gaussians.kind == GAUSSIAN_3D && xmlHasProp(n, (const xmlChar *)"order"))
         return xml_fail(c, n, "'order' is for 2D Gaussian models: 3D ones go by the centre's view depth (the "
                                "rasterizers) or by the distance to each Gaussian's maximum response (3dgrt)");
