@@ -58,6 +58,29 @@ def sharp_gaussian_render(tmp_path, camera, ply, attrs="", name="scene"):
     return read_exr(out)[0]
 
 
+def render_bit_identical_across_threads_and_passes(tmp_path, common, threads):
+    """Renders refrender's arguments `common` with each --threads in `threads` and as --pass 0/2 and
+    1/2 merged; asserts all are bit-identical (nothing may depend on thread count or pass split) and
+    returns the first image."""
+    outs = []
+    for n in threads:
+        out = tmp_path / f"t{n}.exr"
+        assert run([*common, "--threads", n, "-o", out]).returncode == 0
+        outs.append(read_exr(out)[0])
+    parts = []
+    for k in range(2):
+        part = tmp_path / f"p{k}.exr"
+        assert run([*common, "--pass", f"{k}/2", "-o", part]).returncode == 0
+        parts.append(part)
+    merged = tmp_path / "merged.exr"
+    proc = run(["merge", *parts, "-o", merged])
+    assert proc.returncode == 0, proc.stderr
+    outs.append(read_exr(merged)[0])
+    for other in outs[1:]:
+        assert np.array_equal(outs[0], other)
+    return outs[0]
+
+
 def read_full(path):
     """All channels by name (float32 arrays) and the header."""
     channels, _, header = imagecompare.read_channels(path, unassociated_alpha=False)

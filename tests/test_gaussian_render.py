@@ -15,19 +15,13 @@ import pytest
 
 import gs2d_reference as ref
 import gsply
-from conftest import read_exr, run, sharp_gaussian_render
+from gsply import rotation
+from conftest import read_exr, render_bit_identical_across_threads_and_passes, run, sharp_gaussian_render
 
 W = H = 40
 F = 45.0
 BACKGROUND = (0.1, 0.2, 0.3)
 TOL = 1e-4
-
-
-def rotation(yaw, pitch):
-    cy, sy, cp, sp = np.cos(yaw), np.sin(yaw), np.cos(pitch), np.sin(pitch)
-    ry = np.array([[cy, 0, sy], [0, 1, 0], [-sy, 0, cy]])
-    rx = np.array([[1, 0, 0], [0, cp, -sp], [0, sp, cp]])
-    return ry @ rx
 
 
 def random_model(seed, n, degree, sub_pixel):
@@ -200,23 +194,8 @@ def test_a_moving_gaussian_render_is_bit_identical_for_any_threads_and_passes(tm
                      f'<object name="g"><gaussianModel file="{ply}"/>'
                      f'<animation><rotation axis="0 1 0" degrees_per_unit_time="40"/></animation></object></scene>')
     common = [scene, "--spp", 4, "--tspp", 4, "--batches", 4, "--quiet"]
-    outs = []
-    for threads in (1, 2, 3):
-        out = tmp_path / f"t{threads}.exr"
-        assert run([*common, "--threads", threads, "-o", out]).returncode == 0
-        outs.append(read_exr(out)[0])
-    parts = []
-    for k in range(2):
-        part = tmp_path / f"p{k}.exr"
-        assert run([*common, "--pass", f"{k}/2", "-o", part]).returncode == 0
-        parts.append(part)
-    merged = tmp_path / "merged.exr"
-    proc = run(["merge", *parts, "-o", merged])
-    assert proc.returncode == 0, proc.stderr
-    outs.append(read_exr(merged)[0])
-    assert outs[0][..., 3].max() > 0.5
-    for other in outs[1:]:
-        assert np.array_equal(outs[0], other)
+    img = render_bit_identical_across_threads_and_passes(tmp_path, common, (1, 2, 3))
+    assert img[..., 3].max() > 0.5
 
 
 def random_3d_model(seed, n, degree):
