@@ -45,12 +45,12 @@ def read_exr(path):
     return np.stack([channels[c] for c in "RGBA"], axis=-1), header
 
 
-def sharp_gaussian_render(tmp_path, camera, ply, attrs="", name="scene"):
+def sharp_gaussian_render(tmp_path, camera, ply, attrs="", name="scene", background="0.1 0.2 0.3"):
     """The sharp image (--time 0, one sample at each pixel centre: --pixel-filter point) of one
     Gaussian model, given its <camera> element and the gaussianModel's extra attributes, over the
-    Gaussian tests' background (0.1 0.2 0.3)."""
+    background colour given (by default the Gaussian tests' 0.1 0.2 0.3)."""
     scene = tmp_path / f"{name}.xml"
-    scene.write_text(f'<scene>{camera}<background color="0.1 0.2 0.3"/>'
+    scene.write_text(f'<scene>{camera}<background color="{background}"/>'
                      f'<object name="g"><gaussianModel file="{ply}"{attrs}/></object></scene>')
     out = tmp_path / f"{name}.exr"
     proc = run([scene, "--pixel-filter", "point", "--time", 0, "--spp", 1, "--tspp", 1, "-o", out, "--quiet"])

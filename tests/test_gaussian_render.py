@@ -230,12 +230,9 @@ def test_3dgrt_composites_the_hit_that_crosses_its_minimum_transmittance(tmp_pat
          "scale": np.full((3, 3), 0.2), "rot": np.tile([1.0, 0, 0, 0], (3, 1)), "opacity": np.full(3, 0.995),
          "sh": ((np.eye(3) - 0.5) / ref.SH_C0)[:, None, :], "degree": 0}
     ply = _write(tmp_path, m)
-    scene = tmp_path / "axis.xml"
-    scene.write_text(f'<scene>{gsply.camera_xml(np.eye(3), [0, 0, -4.0], F, W, H)}<background color="1 1 1"/>'
-                     f'<object name="g"><gaussianModel file="{ply}" kind="3dgs" semantics="3dgrt"/></object></scene>')
-    out = tmp_path / "axis.exr"
-    assert run([scene, "--pixel-filter", "point", "--time", 0, "--spp", 1, "-o", out, "--quiet"]).returncode == 0
-    px = read_exr(out)[0][H // 2, W // 2, :3]
+    img = sharp_gaussian_render(tmp_path, gsply.camera_xml(np.eye(3), [0, 0, -4.0], F, W, H), ply,
+                                ' kind="3dgs" semantics="3dgrt"', "axis", background="1 1 1")
+    px = img[H // 2, W // 2, :3]
     expect, T = grt.trace(gsply.read(ply), *grt.pixel_ray(np.eye(3), [0, 0, -4.0], F, F, W, H, W / 2 + 0.5,
                                                           H / 2 + 0.5), (1, 1, 1))
     assert 1e-5 < T < 1e-3 and expect[1] > 0.009  # green composited after T fell to about 0.005
@@ -251,12 +248,8 @@ def test_an_edge_on_surfel_seen_through_the_filter_is_skipped_where_its_plane_is
          "rot": np.array([[np.cos((np.pi / 2 - a) / 2), 0, -np.sin((np.pi / 2 - a) / 2), 0]]),
          "opacity": np.array([0.9]), "sh": np.full((1, 1, 3), 1.0), "degree": 0}
     ply = _write(tmp_path, m)
-    scene = tmp_path / "edge.xml"
-    scene.write_text(f'<scene>{gsply.camera_xml(np.eye(3), np.zeros(3), F, W, H)}<background color="0 0 0"/>'
-                     f'<object name="g"><gaussianModel file="{ply}"/></object></scene>')
-    out = tmp_path / "edge.exr"
-    assert run([scene, "--pixel-filter", "point", "--time", 0, "--spp", 1, "-o", out, "--quiet"]).returncode == 0
-    img = read_exr(out)[0]
+    img = sharp_gaussian_render(tmp_path, gsply.camera_xml(np.eye(3), np.zeros(3), F, W, H), ply, "", "edge",
+                                background="0 0 0")
     expect, T = ref.render(gsply.read(ply), np.eye(3), np.zeros(3), F, F, W, H, (0, 0, 0))
     assert np.abs(img[..., :3] - expect).max() < TOL
     row = T[H // 2, W // 2 - 2: W // 2 + 3]  # the filter reaches 2 pixels either side of the centre's pixel
