@@ -45,17 +45,40 @@ def read_exr(path):
     return np.stack([channels[c] for c in "RGBA"], axis=-1), header
 
 
-def sharp_gaussian_render(tmp_path, camera, ply, attrs="", name="scene"):
+def sharp_gaussian_render(tmp_path, camera, ply, attrs="", name="scene", background="0.1 0.2 0.3"):
     """The sharp image (--time 0, one sample at each pixel centre: --pixel-filter point) of one
     Gaussian model, given its <camera> element and the gaussianModel's extra attributes, over the
-    Gaussian tests' background (0.1 0.2 0.3)."""
+    background colour given (by default the Gaussian tests' 0.1 0.2 0.3)."""
     scene = tmp_path / f"{name}.xml"
-    scene.write_text(f'<scene>{camera}<background color="0.1 0.2 0.3"/>'
+    scene.write_text(f'<scene>{camera}<background color="{background}"/>'
                      f'<object name="g"><gaussianModel file="{ply}"{attrs}/></object></scene>')
     out = tmp_path / f"{name}.exr"
     proc = run([scene, "--pixel-filter", "point", "--time", 0, "--spp", 1, "--tspp", 1, "-o", out, "--quiet"])
     assert proc.returncode == 0, proc.stderr
     return read_exr(out)[0]
+
+
+def render_bit_identical_across_threads_and_passes(tmp_path, common, threads):
+    """Renders refrender's arguments `common` with each --threads in `threads` and as --pass 0/2 and
+    1/2 merged; asserts all are bit-identical (nothing may depend on thread count or pass split) and
+    returns the first image."""
+    outs = []
+    for n in threads:
+        out = tmp_path / f"t{n}.exr"
+        assert run([*common, "--threads", n, "-o", out]).returncode == 0
+        outs.append(read_exr(out)[0])
+    parts = []
+    for k in range(2):
+        part = tmp_path / f"p{k}.exr"
+        assert run([*common, "--pass", f"{k}/2", "-o", part]).returncode == 0
+        parts.append(part)
+    merged = tmp_path / "merged.exr"
+    proc = run(["merge", *parts, "-o", merged])
+    assert proc.returncode == 0, proc.stderr
+    outs.append(read_exr(merged)[0])
+    for other in outs[1:]:
+        assert np.array_equal(outs[0], other)
+    return outs[0]
 
 
 def read_full(path):

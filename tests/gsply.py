@@ -59,3 +59,13 @@ def camera_xml(R_c2w, C, fy, W, H):
     f = lambda v: " ".join("%.17g" % x for x in v)
     return (f'<camera position="{f(C)}" lookat="{f(look)}" up="{f(up)}" fov="{fov:.17g}" width="{W}" '
             f'height="{H}"/>')
+
+
+def rotation(yaw, pitch, roll=0.0):
+    """A camera-to-world rotation for camera_xml: turned by roll about z, then pitch about x, then yaw
+    about y (R = Ry Rx Rz), so the Gaussian tests' cameras are written one way."""
+    cy, sy, cp, sp, cr, sr = np.cos(yaw), np.sin(yaw), np.cos(pitch), np.sin(pitch), np.cos(roll), np.sin(roll)
+    ry = np.array([[cy, 0, sy], [0, 1, 0], [-sy, 0, cy]])
+    rx = np.array([[1, 0, 0], [0, cp, -sp], [0, sp, cp]])
+    rz = np.array([[cr, -sr, 0], [sr, cr, 0], [0, 0, 1]])
+    return ry @ rx @ rz

@@ -28,6 +28,7 @@ import pytest
 
 import fdgs_reference as fdgs
 import gsply
+from gsply import rotation
 from conftest import ROOT, read_exr, read_full, run
 
 CONVERTER = ROOT / "scripts" / "convert_4dgs.py"
@@ -61,14 +62,6 @@ def convert(ckpt, ply, convention):
     proc = subprocess.run(cmd, capture_output=True, text=True)
     assert proc.returncode == 0, (cmd, proc.stdout, proc.stderr)
     return ply
-
-
-def rotation(yaw, pitch, roll=0.0):
-    cy, sy, cp, sp, cr, sr = np.cos(yaw), np.sin(yaw), np.cos(pitch), np.sin(pitch), np.cos(roll), np.sin(roll)
-    ry = np.array([[cy, 0, sy], [0, 1, 0], [-sy, 0, cy]])
-    rx = np.array([[1, 0, 0], [0, cp, -sp], [0, sp, cp]])
-    rz = np.array([[cr, -sr, 0], [sr, cr, 0], [0, 0, 1]])
-    return ry @ rx @ rz
 
 
 def camera(W, H):

@@ -19,6 +19,7 @@
 #include "io/gaussian_ply.h"
 #include "io/gaussian_stg_ply.h"
 #include "io/scene_xml.h"
+#include "gaussian_test_util.h"
 #include "harness.h"
 
 /* ---- models written as ascii PLY in the save_ply order ------------------ */
@@ -50,20 +51,11 @@ static void row_values(const stg_row *r, double v[N_PROPS])
  * none), extra one to add (value 0). */
 static size_t write_ply(char *buf, size_t size, const stg_row *rows, int n, const char *skip, const char *extra)
 {
-    size_t len = (size_t)snprintf(buf, size, "ply\nformat ascii 1.0\nelement vertex %d\n", n);
-    for (int k = 0; k < N_PROPS; k++)
-        if (!skip || strcmp(skip, STG_ORDER[k]))
-            len += (size_t)snprintf(buf + len, size - len, "property float %s\n", STG_ORDER[k]);
-    if (extra)
-        len += (size_t)snprintf(buf + len, size - len, "property float %s\n", extra);
-    len += (size_t)snprintf(buf + len, size - len, "end_header\n");
+    size_t len = ply_ascii_header(buf, size, n, STG_ORDER, N_PROPS, skip, extra);
     for (int i = 0; i < n; i++) {
         double v[N_PROPS];
         row_values(&rows[i], v);
-        for (int k = 0; k < N_PROPS; k++)
-            if (!skip || strcmp(skip, STG_ORDER[k]))
-                len += (size_t)snprintf(buf + len, size - len, "%.9g ", v[k]);
-        len += (size_t)snprintf(buf + len, size - len, extra ? "0\n" : "\n");
+        len = ply_ascii_row(buf, size, len, STG_ORDER, v, N_PROPS, 9, skip, extra);
     }
     return len;
 }
@@ -72,8 +64,7 @@ static int parse_rows(const stg_row *rows, int n, gaussian_model *m, rr_error *e
 {
     static char buf[1 << 16];
     size_t len = write_ply(buf, sizeof buf, rows, n, NULL, NULL);
-    gaussian_model_init(m);
-    return gaussian_parse("stg.ply", buf, len, GAUSSIAN_AUTO, m, e);
+    return parse_gaussian_text("stg.ply", buf, len, m, e);
 }
 
 /* x = (1, 2, 3), trbf_center 0.25, exp(trbf_scale) = 1, motion in
@@ -202,12 +193,6 @@ TEST(a_zero_or_tiny_rotation_is_what_the_cuda_computes)
 
 /* ---- bounds over [t0, t1] ----------------------------------------------- */
 
-static double uniform(uint64_t *s, double lo, double hi)
-{
-    *s = *s * 6364136223846793005ull + 1442695040888963407ull;
-    return lo + (hi - lo) * (double)(*s >> 11) / 9007199254740992.0;
-}
-
 /* A model of n Gaussians built in memory (no file). */
 static void alloc_model(gaussian_model *m, size_t n)
 {
@@ -225,25 +210,25 @@ static void alloc_model(gaussian_model *m, size_t n)
 static void random_gaussian(gaussian_model *m, size_t i, uint64_t *s, int kind)
 {
     gaussian_dynamic *d = m->dynamic;
-    d->trbf_center[i] = (float)uniform(s, 0, 1);
-    d->trbf_scale[i] = (float)uniform(s, -3, 1);
-    m->opacity[i] = (float)uniform(s, 0.01, 0.99);
+    d->trbf_center[i] = (float)lcg_uniform(s, 0, 1);
+    d->trbf_scale[i] = (float)lcg_uniform(s, -3, 1);
+    m->opacity[i] = (float)lcg_uniform(s, 0.01, 0.99);
     for (int k = 0; k < 3; k++) {
-        double off = kind == 2 ? uniform(s, 500, 2000) : uniform(s, -3, 3), size = kind == 1 ? 60 : 1;
+        double off = kind == 2 ? lcg_uniform(s, 500, 2000) : lcg_uniform(s, -3, 3), size = kind == 1 ? 60 : 1;
         double *c = NULL, co[3];
         if (kind == 0 || kind == 3) { /* roots of p' in [-1.2, 1.2]; kind 3: a double root */
-            double A = uniform(s, -20, 20), r1 = uniform(s, -1.2, 1.2), r2 = kind == 3 ? r1 : uniform(s, -1.2, 1.2);
+            double A = lcg_uniform(s, -20, 20), r1 = lcg_uniform(s, -1.2, 1.2), r2 = kind == 3 ? r1 : lcg_uniform(s, -1.2, 1.2);
             co[0] = A * r1 * r2, co[1] = -A * (r1 + r2) / 2, co[2] = A / 3, c = co;
         } else if (kind == 4) { /* a parabola (no D^3): p' linear, its root inside */
-            double a = uniform(s, -30, 30), r = uniform(s, -1.2, 1.2);
+            double a = lcg_uniform(s, -30, 30), r = lcg_uniform(s, -1.2, 1.2);
             co[0] = -2 * a * r, co[1] = a, co[2] = 0, c = co;
         } else if (kind == 2) { /* a path of a few ulps of its offset: rounding decides */
             for (int j = 0; j < 3; j++)
-                co[j] = uniform(s, -1, 1) * 4e-13;
+                co[j] = lcg_uniform(s, -1, 1) * 4e-13;
             c = co;
         } else {
             for (int j = 0; j < 3; j++)
-                co[j] = uniform(s, -size, size);
+                co[j] = lcg_uniform(s, -size, size);
             c = co;
         }
         m->mean[3 * i + k] = (float)off;
@@ -313,7 +298,7 @@ TEST(motion_bounds_hold_20000_steps_of_the_path)
     double slack = -INFINITY;
     for (size_t i = 0; i < n; i++) {
         random_gaussian(&m, i, &seed, (int)(i % 5));
-        double c = m.dynamic->trbf_center[i], t0 = c + uniform(&seed, -1.2, 0.2), t1 = t0 + uniform(&seed, 0, 1.4);
+        double c = m.dynamic->trbf_center[i], t0 = c + lcg_uniform(&seed, -1.2, 0.2), t1 = t0 + lcg_uniform(&seed, 0, 1.4);
         if (i % 50 == 7)
             t1 = t0; /* an instant */
         failures += !bounds_hold(&m, i, t0, t1, &slack);
@@ -351,14 +336,7 @@ static int refused(const char *skip, const char *extra, gaussian_kind kind, cons
     static char buf[1 << 14];
     stg_row r = hand_row();
     size_t len = write_ply(buf, sizeof buf, &r, 1, skip, extra);
-    gaussian_model m;
-    rr_error e = {{0}};
-    gaussian_model_init(&m);
-    int ok = gaussian_parse("stg.ply", buf, len, kind, &m, &e) == -1 && strstr(e.msg, "stg.ply") &&
-             strstr(e.msg, needle) && !m.mean && !m.dynamic;
-    if (!ok)
-        printf("    expected an error with '%s', got '%s'\n", needle, e.msg);
-    return ok;
+    return gaussian_text_refused("stg.ply", buf, len, kind, needle);
 }
 
 TEST(stg_files_that_are_not_whole_lite_models_are_refused_by_name)
@@ -385,13 +363,10 @@ TEST(stg_values_beyond_what_the_official_code_holds_are_refused)
     stg_row r = hand_row();
     r.tscale = -100; /* exp(-100) is no normal float */
     size_t len = write_ply(buf, sizeof buf, &r, 1, NULL, NULL);
-    gaussian_model m;
-    rr_error e;
-    gaussian_model_init(&m);
-    CHECK(gaussian_parse("s.ply", buf, len, GAUSSIAN_AUTO, &m, &e) == -1 && strstr(e.msg, "'trbf_scale' = -100"));
+    CHECK(gaussian_text_refused("s.ply", buf, len, GAUSSIAN_AUTO, "'trbf_scale' = -100"));
     r = hand_row(), r.x[1] = 1e16;
     len = write_ply(buf, sizeof buf, &r, 1, NULL, NULL);
-    CHECK(gaussian_parse("s.ply", buf, len, GAUSSIAN_AUTO, &m, &e) == -1 && strstr(e.msg, "'y'"));
+    CHECK(gaussian_text_refused("s.ply", buf, len, GAUSSIAN_AUTO, "'y'"));
 }
 
 /* From a file: the static reader hands it over and the bytes are hashed
@@ -452,11 +427,11 @@ static void random_turning_gaussian(gaussian_model *m, size_t i, uint64_t *s)
     gaussian_dynamic *d = m->dynamic;
     double size = i % 7 == 3 ? 0 : i % 7 == 5 ? 3e-13 : 1;
     for (int k = 0; k < 4; k++)
-        d->rot[4 * i + k] = (float)(size * uniform(s, -1, 1)), d->omega[4 * i + k] = (float)uniform(s, -3, 3);
+        d->rot[4 * i + k] = (float)(size * lcg_uniform(s, -1, 1)), d->omega[4 * i + k] = (float)lcg_uniform(s, -3, 3);
     for (int k = 0; k < 3; k++)
-        m->scale[3 * i + k] = (float)exp(uniform(s, -5, 0));
-    m->opacity[i] = (float)uniform(s, 0.05, 0.99);
-    d->trbf_scale[i] = (float)uniform(s, -1, 1);
+        m->scale[3 * i + k] = (float)exp(lcg_uniform(s, -5, 0));
+    m->opacity[i] = (float)lcg_uniform(s, 0.05, 0.99);
+    d->trbf_scale[i] = (float)lcg_uniform(s, -1, 1);
 }
 
 /* The box a dynamic Gaussian gets over [t0, t1] (gaussian_dynamic_bounds
@@ -479,7 +454,7 @@ TEST(a_moving_gaussians_box_holds_its_reach_at_20000_times_of_the_shutter)
         m.formation = (gaussian_formation)kinds[f];
         for (size_t i = 0; i < n; i++) {
             random_turning_gaussian(&m, i, &seed);
-            double c = m.dynamic->trbf_center[i], t0 = c + uniform(&seed, -1.2, 0.2), t1 = t0 + uniform(&seed, 0, 1.4);
+            double c = m.dynamic->trbf_center[i], t0 = c + lcg_uniform(&seed, -1.2, 0.2), t1 = t0 + lcg_uniform(&seed, 0, 1.4);
             double lo[3], hi[3], omax;
             CHECK(gaussian_dynamic_bounds(&m, i, t0, t1, lo, hi, &omax) == 0);
             /* the camera 40 units from the origin: the distance is its farthest from the box */

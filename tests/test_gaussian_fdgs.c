@@ -15,6 +15,7 @@
 #include "gaussians/gaussian.h"
 #include "gaussians/gaussian_dynamic.h"
 #include "io/gaussian_ply.h"
+#include "gaussian_test_util.h"
 #include "harness.h"
 
 /* ---- models written as ascii PLY in the converter's order ----------------- */
@@ -42,28 +43,21 @@ static fdgs_row hand_row(void)
 /* skip: a property to leave out (NULL: none); extra: one to add (value 0). */
 static size_t write_ply(char *buf, size_t size, const fdgs_row *rows, int n, const char *skip, const char *extra)
 {
-    size_t len = (size_t)snprintf(buf, size, "ply\nformat ascii 1.0\nelement vertex %d\n", n);
-    char name[32];
-    for (int k = 0; k < N_FIXED + rows[0].n_sh; k++) {
-        snprintf(name, sizeof name, "%s", k < N_FIXED ? FIXED[k] : "");
-        if (k >= N_FIXED)
-            snprintf(name, sizeof name, "sh4d_%d", k - N_FIXED);
-        if (!skip || strcmp(skip, name))
-            len += (size_t)snprintf(buf + len, size - len, "property float %s\n", name);
+    static char store[N_FIXED + MAX_SH][32];
+    const char *names[N_FIXED + MAX_SH];
+    for (int k = 0; k < N_FIXED + MAX_SH; k++) {
+        if (k < N_FIXED)
+            snprintf(store[k], sizeof store[k], "%s", FIXED[k]);
+        else
+            snprintf(store[k], sizeof store[k], "sh4d_%d", k - N_FIXED);
+        names[k] = store[k];
     }
-    if (extra)
-        len += (size_t)snprintf(buf + len, size - len, "property float %s\n", extra);
-    len += (size_t)snprintf(buf + len, size - len, "end_header\n");
+    size_t len = ply_ascii_header(buf, size, n, names, N_FIXED + rows[0].n_sh, skip, extra);
     for (int i = 0; i < n; i++) {
-        for (int k = 0; k < N_FIXED + rows[i].n_sh; k++) {
-            snprintf(name, sizeof name, "%s", k < N_FIXED ? FIXED[k] : "");
-            if (k >= N_FIXED)
-                snprintf(name, sizeof name, "sh4d_%d", k - N_FIXED);
-            if (!skip || strcmp(skip, name))
-                len += (size_t)snprintf(buf + len, size - len, "%.17g ",
-                                        k < N_FIXED ? rows[i].v[k] : rows[i].sh[k - N_FIXED]);
-        }
-        len += (size_t)snprintf(buf + len, size - len, extra ? "0\n" : "\n");
+        double v[N_FIXED + MAX_SH];
+        memcpy(v, rows[i].v, sizeof rows[i].v);
+        memcpy(&v[N_FIXED], rows[i].sh, sizeof rows[i].sh);
+        len = ply_ascii_row(buf, size, len, names, v, N_FIXED + rows[i].n_sh, 17, skip, extra);
     }
     return len;
 }
@@ -72,8 +66,7 @@ static int parse_rows(const fdgs_row *rows, int n, gaussian_model *m, rr_error *
 {
     static char buf[1 << 16];
     size_t len = write_ply(buf, sizeof buf, rows, n, NULL, NULL);
-    gaussian_model_init(m);
-    return gaussian_parse("fdgs.ply", buf, len, GAUSSIAN_AUTO, m, e);
+    return parse_gaussian_text("fdgs.ply", buf, len, m, e);
 }
 
 /* ---- evaluation ------------------------------------------------------------ */
@@ -181,12 +174,6 @@ TEST(a_4dgs_colour_is_the_4d_sh_from_the_canonical_mean)
 
 /* ---- bounds over [t0, t1] ---------------------------------------------------- */
 
-static double uniform(uint64_t *s, double lo, double hi)
-{
-    *s = *s * 6364136223846793005ULL + 1442695040888963407ULL;
-    return lo + (hi - lo) * (double)(*s >> 11) / 9007199254740992.0;
-}
-
 /* n random 4DGS Gaussians (slow and fast movers, offsets far from the
  * origin, short and long marginals) with degree 0. */
 static void random_model(gaussian_model *m, size_t n, uint64_t *s)
@@ -198,14 +185,14 @@ static void random_model(gaussian_model *m, size_t n, uint64_t *s)
     for (size_t i = 0; i < n; i++) {
         double off = i % 3 == 2 ? 1000 : 3, speed = i % 3 == 1 ? 60 : 1;
         for (int k = 0; k < 3; k++) {
-            m->mean[3 * i + k] = (float)uniform(s, -off, off);
-            m->dynamic->velocity[3 * i + k] = (float)uniform(s, -speed, speed);
+            m->mean[3 * i + k] = (float)lcg_uniform(s, -off, off);
+            m->dynamic->velocity[3 * i + k] = (float)lcg_uniform(s, -speed, speed);
             m->scale[3 * i + k] = 0.1f, m->sh[3 * i + (size_t)k] = 0;
         }
         m->rotation[4 * i] = 1, m->rotation[4 * i + 1] = m->rotation[4 * i + 2] = m->rotation[4 * i + 3] = 0;
-        m->opacity[i] = (float)uniform(s, 0.01, 0.99);
-        m->dynamic->t_center[i] = (float)uniform(s, -1, 1);
-        m->dynamic->t_var[i] = (float)exp(uniform(s, -8, 1));
+        m->opacity[i] = (float)lcg_uniform(s, 0.01, 0.99);
+        m->dynamic->t_center[i] = (float)lcg_uniform(s, -1, 1);
+        m->dynamic->t_var[i] = (float)exp(lcg_uniform(s, -8, 1));
     }
     m->count = n;
 }
@@ -254,7 +241,7 @@ TEST(fdgs_bounds_hold_20000_steps_of_the_path)
     int failures = 0, cut_all = 0;
     double slack = -INFINITY;
     for (size_t i = 0; i < n; i++) {
-        double c = m.dynamic->t_center[i], t0 = c + uniform(&seed, -3, 1), t1 = t0 + uniform(&seed, 0, 2);
+        double c = m.dynamic->t_center[i], t0 = c + lcg_uniform(&seed, -3, 1), t1 = t0 + lcg_uniform(&seed, 0, 2);
         if (i % 50 == 7)
             t1 = t0; /* an instant */
         failures += !fdgs_bounds_hold(&m, i, t0, t1, &slack, &cut_all);
@@ -274,14 +261,7 @@ static int refused_rows(const fdgs_row *rows, int n, const char *skip, const cha
 {
     static char buf[1 << 16];
     size_t len = write_ply(buf, sizeof buf, rows, n, skip, extra);
-    gaussian_model m;
-    rr_error e = {{0}};
-    gaussian_model_init(&m);
-    int ok = gaussian_parse("fdgs.ply", buf, len, kind, &m, &e) == -1 && strstr(e.msg, "fdgs.ply") &&
-             strstr(e.msg, needle) && !m.mean && !m.dynamic;
-    if (!ok)
-        printf("    expected an error with '%s', got '%s'\n", needle, e.msg);
-    return ok;
+    return gaussian_text_refused("fdgs.ply", buf, len, kind, needle);
 }
 
 static int refused(fdgs_row r, const char *skip, const char *extra, const char *needle)

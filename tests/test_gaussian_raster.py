@@ -22,6 +22,7 @@ import pytest
 
 import gs3d_raster_reference as ref
 import gsply
+from gsply import rotation
 from conftest import read_exr, run, sharp_gaussian_render
 
 BACKGROUND = (0.1, 0.2, 0.3)
@@ -29,14 +30,6 @@ TOL = 1e-4
 # refrender's semantics -> the reference's variant
 VARIANT = {"3dgs": "inria", "3dgs-antialiased": "inria-antialiased", "gsplat": "gsplat",
            "gsplat-antialiased": "gsplat-antialiased"}
-
-
-def rotation(yaw, pitch, roll=0.0):
-    cy, sy, cp, sp, cr, sr = np.cos(yaw), np.sin(yaw), np.cos(pitch), np.sin(pitch), np.cos(roll), np.sin(roll)
-    ry = np.array([[cy, 0, sy], [0, 1, 0], [-sy, 0, cy]])
-    rx = np.array([[1, 0, 0], [0, cp, -sp], [0, sp, cp]])
-    rz = np.array([[cr, -sr, 0], [sr, cr, 0], [0, 0, 1]])
-    return ry @ rx @ rz
 
 
 def random_model(seed, n, degree, sub_pixel=0, spread=0.7, opacity=(0.2, 0.95)):

@@ -15,19 +15,13 @@ import pytest
 
 import gs2d_reference as ref
 import gsply
-from conftest import read_exr, run, sharp_gaussian_render
+from gsply import rotation
+from conftest import read_exr, render_bit_identical_across_threads_and_passes, run, sharp_gaussian_render
 
 W = H = 40
 F = 45.0
 BACKGROUND = (0.1, 0.2, 0.3)
 TOL = 1e-4
-
-
-def rotation(yaw, pitch):
-    cy, sy, cp, sp = np.cos(yaw), np.sin(yaw), np.cos(pitch), np.sin(pitch)
-    ry = np.array([[cy, 0, sy], [0, 1, 0], [-sy, 0, cy]])
-    rx = np.array([[1, 0, 0], [0, cp, -sp], [0, sp, cp]])
-    return ry @ rx
 
 
 def random_model(seed, n, degree, sub_pixel):
@@ -200,23 +194,8 @@ def test_a_moving_gaussian_render_is_bit_identical_for_any_threads_and_passes(tm
                      f'<object name="g"><gaussianModel file="{ply}"/>'
                      f'<animation><rotation axis="0 1 0" degrees_per_unit_time="40"/></animation></object></scene>')
     common = [scene, "--spp", 4, "--tspp", 4, "--batches", 4, "--quiet"]
-    outs = []
-    for threads in (1, 2, 3):
-        out = tmp_path / f"t{threads}.exr"
-        assert run([*common, "--threads", threads, "-o", out]).returncode == 0
-        outs.append(read_exr(out)[0])
-    parts = []
-    for k in range(2):
-        part = tmp_path / f"p{k}.exr"
-        assert run([*common, "--pass", f"{k}/2", "-o", part]).returncode == 0
-        parts.append(part)
-    merged = tmp_path / "merged.exr"
-    proc = run(["merge", *parts, "-o", merged])
-    assert proc.returncode == 0, proc.stderr
-    outs.append(read_exr(merged)[0])
-    assert outs[0][..., 3].max() > 0.5
-    for other in outs[1:]:
-        assert np.array_equal(outs[0], other)
+    img = render_bit_identical_across_threads_and_passes(tmp_path, common, (1, 2, 3))
+    assert img[..., 3].max() > 0.5
 
 
 def random_3d_model(seed, n, degree):
@@ -251,12 +230,9 @@ def test_3dgrt_composites_the_hit_that_crosses_its_minimum_transmittance(tmp_pat
          "scale": np.full((3, 3), 0.2), "rot": np.tile([1.0, 0, 0, 0], (3, 1)), "opacity": np.full(3, 0.995),
          "sh": ((np.eye(3) - 0.5) / ref.SH_C0)[:, None, :], "degree": 0}
     ply = _write(tmp_path, m)
-    scene = tmp_path / "axis.xml"
-    scene.write_text(f'<scene>{gsply.camera_xml(np.eye(3), [0, 0, -4.0], F, W, H)}<background color="1 1 1"/>'
-                     f'<object name="g"><gaussianModel file="{ply}" kind="3dgs" semantics="3dgrt"/></object></scene>')
-    out = tmp_path / "axis.exr"
-    assert run([scene, "--pixel-filter", "point", "--time", 0, "--spp", 1, "-o", out, "--quiet"]).returncode == 0
-    px = read_exr(out)[0][H // 2, W // 2, :3]
+    img = sharp_gaussian_render(tmp_path, gsply.camera_xml(np.eye(3), [0, 0, -4.0], F, W, H), ply,
+                                ' kind="3dgs" semantics="3dgrt"', "axis", background="1 1 1")
+    px = img[H // 2, W // 2, :3]
     expect, T = grt.trace(gsply.read(ply), *grt.pixel_ray(np.eye(3), [0, 0, -4.0], F, F, W, H, W / 2 + 0.5,
                                                           H / 2 + 0.5), (1, 1, 1))
     assert 1e-5 < T < 1e-3 and expect[1] > 0.009  # green composited after T fell to about 0.005
@@ -272,12 +248,8 @@ def test_an_edge_on_surfel_seen_through_the_filter_is_skipped_where_its_plane_is
          "rot": np.array([[np.cos((np.pi / 2 - a) / 2), 0, -np.sin((np.pi / 2 - a) / 2), 0]]),
          "opacity": np.array([0.9]), "sh": np.full((1, 1, 3), 1.0), "degree": 0}
     ply = _write(tmp_path, m)
-    scene = tmp_path / "edge.xml"
-    scene.write_text(f'<scene>{gsply.camera_xml(np.eye(3), np.zeros(3), F, W, H)}<background color="0 0 0"/>'
-                     f'<object name="g"><gaussianModel file="{ply}"/></object></scene>')
-    out = tmp_path / "edge.exr"
-    assert run([scene, "--pixel-filter", "point", "--time", 0, "--spp", 1, "-o", out, "--quiet"]).returncode == 0
-    img = read_exr(out)[0]
+    img = sharp_gaussian_render(tmp_path, gsply.camera_xml(np.eye(3), np.zeros(3), F, W, H), ply, "", "edge",
+                                background="0 0 0")
     expect, T = ref.render(gsply.read(ply), np.eye(3), np.zeros(3), F, F, W, H, (0, 0, 0))
     assert np.abs(img[..., :3] - expect).max() < TOL
     row = T[H // 2, W // 2 - 2: W // 2 + 3]  # the filter reaches 2 pixels either side of the centre's pixel

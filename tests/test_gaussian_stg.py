@@ -14,7 +14,7 @@ import numpy as np
 
 import gsply
 import stg_reference as stg
-from conftest import read_exr, run
+from conftest import read_exr, render_bit_identical_across_threads_and_passes, run
 
 SH_C0 = 0.28209479177387814
 W, H, F = 48, 32, 80.0
@@ -116,26 +116,12 @@ def test_moving_gaussians_compose_with_threads_passes_crops_and_a_rolling_shutte
     write_stg_lite(ply, n=6, cubic=2.0)
     path = scene(tmp_path, "moving", ply, '<animation><rotation axis="0 1 0" degrees_per_unit_time="30"/></animation>')
     common = [path, "--spp", 4, "--tspp", 4, "--batches", 4, "--quiet"]
-    outs = []
-    for threads in (1, 2):
-        out = tmp_path / f"t{threads}.exr"
-        assert run([*common, "--threads", threads, "-o", out]).returncode == 0
-        outs.append(read_exr(out)[0])
-    parts = []
-    for k in range(2):
-        part = tmp_path / f"p{k}.exr"
-        assert run([*common, "--pass", f"{k}/2", "-o", part]).returncode == 0
-        parts.append(part)
-    merged = tmp_path / "merged.exr"
-    assert run(["merge", *parts, "-o", merged]).returncode == 0
-    outs.append(read_exr(merged)[0])
+    img = render_bit_identical_across_threads_and_passes(tmp_path, common, (1, 2))
     crop = tmp_path / "crop.exr"
     assert run([*common, "--crop-window", "0.25,0.75,0.25,0.75", "-o", crop]).returncode == 0
-    assert outs[0][..., 3].max() > 0.1  # the Gaussians are in the picture
-    for other in outs[1:]:
-        assert np.array_equal(outs[0], other)
+    assert img[..., 3].max() > 0.1  # the Gaussians are in the picture
     assert np.array_equal(read_exr(crop)[0],  # only the window's pixels (pbrt's rounding)
-                          outs[0][H // 4:3 * H // 4, W // 4:3 * W // 4])
+                          img[H // 4:3 * H // 4, W // 4:3 * W // 4])
 
     d, T = 0.01, 0.3
     rolling = tmp_path / "rolling.xml"

@@ -25,23 +25,29 @@ static surface_hit hit(float t, unsigned obj, float weight, vec3 color, vec3 nor
     return h;
 }
 
-static kbuffer buffer(int n, const surface_hit *h)
+/* The colour of the n hits blended in one k-buffer, seen by a viewer at
+ * z = 5 looking along -z (towards surfaces facing +z). */
+static vec3 shade_seen_from_above(const scene *s, int n, const surface_hit *h)
 {
     kbuffer kb;
     kbuffer_reset(&kb, 0.5f);
     for (int i = 0; i < n; i++)
         kbuffer_insert(&kb, &h[i]);
-    return kb;
+    return shade_hits(s, &kb, v3(0, 0, 5), v3(0, 0, -1));
+}
+
+static int load(const char *xml, scene *s)
+{
+    rr_error e;
+    return scene_load_memory(xml, strlen(xml), "mem.xml", ".", s, &e);
 }
 
 TEST(unlit_blend_is_the_kernel_weighted_mean_color)
 {
     scene s;
-    rr_error e;
-    CHECK(scene_load_memory(XML, strlen(XML), "mem.xml", ".", &s, &e) == 0);
+    CHECK(load(XML, &s) == 0);
     surface_hit h[2] = {hit(2.0f, 0, 0.75f, v3(1, 0, 0), v3(0, 0, 1)), hit(2.1f, 0, 0.25f, v3(0, 0, 1), v3(0, 0, 1))};
-    kbuffer kb = buffer(2, h);
-    vec3 c = shade_hits(&s, &kb, v3(0, 0, 5), v3(0, 0, -1));
+    vec3 c = shade_seen_from_above(&s, 2, h);
     CHECK_NEAR(c.x, 0.75, 1e-7);
     CHECK_NEAR(c.y, 0, 0);
     CHECK_NEAR(c.z, 0.25, 1e-7);
@@ -51,20 +57,17 @@ TEST(unlit_blend_is_the_kernel_weighted_mean_color)
 TEST(phong_of_a_surface_facing_the_light_and_the_viewer)
 {
     scene s;
-    rr_error e;
-    CHECK(scene_load_memory(XML, strlen(XML), "mem.xml", ".", &s, &e) == 0);
+    CHECK(load(XML, &s) == 0);
     /* n = l = v = +z: n.l = 1, r.v = 1; color C = (0.8, 0.6, 0.4), kd = 0.5 C:
      * ambient kd * 0.1 + L * (kd * 1 + 0.25 * 1^2) */
     surface_hit h[1] = {hit(2.0f, 1, 1.0f, v3(0.8, 0.6, 0.4), v3(0, 0, 1))};
-    kbuffer kb = buffer(1, h);
-    vec3 c = shade_hits(&s, &kb, v3(0, 0, 5), v3(0, 0, -1));
+    vec3 c = shade_seen_from_above(&s, 1, h);
     CHECK_NEAR(c.x, 0.4 * 0.1 + 1.0 * (0.4 + 0.25), 1e-6);
     CHECK_NEAR(c.y, 0.3 * 0.1 + 0.5 * (0.3 + 0.25), 1e-6);
     CHECK_NEAR(c.z, 0.2 * 0.1 + 0.25 * (0.2 + 0.25), 1e-6);
     /* facing away from the light (n.l < 0): ambient only, no specular */
     surface_hit back[1] = {hit(2.0f, 1, 1.0f, v3(0.8, 0.6, 0.4), v3(0, 0, -1))};
-    kb = buffer(1, back);
-    c = shade_hits(&s, &kb, v3(0, 0, 5), v3(0, 0, -1));
+    c = shade_seen_from_above(&s, 1, back);
     CHECK_NEAR(c.x, 0.04, 1e-6);
     CHECK_NEAR(c.z, 0.02, 1e-6);
     scene_free(&s);
@@ -73,15 +76,12 @@ TEST(phong_of_a_surface_facing_the_light_and_the_viewer)
 TEST(mixed_materials_blend_lit_and_unlit_by_weight)
 {
     scene s;
-    rr_error e;
-    CHECK(scene_load_memory(XML, strlen(XML), "mem.xml", ".", &s, &e) == 0);
+    CHECK(load(XML, &s) == 0);
     surface_hit lit[1] = {hit(2.0f, 1, 1.0f, v3(1, 1, 1), v3(0, 0, 1))};
     surface_hit unlit[1] = {hit(2.0f, 0, 1.0f, v3(1, 1, 1), v3(0, 0, 1))};
-    kbuffer a = buffer(1, lit), b = buffer(1, unlit);
-    vec3 ca = shade_hits(&s, &a, v3(0, 0, 5), v3(0, 0, -1)), cb = shade_hits(&s, &b, v3(0, 0, 5), v3(0, 0, -1));
+    vec3 ca = shade_seen_from_above(&s, 1, lit), cb = shade_seen_from_above(&s, 1, unlit);
     surface_hit both[2] = {hit(2.0f, 1, 0.5f, v3(1, 1, 1), v3(0, 0, 1)), hit(2.0f, 0, 0.5f, v3(1, 1, 1), v3(0, 0, 1))};
-    kbuffer ab = buffer(2, both);
-    vec3 c = shade_hits(&s, &ab, v3(0, 0, 5), v3(0, 0, -1));
+    vec3 c = shade_seen_from_above(&s, 2, both);
     /* half the weight lit: the mean of the two (material parameters averaged too:
      * diffuse 0.75, specular 0.125, shininess 17 -> worked through below) */
     double kd = 0.5 * (0.5 + 1.0), spec = 0.5 * 0.25;
@@ -103,11 +103,9 @@ TEST(phong_specular_follows_the_shininess_exponent)
         "<object><sphere radius='1'/><material shading='phong' diffuse='0.5' specular='0.25' shininess='2'/>"
         "</object></scene>";
     scene s;
-    rr_error e;
-    CHECK(scene_load_memory(OBLIQUE, strlen(OBLIQUE), "mem.xml", ".", &s, &e) == 0);
+    CHECK(load(OBLIQUE, &s) == 0);
     surface_hit h[1] = {hit(2.0f, 0, 1.0f, v3(0.8, 0.6, 0.4), v3(0, 0, 1))};
-    kbuffer kb = buffer(1, h);
-    vec3 c = shade_hits(&s, &kb, v3(0, 0, 5), v3(0, 0, -1));
+    vec3 c = shade_seen_from_above(&s, 1, h);
     CHECK_NEAR(c.x, 0.4 * 0.1 + 0.4 * 0.5 + 0.0625, 1e-6);
     CHECK_NEAR(c.y, 0.3 * 0.1 + 0.3 * 0.5 + 0.0625, 1e-6);
     CHECK_NEAR(c.z, 0.2 * 0.1 + 0.2 * 0.5 + 0.0625, 1e-6);

@@ -29,6 +29,7 @@ a 50-frame segment, lie in [0, 1)): `--time T` and `<shutter open close>` are mo
 import numpy as np
 
 import gsply
+from gsply import rotation
 import stg_reference as stg
 from conftest import read_exr, read_full, run
 
@@ -42,14 +43,6 @@ QUAD = 256
 
 SHARP_TIMES = (0.0, 0.31, 0.62, 0.97)
 SHUTTER = (0.2, 0.7)
-
-
-def rotation(yaw, pitch, roll=0.0):
-    cy, sy, cp, sp, cr, sr = np.cos(yaw), np.sin(yaw), np.cos(pitch), np.sin(pitch), np.cos(roll), np.sin(roll)
-    ry = np.array([[cy, 0, sy], [0, 1, 0], [-sy, 0, cy]])
-    rx = np.array([[1, 0, 0], [0, cp, -sp], [0, sp, cp]])
-    rz = np.array([[cr, -sr, 0], [sr, cr, 0], [0, 0, 1]])
-    return ry @ rx @ rz
 
 
 def gaussian(xyz, colour, opacity, scale, rot=(1, 0, 0, 0), omega=(0, 0, 0, 0), motion=(0,) * 9, centre=0.5,
