@@ -13,19 +13,32 @@
  * below DBL_MIN, an absolute error of at most DBL_TRUE_MIN). */
 #define U (DBL_EPSILON / 2)
 
+/* A zeroed gaussian_dynamic and one block of floats_per_gaussian * n
+ * floats its arrays will share (its first array owns it); NULL, with
+ * nothing left allocated, when either fails or the size overflows. */
+static gaussian_dynamic *alloc_with_block(size_t n, size_t floats_per_gaussian, float **block)
+{
+    gaussian_dynamic *d = calloc(1, sizeof *d);
+    *block = n <= SIZE_MAX / (floats_per_gaussian * sizeof(float)) ? malloc(n * floats_per_gaussian * sizeof(float))
+                                                                   : NULL;
+    if (!d || !*block) {
+        free(d);
+        free(*block);
+        return NULL;
+    }
+    return d;
+}
+
 /* The motion's arrays share one block (trbf_center owns it): per Gaussian
  * 1 + 1 + 9 + 4 + 4 floats. */
 enum { DYNAMIC_FLOATS = 19 };
 
 gaussian_dynamic *gaussian_dynamic_alloc(size_t n)
 {
-    gaussian_dynamic *d = calloc(1, sizeof *d);
-    float *block = n <= SIZE_MAX / (DYNAMIC_FLOATS * sizeof(float)) ? malloc(n * DYNAMIC_FLOATS * sizeof(float)) : NULL;
-    if (!d || !block) {
-        free(d);
-        free(block);
+    float *block;
+    gaussian_dynamic *d = alloc_with_block(n, DYNAMIC_FLOATS, &block);
+    if (!d)
         return NULL;
-    }
     d->trbf_center = block;
     d->trbf_scale = d->trbf_center + n;
     d->motion = d->trbf_scale + n;
@@ -40,13 +53,10 @@ enum { FDGS_FLOATS = 5 };
 
 gaussian_dynamic *gaussian_dynamic_alloc_fdgs(size_t n)
 {
-    gaussian_dynamic *d = calloc(1, sizeof *d);
-    float *block = n <= SIZE_MAX / (FDGS_FLOATS * sizeof(float)) ? malloc(n * FDGS_FLOATS * sizeof(float)) : NULL;
-    if (!d || !block) {
-        free(d);
-        free(block);
+    float *block;
+    gaussian_dynamic *d = alloc_with_block(n, FDGS_FLOATS, &block);
+    if (!d)
         return NULL;
-    }
     d->kind = GAUSSIAN_DYNAMIC_FDGS;
     d->t_center = block;
     d->velocity = d->t_center + n;
