@@ -40,32 +40,44 @@ static double model_bytes_per_gaussian(const gaussian_model *m)
     return (double)(floats * sizeof(float));
 }
 
-static void gs_scene(const gs_case *c, scene *s)
+/* A scene of one object: count Gaussians of kind and SH degree sh_degree
+ * made from the default shape, seen from (0, 0, 3.5) with a 40 degree
+ * field of view at width x height; exits on failure. */
+static gaussian_model *one_model_scene(scene *s, int width, int height, size_t count, gaussian_kind kind,
+                                       int sh_degree)
 {
     scene_init(s);
     s->cam.position = v3(0, 0, 3.5);
-    s->cam.width = s->cam.height = c->res;
+    s->cam.width = width, s->cam.height = height;
     s->cam.fov_degrees = 40;
     camera_prepare(&s->cam, NULL);
-    s->camera_motion.velocity = v3(0.3, 0.1, 0);
     shape_params p;
     shape_params_default(&p);
-    p.count = c->count;
+    p.count = count;
     surfel *sf;
     size_t n;
     rr_error err;
+    if (!(s->objects = calloc(1, sizeof *s->objects))) {
+        fprintf(stderr, "bench: out of memory\n");
+        exit(1);
+    }
     s->nobjects = 1;
-    s->objects = calloc(1, sizeof *s->objects);
     scene_object *o = &s->objects[0];
     o->kind = OBJECT_GAUSSIANS;
     animation_init_static(&o->anim);
     gaussian_model_init(&o->gaussians);
-    if (!s->objects || shape_generate(&p, &sf, &n, &err) ||
-        gaussian_from_surfels(sf, n, c->kind, 3, &o->gaussians, &err)) {
+    if (shape_generate(&p, &sf, &n, &err) || gaussian_from_surfels(sf, n, kind, sh_degree, &o->gaussians, &err)) {
         fprintf(stderr, "bench: %s\n", err.msg);
         exit(1);
     }
     free(sf);
+    return &o->gaussians;
+}
+
+static void gs_scene(const gs_case *c, scene *s)
+{
+    one_model_scene(s, c->res, c->res, c->count, c->kind, 3);
+    s->camera_motion.velocity = v3(0.3, 0.1, 0);
 }
 
 /* ---- baseline: built-in oriented discs, every hit gathered ------------ */
@@ -595,30 +607,8 @@ static void stg_freeze(gaussian_model *m)
 
 static void stg_scene(const stg_case *c, scene *s)
 {
-    scene_init(s);
-    s->cam.position = v3(0, 0, 3.5);
-    s->cam.width = c->width, s->cam.height = c->height;
-    s->cam.fov_degrees = 40;
-    camera_prepare(&s->cam, NULL);
+    gaussian_model *m = one_model_scene(s, c->width, c->height, c->count, GAUSSIAN_3D, 0);
     s->shut.open = STG_OPEN, s->shut.close = STG_CLOSE;
-    shape_params p;
-    shape_params_default(&p);
-    p.count = c->count;
-    surfel *sf;
-    size_t n;
-    rr_error err;
-    s->objects = calloc(1, sizeof *s->objects);
-    scene_object *o = &s->objects[0];
-    s->nobjects = 1;
-    o->kind = OBJECT_GAUSSIANS;
-    animation_init_static(&o->anim);
-    gaussian_model *m = &o->gaussians;
-    gaussian_model_init(m);
-    if (shape_generate(&p, &sf, &n, &err) || gaussian_from_surfels(sf, n, GAUSSIAN_3D, 0, m, &err)) {
-        fprintf(stderr, "bench: %s\n", err.msg);
-        exit(1);
-    }
-    free(sf);
     if (!(m->dynamic = gaussian_dynamic_alloc(m->count))) {
         fprintf(stderr, "bench: out of memory\n");
         exit(1);
