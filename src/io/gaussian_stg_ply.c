@@ -21,7 +21,6 @@ static const char *const stg_names[S_SLOTS] = {
     "rot_0", "rot_1", "rot_2", "rot_3", "omega_0", "omega_1", "omega_2", "omega_3"};
 static const ply_schema stg_schema = {stg_names, S_SLOTS, S_SLOTS /* no integer scaling */};
 
-
 static int stg_claims(const char *name)
 {
     return !strcmp(name, "trbf_center") || !strcmp(name, "trbf_scale") ||
