@@ -41,7 +41,7 @@ PREVIEW_LIBS := -lOpenImageIO -lOpenImageIO_Util
 
 LIB_SRCS := core/common core/lanes core/inputfile core/atomicfile accel/kbuffer surfels/splat \
             surfels/pointmodel io/ply gaussians/gaussian io/gaussian_ply gaussians/gaussian_dynamic \
-            io/gaussian_stg_ply io/gaussian_fdgs_ply gaussians/gaussian_hit gaussians/gaussian_blend io/camjson io/transforms \
+            io/gaussian_ply_common io/gaussian_stg_ply io/gaussian_fdgs_ply gaussians/gaussian_hit gaussians/gaussian_blend io/camjson io/transforms \
             surfels/shapes surfels/surfelize io/meshload core/rotation motion/curve motion/trajectory io/tum \
             motion/animation io/animfile core/camera motion/shutter render/sampler scene/scene io/preview \
             io/scene_xml io/scene_xml_util io/scene_xml_anim io/scene_xml_camera io/scene_params accel/accel \

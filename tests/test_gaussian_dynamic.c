@@ -17,7 +17,7 @@
 #include "gaussians/gaussian.h"
 #include "gaussians/gaussian_dynamic.h"
 #include "io/gaussian_ply.h"
-#include "io/gaussian_stg_ply.h"
+#include "io/gaussian_dynamic_ply.h"
 #include "io/scene_xml.h"
 #include "gaussian_test_util.h"
 #include "harness.h"

@@ -40,32 +40,44 @@ static double model_bytes_per_gaussian(const gaussian_model *m)
     return (double)(floats * sizeof(float));
 }
 
-static void gs_scene(const gs_case *c, scene *s)
+/* A scene of one object: count Gaussians of kind and SH degree sh_degree
+ * made from the default shape, seen from (0, 0, 3.5) with a 40 degree
+ * field of view at width x height; exits on failure. */
+static gaussian_model *one_model_scene(scene *s, int width, int height, size_t count, gaussian_kind kind,
+                                       int sh_degree)
 {
     scene_init(s);
     s->cam.position = v3(0, 0, 3.5);
-    s->cam.width = s->cam.height = c->res;
+    s->cam.width = width, s->cam.height = height;
     s->cam.fov_degrees = 40;
     camera_prepare(&s->cam, NULL);
-    s->camera_motion.velocity = v3(0.3, 0.1, 0);
     shape_params p;
     shape_params_default(&p);
-    p.count = c->count;
+    p.count = count;
     surfel *sf;
     size_t n;
     rr_error err;
+    if (!(s->objects = calloc(1, sizeof *s->objects))) {
+        fprintf(stderr, "bench: out of memory\n");
+        exit(1);
+    }
     s->nobjects = 1;
-    s->objects = calloc(1, sizeof *s->objects);
     scene_object *o = &s->objects[0];
     o->kind = OBJECT_GAUSSIANS;
     animation_init_static(&o->anim);
     gaussian_model_init(&o->gaussians);
-    if (!s->objects || shape_generate(&p, &sf, &n, &err) ||
-        gaussian_from_surfels(sf, n, c->kind, 3, &o->gaussians, &err)) {
+    if (shape_generate(&p, &sf, &n, &err) || gaussian_from_surfels(sf, n, kind, sh_degree, &o->gaussians, &err)) {
         fprintf(stderr, "bench: %s\n", err.msg);
         exit(1);
     }
     free(sf);
+    return &o->gaussians;
+}
+
+static void gs_scene(const gs_case *c, scene *s)
+{
+    one_model_scene(s, c->res, c->res, c->count, c->kind, 3);
+    s->camera_motion.velocity = v3(0.3, 0.1, 0);
 }
 
 /* ---- baseline: built-in oriented discs, every hit gathered ------------ */
@@ -220,7 +232,9 @@ static void count_hits(const scene *s, const accel *a, gs_result *r)
     gaussian_integrator_free(&g);
 }
 
-static double gs_render_mrays(const scene *s, const accel *a, const render_settings *rs)
+/* One render of the scene's view: its seconds, and its Mrays/s in *mrays;
+ * exits on failure. */
+static double render_timed(const scene *s, const accel *a, const render_settings *rs, double *mrays)
 {
     image img;
     rr_error err;
@@ -230,9 +244,10 @@ static double gs_render_mrays(const scene *s, const accel *a, const render_setti
         fprintf(stderr, "bench: %s\n", err.msg);
         exit(1);
     }
-    double mrays = img.rays / img.seconds * 1e-6;
+    double seconds = img.seconds;
+    *mrays = (double)img.rays / img.seconds * 1e-6;
     image_free(&img);
-    return mrays;
+    return seconds;
 }
 
 static double median3(double *v, int n)
@@ -277,7 +292,7 @@ static void gs_run(const gs_case *c, gs_result *r)
     double ours[16], theirs[16], rays = (double)c->res * c->res * 4 * 4;
     unsigned long long hits = 0;
     for (int k = 0; k < c->reps; k++) {
-        ours[k] = gs_render_mrays(&s, a, &rs);
+        render_timed(&s, a, &rs, &ours[k]);
         theirs[k] = rays / disc_seconds(discs, &s, &rs, &hits) * 1e-6;
     }
     r->mrays = median3(ours, c->reps), r->base_mrays = median3(theirs, c->reps);
@@ -419,6 +434,24 @@ typedef struct {
     double build_ms, seconds, mrays, model_bytes, embree_bytes, peak_mb;
 } scale_result;
 
+/* The scale and STG rows' measurement, the same for both: build, one
+ * render with --pixel-filter point and tspp x 4 time samples, the bytes
+ * per Gaussian of the count, the peak RSS; frees the scene. */
+static void point_filter_run(scene *s, int tspp, int threads, size_t count, scale_result *r)
+{
+    render_settings rs = render_settings_default();
+    rs.smp.tspp = tspp, rs.smp.time_factor = 4;
+    rs.shut = s->shut;
+    rs.threads = threads;
+    rs.filter = PIXEL_FILTER_POINT;
+    accel *a = build_timed(s, &r->build_ms);
+    r->embree_bytes = (double)accel_embree_peak_bytes(a) / (double)count;
+    r->seconds = render_timed(s, a, &rs, &r->mrays);
+    r->peak_mb = bench_peak_mb();
+    accel_free(a);
+    scene_free(s);
+}
+
 static void scale_scene(const scale_case *c, scene *s)
 {
     static const double radii[3] = {1.0, 0.75, 0.5};
@@ -461,27 +494,8 @@ static void scale_run(const void *in, void *out)
     for (int k = 0; k < s.nobjects; k++)
         count += s.objects[k].gaussians.count,
             model += model_bytes_per_gaussian(&s.objects[k].gaussians) * (double)s.objects[k].gaussians.count;
-    render_settings rs = render_settings_default();
-    rs.smp.tspp = c->tspp, rs.smp.time_factor = 4;
-    rs.shut = s.shut;
-    rs.threads = c->threads;
-    rs.filter = PIXEL_FILTER_POINT;
-    accel *a = build_timed(&s, &r->build_ms);
-    r->embree_bytes = (double)accel_embree_peak_bytes(a) / (double)count;
     r->model_bytes = model / (double)count;
-    image img;
-    volatile sig_atomic_t never = 0;
-    rr_error err;
-    image_alloc(&img, s.cam.width, s.cam.height);
-    if (render_image(&s, a, &rs, &img, NULL, &never, &err)) {
-        fprintf(stderr, "bench: %s\n", err.msg);
-        exit(1);
-    }
-    r->seconds = img.seconds, r->mrays = (double)img.rays / img.seconds * 1e-6;
-    image_free(&img);
-    r->peak_mb = bench_peak_mb();
-    accel_free(a);
-    scene_free(&s);
+    point_filter_run(&s, c->tspp, c->threads, count, r);
 }
 
 int bench_gaussian_scale(int quick, int threads, FILE *csv)
@@ -593,30 +607,8 @@ static void stg_freeze(gaussian_model *m)
 
 static void stg_scene(const stg_case *c, scene *s)
 {
-    scene_init(s);
-    s->cam.position = v3(0, 0, 3.5);
-    s->cam.width = c->width, s->cam.height = c->height;
-    s->cam.fov_degrees = 40;
-    camera_prepare(&s->cam, NULL);
+    gaussian_model *m = one_model_scene(s, c->width, c->height, c->count, GAUSSIAN_3D, 0);
     s->shut.open = STG_OPEN, s->shut.close = STG_CLOSE;
-    shape_params p;
-    shape_params_default(&p);
-    p.count = c->count;
-    surfel *sf;
-    size_t n;
-    rr_error err;
-    s->objects = calloc(1, sizeof *s->objects);
-    scene_object *o = &s->objects[0];
-    s->nobjects = 1;
-    o->kind = OBJECT_GAUSSIANS;
-    animation_init_static(&o->anim);
-    gaussian_model *m = &o->gaussians;
-    gaussian_model_init(m);
-    if (shape_generate(&p, &sf, &n, &err) || gaussian_from_surfels(sf, n, GAUSSIAN_3D, 0, m, &err)) {
-        fprintf(stderr, "bench: %s\n", err.msg);
-        exit(1);
-    }
-    free(sf);
     if (!(m->dynamic = gaussian_dynamic_alloc(m->count))) {
         fprintf(stderr, "bench: out of memory\n");
         exit(1);
@@ -637,26 +629,7 @@ static void stg_run(const void *in, void *out)
     stg_scene(c, &s);
     const gaussian_model *m = &s.objects[0].gaussians;
     r->model_bytes = model_bytes_per_gaussian(m);
-    render_settings rs = render_settings_default();
-    rs.smp.tspp = c->tspp, rs.smp.time_factor = 4;
-    rs.shut = s.shut;
-    rs.threads = c->threads;
-    rs.filter = PIXEL_FILTER_POINT;
-    accel *a = build_timed(&s, &r->build_ms);
-    r->embree_bytes = (double)accel_embree_peak_bytes(a) / (double)m->count;
-    image img;
-    volatile sig_atomic_t never = 0;
-    rr_error err;
-    image_alloc(&img, s.cam.width, s.cam.height);
-    if (render_image(&s, a, &rs, &img, NULL, &never, &err)) {
-        fprintf(stderr, "bench: %s\n", err.msg);
-        exit(1);
-    }
-    r->seconds = img.seconds, r->mrays = (double)img.rays / img.seconds * 1e-6;
-    image_free(&img);
-    r->peak_mb = bench_peak_mb();
-    accel_free(a);
-    scene_free(&s);
+    point_filter_run(&s, c->tspp, c->threads, m->count, r);
 }
 
 static void stg_print_row(const char *name, const stg_case *c, const double *seconds, int reps, const scale_result *r,

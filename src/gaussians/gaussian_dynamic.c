@@ -4,6 +4,7 @@
 
 #include <float.h>
 #include <math.h>
+#include <stddef.h>
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
@@ -13,45 +14,58 @@
  * below DBL_MIN, an absolute error of at most DBL_TRUE_MIN). */
 #define U (DBL_EPSILON / 2)
 
-/* The motion's arrays share one block (trbf_center owns it): per Gaussian
- * 1 + 1 + 9 + 4 + 4 floats. */
-enum { DYNAMIC_FLOATS = 19 };
+/* One float array of a gaussian_dynamic: where its pointer is, and how
+ * many floats it holds per Gaussian. */
+typedef struct {
+    size_t member; /* offsetof the float * */
+    size_t width;
+} dynamic_array;
 
-gaussian_dynamic *gaussian_dynamic_alloc(size_t n)
+/* A zeroed gaussian_dynamic of kind whose arrays share one block, laid out
+ * in the order given (the first owns it: gaussian_dynamic_free), so the
+ * block's size is the widths' sum and cannot disagree with the layout;
+ * NULL, with nothing left allocated, when an allocation fails or the size
+ * overflows. */
+static gaussian_dynamic *alloc_arrays(size_t n, gaussian_dynamic_kind kind, const dynamic_array *arrays, int count)
 {
+    size_t floats = 0;
+    for (int k = 0; k < count; k++)
+        floats += arrays[k].width;
     gaussian_dynamic *d = calloc(1, sizeof *d);
-    float *block = n <= SIZE_MAX / (DYNAMIC_FLOATS * sizeof(float)) ? malloc(n * DYNAMIC_FLOATS * sizeof(float)) : NULL;
+    float *block = n <= SIZE_MAX / (floats * sizeof(float)) ? malloc(n * floats * sizeof(float)) : NULL;
     if (!d || !block) {
         free(d);
         free(block);
         return NULL;
     }
-    d->trbf_center = block;
-    d->trbf_scale = d->trbf_center + n;
-    d->motion = d->trbf_scale + n;
-    d->omega = d->motion + 9 * n;
-    d->rot = d->omega + 4 * n;
+    d->kind = kind;
+    size_t offset = 0;
+    for (int k = 0; k < count; k++) {
+        *(float **)((char *)d + arrays[k].member) = block + offset;
+        offset += arrays[k].width * n;
+    }
     return d;
+}
+
+/* The motion's arrays share one block (trbf_center owns it): per Gaussian
+ * 1 + 1 + 9 + 4 + 4 floats. */
+gaussian_dynamic *gaussian_dynamic_alloc(size_t n)
+{
+    static const dynamic_array stg[] = {
+        {offsetof(gaussian_dynamic, trbf_center), 1}, {offsetof(gaussian_dynamic, trbf_scale), 1},
+        {offsetof(gaussian_dynamic, motion), 9}, {offsetof(gaussian_dynamic, omega), 4},
+        {offsetof(gaussian_dynamic, rot), 4}};
+    return alloc_arrays(n, GAUSSIAN_DYNAMIC_STG, stg, (int)(sizeof stg / sizeof *stg));
 }
 
 /* 4DGS's arrays share one block (t_center owns it): per Gaussian 1 + 3 + 1
  * floats. */
-enum { FDGS_FLOATS = 5 };
-
 gaussian_dynamic *gaussian_dynamic_alloc_fdgs(size_t n)
 {
-    gaussian_dynamic *d = calloc(1, sizeof *d);
-    float *block = n <= SIZE_MAX / (FDGS_FLOATS * sizeof(float)) ? malloc(n * FDGS_FLOATS * sizeof(float)) : NULL;
-    if (!d || !block) {
-        free(d);
-        free(block);
-        return NULL;
-    }
-    d->kind = GAUSSIAN_DYNAMIC_FDGS;
-    d->t_center = block;
-    d->velocity = d->t_center + n;
-    d->t_var = d->velocity + 3 * n;
-    return d;
+    static const dynamic_array fdgs[] = {
+        {offsetof(gaussian_dynamic, t_center), 1}, {offsetof(gaussian_dynamic, velocity), 3},
+        {offsetof(gaussian_dynamic, t_var), 1}};
+    return alloc_arrays(n, GAUSSIAN_DYNAMIC_FDGS, fdgs, (int)(sizeof fdgs / sizeof *fdgs));
 }
 
 void gaussian_dynamic_free(gaussian_dynamic *d)

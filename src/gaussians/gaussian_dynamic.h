@@ -24,7 +24,7 @@
  * A second kind: real-time 4DGS (Yang et al., ICLR 2024;
  * fudan-zvg/4d-gaussian-splatting at 63725f21), each 4D Gaussian
  * conditioned on t as its rasterizer does it (forward.cu:279-352),
- * converted by scripts/convert_4dgs.py (its PLY: gaussian_fdgs_ply.h).
+ * converted by scripts/convert_4dgs.py (its PLY: gaussian_dynamic_ply.h).
  * With D = t - t_center:
  *   mean     x + vel D, vel = Sigma_xt / Sigma_tt (forward.cu:347-350)
  *   rotation, scale  the conditional covariance, the same at every t

@@ -1,15 +1,11 @@
-/* 4DGS models' PLY (gaussian_fdgs_ply.h): scripts/convert_4dgs.py's
+/* 4DGS models' PLY (gaussian_dynamic_ply.h): scripts/convert_4dgs.py's
  * layout read through the PLY reader's generic layer (ply.h). */
-#include "io/gaussian_fdgs_ply.h"
-
 #include <math.h>
 #include <stdio.h>
-#include <stdlib.h>
 #include <string.h>
 
-#include "gaussians/gaussian_dynamic.h"
-#include "io/gaussian_stg_ply.h"
-#include "io/ply.h"
+#include "io/gaussian_dynamic_ply.h"
+#include "io/gaussian_ply_common.h"
 
 /* ---- the layout (scripts/convert_4dgs.py's docstring) --------------------- */
 
@@ -39,28 +35,15 @@ static const char *const fdgs_names[F_SLOTS] = {
     "sh4d_137", "sh4d_138", "sh4d_139", "sh4d_140", "sh4d_141", "sh4d_142", "sh4d_143"};
 static const ply_schema fdgs_schema = {fdgs_names, F_SLOTS, F_SLOTS /* no integer scaling */};
 
-/* name is prefix followed by decimal digits only: their value, else -1. */
-static long numbered(const char *name, const char *prefix)
-{
-    size_t n = strlen(prefix);
-    if (strncmp(name, prefix, n) || name[n] < '0' || name[n] > '9')
-        return -1;
-    char *end;
-    long k = strtol(name + n, &end, 10);
-    return *end ? -1 : k;
-}
-
-int gaussian_fdgs_claims(const char *name)
+static int fdgs_claims(const char *name)
 {
     return !strcmp(name, "t_center") || !strcmp(name, "t_var") || !strcmp(name, "time_duration") ||
-           !strcmp(name, "sh_degree") || !strcmp(name, "sh_degree_t") || numbered(name, "vel_") >= 0 ||
-           numbered(name, "sh4d_") >= 0;
+           !strcmp(name, "sh_degree") || !strcmp(name, "sh_degree_t") ||
+           gaussian_ply_numbered(name, "vel_") >= 0 || gaussian_ply_numbered(name, "sh4d_") >= 0;
 }
 
 typedef struct {
-    gaussian_model *m;
-    gaussian_kind forced;
-    size_t declared, next;
+    gaussian_ply_sink base; /* first: the shared callbacks take it */
     int sh_count;         /* sh4d_* declared (contiguous from sh4d_0: begin_model) */
     double duration, degree, degree_t; /* the first vertex's, which every vertex must repeat */
 } fdgs_sink;
@@ -71,13 +54,13 @@ typedef struct {
 static int see_property(void *user, const char *path, long line, const char *name, rr_error *err)
 {
     (void)user;
-    if (gaussian_stg_claims(name))
+    if (gaussian_stg_ply.claims(name))
         return rr_fail(err, "%s:%ld: vertex property '%s' is SpacetimeGaussians' beside 4DGS ones (t_center, "
                             "vel_*, sh4d_*): a layout mixing the two is refused", path, line, name);
-    if (numbered(name, "f_dc_") >= 0 || numbered(name, "f_rest_") >= 0)
+    if (gaussian_ply_numbered(name, "f_dc_") >= 0 || gaussian_ply_numbered(name, "f_rest_") >= 0)
         return rr_fail(err, "%s:%ld: vertex property '%s' is 3DGS's beside 4DGS ones (t_center, vel_*, sh4d_*): a "
                             "4DGS model's colour is sh4d_* alone", path, line, name);
-    if (numbered(name, "sh4d_") >= F_SH_MAX)
+    if (gaussian_ply_numbered(name, "sh4d_") >= F_SH_MAX)
         return rr_fail(err, "%s:%ld: vertex property '%s': 4DGS's rasterizer reads at most %d coefficients (SH "
                             "degree 3 with two time harmonics, forward.cu:73-195)", path, line, name, F_SH_MAX);
     return 0;
@@ -89,9 +72,7 @@ static int begin_model(void *user, const char *path, const int *present, size_t 
 {
     fdgs_sink *s = user;
     char missing[600] = "";
-    for (int k = 0; k < F_SH + 1; k++)
-        if (!present[k])
-            snprintf(missing + strlen(missing), sizeof missing - strlen(missing), " '%s'", fdgs_names[k]);
+    gaussian_ply_list_missing(missing, sizeof missing, present, fdgs_names, 0, F_SH + 1);
     if (*missing)
         return rr_fail(err, "%s: a 4DGS model lacks the vertex properties%s (scripts/convert_4dgs.py writes x y z "
                             "t_center vel_0..2 t_var opacity scale_0..2 rot_0..3 time_duration sh_degree "
@@ -103,26 +84,15 @@ static int begin_model(void *user, const char *path, const int *present, size_t 
         if (present[F_SH + k])
             return rr_fail(err, "%s: property '%s' is present but '%s' is not (sh4d_* must run from sh4d_0 without "
                                 "gaps)", path, fdgs_names[F_SH + k], fdgs_names[F_SH + n]);
-    if (s->forced == GAUSSIAN_2D)
-        return rr_fail(err, "%s: a 4DGS model is 3D (scale_0..2): kind 2dgs cannot read it", path);
-    s->m->kind = GAUSSIAN_3D;
-    s->sh_count = n, s->declared = count, s->next = 0;
+    if (gaussian_ply_begin_3d(&s->base, path, "4DGS", count, err))
+        return -1;
+    s->sh_count = n;
     return 0;
 }
 
-static int bad(char *why, size_t size, const char *fmt, const char *name, double value)
-{
-    snprintf(why, size, fmt, name, value);
-    return -1;
-}
-
-/* v as the float the model holds: finite as a double but not as a float is
- * refused, as gaussian_ply.c does. */
 static int store(float *dst, const double *v, int slot, char *why, size_t why_size)
 {
-    *dst = (float)v[slot];
-    return isfinite(*dst) ? 0 : bad(why, why_size, "property '%s' = %g is beyond float range (3.4e38)",
-                                    fdgs_names[slot], v[slot]);
+    return gaussian_ply_store(dst, v[slot], fdgs_names[slot], why, why_size);
 }
 
 /* The degrees and T, from the first vertex: integers in range, the time
@@ -132,13 +102,14 @@ static int check_degrees(const fdgs_sink *s, const double *v, char *why, size_t 
 {
     double d = v[F_DEGREE], dt = v[F_DEGREE_T];
     if (!(v[F_DURATION] > 0))
-        return bad(why, why_size, "property '%s' = %g: T of the time harmonics must be above 0",
-                   fdgs_names[F_DURATION], v[F_DURATION]);
+        return gaussian_ply_bad(why, why_size, "property '%s' = %g: T of the time harmonics must be above 0",
+                                fdgs_names[F_DURATION], v[F_DURATION]);
     if (d != floor(d) || d < 0 || d > GAUSSIAN_MAX_SH_DEGREE)
-        return bad(why, why_size, "property '%s' = %g: expected 0, 1, 2 or 3", fdgs_names[F_DEGREE], d);
+        return gaussian_ply_bad(why, why_size, "property '%s' = %g: expected 0, 1, 2 or 3", fdgs_names[F_DEGREE],
+                                d);
     if (dt != floor(dt) || dt < 0 || dt > 2)
-        return bad(why, why_size, "property '%s' = %g: expected 0, 1 or 2 (4DGS's rasterizer has two time "
-                   "harmonics)", fdgs_names[F_DEGREE_T], dt);
+        return gaussian_ply_bad(why, why_size, "property '%s' = %g: expected 0, 1 or 2 (4DGS's rasterizer has two "
+                                "time harmonics)", fdgs_names[F_DEGREE_T], dt);
     if (dt > 0 && d != 3)
         return snprintf(why, why_size, "sh_degree_t = %g with sh_degree = %g: 4DGS's rasterizer draws time "
                         "harmonics only at SH degree 3 (forward.cu:142)", dt, d), -1;
@@ -154,7 +125,7 @@ static int check_degrees(const fdgs_sink *s, const double *v, char *why, size_t 
  * repeat them (they are one model's, written in every vertex). */
 static int model_constants(fdgs_sink *s, const double *v, char *why, size_t why_size)
 {
-    gaussian_model *m = s->m;
+    gaussian_model *m = s->base.m;
     if (m->mean) {
         const double first[3] = {s->duration, s->degree, s->degree_t};
         for (int k = 0; k < 3; k++)
@@ -168,53 +139,28 @@ static int model_constants(fdgs_sink *s, const double *v, char *why, size_t why_
         return -1;
     s->duration = v[F_DURATION], s->degree = v[F_DEGREE], s->degree_t = v[F_DEGREE_T];
     int d = (int)s->degree, dt = (int)s->degree_t;
-    size_t n = s->declared ? s->declared : 1;
     m->sh_degree = d, m->sh_coeffs = (d + 1) * (d + 1) * (dt + 1);
-    if (gaussian_model_alloc(m, n) || !(m->dynamic = gaussian_dynamic_alloc_fdgs(n)))
-        return snprintf(why, why_size, "out of memory for %zu Gaussians", s->declared), -1;
+    if (gaussian_ply_allocate(m, s->base.declared, gaussian_dynamic_alloc_fdgs, why, why_size))
+        return -1;
     m->dynamic->time_duration = s->duration, m->dynamic->sh_degree_t = dt;
-    return 0;
-}
-
-/* The unit quaternion of rot_0..3 (the converter's is unit up to float
- * rounding): divided by its largest component before squaring, as
- * gaussian_ply.c does; only zero is refused. */
-static int normalised_rotation(const double *v, float *q, char *why, size_t why_size)
-{
-    double big = 0, u[4], len2 = 0;
-    for (int k = 0; k < 4; k++)
-        big = fmax(big, fabs(v[F_ROT + k]));
-    if (!(big > 0))
-        return snprintf(why, why_size, "zero-length quaternion (rot_0..rot_3)"), -1;
-    for (int k = 0; k < 4; k++)
-        u[k] = v[F_ROT + k] / big, len2 += u[k] * u[k];
-    for (int k = 0; k < 4; k++)
-        q[k] = (float)(u[k] / sqrt(len2));
     return 0;
 }
 
 /* The static arrays (gaussian_dynamic.h): the canonical mean within
  * GAUSSIAN_MAX_ABS, exp(scale) within GAUSSIAN_MAX_SCALE, the unit
- * quaternion, sigmoid of the opacity, sh4d as it runs (coefficient S k + j
- * of channel c is sh4d_<3 (S k + j) + c>, the model's own order). */
+ * quaternion of rot_0..3 (the converter's is unit up to float rounding;
+ * only zero is refused), sigmoid of the opacity, sh4d as it runs
+ * (coefficient S k + j of channel c is sh4d_<3 (S k + j) + c>, the model's
+ * own order). */
 static int store_static(gaussian_model *m, size_t i, const double *v, int sh_count, char *why, size_t why_size)
 {
-    for (int k = 0; k < 3; k++) {
-        if (!(fabs(v[F_X + k]) <= GAUSSIAN_MAX_ABS))
-            return bad(why, why_size, "property '%s' = %g is beyond 1e+15 (GAUSSIAN_MAX_ABS) from the origin, "
-                       "where rays can be traced", fdgs_names[F_X + k], v[F_X + k]);
-        double e = exp(v[F_SCALE + k]);
-        if (!(e <= GAUSSIAN_MAX_SCALE))
-            return bad(why, why_size, "property '%s' = %g: exp() of it is beyond 1e15 (GAUSSIAN_MAX_SCALE)",
-                       fdgs_names[F_SCALE + k], v[F_SCALE + k]);
-        m->mean[3 * i + k] = (float)v[F_X + k];
-        m->scale[3 * i + k] = (float)e;
-    }
+    if (gaussian_ply_store_mean_scale(m, i, v, fdgs_names, F_X, F_SCALE, 3, why, why_size))
+        return -1;
     for (int k = 0; k < sh_count; k++)
         if (store(&m->sh[(size_t)sh_count * i + (size_t)k], v, F_SH + k, why, why_size))
             return -1;
     m->opacity[i] = (float)(1.0 / (1.0 + exp(-v[F_OPACITY])));
-    return normalised_rotation(v, &m->rotation[4 * i], why, why_size);
+    return gaussian_ply_unit_quaternion(&v[F_ROT], &m->rotation[4 * i], why, why_size);
 }
 
 /* The motion as stored; t_var, a variance divided by, must be above 0 as
@@ -224,8 +170,8 @@ static int store_motion(gaussian_dynamic *d, size_t i, const double *v, char *wh
     if (store(&d->t_center[i], v, F_CENTER, why, why_size) || store(&d->t_var[i], v, F_TVAR, why, why_size))
         return -1;
     if (!(d->t_var[i] > 0))
-        return bad(why, why_size, "property '%s' = %g: the temporal marginal's variance must be above 0",
-                   fdgs_names[F_TVAR], v[F_TVAR]);
+        return gaussian_ply_bad(why, why_size, "property '%s' = %g: the temporal marginal's variance must be "
+                                "above 0", fdgs_names[F_TVAR], v[F_TVAR]);
     for (int k = 0; k < 3; k++)
         if (store(&d->velocity[3 * i + k], v, F_VEL + k, why, why_size))
             return -1;
@@ -235,30 +181,23 @@ static int store_motion(gaussian_dynamic *d, size_t i, const double *v, char *wh
 static int add_gaussian(void *user, const double *v, const int *present, char *why, size_t why_size)
 {
     fdgs_sink *s = user;
-    gaussian_model *m = s->m;
-    for (int k = 0; k < F_SLOTS; k++)
-        if (present[k] && !isfinite(v[k]))
-            return bad(why, why_size, "property '%s' is %g", fdgs_names[k], v[k]);
-    if (model_constants(s, v, why, why_size))
+    gaussian_model *m = s->base.m;
+    if (gaussian_ply_check_finite(v, present, fdgs_names, F_SLOTS, why, why_size) ||
+        model_constants(s, v, why, why_size))
         return -1;
-    size_t i = s->next;
+    size_t i = s->base.next;
     if (store_motion(m->dynamic, i, v, why, why_size) || store_static(m, i, v, s->sh_count, why, why_size))
         return -1;
-    m->count = ++s->next;
+    m->count = ++s->base.next;
     return 0;
 }
 
-int gaussian_fdgs_load(const char *name, const char *data, size_t len, gaussian_kind kind, gaussian_model *m,
-                       uint64_t *content_hash, rr_error *err)
+static int fdgs_load(const char *name, const char *data, size_t len, gaussian_kind kind, gaussian_model *m,
+                     uint64_t *content_hash, rr_error *err)
 {
-    gaussian_model_free(m);
-    fdgs_sink sink = {m, kind, 0, 0, 0, 0, 0, 0};
+    fdgs_sink sink = {{m, kind, 0, 0}, 0, 0, 0, 0};
     ply_visitor v = {begin_model, add_gaussian, &sink, see_property};
-    int rc = data ? ply_parse_vertices(name, data, len, &fdgs_schema, &v, err)
-                  : ply_read_vertices(name, &fdgs_schema, &v, content_hash, err);
-    if (!rc && m->count == 0)
-        rc = rr_fail(err, "%s: the model has no Gaussians", name);
-    if (rc)
-        gaussian_model_free(m);
-    return rc;
+    return gaussian_ply_load_layout(name, data, len, &fdgs_schema, &v, m, content_hash, err);
 }
+
+const gaussian_dynamic_ply_reader gaussian_fdgs_ply = {fdgs_claims, fdgs_load};

@@ -7,9 +7,8 @@
 #include <string.h>
 
 #include "core/atomicfile.h"
-#include "io/gaussian_fdgs_ply.h"
-#include "io/gaussian_stg_ply.h"
-#include "io/ply.h"
+#include "io/gaussian_dynamic_ply.h"
+#include "io/gaussian_ply_common.h"
 
 /* ---- the PLY layout --------------------------------------------------- */
 
@@ -21,9 +20,7 @@ static const char *const slot_names[G_SLOTS] = {
 static const ply_schema gaussian_schema = {slot_names, G_SLOTS, G_SLOTS /* no integer scaling */};
 
 typedef struct {
-    gaussian_model *m;
-    gaussian_kind forced;
-    size_t declared, next;
+    gaussian_ply_sink base; /* first: the shared callbacks take it */
     /* every f_rest_<k> the header declares, schema slot or not: those past
      * f_rest_44 have no slot, yet they decide the SH degree (a file of
      * degree 4 must be refused, not read as degree 3) */
@@ -44,11 +41,8 @@ static int require(const char *path, const int *present, int first, int n, rr_er
 /* k of a property named f_rest_<k> (decimal digits), else -1. */
 static int rest_index(const char *name)
 {
-    if (strncmp(name, "f_rest_", 7) || name[7] < '0' || name[7] > '9')
-        return -1;
-    char *end;
-    long k = strtol(name + 7, &end, 10);
-    return *end || k > 1000000 ? -1 : (int)k;
+    long k = gaussian_ply_numbered(name, "f_rest_");
+    return k > 1000000 ? -1 : (int)k;
 }
 
 /* The header's vertex properties as declared: counts every f_rest_<k>
@@ -58,9 +52,9 @@ static int rest_index(const char *name)
 static int see_property(void *user, const char *path, long line, const char *name, rr_error *err)
 {
     gaussian_sink *s = user;
-    if (gaussian_stg_claims(name)) /* read by gaussian_stg_ply.c instead */
+    if (gaussian_stg_ply.claims(name)) /* read by gaussian_stg_ply.c instead */
         return s->stg = 1, rr_fail(err, "%s:%ld: SpacetimeGaussians property '%s'", path, line, name);
-    if (gaussian_fdgs_claims(name)) /* read by gaussian_fdgs_ply.c instead */
+    if (gaussian_fdgs_ply.claims(name)) /* read by gaussian_fdgs_ply.c instead */
         return s->fdgs = 1, rr_fail(err, "%s:%ld: 4DGS property '%s'", path, line, name);
     if (!strcmp(name, "filter_3D"))
         return rr_fail(err, "%s:%ld: vertex property 'filter_3D': Mip-Splatting's 3D filter is not supported (the "
@@ -109,75 +103,36 @@ static int sh_degree_of(const char *path, const gaussian_sink *s, rr_error *err)
 static int begin_model(void *user, const char *path, const int *present, size_t count, rr_error *err)
 {
     gaussian_sink *s = user;
-    gaussian_model *m = s->m;
+    gaussian_model *m = s->base.m;
     if (require(path, present, G_X, 3, err) || require(path, present, G_DC, 3, err) ||
         require(path, present, G_OPACITY, 1, err) || require(path, present, G_SCALE, 2, err) ||
         require(path, present, G_ROT, 4, err))
         return -1;
-    m->kind = s->forced ? s->forced : present[G_SCALE + 2] ? GAUSSIAN_3D : GAUSSIAN_2D;
+    m->kind = s->base.forced ? s->base.forced : present[G_SCALE + 2] ? GAUSSIAN_3D : GAUSSIAN_2D;
     if (m->kind == GAUSSIAN_3D && require(path, present, G_SCALE + 2, 1, err))
         return -1;
     int degree = sh_degree_of(path, s, err);
     if (degree < 0)
         return -1;
     m->sh_degree = degree, m->sh_coeffs = (degree + 1) * (degree + 1);
-    s->declared = count, s->next = 0;
+    s->base.declared = count, s->base.next = 0;
     return 0;
 }
 
-/* Storage for every declared Gaussian, on the first one (after the reader
- * has checked that the file can hold them all). */
-static int allocate(gaussian_sink *s) { return gaussian_model_alloc(s->m, s->declared ? s->declared : 1); }
-static int bad(char *why, size_t size, const char *fmt, const char *name, double value)
-{
-    snprintf(why, size, fmt, name, value);
-    return -1;
-}
-
-/* Stores v as the float the model holds: a value finite as a double but
- * not as a float (a double property of 1e300, ascii 1e39) would be stored
- * as inf, so it is refused naming the property and its value. */
 static int store(float *dst, double v, int slot, char *why, size_t why_size)
 {
-    *dst = (float)v;
-    return isfinite(*dst) ? 0 : bad(why, why_size, "property '%s' = %g is beyond float range (3.4e38)",
-                                    slot_names[slot], v);
+    return gaussian_ply_store(dst, v, slot_names[slot], why, why_size);
 }
 
-/* The unit quaternion of rot_0..3: divided by its largest component
- * before squaring, so that components of 1e200 do not overflow q.q and a
- * lone 1e-170 does not underflow it; only zero is refused. */
-static int normalised_rotation(const double *v, float *q, char *why, size_t why_size)
-{
-    double big = 0, u[4], len2 = 0;
-    for (int k = 0; k < 4; k++)
-        big = fmax(big, fabs(v[G_ROT + k]));
-    if (!(big > 0))
-        return snprintf(why, why_size, "zero-length quaternion (rot_0..rot_3)"), -1;
-    for (int k = 0; k < 4; k++)
-        u[k] = v[G_ROT + k] / big, len2 += u[k] * u[k];
-    for (int k = 0; k < 4; k++)
-        q[k] = (float)(u[k] / sqrt(len2));
-    return 0;
-}
-
-/* Means within GAUSSIAN_MAX_ABS and scales, after exp, within
- * GAUSSIAN_MAX_SCALE (gaussian.h: Embree's range). */
+/* Means within GAUSSIAN_MAX_ABS, scales (two for 2D), after exp, within
+ * GAUSSIAN_MAX_SCALE, the unit quaternion. */
 static int store_geometry(gaussian_model *m, size_t i, const double *v, char *why, size_t why_size)
 {
     int scales = m->kind == GAUSSIAN_3D ? 3 : 2;
-    for (int k = 0; k < 3; k++) {
-        if (!(fabs(v[G_X + k]) <= GAUSSIAN_MAX_ABS))
-            return bad(why, why_size, "property '%s' = %g is beyond 1e+15 (GAUSSIAN_MAX_ABS) from the origin, "
-                       "where rays can be traced", slot_names[G_X + k], v[G_X + k]);
-        double e = k < scales ? exp(v[G_SCALE + k]) : 0.0;
-        if (!(e <= GAUSSIAN_MAX_SCALE))
-            return bad(why, why_size, "property '%s' = %g: exp() of it is beyond 1e15 (GAUSSIAN_MAX_SCALE)",
-                       slot_names[G_SCALE + k], v[G_SCALE + k]);
-        m->mean[3 * i + k] = (float)v[G_X + k];
-        m->scale[3 * i + k] = (float)e;
-    }
-    return normalised_rotation(v, &m->rotation[4 * i], why, why_size);
+    return gaussian_ply_store_mean_scale(m, i, v, slot_names, G_X, G_SCALE, scales, why, why_size) ||
+                   gaussian_ply_unit_quaternion(&v[G_ROT], &m->rotation[4 * i], why, why_size)
+               ? -1
+               : 0;
 }
 
 /* The SH coefficients, rest channel-major in the file. */
@@ -200,28 +155,17 @@ static int store_sh(gaussian_model *m, size_t i, const double *v, char *why, siz
 static int add_gaussian(void *user, const double *v, const int *present, char *why, size_t why_size)
 {
     gaussian_sink *s = user;
-    gaussian_model *m = s->m;
-    if (!m->mean && allocate(s))
-        return snprintf(why, why_size, "out of memory for %zu Gaussians", s->declared), -1;
-    for (int k = 0; k < G_SLOTS; k++)
-        if (present[k] && !isfinite(v[k]))
-            return bad(why, why_size, "property '%s' is %g", slot_names[k], v[k]);
-    size_t i = s->next;
+    gaussian_model *m = s->base.m;
+    if (!m->mean && gaussian_ply_allocate(m, s->base.declared, NULL, why, why_size))
+        return -1;
+    if (gaussian_ply_check_finite(v, present, slot_names, G_SLOTS, why, why_size))
+        return -1;
+    size_t i = s->base.next;
     if (store_geometry(m, i, v, why, why_size) || store_sh(m, i, v, why, why_size))
         return -1;
     m->opacity[i] = (float)(1.0 / (1.0 + exp(-v[G_OPACITY]))); /* in [0, 1] for any finite value */
-    m->count = ++s->next;
+    m->count = ++s->base.next;
     return 0;
-}
-
-/* A parse's end: on failure, or with no Gaussian, the model is left empty. */
-static int finish(gaussian_model *m, int rc, const char *name, rr_error *err)
-{
-    if (!rc && m->count == 0)
-        rc = rr_fail(err, "%s: the model has no Gaussians", name);
-    if (rc)
-        gaussian_model_free(m);
-    return rc;
 }
 
 /* Parses from memory (data) or reads the file at name (data NULL). */
@@ -232,7 +176,7 @@ static int load(const char *name, const char *data, size_t len, gaussian_kind ki
     gaussian_sink *sink = calloc(1, sizeof *sink);
     if (!sink)
         return rr_fail(err, "%s: out of memory", name);
-    sink->m = m, sink->forced = kind;
+    sink->base.m = m, sink->base.forced = kind;
     ply_visitor v = {begin_model, add_gaussian, sink, see_property};
     uint64_t hash_before = content_hash ? *content_hash : 0;
     int rc = data ? ply_parse_vertices(name, data, len, &gaussian_schema, &v, err)
@@ -242,8 +186,9 @@ static int load(const char *name, const char *data, size_t len, gaussian_kind ki
     if ((stg || fdgs) && content_hash) /* its own reader reads it again, hashing from the same start */
         *content_hash = hash_before;
     if (fdgs)
-        return gaussian_fdgs_load(name, data, len, kind, m, content_hash, err);
-    return stg ? gaussian_stg_load(name, data, len, kind, m, content_hash, err) : finish(m, rc, name, err);
+        return gaussian_fdgs_ply.load(name, data, len, kind, m, content_hash, err);
+    return stg ? gaussian_stg_ply.load(name, data, len, kind, m, content_hash, err)
+               : gaussian_ply_finish(m, rc, name, err);
 }
 
 int gaussian_parse(const char *name, const char *data, size_t len, gaussian_kind kind, gaussian_model *m,

@@ -1,14 +1,12 @@
-#include "io/gaussian_stg_ply.h"
-
+/* SpacetimeGaussians-lite models' PLY (gaussian_dynamic_ply.h): read
+ * through the PLY reader's generic layer (ply.h). */
 #include <float.h>
 #include <math.h>
 #include <stdio.h>
-#include <stdlib.h>
 #include <string.h>
 
-#include "gaussians/gaussian_dynamic.h"
-#include "io/gaussian_fdgs_ply.h"
-#include "io/ply.h"
+#include "io/gaussian_dynamic_ply.h"
+#include "io/gaussian_ply_common.h"
 
 /* ---- the layout (ourslite.py:335-359) ---------------------------------- */
 
@@ -23,28 +21,12 @@ static const char *const stg_names[S_SLOTS] = {
     "rot_0", "rot_1", "rot_2", "rot_3", "omega_0", "omega_1", "omega_2", "omega_3"};
 static const ply_schema stg_schema = {stg_names, S_SLOTS, S_SLOTS /* no integer scaling */};
 
-/* name is prefix followed by decimal digits only: their value, else -1. */
-static long numbered(const char *name, const char *prefix)
+static int stg_claims(const char *name)
 {
-    size_t n = strlen(prefix);
-    if (strncmp(name, prefix, n) || name[n] < '0' || name[n] > '9')
-        return -1;
-    char *end;
-    long k = strtol(name + n, &end, 10);
-    return *end ? -1 : k;
+    return !strcmp(name, "trbf_center") || !strcmp(name, "trbf_scale") ||
+           gaussian_ply_numbered(name, "motion_") >= 0 || gaussian_ply_numbered(name, "omega_") >= 0 ||
+           gaussian_ply_numbered(name, "f_t_") >= 0;
 }
-
-int gaussian_stg_claims(const char *name)
-{
-    return !strcmp(name, "trbf_center") || !strcmp(name, "trbf_scale") || numbered(name, "motion_") >= 0 ||
-           numbered(name, "omega_") >= 0 || numbered(name, "f_t_") >= 0;
-}
-
-typedef struct {
-    gaussian_model *m;
-    gaussian_kind forced;
-    size_t declared, next;
-} stg_sink;
 
 /* The properties lite does not have: the full variant's (oursfull.py:
  * 361-362, 375-376: six f_dc and f_t_0..2, decoded by an MLP after
@@ -52,13 +34,13 @@ typedef struct {
 static int see_property(void *user, const char *path, long line, const char *name, rr_error *err)
 {
     (void)user;
-    if (gaussian_fdgs_claims(name))
+    if (gaussian_fdgs_ply.claims(name))
         return rr_fail(err, "%s:%ld: vertex property '%s' is 4DGS's beside SpacetimeGaussians ones (trbf_*, "
                             "motion_*, omega_*): a layout mixing the two is refused", path, line, name);
-    if (numbered(name, "f_t_") >= 0 || numbered(name, "f_dc_") >= 3)
+    if (gaussian_ply_numbered(name, "f_t_") >= 0 || gaussian_ply_numbered(name, "f_dc_") >= 3)
         return rr_fail(err, "%s:%ld: vertex property '%s': a SpacetimeGaussians \"full\" model (f_t_*, f_dc_3 and "
                             "up) needs STG's per-pixel MLP, not supported (the \"lite\" model is)", path, line, name);
-    if (numbered(name, "f_rest_") >= 0)
+    if (gaussian_ply_numbered(name, "f_rest_") >= 0)
         return rr_fail(err, "%s:%ld: vertex property '%s': a SpacetimeGaussians model has no f_rest_* (lite's "
                             "colour is f_dc_0..2 as RGB)", path, line, name);
     return 0;
@@ -68,34 +50,22 @@ static int see_property(void *user, const char *path, long line, const char *nam
  * the whole list of what it lacks. */
 static int begin_model(void *user, const char *path, const int *present, size_t count, rr_error *err)
 {
-    stg_sink *s = user;
+    gaussian_ply_sink *s = user;
     char missing[600] = "";
-    for (int k = 0; k < S_SLOTS; k++)
-        if (!present[k] && (k < S_NX || k >= S_CENTER))
-            snprintf(missing + strlen(missing), sizeof missing - strlen(missing), " '%s'", stg_names[k]);
+    gaussian_ply_list_missing(missing, sizeof missing, present, stg_names, 0, S_NX);
+    gaussian_ply_list_missing(missing, sizeof missing, present, stg_names, S_CENTER, S_SLOTS);
     if (*missing)
         return rr_fail(err, "%s: a SpacetimeGaussians model lacks the vertex properties%s (lite has x y z trbf_center "
                             "trbf_scale motion_0..8 f_dc_0..2 opacity scale_0..2 rot_0..3 omega_0..3)", path, missing);
-    if (s->forced == GAUSSIAN_2D)
-        return rr_fail(err, "%s: a SpacetimeGaussians model is 3D (scale_0..2): kind 2dgs cannot read it", path);
-    s->m->kind = GAUSSIAN_3D, s->m->sh_degree = 0, s->m->sh_coeffs = 1;
-    s->declared = count, s->next = 0;
+    if (gaussian_ply_begin_3d(s, path, "SpacetimeGaussians", count, err))
+        return -1;
+    s->m->sh_degree = 0, s->m->sh_coeffs = 1;
     return 0;
 }
 
-static int bad(char *why, size_t size, const char *fmt, const char *name, double value)
-{
-    snprintf(why, size, fmt, name, value);
-    return -1;
-}
-
-/* v as the float the model holds: finite as a double but not as a float is
- * refused, as gaussian.c does. */
 static int store(float *dst, const double *v, int slot, char *why, size_t why_size)
 {
-    *dst = (float)v[slot];
-    return isfinite(*dst) ? 0 : bad(why, why_size, "property '%s' = %g is beyond float range (3.4e38)",
-                                    stg_names[slot], v[slot]);
+    return gaussian_ply_store(dst, v[slot], stg_names[slot], why, why_size);
 }
 
 static int store_run(float *dst, const double *v, int first, int n, char *why, size_t why_size)
@@ -112,17 +82,8 @@ static int store_run(float *dst, const double *v, int first, int n, char *why, s
 static int store_static(gaussian_model *m, size_t i, const double *v, char *why, size_t why_size)
 {
     double len2 = 0;
-    for (int k = 0; k < 3; k++) {
-        if (!(fabs(v[S_X + k]) <= GAUSSIAN_MAX_ABS))
-            return bad(why, why_size, "property '%s' = %g is beyond 1e+15 (GAUSSIAN_MAX_ABS) from the origin, "
-                       "where rays can be traced", stg_names[S_X + k], v[S_X + k]);
-        double e = exp(v[S_SCALE + k]);
-        if (!(e <= GAUSSIAN_MAX_SCALE))
-            return bad(why, why_size, "property '%s' = %g: exp() of it is beyond 1e15 (GAUSSIAN_MAX_SCALE)",
-                       stg_names[S_SCALE + k], v[S_SCALE + k]);
-        m->mean[3 * i + k] = (float)v[S_X + k];
-        m->scale[3 * i + k] = (float)e;
-    }
+    if (gaussian_ply_store_mean_scale(m, i, v, stg_names, S_X, S_SCALE, 3, why, why_size))
+        return -1;
     if (store_run(&m->sh[3 * i], v, S_DC, 3, why, why_size) || store_run(&m->dynamic->rot[4 * i], v, S_ROT, 4, why, why_size))
         return -1;
     for (int k = 0; k < 4; k++)
@@ -139,8 +100,8 @@ static int store_static(gaussian_model *m, size_t i, const double *v, char *why,
 static int store_motion(gaussian_dynamic *d, size_t i, const double *v, char *why, size_t why_size)
 {
     if (!(exp(v[S_TSCALE]) >= FLT_MIN))
-        return bad(why, why_size, "property '%s' = %g: exp() of it, the temporal scale, is below float's smallest "
-                   "normal 1.2e-38", stg_names[S_TSCALE], v[S_TSCALE]);
+        return gaussian_ply_bad(why, why_size, "property '%s' = %g: exp() of it, the temporal scale, is below "
+                                "float's smallest normal 1.2e-38", stg_names[S_TSCALE], v[S_TSCALE]);
     return store(&d->trbf_center[i], v, S_CENTER, why, why_size) || store(&d->trbf_scale[i], v, S_TSCALE, why, why_size) ||
                    store_run(&d->motion[9 * i], v, S_MOTION, 9, why, why_size) ||
                    store_run(&d->omega[4 * i], v, S_OMEGA, 4, why, why_size)
@@ -150,15 +111,13 @@ static int store_motion(gaussian_dynamic *d, size_t i, const double *v, char *wh
 
 static int add_gaussian(void *user, const double *v, const int *present, char *why, size_t why_size)
 {
-    stg_sink *s = user;
+    gaussian_ply_sink *s = user;
     gaussian_model *m = s->m;
-    size_t n = s->declared ? s->declared : 1;
-    if (!m->mean && (gaussian_model_alloc(m, n) || !(m->dynamic = gaussian_dynamic_alloc(n))))
-        return snprintf(why, why_size, "out of memory for %zu Gaussians", s->declared), -1;
+    if (!m->mean && gaussian_ply_allocate(m, s->declared, gaussian_dynamic_alloc, why, why_size))
+        return -1;
     m->rgb_precomputed = 1;
-    for (int k = 0; k < S_SLOTS; k++)
-        if (present[k] && !isfinite(v[k]))
-            return bad(why, why_size, "property '%s' is %g", stg_names[k], v[k]);
+    if (gaussian_ply_check_finite(v, present, stg_names, S_SLOTS, why, why_size))
+        return -1;
     size_t i = s->next;
     if (store_motion(m->dynamic, i, v, why, why_size) || store_static(m, i, v, why, why_size))
         return -1;
@@ -166,17 +125,12 @@ static int add_gaussian(void *user, const double *v, const int *present, char *w
     return 0;
 }
 
-int gaussian_stg_load(const char *name, const char *data, size_t len, gaussian_kind kind, gaussian_model *m,
-                      uint64_t *content_hash, rr_error *err)
+static int stg_load(const char *name, const char *data, size_t len, gaussian_kind kind, gaussian_model *m,
+                    uint64_t *content_hash, rr_error *err)
 {
-    gaussian_model_free(m);
-    stg_sink sink = {m, kind, 0, 0};
+    gaussian_ply_sink sink = {m, kind, 0, 0};
     ply_visitor v = {begin_model, add_gaussian, &sink, see_property};
-    int rc = data ? ply_parse_vertices(name, data, len, &stg_schema, &v, err)
-                  : ply_read_vertices(name, &stg_schema, &v, content_hash, err);
-    if (!rc && m->count == 0)
-        rc = rr_fail(err, "%s: the model has no Gaussians", name);
-    if (rc)
-        gaussian_model_free(m);
-    return rc;
+    return gaussian_ply_load_layout(name, data, len, &stg_schema, &v, m, content_hash, err);
 }
+
+const gaussian_dynamic_ply_reader gaussian_stg_ply = {stg_claims, stg_load};
