@@ -17,6 +17,7 @@ static const char *const looks[] = {
     "kind=\"2dgs\"",
     "kind=\"2dgs\" semantics=\"2dgs-unit-circle\" order=\"hit-depth\"",
     "kind=\"2dgs\" tileRule=\"on\"",
+    "kind=\"2dgs\" semantics=\"2dgs-center-near\"",
 };
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
