@@ -332,14 +332,14 @@ static size_t object_rays(const scene *s, const accel *a, const gaussian_sample 
 {
     unsigned count;
     const unsigned *objects = accel_gaussian_objects(a, &count);
-    if (g->rays_cap < count) {
+    if (g->rays_cap < count) { /* out of memory: the sample's Gaussians are dropped, and counted so */
         gaussian_object_ray *grown = realloc(g->rays, count * sizeof *grown);
         if (!grown)
-            return 0;
+            return g->hits.dropped++, 0;
         g->rays = grown;
         gaussian_instant *instants = realloc(g->instants, count * sizeof *instants);
         if (!instants)
-            return 0;
+            return g->hits.dropped++, 0;
         memset(instants + g->rays_cap, 0, (count - g->rays_cap) * sizeof *instants);
         g->instants = instants, g->rays_cap = count;
     }
