@@ -78,30 +78,18 @@ static void cull_candidates(const listing *l, size_t first, unsigned ray)
         g->candidates_count = first + gaussian_cull_candidates(l->r->model, &l->r->ray, g->candidates + first, n, ray);
 }
 
-/* Room for n Gaussians in an instant model. */
+/* Room for n Gaussians in an instant model: its arrays grow together
+ * (rr_grow each from the shared capacity, which moves only when all have). */
 static int instant_room(gaussian_instant *in, size_t n)
 {
-    if (n <= in->cap)
-        return 1;
-    size_t cap = n < 2 * in->cap ? 2 * in->cap : n < 256 ? 256 : n;
-    float *mean = realloc(in->model.mean, 3 * cap * sizeof *mean);
-    if (mean)
-        in->model.mean = mean;
-    float *scale = realloc(in->model.scale, 3 * cap * sizeof *scale);
-    if (scale)
-        in->model.scale = scale;
-    float *rotation = realloc(in->model.rotation, 4 * cap * sizeof *rotation);
-    if (rotation)
-        in->model.rotation = rotation;
-    float *opacity = realloc(in->model.opacity, cap * sizeof *opacity);
-    if (opacity)
-        in->model.opacity = opacity;
-    unsigned *prim = realloc(in->prim, cap * sizeof *prim);
-    if (prim)
-        in->prim = prim;
-    if (!mean || !scale || !rotation || !opacity || !prim)
+    size_t mean = in->cap, scale = in->cap, rotation = in->cap, opacity = in->cap, prim = in->cap;
+    if (rr_grow((void **)&in->model.mean, &mean, n, 3 * sizeof *in->model.mean) ||
+        rr_grow((void **)&in->model.scale, &scale, n, 3 * sizeof *in->model.scale) ||
+        rr_grow((void **)&in->model.rotation, &rotation, n, 4 * sizeof *in->model.rotation) ||
+        rr_grow((void **)&in->model.opacity, &opacity, n, sizeof *in->model.opacity) ||
+        rr_grow((void **)&in->prim, &prim, n, sizeof *in->prim))
         return 0;
-    in->cap = cap;
+    in->cap = mean;
     return 1;
 }
 
@@ -112,7 +100,7 @@ enum { INSTANT_PREFETCH_AHEAD = 8 };
 /* A dynamic model's window: the candidates listed from `first` on
  * (Gaussians of model m) become the slots of the ray's instant model that
  * hold them at the ray's time, so that the cull and the kernels draw each
- * as the static Gaussian of its instant (gaussian_dynamic_instant); their
+ * as the static Gaussian of its instant (gaussian_dynamic_instant_cull and _rest); their
  * hits go back to the Gaussian's own index (original_prim). Here the mean
  * and scale, all the cull reads; instantiate_kept adds the rest for the
  * candidates it keeps (most fail it: on a sphere of 20k, the instants'
