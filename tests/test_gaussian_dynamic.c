@@ -15,6 +15,7 @@
 #include "accel/accel.h"
 #include "core/inputfile.h"
 #include "gaussians/gaussian.h"
+#include "core/rotation.h"
 #include "gaussians/gaussian_dynamic.h"
 #include "io/gaussian_ply.h"
 #include "io/gaussian_dynamic_ply.h"
@@ -142,7 +143,7 @@ TEST(the_rotation_is_rot_plus_omega_d_normalised_once)
         CHECK_NEAR(st.q[0], s, 1e-15);
         CHECK(st.q[1] == 0 && st.q[2] == 0);
         CHECK_NEAR(st.q[3], s, 1e-15);
-        gaussian_dynamic_matrix(st.q, R);
+        quat_unit_matrix(st.q[0], st.q[1], st.q[2], st.q[3], R); /* forward.cu:134-138: q as it is */
         const double want[3][3] = {{0, -1, 0}, {1, 0, 0}, {0, 0, 1}};
         for (int a = 0; a < 3; a++)
             for (int b = 0; b < 3; b++)
@@ -173,18 +174,18 @@ TEST(a_zero_or_tiny_rotation_is_what_the_cuda_computes)
     double R[3][3];
     gaussian_dynamic_at(&m, 0, 0.9, &st);
     CHECK(st.q[0] == 0 && st.q[1] == 0 && st.q[2] == 0 && st.q[3] == 0);
-    gaussian_dynamic_matrix(st.q, R);
+    quat_unit_matrix(st.q[0], st.q[1], st.q[2], st.q[3], R); /* forward.cu:134-138: q as it is */
     for (int a = 0; a < 3; a++)
         for (int b = 0; b < 3; b++)
             CHECK(R[a][b] == (a == b));
     gaussian_dynamic_at(&m, 1, 0.25, &st); /* D = 0: v = 0 */
     CHECK(st.q[0] == 0 && st.q[1] == 0 && st.q[2] == 0 && st.q[3] == 0);
     gaussian_dynamic_at(&m, 1, 0.75, &st); /* D = 1/2: v = (0, 1, 0, 0) */
-    gaussian_dynamic_matrix(st.q, R);
+    quat_unit_matrix(st.q[0], st.q[1], st.q[2], st.q[3], R); /* forward.cu:134-138: q as it is */
     CHECK(R[0][0] == 1 && R[1][1] == -1 && R[2][2] == -1 && R[0][1] == 0 && R[1][2] == 0);
     gaussian_dynamic_at(&m, 2, 0.25, &st);
     CHECK_NEAR(st.q[1], 0.1, 1e-8);
-    gaussian_dynamic_matrix(st.q, R);
+    quat_unit_matrix(st.q[0], st.q[1], st.q[2], st.q[3], R); /* forward.cu:134-138: q as it is */
     CHECK(R[0][0] == 1);
     CHECK_NEAR(R[1][1], 0.98, 1e-8);
     CHECK_NEAR(R[2][2], 0.98, 1e-8);
@@ -398,7 +399,7 @@ TEST(an_stg_file_is_read_and_hashed_once)
 
 /* Gaussian i of m at time t as the one static Gaussian `one` (m's kind and
  * formation over the arrays in `store`), as the renderer draws it
- * (gaussian_dynamic_instant). */
+ * (gaussian_dynamic_instant_cull and _rest). */
 typedef struct {
     float mean[3], scale[3], rotation[4], opacity;
 } one_gaussian;
@@ -408,7 +409,8 @@ static void instant_model(const gaussian_model *m, size_t i, double t, gaussian_
     *one = *m;
     one->count = 1, one->dynamic = NULL, one->sh = NULL;
     one->mean = store->mean, one->scale = store->scale, one->rotation = store->rotation, one->opacity = &store->opacity;
-    gaussian_dynamic_instant(m, i, t, one, 0);
+    gaussian_dynamic_instant_cull(m, i, t, one, 0);
+    gaussian_dynamic_instant_rest(m, i, t, one, 0);
 }
 
 static int box_holds(aabb outer, aabb inner)

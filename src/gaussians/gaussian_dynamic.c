@@ -200,11 +200,6 @@ void gaussian_dynamic_at(const gaussian_model *m, size_t i, double t, gaussian_d
     out->opacity = opacity_at(m, i, D);
 }
 
-void gaussian_dynamic_matrix(const double q[4], double R[3][3])
-{
-    quat_unit_matrix(q[0], q[1], q[2], q[3], R); /* the unit formula on q as it is, as forward.cu does */
-}
-
 /* ---- bounds over [t0, t1] ----------------------------------------------
  *
  * The mean's coordinate is the cubic p(D) = x + m1 D + m2 D^2 + m3 D^3 with
@@ -476,12 +471,6 @@ void gaussian_dynamic_prefetch_rest(const gaussian_model *m, size_t i)
     __builtin_prefetch(&m->dynamic->omega[4 * i]);
     __builtin_prefetch(&m->dynamic->trbf_scale[i]);
     __builtin_prefetch(&m->opacity[i]);
-}
-
-void gaussian_dynamic_instant(const gaussian_model *m, size_t i, double t, gaussian_model *out, size_t j)
-{
-    gaussian_dynamic_instant_cull(m, i, t, out, j);
-    gaussian_dynamic_instant_rest(m, i, t, out, j);
 }
 
 /* Why the box of one static Gaussian suffices (gaussian_dynamic_reach_bounds).

@@ -99,11 +99,6 @@ vec3 gaussian_dynamic_color(const gaussian_model *m, size_t i, double t, vec3 di
  * 480-482 pass orig_points), as a hit holds it (gaussian_hit.dir). */
 void gaussian_dynamic_view_dir(const gaussian_model *m, size_t i, vec3 eye, float dir[3]);
 
-/* The rotation matrix (row-major) forward.cu:134-138 builds from q: the
- * unit quaternion's formula applied to q as it is, so q = 0 gives the
- * identity and a short q a matrix that is no rotation. */
-void gaussian_dynamic_matrix(const double q[4], double R[3][3]);
-
 /* Over the times [t0, t1] (t0 <= t1) Gaussian i's mean stays in
  * [lo, hi] (per axis; both the exact cubic path and what
  * gaussian_dynamic_at computes), and its opacity is at most
@@ -123,7 +118,6 @@ int gaussian_dynamic_bounds(const gaussian_model *m, size_t i, double t0, double
  * are those of Gaussian i itself. In two parts, as the kernels read them:
  * _cull the mean and scale (all a cull reads, gaussian_hit.h), _rest the
  * rotation and opacity (for the candidates the cull keeps). */
-void gaussian_dynamic_instant(const gaussian_model *m, size_t i, double t, gaussian_model *out, size_t j);
 void gaussian_dynamic_instant_cull(const gaussian_model *m, size_t i, double t, gaussian_model *out, size_t j);
 void gaussian_dynamic_instant_rest(const gaussian_model *m, size_t i, double t, gaussian_model *out, size_t j);
 /* Start loading what each part reads of Gaussian i (no value changes). */
@@ -131,7 +125,7 @@ void gaussian_dynamic_prefetch_cull(const gaussian_model *m, size_t i);
 void gaussian_dynamic_prefetch_rest(const gaussian_model *m, size_t i);
 
 /* Object-space bounds of every point through which Gaussian i can give a
- * ray alpha >= 1/255 at any time whose state gaussian_dynamic_instant
+ * ray alpha >= 1/255 at any time whose state gaussian_dynamic_instant_cull/_rest
  * draws with its mean in [lo, hi] and its opacity at most opacity_max
  * (gaussian_dynamic_bounds' box and bound over the times): the box of
  * gaussian_view_bounds for every such instant, under the view bound v

@@ -15,7 +15,7 @@
 /* A dynamic model's Gaussians at one ray's time, as static ones: slot j
  * of `model` (the object's model's kind and formation over scratch arrays)
  * holds Gaussian prim[j] of the object's model at that time
- * (gaussian_dynamic_instant), for a window's candidates. */
+ * (gaussian_dynamic_instant_cull and _rest), for a window's candidates. */
 typedef struct {
     gaussian_model model;
     unsigned *prim;
