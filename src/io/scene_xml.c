@@ -307,14 +307,11 @@ static int parse_point_model(xml_ctx *c, xmlNodePtr n, scene_object *o)
     if ((has_kind = xml_attr_text(c, n, "generate", kind, sizeof kind)) < 0 ||
         (has_kind && generate_shape(c, n, kind, o)))
         return -1;
-    char near[128];
     for (xmlNodePtr k = n->children; k; k = k->next) {
         if (!xml_is_element(k))
             continue;
         if (strcmp(xml_elname(k), "splat"))
-            return xml_fail(c, k, "unknown element inside <pointModel> (expected splat)%s",
-                            rr_did_you_mean(xml_elname(k), (const char *const[]){"splat", NULL}, "<", ">", near,
-                                            sizeof near));
+            return xml_unknown_element(c, k, "element inside <pointModel>", (const char *const[]){"splat", NULL});
         if (parse_splat(c, k, &o->model, default_color))
             return -1;
         o->inline_splats++;
@@ -425,9 +422,7 @@ static int parse_object_child(xml_ctx *c, xmlNodePtr k, scene_object *o, int *sh
     if (!strcmp(name, "animation"))
         return xml_parse_animation(c, k, &o->anim);
     static const char *const known[] = {"pointModel", "gaussianModel", "sphere", "material", "animation", NULL};
-    char near[128];
-    return xml_fail(c, k, "unknown element inside <object> (expected pointModel, gaussianModel, sphere, "
-                           "material or animation)%s", rr_did_you_mean(name, known, "<", ">", near, sizeof near));
+    return xml_unknown_element(c, k, "element inside <object>", known);
 }
 
 static int parse_object(xml_ctx *c, xmlNodePtr n, scene *s)

@@ -104,14 +104,11 @@ static int parse_keyframes(xml_ctx *c, xmlNodePtr n, keyframes *kf)
         return xml_fail(c, n, "unknown pre/post infinity (expected constant, linear, cycle, cycleRelative "
                                "or oscillate)");
     int keys = 0;
-    char near[128];
     for (xmlNodePtr k = n->children; k; k = k->next) {
         if (!xml_is_element(k))
             continue;
         if (strcmp(xml_elname(k), "key"))
-            return xml_fail(c, k, "unknown element inside <keyframes> (expected key)%s",
-                            rr_did_you_mean(xml_elname(k), (const char *const[]){"key", NULL}, "<", ">", near,
-                                            sizeof near));
+            return xml_unknown_element(c, k, "element inside <keyframes>", (const char *const[]){"key", NULL});
         if (parse_key(c, k, kf, in, out))
             return -1;
         keys++;
@@ -180,7 +177,6 @@ int xml_parse_animation(xml_ctx *c, xmlNodePtr n, animation *a)
         return load_anim_file(c, n, a);
     if (xml_has_attr(n, "node"))
         return xml_fail(c, n, "'node' selects a node of an .anim file: give the file too");
-    char near[128];
     for (xmlNodePtr k = n->children; k; k = k->next) {
         if (!xml_is_element(k))
             continue;
@@ -192,9 +188,8 @@ int xml_parse_animation(xml_ctx *c, xmlNodePtr n, animation *a)
         else if (!strcmp(xml_elname(k), "keyframes"))
             rc = new_keyframes(c, k, a) || parse_keyframes(c, k, a->keys);
         else
-            rc = xml_fail(c, k, "unknown animation element (expected linear, rotation or keyframes)%s",
-                          rr_did_you_mean(xml_elname(k), (const char *const[]){"linear", "rotation", "keyframes", NULL},
-                                          "<", ">", near, sizeof near));
+            rc = xml_unknown_element(c, k, "animation element",
+                                     (const char *const[]){"linear", "rotation", "keyframes", NULL});
         if (rc)
             return -1;
     }

@@ -205,15 +205,13 @@ static int parse_camera_motion(xml_ctx *c, xmlNodePtr n, camera *cam, animation 
 {
     if (xml_check_no_text(c, n))
         return -1;
-    char near[128];
     for (xmlNodePtr k = n->children; k; k = k->next) {
         if (!xml_is_element(k))
             continue;
         int is_path = !strcmp(xml_elname(k), "trajectory");
         if (strcmp(xml_elname(k), "animation") && !is_path)
-            return xml_fail(c, k, "unknown element inside <camera> (expected animation or trajectory)%s",
-                            rr_did_you_mean(xml_elname(k), (const char *const[]){"animation", "trajectory", NULL},
-                                            "<", ">", near, sizeof near));
+            return xml_unknown_element(c, k, "element inside <camera>",
+                                       (const char *const[]){"animation", "trajectory", NULL});
         if (a->keys || !animation_is_static(a))
             return xml_fail(c, k, "the camera has one <animation> or <trajectory>");
         if (is_path) {

@@ -31,6 +31,10 @@ int xml_parse_numbers(const char *text, double *out, int max);
 
 int xml_fail(xml_ctx *c, xmlNodePtr n, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
 
+/* Refuses element k, none of the NULL-terminated `known`: "unknown <what>
+ * (expected a, b or c)" with the nearest known name; returns -1. */
+int xml_unknown_element(xml_ctx *c, xmlNodePtr k, const char *what, const char *const *known);
+
 /* Rejects attributes not in the NULL-terminated list (catches typos). */
 int xml_check_attributes(xml_ctx *c, xmlNodePtr n, const char *const *allowed);
 

@@ -17,6 +17,19 @@ int xml_fail(xml_ctx *c, xmlNodePtr n, const char *fmt, ...)
     return rr_fail(c->err, "%s:%ld: <%s>: %s", c->name, xmlGetLineNo(n), xml_elname(n), what);
 }
 
+/* Refuses element k, which is none of the NULL-terminated `known`:
+ * "unknown <what> (expected a, b or c)" and the nearest known name. */
+int xml_unknown_element(xml_ctx *c, xmlNodePtr k, const char *what, const char *const *known)
+{
+    char expected[256] = "", near[128];
+    size_t used = 0;
+    for (int i = 0; known[i] && used < sizeof expected; i++)
+        used += (size_t)snprintf(expected + used, sizeof expected - used, "%s%s",
+                                 i == 0 ? "" : known[i + 1] ? ", " : " or ", known[i]);
+    return xml_fail(c, k, "unknown %s (expected %s)%s", what, expected,
+                    rr_did_you_mean(xml_elname(k), known, "<", ">", near, sizeof near));
+}
+
 /* Rejects attributes not in the NULL-terminated list (catches typos). */
 int xml_check_attributes(xml_ctx *c, xmlNodePtr n, const char *const *allowed)
 {
