@@ -103,6 +103,38 @@ def test_merge_refuses_passes_that_disagree_on(tmp_path, name, type_name, value)
     assert not out.exists()
 
 
+def source_build_id():
+    """The build id as README's Output section defines it, computed here from
+    the sources: SHA-256 over `sha256sum` lines of every .c, .h and .cpp
+    under src/, in byte order of their paths relative to src/."""
+    import hashlib
+    files = sorted((p.relative_to(ROOT / "src").as_posix() for p in (ROOT / "src").glob("*/*")
+                    if p.suffix in (".c", ".h", ".cpp")), key=str.encode)
+    lines = "".join(f"{hashlib.sha256((ROOT / 'src' / f).read_bytes()).hexdigest()}  {f}\n" for f in files)
+    return hashlib.sha256(lines.encode()).hexdigest()
+
+
+def test_states_of_another_build_do_not_merge_or_resume(tmp_path):
+    # A pass or checkpoint carries the build that rendered it (the hash of
+    # the code under src/, which the test recomputes); one from another
+    # build is refused by name, as a rebuilt shared tree under a running
+    # array job would otherwise mix two renderers' pixels (issue 49, item 1).
+    p0, p1 = passes_of_frame(tmp_path, 3)
+    ours = read_full(p0)[1]["refrender:build"]
+    assert ours == source_build_id()
+    other = "0" * 64
+    patch_attribute(p1, "refrender:build", "string", other.encode())
+    out = tmp_path / "merged.exr"
+    proc = run(["merge", p0, p1, "-o", out])
+    assert proc.returncode == 1 and "different builds of refrender" in proc.stderr, proc.stderr
+    assert ours in proc.stderr and other in proc.stderr and str(p1) in proc.stderr, proc.stderr
+    assert not out.exists()
+    resumed = tmp_path / "resumed.exr"
+    proc = run([scene_file(tmp_path), "--frame", 3, *COMMON, "--pass", "1/2", "-o", resumed, "--resume", p1])
+    assert proc.returncode == 1 and "different builds of refrender" in proc.stderr, proc.stderr
+    assert not resumed.exists()
+
+
 def test_merge_refuses_a_pass_that_lacks_the_frame(tmp_path):
     # Frame 0's shutter rendered without --frame: the same pixels, but no
     # frame number to check the sequence by; mixed with numbered passes it is

@@ -255,7 +255,7 @@ static int parse_args(int argc, char **argv, render_options *o)
     rr_error err;
     while ((c = getopt_long(argc, argv, "hD:o:", longopts, NULL)) != -1) {
         if (c == 'h') { usage(stdout); return 1; }
-        if (c == OPT_VERSION) { printf("refrender %s\n", RR_VERSION); return 1; }
+        if (c == OPT_VERSION) { printf("refrender %s (build %s)\n", RR_VERSION, render_build_id()); return 1; }
         if (c == '?') {
             cli_suggest_option("refrender", argv[optind - 1], longopts);
             fputs("Try 'refrender --help'.\n", stderr);

@@ -30,6 +30,9 @@ static const struct {
     rr_attr_kind kind;
     attr_role role;
 } attr_table[] = {
+    /* first: another build's state may differ in anything below, and the
+     * build is the cause (a rebuilt shared tree under a running array job) */
+    {ATTR_BUILD, RR_ATTR_TEXT, ROLE_IDENTITY},
     {ATTR_SCENE_HASH, RR_ATTR_TEXT, ROLE_IDENTITY},
     {ATTR_INPUTS_HASH, RR_ATTR_TEXT, ROLE_IDENTITY},
     {ATTR_RESOLUTION, RR_ATTR_TEXT, ROLE_IDENTITY},
@@ -124,6 +127,9 @@ int attrs_check_identity(const attr_list *a, const char *a_name, const attr_list
         if (attr_table[k].role != ROLE_IDENTITY)
             continue;
         const char *key = attr_table[k].key, *va = attrs_get(a, key), *vb = attrs_get(b, key);
+        if (va && vb && strcmp(va, vb) && !strcmp(key, ATTR_BUILD))
+            return rr_fail(err, "%s and %s were rendered by different builds of refrender (%s '%.80s' vs '%.80s'): "
+                                "not the same render", a_name, b_name, key, va, vb);
         if (!va || !vb || strcmp(va, vb))
             return rr_fail(err, "%s and %s differ in %s ('%.160s' vs '%.160s'): not the same render", a_name, b_name,
                            key, va ? va : "missing", vb ? vb : "missing");
