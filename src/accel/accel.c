@@ -356,7 +356,7 @@ static void trace_static(const accel *a, vec3 org, vec3 dir, kbuffer *kb)
 static void copy_kbuffer(kbuffer *dst, const kbuffer *src)
 {
     dst->count = src->count;
-    dst->dropped = src->dropped;
+    dst->dropped_t = src->dropped_t;
     dst->closest = src->closest;
     dst->epsilon = src->epsilon;
     memcpy(dst->hits, src->hits, (size_t)src->count * sizeof *dst->hits);

@@ -70,7 +70,7 @@ static void usage(FILE *f)
 "  -D name=value      scene parameter: replaces $name in attribute values (repeatable)\n"
 "Running:\n"
 "  --threads N        render threads (default: all cores)\n"
-"  --quiet            no progress bar and no summary line\n"
+"  --quiet            no progress bar and no summary line (warnings still)\n"
 "  --progress-every S  a progress line every S seconds, also into a log (no terminal)\n"
 "  --no-static-reuse  trace every time sample on its own (same image; for benchmarks)\n"
 "  --version, -h, --help\n"
@@ -381,6 +381,7 @@ static int write_checkpoint(void *user, const image *img, rr_error *err)
     render_run *run = user;
     attrs_set(&run->attrs, ATTR_RENDER_SECONDS, "%.3f", img->seconds);
     attrs_set(&run->attrs, ATTR_RAYS, "%llu", (unsigned long long)img->rays);
+    attrs_set(&run->attrs, ATTR_CLAMPED, "%llu", (unsigned long long)img->clamped);
     return output_write_state(run->o->checkpoint, img, run->rs.batch_begin,
                               run->rs.batch_begin + run->rs.batches, &run->attrs, err);
 }
@@ -442,7 +443,9 @@ static int resume_state(render_run *run, image *img, rr_error *err)
         return -1;
     /* the work the state took goes on counting (render.c, checkpoint_paused) */
     const char *rays = attrs_get(&saved, ATTR_RAYS), *seconds = attrs_get(&saved, ATTR_RENDER_SECONDS);
+    const char *clamped = attrs_get(&saved, ATTR_CLAMPED);
     img->rays = rays ? (uint64_t)strtod(rays, NULL) : 0;
+    img->clamped = clamped ? (uint64_t)strtod(clamped, NULL) : 0;
     img->seconds = seconds ? strtod(seconds, NULL) : 0.0;
     if (!run->o->quiet) { /* a log then shows the work kept */
         uint64_t done = 0, n = (uint64_t)img->width * img->height;
@@ -506,20 +509,24 @@ static int write_preview(atomic_set *set, const char *path, const image *img, rr
     return rc;
 }
 
+/* The summary line (not with --quiet), and the warnings: those are no
+ * progress output, so --quiet keeps them (a clamped estimate once left no
+ * trace under --quiet; its count is in the header too). */
 static void report(const render_options *o, const scene *s, const image *img, int tty)
 {
-    if (o->quiet)
-        return;
-    if (!tty)
+    if (!o->quiet && !tty)
         fprintf(stderr, "refrender: %s: %dx%d, %llu rays in %.2fs (%.2f Mrays/s)\n", s->path, img->width,
                 img->height, (unsigned long long)img->rays, img->seconds,
                 img->seconds > 0 ? img->rays / img->seconds * 1e-6 : 0.0);
     if (img->kbuffer_overflows)
         fprintf(stderr, "refrender: warning: %llu samples had more than %d hits within epsilon; "
                         "the farthest were dropped\n", (unsigned long long)img->kbuffer_overflows, KBUFFER_MAX);
+    if (img->gaussians_short)
+        fprintf(stderr, "refrender: warning: %llu samples ran out of memory for their Gaussians and were drawn "
+                        "without some of them\n", (unsigned long long)img->gaussians_short);
     if (img->clamped)
-        fprintf(stderr, "refrender: warning: %llu batch estimates exceeded +-%g and were clamped\n",
-                (unsigned long long)img->clamped, FILM_LIMIT);
+        fprintf(stderr, "refrender: warning: %llu batch estimates exceeded +-%g and were clamped "
+                        "(refrender:clampedEstimates)\n", (unsigned long long)img->clamped, FILM_LIMIT);
 }
 
 /* Exact time: the share of the shutter, over all spatial samples, left in
@@ -645,6 +652,7 @@ static int render_one(const scene *s, const shutter *shut, long long frame, acce
             report_target(o, &img, &run.attrs);
         attrs_set(&run.attrs, ATTR_RENDER_SECONDS, "%.3f", img.seconds);
         attrs_set(&run.attrs, ATTR_RAYS, "%llu", (unsigned long long)img.rays);
+        attrs_set(&run.attrs, ATTR_CLAMPED, "%llu", (unsigned long long)img.clamped);
         if (run.rs.exact_time)
             report_unresolved(o, &img, &run.rs.shut, &run.attrs);
         if (o->frames && s->frame_rate > 0)

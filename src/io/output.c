@@ -69,6 +69,7 @@ static const struct {
     {ATTR_FRAME_RATE, RR_ATTR_DOUBLE, ROLE_EQUAL},
     {ATTR_RAYS, RR_ATTR_DOUBLE, ROLE_SUMMED},
     {ATTR_RENDER_SECONDS, RR_ATTR_DOUBLE, ROLE_SUMMED},
+    {ATTR_CLAMPED, RR_ATTR_DOUBLE, ROLE_SUMMED},
     {ATTR_LINE_TIMES, RR_ATTR_TEXT, ROLE_WRITTEN},
     {ATTR_STATE, RR_ATTR_TEXT, ROLE_WRITTEN},
     {ATTR_TARGET_ERROR, RR_ATTR_DOUBLE, ROLE_WRITTEN},
@@ -183,8 +184,11 @@ int attrs_combine(attr_list *merged, const char *merged_name, const attr_list *b
             return -1;
     combine_unresolved(merged, b);
     const char *rays = attrs_get(merged, ATTR_RAYS), *secs = attrs_get(merged, ATTR_RENDER_SECONDS);
+    const char *clamped = attrs_get(merged, ATTR_CLAMPED);
     if (rays) /* a double holds counts exactly up to 2^53 rays */
         attrs_set(merged, ATTR_RAYS, "%.17g", strtod(rays, NULL) + strtod(attrs_get(b, ATTR_RAYS), NULL));
+    if (clamped)
+        attrs_set(merged, ATTR_CLAMPED, "%.17g", strtod(clamped, NULL) + strtod(attrs_get(b, ATTR_CLAMPED), NULL));
     if (secs)
         attrs_set(merged, ATTR_RENDER_SECONDS, "%.3f",
                   strtod(secs, NULL) + strtod(attrs_get(b, ATTR_RENDER_SECONDS), NULL));

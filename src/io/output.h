@@ -57,6 +57,7 @@
 #define ATTR_FRAME "refrender:frame"
 #define ATTR_FRAME_RATE "refrender:frameRate"
 #define ATTR_RAYS "refrender:rays"
+#define ATTR_CLAMPED "refrender:clampedEstimates"
 #define ATTR_RENDER_SECONDS "refrender:renderSeconds"
 #define ATTR_LINE_TIMES "refrender:lineTimes"
 #define ATTR_STATE "refrender:state"

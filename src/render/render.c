@@ -56,6 +56,7 @@ typedef struct {
     uint32_t round; /* pixels holding `round` batches render batch batch_begin + round */
     atomic_int next_tile, workers_left;
     atomic_uint_fast64_t rays, overflows, clamped, pixel_batches;
+    atomic_uint_fast64_t gaussians_short; /* samples that dropped Gaussians for lack of memory */
     atomic_int scratch_failed; /* a worker could not allocate its scratch */
     atomic_int exact_failed;   /* an exact sample failed (see exact_status): the render stops */
     int exact_status, exact_px, exact_py; /* under lock: the first such failure and its pixel */
@@ -95,7 +96,7 @@ typedef struct {
 static void fixed_camera_color(render_job *job, static_cache *sc, const kbuffer *result, double rgba[4],
                                uint64_t *overflows)
 {
-    *overflows += result->dropped > 0;
+    *overflows += (uint64_t)kbuffer_overflowed(result);
     int is_static = result == &sc->ray.static_hits;
     if (is_static && sc->shaded) {
         memcpy(rgba, sc->rgba, sizeof sc->rgba);
@@ -128,7 +129,7 @@ static void samples_fixed_camera(render_job *job, static_cache *sc, double x, do
  * colour (the nearest surface hides what is behind it: a Gaussian behind
  * an opaque surface is not seen). */
 static void composite_gaussians(render_job *job, double x, double y, double t, vec3 org, vec3 dir,
-                                const kbuffer *kb, gaussian_integrator *scratch, double rgba[4], uint64_t *overflows)
+                                const kbuffer *kb, gaussian_integrator *scratch, double rgba[4])
 {
     camera_view moved, *view = &job->rest_view;
     if (job->camera_moves)
@@ -138,7 +139,9 @@ static void composite_gaussians(render_job *job, double x, double y, double t, v
     gaussian_blend_init(&blend);
     gaussian_sample smp = {view, x, y, org, dir, t};
     gaussian_integrate(job->sc, job->acc, &smp, kb->count ? kb->closest : INFINITY, scratch, &blend);
-    *overflows += scratch->hits.dropped > 0;
+    /* out of memory, not a full k-buffer: counted apart (a sample with
+     * both was counted twice, and warned of as too many hits) */
+    scratch->short_samples += scratch->hits.dropped > 0;
     vec3 rgb = gaussian_blend_over(&blend, v3(rgba[0], rgba[1], rgba[2]));
     rgba[0] = rgb.x, rgba[1] = rgb.y, rgba[2] = rgb.z;
     rgba[3] = kb->count ? 1.0 : 1.0 - blend.T;
@@ -153,10 +156,10 @@ static void sample_own_ray(render_job *job, double x, double y, double t, gaussi
     kbuffer kb;
     scene_camera_ray(job->sc, x, y, t, &org, &dir);
     accel_trace(job->acc, org, dir, t, &kb);
-    *overflows += kb.dropped > 0;
+    *overflows += (uint64_t)kbuffer_overflowed(&kb);
     sample_color(job, org, dir, &kb, rgba);
     if (job->gaussians)
-        composite_gaussians(job, x, y, t, org, dir, &kb, scratch, rgba, overflows);
+        composite_gaussians(job, x, y, t, org, dir, &kb, scratch, rgba);
 }
 
 /* The next group of samples from `first`: those sharing its raster position
@@ -410,6 +413,7 @@ static void *worker(void *arg)
             if (tile >= job->ntiles)
                 break;
         }
+    atomic_fetch_add(&job->gaussians_short, scr.gaussian.short_samples);
     scratch_free(&scr);
     pthread_mutex_lock(&job->lock);
     atomic_fetch_sub(&job->workers_left, 1);
@@ -598,6 +602,7 @@ static void job_finish(render_job *job, image *img, double start)
     img->seconds += rr_seconds() - start;
     img->rays += atomic_load(&job->rays);
     img->kbuffer_overflows += atomic_load(&job->overflows);
+    img->gaussians_short += atomic_load(&job->gaussians_short);
     img->clamped += atomic_load(&job->clamped);
     img->exact_unresolved += job->exact_unresolved;
 }
