@@ -126,10 +126,13 @@ void accel_sphere_bounds_cb(const struct RTCBoundsFunctionArguments *args)
 {
     const scene_object *o = args->geometryUserPtr;
     aabb b = scene_object_bounds(o);
-    double pad = 1e-5 * o->sphere_radius;
+    /* rounded outward as every other box (a cast to the nearest float put
+     * a 1 mm sphere's box at x = 1000 23 um inside it: issue 49) */
+    float lo[3], hi[3];
+    aabb_round_out(b, lo, hi);
     struct RTCBounds *r = args->bounds_o;
-    r->lower_x = (float)(b.lo.x - pad), r->lower_y = (float)(b.lo.y - pad), r->lower_z = (float)(b.lo.z - pad);
-    r->upper_x = (float)(b.hi.x + pad), r->upper_y = (float)(b.hi.y + pad), r->upper_z = (float)(b.hi.z + pad);
+    r->lower_x = lo[0], r->lower_y = lo[1], r->lower_z = lo[2];
+    r->upper_x = hi[0], r->upper_y = hi[1], r->upper_z = hi[2];
 }
 
 /* We never call rtcOccluded; the callback exists so the geometry is complete. */
