@@ -351,12 +351,22 @@ static int apply_overrides(scene *s, const render_options *o, rr_error *err)
     return 0;
 }
 
-static void join_args(int argc, char **argv, char *buf, size_t size)
+/* The command line as one string (malloc'd; NULL when out of memory), for
+ * refrender:command: as long as the arguments are (a fixed 2 KB buffer once
+ * cut it silently; the attribute itself says where it is cut: output.h). */
+static char *join_args(int argc, char **argv)
 {
+    size_t size = 1;
+    for (int i = 0; i < argc; i++)
+        size += strlen(argv[i]) + 1;
+    char *buf = malloc(size);
+    if (!buf)
+        return NULL;
     size_t len = 0;
     buf[0] = 0;
-    for (int i = 0; i < argc && len + 1 < size; i++)
+    for (int i = 0; i < argc; i++)
         len += (size_t)snprintf(buf + len, size - len, "%s%s", i ? " " : "", argv[i]);
+    return buf;
 }
 
 static void install_signal_handlers(void)
@@ -802,18 +812,24 @@ int cmd_render(int argc, char **argv)
         o.scene = default_scene(scene_buf, sizeof scene_buf);
     rr_error err = {{0}};
     scene s;
-    char cmdline[2048];
-    join_args(argc, argv, cmdline, sizeof cmdline);
-    if (cli_check_exr_name("-o", o.output, 1, &err) ||
+    char *cmdline = join_args(argc, argv);
+    if (!cmdline) {
+        fputs("refrender: out of memory\n", stderr);
+        return 1;
+    }
+    int bad = cli_check_exr_name("-o", o.output, 1, &err) ||
         (o.checkpoint && cli_check_exr_name("--checkpoint", o.checkpoint, 0, &err)) ||
         cli_check_writable("-o", o.output, &err) || (o.preview && cli_check_writable("--preview", o.preview, &err)) ||
         (o.preview && preview_check_format(o.preview, &err)) ||
         (o.checkpoint && cli_check_writable("--checkpoint", o.checkpoint, &err)) ||
-        scene_load_file_params(o.scene, &o.params, &s, &err)) {
+        scene_load_file_params(o.scene, &o.params, &s, &err);
+    if (bad) {
+        free(cmdline);
         fprintf(stderr, "refrender: %s\n", err.msg);
         return interrupted ? 130 : 1;
     }
     if (interrupted) { /* the load ended before it saw the signal */
+        free(cmdline);
         scene_free(&s);
         fputs("refrender: interrupted while loading the scene\n", stderr);
         return 130;
@@ -821,6 +837,7 @@ int cmd_render(int argc, char **argv)
     print_warnings(&s.warnings);
     rc = apply_overrides(&s, &o, &err) ? -1 : render_and_write(&s, &o, cmdline, &err);
     scene_free(&s);
+    free(cmdline);
     if (rc) {
         fprintf(stderr, "refrender: %s\n", err.msg);
         return interrupted ? 130 : 1;
