@@ -265,3 +265,19 @@ def test_a_missing_suite_model_says_to_run_make_scenes(tmp_path):
     proc = run([scene, "-o", tmp_path / "a.exr"])
     assert proc.returncode == 1
     assert "scenes/models/bunny.ply: cannot open" in proc.stderr and "run `make scenes`" in proc.stderr
+
+
+def test_extensions_follow_one_rule_and_out_exr_png_suggests_out_exr(tmp_path):
+    """-o's check and --preview's format read a name's extension by one rule
+    (the base name's last dot, not a leading one: ".png" has none), where
+    they once disagreed; and -o out.exr.png suggests -o out.exr and
+    --preview out.png, not out.exr.exr (issue 49)."""
+    scene = tmp_path / "s.xml"
+    scene.write_text(TINY)
+    proc = run([scene, "--spp", 1, "--tspp", 1, "-o", tmp_path / "out.exr.png"])
+    assert proc.returncode == 1, proc.stderr
+    stem = tmp_path / "out"
+    assert f"use -o {stem}.exr, and --preview {stem}.png" in proc.stderr, proc.stderr
+    proc = run([scene, "--spp", 1, "--tspp", 1, "-o", tmp_path / "a.exr", "--preview", tmp_path / ".png"])
+    assert proc.returncode == 1 and "no image format for the extension ''" in proc.stderr, proc.stderr
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["s.xml"]
