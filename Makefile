@@ -126,7 +126,7 @@ $(BUILD)/libfaultinject.so: tests/faultinject.c | $(BUILD)
 # pytest-xdist workers (python3-pytest-xdist): the suite's renders are
 # single processes, so one worker a core halves its time on 2 cores
 TEST_JOBS ?= $(shell nproc)
-test-py: $(BIN) $(TESTBIN) $(BUILD)/libfaultinject.so scenes
+test-py: $(BIN) $(TESTBIN) $(BUILD)/refrender-bench $(BUILD)/libfaultinject.so scenes
 	REFRENDER=$(CURDIR)/$(BIN) UNIT_TESTS=$(CURDIR)/$(TESTBIN) FAULTINJECT=$(CURDIR)/$(BUILD)/libfaultinject.so \
 	    $(PYTHON) -m pytest -q -n $(TEST_JOBS) tests
 
@@ -189,7 +189,7 @@ $(FUZZ_DIR)/fuzz_%: $(FUZZ_DIR)/fuzz_%.o $(FUZZ_DIR)/render_check.o $(FUZZ_OBJS)
 .SECONDARY: $(FUZZ_OBJS) $(FUZZ_TARGETS:%=$(FUZZ_DIR)/fuzz_%.o) $(FUZZ_DIR)/render_check.o
 
 # (after FUZZ_TARGETS: a rule's prerequisites are expanded where it is read)
-test-build: $(BIN) $(TESTBIN) $(BUILD)/libfaultinject.so $(FUZZ_TARGETS:%=$(FUZZ_DIR)/fuzz_%) scenes
+test-build: $(BIN) $(TESTBIN) $(BUILD)/refrender-bench $(BUILD)/libfaultinject.so $(FUZZ_TARGETS:%=$(FUZZ_DIR)/fuzz_%) scenes
 test-fuzz: $(FUZZ_TARGETS:%=$(FUZZ_DIR)/fuzz_%)
 	for t in $(FUZZ_TARGETS); do \
 	    $(FUZZ_DIR)/fuzz_$$t -runs=0 -rss_limit_mb=8192 tests/fuzz/corpus/$$t 2>$(FUZZ_DIR)/replay_$$t.log \

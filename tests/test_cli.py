@@ -281,3 +281,20 @@ def test_extensions_follow_one_rule_and_out_exr_png_suggests_out_exr(tmp_path):
     proc = run([scene, "--spp", 1, "--tspp", 1, "-o", tmp_path / "a.exr", "--preview", tmp_path / ".png"])
     assert proc.returncode == 1 and "no image format for the extension ''" in proc.stderr, proc.stderr
     assert sorted(p.name for p in tmp_path.iterdir()) == ["s.xml"]
+
+
+def test_refrender_bench_answers_help_and_refuses_what_it_does_not_know(tmp_path):
+    """refrender-bench's arguments are positional ([OUT.csv [quick|full
+    [SERIES]]]): --help prints its usage and exits 0, an unknown option, mode
+    or series exits 2 naming it, and neither creates a file nor starts a
+    benchmark (--help once became a CSV named "--help" and began the full
+    run, issue 49)."""
+    bench = str(Path(BIN).parent / "refrender-bench")
+    for args, status, said in [(["--help"], 0, "usage: refrender-bench"), (["-h"], 0, "usage: refrender-bench"),
+                               (["out.csv", "--help"], 0, "usage: refrender-bench"),
+                               (["--bogus"], 2, "unknown option '--bogus'"), (["out.csv", "fast"], 2, "quick|full"),
+                               (["out.csv", "quick", "nosuch"], 2, "quick|full [SERIES]")]:
+        proc = subprocess.run([bench, *args], capture_output=True, text=True, cwd=tmp_path, timeout=30)
+        assert proc.returncode == status, (args, proc.stderr)
+        assert said in (proc.stdout if status == 0 else proc.stderr), (args, proc.stdout, proc.stderr)
+        assert list(tmp_path.iterdir()) == [], args

@@ -674,8 +674,49 @@ static void series_static80(const bench_plan *p)
 }
 
 /* Usage: refrender-bench [CSV [quick|full [SERIES]]]. */
+static const char *const SERIES[] = {"cases", "target", "speed", "splats", "tspp", "threads", "floor",
+                                     "static80", "gaussians", "scale", "stg", NULL};
+
+static void bench_usage(FILE *f)
+{
+    fputs("usage: refrender-bench [OUT.csv [quick|full [SERIES]]]\n"
+          "\n"
+          "Measures refrender's render path against Embree's built-in disc primitive\n"
+          "(src/cmd/BENCH.md) and writes the CSV (default bench.csv). quick: a short\n"
+          "smoke run; full (the default): the measurements. SERIES runs one series\n"
+          "only: cases, target, speed, splats, tspp, threads, floor, static80,\n"
+          "gaussians, scale or stg. Takes minutes (quick) to hours (full).\n"
+          "  -h, --help   this text\n", f);
+}
+
+/* The arguments are positional: an option-looking one is --help or a
+ * mistake, never a file name (--help once became a CSV named "--help" and
+ * started the full benchmark). Returns -1 to go on, else the exit status. */
+static int check_args(int argc, char **argv)
+{
+    for (int i = 1; i < argc; i++) {
+        if (!strcmp(argv[i], "-h") || !strcmp(argv[i], "--help"))
+            return bench_usage(stdout), 0;
+        if (argv[i][0] == '-') {
+            fprintf(stderr, "refrender-bench: unknown option '%s'; try 'refrender-bench --help'\n", argv[i]);
+            return 2;
+        }
+    }
+    int series_known = argc <= 3;
+    for (int k = 0; !series_known && SERIES[k]; k++)
+        series_known = !strcmp(argv[3], SERIES[k]);
+    if (argc > 4 || (argc > 2 && strcmp(argv[2], "quick") && strcmp(argv[2], "full")) || !series_known) {
+        fputs("refrender-bench: expected [OUT.csv [quick|full [SERIES]]]; try 'refrender-bench --help'\n", stderr);
+        return 2;
+    }
+    return -1;
+}
+
 int main(int argc, char **argv)
 {
+    int status = check_args(argc, argv);
+    if (status >= 0)
+        return status;
     int quick = argc > 2 && !strcmp(argv[2], "quick");
     long cores = sysconf(_SC_NPROCESSORS_ONLN);
     bench_plan p = {
