@@ -426,6 +426,13 @@ static double *rate_times(const export_job *j, int *count, rr_error *err)
     double lo, hi, rate = j->o->tum_rate;
     if (path_span(j, &lo, &hi, err))
         return NULL;
+    /* the multiples k must be exact doubles, and counted in an int: a rate
+     * of 1.7e308 made them inf and cast NaN to int (UBSan) */
+    if (!(fabs(lo * rate) <= 0x1p53 && fabs(hi * rate) <= 0x1p53)) {
+        rr_fail(err, "--tum-rate %g: the exported span [%.17g, %.17g] holds multiples of 1/%g beyond 2^53, where they "
+                     "are no longer whole numbers apart: give a lower rate", rate, lo, hi, rate);
+        return NULL;
+    }
     double first = ceil(lo * rate), last = floor(hi * rate);
     if (first / rate < lo) /* lo * rate rounded down past an integer */
         first += 1;
