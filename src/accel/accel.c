@@ -162,6 +162,7 @@ int accel_ray_meets_swept_sphere(const accel *a, unsigned obj, vec3 org, vec3 di
 static void object_sphere(const scene_object *o, vec3 *center, double *radius)
 {
     if (o->kind == OBJECT_GAUSSIANS) { /* (accel_build.c gives the filter's footprint its own) */
+        RR_DCHECK(!o->gaussians.dynamic); /* its rest means are no bound: object_travel takes its paths' box */
         aabb b = scene_object_bounds(o);
         *center = v3_scale(v3_add(b.lo, b.hi), 0.5), *radius = 0.5 * v3_len(v3_sub(b.hi, b.lo));
         return;

@@ -127,7 +127,10 @@ int scene_check_shutter_in_trajectory(const scene *s, const shutter *sh, rr_erro
 int scene_add_input(scene *s, const char *path);
 
 /* Object-space bounds of an object (before its animation; a Gaussian
- * model's at the kernel radius, without its screen-space filter). */
+ * model's at the kernel radius, without its screen-space filter). A
+ * dynamic Gaussian model's at its rest means only: over a shutter its
+ * Gaussians' paths reach farther, and accel_build.c bounds those
+ * (dynamic_paths); this must not be used for one. */
 aabb scene_object_bounds(const scene_object *o);
 
 #endif
