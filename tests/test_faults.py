@@ -6,6 +6,7 @@ one: a disk that stays full) or the Nth rename fail, for every N until a run
 meets no fault. A periodic checkpoint that fails is a warning: the render
 goes on and the previous checkpoint stays."""
 import os
+from pathlib import Path
 import subprocess
 
 import numpy as np
@@ -206,6 +207,8 @@ def test_gaussians_short_of_memory_are_counted_apart_from_full_kbuffers(tmp_path
     # samples is one of each, and the two are told apart (issue 49, item 15:
     # the memory drops were added to the overflow count, one sample twice,
     # and called "more than 64 hits within epsilon").
+    if b"__asan_init" in Path(BIN).read_bytes():
+        pytest.skip("under AddressSanitizer realloc is ASan's own allocator, which the shim cannot fail")
     ply = tmp_path / "g.ply"
     assert run(["gen", "plane", "--count", 100, "--gaussians", "3dgs", "-o", ply]).returncode == 0
     splats = '<splat center="0 0 -10" normal="0 0 1" radius="30"/>' * 70
