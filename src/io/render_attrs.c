@@ -4,9 +4,12 @@
 #include <stdio.h>
 #include <stdlib.h>
 
-#include "build_id.h" /* generated in the build directory (Makefile) */
 #include "gaussians/gaussian_hit.h"
 #include "core/inputfile.h"
+
+#ifndef RR_BUILD_ID /* the Makefile's: the SHA-256 of the code under src/ */
+#error "RR_BUILD_ID is not defined: build with the Makefile"
+#endif
 
 const char *render_build_id(void) { return RR_BUILD_ID; }
 
