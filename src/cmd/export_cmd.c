@@ -191,11 +191,15 @@ static int write_frame(FILE *f, const scene *s, long long frame, int numbered, c
     fputs(",\n     \"rolling_shutter\": ", f);
     json_string(f, rolling);
     fputs(",\n     \"world_to_camera\": [", f);
+    scene fs; /* the camera as the render moves it under this shutter (rolling="gsplat": gsplat's poses) */
+    if (scene_for_shutter(s, sh, &fs, err))
+        return -1;
     for (int i = 0; i < n; i++) {
-        world_to_camera(s, times[i], m);
+        world_to_camera(&fs, times[i], m);
         fputs(i ? ", " : "", f);
         json_matrix(f, m);
     }
+    scene_for_shutter_free(&fs, s);
     fputs("],\n     \"object_to_world\": {", f);
     for (int o = 0; o < s->nobjects; o++) {
         fputs(o ? ", " : "", f);

@@ -743,28 +743,39 @@ static int check_frame_shutters(const scene *s, const render_options *o, rr_erro
 
 /* One frame or a sequence, sharing the loaded models and their BVHs; only
  * the top levels are rebuilt for each frame's shutter. */
+/* Frame f's shutter and the scene as it renders it (scene_for_shutter:
+ * fs, which the BVHs were built for, is refilled in place); the previous
+ * frame's scene is freed first. */
+static int next_frame(const scene *s, const render_options *o, long long f, shutter *shut, scene *fs, rr_error *err)
+{
+    scene_for_shutter_free(fs, s);
+    *fs = *s; /* (nothing of its own if the next call fails) */
+    return frame_shutter(s, o, f, shut, err) || scene_for_shutter(s, shut, fs, err) ? -1 : 0;
+}
+
 static int render_and_write(const scene *s, const render_options *o, const char *cmdline, rr_error *err)
 {
     accel *acc;
     shutter shut;
+    scene fs = *s;
     if (check_frame_outputs(s, o, err) || check_frame_shutters(s, o, err) ||
-        frame_shutter(s, o, o->first_frame, &shut, err))
+        next_frame(s, o, o->first_frame, &shut, &fs, err))
         return -1;
     double t0, t1; /* every line's exposure (a rolling shutter's reaches past [open, close]) */
     shutter_span(&shut, s->cam.width, s->cam.height, &t0, &t1);
     accel_settings set = {t0, t1, s->epsilon, s->kernel_sigma, !o->no_static_reuse};
-    if (accel_build(s, &set, &acc, err))
+    if (accel_build(&fs, &set, &acc, err)) {
+        scene_for_shutter_free(&fs, s);
         return -1;
-    if (interrupted) { /* the build cannot be stopped midway; it is not rendered */
-        accel_free(acc);
-        return rr_fail(err, "interrupted while building the BVH");
     }
     int rc = 0;
+    if (interrupted) /* the build cannot be stopped midway; it is not rendered */
+        rc = rr_fail(err, "interrupted while building the BVH");
     /* 64-bit: --frame 2147483647 must not wrap around into more frames */
     for (long long f = o->first_frame; !rc && f <= o->last_frame; f++) {
         char out[PATH_MAX], prev[PATH_MAX];
         if (f > o->first_frame &&
-            (frame_shutter(s, o, f, &shut, err) ||
+            (next_frame(s, o, f, &shut, &fs, err) ||
              (shutter_span(&shut, s->cam.width, s->cam.height, &t0, &t1), accel_set_shutter(acc, t0, t1, err)))) {
             rc = -1;
             break;
@@ -772,9 +783,10 @@ static int render_and_write(const scene *s, const render_options *o, const char 
         const char *preview = frame_names(o, f, out, prev, sizeof out);
         if (o->frames == 2 && !o->quiet)
             fprintf(stderr, "refrender: frame %lld: shutter [%g, %g] -> %s\n", f, shut.open, shut.close, out);
-        rc = render_one(s, &shut, f, acc, o, cmdline, out, preview, err);
+        rc = render_one(&fs, &shut, f, acc, o, cmdline, out, preview, err);
     }
     accel_free(acc);
+    scene_for_shutter_free(&fs, s);
     return rc;
 }
 
