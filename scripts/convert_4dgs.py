@@ -93,8 +93,8 @@ scales (_scaling, _scaling_t) beyond +-100 (exp of them is no float32, and the
 float64 conversion would lose the other axes); whatever refrender's reader
 (src/io/gaussian_fdgs_ply.c) then refuses: a value beyond float32, t_var or T
 that is not above 0 as a float32, a mean beyond 1e15 from the origin, exp(scale)
-beyond 1e15; --force_sh_3d true with a checkpoint holding more SH coefficients
-than (sh_degree + 1)^2 (a force_sh_3d model holds (max_sh_degree + 1)^2,
+beyond 1e15; --force_sh_3d true with a checkpoint whose SH count per channel
+is no (d + 1)^2 (a force_sh_3d model holds (max_sh_degree + 1)^2,
 gaussian_model.py:222-224: 48 are time harmonics, trained without it); and a
 model with an env_map (env_map_res > 0: gaussian_renderer/__init__.py:165-178
 composites that background behind the Gaussians, refrender does not) unless
