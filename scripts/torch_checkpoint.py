@@ -188,7 +188,7 @@ ALLOWED.update({("torch", name): StorageTag(name, dtype) for name, dtype in STOR
 class RestrictedUnpickler(pickle.Unpickler):
     def __init__(self, data, archive):
         super().__init__(io.BytesIO(data))
-        self.archive = archive
+        self.archive, self.storages = archive, {}
 
     def find_class(self, module, name):
         found = ALLOWED.get((module, name))
@@ -204,7 +204,12 @@ class RestrictedUnpickler(pickle.Unpickler):
                 0 <= pid[4] <= MAX_DIMENSION):
             raise CheckpointError(f"unknown persistent id ({describe(pid)}; expected ('storage', torch.<T>Storage, "
                                   "key, location, numel))")
-        return LazyStorage(self.archive, f"{self.archive.prefix}data/{pid[2]}", pid[1].dtype, pid[4])
+        # one storage a key, read once however many tensors view it (as torch.load's loaded_storages)
+        storage = self.storages.setdefault(pid[2], LazyStorage(self.archive, f"{self.archive.prefix}data/{pid[2]}",
+                                                               pid[1].dtype, pid[4]))
+        if (storage.dtype, storage.numel) != (pid[1].dtype, pid[4]):
+            raise CheckpointError(f"storage '{clip(pid[2])}' is named twice with different types or sizes")
+        return storage
 
 
 def open_regular(path):

@@ -282,6 +282,20 @@ def test_a_fifo_or_directory_as_output_is_refused_and_kept(tmp_path):
     assert folder.is_dir() and sorted(p.name for p in tmp_path.iterdir()) == ["dir.ply", "out.ply", "x.pth"]
 
 
+def test_a_device_as_output_is_refused_and_kept(tmp_path):
+    """A character device node (1, 3), /dev/null's, made in tmp_path: as root the previous converter
+    replaced it with a regular file (as it would /dev/null itself)."""
+    import os
+    import stat
+    if os.geteuid() != 0:
+        pytest.skip("making a device node needs root (mknod)")
+    ckpt, dev = tmp_path / "x.pth", tmp_path / "null.ply"
+    write_fake(ckpt)
+    os.mknod(dev, 0o666 | stat.S_IFCHR, os.makedev(1, 3))
+    refused(convert_limited(ckpt, dev), "device", name=dev)
+    assert stat.S_ISCHR(os.stat(dev).st_mode)
+
+
 @pytest.mark.parametrize("umask, mode", [(0o022, 0o644), (0o002, 0o664), (0o077, 0o600)])
 def test_the_output_gets_the_umask_mode_of_a_new_file(tmp_path, umask, mode):
     import os
@@ -341,6 +355,32 @@ def test_a_deflated_member_inflating_far_beyond_its_archive_is_refused_unread(tm
     write_fake(ckpt, simple_capture(entries={1: np.zeros((n, 3), np.float32)}), compress=True)
     assert ckpt.stat().st_size < 1 << 20
     refused(convert_limited(ckpt, out), "archive's size", name=ckpt)
+
+
+def test_tensors_viewing_one_storage_read_it_once(tmp_path):
+    """Seven entries, views of one 1.4 MB storage at different offsets (as torch saves views of one
+    tensor): read once, as torch.load reads a key once, so they stay within the budget of 4x the
+    archive's size; counted once per tensor, they would be refused."""
+    ckpt, out = tmp_path / "c.pth", tmp_path / "m.ply"
+    n = 20000
+    parts = {1: np.random.default_rng(2).normal(size=(n, 3)), 4: np.full((n, 3), np.log(0.1)),
+             5: np.tile([1.0, 0, 0, 0], (n, 1)), 6: np.zeros((n, 1)), 13: np.ones((n, 1)),
+             14: np.full((n, 1), np.log(0.5)), 15: np.tile([1.0, 0, 0, 0], (n, 1))}
+    shared = FakeStorage("shared", np.concatenate([a.ravel() for a in parts.values()]))
+    storages = []
+    plain = simple_capture(n=n, features=np.zeros((n, 1, 3)), entries={0: 0, 18: 0})
+    capture = list(fake_tensors(tuple(None if i in parts else v for i, v in enumerate(plain)), storages))
+    offset = 0
+    for index, a in parts.items():
+        capture[index] = FakeTensor(shared, offset, a.shape, (a.shape[1], 1))
+        offset += a.size
+    fake_torch_save(ckpt, (tuple(capture), 30000), storages + [shared])
+    assert 7 * shared.data.nbytes > 4 * ckpt.stat().st_size + (1 << 20)
+    proc = convert_limited(ckpt, out)
+    assert proc.returncode == 0, proc.stderr
+    names, cols = read_ply(out)
+    np.testing.assert_allclose(cols["x"], parts[1][:, 0], rtol=1e-6)
+    np.testing.assert_allclose(cols["t_var"], 0.25, rtol=1e-6)
 
 
 def zip_entries(data):
