@@ -216,10 +216,7 @@ def open_regular(path):
     """The input as a binary file, refused by name unless it is a regular file (stat first, then
     opened non-blocking and checked again on the open file: a FIFO swapped in between neither
     blocks the open nor gets read)."""
-    try:
-        safefiles.require_regular(path)
-    except safefiles.FileRefused as e:
-        raise CheckpointError(str(e).split(": ", 1)[1] if str(e).startswith(f"{path}: ") else str(e)) from None
+    safefiles.require_regular(path)  # safefiles.FileRefused, naming the file
     fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK | os.O_CLOEXEC)
     if not stat.S_ISREG(os.fstat(fd).st_mode):
         os.close(fd)
