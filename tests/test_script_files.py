@@ -3,7 +3,7 @@ nframe_average.py never write over one of their inputs, however the output
 names it (the same path, ./x, a/../x, a symbolic link, a hard link: one file
 by device and inode), and refuse it with one line and a non-zero exit before
 anything is computed; an input that is a FIFO is refused by name instead of
-blocking the tool for ever; compare.py's --frames range is bounded by the
+blocking the tool for ever, and so is a FIFO named as an output; compare.py's --frames range is bounded by the
 frames that exist (a range of 1e11 frames is refused by its first missing
 frame, within a memory limit that a list of its numbers would exceed).
 
@@ -17,6 +17,7 @@ is complete, as refrender does (README, Guarantees)."""
 import errno
 import os
 import resource
+import stat
 import subprocess
 import sys
 
@@ -117,6 +118,10 @@ def test_a_fifo_input_is_refused_by_name(tmp_path):
     for script, args in ((COMPARE, (ref, fifo)), (COMPARE, (fifo, ref)), (GALLERY, (tmp_path / "g.png", fifo))):
         proc = tool(script, *args, timeout=60)  # before: blocked for ever in open()
         assert proc.returncode != 0 and f"{fifo}: is a FIFO" in one_line(proc.stderr), (script, proc.stderr)
+    # a FIFO as an output: refused, not opened (that blocked) nor replaced by a regular file
+    proc = tool(COMPARE, ref, ref, "--json", fifo, timeout=60)
+    assert proc.returncode == 2 and f"--json {fifo}: is a FIFO" in one_line(proc.stderr), proc.stderr
+    assert stat.S_ISFIFO(os.stat(fifo).st_mode)
 
 
 def limited_memory():
