@@ -108,9 +108,12 @@ def write_file(path, write, inputs=None, check=None, allow_empty=False):
     format by extension chooses the same), which is then fsync'ed, refused if
     empty (unless allow_empty: a library that ignores write errors leaves an
     empty file on a full disk), given to check(tmp) (raising on a damaged
-    file), made readable as a new file is
-    (0666 less the umask) and renamed over `path`. Any failure removes the
-    temporary and raises FileRefused naming `path`."""
+    file), given the mode a new file gets (0666 less the umask; mkstemp's is
+    0600) and renamed over `path`. Any failure removes the temporary and
+    raises FileRefused naming `path`. A temporary left by a killed process
+    is not removed by a later run: its name (".NAME.tmp-...") says what it
+    is, and a pid check cannot tell another node's live writer from a dead
+    one."""
     path = os.fspath(path)
     if inputs is not None:
         inputs.check_output(path)
