@@ -132,7 +132,7 @@ TEST(sobol_first_dimensions_form_scrambled_0m2_nets)
             for (int k = 0; k < 256; k++)
                 x[k] = buf.x[k] - 7, y[k] = buf.y[k] - 9;
             CHECK(is_net(x, y, 8));
-            for (int k = 0; k < 64; k++) /* and so is every aligned power-of-2 block */
+            for (int k = 0; k < 64; k++) /* the batch comes in time order: the 64 points of the shutter's second quarter form a net too */
                 x[k] = buf.x[64 + k] - 7, y[k] = buf.y[64 + k] - 9;
             CHECK(is_net(x, y, 6));
         }

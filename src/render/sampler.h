@@ -76,11 +76,19 @@ static inline int64_t sampler_count(const sampler *s) { return (int64_t)s->grid 
  * Checked before anything is allocated from the counts. */
 int sampler_check(const sampler *s, rr_error *err);
 
-/* Scratch for one thread: thesis needs tspp * time_factor doubles and ints. */
+typedef struct {
+    double t;
+    uint32_t index;
+} sampler_time_key;
+
+/* Scratch for one thread: thesis needs tspp * time_factor doubles and ints,
+ * sobol a batch's points and their time order. */
 typedef struct {
     double *jitter;
     int *perm;
     uint64_t *taken; /* thesis: bitset of the strata taken by the current ray */
+    sampler_time_key *keys; /* sobol: the batch's points by time */
+    double *points;         /* sobol: x, y, t, w of each point before the sort */
 } sampler_scratch;
 
 int sampler_scratch_init(sampler_scratch *sc, const sampler *s);
