@@ -58,7 +58,7 @@ TEST_OBJS := $(TEST_SRCS:tests/%.c=$(BUILD)/tests/%.o) $(BUILD)/tests/harness.o 
 BIN      := $(BUILD)/refrender
 TESTBIN  := $(BUILD)/unit_tests
 
-.PHONY: all deps demo test test-build test-c test-py test-cluster test-fuzz fuzz bench bench-time clean clean-models scenes references gallery
+.PHONY: all deps demo test test-build test-c test-py test-cluster test-fuzz fuzz bench bench-time bench-samplers scale-models clean clean-models scenes references gallery
 all: $(BIN) $(BUILD)/refrender-bench
 
 # An object without its .d file (built before dependency tracking, or the
@@ -214,13 +214,30 @@ fuzz: $(FUZZ_TARGETS:%=$(FUZZ_DIR)/fuzz_%)
 bench: $(BUILD)/refrender-bench
 	mkdir -p out
 	$(BUILD)/refrender-bench out/bench.csv $(BENCH_ARGS)
-	@if [ "$(BENCH_ARGS)" != quick ]; then $(MAKE) --no-print-directory bench-time; fi
+	@if [ "$(BENCH_ARGS)" != quick ]; then $(MAKE) --no-print-directory bench-time bench-samplers; fi
 
 # Time to equal error, --time-integration exact against sampled time
 # (src/EXACT.md); part of `make bench` except in quick mode.
 TTE_SCENES ?= default,diagonal,rotation,towards_camera,crossing,camera_pan,large
 bench-time: $(BIN) scenes
 	$(PYTHON) scripts/time_to_error.py --scenes $(TTE_SCENES) --out out/time_to_error
+
+# The samplers' convergence on the suite's, the Gaussian examples' and the
+# benchmark-scale view, and the time to 1, 0.1 and 0.01 of an 8-bit level on
+# the benchmark-scale view (scripts/sampler_study.py; src/cmd/BENCH.md).
+# Part of `make bench` except in quick mode.
+bench-samplers: $(BIN) scenes scale-models
+	$(PYTHON) scripts/sampler_study.py convergence --out out/samplers
+	$(PYTHON) scripts/sampler_study.py time-to-error --out out/samplers
+
+# scenes/bench/scale.xml's models: refrender-bench's scale row as files
+# (three 2DGS spheres of 1M Gaussians, SH degree 3; 730 MB, not committed)
+SCALE_RADII := 1 0.75 0.5
+scale-models: $(BIN)
+	mkdir -p scenes/models
+	i=0; for r in $(SCALE_RADII); do f=scenes/models/scale_layer$$i.ply; \
+	    [ -s $$f ] || $(BIN) gen sphere --gaussians 2dgs --sh-degree 3 --count 1000000 --radius $$r -o $$f || exit 1; \
+	    i=$$((i + 1)); done
 
 # The scene suite (scenes/*.xml; README "Scene suite"). Scanned models come
 # from Debian packages and are converted into scenes/models/ (not committed).

@@ -79,7 +79,7 @@ def test_metadata_records_the_settings(tmp_path):
     assert img.shape == (16, 24, 4)
     assert header["refrender:spp"] == 4 and header["refrender:tspp"] == 3
     assert header["refrender:seed"] == "99" and float(header["refrender:epsilon"]) == 0.25
-    assert header["refrender:sampler"] == "thesis" and header["refrender:weightFunction"] == "box"
+    assert header["refrender:sampler"] == "sobol" and header["refrender:weightFunction"] == "box"
     assert header["refrender:scene"] == str(scene) and header["refrender:shutter"] == "0 1"
     assert int(header["refrender:rays"]) == 24 * 16 * 4 * 3
 

@@ -159,6 +159,7 @@ static void *baseline_worker(void *arg)
     sampler_scratch_init(&ss, smp);
     int n = (int)sampler_count(smp); /* the bench sets small counts */
     double *x = malloc(n * sizeof *x), *y = malloc(n * sizeof *y), *t = malloc(n * sizeof *t);
+    double *w = malloc(n * sizeof *w); /* the weights: unused, the rays are what is measured */
     unsigned *prims = malloc(n * sizeof *prims);
     unsigned long long distinct = 0, covered = 0;
     struct RTCIntersectContext ctx;
@@ -171,7 +172,7 @@ static void *baseline_worker(void *arg)
             break;
         for (int px = 0; px < job->sc->cam.width; px++) {
             sampler_batch(smp, job->rs->shut.open, job->rs->shut.close, (uint64_t)row * job->sc->cam.width + px, px,
-                          row, 0, &ss, x, y, t);
+                          row, 0, &ss, x, y, t, w);
             int nhits = 0;
             for (int i = 0; i < n; i++) { /* the same rays the render path traces */
                 vec3 d = camera_ray_direction(&job->sc->cam, x[i], y[i]);
@@ -202,7 +203,7 @@ static void *baseline_worker(void *arg)
     job->covered += covered;
     pthread_mutex_unlock(&job->lock);
     sampler_scratch_free(&ss);
-    free(x), free(y), free(t), free(prims);
+    free(x), free(y), free(t), free(w), free(prims);
     return NULL;
 }
 
@@ -351,6 +352,8 @@ static int may_hit_moving(const accel *a, vec3 org, vec3 dir)
 static render_settings bench_settings(const bench_case *c, const scene *s)
 {
     render_settings rs = render_settings_default();
+    /* the thesis sampler, as these rows were always measured: the rays stay comparable */
+    rs.smp.kind = SAMPLER_THESIS;
     rs.smp.grid = 2, rs.smp.tspp = c->tspp, rs.smp.time_factor = 4;
     rs.shut = s->shut;
     rs.threads = c->threads;

@@ -39,7 +39,7 @@ static void usage(FILE *f)
 "  --spp N            spatial samples per pixel, a KxK grid (default 4)\n"
 "  --pixel-filter F   box (default): samples over the pixel; point: at its centre\n"
 "  --tspp N           temporal samples per spatial sample (default 100)\n"
-"  --sampler S        thesis (default), jittered3d or sobol\n"
+"  --sampler S        sobol (default), jittered3d or thesis (Wolf 2008 sec. 4.5)\n"
 "  --seed N           random seed: same seed, same image, any threads (default 1)\n"
 "  --batches B        independent batches; B >= 2 adds standard errors (default 1)\n"
 "  --target-error X   more batches where the RGB standard error exceeds X\n"
@@ -83,7 +83,7 @@ typedef struct {
     int spp, tspp, time_factor, threads, quiet, width, height, batches, max_batches;
     int pass, passes; /* passes > 0: --pass pass/passes */
     int no_static_reuse;
-    int exact_time, tspp_given, sampler_given; /* --time-integration exact */
+    int exact_time, tspp_given; /* --time-integration exact */
     int shutter_set;                            /* --shutter OPEN,CLOSE */
     int instant_set;                            /* --time T */
     double instant;
@@ -181,9 +181,8 @@ static int parse_option(int c, const char *arg, render_options *o, rr_error *err
         o->exact_time = !strcmp(arg, "exact");
         return 0;
     case OPT_SAMPLER:
-        o->sampler_given = 1;
         return sampler_from_name(arg, &o->sampler)
-                   ? rr_fail(err, "--sampler: expected thesis, jittered3d or sobol, got '%s'", arg) : 0;
+                   ? rr_fail(err, "--sampler: expected sobol, jittered3d or thesis, got '%s'", arg) : 0;
     case 'o': o->output = arg; return 0;
     case 'D': return scene_params_add(&o->params, arg, err);
     case OPT_PREVIEW: o->preview = arg; return 0;
@@ -485,7 +484,7 @@ static void setup_run(render_run *run, const scene *s, const shutter *shut, cons
     run->last_progress = 0;
     run->rs = (render_settings){
         .smp = {.kind = o->sampler, .seed = o->seed, .grid = sampler_grid_for_spp(o->spp), .tspp = o->tspp,
-                .time_factor = s->time_factor},
+                .time_factor = s->time_factor, .random_strata = total >= 2}, /* error bars (a target error needs B >= 2 too) */
         .shut = *shut,
         .threads = o->threads,
         .batch_begin = begin,
@@ -804,17 +803,14 @@ int cmd_render(int argc, char **argv)
     render_options o;
     memset(&o, 0, sizeof o);
     o.spp = 4, o.tspp = 100, o.threads = cores > 0 ? (int)cores : 1, o.batches = 1;
-    o.eps = o.sigma = -1.0, o.checkpoint_every = 60.0, o.seed = 1, o.output = "render.exr", o.sampler = SAMPLER_THESIS;
+    o.eps = o.sigma = -1.0, o.checkpoint_every = 60.0, o.seed = 1, o.output = "render.exr", o.sampler = SAMPLER_DEFAULT;
     int rc = parse_args(argc, argv, &o);
     if (rc)
         return rc == 1 ? 0 : 2;
     if (o.instant_set && !o.tspp_given)
         o.tspp = 1; /* one instant: more times per position would repeat it */
-    if (o.exact_time) { /* time is not sampled: one time per position, Sobol' positions */
+    if (o.exact_time) /* time is not sampled: one time per position */
         o.tspp = 1;
-        if (!o.sampler_given)
-            o.sampler = SAMPLER_SOBOL;
-    }
     /* before loading: a signal while a large model loads or its BVH builds
      * exits 130 as during the render, not 143 */
     install_signal_handlers();
