@@ -110,8 +110,7 @@ import argparse
 import os
 import sys
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-import pydeps  # noqa: E402
+import pydeps
 
 pydeps.require("numpy")
 import numpy as np  # noqa: E402

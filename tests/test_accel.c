@@ -64,9 +64,8 @@ TEST(kbuffer_overflow_keeps_the_closest_hits)
 }
 
 /* Whether more than KBUFFER_MAX hits lay within epsilon is a property of
- * the set of hits, not of the order a traversal offers them (issue 49, item
- * 16). KBUFFER_MAX hits at 10 .. 10.063 and one at 1, epsilon 0.1: within
- * epsilon of the closest (1) lies one hit, whichever comes first (the count
+ * the set of hits, not of the order a traversal offers them. KBUFFER_MAX
+ * hits at 10 .. 10.063 and one at 1, epsilon 0.1: within epsilon of the closest (1) lies one hit, whichever comes first (the count
  * of drops once said 1 for far-then-near, 0 for near-then-far). And
  * KBUFFER_MAX + 1 hits at 10 .. 10.064, all within 0.1 of 10, overflow
  * whether they come nearest or farthest first. */
@@ -102,7 +101,7 @@ TEST(kbuffer_overflow_does_not_depend_on_the_order_of_hits)
 
 /* An analytic sphere's Embree box holds the sphere: a 1 mm sphere at
  * x = 1000, where floats are 61 um apart, so a box rounded to the nearest
- * float may start up to 31 um inside it (issue 49, item 17: 23 um). */
+ * float may start up to 31 um inside it (it started 23 um inside). */
 TEST(sphere_box_holds_a_small_sphere_far_out)
 {
     scene s;

@@ -268,7 +268,7 @@ def test_clamped_estimates_are_warned_of_under_quiet_and_recorded(tmp_path):
     the camera sees everywhere (a sphere far behind it) is, 12 in all. That
     is said on stderr also with --quiet (a warning is no progress output) and
     kept in the header as refrender:clampedEstimates, summed over merged
-    passes (issue 49: under --quiet it once left no trace)."""
+    passes (under --quiet it once left no trace)."""
     scene = tmp_path / "big.xml"
     scene.write_text('<scene><camera position="0 0 0" lookat="0 0 -1" up="0 1 0" width="3" height="2"/>'
                      '<background color="3e6 0 0"/><object position="0 0 10"><sphere radius="0.1"/></object></scene>')

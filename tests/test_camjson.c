@@ -105,7 +105,7 @@ TEST(camjson_names_the_file_level_mistakes)
 }
 
 /* SpacetimeGaussians' cameras.json lists each view once per frame under
- * one name (issue 49, item 20): a name may repeat when every entry is the
+ * one name: a name may repeat when every entry is the
  * same camera (read as the first), and entries of one name that differ in
  * any field are refused as ambiguous, naming both and the field. */
 TEST(camjson_repeated_names_are_one_camera_or_refused)

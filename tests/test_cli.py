@@ -271,7 +271,7 @@ def test_extensions_follow_one_rule_and_out_exr_png_suggests_out_exr(tmp_path):
     """-o's check and --preview's format read a name's extension by one rule
     (the base name's last dot, not a leading one: ".png" has none), where
     they once disagreed; and -o out.exr.png suggests -o out.exr and
-    --preview out.png, not out.exr.exr (issue 49)."""
+    --preview out.png, not out.exr.exr."""
     scene = tmp_path / "s.xml"
     scene.write_text(TINY)
     proc = run([scene, "--spp", 1, "--tspp", 1, "-o", tmp_path / "out.exr.png"])
@@ -288,7 +288,7 @@ def test_refrender_bench_answers_help_and_refuses_what_it_does_not_know(tmp_path
     [SERIES]]]): --help prints its usage and exits 0, an unknown option, mode
     or series exits 2 naming it, and neither creates a file nor starts a
     benchmark (--help once became a CSV named "--help" and began the full
-    run, issue 49)."""
+    run)."""
     bench = str(Path(BIN).parent / "refrender-bench")
     for args, status, said in [(["--help"], 0, "usage: refrender-bench"), (["-h"], 0, "usage: refrender-bench"),
                                (["out.csv", "--help"], 0, "usage: refrender-bench"),

@@ -118,7 +118,7 @@ def test_states_of_another_build_do_not_merge_or_resume(tmp_path):
     # A pass or checkpoint carries the build that rendered it (the hash of
     # the code under src/, which the test recomputes); one from another
     # build is refused by name, as a rebuilt shared tree under a running
-    # array job would otherwise mix two renderers' pixels (issue 49, item 1).
+    # array job would otherwise mix two renderers' pixels.
     p0, p1 = passes_of_frame(tmp_path, 3)
     ours = read_full(p0)[1]["refrender:build"]
     assert ours == source_build_id()

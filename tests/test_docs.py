@@ -412,12 +412,8 @@ def test_the_gaussian_splatting_workflow_runs(tmp_path):
     assert (tmp_path / "f.png").exists() and "deblur-nerf" in proc.stdout, proc.stdout
 
 
-# convert_4dgs.py is another change's (issue 49, item 19 names it too)
-PATH_INSERT_PENDING = {"convert_4dgs.py"}
-
-
 def test_no_script_puts_its_own_folder_on_the_path_again():
     # Python puts a script's own folder first on sys.path: a script inserting
-    # it again only repeats it (issue 49, item 19).
+    # it again only repeats it.
     inserting = {p.name for p in (ROOT / "scripts").glob("*.py") if "sys.path.insert" in p.read_text()}
-    assert inserting <= PATH_INSERT_PENDING, inserting - PATH_INSERT_PENDING
+    assert not inserting, inserting

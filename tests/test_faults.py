@@ -204,9 +204,9 @@ def test_gaussians_short_of_memory_are_counted_apart_from_full_kbuffers(tmp_path
     # Every sample meets 70 coplanar splats (more than the k-buffer's 64
     # within epsilon) and, with every realloc of the render's worker threads
     # failing, finds no memory for its Gaussians: each of the W*H*spp*tspp
-    # samples is one of each, and the two are told apart (issue 49, item 15:
-    # the memory drops were added to the overflow count, one sample twice,
-    # and called "more than 64 hits within epsilon").
+    # samples is one of each, and the two are told apart (the memory
+    # drops were added to the overflow count, one sample twice, and called
+    # "more than 64 hits within epsilon").
     if b"__asan_init" in Path(BIN).read_bytes():
         pytest.skip("under AddressSanitizer realloc is ASan's own allocator, which the shim cannot fail")
     ply = tmp_path / "g.ply"

@@ -403,7 +403,7 @@ static int opens_while_reading(const char *path, gaussian_model *m, uint64_t *h,
  * the bytes it holds over, so the file is opened once (counted by the
  * kernel) and its bytes hashed once (the hash of one pass over them). It
  * was read twice, the failed static pass hashing every byte it had not
- * parsed (issue 49, item 18). */
+ * parsed. */
 TEST(an_stg_file_is_read_and_hashed_once)
 {
     static char buf[1 << 14];

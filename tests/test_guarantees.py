@@ -117,7 +117,7 @@ def test_temporary_files_of_a_killed_run_are_removed_by_the_next(tmp_path):
     live = tmp_path / f"o.exr.tmp-{os.getpid()}@{host}-XyZwVu"  # a live process's: kept
     live.write_bytes(b"still being written")
     # Another node's, with a pid that runs nowhere here: pids are per node, so
-    # on a shared file system it may be a live writer's there (issue 49, item 6)
+    # on a shared file system it may be a live writer's there
     elsewhere = tmp_path / f"o.exr.tmp-{dead.pid}@{host}x-GhIjKl"
     elsewhere.write_bytes(b"written on another node")
     assert run([s, "-o", out, *FAST]).returncode == 0

@@ -65,7 +65,7 @@ def test_an_external_entity_in_a_path_is_named(tmp_path):
 def test_the_command_attribute_holds_a_long_command_line_whole(tmp_path):
     # refrender:command is the arguments joined by spaces: a 3,000-character
     # command line (long -D values) is kept whole; a 2 KB buffer cut it
-    # silently (issue 49, item 19).
+    # silently.
     scene = tmp_path / "s.xml"
     scene.write_text(SCENE.replace("$vx", "0"))
     out = tmp_path / "o.exr"

@@ -199,7 +199,7 @@ TEST(se3_exp_is_a_screw_motion_and_log_inverts_it)
      * Just above the series' switch (|phi| = 1e-4) 1 - cos theta computed
      * as written cancels (an error of eps / theta^2 relative: Log's twist
      * was off by 5e-9 |rho| at 2e-4); as 2 sin^2(theta/2) it does not, and
-     * both directions hold to a few eps |rho| at every angle (issue 49). */
+     * both directions hold to a few eps |rho| at every angle. */
     double thetas[] = {1e-7, 5e-5, 2e-4, 0.3, 1.2, 3.0};
     for (int k = 0; k < (int)(sizeof thetas / sizeof *thetas); k++) {
         double th = thetas[k], v = 1.7, h = -0.4, q[4];

@@ -127,7 +127,7 @@ void accel_sphere_bounds_cb(const struct RTCBoundsFunctionArguments *args)
     const scene_object *o = args->geometryUserPtr;
     aabb b = scene_object_bounds(o);
     /* rounded outward as every other box (a cast to the nearest float put
-     * a 1 mm sphere's box at x = 1000 23 um inside it: issue 49) */
+     * a 1 mm sphere's box at x = 1000 23 um inside it) */
     float lo[3], hi[3];
     aabb_round_out(b, lo, hi);
     struct RTCBounds *r = args->bounds_o;

@@ -127,7 +127,7 @@ void attrs_for_render(attr_list *a, const scene *s, const render_settings *rs, u
 {
     const sampler *smp = &rs->smp;
     /* the code that drew the pixels: a state of another build may draw a
-     * model differently under the same settings (issue 49) */
+     * model differently under the same settings */
     attrs_set(a, ATTR_BUILD, "%s", RR_BUILD_ID);
     attrs_set(a, ATTR_SCENE, "%s", s->path);
     attrs_set(a, ATTR_SCENE_HASH, "%016" PRIx64, s->scene_hash);
