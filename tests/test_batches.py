@@ -67,6 +67,12 @@ def test_target_error_adds_batches_where_needed(tmp_path):
     assert header["refrender:targetReached"] == f"{reached} of {se.size} pixels"
 
 
+def test_target_error_alone_takes_four_batches(tmp_path):
+    # an error estimate needs batches: without --batches a target means B = 4 (the cap 8 B = 32)
+    ch, header = render_disk(tmp_path, "t4.exr", "--spp", 1, "--tspp", 4, "--target-error", 1e-9)
+    assert header["refrender:batches"] == 4 and (ch["samples"] / 4).min() == 4 and (ch["samples"] / 4).max() == 32
+
+
 @pytest.mark.parametrize("sampler", ["thesis", "jittered3d", "sobol"])
 def test_every_sampler_is_unbiased_for_the_moving_disk(tmp_path, sampler):
     # Reference: the same scene with many samples; each sampler's mean over

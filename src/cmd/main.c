@@ -42,7 +42,7 @@ static void usage(FILE *f)
 "  --sampler S        sobol (default), jittered3d or thesis (Wolf 2008 sec. 4.5)\n"
 "  --seed N           random seed: same seed, same image, any threads (default 1)\n"
 "  --batches B        independent batches; B >= 2 adds standard errors (default 1)\n"
-"  --target-error X   more batches where the RGB standard error exceeds X\n"
+"  --target-error X   more batches where the RGB standard error exceeds X (B 4 unless given)\n"
 "  --max-batches N    batch cap for --target-error (default 8*B)\n"
 "Time:\n"
 "  --time-integration M  sampled (default) or exact (src/EXACT.md)\n"
@@ -83,7 +83,7 @@ typedef struct {
     int spp, tspp, time_factor, threads, quiet, width, height, batches, max_batches;
     int pass, passes; /* passes > 0: --pass pass/passes */
     int no_static_reuse;
-    int exact_time, tspp_given; /* --time-integration exact */
+    int exact_time, tspp_given, batches_given; /* --time-integration exact; --target-error's B */
     int shutter_set;                            /* --shutter OPEN,CLOSE */
     int instant_set;                            /* --time T */
     double instant;
@@ -136,7 +136,7 @@ static int parse_option(int c, const char *arg, render_options *o, rr_error *err
     case OPT_SEED: return cli_u64("--seed", arg, &o->seed, err);
     case OPT_EPS: return cli_double("--eps", arg, 0.0, &o->eps, err);
     case OPT_SIGMA: return cli_double("--sigma", arg, 1e-6, &o->sigma, err);
-    case OPT_BATCHES: return cli_int("--batches", arg, 1, FILM_MAX_BATCHES, &o->batches, err);
+    case OPT_BATCHES: o->batches_given = 1; return cli_int("--batches", arg, 1, FILM_MAX_BATCHES, &o->batches, err);
     case OPT_MAXB: return cli_int("--max-batches", arg, 1, FILM_MAX_BATCHES, &o->max_batches, err);
     case OPT_TARGET: return cli_double("--target-error", arg, 1e-12, &o->target_error, err);
     case OPT_CKPT_EVERY: return cli_double("--checkpoint-every", arg, 0.0, &o->checkpoint_every, err);
@@ -271,6 +271,8 @@ static int parse_args(int argc, char **argv, render_options *o)
     }
     if (optind == argc - 1)
         o->scene = argv[optind];
+    if (o->target_error > 0 && !o->batches_given)
+        o->batches = 4; /* an error estimate needs batches (src/SAMPLING.md, Error bars) */
     if (check_combinations(o, &err)) {
         fprintf(stderr, "refrender: %s\n", err.msg);
         return 2;
