@@ -89,7 +89,7 @@ def test_unknown_sampler_and_bad_combinations_are_usage_errors():
     assert run(["--sampler", "halton"]).returncode == 2
     assert run(["--pass", "1/4", "--batches", 2]).returncode == 2
     assert run(["--pass", "4/4", "--batches", 4]).returncode == 2
-    assert run(["--target-error", "0.1"]).returncode == 2
+    assert run(["--target-error", "0.1", "--batches", 1]).returncode == 2  # no error estimate from one batch
 
 
 COMMON = ["--res", "40x32", "--spp", 4, "--tspp", 8, "--batches", 4, "--sampler", "sobol", "--seed", 5]
