@@ -828,6 +828,8 @@ int main(int argc, char **argv)
         return cmd_gen(argc - 1, argv + 1);
     if (argc > 1 && !strcmp(argv[1], "merge"))
         return cmd_merge(argc - 1, argv + 1);
+    if (argc > 1 && !strcmp(argv[1], "splat"))
+        return cmd_splat(argc - 1, argv + 1);
     if (argc > 1 && !strcmp(argv[1], "surfels"))
         return cmd_surfels(argc - 1, argv + 1);
     return cmd_render(argc, argv);

@@ -1,0 +1,117 @@
+#!/usr/bin/python3
+"""refrender splat (src/SPLAT.md): the thesis's splatting methods as
+comparands. Each check's expectation comes from another computation than
+the one judged: the ray tracer (instant = --time T --pixel-filter point),
+the N-frame average of the instants (accum), accumulation itself (bucket
+with B = N) and the coverage of the truth (bucket's opaque smear)."""
+import random
+
+import numpy as np
+import pytest
+
+from conftest import ROOT, run, read_exr
+
+SUITE = ['sphere_weights_box', 'sphere_weights_linear', 'sphere_weights_exp', 'diagonal', 'rotation',
+         'towards_camera', 'crossing', 'thin_fast', 'camera_pan', 'large']
+RES = '48x36'
+# the EXR stores each batch estimate rounded to 2^-24 (film.h) and both
+# sides sum their kernel weights in another order: a few float ulps
+ROUNDING = 1e-6
+
+
+def splat(args, out):
+    proc = run(['splat', *args, '-o', out, '--quiet'])
+    assert proc.returncode == 0, proc.stderr
+    return read_exr(out)
+
+
+def truth_instant(scene, t, out, res=RES):
+    proc = run([scene, '--time', t, '--pixel-filter', 'point', '--spp', 1, '--res', res, '-o', out, '--quiet'])
+    assert proc.returncode == 0, proc.stderr
+    return read_exr(out)[0]
+
+
+@pytest.mark.parametrize('name', SUITE)
+def test_instant_equals_the_ray_tracer_at_pixel_centres(tmp_path, name):
+    """Thesis 4.1.1 with 4.2.1's ray/ellipse test and no EWA filter computes,
+    per pixel centre, the function the ray tracer samples there (issue 51's
+    first check): the same crossing, kernel, epsilon rule and Phong."""
+    scene = ROOT / 'scenes' / f'{name}.xml'
+    for t in (0.13, 0.71):
+        img, hdr = splat(['instant', scene, '--time', t, '--res', RES], tmp_path / 's.exr')
+        ref = truth_instant(scene, t, tmp_path / 'g.exr')
+        assert ref[..., 3].any(), 'the instant shows something'
+        assert np.abs(img - ref).max() <= ROUNDING, (name, t)
+    assert hdr['refrender:method'] == 'instant'
+    assert float(hdr['refrender:fragments']) > 0
+
+
+def random_cloud(path, seed, n=150):
+    """Random elliptical splats crossing each other in depth within a few
+    epsilon, two objects (one turning, one translating), a moving camera."""
+    rng = random.Random(seed)
+
+    def vec(lo, hi):
+        return ' '.join(f'{rng.uniform(lo, hi):.5f}' for _ in range(3))
+    splats = []
+    for _ in range(n):
+        if rng.random() < 0.5:
+            shape = f'normal="{vec(-1, 1)}" radius="{rng.uniform(0.05, 0.3):.4f}"'
+        else:
+            shape = f'u="{vec(-0.25, 0.25)}" v="{vec(-0.25, 0.25)}"'
+        c = f'{rng.uniform(-1, 1):.4f} {rng.uniform(-0.8, 0.8):.4f} {rng.uniform(-0.05, 0.05):.4f}'
+        splats.append(f'<splat center="{c}" {shape} color="{vec(0.1, 1)}"/>')
+    half = n // 2
+    path.write_text(f'''<scene>
+  <camera position="0 0 4" lookat="0 0 0" up="0 1 0" fov="45" width="48" height="36">
+    <animation><keyframes><key time="0" translate="0 0 0"/><key time="1" translate="0.2 0.1 0" rotate="0 3 0"/></keyframes></animation>
+  </camera>
+  <background color="0.1 0.2 0.3"/><ambient color="0.2 0.2 0.2"/>
+  <light type="directional" direction="-0.3 -0.5 -1" color="0.9 0.9 0.85"/>
+  <light type="point" position="1 2 3" color="0.3 0.3 0.3"/>
+  <render epsilon="0.03" kernel_sigma="0.45"/>
+  <object name="a"><pointModel>{"".join(splats[:half])}</pointModel>
+    <material shading="phong" diffuse="0.9" specular="0.5" shininess="12"/>
+    <animation><keyframes><key time="0" rotate="0 0 0"/><key time="1" rotate="10 40 5"/></keyframes></animation></object>
+  <object name="b"><pointModel>{"".join(splats[half:])}</pointModel>
+    <material shading="unlit"/>
+    <animation><linear velocity="0.3 -0.2 0.4"/></animation></object>
+</scene>''')
+
+
+@pytest.mark.parametrize('seed', [1, 2, 3])
+def test_instant_equals_the_ray_tracer_on_random_splat_clouds(tmp_path, seed):
+    scene = tmp_path / 'cloud.xml'
+    random_cloud(scene, seed)
+    for t in (0.0, 0.37, 1.0):
+        img, _ = splat(['instant', scene, '--time', t], tmp_path / 's.exr')
+        ref = truth_instant(scene, t, tmp_path / 'g.exr', res='48x36')
+        assert ref[..., 3].mean() > 0.2
+        assert np.abs(img - ref).max() <= ROUNDING, (seed, t)
+
+
+def test_botsch_filter_gives_a_subpixel_splat_its_2x2_pixels_and_blends_them(tmp_path):
+    """Eq. 4.13 (sec. 4.2.3): a splat far below a pixel is accepted where
+    d(x, y)^2 / r^2 <= 1 with r = sqrt 2 pixels from its projected centre.
+    Projected onto the image centre (24, 18) of a 48x36 image, the four
+    pixel centres about it lie at sqrt(1/2) pixel and the next ones at
+    sqrt(5/2) or more: exactly the 2x2 block. These pixels write no depth
+    (visibility pass: the ellipse only), so a second tiny splat far behind
+    blends in with the same weight h(sqrt(1/4)): the mean of the colours."""
+    scene = tmp_path / 'tiny.xml'
+    scene.write_text('''<scene>
+  <camera position="0 0 4" lookat="0 0 0" up="0 1 0" fov="45" width="48" height="36"/>
+  <background color="0 0 0"/>
+  <object name="front"><pointModel><splat center="0 0 0" normal="0 0 1" radius="0.0001" color="1 0 0"/></pointModel>
+    <material shading="unlit"/></object>
+  <object name="back"><pointModel><splat center="0 0 -2" normal="0 0 1" radius="0.0001" color="0 0 1"/></pointModel>
+    <material shading="unlit"/></object>
+</scene>''')
+    none, _ = splat(['instant', scene, '--filter', 'none'], tmp_path / 'n.exr')
+    assert not none[..., 3].any(), 'the reconstruction kernel alone misses every pixel centre'
+    img, hdr = splat(['instant', scene, '--filter', 'botsch'], tmp_path / 'b.exr')
+    covered = np.argwhere(img[..., 3] > 0)
+    assert sorted(map(tuple, covered)) == [(17, 23), (17, 24), (18, 23), (18, 24)]
+    for y, x in covered:
+        assert np.allclose(img[y, x], [0.5, 0, 0.5, 1], atol=1e-6)
+    assert 'filter=botsch' in hdr['refrender:methodParameters']
