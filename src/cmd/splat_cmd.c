@@ -32,11 +32,21 @@ static void splat_usage(FILE *f)
 "  bucket      N instants in B time buckets, one visibility and one\n"
 "              normalisation pass per bucket (3.6.2, 4.4); a bucket is opaque\n"
 "              wherever any of its instants covers the pixel\n"
+"  volumetric  N instants of volumetric kernels: each splat convolved with a 1D\n"
+"              Gaussian along its velocity (3.6.3, 4.1.2, 4.2.2, App. C), depth\n"
+"              tested at its source point, shaded per kernel; still cameras only\n"
 "Options:\n"
 "  --filter F         none (default) or botsch: the EWA approximation, eq. 4.13\n"
 "  --time T           instant: the time splatted (default: the shutter's middle)\n"
-"  --samples N        accum, bucket: instants (default 10)\n"
+"  --samples N        accum, bucket, volumetric: instants (default 10;\n"
+"                     volumetric 1)\n"
 "  --buckets B        bucket: buckets, 1 <= B <= N (default 1)\n"
+"  --alpha A          volumetric: thesis (default: the weighted sum of every\n"
+"                     fragment, clamped to [0, 1]) or normalized (each instant's\n"
+"                     a weighted average, then summed: the thesis's sec. 6.2)\n"
+"  --sigma-t X        volumetric: the 1D Gaussian's standard deviation in units\n"
+"                     of the slice |v| dt a kernel stands for (default 0.2887 =\n"
+"                     1/sqrt 12, a uniform slice's)\n"
 "  --times M          midpoint (default: (k + 1/2) / N of the shutter, as\n"
 "                     scripts/nframe_average.py), stratified or random\n"
 "  --seed N           stratified and random instants (default 1)\n"
@@ -55,12 +65,12 @@ static void splat_usage(FILE *f)
 typedef struct {
     splat_settings set;
     const char *scene, *output, *preview;
-    int width, height, quiet, time_set, samples_set, buckets_set, shutter_set;
+    int width, height, quiet, time_set, samples_set, buckets_set, shutter_set, filter_set, alpha_set, sigma_t_set;
     double eps, sigma, shutter_open, shutter_close;
     scene_params params;
 } splat_options;
 
-enum { OPT_FILTER = 256, OPT_TIME, OPT_SAMPLES, OPT_BUCKETS, OPT_TIMES, OPT_SEED, OPT_SHUTTER, OPT_RES, OPT_EPS,
+enum { OPT_ALPHA = 300, OPT_SIGMA_T, OPT_FILTER = 256, OPT_TIME, OPT_SAMPLES, OPT_BUCKETS, OPT_TIMES, OPT_SEED, OPT_SHUTTER, OPT_RES, OPT_EPS,
        OPT_SIGMA, OPT_PREVIEW, OPT_QUIET };
 
 static int parse_choice(const char *opt, const char *arg, const char *const *names, int n, int *out, rr_error *err)
@@ -68,16 +78,24 @@ static int parse_choice(const char *opt, const char *arg, const char *const *nam
     for (int i = 0; i < n; i++)
         if (!strcmp(arg, names[i]))
             return *out = i, 0;
-    return rr_fail(err, "%s: expected %s, got '%s'", opt,
-                   n == 2 ? "none or botsch" : "midpoint, stratified or random", arg);
+    if (n == 3)
+        return rr_fail(err, "%s: expected %s, %s or %s, got '%s'", opt, names[0], names[1], names[2], arg);
+    return rr_fail(err, "%s: expected %s or %s, got '%s'", opt, names[0], names[1], arg);
 }
 
 static int parse_option(int c, const char *arg, splat_options *o, rr_error *err)
 {
     static const char *const filters[] = {"none", "botsch"}, *const times[] = {"midpoint", "stratified", "random"};
+    static const char *const alphas[] = {"thesis", "normalized"};
     int v = 0;
     switch (c) {
-    case OPT_FILTER: return parse_choice("--filter", arg, filters, 2, &v, err) ? -1 : (o->set.filter = v, 0);
+    case OPT_FILTER:
+        o->filter_set = 1;
+        return parse_choice("--filter", arg, filters, 2, &v, err) ? -1 : (o->set.filter = v, 0);
+    case OPT_ALPHA:
+        o->alpha_set = 1;
+        return parse_choice("--alpha", arg, alphas, 2, &v, err) ? -1 : (o->set.alpha = v, 0);
+    case OPT_SIGMA_T: o->sigma_t_set = 1; return cli_double("--sigma-t", arg, 1e-6, &o->set.sigma_t, err);
     case OPT_TIMES: return parse_choice("--times", arg, times, 3, &v, err) ? -1 : (o->set.times = v, 0);
     case OPT_TIME: o->time_set = 1; return cli_double("--time", arg, -INFINITY, &o->set.instant, err);
     case OPT_SAMPLES: o->samples_set = 1; return cli_int("--samples", arg, 1, 100000, &o->set.samples, err);
@@ -97,11 +115,11 @@ static int parse_option(int c, const char *arg, splat_options *o, rr_error *err)
 
 static int parse_method(const char *name, splat_method *m, rr_error *err)
 {
-    static const char *const names[] = {"instant", "accum", "bucket"};
-    for (int i = 0; i < 3; i++)
+    static const char *const names[] = {"instant", "accum", "bucket", "volumetric"};
+    for (int i = 0; i < 4; i++)
         if (!strcmp(name, names[i]))
             return *m = (splat_method)i, 0;
-    return rr_fail(err, "unknown method '%s': expected instant, accum or bucket", name);
+    return rr_fail(err, "unknown method '%s': expected instant, accum, bucket or volumetric", name);
 }
 
 /* Options that mean nothing for the method chosen are refused, not ignored. */
@@ -113,6 +131,10 @@ static int check_combinations(const splat_options *o, rr_error *err)
     if (m != SPLAT_INSTANT && o->time_set)
         return rr_fail(err, "--time is the instant of 'instant'; %s spans the shutter (--shutter)",
                        splat_method_name(m));
+    if (m != SPLAT_VOLUMETRIC && (o->alpha_set || o->sigma_t_set))
+        return rr_fail(err, "--alpha and --sigma-t are for volumetric");
+    if (m == SPLAT_VOLUMETRIC && (o->buckets_set || o->filter_set))
+        return rr_fail(err, "volumetric kernels have no --buckets or --filter (sec. 4.2.2 weighs the kernel itself)");
     if (m == SPLAT_ACCUM && o->buckets_set)
         return rr_fail(err, "--buckets is for bucket (accum is bucket with B = N)");
     if (m == SPLAT_BUCKET && o->set.buckets > o->set.samples)
@@ -130,6 +152,7 @@ static int parse_args(int argc, char **argv, splat_options *o)
         {"shutter", required_argument, 0, OPT_SHUTTER}, {"res", required_argument, 0, OPT_RES},
         {"eps", required_argument, 0, OPT_EPS}, {"sigma", required_argument, 0, OPT_SIGMA},
         {"output", required_argument, 0, 'o'}, {"preview", required_argument, 0, OPT_PREVIEW},
+        {"alpha", required_argument, 0, OPT_ALPHA}, {"sigma-t", required_argument, 0, OPT_SIGMA_T},
         {"quiet", no_argument, 0, OPT_QUIET}, {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
     rr_error err;
     int c;
@@ -154,7 +177,10 @@ static int parse_args(int argc, char **argv, splat_options *o)
         return 2;
     }
     o->scene = argv[optind + 1];
-    if (parse_method(argv[optind], &o->set.method, &err) || check_combinations(o, &err)) {
+    int bad = parse_method(argv[optind], &o->set.method, &err);
+    if (!bad && o->set.method == SPLAT_VOLUMETRIC && !o->samples_set)
+        o->set.samples = 1; /* Table 5.1 row d */
+    if (bad || check_combinations(o, &err)) {
         fprintf(stderr, "refrender splat: %s\n", err.msg);
         return 2;
     }
@@ -201,6 +227,9 @@ static void method_attrs(attr_list *a, const splat_options *o, const splat_resul
                         splat_times_name(set->times), (unsigned long long)set->seed);
     if (set->method == SPLAT_BUCKET)
         snprintf(params + len, sizeof params - (size_t)len, " buckets=%d", set->buckets);
+    if (set->method == SPLAT_VOLUMETRIC)
+        snprintf(params + len, sizeof params - (size_t)len, " alpha=%s sigma_t=%.17g", splat_alpha_name(set->alpha),
+                 set->sigma_t);
     attrs_set(a, ATTR_SAMPLER, "none (refrender splat: %s)", splat_method_name(set->method));
     attrs_set(a, ATTR_METHOD, "%s", splat_method_name(set->method));
     attrs_set(a, ATTR_METHOD_PARAMETERS, "%s", params);
@@ -280,7 +309,7 @@ int cmd_splat(int argc, char **argv)
 {
     splat_options o;
     memset(&o, 0, sizeof o);
-    o.set.samples = 10, o.set.buckets = 1, o.set.seed = 1, o.eps = o.sigma = -1.0, o.output = "splat.exr";
+    o.set.samples = 10, o.set.buckets = 1, o.set.sigma_t = SPLAT_SIGMA_T_DEFAULT, o.set.seed = 1, o.eps = o.sigma = -1.0, o.output = "splat.exr";
     int rc = parse_args(argc, argv, &o);
     if (rc)
         return rc == 1 ? 0 : 2;

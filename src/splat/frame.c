@@ -51,7 +51,7 @@ static void pixel_ray(const splat_frame *f, int x, int y, double t, vec3 *org, v
     scene_camera_ray(s, x + 0.5, y + 0.5, t, org, dir);
 }
 
-static void set_rays(splat_frame *f, double t)
+void splat_frame_set_rays(splat_frame *f, double t)
 {
     if (f->ray_time == t || (!f->camera_moves && !isnan(f->ray_time)))
         return;
@@ -71,8 +71,7 @@ typedef struct {
     int centre_valid;
 } placed_splat;
 
-/* Raster position of world point p; 0 when p is not in front of the camera. */
-static int project(const camera_view *v, vec3 p, double *x, double *y)
+int splat_project(const camera_view *v, vec3 p, double *x, double *y)
 {
     vec3 d = v3_sub(p, v->position);
     double z = v3_dot(d, v->axis[2]);
@@ -88,24 +87,52 @@ static int clampi(double v, int lo, int hi)
     return v < lo ? lo : v > hi ? hi : (int)v;
 }
 
+/* The pixels whose centres x + 1/2, y + 1/2 lie in the raster box
+ * lo..hi, padded by a pixel against rounding. */
+static void pixels_of(const splat_frame *f, const double lo[2], const double hi[2], int box[4])
+{
+    box[0] = clampi(floor(lo[0] - 0.5) - 1, 0, f->width), box[1] = clampi(ceil(hi[0] - 0.5) + 1, -1, f->width - 1);
+    box[2] = clampi(floor(lo[1] - 0.5) - 1, 0, f->height), box[3] = clampi(ceil(hi[1] - 0.5) + 1, -1, f->height - 1);
+}
+
+/* Projects the world points; 0 when one is not in front of the camera. */
+static int raster_extent(const camera_view *v, const vec3 *pts, int n, double lo[2], double hi[2])
+{
+    lo[0] = lo[1] = INFINITY, hi[0] = hi[1] = -INFINITY;
+    for (int k = 0; k < n; k++) {
+        double x, y;
+        if (!splat_project(v, pts[k], &x, &y))
+            return 0;
+        lo[0] = fmin(lo[0], x), hi[0] = fmax(hi[0], x), lo[1] = fmin(lo[1], y), hi[1] = fmax(hi[1], y);
+    }
+    return 1;
+}
+
+void splat_footprint_of(const splat_frame *f, const camera_view *v, const vec3 corners[8], int box[4])
+{
+    double lo[2], hi[2];
+    if (!raster_extent(v, corners, 8, lo, hi)) { /* reaches behind the camera: every pixel */
+        box[0] = box[2] = 0, box[1] = f->width - 1, box[3] = f->height - 1;
+        return;
+    }
+    pixels_of(f, lo, hi, box);
+}
+
 /* Thesis sec. 4.2.1: the footprint is the projection of the splat's
- * bounds (its object-space box, placed at t): every pixel whose centre
- * may see it, padded by a pixel against rounding; a box reaching behind
- * the camera covers the whole image. With the EWA approximation (sec.
- * 4.2.3) it also holds the disc of radius sqrt 2 about the projected centre. */
+ * bounds (its object-space box, placed at t); with the EWA approximation
+ * (sec. 4.2.3) it also holds the disc of radius sqrt 2 about the projected
+ * centre. */
 static void footprint(const splat_frame *f, const camera_view *v, placed_splat *p)
 {
     const float *c = p->o->model.geom[p->i].center, *e = &p->o->model.extent[3 * p->i];
-    double lo[2] = {INFINITY, INFINITY}, hi[2] = {-INFINITY, -INFINITY};
-    int behind = 0;
-    for (int k = 0; k < 8 && !behind; k++) {
-        vec3 q = v3(c[0] + (k & 1 ? e[0] : -e[0]), c[1] + (k & 2 ? e[1] : -e[1]), c[2] + (k & 4 ? e[2] : -e[2]));
-        double x, y;
-        behind = !project(v, xform_point(&p->xf, q), &x, &y);
-        lo[0] = fmin(lo[0], x), hi[0] = fmax(hi[0], x), lo[1] = fmin(lo[1], y), hi[1] = fmax(hi[1], y);
-    }
-    p->centre_valid = project(v, xform_point(&p->xf, v3(c[0], c[1], c[2])), &p->cx, &p->cy);
-    if (behind) {
+    vec3 corners[8];
+    for (int k = 0; k < 8; k++)
+        corners[k] = xform_point(&p->xf, v3(c[0] + (k & 1 ? e[0] : -e[0]), c[1] + (k & 2 ? e[1] : -e[1]),
+                                            c[2] + (k & 4 ? e[2] : -e[2])));
+    p->centre_valid = splat_project(v, xform_point(&p->xf, v3(c[0], c[1], c[2])), &p->cx, &p->cy);
+    double lo[2], hi[2];
+    int box[4];
+    if (!raster_extent(v, corners, 8, lo, hi)) {
         p->x0 = p->y0 = 0, p->x1 = f->width - 1, p->y1 = f->height - 1;
         return;
     }
@@ -113,9 +140,8 @@ static void footprint(const splat_frame *f, const camera_view *v, placed_splat *
         lo[0] = fmin(lo[0], p->cx - M_SQRT2), hi[0] = fmax(hi[0], p->cx + M_SQRT2);
         lo[1] = fmin(lo[1], p->cy - M_SQRT2), hi[1] = fmax(hi[1], p->cy + M_SQRT2);
     }
-    /* pixel x's centre x + 1/2 inside [lo, hi] */
-    p->x0 = clampi(floor(lo[0] - 0.5) - 1, 0, f->width), p->x1 = clampi(ceil(hi[0] - 0.5) + 1, -1, f->width - 1);
-    p->y0 = clampi(floor(lo[1] - 0.5) - 1, 0, f->height), p->y1 = clampi(ceil(hi[1] - 0.5) + 1, -1, f->height - 1);
+    pixels_of(f, lo, hi, box);
+    p->x0 = box[0], p->x1 = box[1], p->y0 = box[2], p->y1 = box[3];
 }
 
 /* One fragment: the pixel's ray in the object's space (as accel.c moves
@@ -143,7 +169,7 @@ typedef void fragment_fn(splat_frame *f, const placed_splat *p, size_t px, const
 /* Every splat of every object placed at t, each footprint pixel offered to fn. */
 static void raster(splat_frame *f, double t, fragment_fn *fn)
 {
-    set_rays(f, t);
+    splat_frame_set_rays(f, t);
     camera_view v;
     scene_camera_view(f->sc, t, &v);
     for (int k = 0; k < f->sc->nobjects; k++) {

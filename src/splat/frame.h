@@ -32,6 +32,15 @@ void splat_frame_clear(splat_frame *f);
 /* The passes at instant t (the scene's objects and camera placed at t). */
 void splat_visibility_pass(splat_frame *f, double t);
 void splat_attribute_pass(splat_frame *f, double t);
+/* The rays through the pixel centres at instant t into org/dir. */
+void splat_frame_set_rays(splat_frame *f, double t);
+/* Raster position of world point p; 0 when p is not in front of the camera. */
+int splat_project(const camera_view *v, vec3 p, double *x, double *y);
+/* The pixels x0..x1, y0..y1 (box[0..3]) whose centres may see something
+ * inside the world box with these corners (sec. 4.2.1: the projected
+ * bounds, padded by a pixel against rounding; the whole image when the box
+ * reaches behind the camera). */
+void splat_footprint_of(const splat_frame *f, const camera_view *v, const vec3 corners[8], int box[4]);
 /* Normalisation and deferred shading into rgba (4 per pixel), covered
  * pixels with alpha 1, the others the background with alpha 0. */
 void splat_shade_pass(splat_frame *f, float *rgba);

@@ -4,13 +4,16 @@
 #include <string.h>
 
 #include "splat/frame.h"
+#include "splat/volumetric.h"
 
 const char *splat_method_name(splat_method m)
 {
-    return m == SPLAT_ACCUM ? "accum" : m == SPLAT_BUCKET ? "bucket" : "instant";
+    return m == SPLAT_ACCUM ? "accum" : m == SPLAT_BUCKET ? "bucket" : m == SPLAT_VOLUMETRIC ? "volumetric" : "instant";
 }
 
 const char *splat_filter_name(splat_filter f) { return f == SPLAT_FILTER_BOTSCH ? "botsch" : "none"; }
+
+const char *splat_alpha_name(splat_alpha a) { return a == SPLAT_ALPHA_NORMALIZED ? "normalized" : "thesis"; }
 
 const char *splat_times_name(splat_times t)
 {
@@ -100,8 +103,13 @@ static int splat_buckets(splat_frame *f, const splat_settings *set, int buckets,
     return rc;
 }
 
-static int check_scene(const scene *s, rr_error *err)
+static int check_scene(const scene *s, const splat_settings *set, rr_error *err)
 {
+    /* the kernels stretch along each splat's own world velocity: a moving
+     * camera would need the velocity relative to it, which sec. 3.6.3
+     * does not treat */
+    if (set->method == SPLAT_VOLUMETRIC && scene_camera_moves(s))
+        return rr_fail(err, "%s: the camera moves: volumetric kernels are built for a still camera", s->path);
     for (int i = 0; i < s->nobjects; i++)
         if (s->objects[i].kind != OBJECT_POINTS)
             return rr_fail(err, "%s: object '%s' is %s: refrender splat renders point models (surfels) only", s->path,
@@ -115,7 +123,7 @@ static int check_scene(const scene *s, rr_error *err)
 int splat_render(const scene *s, const splat_settings *set, splat_result *out, rr_error *err)
 {
     memset(out, 0, sizeof *out);
-    if (check_scene(s, err))
+    if (check_scene(s, set, err))
         return -1;
     splat_frame f;
     size_t n = (size_t)s->cam.width * s->cam.height;
@@ -126,6 +134,8 @@ int splat_render(const scene *s, const splat_settings *set, splat_result *out, r
     int rc = out->rgba ? 0 : rr_fail(err, "out of memory for the image");
     if (!rc && set->method == SPLAT_INSTANT)
         splat_group(&f, &set->instant, 0, 1, out->rgba);
+    else if (!rc && set->method == SPLAT_VOLUMETRIC)
+        rc = splat_volumetric(&f, set, out->rgba, err);
     else if (!rc)
         rc = splat_buckets(&f, set, set->method == SPLAT_ACCUM ? set->samples : set->buckets, out->rgba, err);
     out->fragments = f.fragments;

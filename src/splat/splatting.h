@@ -12,7 +12,7 @@
 
 #include "scene/scene.h"
 
-typedef enum { SPLAT_INSTANT, SPLAT_ACCUM, SPLAT_BUCKET } splat_method;
+typedef enum { SPLAT_INSTANT, SPLAT_ACCUM, SPLAT_BUCKET, SPLAT_VOLUMETRIC } splat_method;
 /* none: the reconstruction kernel only; botsch: the EWA approximation of
  * thesis sec. 4.2.3, eq. 4.13 (screen-space radius sqrt 2, attribute pass only). */
 typedef enum { SPLAT_FILTER_NONE, SPLAT_FILTER_BOTSCH } splat_filter;
@@ -20,6 +20,17 @@ typedef enum { SPLAT_FILTER_NONE, SPLAT_FILTER_BOTSCH } splat_filter;
  * midpoint (k + 1/2) / N as scripts/nframe_average.py, stratified
  * (k + u_k) / N, random u_k (sorted). */
 typedef enum { SPLAT_TIMES_MIDPOINT, SPLAT_TIMES_STRATIFIED, SPLAT_TIMES_RANDOM } splat_times;
+
+/* Volumetric kernels' alpha (src/SPLAT.md): thesis: the weighted sum of
+ * every instant's fragments, clamped to [0, 1] (sec. 4.1.2, Fig. 4.6);
+ * normalized: each instant's a weighted average, then summed with a(t)
+ * (the remedy sec. 6.2 proposes). */
+typedef enum { SPLAT_ALPHA_THESIS, SPLAT_ALPHA_NORMALIZED } splat_alpha;
+
+/* Default standard deviation of a volumetric kernel's 1D Gaussian along
+ * its velocity, in units of the slice |v| dt it stands for: that of a
+ * uniform density over the slice, 1 / sqrt 12. */
+#define SPLAT_SIGMA_T_DEFAULT 0.28867513459481287
 
 typedef struct {
     splat_method method;
@@ -29,7 +40,9 @@ typedef struct {
     int buckets;       /* B (bucket): consecutive groups of instants */
     uint64_t seed;     /* stratified and random times */
     double instant;    /* instant: the time splatted */
-    shutter shut;      /* accum, bucket: the interval and a(t) */
+    shutter shut;      /* accum, bucket, volumetric: the interval and a(t) */
+    splat_alpha alpha; /* volumetric */
+    double sigma_t;    /* volumetric: see SPLAT_SIGMA_T_DEFAULT */
 } splat_settings;
 
 typedef struct {
@@ -42,8 +55,9 @@ typedef struct {
 const char *splat_method_name(splat_method m);
 const char *splat_filter_name(splat_filter f);
 const char *splat_times_name(splat_times t);
+const char *splat_alpha_name(splat_alpha a);
 
-/* The N instants of accum and bucket, ascending. */
+/* The N instants of accum, bucket and volumetric, ascending. */
 void splat_instants(const splat_settings *set, double *times);
 
 /* Renders s (point models only; -1 with err naming the scene and object
