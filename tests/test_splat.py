@@ -181,3 +181,48 @@ def test_bucket_smears_opaque_and_less_with_more_buckets(tmp_path):
     assert bias[0] > 0.5 * truth, bias  # the whole sweep opaque: far more than the bunny's share
     assert bias[0] > bias[1] > bias[2], bias
     assert abs(bias[2]) < 1e-6, bias
+
+
+@pytest.mark.parametrize('args,message', [
+    (['warp', 'S'], "unknown method 'warp'"),
+    (['accum', 'S', '--buckets', 2], '--buckets is for bucket'),
+    (['bucket', 'S', '--samples', 2, '--buckets', 3], '--buckets 3: at most --samples (2)'),
+    (['instant', 'S', '--samples', 4], 'instant splats one instant'),
+    (['accum', 'S', '--time', 0.5], '--time is the instant'),
+    (['instant', 'S', '--filter', 'ewa'], "--filter: expected none or botsch, got 'ewa'"),
+    (['accum', 'S', '--times', 'halton'], "--times: expected midpoint, stratified or random"),
+    (['volumetric', 'S', '--filter', 'botsch'], 'no --buckets or --filter'),
+    (['instant', 'S', '--alpha', 'thesis'], '--alpha and --sigma-t are for volumetric'),
+    (['instant'], 'expected a method and a scene file'),
+    (['instant', 'S', '--samplez', 3], "did you mean '--samples'"),
+])
+def test_usage_errors_exit_2_and_write_nothing(tmp_path, args, message):
+    out = tmp_path / 'o.exr'
+    proc = run(['splat', *[str(ROOT / 'scenes' / 'diagonal.xml') if a == 'S' else a for a in args], '-o', out])
+    assert proc.returncode == 2, proc.stderr
+    assert message in proc.stderr
+    assert not out.exists()
+
+
+def test_help_names_every_method(tmp_path):
+    proc = run(['splat', '--help'])
+    assert proc.returncode == 0
+    for word in ('instant', 'accum', 'bucket', 'volumetric', '--filter', '--alpha', '--sigma-t', 'src/SPLAT.md'):
+        assert word in proc.stdout
+
+
+def test_bad_scenes_name_file_and_line_and_leave_the_output(tmp_path):
+    out = tmp_path / 'o.exr'
+    out.write_bytes(b'keep')
+    bad = tmp_path / 'bad.xml'
+    bad.write_text('<scene>\n<camera width="8" height="8"/>\n<object><pointModel><splat center="0 0"/></pointModel></object>\n</scene>')
+    proc = run(['splat', 'instant', bad, '-o', out])
+    assert proc.returncode == 1 and f'{bad}:3' in proc.stderr, proc.stderr
+    sphere = tmp_path / 'sphere.xml'
+    sphere.write_text('<scene><camera width="8" height="8"/><object name="ball"><sphere radius="1"/></object></scene>')
+    proc = run(['splat', 'accum', sphere, '-o', out])
+    assert proc.returncode == 1 and "object 'ball' is an analytic sphere" in proc.stderr, proc.stderr
+    proc = run(['splat', 'instant', sphere, '-o', tmp_path / 'o.png'])
+    assert proc.returncode == 1 and 'OpenEXR' in proc.stderr
+    assert out.read_bytes() == b'keep'
+    assert [p.name for p in tmp_path.iterdir() if p.name.startswith('.') or 'tmp' in p.name] == []
