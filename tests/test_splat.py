@@ -90,6 +90,16 @@ def test_instant_equals_the_ray_tracer_on_random_splat_clouds(tmp_path, seed):
         assert np.abs(img - ref).max() <= ROUNDING, (seed, t)
 
 
+TINY_PAIR = '''<scene>
+  <camera position="0 0 4" lookat="0 0 0" up="0 1 0" fov="45" width="48" height="36"/>
+  <background color="0 0 0"/>
+  <object name="front"><pointModel><splat center="0 0 0" normal="0 0 1" radius="0.0001" color="1 0 0"/></pointModel>
+    <material shading="unlit"/></object>
+  <object name="back"><pointModel><splat center="0 0 -2" normal="0 0 1" radius="0.0001" color="0 0 1"/></pointModel>
+    <material shading="unlit"/></object>
+</scene>'''
+
+
 def test_botsch_filter_gives_a_subpixel_splat_its_2x2_pixels_and_blends_them(tmp_path):
     """Eq. 4.13 (sec. 4.2.3): a splat far below a pixel is accepted where
     d(x, y)^2 / r^2 <= 1 with r = sqrt 2 pixels from its projected centre.
@@ -99,14 +109,7 @@ def test_botsch_filter_gives_a_subpixel_splat_its_2x2_pixels_and_blends_them(tmp
     (visibility pass: the ellipse only), so a second tiny splat far behind
     blends in with the same weight h(sqrt(1/4)): the mean of the colours."""
     scene = tmp_path / 'tiny.xml'
-    scene.write_text('''<scene>
-  <camera position="0 0 4" lookat="0 0 0" up="0 1 0" fov="45" width="48" height="36"/>
-  <background color="0 0 0"/>
-  <object name="front"><pointModel><splat center="0 0 0" normal="0 0 1" radius="0.0001" color="1 0 0"/></pointModel>
-    <material shading="unlit"/></object>
-  <object name="back"><pointModel><splat center="0 0 -2" normal="0 0 1" radius="0.0001" color="0 0 1"/></pointModel>
-    <material shading="unlit"/></object>
-</scene>''')
+    scene.write_text(TINY_PAIR)
     none, _ = splat(['instant', scene, '--filter', 'none'], tmp_path / 'n.exr')
     assert not none[..., 3].any(), 'the reconstruction kernel alone misses every pixel centre'
     img, hdr = splat(['instant', scene, '--filter', 'botsch'], tmp_path / 'b.exr')
@@ -115,6 +118,27 @@ def test_botsch_filter_gives_a_subpixel_splat_its_2x2_pixels_and_blends_them(tmp
     for y, x in covered:
         assert np.allclose(img[y, x], [0.5, 0, 0.5, 1], atol=1e-6)
     assert 'filter=botsch' in hdr['refrender:methodParameters']
+
+
+def test_ewa_filter_weighs_a_subpixel_splat_by_its_projected_area(tmp_path):
+    """Ren, Pfister, Zwicker 2002, eq. 5/7: a splat far below a pixel becomes
+    |J| G_I(x - m), the screen low-pass scaled by its projected area |J| (the
+    reconstruction kernel's own variance is negligible at radius 1e-4). Cut
+    at the kernel's 1 / sigma = 2 standard deviations, it covers the pixel
+    centres within 2 pixels of (24, 18): the 12 at offsets (+-1/2, +-1/2),
+    (+-3/2, +-1/2), (+-1/2, +-3/2). Two such splats at distances 4 and 6 on
+    one line of sight blend with weights 1/4^2 : 1/6^2 = 36 : 16."""
+    scene = tmp_path / 'tiny.xml'
+    scene.write_text(TINY_PAIR)
+    img, hdr = splat(['instant', scene, '--filter', 'ewa'], tmp_path / 'e.exr')
+    covered = sorted(map(tuple, np.argwhere(img[..., 3] > 0)))
+    want = sorted((18 + dy, 24 + dx) for dx in range(-2, 2) for dy in range(-2, 2)
+                  if (dx + 0.5) ** 2 + (dy + 0.5) ** 2 <= 4)
+    assert covered == want and len(want) == 12
+    red = 36 / 52
+    for y, x in covered:
+        assert np.allclose(img[y, x], [red, 0, 1 - red, 1], atol=1e-4), img[y, x]
+    assert 'filter=ewa' in hdr['refrender:methodParameters']
 
 
 def nframe_average(scene, n, tmp_path, res=RES, shutter=(0.0, 1.0)):
@@ -189,7 +213,7 @@ def test_bucket_smears_opaque_and_less_with_more_buckets(tmp_path):
     (['bucket', 'S', '--samples', 2, '--buckets', 3], '--buckets 3: at most --samples (2)'),
     (['instant', 'S', '--samples', 4], 'instant splats one instant'),
     (['accum', 'S', '--time', 0.5], '--time is the instant'),
-    (['instant', 'S', '--filter', 'ewa'], "--filter: expected none or botsch, got 'ewa'"),
+    (['instant', 'S', '--filter', 'gauss'], "--filter: expected none, botsch or ewa, got 'gauss'"),
     (['accum', 'S', '--times', 'halton'], "--times: expected midpoint, stratified or random"),
     (['volumetric', 'S', '--filter', 'botsch'], 'no --buckets or --filter'),
     (['instant', 'S', '--alpha', 'thesis'], '--alpha and --sigma-t are for volumetric'),

@@ -36,7 +36,8 @@ static void splat_usage(FILE *f)
 "              Gaussian along its velocity (3.6.3, 4.1.2, 4.2.2, App. C), depth\n"
 "              tested at its source point, shaded per kernel; still cameras only\n"
 "Options:\n"
-"  --filter F         none (default) or botsch: the EWA approximation, eq. 4.13\n"
+"  --filter F         none (default), botsch (the EWA approximation, eq. 4.13) or\n"
+"                     ewa (Ren, Pfister, Zwicker 2002, eq. 7, per-pixel normalised)\n"
 "  --time T           instant: the time splatted (default: the shutter's middle)\n"
 "  --samples N        accum, bucket, volumetric: instants (default 10;\n"
 "                     volumetric 1)\n"
@@ -85,13 +86,13 @@ static int parse_choice(const char *opt, const char *arg, const char *const *nam
 
 static int parse_option(int c, const char *arg, splat_options *o, rr_error *err)
 {
-    static const char *const filters[] = {"none", "botsch"}, *const times[] = {"midpoint", "stratified", "random"};
+    static const char *const filters[] = {"none", "botsch", "ewa"}, *const times[] = {"midpoint", "stratified", "random"};
     static const char *const alphas[] = {"thesis", "normalized"};
     int v = 0;
     switch (c) {
     case OPT_FILTER:
         o->filter_set = 1;
-        return parse_choice("--filter", arg, filters, 2, &v, err) ? -1 : (o->set.filter = v, 0);
+        return parse_choice("--filter", arg, filters, 3, &v, err) ? -1 : (o->set.filter = v, 0);
     case OPT_ALPHA:
         o->alpha_set = 1;
         return parse_choice("--alpha", arg, alphas, 2, &v, err) ? -1 : (o->set.alpha = v, 0);

@@ -69,6 +69,9 @@ typedef struct {
     int x0, x1, y0, y1;  /* footprint: pixels x0 <= x <= x1, y0 <= y <= y1 */
     double cx, cy;       /* projected centre (raster), for the screen-space filter */
     int centre_valid;
+    /* --filter ewa: the inverse of V = sigma^2 I + J^-1 J^-T (xx, xy, yy) and 1 / (2 pi sqrt |V|) */
+    double vi[3], gauss_norm;
+    int ewa_ok;
 } placed_splat;
 
 int splat_project(const camera_view *v, vec3 p, double *x, double *y)
@@ -118,10 +121,43 @@ void splat_footprint_of(const splat_frame *f, const camera_view *v, const vec3 c
     pixels_of(f, lo, hi, box);
 }
 
+/* Ren, Pfister, Zwicker 2002, sec. 5.2: the Jacobian J of the projection
+ * from the splat's parameters (a, b) (the point c + a u + b v) to raster
+ * coordinates at its centre, then their eq. 7's object-space resampling
+ * filter G_V, V = V^r + J^-1 J^-T with V^r = sigma^2 I (our kernel
+ * exp(-r^2 / (2 sigma^2)) is G_{sigma^2 I} up to a factor every splat
+ * shares, which the per-pixel normalisation removes). Returns the raster
+ * half-extents of the screen-space filter J V^r J^T + I (eq. 5) at the
+ * kernel's cutoff r = 1, i.e. 1 / sigma standard deviations. */
+static void ewa_setup(const splat_frame *f, const camera_view *v, placed_splat *p, double half[2])
+{
+    vec3 u, w, c = xform_point(&p->xf, v3(p->o->model.geom[p->i].center[0], p->o->model.geom[p->i].center[1],
+                                             p->o->model.geom[p->i].center[2]));
+    splat_geom_axes(&p->o->model.geom[p->i], &u, &w);
+    vec3 ax[2] = {xform_vector(&p->xf, u), xform_vector(&p->xf, w)}, d = v3_sub(c, v->position);
+    double z = v3_dot(d, v->axis[2]), J[2][2], s2 = f->sc->kernel_sigma * f->sc->kernel_sigma;
+    for (int j = 0; j < 2; j++) {
+        double az = v3_dot(ax[j], v->axis[2]);
+        J[0][j] = v->fx * (v3_dot(ax[j], v->axis[0]) * z - v3_dot(d, v->axis[0]) * az) / (z * z);
+        J[1][j] = v->fy * (v3_dot(ax[j], v->axis[1]) * z - v3_dot(d, v->axis[1]) * az) / (z * z);
+    }
+    /* J^-1 J^-T = (J^T J)^-1 */
+    double m00 = J[0][0] * J[0][0] + J[1][0] * J[1][0], m01 = J[0][0] * J[0][1] + J[1][0] * J[1][1];
+    double m11 = J[0][1] * J[0][1] + J[1][1] * J[1][1], det = m00 * m11 - m01 * m01;
+    p->ewa_ok = z > 0 && det > 1e-12 * (m00 * m11) && det > 0;
+    half[0] = sqrt(s2 * (J[0][0] * J[0][0] + J[0][1] * J[0][1]) + 1) / f->sc->kernel_sigma;
+    half[1] = sqrt(s2 * (J[1][0] * J[1][0] + J[1][1] * J[1][1]) + 1) / f->sc->kernel_sigma;
+    if (!p->ewa_ok)
+        return;
+    double v00 = s2 + m11 / det, v01 = -m01 / det, v11 = s2 + m00 / det, dv = v00 * v11 - v01 * v01;
+    p->vi[0] = v11 / dv, p->vi[1] = -v01 / dv, p->vi[2] = v00 / dv;
+    p->gauss_norm = 1.0 / (2.0 * M_PI * sqrt(dv));
+}
+
 /* Thesis sec. 4.2.1: the footprint is the projection of the splat's
  * bounds (its object-space box, placed at t); with the EWA approximation
  * (sec. 4.2.3) it also holds the disc of radius sqrt 2 about the projected
- * centre. */
+ * centre; with the EWA filter the screen-space filter's box (ewa_setup). */
 static void footprint(const splat_frame *f, const camera_view *v, placed_splat *p)
 {
     const float *c = p->o->model.geom[p->i].center, *e = &p->o->model.extent[3 * p->i];
@@ -136,9 +172,12 @@ static void footprint(const splat_frame *f, const camera_view *v, placed_splat *
         p->x0 = p->y0 = 0, p->x1 = f->width - 1, p->y1 = f->height - 1;
         return;
     }
-    if (f->filter == SPLAT_FILTER_BOTSCH && p->centre_valid) {
-        lo[0] = fmin(lo[0], p->cx - M_SQRT2), hi[0] = fmax(hi[0], p->cx + M_SQRT2);
-        lo[1] = fmin(lo[1], p->cy - M_SQRT2), hi[1] = fmax(hi[1], p->cy + M_SQRT2);
+    double half[2] = {M_SQRT2, M_SQRT2};
+    if (f->filter == SPLAT_FILTER_EWA)
+        ewa_setup(f, v, p, half);
+    if (f->filter != SPLAT_FILTER_NONE && p->centre_valid) {
+        lo[0] = fmin(lo[0], p->cx - half[0]), hi[0] = fmax(hi[0], p->cx + half[0]);
+        lo[1] = fmin(lo[1], p->cy - half[1]), hi[1] = fmax(hi[1], p->cy + half[1]);
     }
     pixels_of(f, lo, hi, box);
     p->x0 = box[0], p->x1 = box[1], p->y0 = box[2], p->y1 = box[3];
@@ -149,9 +188,10 @@ static void footprint(const splat_frame *f, const camera_view *v, placed_splat *
  * its depth t and squared kernel radius r2 (> 1 outside the ellipse). */
 typedef struct {
     float t, r2, odir[3];
+    float ab[2]; /* the crossing's splat parameters (--filter ewa) */
 } fragment;
 
-static int fragment_at(const placed_splat *p, vec3 org, vec3 dir, fragment *fr)
+static int fragment_at(const splat_frame *f, const placed_splat *p, vec3 org, vec3 dir, fragment *fr)
 {
     vec3 o = xform_inverse_point(&p->xf, org), d = xform_inverse_vector(&p->xf, dir);
     const float of[3] = {(float)o.x, (float)o.y, (float)o.z};
@@ -161,6 +201,8 @@ static int fragment_at(const placed_splat *p, vec3 org, vec3 dir, fragment *fr)
     if (!splat_depth_f(g->center, g->plane_normal, of, fr->odir, co, &denom, &fr->t) || !(fr->t >= 0.0f))
         return 0; /* Embree's rays start at tnear 0 */
     fr->r2 = splat_radius2_f(g->dual_u, g->dual_v, co, fr->odir, fr->t);
+    if (f->filter == SPLAT_FILTER_EWA)
+        splat_coords_f(g->dual_u, g->dual_v, co, fr->odir, fr->t, fr->ab);
     return 1;
 }
 
@@ -182,7 +224,7 @@ static void raster(splat_frame *f, double t, fragment_fn *fn)
                     size_t px = (size_t)y * f->width + x;
                     fragment fr;
                     f->fragments++;
-                    if (fragment_at(&p, f->org[px], f->dir[px], &fr))
+                    if (fragment_at(f, &p, f->org[px], f->dir[px], &fr))
                         fn(f, &p, px, &fr, t);
                 }
         }
@@ -211,18 +253,34 @@ static double filtered_r2(const splat_frame *f, const placed_splat *p, size_t px
     return fmin((dx * dx + dy * dy) / 2.0, fr->r2);
 }
 
+/* A fragment's weight, 0 when the filter rejects it: the kernel h(r~) (none,
+ * botsch), or Ren et al.'s eq. 7 G_V(u) at the crossing's parameters u,
+ * cut where u^T V^-1 u > 1 / sigma^2 (the kernel's own cutoff r = 1). */
+static double fragment_weight(const splat_frame *f, const placed_splat *p, size_t px, const fragment *fr)
+{
+    if (f->filter != SPLAT_FILTER_EWA) {
+        double r2 = filtered_r2(f, p, px, fr);
+        return r2 <= 1.0 ? splat_kernel_weight(r2, f->sc->kernel_sigma) : 0.0;
+    }
+    if (!p->ewa_ok)
+        return 0.0;
+    double a = fr->ab[0], b = fr->ab[1], q = p->vi[0] * a * a + 2 * p->vi[1] * a * b + p->vi[2] * b * b;
+    double sigma = f->sc->kernel_sigma;
+    return q * sigma * sigma <= 1.0 ? p->gauss_norm * exp(-0.5 * q) : 0.0;
+}
+
 /* Attribute pass (sec. 4.1.1, eq. 4.3): a fragment within epsilon of the
  * depth buffer adds its kernel-weighted colour, normal and material. */
 static void attribute_fragment(splat_frame *f, const placed_splat *p, size_t px, const fragment *fr, double t)
 {
-    double r2 = filtered_r2(f, p, px, fr);
-    if (!(r2 <= 1.0) || (isfinite(f->depth[px]) && !kbuffer_within(fr->t, f->depth[px], (float)f->sc->epsilon)))
+    double weight = fragment_weight(f, p, px, fr);
+    if (!(weight > 0) || (isfinite(f->depth[px]) && !kbuffer_within(fr->t, f->depth[px], (float)f->sc->epsilon)))
         return;
     const float *n = pointmodel_normal(&p->o->model, p->i);
     /* as accel.c's accept_hit: the normal facing the eye, moved to world space */
     vec3 wn = xform_normal(&p->xf, normal_facing_eye(v3(n[0], n[1], n[2]), v3(fr->odir[0], fr->odir[1], fr->odir[2])));
     const float wnf[3] = {(float)wn.x, (float)wn.y, (float)wn.z};
-    float w = (float)splat_kernel_weight(r2, f->sc->kernel_sigma); /* as the k-buffer stores it */
+    float w = (float)weight; /* as the k-buffer stores it */
     shade_sums_add(&f->sums[px], &p->o->mat, pointmodel_color(&p->o->model, p->i), wnf, w);
     if (fr->t < f->attr_depth[px])
         f->attr_depth[px] = fr->t, f->attr_time[px] = t;

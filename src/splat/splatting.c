@@ -11,7 +11,10 @@ const char *splat_method_name(splat_method m)
     return m == SPLAT_ACCUM ? "accum" : m == SPLAT_BUCKET ? "bucket" : m == SPLAT_VOLUMETRIC ? "volumetric" : "instant";
 }
 
-const char *splat_filter_name(splat_filter f) { return f == SPLAT_FILTER_BOTSCH ? "botsch" : "none"; }
+const char *splat_filter_name(splat_filter f)
+{
+    return f == SPLAT_FILTER_BOTSCH ? "botsch" : f == SPLAT_FILTER_EWA ? "ewa" : "none";
+}
 
 const char *splat_alpha_name(splat_alpha a) { return a == SPLAT_ALPHA_NORMALIZED ? "normalized" : "thesis"; }
 

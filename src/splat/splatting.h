@@ -14,8 +14,10 @@
 
 typedef enum { SPLAT_INSTANT, SPLAT_ACCUM, SPLAT_BUCKET, SPLAT_VOLUMETRIC } splat_method;
 /* none: the reconstruction kernel only; botsch: the EWA approximation of
- * thesis sec. 4.2.3, eq. 4.13 (screen-space radius sqrt 2, attribute pass only). */
-typedef enum { SPLAT_FILTER_NONE, SPLAT_FILTER_BOTSCH } splat_filter;
+ * thesis sec. 4.2.3, eq. 4.13 (screen-space radius sqrt 2, attribute pass
+ * only); ewa: Ren, Pfister, Zwicker 2002's object-space EWA resampling
+ * filter (their eq. 7) with per-pixel normalisation. */
+typedef enum { SPLAT_FILTER_NONE, SPLAT_FILTER_BOTSCH, SPLAT_FILTER_EWA } splat_filter;
 /* Where the N instants lie in the shutter (the thesis does not say):
  * midpoint (k + 1/2) / N as scripts/nframe_average.py, stratified
  * (k + u_k) / N, random u_k (sorted). */

@@ -50,21 +50,6 @@ static vec3 mat_vec(const double m[3][3], vec3 v)
               m[2][0] * v.x + m[2][1] * v.y + m[2][2] * v.z);
 }
 
-/* The splat's tangent axes u, v from its intersection form: rows du, dv, n
- * are the dual basis of (u, v, n) (surfels/splat.h), so the axes are the
- * columns of that matrix's inverse. */
-static void splat_axes(const splat_geom *g, vec3 *u, vec3 *v)
-{
-    double m[3][3], mi[3][3];
-    for (int k = 0; k < 3; k++)
-        m[0][k] = g->dual_u[k], m[1][k] = g->dual_v[k], m[2][k] = g->plane_normal[k];
-    if (!inverse3(m, mi)) { /* splat_geom_init refused such splats */
-        *u = *v = v3(0, 0, 0);
-        return;
-    }
-    *u = v3(mi[0][0], mi[1][0], mi[2][0]), *v = v3(mi[0][1], mi[1][1], mi[2][1]);
-}
-
 /* Sec. 3.6.3 and App. C: the splat's 2D Gaussian convolved with a 1D
  * Gaussian along its instantaneous velocity is the Gaussian of the summed
  * covariances (exact on the CPU; the GPU eigen-solver of C.2 failed):
@@ -78,7 +63,7 @@ static int make_kernel(const scene_object *o, size_t i, const xform *xf, const x
 {
     const splat_geom *g = &o->model.geom[i];
     vec3 u, v, c = v3(g->center[0], g->center[1], g->center[2]);
-    splat_axes(g, &u, &v);
+    splat_geom_axes(g, &u, &v);
     u = xform_vector(xf, u), v = xform_vector(xf, v);
     k->c = xform_point(xf, c);
     k->n = v3_normalize(v3_cross(u, v));
