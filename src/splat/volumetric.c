@@ -11,7 +11,7 @@ typedef struct {
     vec3 c, n, vel;         /* centre, unit plane normal, instantaneous velocity (world) */
     vec3 shading_n, color;  /* object-space shading normal (world after xform_normal), colour */
     double S0[3][3];        /* the still splat's covariance a0 a0^T + a1 a1^T + (1e-3 r)^2 n n^T */
-    double Si[3][3];        /* inverse of S = S0 + w w^T */
+    double S[3][3], Si[3][3]; /* S = S0 + w w^T and its inverse */
     vec3 w;                 /* the 1D Gaussian's axis along the velocity */
     const material *mat;
     const xform *xf;
@@ -70,28 +70,25 @@ static int make_kernel(const scene_object *o, size_t i, const xform *xf, const x
     /* instantaneous velocity: central difference of the centre's path */
     k->vel = v3_scale(v3_sub(xform_point(after, c), xform_point(before, c)), 0.5 / h);
     k->w = v3_scale(k->vel, dt * sigma_t / sigma);
-    double r = fmax(v3_len(u), v3_len(v)), S[3][3] = {{0}};
+    double r = fmax(v3_len(u), v3_len(v));
     for (int a = 0; a < 3; a++)
         for (int b = 0; b < 3; b++)
             k->S0[a][b] = 0;
     outer_add(k->S0, u, 1), outer_add(k->S0, v, 1), outer_add(k->S0, k->n, 1e-6 * r * r);
     for (int a = 0; a < 3; a++)
         for (int b = 0; b < 3; b++)
-            S[a][b] = k->S0[a][b];
-    outer_add(S, k->w, 1);
+            k->S[a][b] = k->S0[a][b];
+    outer_add(k->S, k->w, 1);
     const float *sn = pointmodel_normal(&o->model, i), *col = pointmodel_color(&o->model, i);
     k->shading_n = v3(sn[0], sn[1], sn[2]), k->color = v3(col[0], col[1], col[2]);
     k->mat = &o->mat, k->xf = xf;
-    return inverse3(S, k->Si);
+    return inverse3(k->S, k->Si);
 }
 
-/* The ellipsoid's axis-aligned box: half extents sqrt(S_jj) (S = Si^-1). */
+/* The ellipsoid's axis-aligned box: half extents sqrt(S_jj). */
 static void kernel_corners(const kernel *k, vec3 corners[8])
 {
-    double S[3][3];
-    if (!inverse3(k->Si, S))
-        S[0][0] = S[1][1] = S[2][2] = 0;
-    vec3 e = v3(sqrt(fabs(S[0][0])), sqrt(fabs(S[1][1])), sqrt(fabs(S[2][2])));
+    vec3 e = v3(sqrt(k->S[0][0]), sqrt(k->S[1][1]), sqrt(k->S[2][2]));
     for (int j = 0; j < 8; j++)
         corners[j] = v3(k->c.x + (j & 1 ? e.x : -e.x), k->c.y + (j & 2 ? e.y : -e.y), k->c.z + (j & 4 ? e.z : -e.z));
 }
