@@ -27,7 +27,7 @@ endif
 # The user's CFLAGS/CXXFLAGS/CPPFLAGS come last (make CFLAGS=-O0 still
 # builds); -MMD -MP track header dependencies.
 INCLUDES  := -I/usr/include/embree3 -I/usr/include/OpenEXR -I/usr/include/libxml2
-RR_CPPFLAGS = -D_GNU_SOURCE -Isrc $(INCLUDES) -DRR_SOURCE_SCENE='"$(CURDIR)/scenes/default.xml"' \
+RR_CPPFLAGS = -D_GNU_SOURCE -Isrc $(INCLUDES) $(BUILD_ID_FLAG) -DRR_SOURCE_SCENE='"$(CURDIR)/scenes/default.xml"' \
               -DRR_SOURCE_DIR='"$(CURDIR)"' -MMD -MP $(CPPFLAGS)
 # -ffp-contract=off: the Gaussian kernels in AVX2 lanes (src/core/lanes.h) give
 # the scalar path's answers bit for bit only if neither is fused into FMA (-std=c11
@@ -58,7 +58,7 @@ TEST_OBJS := $(TEST_SRCS:tests/%.c=$(BUILD)/tests/%.o) $(BUILD)/tests/harness.o 
 BIN      := $(BUILD)/refrender
 TESTBIN  := $(BUILD)/unit_tests
 
-.PHONY: all deps demo test test-build test-c test-py test-cluster test-fuzz fuzz bench bench-time thesis-table clean clean-models scenes references gallery
+.PHONY: all deps demo test test-build test-c test-py test-cluster test-fuzz fuzz bench bench-time bench-samplers scale-models thesis-table clean clean-models scenes references gallery
 all: $(BIN) $(BUILD)/refrender-bench
 
 # An object without its .d file (built before dependency tracking, or the
@@ -75,6 +75,24 @@ $(BUILD)/cmd/%.o: src/cmd/%.c $(BUILD)/cmd/%.d | $(BUILD)
 $(PREVIEW_SO): src/io/preview.cpp $(BUILD)/io/preview-so.d | $(BUILD)
 	@mkdir -p $(BUILD)/io
 	$(CXX) $(RR_CPPFLAGS) $(RR_CXXFLAGS) -MF $(BUILD)/io/preview-so.d -fPIC -shared $< -o $@ $(SANLD) $(PREVIEW_LIBS)
+# The build's identity (refrender:build, part of a render's identity: a
+# state from another build is not merged or resumed): the SHA-256 of the
+# code under src/, "sha256sum FILE" lines in C-locale path order, hashed
+# again. Paths and contents only, no times or flags, so the same sources give
+# the same id in every build directory. The id file is replaced only when the
+# id changes (a touched file reruns this recipe but rebuilds nothing), and
+# only render_attrs.o is compiled with it (-DRR_BUILD_ID).
+BUILD_ID_SRCS := $(sort $(wildcard src/*/*.c src/*/*.h src/*/*.cpp))
+define build_id_file
+@mkdir -p $(@D)
+@(cd src && LC_ALL=C sha256sum $(BUILD_ID_SRCS:src/%=%) | sha256sum | cut -d' ' -f1) > $@.tmp && \
+    { cmp -s $@.tmp $@ && rm -f $@.tmp || mv -f $@.tmp $@; }
+endef
+BUILD_ID_FLAG :=
+$(BUILD)/build_id: $(BUILD_ID_SRCS)
+	$(build_id_file)
+$(BUILD)/io/render_attrs.o: $(BUILD)/build_id
+$(BUILD)/io/render_attrs.o: BUILD_ID_FLAG = -DRR_BUILD_ID='"$(file <$(BUILD)/build_id)"'
 $(BUILD)/tests/%.o: tests/%.c $(BUILD)/tests/%.d | $(BUILD)
 	$(CC) $(RR_CPPFLAGS) $(RR_CFLAGS) -Isrc -c $< -o $@
 	@touch $@
@@ -110,7 +128,7 @@ $(BUILD)/libfaultinject.so: tests/faultinject.c | $(BUILD)
 # pytest-xdist workers (python3-pytest-xdist): the suite's renders are
 # single processes, so one worker a core halves its time on 2 cores
 TEST_JOBS ?= $(shell nproc)
-test-py: $(BIN) $(TESTBIN) $(BUILD)/libfaultinject.so scenes
+test-py: $(BIN) $(TESTBIN) $(BUILD)/refrender-bench $(BUILD)/libfaultinject.so scenes
 	REFRENDER=$(CURDIR)/$(BIN) UNIT_TESTS=$(CURDIR)/$(TESTBIN) FAULTINJECT=$(CURDIR)/$(BUILD)/libfaultinject.so \
 	    $(PYTHON) -m pytest -q -n $(TEST_JOBS) tests
 
@@ -150,7 +168,7 @@ FUZZ_OBJS    := $(LIB_SRCS:%=$(FUZZ_DIR)/%.o)
 
 $(FUZZ_DIR)/%.o: src/%.c $(FUZZ_DIR)/%.d
 	@mkdir -p $(@D)
-	clang $(FUZZ_CFLAGS) -MMD -MP -c $< -o $@
+	clang $(FUZZ_CFLAGS) $(BUILD_ID_FLAG) -MMD -MP -c $< -o $@
 	@touch $@
 $(FUZZ_DIR)/fuzz_%.o: tests/fuzz/fuzz_%.c $(FUZZ_DIR)/fuzz_%.d
 	@mkdir -p $(FUZZ_DIR)
@@ -161,6 +179,10 @@ $(FUZZ_DIR)/render_check.o: tests/fuzz/render_check.c $(FUZZ_DIR)/render_check.d
 	@mkdir -p $(FUZZ_DIR)
 	clang $(FUZZ_CFLAGS) -MMD -MP -Isrc -c $< -o $@
 	@touch $@
+$(FUZZ_DIR)/build_id: $(BUILD_ID_SRCS)
+	$(build_id_file)
+$(FUZZ_DIR)/io/render_attrs.o: $(FUZZ_DIR)/build_id
+$(FUZZ_DIR)/io/render_attrs.o: BUILD_ID_FLAG = -DRR_BUILD_ID='"$(file <$(FUZZ_DIR)/build_id)"'
 FUZZ_DEPS := $(FUZZ_OBJS:.o=.d) $(FUZZ_TARGETS:%=$(FUZZ_DIR)/fuzz_%.d) $(FUZZ_DIR)/render_check.d
 $(FUZZ_DEPS):
 -include $(wildcard $(FUZZ_DEPS))
@@ -169,7 +191,7 @@ $(FUZZ_DIR)/fuzz_%: $(FUZZ_DIR)/fuzz_%.o $(FUZZ_DIR)/render_check.o $(FUZZ_OBJS)
 .SECONDARY: $(FUZZ_OBJS) $(FUZZ_TARGETS:%=$(FUZZ_DIR)/fuzz_%.o) $(FUZZ_DIR)/render_check.o
 
 # (after FUZZ_TARGETS: a rule's prerequisites are expanded where it is read)
-test-build: $(BIN) $(TESTBIN) $(BUILD)/libfaultinject.so $(FUZZ_TARGETS:%=$(FUZZ_DIR)/fuzz_%) scenes
+test-build: $(BIN) $(TESTBIN) $(BUILD)/refrender-bench $(BUILD)/libfaultinject.so $(FUZZ_TARGETS:%=$(FUZZ_DIR)/fuzz_%) scenes
 test-fuzz: $(FUZZ_TARGETS:%=$(FUZZ_DIR)/fuzz_%)
 	for t in $(FUZZ_TARGETS); do \
 	    $(FUZZ_DIR)/fuzz_$$t -runs=0 -rss_limit_mb=8192 tests/fuzz/corpus/$$t 2>$(FUZZ_DIR)/replay_$$t.log \
@@ -192,7 +214,7 @@ fuzz: $(FUZZ_TARGETS:%=$(FUZZ_DIR)/fuzz_%)
 bench: $(BUILD)/refrender-bench
 	mkdir -p out
 	$(BUILD)/refrender-bench out/bench.csv $(BENCH_ARGS)
-	@if [ "$(BENCH_ARGS)" != quick ]; then $(MAKE) --no-print-directory bench-time; fi
+	@if [ "$(BENCH_ARGS)" != quick ]; then $(MAKE) --no-print-directory bench-time bench-samplers; fi
 
 # Time to equal error, --time-integration exact against sampled time
 # (src/EXACT.md); part of `make bench` except in quick mode.
@@ -205,6 +227,23 @@ bench-time: $(BIN) scenes
 # reference_images/thesis/thesis_table.{csv,tex,png}.
 thesis-table: $(BIN) scenes
 	$(PYTHON) scripts/thesis_table.py --out reference_images/thesis --refrender $(BIN)
+
+# The samplers' convergence on the suite's, the Gaussian examples' and the
+# benchmark-scale view, and the time to 1, 0.1 and 0.01 of an 8-bit level on
+# the benchmark-scale view (scripts/sampler_study.py; src/cmd/BENCH.md).
+# Part of `make bench` except in quick mode.
+bench-samplers: $(BIN) scenes scale-models
+	$(PYTHON) scripts/sampler_study.py convergence --out out/samplers
+	$(PYTHON) scripts/sampler_study.py time-to-error --out out/samplers
+
+# scenes/bench/scale.xml's models: refrender-bench's scale row as files
+# (three 2DGS spheres of 1M Gaussians, SH degree 3; 730 MB, not committed)
+SCALE_RADII := 1 0.75 0.5
+scale-models: $(BIN)
+	mkdir -p scenes/models
+	i=0; for r in $(SCALE_RADII); do f=scenes/models/scale_layer$$i.ply; \
+	    [ -s $$f ] || $(BIN) gen sphere --gaussians 2dgs --sh-degree 3 --count 1000000 --radius $$r -o $$f || exit 1; \
+	    i=$$((i + 1)); done
 
 # The scene suite (scenes/*.xml; README "Scene suite"). Scanned models come
 # from Debian packages and are converted into scenes/models/ (not committed).

@@ -16,6 +16,7 @@ file).
 import argparse
 import csv
 import html
+import io
 import json
 import math
 import os
@@ -28,6 +29,7 @@ pydeps.require(*pydeps.IMAGE_MODULES, "matplotlib")  # a missing package: one li
 import numpy as np
 
 import flip
+import safefiles
 import sequences
 from imagecompare import (CompareError, basic_metrics, composite, read_image, ssim_map,
                           stderr_fraction)
@@ -201,7 +203,9 @@ def schema(args):
             "HDR-FLIP", f">{args.k_sigma:g}SE", "SE source", "notes"])
 
 
-def write_machine_readable(rows, json_path, csv_path, columns):
+def write_machine_readable(rows, json_path, csv_path, columns, inputs):
+    """--json and --csv: '-' is stdout, a file is written whole or not at all
+    (safefiles), never over an input."""
     rows = [{c: r.get(c) for c in columns} for r in rows]
     if json_path:
         # strict JSON has no Infinity: an infinite PSNR (identical images) is "inf"
@@ -210,15 +214,16 @@ def write_machine_readable(rows, json_path, csv_path, columns):
         if json_path == "-":
             print(text)
         else:
-            with open(json_path, "w") as f:
-                f.write(text + "\n")
+            safefiles.write_text(json_path, text + "\n", inputs)
     if csv_path:
-        f = sys.stdout if csv_path == "-" else open(csv_path, "w", newline="")
-        w = csv.DictWriter(f, fieldnames=columns)
+        out = io.StringIO(newline="")
+        w = csv.DictWriter(out, fieldnames=columns)
         w.writeheader()
         w.writerows([{k: ("" if v is None else v) for k, v in r.items()} for r in rows])
-        if f is not sys.stdout:
-            f.close()
+        if csv_path == "-":
+            sys.stdout.write(out.getvalue())
+        else:
+            safefiles.write_text(csv_path, out.getvalue(), inputs)
 
 
 def test_noise(args, shape):
@@ -306,7 +311,9 @@ def latex_rows(rows, summary_only):
     return sorted((r for r in rows if kind(r) or not summary_only), key=kind)
 
 
-def compare(args):
+def plan(args):
+    """(labels, [(frame or None, reference path, [test paths])]): what will
+    be read, known before any image is."""
     if args.latex_summary and not (args.latex and sequences.is_sequence(args.reference)):
         raise CompareError("--latex-summary needs --latex and a sequence (a pattern such as 'gt.%04d.exr' "
                            "or a directory): a single image has no mean or worst frame")
@@ -314,33 +321,59 @@ def compare(args):
     if not sequences.is_sequence(args.reference):
         if args.frames:
             raise CompareError("--frames needs a sequence: a pattern such as 'gt.%04d.exr' or a directory")
-        return compare_images(args, args.reference, args.tests, labels)
+        return labels, [(None, args.reference, args.tests)]
     frames = sequences.parse_frames(args.frames) if args.frames else None
+    return labels, sequences.pairs(args.reference, args.tests, frames)
+
+
+def checked_inputs(args, work):
+    """The input files (each refused unless a regular file, so that a FIFO
+    cannot block the run), and every output checked against them before
+    anything is computed: an output may not overwrite an input."""
+    paths = [p for _, ref, tests in work for p in (ref, *tests)]
+    paths += ([args.mask] if args.mask else []) + (args.test_noise.split(",") if args.test_noise else [])
+    for p in paths:
+        if not os.path.exists(p):
+            raise CompareError(f"{p}: no such file")
+        safefiles.require_regular(p)
+    inputs = safefiles.Inputs(paths)
+    for option, path in (("--json", args.json), ("--csv", args.csv), ("--latex", args.latex)):
+        if path and (path != "-" or option == "--latex"):
+            inputs.check_output(path, option)
+    for option, path in (("--maps", args.maps), ("--heatmaps", args.heatmaps), ("--report", args.report)):
+        if path:
+            inputs.check_directory(path, option)
+    return inputs
+
+
+def compare(args, labels, work):
     rows, maps = [], []
-    for frame, ref, tests in sequences.pairs(args.reference, args.tests, frames):
+    for frame, ref, tests in work:
         r, m = compare_images(args, ref, tests, labels, frame)
         rows += r
         maps += m
-    return rows + summarize(rows, labels), maps
+    return (rows if work[0][0] is None else rows + summarize(rows, labels)), maps
 
 
 def main(argv=None):
     args = parse_args(argv if argv is not None else sys.argv[1:])
     try:
-        rows, maps = compare(args)
-    except CompareError as e:
+        labels, work = plan(args)
+        inputs = checked_inputs(args, work)
+        rows, maps = compare(args, labels, work)
+        print(f"metrics space: {args.metrics_space} (FLIP: linear)")
+        print_table(rows)
+        write_machine_readable(rows, args.json, args.csv, schema(args), inputs)
+        if args.latex:
+            import figures  # matplotlib only when figures are asked for
+            figures.latex_table(latex_rows(rows, args.latex_summary), COLUMNS + [f">{args.k_sigma:g}SE"], args.latex,
+                                inputs)
+        write_pictures(args, rows, maps, inputs)
+    except (CompareError, safefiles.FileRefused) as e:
         print(f"compare.py: {e}", file=sys.stderr)
         return 2
-    print(f"metrics space: {args.metrics_space} (FLIP: linear)")
-    print_table(rows)
-    write_machine_readable(rows, args.json, args.csv, schema(args))
-    if args.latex:
-        import figures  # matplotlib only when figures are asked for
-        figures.latex_table(latex_rows(rows, args.latex_summary), COLUMNS + [f">{args.k_sigma:g}SE"], args.latex)
-    try:
-        write_pictures(args, rows, maps)
-    except CompareError as e:
-        print(f"compare.py: {e}", file=sys.stderr)
+    except OSError as e:  # e.g. an output directory that cannot be made
+        print(f"compare.py: {e.filename + ': ' if e.filename else ''}{e.strerror or e}", file=sys.stderr)
         return 2
     return 0
 
@@ -361,7 +394,7 @@ def shared_diff_range(args, diffs):
     return lim or 1.0
 
 
-def write_native_maps(args, maps, diffs, diff_range):
+def write_native_maps(args, maps, diffs, diff_range, inputs):
     import figures
     flip_lo, flip_hi = parse_floats(args.flip_range, 2, "--flip-range")
     if args.map_scale < 1 or args.inset_scale < 1:
@@ -373,26 +406,29 @@ def write_native_maps(args, maps, diffs, diff_range):
             crops.setdefault(label, []).append((window, win))
     for (label, window, _, _, test, flip_map, hdr_map), diff in zip(maps, diffs):
         base = figures._name(label, window)
-        figures.write_map(args.maps, base + "_flip", flip_map, "magma", flip_lo, flip_hi, args.map_scale)
-        figures.write_map(args.maps, base + "_diff", diff, "RdBu_r", -diff_range, diff_range, args.map_scale)
+        figures.write_map(args.maps, base + "_flip", flip_map, "magma", flip_lo, flip_hi, args.map_scale, inputs)
+        figures.write_map(args.maps, base + "_diff", diff, "RdBu_r", -diff_range, diff_range, args.map_scale,
+                          inputs)
         if hdr_map is not None:
-            figures.write_map(args.maps, base + "_hdrflip", hdr_map, "magma", flip_lo, flip_hi, args.map_scale)
+            figures.write_map(args.maps, base + "_hdrflip", hdr_map, "magma", flip_lo, flip_hi, args.map_scale,
+                              inputs)
         if window == "full" and label in crops:
-            figures.write_crops(args.maps, label, test, crops[label], args.inset_scale)
+            figures.write_crops(args.maps, label, test, crops[label], args.inset_scale, inputs)
 
 
-def write_pictures(args, rows, maps):
+def write_pictures(args, rows, maps, inputs):
+    """Each picture is written whole or not at all (safefiles), never over an input."""
     diffs = window_diffs(maps)
     diff_range = shared_diff_range(args, diffs)
     if args.maps:
-        write_native_maps(args, maps, diffs, diff_range)
+        write_native_maps(args, maps, diffs, diff_range, inputs)
     if args.heatmaps or args.report:
         import heatmaps  # matplotlib only when pictures are asked for
         if args.heatmaps:
-            heatmaps.write_all(maps, args.heatmaps, diff_range)
+            heatmaps.write_all(maps, args.heatmaps, diff_range, inputs)
         if args.report:  # the report folder holds its own pictures, viewable offline
-            heatmaps.write_report(rows, heatmaps.write_all(maps, args.report, diff_range), args.report,
-                                  args.reference, args.metrics_space)
+            heatmaps.write_report(rows, heatmaps.write_all(maps, args.report, diff_range, inputs), args.report,
+                                  args.reference, args.metrics_space, inputs)
 
 
 if __name__ == "__main__":

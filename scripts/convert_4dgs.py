@@ -5,14 +5,18 @@ fudan-zvg/4d-gaussian-splatting, read at 63725f21) into a PLY refrender reads.
 usage: convert_4dgs.py CHECKPOINT.pth -o OUT.ply
            --rotation-convention {before-900c592,after-900c592}
            --time_duration START END --prefilter_var V --force_sh_3d {false,true}
+           [--drop-env-map]
 
 The checkpoint is what 4DGS's training saves: torch.save((gaussians.capture(),
-iteration)) (scene/__init__.py:92, train.py:224), a torch zip archive whose
-pickle is read by a restricted unpickler: it may name only
+iteration)) (scene/__init__.py:92, train.py:224), a torch zip archive read by
+torch_checkpoint.py: a restricted unpickler that may name only
 torch._utils._rebuild_tensor_v2, torch._utils._rebuild_parameter(_with_state),
 collections.OrderedDict and torch's typed storage classes (as storage tags);
 every other global is refused naming module.name, and nothing in the pickle is
-called but those, the rebuilders implemented here in numpy. No torch needed.
+called but those, the rebuilders implemented there in numpy. No torch needed.
+Only a regular file is read; every tensor is bounded by its storage and every
+member by its declared size and the archive's size before it is inflated, so
+no checkpoint can make the converter hang or ask for much memory.
 
 The model (file:line at 63725f21)
   capture() (scene/gaussian_model.py:116-136), gaussian_dim 4: [0]
@@ -84,23 +88,36 @@ The conditional covariance is computed in float64 as the inverse of the
 precision block (R diag(s)^-2 R^T)_xyz, equal in exact arithmetic to the
 Schur complement above and positive definite in floating point.
 
-Errors name the file and the entry (capture() index and name, Gaussian index)
-and exit 1; usage errors exit 2; the output appears only when complete.
+Refused, besides what is not a 4DGS rot_4d checkpoint: an empty model;
+scales (_scaling, _scaling_t) beyond +-100 (exp of them is no float32, and the
+float64 conversion would lose the other axes); whatever refrender's reader
+(src/io/gaussian_fdgs_ply.c) then refuses: a value beyond float32, t_var or T
+that is not above 0 as a float32, a mean beyond 1e15 from the origin, exp(scale)
+beyond 1e15; --force_sh_3d true with a checkpoint whose SH count per channel
+is no (d + 1)^2 (a force_sh_3d model holds (max_sh_degree + 1)^2,
+gaussian_model.py:222-224: 48 are time harmonics, trained without it); and a
+model with an env_map (env_map_res > 0: gaussian_renderer/__init__.py:165-178
+composites that background behind the Gaussians, refrender does not) unless
+--drop-env-map says to convert the Gaussians alone.
+
+Errors are one line naming the file and the entry (capture() index and name,
+Gaussian index), exit 1; usage errors exit 2. The output is written to a
+temporary beside it and renamed when complete (mode 0666 less the umask); an
+output that is the checkpoint (however named: a symbolic or hard link too) or
+an existing FIFO, device or directory is refused (scripts/safefiles.py).
 """
 import argparse
-import collections
-import io
 import os
-import pickle
 import sys
-import tempfile
-import zipfile
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-import pydeps  # noqa: E402
+import pydeps
 
 pydeps.require("numpy")
 import numpy as np  # noqa: E402
+
+import safefiles  # noqa: E402
+from torch_checkpoint import CheckpointError as ConvertError, LazyTensor, describe, clip  # noqa: E402
+import torch_checkpoint  # noqa: E402
 
 CONVENTIONS = {
     "before-900c592": "checkpoints trained before fudan-zvg/4d-gaussian-splatting commit 900c592 "
@@ -115,168 +132,9 @@ CAPTURE_NAMES = ["active_sh_degree", "_xyz", "_features_dc", "_features_rest", "
                  "max_radii2D", "xyz_gradient_accum", "t_gradient_accum", "denom", "optimizer.state_dict()",
                  "spatial_lr_scale", "_t", "_scaling_t", "_rotation_r", "rot_4d", "env_map", "active_sh_degree_t"]
 MARGINAL_CUT = 0.05  # forward.cu:334, gaussian_renderer/__init__.py:123: kept where marginal > 0.05
-
-
-class ConvertError(Exception):
-    pass
-
-
-# ---- reading the checkpoint without torch ---------------------------------
-
-class StorageTag:
-    """torch.<T>Storage as a persistent id names it: a dtype, never called."""
-    __slots__ = ("name", "dtype")
-
-    def __init__(self, name, dtype):
-        self.name, self.dtype = name, dtype
-
-    def __call__(self, *args, **kwargs):
-        raise ConvertError(f"the pickle calls torch.{self.name}, which is allowed only as a storage tag")
-
-    def __setstate__(self, state):
-        raise ConvertError(f"the pickle sets the state of torch.{self.name}")
-
-
-STORAGE_DTYPES = {"DoubleStorage": "f8", "FloatStorage": "f4", "HalfStorage": "f2", "LongStorage": "i8",
-                  "IntStorage": "i4", "ShortStorage": "i2", "CharStorage": "i1", "ByteStorage": "u1",
-                  "BoolStorage": "?", "BFloat16Storage": "bf16"}
-
-
-class LazyStorage:
-    """One storage of the archive (data/<key>), read when a tensor needs it."""
-    __slots__ = ("archive", "member", "dtype", "numel", "_data")
-
-    def __init__(self, archive, member, dtype, numel):
-        self.archive, self.member, self.dtype, self.numel, self._data = archive, member, dtype, numel, None
-
-    def __setstate__(self, state):
-        raise ConvertError("the pickle sets the state of a storage")
-
-    def array(self):
-        if self._data is None:
-            try:
-                raw = self.archive.zip.read(self.member)
-            except (KeyError, zipfile.BadZipFile, OSError, EOFError) as e:
-                raise ConvertError(f"storage '{self.member}' cannot be read: {e}") from None
-            if self.dtype == "bf16":  # bfloat16: the high half of a float32
-                u16 = np.frombuffer(raw[:len(raw) // 2 * 2], dtype=self.archive.order + "u2")
-                data = (u16.astype(np.uint32) << 16).view(np.float32)
-            else:
-                data = np.frombuffer(raw, dtype=np.dtype(self.dtype).newbyteorder(self.archive.order))
-            if data.size < self.numel:
-                raise ConvertError(f"storage '{self.member}' holds {data.size} elements, the pickle says "
-                                   f"{self.numel} (truncated archive?)")
-            self._data = data[:self.numel]
-        return self._data
-
-
-class LazyTensor:
-    """torch._utils._rebuild_tensor_v2's tensor: a strided view of a storage, read on demand."""
-    __slots__ = ("storage", "offset", "shape", "stride")
-
-    def __init__(self, storage, offset, shape, stride):
-        self.storage, self.offset, self.shape, self.stride = storage, offset, shape, stride
-
-    def __setstate__(self, state):
-        raise ConvertError("the pickle sets the state of a tensor")
-
-    def numpy(self):
-        data = self.storage.array()
-        if 0 in self.shape:
-            return np.zeros(self.shape, dtype=data.dtype)
-        last = self.offset + sum((n - 1) * s for n, s in zip(self.shape, self.stride))
-        if self.offset < 0 or min(self.stride, default=0) < 0 or last >= data.size:
-            raise ConvertError(f"tensor of shape {self.shape} stride {self.stride} offset {self.offset} "
-                               f"reaches past its storage '{self.storage.member}' of {data.size}")
-        view = np.lib.stride_tricks.as_strided(data[self.offset:], shape=self.shape,
-                                               strides=[s * data.itemsize for s in self.stride], writeable=False)
-        return np.array(view, dtype=np.float64 if data.dtype.kind == "f" else data.dtype)
-
-
-def _ints(value, what):
-    if not isinstance(value, tuple) or not all(type(v) is int for v in value):
-        raise ConvertError(f"_rebuild_tensor_v2: {what} {value!r} is not a tuple of ints")
-    return value
-
-
-def rebuild_tensor_v2(storage, storage_offset, size, stride, requires_grad=False, backward_hooks=None,
-                      metadata=None):
-    if not isinstance(storage, LazyStorage) or type(storage_offset) is not int:
-        raise ConvertError("_rebuild_tensor_v2: its storage is no archive storage")
-    size, stride = _ints(size, "size"), _ints(stride, "stride")
-    if len(size) != len(stride):
-        raise ConvertError(f"_rebuild_tensor_v2: size {size} and stride {stride} differ in length")
-    return LazyTensor(storage, storage_offset, size, stride)
-
-
-def rebuild_parameter(data, requires_grad=False, backward_hooks=None, state=None):
-    if not isinstance(data, LazyTensor):
-        raise ConvertError("_rebuild_parameter: its data is no tensor")
-    return data
-
-
-ALLOWED = {("torch._utils", "_rebuild_tensor_v2"): rebuild_tensor_v2,
-           ("torch._utils", "_rebuild_parameter"): rebuild_parameter,
-           ("torch._utils", "_rebuild_parameter_with_state"): rebuild_parameter,
-           ("collections", "OrderedDict"): collections.OrderedDict}
-ALLOWED.update({("torch", name): StorageTag(name, dtype) for name, dtype in STORAGE_DTYPES.items()})
-
-
-class RestrictedUnpickler(pickle.Unpickler):
-    def __init__(self, data, archive):
-        super().__init__(io.BytesIO(data))
-        self.archive = archive
-
-    def find_class(self, module, name):
-        found = ALLOWED.get((module, name))
-        if found is None:
-            raise ConvertError(f"the pickle references {module}.{name}, which is not on the allow-list "
-                               "(torch tensor rebuilders, storage tags, collections.OrderedDict): refused, "
-                               "nothing was run")
-        return found
-
-    def persistent_load(self, pid):
-        if not (isinstance(pid, tuple) and len(pid) == 5 and pid[0] == "storage" and
-                isinstance(pid[1], StorageTag) and isinstance(pid[2], str) and type(pid[4]) is int and pid[4] >= 0):
-            raise ConvertError(f"unknown persistent id {pid!r:.200} (expected ('storage', torch.<T>Storage, key, "
-                               "location, numel))")
-        return LazyStorage(self.archive, f"{self.archive.prefix}data/{pid[2]}", pid[1].dtype, pid[4])
-
-
-class Archive:
-    def __init__(self, path):
-        with open(path, "rb") as f:
-            head = f.read(4)
-        if head[:1] == b"\x80":
-            raise ConvertError("the legacy torch.save format (torch < 1.6, or _use_new_zipfile_serialization="
-                               "False) is not supported: load and save it again with torch >= 1.6")
-        try:
-            self.zip = zipfile.ZipFile(path)
-            names = self.zip.namelist()
-        except (zipfile.BadZipFile, OSError, EOFError) as e:
-            raise ConvertError(f"not a complete torch zip archive (truncated or damaged?): {e}") from None
-        pickles = [n for n in names if n.endswith("/data.pkl") and n.count("/") == 1]
-        if len(pickles) != 1:
-            raise ConvertError(f"not a torch checkpoint: expected one <name>/data.pkl, found {len(pickles)}")
-        self.prefix = pickles[0][:-len("data.pkl")]
-        self.order = "<"
-        if self.prefix + "byteorder" in names:
-            order = self.zip.read(self.prefix + "byteorder").decode(errors="replace").strip()
-            if order not in ("little", "big"):
-                raise ConvertError(f"byteorder '{order}' is neither little nor big")
-            self.order = "<" if order == "little" else ">"
-
-    def load(self):
-        try:
-            data = self.zip.read(self.prefix + "data.pkl")
-        except (zipfile.BadZipFile, OSError, EOFError) as e:
-            raise ConvertError(f"data.pkl cannot be read (truncated or damaged?): {e}") from None
-        try:
-            return RestrictedUnpickler(data, self).load()
-        except ConvertError:
-            raise
-        except Exception as e:  # a malformed pickle: anything the unpickler raises is the file's fault
-            raise ConvertError(f"data.pkl is not a valid pickle: {type(e).__name__}: {e}") from None
+MAX_LOG_SCALE = 100.0  # |_scaling|, |_scaling_t|: e^100 > FLT_MAX; the float64 products stay far from overflow
+MAX_ABS = 1e15  # refrender's GAUSSIAN_MAX_ABS and GAUSSIAN_MAX_SCALE (src/gaussians/gaussian.h)
+MAX_MESSAGE = 600  # a message's reason, in characters
 
 
 # ---- the model -------------------------------------------------------------
@@ -297,16 +155,17 @@ def entry(capture, index, n=None, shape=None):
         if a.shape != want and not (len(want) == 2 and want[1] == 1 and a.shape == want[:1]):
             raise ConvertError(f"{name} has shape {a.shape}, expected {want} (N = {n} from _xyz)")
         a = a.reshape(want)
-    bad = np.argwhere(~np.isfinite(a))
+    bad = np.argwhere(~np.isfinite(np.atleast_1d(a)))
     if len(bad):
-        raise ConvertError(f"{name} is not finite at Gaussian {bad[0][0]}: {a[tuple(bad[0])]}")
+        raise ConvertError(f"{name} is not finite at Gaussian {bad[0][0]}: {np.atleast_1d(a)[tuple(bad[0])]}")
     return a
 
 
 def small_int(capture, index, low, high):
     v = capture[index]
     if type(v) is not int or not low <= v <= high:
-        raise ConvertError(f"capture()[{index}] {CAPTURE_NAMES[index]} is {v!r}, expected an int in {low}..{high}")
+        raise ConvertError(f"capture()[{index}] {CAPTURE_NAMES[index]} is {describe(v)}, expected an int in "
+                           f"{low}..{high}")
     return v
 
 
@@ -321,9 +180,21 @@ def read_capture(top):
         raise ConvertError(f"capture() has {len(capture)} entries, a gaussian_dim 4 one has 19 "
                            "(scene/gaussian_model.py:116-136)")
     if capture[16] is not True:
-        raise ConvertError(f"capture()[16] rot_4d is {capture[16]!r}: only rot_4d models (every 4DGS config) are "
-                           "supported")
+        raise ConvertError(f"capture()[16] rot_4d is {describe(capture[16])}: only rot_4d models (every 4DGS config) "
+                           "are supported")
+    if type(top[1]) is not int:
+        raise ConvertError(f"the iteration saved with capture() is {describe(top[1])}, not an int (train.py:224)")
     return capture, top[1]
+
+
+def log_scales(capture, index, n, width):
+    """_scaling (N x 3) or _scaling_t (N x 1), within +-MAX_LOG_SCALE (module docstring)."""
+    s = entry(capture, index, n, (None, width))
+    bad = np.argwhere(np.abs(s) > MAX_LOG_SCALE)
+    if len(bad):
+        raise ConvertError(f"capture()[{index}] {CAPTURE_NAMES[index]} is {s[tuple(bad[0])]:g} at Gaussian "
+                           f"{bad[0][0]}: beyond +-{MAX_LOG_SCALE:g}, exp() of it is no float32 scale")
+    return s
 
 
 def unit_quaternions(q, index):
@@ -373,7 +244,8 @@ def quaternion_of(rot):
 
 
 def conditional_form(scaling, scaling_t, rot_l, rot_r, convention, prefilter_var):
-    """velocity, t_var, log scales and quaternions of the conditional 3D Gaussian."""
+    """velocity, t_var, log scales and quaternions of the conditional 3D Gaussian (a value that
+    overflows or vanishes is refused afterwards, by refrender_rules)."""
     s2 = np.exp(2 * np.concatenate([scaling, scaling_t], axis=1))
     rot = rotation_4d(rot_l, rot_r, convention)
     sigma = np.einsum("nik,nk,njk->nij", rot, s2, rot)
@@ -381,7 +253,10 @@ def conditional_form(scaling, scaling_t, rot_l, rot_r, convention, prefilter_var
     velocity = sigma[:, :3, 3] / cov_t[:, None]
     t_var = cov_t + prefilter_var if prefilter_var > 0 else cov_t  # forward.cu:333
     precision_xx = np.einsum("nik,nk,njk->nij", rot[:, :3, :], 1 / s2, rot[:, :3, :])
-    mu, vec = np.linalg.eigh(precision_xx)
+    try:
+        mu, vec = np.linalg.eigh(precision_xx)
+    except np.linalg.LinAlgError as e:  # not expected with scales within MAX_LOG_SCALE
+        raise ConvertError(f"a Gaussian's conditional covariance has no eigen decomposition: {clip(e)}") from None
     if not np.all(mu > 0):
         i = int(np.flatnonzero(~(mu > 0).all(axis=1))[0])
         raise ConvertError(f"Gaussian {i}: its conditional covariance is not positive definite (scales "
@@ -390,64 +265,110 @@ def conditional_form(scaling, scaling_t, rot_l, rot_r, convention, prefilter_var
     return velocity, t_var, -0.5 * np.log(mu), quaternion_of(vec)
 
 
-def sh_columns(features, degree, degree_t, index):
+def sh_columns(features, degree, degree_t, force_sh_3d):
     """The coefficients used, as sh4d_<3 (S k + j) + c> (features: N x M x 3, 4DGS's order)."""
-    s = (degree + 1) ** 2
+    m, s = features.shape[1], (degree + 1) ** 2
+    if force_sh_3d and m not in (1, 4, 9, 16):
+        raise ConvertError(f"--force_sh_3d true, but capture()[2..3] _features_dc/_features_rest hold {m} "
+                           "coefficients per channel: a force_sh_3d model holds (max_sh_degree + 1)^2 "
+                           "(gaussian_model.py:222-224), so this one has time harmonics and was trained with "
+                           "force_sh_3d false")
     used = [16 * k + j for k in range(degree_t + 1) for j in range(s)]
-    if used[-1] >= features.shape[1]:
-        raise ConvertError(f"capture()[{index}] _features_dc/_features_rest hold {features.shape[1]} coefficients "
-                           f"per channel, SH degree {degree} x time degree {degree_t} needs {used[-1] + 1} "
-                           "(a force_sh_3d model? then say --force_sh_3d true)")
+    if used[-1] >= m:
+        raise ConvertError(f"capture()[3] _features_dc/_features_rest hold {m} coefficients per channel, SH degree "
+                           f"{degree} x time degree {degree_t} needs {used[-1] + 1} (a force_sh_3d model? then say "
+                           "--force_sh_3d true)")
     return features[:, used, :].reshape(len(features), -1)
 
 
-def convert(capture, args):
-    n_deg, n_deg_t = small_int(capture, 0, 0, 3), small_int(capture, 18, 0, 2)
-    xyz = entry(capture, 1, shape=(None, 3))
-    n = len(xyz)
+def features_of(capture, n):
+    """get_features (gaussian_model.py:212-215): _features_dc and _features_rest, N x M x 3."""
     dc = entry(capture, 2, n, (None, 1, 3))
     rest = capture[3]
     rest = entry(capture, 3) if isinstance(rest, LazyTensor) else rest
     if not isinstance(rest, np.ndarray) or rest.ndim != 3 or rest.shape[0] != n or rest.shape[2] != 3:
         raise ConvertError(f"capture()[3] _features_rest has shape {getattr(rest, 'shape', None)}, expected "
                            f"(N, M - 1, 3) with N = {n}")
-    features = np.concatenate([dc, rest], axis=1)  # get_features (gaussian_model.py:212-215)
-    degree_t = n_deg_t if n_deg == 3 and not args.force_sh_3d else 0  # forward.cu:142, 479
-    sh = sh_columns(features, n_deg, degree_t, 3)
-    scaling, opacity = entry(capture, 4, n, (None, 3)), entry(capture, 6, n, (None, 1))
-    rot_l = unit_quaternions(entry(capture, 5, n, (None, 4)), 5)
-    t0, scaling_t = entry(capture, 13, n, (None, 1)), entry(capture, 14, n, (None, 1))
-    rot_r = unit_quaternions(entry(capture, 15, n, (None, 4)), 15)
-    velocity, t_var, log_scale, quat = conditional_form(scaling, scaling_t, rot_l, rot_r, args.rotation_convention,
-                                                        args.prefilter_var)
-    duration = args.time_duration[1] - args.time_duration[0]
-    const = np.broadcast_to(np.array([duration, n_deg, degree_t], dtype=np.float64), (n, 3))
-    columns = np.concatenate([xyz, t0, velocity, t_var[:, None], opacity, log_scale, quat, const, sh], axis=1)
-    names = (["x", "y", "z", "t_center", "vel_0", "vel_1", "vel_2", "t_var", "opacity", "scale_0", "scale_1",
-              "scale_2", "rot_0", "rot_1", "rot_2", "rot_3", "time_duration", "sh_degree", "sh_degree_t"] +
-             [f"sh4d_{i}" for i in range(sh.shape[1])])
-    values = columns.astype("<f4")
-    bad = np.argwhere(~np.isfinite(values))
-    if len(bad):
-        raise ConvertError(f"Gaussian {bad[0][0]}: '{names[bad[0][1]]}' = {columns[tuple(bad[0])]} is beyond float32")
+    return np.concatenate([dc, rest], axis=1)
+
+
+def has_env_map(capture):
+    """capture()[17]: None or an empty tensor without env_map_res (train.py:71-77), else 3 x res x res."""
     env = capture[17]
-    has_env = isinstance(env, LazyTensor) and all(env.shape) and len(env.shape) > 0
-    return names, values, has_env
+    return env is not None and not (isinstance(env, LazyTensor) and 0 in env.shape)
 
 
-def write_ply(path, names, values, comments):
+FDGS_NAMES = ["x", "y", "z", "t_center", "vel_0", "vel_1", "vel_2", "t_var", "opacity", "scale_0", "scale_1",
+              "scale_2", "rot_0", "rot_1", "rot_2", "rot_3", "time_duration", "sh_degree", "sh_degree_t"]
+
+
+def first_bad(ok, columns, names, rule):
+    bad = np.argwhere(~ok)
+    if len(bad):
+        i, k = bad[0]
+        raise ConvertError(f"Gaussian {i}: '{names[k]}' = {columns[i, k]:.9g} {rule}")
+
+
+def refrender_rules(columns, values, names):
+    """Refuses what refrender's reader would (src/io/gaussian_fdgs_ply.c store_motion, check_degrees;
+    gaussian_ply_common.c): each value within float32, t_var above 0 as the float32 it reads, a mean
+    within GAUSSIAN_MAX_ABS and exp(scale) within GAUSSIAN_MAX_SCALE of the float32 scales."""
+    first_bad(np.isfinite(values), columns, names, "is beyond float32")
+    first_bad(values[:, 7:8] > 0, columns[:, 7:8], names[7:8], "is 0 as a float32: refrender refuses a temporal "
+              "marginal whose variance is not above 0")
+    first_bad(np.abs(values[:, 0:3]) <= MAX_ABS, columns[:, 0:3], names[0:3], "is beyond 1e15 from the origin, "
+              "which refrender refuses (GAUSSIAN_MAX_ABS)")
+    with np.errstate(over="ignore"):
+        first_bad(np.exp(values[:, 9:12].astype(np.float64)) <= MAX_ABS, columns[:, 9:12], names[9:12],
+                  "is a log scale whose exp() is beyond 1e15, which refrender refuses (GAUSSIAN_MAX_SCALE)")
+
+
+def convert(capture, args):
+    """(property names, N x P float32 values, whether an env_map was dropped)."""
+    n_deg, n_deg_t = small_int(capture, 0, 0, 3), small_int(capture, 18, 0, 2)
+    if has_env_map(capture) and not args.drop_env_map:
+        raise ConvertError("capture()[17] env_map is not empty: the model was trained with env_map_res > 0 and "
+                           "4DGS composites that background behind the Gaussians (gaussian_renderer/__init__.py:"
+                           "165-178); refrender draws no env_map: --drop-env-map converts the Gaussians alone")
+    xyz = entry(capture, 1, shape=(None, 3))
+    n = len(xyz)
+    if n == 0:
+        raise ConvertError("capture()[1] _xyz holds no Gaussians: the model is empty (refrender refuses an empty "
+                           "model)")
+    degree_t = n_deg_t if n_deg == 3 and not args.force_sh_3d else 0  # forward.cu:142, 479
+    sh = sh_columns(features_of(capture, n), n_deg, degree_t, args.force_sh_3d)
+    scaling, opacity = log_scales(capture, 4, n, 3), entry(capture, 6, n, (None, 1))
+    rot_l = unit_quaternions(entry(capture, 5, n, (None, 4)), 5)
+    t0, scaling_t = entry(capture, 13, n, (None, 1)), log_scales(capture, 14, n, 1)
+    rot_r = unit_quaternions(entry(capture, 15, n, (None, 4)), 15)
+    with np.errstate(over="ignore", under="ignore", invalid="ignore", divide="ignore"):
+        velocity, t_var, log_scale, quat = conditional_form(scaling, scaling_t, rot_l, rot_r,
+                                                            args.rotation_convention, args.prefilter_var)
+        duration = args.time_duration[1] - args.time_duration[0]
+        const = np.broadcast_to(np.array([duration, n_deg, degree_t], dtype=np.float64), (n, 3))
+        columns = np.concatenate([xyz, t0, velocity, t_var[:, None], opacity, log_scale, quat, const, sh], axis=1)
+        values = columns.astype("<f4")
+    names = FDGS_NAMES + [f"sh4d_{i}" for i in range(sh.shape[1])]
+    refrender_rules(columns, values, names)
+    return names, values, has_env_map(capture)
+
+
+def write_ply(path, names, values, comments, source=None):
+    """The PLY, whole or not at all, never over the checkpoint source (scripts/safefiles.py)."""
     head = ["ply", "format binary_little_endian 1.0"] + [f"comment {c}" for c in comments]
     head += [f"element vertex {len(values)}"] + [f"property float {p}" for p in names] + ["end_header"]
-    directory = os.path.dirname(os.path.abspath(path))
-    fd, tmp = tempfile.mkstemp(prefix=".convert_4dgs.", dir=directory)
-    try:
-        with os.fdopen(fd, "wb") as f:
-            f.write(("\n".join(head) + "\n").encode())
-            f.write(np.ascontiguousarray(values).tobytes())
-        os.replace(tmp, path)
-    except BaseException:
-        os.unlink(tmp)
-        raise
+    head = ("\n".join(head) + "\n").encode()
+    body = np.ascontiguousarray(values, dtype="<f4")
+
+    def put(tmp):
+        with open(tmp, "wb") as f:
+            f.write(head)
+            body.tofile(f)
+
+    def complete(tmp):
+        if os.path.getsize(tmp) != len(head) + body.nbytes:
+            raise OSError(f"{os.path.getsize(tmp)} of {len(head) + body.nbytes} bytes written (disk full?)")
+    safefiles.write_file(path, put, safefiles.Inputs([source] if source else []), complete)
 
 
 class Parser(argparse.ArgumentParser):
@@ -471,42 +392,63 @@ def parse_args(argv):
                         "rendered with it): added to Sigma_tt in the temporal marginal when > 0")
     p.add_argument("--force_sh_3d", "--force-sh-3d", required=True, choices=["false", "true"],
                    help="the config's force_sh_3d (False in every 4DGS config): true uses 3D SH only")
+    p.add_argument("--drop-env-map", action="store_true",
+                   help="convert a model trained with an env_map (env_map_res > 0) without it: refrender draws the "
+                        "scene's <background> behind the Gaussians, not the env_map 4DGS composites")
     args = p.parse_args(argv)
     args.force_sh_3d = args.force_sh_3d == "true"
-    if not np.isfinite(args.time_duration).all() or not args.time_duration[1] > args.time_duration[0]:
-        p.error(f"--time_duration {args.time_duration[0]} {args.time_duration[1]}: END must exceed START")
+    start, end = args.time_duration
+    if not np.isfinite(args.time_duration).all() or not end > start:
+        p.error(f"--time_duration {start} {end}: END must exceed START")
+    with np.errstate(over="ignore"):
+        duration = np.float32(end - start)
+    if not (0 < duration < np.inf):
+        p.error(f"--time_duration {start} {end}: T = END - START = {end - start:g} is {float(duration):g} as the "
+                "float32 the PLY holds, and refrender refuses a T that is not above 0 or not finite")
     if not np.isfinite(args.prefilter_var):
         p.error(f"--prefilter_var {args.prefilter_var} is not finite")
     return args
 
 
-def main(argv=None):
-    args = parse_args(argv)
-    try:
-        capture, iteration = read_capture(Archive(args.checkpoint).load())
-        names, values, has_env = convert(capture, args)
-    except ConvertError as e:
-        sys.stderr.write(f"convert_4dgs.py: {args.checkpoint}: {e}\n")
-        return 1
-    except OSError as e:
-        sys.stderr.write(f"convert_4dgs.py: {args.checkpoint}: {e.strerror or e}\n")
-        return 1
+def printable(text):
+    """A file name for a PLY comment line: one line, bounded."""
+    return clip("".join(c if c.isprintable() else "?" for c in text))
+
+
+def convert_file(args):
+    """Reads, converts and writes; returns (Gaussians, SH degree, time degree, env_map dropped)."""
+    safefiles.Inputs([args.checkpoint]).check_output(args.output, "-o")  # before any work, again at the rename
+    top, archive = torch_checkpoint.load(args.checkpoint)
+    with archive.file:
+        capture, iteration = read_capture(top)
+        names, values, dropped_env = convert(capture, args)
     comments = ["4DGS model (fudan-zvg/4d-gaussian-splatting, rules read at 63725f21) converted by "
                 "refrender scripts/convert_4dgs.py",
-                f"source {os.path.basename(args.checkpoint)} iteration {iteration}",
+                f"source {printable(os.path.basename(args.checkpoint))} iteration {iteration}",
                 f"rotation_convention {args.rotation_convention}",
                 f"time_duration {args.time_duration[0]!r} {args.time_duration[1]!r}",
                 f"prefilter_var {args.prefilter_var!r}", f"force_sh_3d {str(args.force_sh_3d).lower()}"]
+    if dropped_env:
+        comments.append("env_map dropped (--drop-env-map): the model's background is not in this file")
+    write_ply(args.output, names, values, comments, args.checkpoint)
+    return len(values), int(values[0, 17]), int(values[0, 18]), dropped_env
+
+
+def main(argv=None):
+    args = parse_args(argv)
     try:
-        write_ply(args.output, names, values, comments)
-    except OSError as e:
-        sys.stderr.write(f"convert_4dgs.py: {args.output}: {e.strerror or e}\n")
+        count, degree, degree_t, dropped_env = convert_file(args)
+    except safefiles.FileRefused as e:  # names its file itself
+        sys.stderr.write(f"convert_4dgs.py: {clip(e, MAX_MESSAGE + 2000)}\n")
         return 1
-    if has_env:
-        sys.stderr.write(f"convert_4dgs.py: {args.checkpoint}: capture()[17] env_map is not empty: 4DGS draws "
-                         "its background from it when env_map_res > 0; the PLY holds the Gaussians only\n")
-    print(f"{args.output}: {len(values)} Gaussians, SH degree {int(values[0, 17]) if len(values) else 0} x time "
-          f"degree {int(values[0, 18]) if len(values) else 0}")
+    except (ConvertError, OSError, MemoryError, RecursionError) as e:
+        reason = e.strerror if isinstance(e, OSError) and e.strerror else e
+        if isinstance(e, (MemoryError, RecursionError)):
+            reason = f"{type(e).__name__} while reading it: {e}"
+        sys.stderr.write(f"convert_4dgs.py: {args.checkpoint}: {clip(reason, MAX_MESSAGE)}\n")
+        return 1
+    print(f"{args.output}: {count} Gaussians, SH degree {degree} x time degree {degree_t}"
+          + (", env_map dropped" if dropped_env else ""))
     return 0
 
 

@@ -16,21 +16,29 @@ import numpy as np  # noqa: E402
 import OpenImageIO as oiio  # noqa: E402
 
 import flip  # noqa: E402
+import imagecompare  # noqa: E402
+import safefiles  # noqa: E402
 from heatmaps import _name  # noqa: E402
 
 # per column: True when a higher value is better
 HIGHER_IS_BETTER = {"PSNR": True, "SSIM": True}
 
 
-def _write(path, pixels, fmt):
+def _write(path, pixels, fmt, inputs):
+    """One picture, whole or not at all (safefiles), checked by reading it back."""
     pixels = np.ascontiguousarray(pixels)
     if pixels.ndim == 2:
         pixels = pixels[:, :, None]
     spec = oiio.ImageSpec(pixels.shape[1], pixels.shape[0], pixels.shape[2], fmt)
-    out = oiio.ImageOutput.create(path)
-    if not out or not out.open(path, spec) or not out.write_image(pixels):
-        raise OSError(f"{path}: cannot write: {oiio.geterror()}")
-    out.close()
+
+    def write(tmp):
+        out = oiio.ImageOutput.create(tmp)
+        ok = bool(out) and out.open(tmp, spec) and out.write_image(pixels)
+        if out:
+            ok = out.close() and ok
+        if not ok:
+            raise OSError(oiio.geterror() or "OpenImageIO cannot write it")
+    safefiles.write_file(path, write, inputs, imagecompare.check_written)
 
 
 def _upscale(img, scale):
@@ -43,10 +51,10 @@ def colorize(values, cmap, lo, hi):
     return (plt.get_cmap(cmap)(norm)[..., :3] * 255 + 0.5).astype(np.uint8)
 
 
-def write_map(out_dir, base, values, cmap, lo, hi, scale):
+def write_map(out_dir, base, values, cmap, lo, hi, scale, inputs=None):
     """base.png (coloured, native resolution x scale) and base.exr (the float values)."""
-    _write(os.path.join(out_dir, base + ".png"), _upscale(colorize(values, cmap, lo, hi), scale), oiio.UINT8)
-    _write(os.path.join(out_dir, base + ".exr"), values.astype(np.float32), oiio.FLOAT)
+    _write(os.path.join(out_dir, base + ".png"), _upscale(colorize(values, cmap, lo, hi), scale), oiio.UINT8, inputs)
+    _write(os.path.join(out_dir, base + ".exr"), values.astype(np.float32), oiio.FLOAT, inputs)
     return [base + ".png", base + ".exr"]
 
 
@@ -65,17 +73,17 @@ def draw_rectangles(img, windows, color=(255, 64, 32)):
     return out
 
 
-def write_crops(out_dir, label, test, crops, inset_scale):
+def write_crops(out_dir, label, test, crops, inset_scale, inputs=None):
     """label_crops.png: the test image with every crop outlined; one zoomed
     inset per crop."""
     files = []
     full = srgb8(test)
     name = _name(label, "crops") + ".png"
-    _write(os.path.join(out_dir, name), draw_rectangles(full, [w for _, w in crops]), oiio.UINT8)
+    _write(os.path.join(out_dir, name), draw_rectangles(full, [w for _, w in crops]), oiio.UINT8, inputs)
     files.append(name)
     for crop, (x, y, w, h) in crops:
         inset = _name(label, crop) + "_inset.png"
-        _write(os.path.join(out_dir, inset), _upscale(full[y:y + h, x:x + w], inset_scale), oiio.UINT8)
+        _write(os.path.join(out_dir, inset), _upscale(full[y:y + h, x:x + w], inset_scale), oiio.UINT8, inputs)
         files.append(inset)
     return files
 
@@ -120,7 +128,7 @@ def _latex_cell(value, best):
     return r"\textbf{" + text + "}" if best == value else text
 
 
-def latex_table(rows, columns, path):
+def latex_table(rows, columns, path, inputs=None):
     """A booktabs table: one row per input row (method, frame when the rows
     come from a sequence, window), the best value of each column in bold
     among the rows of the same frame (or summary) and window. Rows come in
@@ -140,5 +148,5 @@ def latex_table(rows, columns, path):
         cells = [_latex_cell(r.get(c), best[comparison_group(r)].get(c)) for c in columns]
         lines.append(" & ".join([_tex(h) for h in head] + cells) + r" \\")
     lines += [r"\bottomrule", r"\end{tabular}"]
-    with open(path, "w") as f:
-        f.write("% refrender compare.py; requires \\usepackage{booktabs}\n" + "\n".join(lines) + "\n")
+    safefiles.write_text(path, "% refrender compare.py; requires \\usepackage{booktabs}\n" + "\n".join(lines) + "\n",
+                         inputs)

@@ -25,8 +25,11 @@ import OpenImageIO as oiio
 
 import flip
 import imagecompare
+import safefiles
 
 COLUMNS, LABEL = 4, 18
+# float formats: a contact sheet is 8-bit, so OUT with one of these is an input image named first by mistake
+FLOAT_EXTENSIONS = (".exr", ".hdr", ".pfm")
 
 
 def font_candidates(requested):
@@ -67,6 +70,29 @@ def tile(path, font):
     return buf.get_pixels(oiio.FLOAT)
 
 
+def check_arguments(args):
+    """Refuses, before anything is read or drawn, an OUT that is one of the
+    images or has a float image's extension (`gallery.py a.exr b.exr` with
+    OUT forgotten), and inputs that are not regular files."""
+    if os.path.splitext(args.out)[1].lower() in FLOAT_EXTENSIONS:
+        raise safefiles.FileRefused(f"{args.out}: OUT is an 8-bit contact sheet (e.g. sheet.png), not a float image: "
+                                    "was OUT left out? usage: gallery.py OUT.png IMAGE [IMAGE ...]")
+    for path in args.images:
+        safefiles.require_regular(path)
+    inputs = safefiles.Inputs(args.images)
+    inputs.check_output(args.out, "OUT")
+    return inputs
+
+
+def write_sheet(path, sheet, inputs):
+    """The sheet as 8-bit, whole or not at all, checked by reading it back."""
+    def write(tmp):
+        buf = oiio.ImageBuf(sheet)
+        if not buf.write(tmp, "uint8"):
+            raise OSError(buf.geterror() or "OpenImageIO cannot write it")
+    safefiles.write_file(path, write, inputs, imagecompare.check_written)
+
+
 def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("out", metavar="OUT.png", help="contact sheet to write (8-bit, format by extension)")
@@ -74,6 +100,15 @@ def main(argv=None):
     p.add_argument("--font", help="font for the labels: a name OpenImageIO finds or a .ttf file (default: "
                                   "matplotlib's DejaVu Sans, else OpenImageIO's DejaVuSans or default font)")
     args = p.parse_args(argv)
+    try:
+        inputs = check_arguments(args)
+        return draw(args, inputs)
+    except (safefiles.FileRefused, imagecompare.CompareError) as e:
+        print(f"gallery.py: {e}", file=sys.stderr)
+        return 1
+
+
+def draw(args, inputs):
     font = label_font(args.font)
     if font is None:
         tried = ", ".join(repr(f) for f in font_candidates(args.font))
@@ -87,10 +122,7 @@ def main(argv=None):
     for i, t in enumerate(tiles):
         y, x = (i // COLUMNS) * h, (i % COLUMNS) * w
         sheet[y:y + t.shape[0], x:x + t.shape[1]] = t
-    buf = oiio.ImageBuf(sheet)
-    if not buf.write(args.out, "uint8"):
-        print(f"gallery.py: {args.out}: {buf.geterror()}", file=sys.stderr)
-        return 1
+    write_sheet(args.out, sheet, inputs)
     print(f"gallery.py: {len(tiles)} images -> {args.out}")
     return 0
 

@@ -11,6 +11,8 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 import flip
+import imagecompare
+import safefiles
 
 
 def _name(label, window):
@@ -20,18 +22,26 @@ def _name(label, window):
     return re.sub(r"[^A-Za-z0-9_.-]+", "_", f"{stem}_{window}").strip("_")
 
 
-def _save_map(values, cmap, vmin, vmax, title, label, path):
+def _save(fig, path, inputs):
+    """A figure, whole or not at all (safefiles), checked by reading it back."""
+    try:
+        safefiles.write_file(path, lambda tmp: fig.savefig(tmp, dpi=100, bbox_inches="tight"), inputs,
+                             imagecompare.check_written)
+    finally:
+        plt.close(fig)
+
+
+def _save_map(values, cmap, vmin, vmax, title, label, path, inputs=None):
     h, w = values.shape
     fig, ax = plt.subplots(figsize=(max(3.0, 5.0 * w / max(w, h)) + 1.2, max(3.0, 5.0 * h / max(w, h))))
     im = ax.imshow(values, cmap=cmap, vmin=vmin, vmax=vmax, interpolation="nearest")
     ax.set_title(title, fontsize=9)
     ax.axis("off")
     fig.colorbar(im, ax=ax, fraction=0.046, pad=0.04, label=label)
-    fig.savefig(path, dpi=100, bbox_inches="tight")
-    plt.close(fig)
+    _save(fig, path, inputs)
 
 
-def _contact_sheet(ref, test, flip_map, title, path):
+def _contact_sheet(ref, test, flip_map, title, path, inputs=None):
     fig, axes = plt.subplots(1, 3, figsize=(12, 4.4))
     panels = [(flip.linear_to_srgb(ref), "reference"), (flip.linear_to_srgb(test), "test"),
               (flip_map, "LDR-FLIP error")]
@@ -41,11 +51,10 @@ def _contact_sheet(ref, test, flip_map, title, path):
         ax.set_title(name, fontsize=9)
         ax.axis("off")
     fig.suptitle(title, fontsize=10)
-    fig.savefig(path, dpi=100, bbox_inches="tight")
-    plt.close(fig)
+    _save(fig, path, inputs)
 
 
-def write_all(maps, out_dir, diff_range):
+def write_all(maps, out_dir, diff_range, inputs=None):
     """maps: (test label, window name, (x, y, w, h), ref, test, LDR-FLIP map
     and HDR-FLIP map (or None) of the window); difference maps span
     [-diff_range, diff_range], the same for every input. Returns one dict of
@@ -58,11 +67,12 @@ def write_all(maps, out_dir, diff_range):
         base = _name(path, window)
         files = {"flip": f"{base}_flip.png", "diff": f"{base}_diff.png", "sheet": f"{base}_sheet.png"}
         title = f"{path} [{window}]"
-        _save_map(flip_map, "magma", 0.0, 1.0, f"LDR-FLIP, {title}", "FLIP", os.path.join(out_dir, files["flip"]))
+        _save_map(flip_map, "magma", 0.0, 1.0, f"LDR-FLIP, {title}", "FLIP", os.path.join(out_dir, files["flip"]),
+                  inputs)
         diff = (t - r).mean(axis=-1)
         _save_map(diff, "RdBu_r", -diff_range, diff_range, f"test - reference (mean of RGB), {title}", "signed difference",
-                  os.path.join(out_dir, files["diff"]))
-        _contact_sheet(r, t, flip_map, title, os.path.join(out_dir, files["sheet"]))
+                  os.path.join(out_dir, files["diff"]), inputs)
+        _contact_sheet(r, t, flip_map, title, os.path.join(out_dir, files["sheet"]), inputs)
         written.append(files)
     return written
 
@@ -100,7 +110,7 @@ def _legend(cols):
     return "<ul>" + "".join(items) + "</ul>"
 
 
-def write_report(rows, pictures, out_dir, reference, metrics_space="linear"):
+def write_report(rows, pictures, out_dir, reference, metrics_space="linear", inputs=None):
     cols = [k for k in dict.fromkeys(k for r in rows for k in r) if not k.endswith("note")]
     notes = "".join(f"<p>{html.escape(str(r['image']))} [{html.escape(str(r['window']))}]: "
                     f"{html.escape(r['notes'])}</p>\n" for r in rows if r.get("notes"))
@@ -128,8 +138,7 @@ td,th{{border:1px solid #999;padding:2px 6px;text-align:right;white-space:nowrap
 <p>Full definitions: refrender's scripts/README.md (Comparing images).</p>
 {figures}</body></html>
 """
-    with open(os.path.join(out_dir, "index.html"), "w") as f:
-        f.write(page)
+    safefiles.write_text(os.path.join(out_dir, "index.html"), page, inputs)
 
 
 def _fmt(v):

@@ -16,6 +16,7 @@ import numpy as np
 import OpenImageIO as oiio
 
 import flip
+import safefiles
 
 REL_EPS = 0.01
 
@@ -48,7 +49,13 @@ def _channel(pixels, names, wanted):
 
 def read_channels(path, unassociated_alpha=True):
     """Every channel of an image by name (float32 planes), its spec and its
-    header attributes: the one image reader of the scripts and tests."""
+    header attributes: the one image reader of the scripts and tests. A path
+    that is not a regular file (a FIFO would block the read) is refused
+    before it is opened."""
+    try:
+        safefiles.require_regular(path)
+    except safefiles.FileRefused as e:
+        raise CompareError(str(e)) from None
     config = oiio.ImageSpec()
     if unassociated_alpha:
         config.attribute("oiio:UnassociatedAlpha", 1)  # PNG alpha as stored, not premultiplied
@@ -64,6 +71,18 @@ def read_channels(path, unassociated_alpha=True):
         pixels = pixels[:, :, None]
     channels = {name: pixels[:, :, i] for i, name in enumerate(spec.channelnames)}
     return channels, spec, {a.name: a.value for a in spec.extra_attribs}
+
+
+def check_written(path):
+    """Raises OSError unless the image file at path decodes in full: the
+    check safefiles.write_file makes before a picture is put in place
+    (OpenImageIO's PNG writer does not report a full disk)."""
+    inp = oiio.ImageInput.open(str(path))
+    pixels = inp.read_image(oiio.FLOAT) if inp else None
+    if inp:
+        inp.close()
+    if pixels is None:
+        raise OSError(f"the written image does not read back ({oiio.geterror() or 'truncated'}; disk full?)")
 
 
 def read_image(path, colorspace="auto"):

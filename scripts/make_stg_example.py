@@ -22,10 +22,8 @@ the 8 KB each committed example may take (tests/test_examples.py).
 usage: make_stg_example.py [--out PATH]   (default scenes/examples/stg_lite.ply)"""
 import argparse
 import pathlib
-import sys
 
-sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
-from pydeps import require  # noqa: E402
+from pydeps import require  # (a script's own folder is on sys.path already)
 
 require("numpy")
 import numpy as np  # noqa: E402

@@ -145,6 +145,7 @@ import numpy as np
 
 import flip
 import imagecompare
+import safefiles
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -398,12 +399,21 @@ def render_frames(scene, times, settings, extra, out_dir, cache, ref_shape):
     return [cache[t] for t in times]
 
 
-def write_exr(path, rgba):
+def write_exr(path, rgba, inputs):
+    """A float EXR, whole or not at all (safefiles), checked by reading it back."""
     import OpenImageIO as oiio
     buf = oiio.ImageBuf(rgba.astype(np.float32))
     buf.specmod().channelnames = ["R", "G", "B", "A"][:rgba.shape[-1]]
-    if not buf.write(str(path)):
-        raise Failure(f"{path}: cannot write: {oiio.geterror()}")
+
+    def write(tmp):
+        if not buf.write(tmp):
+            raise OSError(oiio.geterror() or "OpenImageIO cannot write it")
+    safefiles.write_file(path, write, inputs, imagecompare.check_written)
+
+
+def save_figure(fig, path, inputs, **kw):
+    """A matplotlib figure, whole or not at all (safefiles), checked by reading it back."""
+    safefiles.write_file(path, lambda tmp: fig.savefig(tmp, **kw), inputs, imagecompare.check_written)
 
 
 def measure(avg, ref, se):
@@ -453,7 +463,7 @@ def procedure_table(rows, display, blur):
     return "\n".join(lines)
 
 
-def plot(rows, ref_se, path):
+def plot(rows, ref_se, path, inputs):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -466,10 +476,10 @@ def plot(rows, ref_se, path):
     ax.set_ylabel("RMSE against the time integral")
     ax.legend(fontsize=8)
     fig.tight_layout()
-    fig.savefig(path)
+    save_figure(fig, path, inputs)
 
 
-def figure(ref, avg, n, path):
+def figure(ref, avg, n, path, inputs):
     """The reference, the N-frame average and the error map between them."""
     import matplotlib
     matplotlib.use("Agg")
@@ -485,10 +495,10 @@ def figure(ref, avg, n, path):
     for ax in axes:
         ax.axis("off")
     fig.tight_layout()
-    fig.savefig(path)
+    save_figure(fig, path, inputs)
 
 
-def procedure_figure(truth, outs, path):
+def procedure_figure(truth, outs, path, inputs):
     """The true blur (display) and each procedure's signed error in 8-bit levels (channel mean)."""
     import matplotlib
     matplotlib.use("Agg")
@@ -508,7 +518,7 @@ def procedure_figure(truth, outs, path):
     fig.colorbar(shown, ax=list(axes), fraction=0.02, pad=0.01, label="8-bit levels (mean of R, G, B)")
     for ax in axes:
         ax.axis("off")
-    fig.savefig(path, bbox_inches="tight")
+    save_figure(fig, path, inputs, bbox_inches="tight")
 
 
 def check_names(value):
@@ -575,17 +585,17 @@ def float_averages(args, settings, ref, se, frames, out):
     rows = []
     for n in args.counts:
         avg = np.mean(frames(frame_times(settings["open"], settings["close"], n, args.times)), axis=0)
-        write_exr(out / f"average_{n}.exr", avg)
+        write_exr(out / f"average_{n}.exr", avg, args.inputs)
         rows.append({"N": n, **measure(avg, ref, se)})
         if args.figure and n == args.counts[0]:
-            figure(ref, avg, n, args.figure)
+            figure(ref, avg, n, args.figure, args.inputs)
     noise = float(np.sqrt(np.mean(se ** 2)))
     print(table(rows, noise))
     if args.json:
-        Path(args.json).write_text(json.dumps({"reference": str(args.reference), "times": args.times,
-                                               "reference_noise": noise, "rows": rows}, indent=1))
+        safefiles.write_text(args.json, json.dumps({"reference": str(args.reference), "times": args.times,
+                                                    "reference_noise": noise, "rows": rows}, indent=1), args.inputs)
     if args.plot:
-        plot(rows, noise, args.plot)
+        plot(rows, noise, args.plot, args.inputs)
 
 
 # Where the scene moves is measured on sharp frames at the midpoint times of this many, as well as the
@@ -610,7 +620,8 @@ def procedures(args, settings, ref, se, frames, cache, out):
     for p in args.procedures:
         renders = [f[..., :3] for f in frames(procedure_times(p, settings["open"], settings["close"]))]
         outs.append((p, emulate(p, renders, display)))
-        write_exr(out / f"procedure_{p.name.replace(':', '_').replace(',', '_').replace('=', '')}.exr", outs[-1][1])
+        write_exr(out / f"procedure_{p.name.replace(':', '_').replace(',', '_').replace('=', '')}.exr", outs[-1][1],
+                  args.inputs)
     frames(frame_times(settings["open"], settings["close"], MOTION_PROBES, "midpoint"))
     moving = moving_pixels(cache.values(), display, ref_rgb.shape)
     rows = [{"procedure": dataclasses.asdict(p), **measure_procedure(o, ref_rgb, se, display, moving)}
@@ -620,16 +631,27 @@ def procedures(args, settings, ref, se, frames, cache, out):
           f"sharp frames, {MOTION_PROBES} of them evenly spaced over the shutter, differ by more than half a level)")
     if args.json:
         curve = "the sRGB curve" if display == "srgb" else "identity"
-        Path(args.json).write_text(json.dumps({
+        safefiles.write_text(args.json, json.dumps({
             "reference": str(args.reference), "display": display, "blur_space": settings["blur"],
             "comparison": COMPARISON.format(curve=curve, decode=curve, blur=settings["blur"]),
-            "moving_fraction": float(moving[..., 0].mean()), "rows": rows}, indent=1))
+            "moving_fraction": float(moving[..., 0].mean()), "rows": rows}, indent=1), args.inputs)
     if args.figure:
-        procedure_figure(to_display(ref_rgb, display), [(p.name, o) for p, o in outs], args.figure)
+        procedure_figure(to_display(ref_rgb, display), [(p.name, o) for p, o in outs], args.figure, args.inputs)
+
+
+def check_outputs(args):
+    """The inputs (the scene, the reference when given) that no output may
+    overwrite, however spelled; each output refused now, before any render."""
+    inputs = safefiles.Inputs([args.scene] + ([args.reference] if args.reference else []))
+    for option in ("json", "plot", "figure"):
+        if getattr(args, option):
+            inputs.check_output(getattr(args, option), f"--{option}")
+    return inputs
 
 
 def main(argv):
     args, extra = parse(argv)
+    args.inputs = check_outputs(args)
     out = Path(args.out)
     if out.exists() and not out.is_dir():
         raise Failure(f"--out {out}: exists and is not a directory (the frames and averages go into a directory)")
@@ -658,6 +680,6 @@ def main(argv):
 if __name__ == "__main__":
     try:
         sys.exit(main(sys.argv[1:]))
-    except (Failure, imagecompare.CompareError) as e:
+    except (Failure, imagecompare.CompareError, safefiles.FileRefused) as e:
         print(f"nframe_average: {e}", file=sys.stderr)
         sys.exit(1)

@@ -2,6 +2,7 @@
 or a directory stands for one image per frame; frames pair by number, and a
 refrender image that names its frame (header refrender:frame) must name the
 same one."""
+import itertools
 import os
 import re
 
@@ -16,10 +17,13 @@ def is_sequence(spec):
 
 
 def parse_frames(text):
+    """The frames A..B as a range: never a list, so that a range far larger
+    than the frames that exist (24-99999999999) costs nothing; expand()
+    stops at the first frame that is not there."""
     m = re.fullmatch(r"(-?\d+)-(-?\d+)", text or "")
     if not m or int(m.group(1)) > int(m.group(2)):
         raise CompareError(f"--frames {text}: expected A-B with A <= B")
-    return list(range(int(m.group(1)), int(m.group(2)) + 1))
+    return range(int(m.group(1)), int(m.group(2)) + 1)
 
 
 def _directory_frames(path):
@@ -45,15 +49,21 @@ def expand(spec, frames):
         found = _directory_frames(spec)
         if frames is None:
             return found
-        missing = [f for f in frames if f not in found]
-        if missing:
-            raise CompareError(f"{spec}: no image for frame {missing[0]}")
+        # the first missing frame is among the first len(found) + 1 of the range
+        missing = next((f for f in itertools.islice(frames, len(found) + 1) if f not in found), None)
+        if missing is not None:
+            raise CompareError(f"{spec}: no image for frame {missing}")
         return {f: found[f] for f in frames}
     if frames is None:
         raise CompareError(f"{spec}: a frame pattern needs --frames A-B")
     if len(_FIELD.findall(spec)) != 1:
         raise CompareError(f"{spec}: a frame pattern holds exactly one field such as %04d")
-    return {f: spec % f for f in frames}
+    paths = {}
+    for f in frames:  # stops at the first missing frame: the range is bounded by the files that exist
+        if not os.path.exists(spec % f):
+            raise CompareError(f"{spec % f}: no such file (frame {f} of {spec})")
+        paths[f] = spec % f
+    return paths
 
 
 def check_frame(path, header, frame):

@@ -16,13 +16,14 @@ pixel), whose per-pixel standard errors give each RMSE its noise floor.
 Writes DIR/thesis_table.csv (scene, row, method, rmse, gt_noise, flip,
 coverage_bias, seconds, fragments, gt_seconds), DIR/thesis_table.tex
 (booktabs) and DIR/thesis_table.png (per scene: the ground truth and each
-row, the absolute error under each), all or none; prints the table and
+row, the absolute error under each), each complete or absent
+(scripts/safefiles.py), none before every render is done; prints the table and
 the thesis's claims measured as orderings (src/SPLAT.md, Findings).
 Exit status: 0, 1 when a render fails, 2 on a usage error."""
 import argparse
 import csv
+import io
 import os
-import shutil
 import subprocess
 import sys
 import tempfile
@@ -35,6 +36,7 @@ import numpy as np
 
 import flip
 from imagecompare import CompareError, read_image
+from safefiles import FileRefused, Inputs, write_bytes, write_text
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 # Table 5.1's rows: label, the thesis's words, refrender splat's arguments
@@ -127,19 +129,20 @@ def claims(rows):
     return out
 
 
-def latex(rows, path):
-    with open(path, "w") as f:
-        f.write("% thesis_table.py: Wolf 2008 Table 5.1's rows against refrender's ground truth\n")
-        f.write("\\begin{tabular}{llrrrrr}\n\\toprule\n")
-        f.write("scene & row & RMSE & GT noise & FLIP & $\\Delta\\alpha$ & seconds \\\\\n\\midrule\n")
-        for r in rows:
-            scene = r["scene"].replace("_", "\\_")
-            f.write(f"{scene} & {r['row']}) {r['method']} & {r['rmse']:.4f} & {r['gt_noise']:.4f} & "
-                    f"{r['flip']:.4f} & {r['coverage_bias']:+.4f} & {r['seconds']:.2f} \\\\\n")
-        f.write("\\bottomrule\n\\end{tabular}\n")
+def latex(rows):
+    f = io.StringIO()
+    f.write("% thesis_table.py: Wolf 2008 Table 5.1's rows against refrender's ground truth\n")
+    f.write("\\begin{tabular}{llrrrrr}\n\\toprule\n")
+    f.write("scene & row & RMSE & GT noise & FLIP & $\\Delta\\alpha$ & seconds \\\\\n\\midrule\n")
+    for r in rows:
+        scene = r["scene"].replace("_", "\\_")
+        f.write(f"{scene} & {r['row']}) {r['method']} & {r['rmse']:.4f} & {r['gt_noise']:.4f} & "
+                f"{r['flip']:.4f} & {r['coverage_bias']:+.4f} & {r['seconds']:.2f} \\\\\n")
+    f.write("\\bottomrule\n\\end{tabular}\n")
+    return f.getvalue()
 
 
-def figure(scenes, images, path):
+def figure(scenes, images):
     """Per scene two rows: the ground truth and rows a-e, and under each
     method its absolute RGB error (one colour range for the figure)."""
     import matplotlib
@@ -165,25 +168,25 @@ def figure(scenes, images, path):
         axes[2 * s, 0].set_ylabel(name, fontsize=6)
         axes[2 * s + 1, 0].set_ylabel(f"|error|, 0-{hi:.2f}", fontsize=5)
     fig.tight_layout(pad=0.2, h_pad=0.1, w_pad=0.1)
-    fig.savefig(path, dpi=100)
+    png = io.BytesIO()
+    fig.savefig(png, format="png", dpi=100)
     plt.close(fig)
+    return png.getvalue()
 
 
-def write_all(args, rows, scenes, images, tmp):
-    """Every output into a temporary directory beside DIR, then moved in."""
+def write_all(args, rows, scenes, images):
+    """The three outputs, made in memory first, then each written whole or
+    not at all (safefiles.py), never over a scene file."""
+    table = io.StringIO()
+    w = csv.DictWriter(table, fieldnames=COLUMNS)
+    w.writeheader()
+    w.writerows({k: (f"{v:.6g}" if isinstance(v, float) else v) for k, v in r.items()} for r in rows)
+    tex, png = latex(rows), figure(scenes, images)
+    inputs = Inputs([os.path.join(ROOT, "scenes", f"{name}.xml") for name in scenes])
     os.makedirs(args.out, exist_ok=True)
-    stage = tempfile.mkdtemp(prefix=".thesis_table.", dir=args.out)
-    try:
-        with open(os.path.join(stage, "thesis_table.csv"), "w", newline="") as f:
-            w = csv.DictWriter(f, fieldnames=COLUMNS)
-            w.writeheader()
-            w.writerows({k: (f"{v:.6g}" if isinstance(v, float) else v) for k, v in r.items()} for r in rows)
-        latex(rows, os.path.join(stage, "thesis_table.tex"))
-        figure(scenes, images, os.path.join(stage, "thesis_table.png"))
-        for name in ("thesis_table.csv", "thesis_table.tex", "thesis_table.png"):
-            os.replace(os.path.join(stage, name), os.path.join(args.out, name))
-    finally:
-        shutil.rmtree(stage, ignore_errors=True)
+    write_text(os.path.join(args.out, "thesis_table.csv"), table.getvalue(), inputs)
+    write_text(os.path.join(args.out, "thesis_table.tex"), tex, inputs)
+    write_bytes(os.path.join(args.out, "thesis_table.png"), png, inputs)
 
 
 def main(argv=None):
@@ -196,8 +199,8 @@ def main(argv=None):
                 r, imgs = scene_rows(args, name, tmp)
                 rows += r
                 images.append(imgs)
-            write_all(args, rows, scenes, images, tmp)
-    except (TableError, CompareError, OSError) as e:
+            write_all(args, rows, scenes, images)
+    except (TableError, CompareError, FileRefused, OSError) as e:
         print(f"thesis_table.py: {e}", file=sys.stderr)
         return 1
     print(f"{'scene':16s} {'row':24s} {'RMSE':>8s} {'GT noise':>8s} {'FLIP':>7s} {'d alpha':>8s} {'s':>6s}")

@@ -7,7 +7,10 @@
  *   RR_FAULT_OP=rename  rename
  *   RR_FAULT_STICKY=1   every later write fails too (a disk that stays full)
  *   RR_FAULT_LOG=FILE   a line is appended to FILE for each injected fault,
- *                       and "calls W R" (writes, renames seen) at exit */
+ *                       and "calls W R" (writes, renames seen) at exit
+ *   RR_FAULT_OP=realloc-in-threads  every realloc outside the main thread
+ *                       returns NULL, as when memory runs out while the
+ *                       render's workers grow their scratch */
 #define _GNU_SOURCE
 #include <dlfcn.h>
 #include <errno.h>
@@ -16,6 +19,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <sys/syscall.h>
 #include <unistd.h>
 
 static long calls[2]; /* writes, renames */
@@ -110,4 +114,21 @@ int rename(const char *from, const char *to)
     if (should_fail(1, -1))
         return errno = EIO, -1;
     return REAL(rename)(from, to);
+}
+
+/* The render's worker threads are the only ones that grow scratch while
+ * rendering; the main thread reads the scene and writes the outputs. */
+void *realloc(void *p, size_t n)
+{
+    static void *(*real)(void *, size_t);
+    static int mode = -1;
+    if (!real)
+        real = (void *(*)(void *, size_t))dlsym(RTLD_NEXT, "realloc");
+    if (mode < 0) {
+        const char *op = getenv("RR_FAULT_OP");
+        mode = op && !strcmp(op, "realloc-in-threads");
+    }
+    if (mode && n > 0 && syscall(SYS_gettid) != getpid())
+        return errno = ENOMEM, NULL;
+    return real(p, n);
 }

@@ -166,6 +166,41 @@ def tile_rect(centre, half, W, H, rule="cutoff", cutoff=CUTOFF):
             clamp(_int((p[1] - r) / TILE), gy), clamp(_int((p[1] + r + TILE - 1) / TILE), gy))
 
 
+def drawn_pixels(model, i, R_c2w, C, fx, fy, W, H, tile_rule=True):
+    """The pixels (H x W booleans) where Gaussian i alone gets alpha >= 1/255 at e0ed020, each rule
+    from its source line: culled by in_frustum (aux:200), DUAL_VISIABLE (fw:209-214) or compute_aabb's
+    d == 0 (fw:127, 229); with tile_rule, only in the tiles of getRect (fw:232-236, aux:67-77) on
+    point_image and radius = ceil(max(extent, 3 FilterSize)) (fw:230), whatever the sign of d (an
+    ellipse or, where the radius-3 circle reaches behind the camera's plane, a hyperbola: fw:127 goes
+    on, fw:140-144 take its centre and sqrt(max(1e-4, h0)) as for an ellipse); per pixel renderCUDA's
+    plane intersection (fw:355-361), rho = min(rho3d, 2 |point_image - pixel|^2) (fw:362-366), the
+    hit's depth >= 0.2 (fw:369-372) and min(0.99, o exp(-rho/2)) >= 1/255 (fw:378-387)."""
+    mean = np.asarray(model["mean"][i], dtype=np.float64)
+    T, depth = splat_transform(mean, model["scale"][i], model["rot"][i], R_c2w, C, fx, fy, W, H)
+    out = np.zeros((H, W), dtype=bool)
+    p_view = np.asarray(R_c2w, dtype=np.float64).T @ (mean - np.asarray(C, dtype=np.float64))
+    normal = np.asarray(R_c2w, dtype=np.float64).T @ quat_to_rot(model["rot"][i])[:, 2]
+    box = screen_box(T)
+    if depth <= NEAR or np.dot(p_view, normal) == 0.0 or box is None:
+        return out
+    rect = tile_rect(box[0], box[1], W, H) if tile_rule else None
+    for y in range(H):
+        for x in range(W):
+            if tile_rule and not (rect[0] <= x // TILE < rect[1] and rect[2] <= y // TILE < rect[3]):
+                continue
+            px, py = x + 0.5, y + 0.5
+            k, l = px * T[2] - T[0], py * T[2] - T[1]
+            line = np.cross(k, l)
+            if line[2] == 0:
+                continue
+            u, v = line[0] / line[2], line[1] / line[2]
+            rho = min(u * u + v * v, FILTER_INV_SQUARE * float(np.sum((box[0] - [px, py]) ** 2)))
+            if u * T[2][0] + v * T[2][1] + T[2][2] < NEAR:
+                continue
+            out[y, x] = min(0.99, model["opacity"][i] * np.exp(-0.5 * rho)) >= 1.0 / 255.0
+    return out
+
+
 def render(model, R_c2w, C, fx, fy, W, H, background, centre="cutoff", tile_rule=False, near_depth="hit"):
     """model: dict with mean (N,3), scale (N,2), rot (N,4 wxyz), opacity (N,),
     sh (N,K,3), degree. Returns an (H, W, 3) image and the final T.

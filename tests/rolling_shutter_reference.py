@@ -53,6 +53,9 @@ __all__ = [
     "deblur3dgs_sample_times",
     "gsplat_pixel_time",
     "gsplat_row_instant",
+    "glm_slerp",
+    "gsplat_shutter_pose",
+    "gsplat_sh_campos",
     "dgut_pixel_time",
     "dgut_row_instant",
 ]
@@ -223,6 +226,68 @@ def gsplat_row_instant(row, col, W, H, open, close, readout):
     t = gsplat_pixel_time(np.asarray(col, dtype=np.float64) + 0.5,
                           np.asarray(row, dtype=np.float64) + 0.5, W, H, readout)
     return open + t * (close - open)
+
+
+def _quat_cast(R):
+    """glm::quat_cast of a rotation matrix: a unit quaternion (w, x, y, z) of R (its sign is free: the
+    slerp below takes the short arc)."""
+    w = np.sqrt(max(0.0, 1.0 + np.trace(R))) / 2
+    x = np.copysign(np.sqrt(max(0.0, 1.0 + R[0, 0] - R[1, 1] - R[2, 2])) / 2, R[2, 1] - R[1, 2])
+    y = np.copysign(np.sqrt(max(0.0, 1.0 - R[0, 0] + R[1, 1] - R[2, 2])) / 2, R[0, 2] - R[2, 0])
+    z = np.copysign(np.sqrt(max(0.0, 1.0 - R[0, 0] - R[1, 1] + R[2, 2])) / 2, R[1, 0] - R[0, 1])
+    q = np.array([w, x, y, z])
+    return q / np.linalg.norm(q)
+
+
+def _quat_matrix(q):
+    w, x, y, z = np.asarray(q, dtype=np.float64) / np.linalg.norm(q)
+    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+                     [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+                     [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
+
+
+def glm_slerp(x, y, a):
+    """glm::slerp(x, y, a) (g-truc/glm 33b4a62, the submodule gsplat v1.5.3 pins:
+    glm/ext/quaternion_common.inl lines 41-73): y negated when dot(x, y) < 0 (the short arc); a
+    componentwise lerp when cos > 1 - epsilon (float's, 1.19e-7, as gsplat calls it on floats);
+    else (sin((1 - a) angle) x + sin(a angle) z) / sin(angle), angle = acos(cos)."""
+    x, z = np.asarray(x, dtype=np.float64), np.asarray(y, dtype=np.float64)
+    cos = float(x @ z)
+    if cos < 0:
+        z, cos = -z, -cos
+    if cos > 1 - np.finfo(np.float32).eps:
+        return x + a * (z - x)
+    angle = np.arccos(cos)
+    return (np.sin((1 - a) * angle) * x + np.sin(a * angle) * z) / np.sin(angle)
+
+
+def gsplat_shutter_pose(viewmat_start, viewmat_end, u):
+    """gsplat's camera at relative frame time u between two world-to-camera 4x4 matrices: (R_w2c,
+    t_w2c, centre). Source: nerfstudio-project/gsplat v1.5.3 (937e299),
+    gsplat/cuda/include/Cameras.cuh:
+      lines 40-61  RollingShutterParameters: q = quat_cast of each viewmat's rotation, t its
+                   translation column (row-major input);
+      lines 276-288 interpolate_shutter_pose: t_rs = (1 - u) t_start + u t_end,
+                   q_rs = normalize(glm::slerp(q_start, q_end, u));
+      lines 260-274 ShutterPose: camera_world_position = rotate(inverse(q), -t), the world ray
+                   (-R^-1 t, R^-1 camera_ray).
+    The same rule on main: gsplat/cuda/include/Cameras.cuh interpolate_shutter_pose and
+    _torch_cameras.py. Not the centres lerped: the centre -R(u)^T t_rs bends when the camera turns."""
+    V0, V1 = np.asarray(viewmat_start, dtype=np.float64), np.asarray(viewmat_end, dtype=np.float64)
+    t = (1 - u) * V0[:3, 3] + u * V1[:3, 3]
+    q = glm_slerp(_quat_cast(V0[:3, :3]), _quat_cast(V1[:3, :3]), u)
+    R = _quat_matrix(q / np.linalg.norm(q))
+    return R, t, R.T @ -t
+
+
+def gsplat_sh_campos(viewmat, viewmat_rs):
+    """The camera position gsplat evaluates every Gaussian's SH from under a rolling shutter: the
+    mean of the two poses' centres (gsplat v1.5.3 gsplat/rendering.py lines 491-494:
+    campos = inverse(viewmats)[:3, 3]; with viewmats_rs, 0.5 (campos + campos_rs)), one for the
+    whole image, whatever the row's pose."""
+    c0 = np.linalg.inv(np.asarray(viewmat, dtype=np.float64))[:3, 3]
+    c1 = np.linalg.inv(np.asarray(viewmat_rs, dtype=np.float64))[:3, 3]
+    return 0.5 * (c0 + c1)
 
 
 # ---------------------------------------------------------------------------

@@ -67,6 +67,12 @@ def test_target_error_adds_batches_where_needed(tmp_path):
     assert header["refrender:targetReached"] == f"{reached} of {se.size} pixels"
 
 
+def test_target_error_alone_takes_four_batches(tmp_path):
+    # an error estimate needs batches: without --batches a target means B = 4 (the cap 8 B = 32)
+    ch, header = render_disk(tmp_path, "t4.exr", "--spp", 1, "--tspp", 4, "--target-error", 1e-9)
+    assert header["refrender:batches"] == 4 and (ch["samples"] / 4).min() == 4 and (ch["samples"] / 4).max() == 32
+
+
 @pytest.mark.parametrize("sampler", ["thesis", "jittered3d", "sobol"])
 def test_every_sampler_is_unbiased_for_the_moving_disk(tmp_path, sampler):
     # Reference: the same scene with many samples; each sampler's mean over
@@ -260,3 +266,26 @@ def test_convergence_help_describes_every_option_and_writes_where_cost_error_rea
     readme = (ROOT / "scripts" / "README.md").read_text()
     (curves,) = re.findall(r"--refrender-curves (\S+)", readme)
     assert os.path.join(defaults.out, "convergence.csv") == curves
+
+
+def test_clamped_estimates_are_warned_of_under_quiet_and_recorded(tmp_path):
+    """A batch estimate beyond +-2^20 is clamped (README, sums are exact):
+    every one of a 3x2 image's 2 batches over a background of red 3e6 that
+    the camera sees everywhere (a sphere far behind it) is, 12 in all. That
+    is said on stderr also with --quiet (a warning is no progress output) and
+    kept in the header as refrender:clampedEstimates, summed over merged
+    passes (under --quiet it once left no trace)."""
+    scene = tmp_path / "big.xml"
+    scene.write_text('<scene><camera position="0 0 0" lookat="0 0 -1" up="0 1 0" width="3" height="2"/>'
+                     '<background color="3e6 0 0"/><object position="0 0 10"><sphere radius="0.1"/></object></scene>')
+    args = [scene, "--spp", 1, "--tspp", 1, "--batches", 2, "--quiet"]
+    proc = run([*args, "-o", tmp_path / "one.exr"])
+    assert proc.returncode == 0, proc.stderr
+    assert "warning: 12 batch estimates exceeded" in proc.stderr, proc.stderr
+    assert read_full(tmp_path / "one.exr")[1]["refrender:clampedEstimates"] == 12
+    parts = [tmp_path / f"p{k}.exr" for k in range(2)]
+    for k, part in enumerate(parts):
+        assert run([*args, "--pass", f"{k}/2", "-o", part]).returncode == 0
+        assert read_full(part)[1]["refrender:clampedEstimates"] == 6
+    assert run(["merge", *parts, "-o", tmp_path / "m.exr", "--quiet"]).returncode == 0
+    assert read_full(tmp_path / "m.exr")[1]["refrender:clampedEstimates"] == 12

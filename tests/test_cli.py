@@ -79,7 +79,7 @@ def test_metadata_records_the_settings(tmp_path):
     assert img.shape == (16, 24, 4)
     assert header["refrender:spp"] == 4 and header["refrender:tspp"] == 3
     assert header["refrender:seed"] == "99" and float(header["refrender:epsilon"]) == 0.25
-    assert header["refrender:sampler"] == "thesis" and header["refrender:weightFunction"] == "box"
+    assert header["refrender:sampler"] == "sobol" and header["refrender:weightFunction"] == "box"
     assert header["refrender:scene"] == str(scene) and header["refrender:shutter"] == "0 1"
     assert int(header["refrender:rays"]) == 24 * 16 * 4 * 3
 
@@ -265,3 +265,36 @@ def test_a_missing_suite_model_says_to_run_make_scenes(tmp_path):
     proc = run([scene, "-o", tmp_path / "a.exr"])
     assert proc.returncode == 1
     assert "scenes/models/bunny.ply: cannot open" in proc.stderr and "run `make scenes`" in proc.stderr
+
+
+def test_extensions_follow_one_rule_and_out_exr_png_suggests_out_exr(tmp_path):
+    """-o's check and --preview's format read a name's extension by one rule
+    (the base name's last dot, not a leading one: ".png" has none), where
+    they once disagreed; and -o out.exr.png suggests -o out.exr and
+    --preview out.png, not out.exr.exr."""
+    scene = tmp_path / "s.xml"
+    scene.write_text(TINY)
+    proc = run([scene, "--spp", 1, "--tspp", 1, "-o", tmp_path / "out.exr.png"])
+    assert proc.returncode == 1, proc.stderr
+    stem = tmp_path / "out"
+    assert f"use -o {stem}.exr, and --preview {stem}.png" in proc.stderr, proc.stderr
+    proc = run([scene, "--spp", 1, "--tspp", 1, "-o", tmp_path / "a.exr", "--preview", tmp_path / ".png"])
+    assert proc.returncode == 1 and "no image format for the extension ''" in proc.stderr, proc.stderr
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["s.xml"]
+
+
+def test_refrender_bench_answers_help_and_refuses_what_it_does_not_know(tmp_path):
+    """refrender-bench's arguments are positional ([OUT.csv [quick|full
+    [SERIES]]]): --help prints its usage and exits 0, an unknown option, mode
+    or series exits 2 naming it, and neither creates a file nor starts a
+    benchmark (--help once became a CSV named "--help" and began the full
+    run)."""
+    bench = str(Path(BIN).parent / "refrender-bench")
+    for args, status, said in [(["--help"], 0, "usage: refrender-bench"), (["-h"], 0, "usage: refrender-bench"),
+                               (["out.csv", "--help"], 0, "usage: refrender-bench"),
+                               (["--bogus"], 2, "unknown option '--bogus'"), (["out.csv", "fast"], 2, "quick|full"),
+                               (["out.csv", "quick", "nosuch"], 2, "quick|full [SERIES]")]:
+        proc = subprocess.run([bench, *args], capture_output=True, text=True, cwd=tmp_path, timeout=30)
+        assert proc.returncode == status, (args, proc.stderr)
+        assert said in (proc.stdout if status == 0 else proc.stderr), (args, proc.stdout, proc.stderr)
+        assert list(tmp_path.iterdir()) == [], args

@@ -13,6 +13,20 @@
 /* "Did you mean": distances worked by hand (one deletion, one swap of
  * neighbours, case), the limit a third of the name's length (at least 1,
  * at most 3), ties to the first name. */
+/* One rule for every file name's extension (cli.c's -o check and
+ * preview.c's format once disagreed on ".png"): the base name's last dot,
+ * not a leading one (os.path.splitext's rule). */
+TEST(extension_is_the_base_names_last_dot_but_not_a_leading_one)
+{
+    CHECK(!strcmp(rr_extension("a/b.png"), ".png"));
+    CHECK(!strcmp(rr_extension("out.exr.png"), ".png"));
+    CHECK(!strcmp(rr_extension(".png"), ""));
+    CHECK(!strcmp(rr_extension("dir/.png"), ""));
+    CHECK(!strcmp(rr_extension("dir.exr/out"), ""));
+    CHECK(!strcmp(rr_extension("x."), "."));
+    CHECK(!strcmp(rr_extension(""), ""));
+}
+
 TEST(nearest_name_takes_slips_of_the_keyboard_and_nothing_else)
 {
     const char *const opts[] = {"crop-window", "spp", "tspp", "sampler", "seed", NULL};

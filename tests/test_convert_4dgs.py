@@ -17,13 +17,23 @@ sign. With (cos a, sin a, 0, 0) and (cos a, -sin a, 0, 0) it is a turn in the (x
 900c592 (no motion) and, reversed, one in the (z, t) plane after it (motion along z): a transpose
 instead of the reversal would keep it in (x, y). The covariance is rebuilt from scale/rot with
 3DGS's quaternion matrix (general_utils.py:79-100); SH coefficients keep 4DGS's order; the time
-terms drop when the spatial degree is below 3 (forward.cu:142) or with force_sh_3d."""
+terms drop when the spatial degree is below 3 (forward.cu:142) or with force_sh_3d.
+
+Hostile inputs need no torch: the tests write checkpoints in torch.save's layout themselves and make
+each part hostile (the view, the storage, a zip member, a pickled value, a model value), and run the
+converter under a 2 GiB address-space limit with a timeout, so a converter that hangs or asks for
+gigabytes fails fast. Each must be refused in one line naming the file (bounded in length), exit 1,
+no output; the expectations come from the format (a view's extent, a member's declared size, the
+archive's size) and from refrender's reader (src/io/gaussian_fdgs_ply.c), not from the converter.
+An -o that is the checkpoint, however named, or a FIFO/directory is refused and left as it was;
+a new PLY gets 0666 less the umask, as open(2) gives a new file."""
 import math
 import subprocess
 
 import numpy as np
 import pytest
 
+import fdgs_reference as fdgs
 from conftest import ROOT
 
 SCRIPT = str(ROOT / "scripts" / "convert_4dgs.py")
@@ -91,6 +101,408 @@ def test_a_truncated_archive_is_refused_naming_the_file(tmp_path):
     proc = convert(ckpt, out, *ARGS)
     assert proc.returncode == 1 and str(ckpt) in proc.stderr and "truncated" in proc.stderr, proc.stderr
     assert not out.exists()
+
+
+# ---- checkpoints written without torch: hostile inputs ------------------------
+#
+# torch.save's zip layout (archive/data.pkl, archive/data/<key>, protocol 2, tensors as
+# torch._utils._rebuild_tensor_v2(storage, offset, size, stride, ...), storages as persistent ids
+# ('storage', torch.FloatStorage, key, location, numel)), written here from that description with
+# stand-in modules named torch and torch._utils that exist only while pickling, so any view,
+# storage or member can be made as hostile as wanted, and the tests run without python3-torch.
+
+class FakeStorage:
+    def __init__(self, key, data, numel=None):
+        self.key, self.data = key, np.ascontiguousarray(data, "<f4")
+        self.numel = self.data.size if numel is None else numel
+
+
+class FakeTensor:
+    def __init__(self, storage, offset, size, stride):
+        self.storage, self.offset, self.size, self.stride = storage, offset, tuple(size), tuple(stride)
+
+    def __reduce__(self):
+        import collections
+        import sys
+        return (sys.modules["torch._utils"]._rebuild_tensor_v2,
+                (self.storage, self.offset, self.size, self.stride, False, collections.OrderedDict()))
+
+
+def fake_tensors(value, storages):
+    """value with every float numpy array as a contiguous FakeTensor over a storage of its own."""
+    if isinstance(value, np.ndarray):
+        st = FakeStorage(str(len(storages)), value.ravel())
+        storages.append(st)
+        return FakeTensor(st, 0, value.shape, tuple(s // 4 for s in np.array(value, "<f4", order="C").strides))
+    if isinstance(value, tuple):
+        return tuple(fake_tensors(v, storages) for v in value)
+    return value
+
+
+def fake_torch_save(path, obj, storages, compress=False, placeholder=None):
+    """torch.save(obj, path) of FakeTensors; placeholder (name, opcodes) puts raw pickle opcodes
+    pushing one object where the string name was pickled."""
+    import io
+    import pickle
+    import struct
+    import sys
+    import types
+    import zipfile
+    torch_mod, utils = types.ModuleType("torch"), types.ModuleType("torch._utils")
+
+    def _rebuild_tensor_v2(*args):
+        raise AssertionError("never called when writing")
+    _rebuild_tensor_v2.__module__, _rebuild_tensor_v2.__qualname__ = "torch._utils", "_rebuild_tensor_v2"
+    utils._rebuild_tensor_v2 = _rebuild_tensor_v2
+    float_storage = type("FloatStorage", (), {"__module__": "torch", "__qualname__": "FloatStorage"})
+    torch_mod.FloatStorage, torch_mod._utils = float_storage, utils
+
+    class Pickler(pickle.Pickler):
+        def persistent_id(self, o):
+            return ("storage", float_storage, o.key, "cpu", o.numel) if isinstance(o, FakeStorage) else None
+    saved = {k: sys.modules.get(k) for k in ("torch", "torch._utils")}
+    sys.modules.update({"torch": torch_mod, "torch._utils": utils})
+    try:
+        buf = io.BytesIO()
+        Pickler(buf, protocol=2).dump(obj)
+    finally:
+        for k, v in saved.items():
+            if v is None:
+                sys.modules.pop(k, None)
+            else:
+                sys.modules[k] = v
+    data = buf.getvalue()
+    if placeholder:
+        name, opcodes = placeholder
+        pickled = b"X" + struct.pack("<I", len(name)) + name.encode()
+        assert data.count(pickled) == 1
+        data = data.replace(pickled, opcodes)
+    method = zipfile.ZIP_DEFLATED if compress else zipfile.ZIP_STORED
+    with zipfile.ZipFile(path, "w", method) as z:
+        z.writestr("archive/data.pkl", data)
+        z.writestr("archive/byteorder", "little")
+        for st in storages:
+            z.writestr(f"archive/data/{st.key}", st.data.tobytes())
+        z.writestr("archive/version", "3\n")
+
+
+def simple_capture(n=2, **change):
+    """A capture() of n Gaussians with identity 4D rotations (Sigma = diag(exp(2 s))): degree 3 x 2
+    (48 coefficients); change replaces entries by CAPTURE name."""
+    fields = dict(xyz=np.arange(3 * n, dtype=np.float64).reshape(n, 3), features=np.zeros((n, 48, 3)),
+                  scaling=np.log(np.full((n, 3), 0.1)), rotation=np.tile([1.0, 0, 0, 0], (n, 1)),
+                  opacity=np.zeros(n), t=np.linspace(1, 2, n), scaling_t=np.full(n, np.log(0.5)),
+                  rotation_r=np.tile([1.0, 0, 0, 0], (n, 1)))
+    fields.update({k: v for k, v in change.items() if k in fields})
+    capture = list(fdgs.make_capture(**fields))
+    for index, value in change.get("entries", {}).items():
+        capture[index] = value
+    return tuple(capture)
+
+
+def write_fake(path, capture=None, iteration=30000, **kw):
+    storages = []
+    fake_torch_save(path, (fake_tensors(capture if capture is not None else simple_capture(), storages), iteration),
+                    storages, **kw)
+    return storages
+
+
+def convert_limited(ckpt, out, *args, timeout=60, umask=None, flags=ARGS):
+    """The converter in an address space of 2 GiB (a converter that asks for many GiB fails
+    fast instead of taking the machine), killed after timeout seconds (a hang fails the test)."""
+    import os
+    import resource
+
+    def limit():
+        resource.setrlimit(resource.RLIMIT_AS, (2 << 30, 2 << 30))
+        if umask is not None:
+            os.umask(umask)
+    try:
+        return subprocess.run(["/usr/bin/python3", SCRIPT, str(ckpt), "-o", str(out), "--rotation-convention",
+                               "after-900c592", *flags, *args], capture_output=True, text=True, timeout=timeout,
+                              preexec_fn=limit, env={**os.environ, "OPENBLAS_NUM_THREADS": "1"})
+    except subprocess.TimeoutExpired:
+        pytest.fail(f"the converter did not finish within {timeout} s (it hangs)")
+
+
+def refused(proc, *words, name=None):
+    """Exit 1, one line on stderr naming the file (the checkpoint unless name), bounded, with words."""
+    lines = proc.stderr.splitlines()
+    assert proc.returncode == 1 and len(lines) == 1 and "Traceback" not in proc.stderr, proc.stderr[-3000:]
+    assert len(lines[0]) < 1200 and (name is None or str(name) in lines[0]), lines[0][:3000]
+    for w in words:
+        assert w in lines[0], lines[0]
+    return lines[0]
+
+
+def test_a_checkpoint_written_without_torch_converts_to_the_closed_form(tmp_path):
+    """Identity rotations: no velocity, t_var = exp(2 s_t), the scales as given (the fake writer
+    is right, so the refusals below are refusals of the hostile part only)."""
+    ckpt, out = tmp_path / "c.pth", tmp_path / "m.ply"
+    write_fake(ckpt)
+    proc = convert_limited(ckpt, out)
+    assert proc.returncode == 0, proc.stderr
+    names, cols = read_ply(out)
+    np.testing.assert_allclose(cols["t_var"], [0.25, 0.25], rtol=1e-6)
+    np.testing.assert_allclose(cols["vel_0"], [0, 0], atol=1e-7)
+    np.testing.assert_allclose(np.exp(cols["scale_1"]), [0.1, 0.1], rtol=1e-6)
+    np.testing.assert_allclose(cols["t_center"], [1, 2], rtol=1e-7)
+    assert names[-1] == "sh4d_143"
+
+
+def output_cases(tmp_path, ckpt):
+    import os
+    (tmp_path / "sub").mkdir()
+    os.symlink(ckpt, tmp_path / "link.ply")
+    os.link(ckpt, tmp_path / "hard.ply")
+    return {"same": ckpt, "spelled": tmp_path / "sub" / ".." / ckpt.name, "symlink": tmp_path / "link.ply",
+            "hardlink": tmp_path / "hard.ply"}
+
+
+@pytest.mark.parametrize("case", ["same", "spelled", "symlink", "hardlink"])
+def test_an_output_that_is_the_checkpoint_is_refused(tmp_path, case):
+    ckpt = tmp_path / "x.pth"
+    write_fake(ckpt)
+    before = ckpt.read_bytes()
+    out = output_cases(tmp_path, ckpt)[case]
+    refused(convert_limited(ckpt, out), "input", name=out)
+    assert ckpt.read_bytes() == before and ckpt.is_file() and not ckpt.is_symlink()
+
+
+def test_a_fifo_or_directory_as_output_is_refused_and_kept(tmp_path):
+    import os
+    import stat
+    ckpt, fifo, folder = tmp_path / "x.pth", tmp_path / "out.ply", tmp_path / "dir.ply"
+    write_fake(ckpt)
+    os.mkfifo(fifo)
+    folder.mkdir()
+    refused(convert_limited(ckpt, fifo), "FIFO", name=fifo)
+    assert stat.S_ISFIFO(os.stat(fifo).st_mode)
+    refused(convert_limited(ckpt, folder), "directory", name=folder)
+    assert folder.is_dir() and sorted(p.name for p in tmp_path.iterdir()) == ["dir.ply", "out.ply", "x.pth"]
+
+
+def test_a_device_as_output_is_refused_and_kept(tmp_path):
+    """A character device node (1, 3), /dev/null's, made in tmp_path: as root the previous converter
+    replaced it with a regular file (as it would /dev/null itself)."""
+    import os
+    import stat
+    if os.geteuid() != 0:
+        pytest.skip("making a device node needs root (mknod)")
+    ckpt, dev = tmp_path / "x.pth", tmp_path / "null.ply"
+    write_fake(ckpt)
+    os.mknod(dev, 0o666 | stat.S_IFCHR, os.makedev(1, 3))
+    refused(convert_limited(ckpt, dev), "device", name=dev)
+    assert stat.S_ISCHR(os.stat(dev).st_mode)
+
+
+@pytest.mark.parametrize("umask, mode", [(0o022, 0o644), (0o002, 0o664), (0o077, 0o600)])
+def test_the_output_gets_the_umask_mode_of_a_new_file(tmp_path, umask, mode):
+    import os
+    ckpt, out = tmp_path / "x.pth", tmp_path / "m.ply"
+    write_fake(ckpt)
+    proc = convert_limited(ckpt, out, umask=umask)
+    assert proc.returncode == 0, proc.stderr
+    assert os.stat(out).st_mode & 0o777 == mode  # open(2): 0666 & ~umask
+
+
+def test_a_fifo_or_device_as_input_is_refused_without_reading(tmp_path):
+    import os
+    fifo = tmp_path / "in.pth"
+    os.mkfifo(fifo)
+    refused(convert_limited(fifo, tmp_path / "a.ply", timeout=30), "FIFO", name=fifo)
+    refused(convert_limited("/dev/zero", tmp_path / "b.ply", timeout=30), "device", name="/dev/zero")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["in.pth"]
+
+
+def hostile_view(size, stride, offset=0, numel=None):
+    """_xyz as a view of a 3-float storage (numel: what the pickle says it holds)."""
+    st = FakeStorage("xyz", [1.0, 2.0, 3.0], numel)
+    return FakeTensor(st, offset, size, stride), st
+
+
+@pytest.mark.parametrize("size, stride, offset, words", [
+    ((10 ** 9, 3), (0, 1), 0, "zero stride"),  # 2 KB asking for 24 GB as float64
+    ((1000, 3), (3, 1), 0, "reaches past its storage"),
+    ((-1, 3), (3, 1), 0, "negative"),
+    ((1 << 62, 3), (3, 1), 0, "beyond 2^40"),
+    ((1, 3), (3, 1), 1, "reaches past its storage"),
+])
+def test_a_tensor_is_bounded_by_its_storage(tmp_path, size, stride, offset, words):
+    ckpt, out = tmp_path / "c.pth", tmp_path / "m.ply"
+    storages = []
+    capture = list(fake_tensors(simple_capture(), storages))
+    capture[1], st = hostile_view(size, stride, offset)
+    fake_torch_save(ckpt, (tuple(capture), 30000), storages + [st])
+    refused(convert_limited(ckpt, out), words, name=ckpt)
+    assert not out.exists()
+
+
+def test_a_storage_the_pickle_says_is_larger_than_its_member_is_refused(tmp_path):
+    ckpt, out = tmp_path / "c.pth", tmp_path / "m.ply"
+    storages = []
+    capture = list(fake_tensors(simple_capture(), storages))
+    capture[1], st = hostile_view((10 ** 8, 3), (3, 1), numel=3 * 10 ** 8)
+    fake_torch_save(ckpt, (tuple(capture), 30000), storages + [st])
+    refused(convert_limited(ckpt, out), "declares 12 bytes", name=ckpt)
+
+
+def test_a_deflated_member_inflating_far_beyond_its_archive_is_refused_unread(tmp_path):
+    """64 MiB of zeros deflate to about 64 KiB: declared, consistent with the pickle, but more than
+    4 times the archive's size plus 1 MiB, so it is refused before it is inflated."""
+    ckpt, out = tmp_path / "bomb.pth", tmp_path / "m.ply"
+    n = (64 << 20) // 12
+    write_fake(ckpt, simple_capture(entries={1: np.zeros((n, 3), np.float32)}), compress=True)
+    assert ckpt.stat().st_size < 1 << 20
+    refused(convert_limited(ckpt, out), "archive's size", name=ckpt)
+
+
+def test_tensors_viewing_one_storage_read_it_once(tmp_path):
+    """Seven entries, views of one 1.4 MB storage at different offsets (as torch saves views of one
+    tensor): read once, as torch.load reads a key once, so they stay within the budget of 4x the
+    archive's size; counted once per tensor, they would be refused."""
+    ckpt, out = tmp_path / "c.pth", tmp_path / "m.ply"
+    n = 20000
+    parts = {1: np.random.default_rng(2).normal(size=(n, 3)), 4: np.full((n, 3), np.log(0.1)),
+             5: np.tile([1.0, 0, 0, 0], (n, 1)), 6: np.zeros((n, 1)), 13: np.ones((n, 1)),
+             14: np.full((n, 1), np.log(0.5)), 15: np.tile([1.0, 0, 0, 0], (n, 1))}
+    shared = FakeStorage("shared", np.concatenate([a.ravel() for a in parts.values()]))
+    storages = []
+    plain = simple_capture(n=n, features=np.zeros((n, 1, 3)), entries={0: 0, 18: 0})
+    capture = list(fake_tensors(tuple(None if i in parts else v for i, v in enumerate(plain)), storages))
+    offset = 0
+    for index, a in parts.items():
+        capture[index] = FakeTensor(shared, offset, a.shape, (a.shape[1], 1))
+        offset += a.size
+    fake_torch_save(ckpt, (tuple(capture), 30000), storages + [shared])
+    assert 7 * shared.data.nbytes > 4 * ckpt.stat().st_size + (1 << 20)
+    proc = convert_limited(ckpt, out)
+    assert proc.returncode == 0, proc.stderr
+    names, cols = read_ply(out)
+    np.testing.assert_allclose(cols["x"], parts[1][:, 0], rtol=1e-6)
+    np.testing.assert_allclose(cols["t_var"], 0.25, rtol=1e-6)
+
+
+def zip_entries(data):
+    """{name: (local header offset, central header offset)} of a zip file's bytes."""
+    import struct
+    out, pos = {}, 0
+    while (pos := data.find(b"PK\x01\x02", pos)) >= 0:
+        nlen = struct.unpack_from("<H", data, pos + 28)[0]
+        name = data[pos + 46:pos + 46 + nlen].decode()
+        out[name] = (struct.unpack_from("<I", data, pos + 42)[0], pos)
+        pos += 4
+    return out
+
+
+def damage(path, member, how):
+    """Damages one member of a zip in place: the ways zipfile fails reading a member."""
+    import struct
+    data = bytearray(path.read_bytes())
+    local, central = zip_entries(bytes(data))[member]
+    nlen, xlen = struct.unpack_from("<HH", data, local + 26)
+    start = local + 30 + nlen + xlen
+    if how == "crc":  # BadZipFile: Bad CRC-32
+        data[start] ^= 0xFF
+    elif how == "method":  # NotImplementedError: compression method 99
+        struct.pack_into("<H", data, local + 8, 99)
+        struct.pack_into("<H", data, central + 10, 99)
+    elif how == "encrypted":  # RuntimeError: password required
+        for off in (local + 6, central + 8):
+            struct.pack_into("<H", data, off, struct.unpack_from("<H", data, off)[0] | 1)
+    elif how == "stream":  # zlib.error: invalid deflate data
+        data[start:start + 4] = b"\xff\xff\xff\xff"
+    elif how == "header":  # BadZipFile: bad local header magic
+        data[local:local + 4] = b"PK\x09\x09"
+    elif how == "short":  # EOFError: the deflate stream ends early
+        csize = struct.unpack_from("<I", data, central + 20)[0]
+        for off in (local + 18, central + 20):
+            struct.pack_into("<I", data, off, csize // 2)
+    path.write_bytes(bytes(data))
+
+
+@pytest.mark.parametrize("member", ["archive/data.pkl", "archive/data/0"])
+@pytest.mark.parametrize("how", ["crc", "method", "encrypted", "stream", "header", "short"])
+def test_a_damaged_member_is_refused_in_one_line(tmp_path, member, how):
+    ckpt, out = tmp_path / "c.pth", tmp_path / "m.ply"
+    capture = simple_capture(n=200, xyz=np.random.default_rng(1).normal(size=(200, 3)))
+    write_fake(ckpt, capture, compress=how in ("stream", "short"))
+    damage(ckpt, member, how)
+    refused(convert_limited(ckpt, out), member, name=ckpt)
+    assert not out.exists()
+
+
+def nested_list(depth):
+    """Pickle opcodes pushing a list nested depth deep: depth EMPTY_LISTs, then depth - 1 APPENDs."""
+    return b"]" * depth + b"a" * (depth - 1)
+
+
+@pytest.mark.parametrize("where", [0, 16, "iteration"])
+def test_a_deep_or_huge_value_is_refused_in_a_bounded_line(tmp_path, where):
+    """A list nested 200,000 deep or a 20 MB string where an int or True belongs: one line of
+    bounded length, no RecursionError."""
+    ckpt, out = tmp_path / "c.pth", tmp_path / "m.ply"
+    for value, placeholder in (("PLACEHOLDER", ("PLACEHOLDER", nested_list(200_000))), ("x" * 20_000_000, None)):
+        if where == "iteration":
+            storages = []
+            fake_torch_save(ckpt, (fake_tensors(simple_capture(), storages), value), storages,
+                            placeholder=placeholder)
+        else:
+            write_fake(ckpt, simple_capture(entries={where: value}), placeholder=placeholder)
+        refused(convert_limited(ckpt, out), name=ckpt)
+        assert not out.exists()
+
+
+@pytest.mark.parametrize("change, words", [
+    (dict(scaling=np.full((2, 3), -400.0)), "capture()[4] _scaling is -400 at Gaussian 0"),
+    (dict(scaling_t=np.array([0.0, 150.0])), "capture()[14] _scaling_t is 150 at Gaussian 1"),
+    (dict(xyz=np.zeros((0, 3)), features=np.zeros((0, 48, 3)), scaling=np.zeros((0, 3)),
+          rotation=np.zeros((0, 4)), opacity=np.zeros(0), t=np.zeros(0), scaling_t=np.zeros(0),
+          rotation_r=np.zeros((0, 4))), "no Gaussians"),
+    # exp(2 (-60)) = 7.7e-53: a positive float64, 0 as the float32 refrender reads
+    (dict(scaling_t=np.array([0.0, -60.0])), "Gaussian 1: 't_var' = 7.66764807e-53 is 0 as a float32"),
+    (dict(xyz=np.array([[0, 0, 0], [0, 2e15, 0]])), "Gaussian 1: 'y' = 1.99999997e+15 is beyond 1e15"),
+    (dict(scaling=np.array([[0, 0, 0], [0, 0, 40.0]])), "Gaussian 1: 'scale_"),
+])
+def test_values_refrender_would_refuse_are_refused(tmp_path, change, words):
+    ckpt, out = tmp_path / "c.pth", tmp_path / "m.ply"
+    write_fake(ckpt, simple_capture(**change))
+    refused(convert_limited(ckpt, out), words, name=ckpt)
+    assert not out.exists()
+
+
+def test_a_time_duration_that_is_0_as_a_float32_is_refused(tmp_path):
+    ckpt, out = tmp_path / "c.pth", tmp_path / "m.ply"
+    write_fake(ckpt)
+    flags = ["--time_duration", "0", "1e-50", "--prefilter_var", "-1", "--force_sh_3d", "false"]
+    proc = convert_limited(ckpt, out, flags=flags)
+    assert proc.returncode == 2 and "float32" in proc.stderr and not out.exists(), proc.stderr
+
+
+def test_an_env_map_model_is_refused_unless_dropped_by_name(tmp_path):
+    ckpt, out = tmp_path / "c.pth", tmp_path / "m.ply"
+    write_fake(ckpt, simple_capture(entries={17: np.zeros((3, 4, 4), np.float32)}))
+    refused(convert_limited(ckpt, out), "env_map", "--drop-env-map", name=ckpt)
+    assert not out.exists()
+    proc = convert_limited(ckpt, out, "--drop-env-map")
+    assert proc.returncode == 0 and "env_map dropped" in proc.stdout, proc.stderr
+    assert b"comment env_map dropped" in out.read_bytes()[:2000]
+    write_fake(ckpt, simple_capture(entries={17: None}))  # env_map_res 0: train.py:75 saves None
+    assert convert_limited(ckpt, out).returncode == 0
+
+
+def test_force_sh_3d_with_time_harmonics_is_refused(tmp_path):
+    """48 coefficients are 16 x 3 time harmonics: a force_sh_3d model holds (max_sh_degree + 1)^2
+    (gaussian_model.py:222-224), so saying force_sh_3d true contradicts the checkpoint."""
+    ckpt, out = tmp_path / "c.pth", tmp_path / "m.ply"
+    force = ["--time_duration", "0", "10", "--prefilter_var", "-1", "--force_sh_3d", "true"]
+    write_fake(ckpt)
+    refused(convert_limited(ckpt, out, flags=force), "--force_sh_3d true", "48 coefficients", name=ckpt)
+    write_fake(ckpt, simple_capture(features=np.zeros((2, 16, 3))))
+    proc = convert_limited(ckpt, out, flags=force)
+    assert proc.returncode == 0, proc.stderr
+    names, cols = read_ply(out)
+    assert names[-1] == "sh4d_47" and set(cols["sh_degree_t"]) == {0}
 
 
 # ---- a real checkpoint -------------------------------------------------------
@@ -230,7 +642,7 @@ def test_prefilter_and_the_sh_degrees_that_take_effect(tmp_path):
     np.testing.assert_allclose(cols["t_var"], tvar, rtol=2e-6)
     assert set(cols["time_duration"]) == {2.5} and set(cols["sh_degree"]) == {2} and set(cols["sh_degree_t"]) == {0}
     assert names[-1] == "sh4d_26"  # degree 2 below 3: no time terms (forward.cu:142), 9 coefficients x RGB
-    make_checkpoint(ckpt)
+    make_checkpoint(ckpt, edit=lambda c: c[:3] + (c[3].detach()[:, :15],) + c[4:])  # 16: a force_sh_3d model's
     proc = convert(ckpt, out, "--time_duration", "0", "10", "--prefilter_var", "-1", "--force_sh_3d", "true")
     names, cols = read_ply(out)
     assert proc.returncode == 0 and names[-1] == "sh4d_47" and set(cols["sh_degree_t"]) == {0}

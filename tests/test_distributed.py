@@ -103,6 +103,38 @@ def test_merge_refuses_passes_that_disagree_on(tmp_path, name, type_name, value)
     assert not out.exists()
 
 
+def source_build_id():
+    """The build id as README's Output section defines it, computed here from
+    the sources: SHA-256 over `sha256sum` lines of every .c, .h and .cpp
+    under src/, in byte order of their paths relative to src/."""
+    import hashlib
+    files = sorted((p.relative_to(ROOT / "src").as_posix() for p in (ROOT / "src").glob("*/*")
+                    if p.suffix in (".c", ".h", ".cpp")), key=str.encode)
+    lines = "".join(f"{hashlib.sha256((ROOT / 'src' / f).read_bytes()).hexdigest()}  {f}\n" for f in files)
+    return hashlib.sha256(lines.encode()).hexdigest()
+
+
+def test_states_of_another_build_do_not_merge_or_resume(tmp_path):
+    # A pass or checkpoint carries the build that rendered it (the hash of
+    # the code under src/, which the test recomputes); one from another
+    # build is refused by name, as a rebuilt shared tree under a running
+    # array job would otherwise mix two renderers' pixels.
+    p0, p1 = passes_of_frame(tmp_path, 3)
+    ours = read_full(p0)[1]["refrender:build"]
+    assert ours == source_build_id()
+    other = "0" * 64
+    patch_attribute(p1, "refrender:build", "string", other.encode())
+    out = tmp_path / "merged.exr"
+    proc = run(["merge", p0, p1, "-o", out])
+    assert proc.returncode == 1 and "different builds of refrender" in proc.stderr, proc.stderr
+    assert ours in proc.stderr and other in proc.stderr and str(p1) in proc.stderr, proc.stderr
+    assert not out.exists()
+    resumed = tmp_path / "resumed.exr"
+    proc = run([scene_file(tmp_path), "--frame", 3, *COMMON, "--pass", "1/2", "-o", resumed, "--resume", p1])
+    assert proc.returncode == 1 and "different builds of refrender" in proc.stderr, proc.stderr
+    assert not resumed.exists()
+
+
 def test_merge_refuses_a_pass_that_lacks_the_frame(tmp_path):
     # Frame 0's shutter rendered without --frame: the same pixels, but no
     # frame number to check the sequence by; mixed with numbered passes it is
@@ -207,11 +239,12 @@ def pixel_batches(state):
 def test_slurm_task_resumes_from_its_own_checkpoint(tmp_path):
     # Task 0 is stopped mid-render (SIGTERM, as Slurm's requeue and time limit
     # send): it leaves its checkpoint; run again (SLURM_RESTART_COUNT=1, same
-    # index) it resumes from it, and the frame is still one process's image.
+    # index) it resumes from it, and the frame is still one process's image. The pass takes about
+    # 0.7 s (tspp 512): at tspp 64 it took 0.1 s, often ending before the signal reached it.
     import signal
     import time
     scene, out = scene_file(tmp_path), tmp_path / "out"
-    slow = ["--res", "96x72", "--spp", 4, "--tspp", 64, "--batches", 4, "--seed", 5, "--checkpoint-every", 0]
+    slow = ["--res", "96x72", "--spp", 4, "--tspp", 512, "--batches", 4, "--seed", 5, "--checkpoint-every", 0]
     args = ["--passes", 2, out, "--", scene, *slow]
     log = tmp_path / "task0.log"
     with open(log, "w") as f:
@@ -387,3 +420,89 @@ def test_two_tasks_never_merge_one_frame_at_once(tmp_path):
     lock.rmdir()
     by_hand = sbatch_task(["--merge", *args], task_env(0, array=(0, 1)))
     assert by_hand.returncode == 0 and (out / "render.exr").exists(), by_hand.stderr
+
+
+def stub_refrender(tmp_path):
+    """A refrender that records its arguments, one call a line, and creates the file its -o names (a
+    pass, or a merged frame), so that the script's arithmetic is seen without rendering."""
+    stub, record = tmp_path / "refrender-stub", tmp_path / "calls"
+    stub.write_text(f'#!/bin/sh\necho "$*" >> {record}\n'
+                    'while [ $# -gt 1 ]; do [ "$1" = -o ] && : > "$2"; shift; done\n')
+    stub.chmod(0o755)
+    return stub, record
+
+
+@pytest.mark.parametrize("frames, task, frame", [("0010-0010", 0, 10), ("08-09", 0, 8), ("08-09", 1, 9),
+                                                 ("007-012", 5, 12)])
+def test_slurm_frame_numbers_are_decimal(tmp_path, frames, task, frame):
+    # The shell reads 0010 as octal 8 and 08 as an error: the frame a task renders, its --frame and
+    # the merged file's number are the decimal ones written (one pass a frame: task K is frame A + K).
+    stub, record = stub_refrender(tmp_path)
+    out = tmp_path / "out"
+    proc = sbatch_task(["--passes", 1, "--frames", frames, out, "--", "s.xml"],
+                       task_env(task, array=(0, 9), REFRENDER=stub))
+    assert proc.returncode == 0, proc.stderr
+    render, merge = record.read_text().splitlines()
+    assert f"--frame {frame}" in render and "--pass 0/1" in render, render
+    assert merge.startswith("merge ") and merge.endswith(f"render.{frame:04d}.exr"), merge
+
+
+def test_slurm_pass_count_is_decimal_for_the_script_and_refrender(tmp_path):
+    # --passes 010: ten passes (not 8 to the script and 10 to refrender), so task 9 is pass 9/10
+    stub, record = stub_refrender(tmp_path)
+    proc = sbatch_task(["--passes", "010", tmp_path / "out", "--", "s.xml"],
+                       task_env(9, array=(0, 9), REFRENDER=stub))
+    assert proc.returncode == 0, proc.stderr
+    assert "--pass 9/10" in record.read_text().splitlines()[0]
+
+
+@pytest.mark.parametrize("option, value", [("--passes", "0"), ("--passes", "-1"), ("--passes", ""),
+                                           ("--passes", "abc"), ("--passes", "1e3"), ("--passes", "9999999999"),
+                                           ("--frames", "1-x"), ("--frames", "3-2"), ("--frames", "0-99999999999")])
+def test_slurm_numbers_that_are_not_decimal_counts_are_refused(tmp_path, option, value):
+    stub, record = stub_refrender(tmp_path)
+    args = ["--passes", 1, option, value, tmp_path / "out", "--", "s.xml"]
+    proc = sbatch_task(args, task_env(0, array=(0, 0), REFRENDER=stub), timeout=60)  # before: 1e10 passes looped
+    assert proc.returncode == 2 and len(proc.stderr.splitlines()) == 1, proc.stderr
+    assert proc.stderr.startswith("slurm-render: ") and option in proc.stderr and not record.exists(), proc.stderr
+
+
+def render_parallel(args, cwd, **env):
+    return subprocess.run([str(ROOT / "scripts" / "render-parallel.sh"), *map(str, args)], capture_output=True,
+                          text=True, cwd=cwd, env={**os.environ, "REFRENDER": BIN, **env}, timeout=300)
+
+
+def test_render_parallel_passes_arguments_word_for_word(tmp_path):
+    # A scene path with a space and a -D value with spaces reach refrender as one word each: the merge
+    # equals one process's render of the same arguments (bit for bit, README).
+    scene = tmp_path / "my scene.xml"
+    scene.write_text(FRAMED.replace('<frames rate="24"/>', '<frames rate="24"/><background color="$bg"/>'))
+    args = [scene, "-D", "bg=0.5 0.25 0.125", *COMMON]
+    proc = render_parallel([2, tmp_path / "m.exr", "--", *args], tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    render_ok(*args, "-o", tmp_path / "one.exr")
+    one, merged = read_full(tmp_path / "one.exr")[0], read_full(tmp_path / "m.exr")[0]
+    assert all(np.array_equal(one[c], merged[c]) for c in one)
+    assert np.allclose(merged["B"][merged["A"] == 0], 0.125)  # the background given by -D
+    # nothing in an argument is run: not by a shell (;), not by GNU parallel's {= perl =}
+    for hostile in ("x.xml;touch injected;:", "{= system('touch injected') =}", "$(touch injected)"):
+        proc = render_parallel([2, tmp_path / "h.exr", "--", hostile, *COMMON], tmp_path)
+        assert proc.returncode != 0 and f"refrender: {hostile}: cannot open" in proc.stderr, proc.stderr
+        assert not (tmp_path / "injected").exists(), hostile
+
+
+@pytest.mark.parametrize("n", ["0", "-1", "", "abc", "2x"])
+def test_render_parallel_refuses_a_pass_count_that_is_no_count(tmp_path, n):
+    proc = render_parallel([n, tmp_path / "m.exr", "--", scene_file(tmp_path), *COMMON], tmp_path)
+    assert proc.returncode == 2 and len(proc.stderr.splitlines()) == 1, proc.stderr
+    assert f"expected a count from 1 to 999999999, got '{n}'" in proc.stderr
+    assert not (tmp_path / "m.exr").exists()
+
+
+def test_render_parallel_reads_08_as_eight_passes(tmp_path):
+    stub, record = recording_refrender(tmp_path)
+    args = [scene_file(tmp_path), "--batches", 8, "--spp", 1, "--tspp", 2, "--quiet"]
+    proc = render_parallel(["08", tmp_path / "m.exr", "--", *args], tmp_path, REFRENDER=str(stub))
+    assert proc.returncode == 0, proc.stderr
+    passes = sorted(l.split("--pass ")[1].split()[0] for l in record.read_text().splitlines() if "--pass" in l)
+    assert passes == [f"{k}/8" for k in range(8)]

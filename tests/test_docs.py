@@ -410,3 +410,10 @@ def test_the_gaussian_splatting_workflow_runs(tmp_path):
                               env={**os.environ, "REFRENDER": str(tmp_path / "build" / "refrender")})
         assert proc.returncode == 0, (cmd, proc.stderr)
     assert (tmp_path / "f.png").exists() and "deblur-nerf" in proc.stdout, proc.stdout
+
+
+def test_no_script_puts_its_own_folder_on_the_path_again():
+    # Python puts a script's own folder first on sys.path: a script inserting
+    # it again only repeats it.
+    inserting = {p.name for p in (ROOT / "scripts").glob("*.py") if "sys.path.insert" in p.read_text()}
+    assert not inserting, inserting

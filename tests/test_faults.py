@@ -6,6 +6,7 @@ one: a disk that stays full) or the Nth rename fail, for every N until a run
 meets no fault. A periodic checkpoint that fails is a warning: the render
 goes on and the previous checkpoint stays."""
 import os
+from pathlib import Path
 import subprocess
 
 import numpy as np
@@ -213,3 +214,28 @@ def test_scene_export_writes_its_three_outputs_or_none(tmp_path, scene, op, stic
         proc, faulted, _ = faulty_run(export_args(tmp_path), n, op, log, sticky)
         assert faulted and proc.returncode == 1 and not any(out.exists() for out in outputs), n
         assert [p.name for p in tmp_path.iterdir() if ".tmp-" in p.name] == [], n
+
+
+def test_gaussians_short_of_memory_are_counted_apart_from_full_kbuffers(tmp_path):
+    # Every sample meets 70 coplanar splats (more than the k-buffer's 64
+    # within epsilon) and, with every realloc of the render's worker threads
+    # failing, finds no memory for its Gaussians: each of the W*H*spp*tspp
+    # samples is one of each, and the two are told apart (the memory
+    # drops were added to the overflow count, one sample twice, and called
+    # "more than 64 hits within epsilon").
+    if b"__asan_init" in Path(BIN).read_bytes():
+        pytest.skip("under AddressSanitizer realloc is ASan's own allocator, which the shim cannot fail")
+    ply = tmp_path / "g.ply"
+    assert run(["gen", "plane", "--count", 100, "--gaussians", "3dgs", "-o", ply]).returncode == 0
+    splats = '<splat center="0 0 -10" normal="0 0 1" radius="30"/>' * 70
+    scene = tmp_path / "s.xml"
+    scene.write_text('<scene><camera position="0 0 5" lookat="0 0 0" up="0 1 0" fov="30" width="4" height="3"/>'
+                     f'<object><pointModel>{splats}</pointModel></object>'
+                     f'<object><gaussianModel file="{ply}"/></object></scene>')
+    env = dict(os.environ, LD_PRELOAD=SHIM, RR_FAULT_OP="realloc-in-threads", ASAN_OPTIONS="verify_asan_link_order=0")
+    proc = subprocess.run([BIN, *map(str, [scene, "--spp", 1, "--tspp", 2, "--quiet", "-o", tmp_path / "o.exr"])],
+                          capture_output=True, text=True, env=env, timeout=120)
+    samples = 4 * 3 * 1 * 2
+    assert proc.returncode == 0, proc.stderr
+    assert f"warning: {samples} samples had more than 64 hits within epsilon" in proc.stderr, proc.stderr
+    assert f"warning: {samples} samples ran out of memory for their Gaussians" in proc.stderr, proc.stderr

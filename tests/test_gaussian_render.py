@@ -332,3 +332,24 @@ def test_no_2dgs_splat_is_missed_by_wide_lenses_far_off_axis(tmp_path, fov):
     err = np.abs(img[..., :3] - expect)
     assert err.max() < TOL, (err.max(), np.unravel_index(err.argmax(), err.shape))
     assert (final_t < 0.5).sum() > 20
+
+
+def test_with_the_tile_rule_a_splat_reaching_behind_the_camera_plane_is_drawn_in_its_hyperbola_tiles(tmp_path):
+    """A splat whose radius-3 circle reaches behind the camera's plane: its image is a hyperbola,
+    and e0ed020's compute_aabb goes on with it (only d == 0 culls), so the official image draws
+    the splat's ray hits in the tiles about the hyperbola's centre, filtered about that centre
+    (GAUSSIANS.md). Its pixels, one by one, are those gs2d_reference.drawn_pixels finds from
+    forward.cu; refrender dropped the splat (0 pixels)."""
+    R, C, f, w, h = np.eye(3), np.zeros(3), 20.0, 48, 48
+    th = np.radians(30)  # v = 4 turned 30 deg at depth 5: 3 * 4 sin 30 = 6 > 5 reaches z < 0
+    model = {"mean": np.array([[0.0, 0.0, 5.0]]), "scale": np.array([[0.5, 4.0]]),
+             "rot": np.array([[np.cos(th / 2), np.sin(th / 2), 0.0, 0.0]]), "opacity": np.array([0.8]),
+             "sh": ((np.array([0.9, 0.2, 0.1]) - 0.5) / ref.SH_C0).reshape(1, 1, 3), "degree": 0}
+    img, read = _render_2d(tmp_path, model, R, C, f, w, h, ' tileRule="on"')
+    T, _ = ref.splat_transform(read["mean"][0], read["scale"][0], read["rot"][0], R, C, f, f, w, h)
+    assert (T @ np.diag([9.0, 9.0, -1.0]) @ T.T)[2, 2] > 0  # a hyperbola
+    drawn = ref.drawn_pixels(read, 0, R, C, f, f, w, h)
+    assert drawn.sum() > 40 and not drawn[:16].any()  # the hyperbola's tiles start at pixel row 16
+    assert np.array_equal(img[..., 3] > 0, drawn)
+    expect, _ = ref.render(read, R, C, f, f, w, h, BACKGROUND, tile_rule=True)
+    assert np.abs(img[..., :3] - expect).max() < TOL

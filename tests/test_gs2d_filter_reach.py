@@ -20,8 +20,10 @@ splat's own footprint, and every one must be found:
  - random single splats, depths 0.22 to 4 and turns up to 87 degrees, under 90- and 58-degree
    lenses;
  - the same kinds under a moving camera (a transforms.json trajectory that turns and travels)
-   with an off-centre principal point: a `gsplat` rolling shutter exposes each row at one
-   instant r / (H - 1) of the shutter, so row r is the reference at that instant's pose, and the
+   with an off-centre principal point: a sharp frame (`--time 0`) under a `lines` rolling shutter
+   of line delay 1 / (H - 1) exposes each row at one instant r / (H - 1) of the trajectory, so row
+   r is the reference at that instant's pose (the trajectory's own; the `gsplat` preset would
+   interpolate the first and last pose as gsplat does: TRAJECTORIES.md), and the
    boxes, built once for the whole shutter, must hold the filter for every pose. The principal
    point is an integer number of pixels off the centre: the image is then a crop of the centred
    image of a larger sensor (the reference's camera, which has no principal point).
@@ -324,10 +326,11 @@ def render_moving(tmp_path, m, semantics="2dgs"):
     transforms_json(tmp_path / "transforms.json")
     scene = tmp_path / "moving.xml"
     scene.write_text('<scene><camera><trajectory file="transforms.json"/></camera>'
-                     '<shutter open="0" close="1" rolling="gsplat"/><background color="0.1 0.2 0.3"/>'
+                     f'<shutter open="0" close="1" rolling="lines" lineDelay="{1 / (MH - 1)!r}"/>'
+                     '<background color="0.1 0.2 0.3"/>'
                      f'<object name="g"><gaussianModel file="{ply}" semantics="{semantics}"/></object></scene>')
     out = tmp_path / "moving.exr"
-    proc = run([scene, "--pixel-filter", "point", "--spp", 1, "--tspp", 1, "-o", out, "--quiet"])
+    proc = run([scene, "--pixel-filter", "point", "--time", 0, "--spp", 1, "--tspp", 1, "-o", out, "--quiet"])
     assert proc.returncode == 0, proc.stderr
     return read_exr(out)[0], gsply.read(ply)
 

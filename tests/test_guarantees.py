@@ -4,6 +4,7 @@ rendering, stale temporary files of killed runs are cleaned up, and frame
 numbers at the ends of the int range do not wrap."""
 import os
 import signal
+import socket
 import subprocess
 import time
 
@@ -109,12 +110,18 @@ def test_temporary_files_of_a_killed_run_are_removed_by_the_next(tmp_path):
     out = tmp_path / "o.exr"
     dead = subprocess.Popen(["true"])
     dead.wait()  # a pid that no longer runs
-    stale = tmp_path / f"o.exr.tmp-{dead.pid}-AbCdEf"
+    # temporaries carry pid@host (atomicfile.h); the host's '-', '@' and '/' as '_'
+    host = "".join("_" if c in "-@/" or ord(c) <= 32 else c for c in socket.gethostname())
+    stale = tmp_path / f"o.exr.tmp-{dead.pid}@{host}-AbCdEf"
     stale.write_bytes(b"half a file")
-    live = tmp_path / f"o.exr.tmp-{os.getpid()}-XyZwVu"  # a live process's: kept
+    live = tmp_path / f"o.exr.tmp-{os.getpid()}@{host}-XyZwVu"  # a live process's: kept
     live.write_bytes(b"still being written")
+    # Another node's, with a pid that runs nowhere here: pids are per node, so
+    # on a shared file system it may be a live writer's there
+    elsewhere = tmp_path / f"o.exr.tmp-{dead.pid}@{host}x-GhIjKl"
+    elsewhere.write_bytes(b"written on another node")
     assert run([s, "-o", out, *FAST]).returncode == 0
-    assert out.exists() and not stale.exists() and live.exists()
+    assert out.exists() and not stale.exists() and live.exists() and elsewhere.exists()
 
 
 def test_models_that_would_not_read_back_are_not_written(tmp_path):

@@ -10,7 +10,7 @@ an external entity as a model path is named (it read as an empty path,
 "point model has no splats")."""
 import json
 
-from conftest import read_full, run
+from conftest import BIN, read_full, run
 
 LONG = "x" * 500
 SCENE = """<scene><camera position="0 0 5" lookat="0 0 0" width="4" height="4"/>
@@ -60,3 +60,19 @@ def test_an_external_entity_in_a_path_is_named(tmp_path):
     proc = run([scene, "-o", tmp_path / "e.exr"])
     assert proc.returncode == 1, proc.stderr
     assert "no splats" not in proc.stderr and "external XML entity 'ext'" in proc.stderr, proc.stderr
+
+
+def test_the_command_attribute_holds_a_long_command_line_whole(tmp_path):
+    # refrender:command is the arguments joined by spaces: a 3,000-character
+    # command line (long -D values) is kept whole; a 2 KB buffer cut it
+    # silently.
+    scene = tmp_path / "s.xml"
+    scene.write_text(SCENE.replace("$vx", "0"))
+    out = tmp_path / "o.exr"
+    params = [a for k in range(8) for a in ("-D", f"unused{k}=" + "y" * 400)]  # a value holds at most 511
+    args = [scene, *params, "--spp", 1, "--tspp", 1, "--quiet", "-o", out]
+    proc = run(args)
+    assert proc.returncode == 0, proc.stderr
+    command = read_full(out)[1]["refrender:command"]
+    # (getopt has moved the scene after the options by then)
+    assert sorted(command.split(" ")) == sorted(map(str, [BIN, *args])), command[-80:]

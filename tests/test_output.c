@@ -19,7 +19,7 @@ static const char *state_path(const char *name)
 /* The identity attributes a state must carry, for a w x h render. */
 static void identity(attr_list *a, int w, int h)
 {
-    static const char *const keys[] = {"refrender:sceneHash", "refrender:inputsHash", "refrender:sampler",
+    static const char *const keys[] = {"refrender:build", "refrender:sceneHash", "refrender:inputsHash", "refrender:sampler",
                                        "refrender:spp", "refrender:tspp", "refrender:seed", "refrender:epsilon",
                                        "refrender:kernelSigma", "refrender:shutter", "refrender:weightFunction",
                                        "refrender:timeFactor", "refrender:batches", "refrender:timeIntegration",

@@ -264,3 +264,109 @@ def test_exact_time_refuses_a_rolling_shutter(tmp_path):
     proc = run([scene(tmp_path, 'rolling="lines" lineDelay="0.01"'), "--time-integration", "exact",
                 "-o", tmp_path / "o.exr", "--quiet"])
     assert proc.returncode != 0 and "rolling shutter" in proc.stderr, proc.stderr
+
+
+# ---- gsplat's pose between a start and an end pose ----------------------------------------------------
+# A camera 20 units from the world origin turning 20 degrees while it moves 0.2 (two TUM poses at the
+# shutter's ends): gsplat lerps the world-to-camera translation -R^T c and slerps the rotation
+# (rolling_shutter_reference.gsplat_shutter_pose, from gsplat v1.5.3's Cameras.cuh), so the centre
+# bends off the line between the poses' centres, by about u (1 - u) theta^2 / 2 x 20 = 0.3 at mid-frame.
+TURN = np.radians(20.0)
+P0, P1 = np.array([20.0, 0.0, 0.0]), np.array([20.2, 0.0, 0.0])
+SPHERE, SPHERE_R = np.array([21.0, 0.0, 6.0]), 1.5
+
+
+def turning_poses():
+    """The two camera-to-world poses (OpenCV axes): (R, centre) at t = 0 and t = 1."""
+    c, s = np.cos(TURN), np.sin(TURN)
+    return (np.eye(3), P0), (np.array([[c, 0, s], [0, 1, 0], [-s, 0, c]]), P1)
+
+
+def viewmat(R, centre):
+    V = np.eye(4)
+    V[:3, :3], V[:3, 3] = R.T, -R.T @ centre
+    return V
+
+
+SPHERE_XML = (f'<object position="{SPHERE[0]} {SPHERE[1]} {SPHERE[2]}"><sphere radius="{SPHERE_R}" color="1 1 1"/>'
+              f'<material shading="unlit"/></object>')
+
+
+def turning_scene(tmp_path, objects=SPHERE_XML):
+    (_, c0), (_, c1) = turning_poses()
+    h = TURN / 2
+    (tmp_path / "turn.tum").write_text(f"0 {c0[0]!r} {c0[1]!r} {c0[2]!r} 0 0 0 1\n"
+                                       f"1 {c1[0]!r} {c1[1]!r} {c1[2]!r} 0 {np.sin(h)!r} 0 {np.cos(h)!r}\n")
+    xml = (f'<scene><camera fov="{FOV}" width="{W}" height="{H}"><trajectory file="turn.tum" axes="opencv"/></camera>'
+           f'<shutter open="0" close="1" rolling="gsplat"/><background color="0 0 0"/>{objects}</scene>')
+    p = tmp_path / "turn.xml"
+    p.write_text(xml)
+    return p
+
+
+def sphere_hits(pose_at):
+    """Per pixel (H x W): whether the ray through its centre, from the pose of its row's relative
+    time u = row / (H - 1) (top to bottom), meets the sphere; and how far from grazing it is."""
+    f = H / (2 * np.tan(np.radians(FOV) / 2))
+    hit, margin = np.zeros((H, W), bool), np.zeros((H, W))
+    for row in range(H):
+        R, centre = pose_at(row / (H - 1))
+        for col in range(W):
+            d = R @ np.array([(col + 0.5 - W / 2) / f, (row + 0.5 - H / 2) / f, 1.0])
+            d /= np.linalg.norm(d)
+            w = SPHERE - centre
+            miss = np.sqrt(max(0.0, w @ w - (w @ d) ** 2))
+            hit[row, col], margin[row, col] = miss <= SPHERE_R and w @ d > 0, abs(miss - SPHERE_R)
+    return hit, margin
+
+
+def test_the_gsplat_preset_moves_a_turning_camera_as_gsplat_interpolates_its_two_poses(tmp_path):
+    (R0, c0), (R1, c1) = turning_poses()
+
+    def gsplat(u):
+        R_w2c, _, centre = reference.gsplat_shutter_pose(viewmat(R0, c0), viewmat(R1, c1), u)
+        return R_w2c.T, centre
+
+    def centre_lerped(u):  # refrender's rule before: the trajectory's own linear pose
+        return gsplat(u)[0], (1 - u) * c0 + u * c1
+
+    expect, margin = sphere_hits(gsplat)
+    out = tmp_path / "turn.exr"
+    proc = run([turning_scene(tmp_path), "--pixel-filter", "point", "--spp", 1, "--tspp", 1, "-o", out, "--quiet"])
+    assert proc.returncode == 0, proc.stderr
+    got = read_full(out)[0]["R"] > 0.5
+    assert margin.min() > 1e-6  # no pixel's ray grazes the sphere
+    assert expect.sum() > 100 and np.array_equal(got, expect), int((got != expect).sum())
+    # the old rule draws another image: the centre lerped misses or hits the sphere elsewhere
+    assert (sphere_hits(centre_lerped)[0] != expect).sum() > 10
+
+
+def test_the_gsplat_preset_takes_every_gaussians_sh_direction_from_the_two_poses_mean_centre(tmp_path):
+    """gsplat evaluates each Gaussian's SH once, from the mean of the start and end poses' centres
+    (rolling_shutter_reference.gsplat_sh_campos, rendering.py:491-494), whatever the row's pose. One
+    3DGS Gaussian of SH degree 1 over black: every pixel's RGB / A is its colour (alpha c + 0 (1 -
+    alpha), A = alpha), the same in every row; from each row's own centre it would change by
+    about 0.01 from row to row."""
+    import gs3d_raster_reference as gs3d
+    import gsply
+    (R0, c0), (R1, c1) = turning_poses()
+    sh = np.array([[[0.2, 0.1, -0.3], [1.5, -1.0, 0.5], [-0.5, 1.2, 0.8], [1.0, 0.6, -1.4]]])
+    model = {"mean": SPHERE[None, :], "scale": np.full((1, 3), 0.4), "rot": np.array([[1.0, 0, 0, 0]]),
+             "opacity": np.array([0.9]), "sh": sh}
+    gsply.write(tmp_path / "g.ply", model)
+    scene = turning_scene(tmp_path, '<object name="g"><gaussianModel file="g.ply" semantics="gsplat"/></object>')
+    out = tmp_path / "g.exr"
+    proc = run([scene, "--pixel-filter", "point", "--spp", 1, "--tspp", 1, "-o", out, "--quiet"])
+    assert proc.returncode == 0, proc.stderr
+    ch = read_full(out)[0]
+    seen = ch["A"] > 0.05
+    colour = np.stack([ch[c][seen] / ch["A"][seen] for c in "RGB"], axis=-1)
+    campos = reference.gsplat_sh_campos(viewmat(R0, c0), viewmat(R1, c1))
+    d = SPHERE - campos
+    expect = gs3d.sh_colour(sh[0], 1, d / np.linalg.norm(d))
+    assert seen.sum() > 100 and np.abs(colour - expect).max() < 1e-5, np.abs(colour - expect).max()
+    # planted: the SH from the first or the last row's centre differs by far more
+    for u in (0.0, 1.0):
+        _, _, centre = reference.gsplat_shutter_pose(viewmat(R0, c0), viewmat(R1, c1), u)
+        d = SPHERE - centre
+        assert np.abs(gs3d.sh_colour(sh[0], 1, d / np.linalg.norm(d)) - expect).max() > 1e-3

@@ -1,5 +1,6 @@
 /* Samplers: the defining property of each (stratification, net property),
  * range, determinism, and unbiasedness of a known integral. */
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -7,7 +8,7 @@
 #include "render/sampler.h"
 
 typedef struct {
-    double x[4096], y[4096], t[4096];
+    double x[4096], y[4096], t[4096], w[4096];
 } batch_buf;
 
 /* every test's shutter: [2, 3.5) */
@@ -16,7 +17,7 @@ typedef struct {
 
 static sampler make(sampler_kind kind, int grid, int tspp, int factor)
 {
-    sampler s = {kind, 12345, grid, tspp, factor};
+    sampler s = {kind, 12345, grid, tspp, factor, 0};
     return s;
 }
 
@@ -24,7 +25,7 @@ static void run_batch(const sampler *s, uint64_t pixel, uint32_t batch, batch_bu
 {
     sampler_scratch sc;
     CHECK(sampler_scratch_init(&sc, s) == 0);
-    sampler_batch(s, T0, T1, pixel, 7, 9, batch, &sc, b->x, b->y, b->t);
+    sampler_batch(s, T0, T1, pixel, 7, 9, batch, &sc, b->x, b->y, b->t, b->w);
     sampler_scratch_free(&sc);
 }
 
@@ -131,7 +132,7 @@ TEST(sobol_first_dimensions_form_scrambled_0m2_nets)
             for (int k = 0; k < 256; k++)
                 x[k] = buf.x[k] - 7, y[k] = buf.y[k] - 9;
             CHECK(is_net(x, y, 8));
-            for (int k = 0; k < 64; k++) /* and so is every aligned power-of-2 block */
+            for (int k = 0; k < 64; k++) /* the batch comes in time order: the 64 points of the shutter's second quarter form a net too */
                 x[k] = buf.x[64 + k] - 7, y[k] = buf.y[64 + k] - 9;
             CHECK(is_net(x, y, 6));
         }
@@ -214,17 +215,125 @@ TEST(uniform_numbers_are_in_unit_interval_with_mean_half)
     CHECK_NEAR(sum / 100000, 0.5, 5 * sqrt(1 / 12.0 / 100000));
 }
 
-/* Regression: counts in 64 bits, and Sobol' batches inside
- * the 2^32 points of the sequence (batch * n was a uint32 product, so later
- * batches repeated earlier points and the standard error shrank to 0). */
-TEST(sampler_check_refuses_counts_past_int_and_sobol_past_its_points)
+/* Regression: counts in 64 bits (spp 4096 and tspp 10^6 overflowed an int). */
+TEST(sampler_check_refuses_counts_past_int)
 {
-    sampler s = {SAMPLER_THESIS, 1, 64, 1000000, 1}; /* spp 4096, tspp 10^6 */
+    sampler s = {SAMPLER_THESIS, 1, 64, 1000000, 1, 0}; /* spp 4096, tspp 10^6 */
     CHECK(sampler_count(&s) == 4096000000LL);
-    CHECK(sampler_check(&s, 1, NULL) == -1);
-    sampler sob = {SAMPLER_SOBOL, 1, 1, 1 << 20, 1}; /* n = 2^20: 4096 batches fill the sequence */
-    CHECK(sampler_check(&sob, 4096, NULL) == 0);
-    CHECK(sampler_check(&sob, 4097, NULL) == -1);
-    sob.kind = SAMPLER_JITTERED3D; /* hashed streams have no such end */
-    CHECK(sampler_check(&sob, 4097, NULL) == 0);
+    CHECK(sampler_check(&s, NULL) == -1);
+    sampler sob = {SAMPLER_SOBOL, 1, 1, 1 << 20, 1, 0};
+    CHECK(sampler_check(&sob, NULL) == 0);
+}
+
+/* Batches of sobol are independent replicates: each its own scramble of the
+ * sequence's first n points. Consecutive blocks of one sequence (as before)
+ * would together form a net of 2n points; independent scrambles almost never
+ * do, and batch 1 is a net on its own. */
+TEST(sobol_batches_are_independent_scrambles_not_blocks_of_one_sequence)
+{
+    sampler s = make(SAMPLER_SOBOL, 1, 64, 1);
+    double x[128], y[128];
+    int joint_nets = 0;
+    for (uint64_t pixel = 0; pixel < 20; pixel++) {
+        run_batch(&s, pixel, 0, &buf);
+        run_batch(&s, pixel, 1, &buf2);
+        for (int k = 0; k < 64; k++) {
+            x[k] = buf.x[k] - 7, y[k] = buf.y[k] - 9;
+            x[64 + k] = buf2.x[k] - 7, y[64 + k] = buf2.y[k] - 9;
+        }
+        CHECK(is_net(x + 64, y + 64, 6));
+        joint_nets += is_net(x, y, 7);
+    }
+    CHECK(joint_nets <= 2);
+}
+
+/* Equal strata (one batch, no error bars): every weight is 1. */
+TEST(equal_strata_weigh_every_sample_one)
+{
+    for (int kind = 0; kind < 3; kind++) {
+        sampler s = make((sampler_kind)kind, 2, 16, 4);
+        run_batch(&s, 5, 3, &buf);
+        for (int i = 0; i < 64; i++)
+            CHECK(buf.w[i] == 1.0);
+    }
+}
+
+/* The thesis sampler keeps its own images: weights 1 whatever random_strata. */
+TEST(thesis_ignores_random_strata)
+{
+    sampler s = make(SAMPLER_THESIS, 2, 16, 4), r = s;
+    r.random_strata = 1;
+    run_batch(&s, 9, 2, &buf);
+    run_batch(&r, 9, 2, &buf2);
+    CHECK(memcmp(buf.t, buf2.t, 64 * sizeof(double)) == 0);
+    for (int i = 0; i < 64; i++)
+        CHECK(buf2.w[i] == 1.0);
+}
+
+/* Random strata: the times of a spatial cell (jittered3d) or of the batch
+ * (sobol, n a power of two) hold one time per stratum of the sampler, so the
+ * strata's widths, m w / m, add up to the shutter: the weights sum to m. */
+TEST(random_strata_weights_are_positive_and_sum_to_the_count)
+{
+    for (int kind = 1; kind < 3; kind++) {
+        sampler s = make((sampler_kind)kind, 1, 64, 1);
+        s.random_strata = 1;
+        for (uint64_t pixel = 0; pixel < 50; pixel++) {
+            run_batch(&s, pixel, (uint32_t)pixel % 4, &buf);
+            double sum = 0;
+            int ok = 1;
+            for (int i = 0; i < 64; i++) {
+                ok &= buf.w[i] > 0 && buf.w[i] < 2 && buf.t[i] >= T0 && buf.t[i] < T1;
+                sum += buf.w[i];
+            }
+            CHECK(ok);
+            CHECK_NEAR(sum, 64.0, 1e-9);
+        }
+    }
+}
+
+/* The estimate of a step in time, sum w [t < s] / sum w: unbiased (mean over
+ * 4000 batches within 5 standard errors of the step's place) and not on a
+ * lattice (two batches of a pixel practically never agree exactly), which is
+ * what lets the batches' spread see the step's error. With equal strata the
+ * estimate is a count over 64, and batches agree often: that half of the
+ * test is the planted bug, and it must find ties. */
+static void step_estimates(sampler *s, double step, double *est, int n)
+{
+    for (int k = 0; k < n; k++) {
+        run_batch(s, (uint64_t)k / 2, (uint32_t)k % 2, &buf);
+        double hit = 0, sum = 0;
+        for (int i = 0; i < 64; i++) {
+            hit += buf.w[i] * (buf.t[i] < T0 + step * (T1 - T0));
+            sum += buf.w[i];
+        }
+        est[k] = hit / sum;
+    }
+}
+
+static int pairs_agreeing(const double *est, int n)
+{
+    int ties = 0;
+    for (int k = 0; k + 1 < n; k += 2)
+        ties += est[k] == est[k + 1];
+    return ties;
+}
+
+TEST(random_strata_estimate_a_step_without_bias_or_lattice)
+{
+    static double est[4000];
+    for (int kind = 1; kind < 3; kind++) {
+        sampler s = make((sampler_kind)kind, 1, 64, 1);
+        s.random_strata = 1;
+        step_estimates(&s, 0.3037, est, 4000);
+        double sum = 0, sumsq = 0;
+        for (int k = 0; k < 4000; k++)
+            sum += est[k], sumsq += est[k] * est[k];
+        double mean = sum / 4000, sd = sqrt(fmax(sumsq / 4000 - mean * mean, 0));
+        CHECK_NEAR(mean, 0.3037, 5 * sd / sqrt(4000.0));
+        CHECK(pairs_agreeing(est, 4000) == 0);
+        s.random_strata = 0;
+        step_estimates(&s, 0.3037, est, 4000);
+        CHECK(pairs_agreeing(est, 4000) > 200);
+    }
 }

@@ -119,6 +119,17 @@ TEST(scene_errors_name_file_and_line)
     CHECK(fails_with("<scene>\n<camera fov='abc'/>\n</scene>", "mem.xml:2: <camera>: attribute 'fov'"));
     CHECK(fails_with("<scene>\n\n<camera fov='190'/></scene>", "mem.xml:3: <camera>: camera fov"));
     CHECK(fails_with("<scene>\n<bogus/>\n</scene>", "mem.xml:2: <bogus>: unknown element"));
+    /* a 2,000-character name is shown by its first 64 characters, and the
+     * reason still ends the message (the name once pushed it out) */
+    static char xml[4600];
+    char name[2001];
+    memset(name, 'q', 2000), name[2000] = 0;
+    snprintf(xml, sizeof xml, "<scene>\n<%s/>\n</scene>", name);
+    CHECK(fails_with(xml, "mem.xml:2: <qqqqqqqqqqqqqqqqqqqqqqqqqqqqqqqqqqqqqqqqqqqqqqqqqqqqqqqqqqqqqqqq...>: unknown element "
+                          "(expected camera, "));
+    snprintf(xml, sizeof xml, "<scene>\n<camera %s=\"1\"/>\n</scene>", name);
+    CHECK(fails_with(xml, "mem.xml:2: <camera>: unknown attribute "
+                          "'qqqqqqqqqqqqqqqqqqqqqqqqqqqqqqqqqqqqqqqqqqqqqqqqqqqqqqqqqqqqqqqq...'"));
     CHECK(fails_with("<scene>\n<object>\n<sphere radius='1' colour='1 0 0'/></object></scene>",
                      "mem.xml:3: <sphere>: unknown attribute 'colour'"));
     CHECK(fails_with("<scene>\n<object>\n<sphere radius='-1'/></object></scene>", "mem.xml:3: <sphere>"));

@@ -262,7 +262,7 @@ TEST(motion_bounds_hold_the_interpolated_path)
     const char *text = "0 0 0 0 0 0 0 1\n1 0.3 0.1 0 0.1 0.2 0 0.9746794344808963\n"
                        "2 0.5 -0.2 0.4 -0.2 0.3 0.1 0.9273618495495703\n3 1 0 0.2 0.3 0.1 0.4 0.8602325267042626\n"
                        "4 1.2 0.5 0 0 0.5 0 0.8660254037844386\n";
-    for (int k = TRAJECTORY_LINEAR; k <= TRAJECTORY_BEZIER_SE3; k++) {
+    for (int k = TRAJECTORY_LINEAR; k <= TRAJECTORY_GSPLAT; k++) {
         trajectory tr;
         rr_error e;
         CHECK(parse(text, &tr, &e) == 0);
@@ -290,6 +290,30 @@ TEST(motion_bounds_hold_the_interpolated_path)
         CHECK(turn <= tr.turn_rate * (1 + 1e-6));
         trajectory_free(&tr);
     }
+}
+
+/* gsplat's rolling-shutter pose (trajectory.h): a camera at (10, 0, 0)
+ * turning 90 degrees about z in place. Its world-to-camera translations
+ * -R^T p are (-10, 0, 0) and (0, 10, 0), at u = 1/2 (-5, 5, 0), and the
+ * rotation there Rz(45): the centre -Rz(45) (-5, 5, 0) = (5 sqrt 2, 0, 0),
+ * 10 / sqrt 2 from the origin, where linear keeps it at (10, 0, 0). A
+ * file cannot name it. */
+TEST(gsplat_interpolation_lerps_the_world_to_camera_translation)
+{
+    trajectory_knot k[2] = {{0, {10, 0, 0}, {1, 0, 0, 0}}, {1, {10, 0, 0}, {sqrt(0.5), 0, 0, sqrt(0.5)}}};
+    trajectory tr = {TRAJECTORY_GSPLAT, 0, 2, k, NULL, 0, 0, NULL};
+    rr_error e;
+    CHECK(trajectory_prepare(&tr, "two poses", &e) == 0);
+    vec3 p;
+    double q[4];
+    trajectory_pose(&tr, 0.5, &p, q);
+    printf("    centre (%.15g, %.15g, %.15g)\n", p.x, p.y, p.z);
+    CHECK(fabs(p.x - 5 * sqrt(2.0)) < 1e-12 && fabs(p.y) < 1e-12 && fabs(p.z) < 1e-12);
+    CHECK(fabs(q[0] - cos(M_PI / 8)) < 1e-12 && fabs(q[3] - sin(M_PI / 8)) < 1e-12);
+    tr.interp = TRAJECTORY_LINEAR;
+    trajectory_pose(&tr, 0.5, &p, q);
+    CHECK(p.x == 10 && p.y == 0);
+    CHECK(trajectory_interp_parse("gsplat") == -1 && !strcmp(trajectory_interp_name(TRAJECTORY_GSPLAT), "gsplat"));
 }
 
 /* ---- nerfstudio transforms.json ---------------------------------------- */

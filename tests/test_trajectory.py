@@ -485,4 +485,8 @@ def test_export_tum_rate_mistakes_are_named(tmp_path):
     proc = run(["export", scene, "--shutter", "1.2,1.3", "--tum-rate", 2, "--tum", tmp_path / "a.tum", "-o",
                 tmp_path / "x.json"])
     assert proc.returncode == 1 and "no multiple of 1/2 lies in the exported span" in proc.stderr, proc.stderr
+    # k / R with k beyond 2^53 is no longer every multiple (and 1.7e308 made k inf, cast to an int: UBSan)
+    for rate in ["1.7e308", "1e16"]:
+        proc = run(["export", scene, "--tum-rate", rate, "--tum", tmp_path / "a.tum", "-o", tmp_path / "x.json"])
+        assert proc.returncode == 1 and "beyond 2^53" in proc.stderr, (rate, proc.stderr)
     assert not list(tmp_path.iterdir())

@@ -126,10 +126,13 @@ void accel_sphere_bounds_cb(const struct RTCBoundsFunctionArguments *args)
 {
     const scene_object *o = args->geometryUserPtr;
     aabb b = scene_object_bounds(o);
-    double pad = 1e-5 * o->sphere_radius;
+    /* rounded outward as every other box (a cast to the nearest float put
+     * a 1 mm sphere's box at x = 1000 23 um inside it) */
+    float lo[3], hi[3];
+    aabb_round_out(b, lo, hi);
     struct RTCBounds *r = args->bounds_o;
-    r->lower_x = (float)(b.lo.x - pad), r->lower_y = (float)(b.lo.y - pad), r->lower_z = (float)(b.lo.z - pad);
-    r->upper_x = (float)(b.hi.x + pad), r->upper_y = (float)(b.hi.y + pad), r->upper_z = (float)(b.hi.z + pad);
+    r->lower_x = lo[0], r->lower_y = lo[1], r->lower_z = lo[2];
+    r->upper_x = hi[0], r->upper_y = hi[1], r->upper_z = hi[2];
 }
 
 /* We never call rtcOccluded; the callback exists so the geometry is complete. */
@@ -159,6 +162,7 @@ int accel_ray_meets_swept_sphere(const accel *a, unsigned obj, vec3 org, vec3 di
 static void object_sphere(const scene_object *o, vec3 *center, double *radius)
 {
     if (o->kind == OBJECT_GAUSSIANS) { /* (accel_build.c gives the filter's footprint its own) */
+        RR_DCHECK(!o->gaussians.dynamic); /* its rest means are no bound: object_travel takes its paths' box */
         aabb b = scene_object_bounds(o);
         *center = v3_scale(v3_add(b.lo, b.hi), 0.5), *radius = 0.5 * v3_len(v3_sub(b.hi, b.lo));
         return;
@@ -356,7 +360,7 @@ static void trace_static(const accel *a, vec3 org, vec3 dir, kbuffer *kb)
 static void copy_kbuffer(kbuffer *dst, const kbuffer *src)
 {
     dst->count = src->count;
-    dst->dropped = src->dropped;
+    dst->dropped_t = src->dropped_t;
     dst->closest = src->closest;
     dst->epsilon = src->epsilon;
     memcpy(dst->hits, src->hits, (size_t)src->count * sizeof *dst->hits);

@@ -8,7 +8,7 @@
 void kbuffer_reset(kbuffer *kb, float epsilon)
 {
     kb->count = 0;
-    kb->dropped = 0;
+    kb->dropped_t = INFINITY;
     kb->closest = INFINITY;
     kb->epsilon = epsilon;
 }
@@ -30,7 +30,8 @@ void kbuffer_insert(kbuffer *kb, const surface_hit *h)
     while (pos > 0 && hit_before(h, &kb->hits[pos - 1]))
         pos--;
     if (kb->count == KBUFFER_MAX) {
-        kb->dropped++;
+        float lost = pos == KBUFFER_MAX ? h->t : kb->hits[KBUFFER_MAX - 1].t;
+        kb->dropped_t = lost < kb->dropped_t ? lost : kb->dropped_t;
         if (pos == KBUFFER_MAX)
             return;
         kb->count--; /* the farthest entry makes room */
@@ -45,6 +46,13 @@ void kbuffer_insert(kbuffer *kb, const surface_hit *h)
         while (kb->count > 0 && !kbuffer_within(kb->hits[kb->count - 1].t, kb->closest, kb->epsilon))
             kb->count--;
     }
+}
+
+int kbuffer_overflowed(const kbuffer *kb)
+{
+    /* the window's test in kbuffer_insert, with the final closest; a drop
+     * leaves the buffer full (without any hit, closest + epsilon is inf) */
+    return kb->count == KBUFFER_MAX && kb->dropped_t <= kb->closest + kb->epsilon;
 }
 
 float kbuffer_cutoff(const kbuffer *kb)

@@ -19,7 +19,9 @@ typedef struct {
 
 typedef struct {
     int count;
-    int dropped;     /* hits beyond KBUFFER_MAX within epsilon (farthest dropped) */
+    float dropped_t; /* the nearest hit that found no room (INFINITY: none); whether
+                        it lies within epsilon of the final closest hit is what
+                        kbuffer_overflowed decides, after the traversal */
     float closest, epsilon;
     surface_hit hits[KBUFFER_MAX]; /* sorted by (t, obj, prim) */
 } kbuffer;
@@ -36,6 +38,15 @@ static inline int kbuffer_within(float t, float closest, float epsilon)
 void kbuffer_reset(kbuffer *kb, float epsilon);
 /* Inserts a hit if it lies within epsilon of the closest so far. */
 void kbuffer_insert(kbuffer *kb, const surface_hit *h);
+
+/* Did more than KBUFFER_MAX hits lie within epsilon of the closest? Decided
+ * from the final closest hit, so it does not depend on the order the hits
+ * came in (a hit dropped while the window was wider, before a nearer hit
+ * arrived, may lie beyond the final window: that is no overflow). Every
+ * dropped hit comes after every kept one in (t, obj, prim) order, so when
+ * the hits within the final window number more than KBUFFER_MAX the
+ * nearest dropped one is the first of them that did not fit. */
+int kbuffer_overflowed(const kbuffer *kb);
 
 /* The farthest distance a ray still needs to reach: just past closest +
  * epsilon (the window is closed). */

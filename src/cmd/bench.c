@@ -160,6 +160,7 @@ static void *baseline_worker(void *arg)
     sampler_scratch_init(&ss, smp);
     int n = (int)sampler_count(smp); /* the bench sets small counts */
     double *x = malloc(n * sizeof *x), *y = malloc(n * sizeof *y), *t = malloc(n * sizeof *t);
+    double *w = malloc(n * sizeof *w); /* the weights: unused, the rays are what is measured */
     unsigned *prims = malloc(n * sizeof *prims);
     unsigned long long distinct = 0, covered = 0;
     struct RTCIntersectContext ctx;
@@ -172,7 +173,7 @@ static void *baseline_worker(void *arg)
             break;
         for (int px = 0; px < job->sc->cam.width; px++) {
             sampler_batch(smp, job->rs->shut.open, job->rs->shut.close, (uint64_t)row * job->sc->cam.width + px, px,
-                          row, 0, &ss, x, y, t);
+                          row, 0, &ss, x, y, t, w);
             int nhits = 0;
             for (int i = 0; i < n; i++) { /* the same rays the render path traces */
                 vec3 d = camera_ray_direction(&job->sc->cam, x[i], y[i]);
@@ -203,7 +204,7 @@ static void *baseline_worker(void *arg)
     job->covered += covered;
     pthread_mutex_unlock(&job->lock);
     sampler_scratch_free(&ss);
-    free(x), free(y), free(t), free(prims);
+    free(x), free(y), free(t), free(w), free(prims);
     return NULL;
 }
 
@@ -352,6 +353,8 @@ static int may_hit_moving(const accel *a, vec3 org, vec3 dir)
 static render_settings bench_settings(const bench_case *c, const scene *s)
 {
     render_settings rs = render_settings_default();
+    /* the thesis sampler, as these rows were always measured: the rays stay comparable */
+    rs.smp.kind = SAMPLER_THESIS;
     rs.smp.grid = 2, rs.smp.tspp = c->tspp, rs.smp.time_factor = 4;
     rs.shut = s->shut;
     rs.threads = c->threads;
@@ -690,8 +693,49 @@ static void series_splat(const bench_plan *p)
 }
 
 /* Usage: refrender-bench [CSV [quick|full [SERIES]]]. */
+static const char *const SERIES[] = {"cases", "target", "speed", "splats", "tspp", "threads", "floor",
+                                     "static80", "splat", "gaussians", "scale", "stg", NULL};
+
+static void bench_usage(FILE *f)
+{
+    fputs("usage: refrender-bench [OUT.csv [quick|full [SERIES]]]\n"
+          "\n"
+          "Measures refrender's render path against Embree's built-in disc primitive\n"
+          "(src/cmd/BENCH.md) and writes the CSV (default bench.csv). quick: a short\n"
+          "smoke run; full (the default): the measurements. SERIES runs one series\n"
+          "only: cases, target, speed, splats, tspp, threads, floor, static80,\n"
+          "gaussians, scale or stg. Takes minutes (quick) to hours (full).\n"
+          "  -h, --help   this text\n", f);
+}
+
+/* The arguments are positional: an option-looking one is --help or a
+ * mistake, never a file name (--help once became a CSV named "--help" and
+ * started the full benchmark). Returns -1 to go on, else the exit status. */
+static int check_args(int argc, char **argv)
+{
+    for (int i = 1; i < argc; i++) {
+        if (!strcmp(argv[i], "-h") || !strcmp(argv[i], "--help"))
+            return bench_usage(stdout), 0;
+        if (argv[i][0] == '-') {
+            fprintf(stderr, "refrender-bench: unknown option '%s'; try 'refrender-bench --help'\n", argv[i]);
+            return 2;
+        }
+    }
+    int series_known = argc <= 3;
+    for (int k = 0; !series_known && SERIES[k]; k++)
+        series_known = !strcmp(argv[3], SERIES[k]);
+    if (argc > 4 || (argc > 2 && strcmp(argv[2], "quick") && strcmp(argv[2], "full")) || !series_known) {
+        fputs("refrender-bench: expected [OUT.csv [quick|full [SERIES]]]; try 'refrender-bench --help'\n", stderr);
+        return 2;
+    }
+    return -1;
+}
+
 int main(int argc, char **argv)
 {
+    int status = check_args(argc, argv);
+    if (status >= 0)
+        return status;
     int quick = argc > 2 && !strcmp(argv[2], "quick");
     long cores = sysconf(_SC_NPROCESSORS_ONLN);
     bench_plan p = {

@@ -161,12 +161,13 @@ static void *disc_worker(void *arg)
     sampler_scratch_init(&ss, smp);
     int n = (int)sampler_count(smp);
     double *x = malloc(n * sizeof *x), *y = malloc(n * sizeof *y), *t = malloc(n * sizeof *t);
+    double *w = malloc(n * sizeof *w); /* the weights: unused, the rays are what is measured */
     all_hits h = {0};
     unsigned long long hits = 0;
     for (int row; (pthread_mutex_lock(&job->lock), row = job->next_row++, pthread_mutex_unlock(&job->lock),
                    row < job->sc->cam.height);)
         for (int px = 0; px < job->sc->cam.width; px++) {
-            sampler_batch(smp, 0, 1, (uint64_t)row * job->sc->cam.width + px, px, row, 0, &ss, x, y, t);
+            sampler_batch(smp, 0, 1, (uint64_t)row * job->sc->cam.width + px, px, row, 0, &ss, x, y, t, w);
             for (int i = 0; i < n; i++) {
                 vec3 o, d;
                 scene_camera_ray(job->sc, x[i], y[i], t[i], &o, &d);
@@ -186,7 +187,7 @@ static void *disc_worker(void *arg)
     job->hits += hits;
     pthread_mutex_unlock(&job->lock);
     sampler_scratch_free(&ss);
-    free(x), free(y), free(t), free(h.t);
+    free(x), free(y), free(t), free(w), free(h.t);
     return NULL;
 }
 
@@ -282,6 +283,8 @@ static void gs_run(const gs_case *c, gs_result *r)
     const gaussian_model *m = &s.objects[0].gaussians;
     r->model_bytes = model_bytes_per_gaussian(m);
     render_settings rs = render_settings_default();
+    /* the thesis sampler, as these rows were always measured: the rays stay comparable */
+    rs.smp.kind = SAMPLER_THESIS;
     rs.smp.grid = 2, rs.smp.tspp = 4, rs.smp.time_factor = 4;
     rs.shut = s.shut;
     rs.threads = c->threads;
@@ -440,6 +443,8 @@ typedef struct {
 static void point_filter_run(scene *s, int tspp, int threads, size_t count, scale_result *r)
 {
     render_settings rs = render_settings_default();
+    /* the thesis sampler, as these rows were always measured: the rays stay comparable */
+    rs.smp.kind = SAMPLER_THESIS;
     rs.smp.tspp = tspp, rs.smp.time_factor = 4;
     rs.shut = s->shut;
     rs.threads = threads;

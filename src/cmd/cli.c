@@ -89,20 +89,15 @@ int cli_check_writable(const char *option, const char *path, rr_error *err)
     return 0;
 }
 
-/* The extension of path's base name ("" if it has none; a leading dot,
- * as in ".hidden", is no extension). */
-static const char *extension_of(const char *path)
-{
-    const char *slash = strrchr(path, '/'), *base = slash ? slash + 1 : path, *dot = strrchr(base, '.');
-    return dot && dot != base ? dot + 1 : "";
-}
-
 int cli_check_exr_name(const char *opt, const char *path, int has_preview, rr_error *err)
 {
-    const char *ext = extension_of(path);
+    const char *dot = rr_extension(path), *ext = *dot ? dot + 1 : dot;
     if (!*ext || !strcasecmp(ext, "exr"))
         return 0;
-    int stem = (int)(ext - 1 - path);
+    int stem = (int)(dot - path);
+    /* "out.exr.png": the EXR is out.exr (not out.exr.exr), the preview out.png */
+    if (stem > 4 && !strncasecmp(dot - 4, ".exr", 4) && dot[-5] != '/')
+        stem -= 4;
     if (!has_preview)
         return rr_fail(err, "%s %s: refrender writes OpenEXR only, not .%s: use %s %.*s.exr", opt, path, ext, opt,
                        stem, path);

@@ -191,11 +191,15 @@ static int write_frame(FILE *f, const scene *s, long long frame, int numbered, c
     fputs(",\n     \"rolling_shutter\": ", f);
     json_string(f, rolling);
     fputs(",\n     \"world_to_camera\": [", f);
+    scene fs; /* the camera as the render moves it under this shutter (rolling="gsplat": gsplat's poses) */
+    if (scene_for_shutter(s, sh, &fs, err))
+        return -1;
     for (int i = 0; i < n; i++) {
-        world_to_camera(s, times[i], m);
+        world_to_camera(&fs, times[i], m);
         fputs(i ? ", " : "", f);
         json_matrix(f, m);
     }
+    scene_for_shutter_free(&fs, s);
     fputs("],\n     \"object_to_world\": {", f);
     for (int o = 0; o < s->nobjects; o++) {
         fputs(o ? ", " : "", f);
@@ -426,6 +430,13 @@ static double *rate_times(const export_job *j, int *count, rr_error *err)
     double lo, hi, rate = j->o->tum_rate;
     if (path_span(j, &lo, &hi, err))
         return NULL;
+    /* the multiples k must be exact doubles, and counted in an int: a rate
+     * of 1.7e308 made them inf and cast NaN to int (UBSan) */
+    if (!(fabs(lo * rate) <= 0x1p53 && fabs(hi * rate) <= 0x1p53)) {
+        rr_fail(err, "--tum-rate %g: the exported span [%.17g, %.17g] holds multiples of 1/%g beyond 2^53, where they "
+                     "are no longer whole numbers apart: give a lower rate", rate, lo, hi, rate);
+        return NULL;
+    }
     double first = ceil(lo * rate), last = floor(hi * rate);
     if (first / rate < lo) /* lo * rate rounded down past an integer */
         first += 1;

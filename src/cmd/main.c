@@ -40,10 +40,10 @@ static void usage(FILE *f)
 "  --spp N            spatial samples per pixel, a KxK grid (default 4)\n"
 "  --pixel-filter F   box (default): samples over the pixel; point: at its centre\n"
 "  --tspp N           temporal samples per spatial sample (default 100)\n"
-"  --sampler S        thesis (default), jittered3d or sobol\n"
+"  --sampler S        sobol (default), jittered3d or thesis (Wolf 2008 sec. 4.5)\n"
 "  --seed N           random seed: same seed, same image, any threads (default 1)\n"
 "  --batches B        independent batches; B >= 2 adds standard errors (default 1)\n"
-"  --target-error X   more batches where the RGB standard error exceeds X\n"
+"  --target-error X   more batches where the RGB standard error exceeds X (B 4 unless given)\n"
 "  --max-batches N    batch cap for --target-error (default 8*B)\n"
 "Time:\n"
 "  --time-integration M  sampled (default) or exact (src/EXACT.md)\n"
@@ -71,7 +71,7 @@ static void usage(FILE *f)
 "  -D name=value      scene parameter: replaces $name in attribute values (repeatable)\n"
 "Running:\n"
 "  --threads N        render threads (default: all cores)\n"
-"  --quiet            no progress bar and no summary line\n"
+"  --quiet            no progress bar and no summary line (warnings still)\n"
 "  --progress-every S  a progress line every S seconds, also into a log (no terminal)\n"
 "  --no-static-reuse  trace every time sample on its own (same image; for benchmarks)\n"
 "  --version, -h, --help\n"
@@ -84,7 +84,7 @@ typedef struct {
     int spp, tspp, time_factor, threads, quiet, width, height, batches, max_batches;
     int pass, passes; /* passes > 0: --pass pass/passes */
     int no_static_reuse;
-    int exact_time, tspp_given, sampler_given; /* --time-integration exact */
+    int exact_time, tspp_given, batches_given; /* --time-integration exact; --target-error's B */
     int shutter_set;                            /* --shutter OPEN,CLOSE */
     int instant_set;                            /* --time T */
     double instant;
@@ -137,7 +137,7 @@ static int parse_option(int c, const char *arg, render_options *o, rr_error *err
     case OPT_SEED: return cli_u64("--seed", arg, &o->seed, err);
     case OPT_EPS: return cli_double("--eps", arg, 0.0, &o->eps, err);
     case OPT_SIGMA: return cli_double("--sigma", arg, 1e-6, &o->sigma, err);
-    case OPT_BATCHES: return cli_int("--batches", arg, 1, FILM_MAX_BATCHES, &o->batches, err);
+    case OPT_BATCHES: o->batches_given = 1; return cli_int("--batches", arg, 1, FILM_MAX_BATCHES, &o->batches, err);
     case OPT_MAXB: return cli_int("--max-batches", arg, 1, FILM_MAX_BATCHES, &o->max_batches, err);
     case OPT_TARGET: return cli_double("--target-error", arg, 1e-12, &o->target_error, err);
     case OPT_CKPT_EVERY: return cli_double("--checkpoint-every", arg, 0.0, &o->checkpoint_every, err);
@@ -182,9 +182,8 @@ static int parse_option(int c, const char *arg, render_options *o, rr_error *err
         o->exact_time = !strcmp(arg, "exact");
         return 0;
     case OPT_SAMPLER:
-        o->sampler_given = 1;
         return sampler_from_name(arg, &o->sampler)
-                   ? rr_fail(err, "--sampler: expected thesis, jittered3d or sobol, got '%s'", arg) : 0;
+                   ? rr_fail(err, "--sampler: expected sobol, jittered3d or thesis, got '%s'", arg) : 0;
     case 'o': o->output = arg; return 0;
     case 'D': return scene_params_add(&o->params, arg, err);
     case OPT_PREVIEW: o->preview = arg; return 0;
@@ -256,7 +255,7 @@ static int parse_args(int argc, char **argv, render_options *o)
     rr_error err;
     while ((c = getopt_long(argc, argv, "hD:o:", longopts, NULL)) != -1) {
         if (c == 'h') { usage(stdout); return 1; }
-        if (c == OPT_VERSION) { printf("refrender %s\n", RR_VERSION); return 1; }
+        if (c == OPT_VERSION) { printf("refrender %s (build %s)\n", RR_VERSION, render_build_id()); return 1; }
         if (c == '?') {
             cli_suggest_option("refrender", argv[optind - 1], longopts);
             fputs("Try 'refrender --help'.\n", stderr);
@@ -273,6 +272,8 @@ static int parse_args(int argc, char **argv, render_options *o)
     }
     if (optind == argc - 1)
         o->scene = argv[optind];
+    if (o->target_error > 0 && !o->batches_given)
+        o->batches = 4; /* an error estimate needs batches (src/SAMPLING.md, Error bars) */
     if (check_combinations(o, &err)) {
         fprintf(stderr, "refrender: %s\n", err.msg);
         return 2;
@@ -352,12 +353,22 @@ static int apply_overrides(scene *s, const render_options *o, rr_error *err)
     return 0;
 }
 
-static void join_args(int argc, char **argv, char *buf, size_t size)
+/* The command line as one string (malloc'd; NULL when out of memory), for
+ * refrender:command: as long as the arguments are (a fixed 2 KB buffer once
+ * cut it silently; the attribute itself says where it is cut: output.h). */
+static char *join_args(int argc, char **argv)
 {
+    size_t size = 1;
+    for (int i = 0; i < argc; i++)
+        size += strlen(argv[i]) + 1;
+    char *buf = malloc(size);
+    if (!buf)
+        return NULL;
     size_t len = 0;
     buf[0] = 0;
-    for (int i = 0; i < argc && len + 1 < size; i++)
+    for (int i = 0; i < argc; i++)
         len += (size_t)snprintf(buf + len, size - len, "%s%s", i ? " " : "", argv[i]);
+    return buf;
 }
 
 static void install_signal_handlers(void)
@@ -382,6 +393,7 @@ static int write_checkpoint(void *user, const image *img, rr_error *err)
     render_run *run = user;
     attrs_set(&run->attrs, ATTR_RENDER_SECONDS, "%.3f", img->seconds);
     attrs_set(&run->attrs, ATTR_RAYS, "%llu", (unsigned long long)img->rays);
+    attrs_set(&run->attrs, ATTR_CLAMPED, "%llu", (unsigned long long)img->clamped);
     return output_write_state(run->o->checkpoint, img, run->rs.batch_begin,
                               run->rs.batch_begin + run->rs.batches, &run->attrs, err);
 }
@@ -443,7 +455,9 @@ static int resume_state(render_run *run, image *img, rr_error *err)
         return -1;
     /* the work the state took goes on counting (render.c, checkpoint_paused) */
     const char *rays = attrs_get(&saved, ATTR_RAYS), *seconds = attrs_get(&saved, ATTR_RENDER_SECONDS);
+    const char *clamped = attrs_get(&saved, ATTR_CLAMPED);
     img->rays = rays ? (uint64_t)strtod(rays, NULL) : 0;
+    img->clamped = clamped ? (uint64_t)strtod(clamped, NULL) : 0;
     img->seconds = seconds ? strtod(seconds, NULL) : 0.0;
     if (!run->o->quiet) { /* a log then shows the work kept */
         uint64_t done = 0, n = (uint64_t)img->width * img->height;
@@ -473,7 +487,7 @@ static void setup_run(render_run *run, const scene *s, const shutter *shut, cons
     run->last_progress = 0;
     run->rs = (render_settings){
         .smp = {.kind = o->sampler, .seed = o->seed, .grid = sampler_grid_for_spp(o->spp), .tspp = o->tspp,
-                .time_factor = s->time_factor},
+                .time_factor = s->time_factor, .random_strata = total >= 2}, /* error bars (a target error needs B >= 2 too) */
         .shut = *shut,
         .threads = o->threads,
         .batch_begin = begin,
@@ -507,20 +521,24 @@ static int write_preview(atomic_set *set, const char *path, const image *img, rr
     return rc;
 }
 
+/* The summary line (not with --quiet), and the warnings: those are no
+ * progress output, so --quiet keeps them (a clamped estimate once left no
+ * trace under --quiet; its count is in the header too). */
 static void report(const render_options *o, const scene *s, const image *img, int tty)
 {
-    if (o->quiet)
-        return;
-    if (!tty)
+    if (!o->quiet && !tty)
         fprintf(stderr, "refrender: %s: %dx%d, %llu rays in %.2fs (%.2f Mrays/s)\n", s->path, img->width,
                 img->height, (unsigned long long)img->rays, img->seconds,
                 img->seconds > 0 ? img->rays / img->seconds * 1e-6 : 0.0);
     if (img->kbuffer_overflows)
         fprintf(stderr, "refrender: warning: %llu samples had more than %d hits within epsilon; "
                         "the farthest were dropped\n", (unsigned long long)img->kbuffer_overflows, KBUFFER_MAX);
+    if (img->gaussians_short)
+        fprintf(stderr, "refrender: warning: %llu samples ran out of memory for their Gaussians and were drawn "
+                        "without some of them\n", (unsigned long long)img->gaussians_short);
     if (img->clamped)
-        fprintf(stderr, "refrender: warning: %llu batch estimates exceeded +-%g and were clamped\n",
-                (unsigned long long)img->clamped, FILM_LIMIT);
+        fprintf(stderr, "refrender: warning: %llu batch estimates exceeded +-%g and were clamped "
+                        "(refrender:clampedEstimates)\n", (unsigned long long)img->clamped, FILM_LIMIT);
 }
 
 /* Exact time: the share of the shutter, over all spatial samples, left in
@@ -646,6 +664,7 @@ static int render_one(const scene *s, const shutter *shut, long long frame, acce
             report_target(o, &img, &run.attrs);
         attrs_set(&run.attrs, ATTR_RENDER_SECONDS, "%.3f", img.seconds);
         attrs_set(&run.attrs, ATTR_RAYS, "%llu", (unsigned long long)img.rays);
+        attrs_set(&run.attrs, ATTR_CLAMPED, "%llu", (unsigned long long)img.clamped);
         if (run.rs.exact_time)
             report_unresolved(o, &img, &run.rs.shut, &run.attrs);
         if (o->frames && s->frame_rate > 0)
@@ -726,28 +745,39 @@ static int check_frame_shutters(const scene *s, const render_options *o, rr_erro
 
 /* One frame or a sequence, sharing the loaded models and their BVHs; only
  * the top levels are rebuilt for each frame's shutter. */
+/* Frame f's shutter and the scene as it renders it (scene_for_shutter:
+ * fs, which the BVHs were built for, is refilled in place); the previous
+ * frame's scene is freed first. */
+static int next_frame(const scene *s, const render_options *o, long long f, shutter *shut, scene *fs, rr_error *err)
+{
+    scene_for_shutter_free(fs, s);
+    *fs = *s; /* (nothing of its own if the next call fails) */
+    return frame_shutter(s, o, f, shut, err) || scene_for_shutter(s, shut, fs, err) ? -1 : 0;
+}
+
 static int render_and_write(const scene *s, const render_options *o, const char *cmdline, rr_error *err)
 {
     accel *acc;
     shutter shut;
+    scene fs = *s;
     if (check_frame_outputs(s, o, err) || check_frame_shutters(s, o, err) ||
-        frame_shutter(s, o, o->first_frame, &shut, err))
+        next_frame(s, o, o->first_frame, &shut, &fs, err))
         return -1;
     double t0, t1; /* every line's exposure (a rolling shutter's reaches past [open, close]) */
     shutter_span(&shut, s->cam.width, s->cam.height, &t0, &t1);
     accel_settings set = {t0, t1, s->epsilon, s->kernel_sigma, !o->no_static_reuse};
-    if (accel_build(s, &set, &acc, err))
+    if (accel_build(&fs, &set, &acc, err)) {
+        scene_for_shutter_free(&fs, s);
         return -1;
-    if (interrupted) { /* the build cannot be stopped midway; it is not rendered */
-        accel_free(acc);
-        return rr_fail(err, "interrupted while building the BVH");
     }
     int rc = 0;
+    if (interrupted) /* the build cannot be stopped midway; it is not rendered */
+        rc = rr_fail(err, "interrupted while building the BVH");
     /* 64-bit: --frame 2147483647 must not wrap around into more frames */
     for (long long f = o->first_frame; !rc && f <= o->last_frame; f++) {
         char out[PATH_MAX], prev[PATH_MAX];
         if (f > o->first_frame &&
-            (frame_shutter(s, o, f, &shut, err) ||
+            (next_frame(s, o, f, &shut, &fs, err) ||
              (shutter_span(&shut, s->cam.width, s->cam.height, &t0, &t1), accel_set_shutter(acc, t0, t1, err)))) {
             rc = -1;
             break;
@@ -755,9 +785,10 @@ static int render_and_write(const scene *s, const render_options *o, const char 
         const char *preview = frame_names(o, f, out, prev, sizeof out);
         if (o->frames == 2 && !o->quiet)
             fprintf(stderr, "refrender: frame %lld: shutter [%g, %g] -> %s\n", f, shut.open, shut.close, out);
-        rc = render_one(s, &shut, f, acc, o, cmdline, out, preview, err);
+        rc = render_one(&fs, &shut, f, acc, o, cmdline, out, preview, err);
     }
     accel_free(acc);
+    scene_for_shutter_free(&fs, s);
     return rc;
 }
 
@@ -775,17 +806,14 @@ int cmd_render(int argc, char **argv)
     render_options o;
     memset(&o, 0, sizeof o);
     o.spp = 4, o.tspp = 100, o.threads = cores > 0 ? (int)cores : 1, o.batches = 1;
-    o.eps = o.sigma = -1.0, o.checkpoint_every = 60.0, o.seed = 1, o.output = "render.exr", o.sampler = SAMPLER_THESIS;
+    o.eps = o.sigma = -1.0, o.checkpoint_every = 60.0, o.seed = 1, o.output = "render.exr", o.sampler = SAMPLER_DEFAULT;
     int rc = parse_args(argc, argv, &o);
     if (rc)
         return rc == 1 ? 0 : 2;
     if (o.instant_set && !o.tspp_given)
         o.tspp = 1; /* one instant: more times per position would repeat it */
-    if (o.exact_time) { /* time is not sampled: one time per position, Sobol' positions */
+    if (o.exact_time) /* time is not sampled: one time per position */
         o.tspp = 1;
-        if (!o.sampler_given)
-            o.sampler = SAMPLER_SOBOL;
-    }
     /* before loading: a signal while a large model loads or its BVH builds
      * exits 130 as during the render, not 143 */
     install_signal_handlers();
@@ -795,18 +823,24 @@ int cmd_render(int argc, char **argv)
         o.scene = default_scene(scene_buf, sizeof scene_buf);
     rr_error err = {{0}};
     scene s;
-    char cmdline[2048];
-    join_args(argc, argv, cmdline, sizeof cmdline);
-    if (cli_check_exr_name("-o", o.output, 1, &err) ||
+    char *cmdline = join_args(argc, argv);
+    if (!cmdline) {
+        fputs("refrender: out of memory\n", stderr);
+        return 1;
+    }
+    int bad = cli_check_exr_name("-o", o.output, 1, &err) ||
         (o.checkpoint && cli_check_exr_name("--checkpoint", o.checkpoint, 0, &err)) ||
         cli_check_writable("-o", o.output, &err) || (o.preview && cli_check_writable("--preview", o.preview, &err)) ||
         (o.preview && preview_check_format(o.preview, &err)) ||
         (o.checkpoint && cli_check_writable("--checkpoint", o.checkpoint, &err)) ||
-        scene_load_file_params(o.scene, &o.params, &s, &err)) {
+        scene_load_file_params(o.scene, &o.params, &s, &err);
+    if (bad) {
+        free(cmdline);
         fprintf(stderr, "refrender: %s\n", err.msg);
         return interrupted ? 130 : 1;
     }
     if (interrupted) { /* the load ended before it saw the signal */
+        free(cmdline);
         scene_free(&s);
         fputs("refrender: interrupted while loading the scene\n", stderr);
         return 130;
@@ -814,6 +848,7 @@ int cmd_render(int argc, char **argv)
     print_warnings(&s.warnings);
     rc = apply_overrides(&s, &o, &err) ? -1 : render_and_write(&s, &o, cmdline, &err);
     scene_free(&s);
+    free(cmdline);
     if (rc) {
         fprintf(stderr, "refrender: %s\n", err.msg);
         return interrupted ? 130 : 1;

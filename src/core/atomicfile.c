@@ -23,18 +23,35 @@ static void split_path(const char *path, char *dir, size_t dsize, const char **b
         snprintf(dir, dsize, "%.*s", (int)(slash - path), path);
 }
 
-/* The pid in "<base>.tmp-<pid>-..." or 0 if name is not such a temporary. */
-static long temp_owner(const char *name, const char *base)
+/* This node's name as temporaries carry it: pids are per node, so on a
+ * shared file system a temporary is only judged by the node that made it.
+ * Characters a name may not hold ('/', and '-' and '@', which delimit it
+ * here) become '_'. */
+static void host_tag(char *buf, size_t size)
 {
-    size_t n = strlen(base);
+    if (gethostname(buf, size) != 0)
+        snprintf(buf, size, "unknown");
+    buf[size - 1] = 0;
+    for (char *c = buf; *c; c++)
+        if (*c == '/' || *c == '-' || *c == '@' || (unsigned char)*c <= ' ')
+            *c = '_';
+}
+
+/* The pid in "<base>.tmp-<pid>@<host>-..." when host is this node's, else 0
+ * (not such a temporary, or another node's, whose pid means nothing here). */
+static long temp_owner(const char *name, const char *base, const char *host)
+{
+    size_t n = strlen(base), h = strlen(host);
     if (strncmp(name, base, n) || strncmp(name + n, ".tmp-", 5))
         return 0;
     char *end;
     long pid = strtol(name + n + 5, &end, 10);
-    return pid > 0 && *end == '-' ? pid : 0;
+    if (pid <= 0 || *end != '@' || strncmp(end + 1, host, h) || end[1 + h] != '-')
+        return 0;
+    return pid;
 }
 
-static void remove_stale(const char *path)
+static void remove_stale(const char *path, const char *host)
 {
     char dir[PATH_MAX];
     const char *base;
@@ -43,7 +60,7 @@ static void remove_stale(const char *path)
     if (!d)
         return;
     for (struct dirent *e; (e = readdir(d));) {
-        long pid = temp_owner(e->d_name, base);
+        long pid = temp_owner(e->d_name, base, host);
         if (pid && pid != (long)getpid() && kill((pid_t)pid, 0) && errno == ESRCH) {
             char stale[PATH_MAX + 256];
             snprintf(stale, sizeof stale, "%s/%s", dir, e->d_name);
@@ -55,10 +72,13 @@ static void remove_stale(const char *path)
 
 int atomic_create(const char *path, const char *suffix, char *tmp, size_t size, rr_error *err)
 {
-    if (strlen(path) + strlen(suffix) + 32 > size || strlen(path) >= PATH_MAX - 32)
+    char host[ATOMIC_HOST_MAX];
+    host_tag(host, sizeof host);
+    size_t extra = strlen(suffix) + strlen(host) + 32;
+    if (strlen(path) + extra > size || strlen(path) + extra >= PATH_MAX)
         return rr_fail(err, "%.200s...: output path is too long (%zu characters)", path, strlen(path));
-    remove_stale(path);
-    snprintf(tmp, size, "%s.tmp-%ld-XXXXXX%s", path, (long)getpid(), suffix);
+    remove_stale(path, host);
+    snprintf(tmp, size, "%s.tmp-%ld@%s-XXXXXX%s", path, (long)getpid(), host, suffix);
     int fd = mkstemps(tmp, (int)strlen(suffix));
     if (fd < 0)
         return rr_fail(err, "%s: cannot create a temporary file beside it: %s", path, strerror(errno));

@@ -2,9 +2,11 @@
  * is renamed over it only when complete, so a failed, interrupted or killed
  * write never leaves a partial file and never replaces a good one.
  *
- * Temporary names are "<target>.tmp-<pid>-XXXXXX[suffix]": a later write of
- * the same target removes those whose process no longer exists (left by a
- * SIGKILL), and never another live process's. */
+ * Temporary names are "<target>.tmp-<pid>@<host>-XXXXXX[suffix]": a later
+ * write of the same target on the same node removes those whose process no
+ * longer exists (left by a SIGKILL), and never another live process's nor
+ * another node's (pids are per node: on a shared file system a live writer
+ * elsewhere may have any pid). */
 #ifndef RR_ATOMICFILE_H
 #define RR_ATOMICFILE_H
 
@@ -13,6 +15,9 @@
 #include <stdio.h>
 
 #include "core/common.h"
+
+/* Longest host name kept in a temporary's name (HOST_NAME_MAX is 64). */
+#define ATOMIC_HOST_MAX 65
 
 #ifdef __cplusplus
 extern "C" {

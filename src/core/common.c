@@ -253,6 +253,12 @@ static int edit_distance(const char *a, const char *b)
     return d[la][lb];
 }
 
+const char *rr_extension(const char *path)
+{
+    const char *slash = strrchr(path, '/'), *base = slash ? slash + 1 : path, *dot = strrchr(base, '.');
+    return dot && dot != base ? dot : path + strlen(path);
+}
+
 const char *rr_nearest_name(const char *word, const char *const *names)
 {
     const char *best = NULL;

@@ -145,6 +145,13 @@ const char *rr_nearest_name(const char *word, const char *const *names);
 const char *rr_did_you_mean(const char *word, const char *const *names, const char *prefix, const char *suffix,
                             char *buf, size_t size);
 
+/* A file name's extension: from the last '.' of its base name (after the
+ * last '/'), or "" (the end of path) when it has none. A base name's
+ * leading dot starts no extension: ".png" is a hidden file without one, as
+ * os.path.splitext has it. One rule for -o's check and the preview's
+ * format (which once disagreed on ".png"). */
+const char *rr_extension(const char *path);
+
 /* Monotonic wall-clock seconds (for progress, checkpoints and timings). */
 double rr_seconds(void);
 

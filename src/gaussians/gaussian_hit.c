@@ -253,7 +253,10 @@ static int in_2dgs_tiles(const gaussian_ray *r, const double row[3][3], double c
  * P is always in front of the camera: the filter acts only where the
  * circle's image is an ellipse (splat_2d_geometry's `filtered`), so the
  * circle, and the disc within it, lie beyond view depth 0, and the pole
- * of a line that misses the circle lies inside it. The bounds built on P
+ * of a line that misses the circle lies inside it. (Not so for the tile
+ * rule's filter about a hyperbola's centre, hyperbola_filter: its P lies
+ * behind the camera and nothing here bounds those filter pixels; its ray
+ * hits are bounded as every hit is. GAUSSIANS.md says what was measured.) The bounds built on P
  * (the culls, filter_2d_reach) hold every pixel within the filter's reach
  * of P's image and never ask where the pixel's ray meets the splat's
  * plane: so they hold under either near rule (hit_2d_from_geometry), also
@@ -382,8 +385,9 @@ static int cull_2d(const gaussian_model *m, size_t i, const gaussian_ray *r, vec
  * `circle` scales: the last column of the dual conic T diag(c^2, c^2, -1)
  * T^T over its last entry (compute_aabb's point_image); none when the
  * circle reaches behind the camera's plane: its image is no ellipse and
- * has no centre to filter about (the rasterizer would filter about the
- * hyperbola's, anywhere on screen; GAUSSIANS.md). A lane computes every
+ * has no centre to filter about (the rasterizer filters about the
+ * hyperbola's, anywhere on screen, which only tileRule follows:
+ * hyperbola_filter; GAUSSIANS.md). A lane computes every
  * field; u, v and what follows mean something only where cz != 0. */
 #define DEFINE_SPLAT_2D_GEOMETRY(T)                                                                           \
     typedef struct {                                                                                          \
@@ -469,13 +473,43 @@ static int splat_edge_on(const gaussian_model *m, size_t i, const gaussian_ray *
     return v3_dot(p, v3_cross(tu, tv)) == 0;
 }
 
+/* The tile rule's filter where the filter's circle reaches behind the
+ * camera's plane (its image a hyperbola, not an ellipse): forward.cu at
+ * e0ed020 goes on with the same formulas whatever the sign of the dual
+ * conic's d = T_w . T_w (c^2, c^2, -1) (compute_aabb, fw:119-145, stops
+ * only at d == 0; preprocessCUDA fw:226-236 takes the tiles of its
+ * point_image and extent), and renderCUDA (fw:362-366) filters about that
+ * point_image: the hyperbola's centre. So with tileRule the splat is drawn
+ * in the hyperbola's tiles, filtered about its centre (GAUSSIANS.md says
+ * which of those pixels the bounds can miss). 0 where d == 0: culled. */
+static int hyperbola_filter(const gaussian_model *m, const gaussian_ray *r, const splat_2d_geometry_double *g,
+                            splat_2d_geometry_double *out)
+{
+    double c = filter_circle(m), d22 = DUAL_CONIC(g->row[2], g->row[2], c * c);
+    if (d22 == 0)
+        return 0;
+    *out = *g;
+    out->centre_x = DUAL_CONIC(g->row[0], g->row[2], c * c) / d22;
+    out->centre_y = DUAL_CONIC(g->row[1], g->row[2], c * c) / d22;
+    double dx = out->centre_x - r->x, dy = out->centre_y - r->y;
+    out->rho2d = GAUSSIAN_FILTER_INV_SQUARE * (dx * dx + dy * dy);
+    out->filtered = 1;
+    return 1;
+}
+
 /* Gaussian i's 2DGS hit from its geometry at the pixel (p: its
  * camera-space mean). */
 static int hit_2d_from_geometry(const gaussian_model *m, size_t i, gaussian_order order, const gaussian_ray *r, vec3 p,
                                 const splat_2d_geometry_double *g, gaussian_hit *h)
 {
+    splat_2d_geometry_double hyperbola;
     if (g->cz == 0)
         return 0;
+    if (m->tile_rule && !g->filtered) {
+        if (!hyperbola_filter(m, r, g, &hyperbola))
+            return 0;
+        g = &hyperbola;
+    }
     /* where the filter wins the hit is placed at the centre's depth, the
      * point its bounds and windows hold. The near skip takes the plane
      * hit's depth even there (forward.cu since e0ed020, the commit 2DGS

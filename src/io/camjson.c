@@ -183,7 +183,19 @@ static void list_names(json_object *root, char *buf, size_t size)
         snprintf(buf + len, size - len, "%s (%zu cameras)", n > 4 ? ", ..." : "", n);
 }
 
-/* The index of the one entry named img_name; -1 none, -2 more than one. */
+/* Whether entry e (an object with a string img_name) is named img_name: by
+ * the JSON string's length ("A\u0000x" is not "A": strcmp would stop at the
+ * NUL). */
+static int named(json_object *e, const char *img_name)
+{
+    json_object *v;
+    json_object_object_get_ex(e, "img_name", &v);
+    return (size_t)json_object_get_string_len(v) == strlen(img_name) &&
+           !memcmp(json_object_get_string(v), img_name, strlen(img_name));
+}
+
+/* The index of the first entry named img_name (-1 none, -2 a malformed
+ * entry); camjson_find checks the others of that name. */
 static long find_entry(const char *name, json_object *root, const char *img_name, rr_error *err)
 {
     long found = -1;
@@ -194,13 +206,8 @@ static long find_entry(const char *name, json_object *root, const char *img_name
             return rr_fail(err, "%s: camera %zu is not an object", name, i), -2;
         if (!json_object_object_get_ex(e, "img_name", &v) || !json_object_is_type(v, json_type_string))
             return rr_fail(err, "%s: camera %zu: field 'img_name' is missing or not a string", name, i), -2;
-        /* by the JSON string's length: "A\u0000x" is not "A" (strcmp would stop at the NUL) */
-        if ((size_t)json_object_get_string_len(v) != strlen(img_name) ||
-            memcmp(json_object_get_string(v), img_name, strlen(img_name)))
-            continue;
-        if (found >= 0)
-            return rr_fail(err, "%s: cameras %ld and %zu are both named '%s'", name, found, i, img_name), -2;
-        found = (long)i;
+        if (found < 0 && named(e, img_name))
+            found = (long)i;
     }
     if (found < 0) {
         char names[256];
@@ -208,6 +215,20 @@ static long find_entry(const char *name, json_object *root, const char *img_name
         rr_fail(err, "%s: no camera named '%s' (img_name); it has %s", name, img_name, names);
     }
     return found;
+}
+
+/* The first field in which two cameras differ, or NULL: exact, as parsed. */
+static const char *camera_difference(const camjson_camera *a, const camjson_camera *b)
+{
+    if (a->width != b->width || a->height != b->height)
+        return "width x height";
+    if (a->position.x != b->position.x || a->position.y != b->position.y || a->position.z != b->position.z)
+        return "position";
+    for (int r = 0; r < 3; r++)
+        for (int c = 0; c < 3; c++)
+            if (a->c2w[r][c] != b->c2w[r][c])
+                return "rotation";
+    return a->fx != b->fx ? "fx" : a->fy != b->fy ? "fy" : NULL;
 }
 
 /* The line each element of the top-level array starts on (json-c keeps no
@@ -305,6 +326,20 @@ int camjson_load(const char *path, camjson_file *f, uint64_t *content_hash, rr_e
     return rc;
 }
 
+/* Entry idx read into out (its errors name the file and the entry's line). */
+static int read_entry(const camjson_file *f, long idx, camjson_camera *out, rr_error *err)
+{
+    char *at = NULL; /* "file:line", where the entry starts */
+    if (asprintf(&at, "%s:%d", f->name, f->lines[idx]) < 0)
+        return rr_fail(err, "out of memory");
+    int rc = read_camera(at, (size_t)idx, json_object_array_get_idx(f->root, (size_t)idx), out, err);
+    free(at);
+    return rc;
+}
+
+/* A name may repeat (SpacetimeGaussians' cameras.json lists each view once
+ * per frame under one name) when every entry of it is the same camera;
+ * entries that differ make the name ambiguous and are refused. */
 int camjson_find(const camjson_file *f, const char *img_name, camjson_camera *out, rr_error *err)
 {
     long idx = find_entry(f->name, f->root, img_name, err);
@@ -312,12 +347,21 @@ int camjson_find(const camjson_file *f, const char *img_name, camjson_camera *ou
         return -1;
     memset(out, 0, sizeof *out);
     snprintf(out->img_name, sizeof out->img_name, "%s", img_name);
-    char *at = NULL; /* "file:line", where the entry starts */
-    if (asprintf(&at, "%s:%d", f->name, f->lines[idx]) < 0)
-        return rr_fail(err, "out of memory");
-    int rc = read_camera(at, (size_t)idx, json_object_array_get_idx(f->root, (size_t)idx), out, err);
-    free(at);
-    return rc;
+    if (read_entry(f, idx, out, err))
+        return -1;
+    size_t n = json_object_array_length(f->root);
+    for (size_t i = (size_t)idx + 1; i < n; i++) {
+        if (!named(json_object_array_get_idx(f->root, i), img_name))
+            continue;
+        camjson_camera other = *out;
+        if (read_entry(f, (long)i, &other, err))
+            return -1;
+        const char *field = camera_difference(out, &other);
+        if (field)
+            return rr_fail(err, "%s: cameras %ld and %zu are both named '%s' and differ in %s: which is meant is "
+                                "ambiguous", f->name, idx, i, img_name, field);
+    }
+    return 0;
 }
 
 void camjson_free(camjson_file *f)

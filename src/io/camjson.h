@@ -48,7 +48,8 @@ void camjson_free(camjson_file *f);
  * rotation that is not one (orthonormal within 1e-4, determinant 1), a
  * position too far out for position + view direction to keep the
  * direction, no camera of that name (compared with the JSON string's whole
- * length), or two.
+ * length), or two of that name that differ (repeats of one camera are one:
+ * SpacetimeGaussians lists each view once per frame).
  * The file's bytes are folded into *content_hash unless NULL. */
 int camjson_read(const char *path, const char *img_name, camjson_camera *out, uint64_t *content_hash,
                  rr_error *err);

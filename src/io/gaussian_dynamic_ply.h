@@ -20,6 +20,7 @@
 
 #include <stdint.h>
 
+#include "core/inputfile.h"
 #include "gaussians/gaussian.h"
 
 typedef struct {
@@ -28,11 +29,11 @@ typedef struct {
      * whole model of the layout. */
     int (*claims)(const char *name);
     /* Reads a model into m (kind 3D, m->dynamic set) from len bytes at
-     * data, or from the file name when data is NULL (its bytes folded into
-     * *content_hash unless NULL). kind GAUSSIAN_2D is refused. On failure
-     * m is left empty. */
-    int (*load)(const char *name, const char *data, size_t len, gaussian_kind kind, gaussian_model *m,
-                uint64_t *content_hash, rr_error *err);
+     * data, or from the opened file src when it is not NULL (the file
+     * gaussian_ply.c opened and looked at: read and hashed once).
+     * kind GAUSSIAN_2D is refused. On failure m is left empty. */
+    int (*load)(const char *name, const char *data, size_t len, input_file *src, gaussian_kind kind,
+                gaussian_model *m, rr_error *err);
 } gaussian_dynamic_ply_reader;
 
 /* SpacetimeGaussians lite. claims: trbf_center, trbf_scale, motion_<k>,

@@ -168,9 +168,13 @@ static int add_gaussian(void *user, const double *v, const int *present, char *w
     return 0;
 }
 
-/* Parses from memory (data) or reads the file at name (data NULL). */
-static int load(const char *name, const char *data, size_t len, gaussian_kind kind, gaussian_model *m,
-                uint64_t *content_hash, rr_error *err)
+/* Parses len bytes at data, or the opened file src (not NULL). A dynamic
+ * model's layout is seen in the header, before the parse has released any
+ * of the file: its own reader then parses the same bytes, so the file is
+ * read and hashed once (it was read twice, the failed static pass hashing
+ * every byte it had not parsed). */
+static int load(const char *name, const char *data, size_t len, input_file *src, gaussian_kind kind,
+                gaussian_model *m, rr_error *err)
 {
     gaussian_model_free(m);
     gaussian_sink *sink = calloc(1, sizeof *sink);
@@ -178,28 +182,33 @@ static int load(const char *name, const char *data, size_t len, gaussian_kind ki
         return rr_fail(err, "%s: out of memory", name);
     sink->base.m = m, sink->base.forced = kind;
     ply_visitor v = {begin_model, add_gaussian, sink, see_property};
-    uint64_t hash_before = content_hash ? *content_hash : 0;
-    int rc = data ? ply_parse_vertices(name, data, len, &gaussian_schema, &v, err)
-                  : ply_read_vertices(name, &gaussian_schema, &v, content_hash, err);
+    int rc = src ? ply_stream_vertices(name, src, &gaussian_schema, &v, err)
+                 : ply_parse_vertices(name, data, len, &gaussian_schema, &v, err);
     int stg = sink->stg, fdgs = sink->fdgs;
     free(sink);
-    if ((stg || fdgs) && content_hash) /* its own reader reads it again, hashing from the same start */
-        *content_hash = hash_before;
+    RR_CHECK(!(stg || fdgs) || !src || src->released == 0); /* refused in the header: nothing released */
     if (fdgs)
-        return gaussian_fdgs_ply.load(name, data, len, kind, m, content_hash, err);
-    return stg ? gaussian_stg_ply.load(name, data, len, kind, m, content_hash, err)
-               : gaussian_ply_finish(m, rc, name, err);
+        return gaussian_fdgs_ply.load(name, data, len, src, kind, m, err);
+    return stg ? gaussian_stg_ply.load(name, data, len, src, kind, m, err) : gaussian_ply_finish(m, rc, name, err);
 }
 
 int gaussian_parse(const char *name, const char *data, size_t len, gaussian_kind kind, gaussian_model *m,
                    rr_error *err)
 {
-    return load(name, data ? data : "", len, kind, m, NULL, err);
+    return load(name, data ? data : "", len, NULL, kind, m, err);
 }
 
 int gaussian_read(const char *path, gaussian_kind kind, gaussian_model *m, uint64_t *content_hash, rr_error *err)
 {
-    return load(path, NULL, 0, kind, m, content_hash, err);
+    input_file in;
+    if (input_file_stream(path, PLY_MAX_BYTES, &in, err))
+        return -1;
+    in.hash = content_hash ? *content_hash : INPUT_HASH_INIT;
+    int rc = load(path, in.data, in.len, &in, kind, m, err);
+    if (content_hash)
+        *content_hash = input_file_hash(&in);
+    input_file_free(&in);
+    return rc;
 }
 
 /* ---- writing ------------------------------------------------------------ */

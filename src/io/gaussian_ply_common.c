@@ -104,11 +104,10 @@ int gaussian_ply_finish(gaussian_model *m, int rc, const char *name, rr_error *e
     return rc;
 }
 
-int gaussian_ply_load_layout(const char *name, const char *data, size_t len, const ply_schema *schema,
-                             const ply_visitor *v, gaussian_model *m, uint64_t *content_hash, rr_error *err)
+int gaussian_ply_load_layout(const char *name, const char *data, size_t len, input_file *src,
+                             const ply_schema *schema, const ply_visitor *v, gaussian_model *m, rr_error *err)
 {
     gaussian_model_free(m);
-    int rc = data ? ply_parse_vertices(name, data, len, schema, v, err)
-                  : ply_read_vertices(name, schema, v, content_hash, err);
+    int rc = src ? ply_stream_vertices(name, src, schema, v, err) : ply_parse_vertices(name, data, len, schema, v, err);
     return gaussian_ply_finish(m, rc, name, err);
 }

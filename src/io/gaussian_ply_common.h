@@ -63,10 +63,10 @@ int gaussian_ply_unit_quaternion(const double *rot, float *q, char *why, size_t 
 /* A parse's end: on failure, or with no Gaussian, the model is left empty. */
 int gaussian_ply_finish(gaussian_model *m, int rc, const char *name, rr_error *err);
 
-/* Empties m, then parses len bytes at data with schema and v, or reads the
- * file name when data is NULL (its bytes folded into *content_hash unless
- * NULL), and ends as gaussian_ply_finish. */
-int gaussian_ply_load_layout(const char *name, const char *data, size_t len, const ply_schema *schema,
-                             const ply_visitor *v, gaussian_model *m, uint64_t *content_hash, rr_error *err);
+/* Empties m, then parses len bytes at data with schema and v, or the
+ * opened file src when it is not NULL (released as it is read:
+ * ply_stream_vertices), and ends as gaussian_ply_finish. */
+int gaussian_ply_load_layout(const char *name, const char *data, size_t len, input_file *src,
+                             const ply_schema *schema, const ply_visitor *v, gaussian_model *m, rr_error *err);
 
 #endif

@@ -125,12 +125,12 @@ static int add_gaussian(void *user, const double *v, const int *present, char *w
     return 0;
 }
 
-static int stg_load(const char *name, const char *data, size_t len, gaussian_kind kind, gaussian_model *m,
-                    uint64_t *content_hash, rr_error *err)
+static int stg_load(const char *name, const char *data, size_t len, input_file *src, gaussian_kind kind,
+                    gaussian_model *m, rr_error *err)
 {
     gaussian_ply_sink sink = {m, kind, 0, 0};
     ply_visitor v = {begin_model, add_gaussian, &sink, see_property};
-    return gaussian_ply_load_layout(name, data, len, &stg_schema, &v, m, content_hash, err);
+    return gaussian_ply_load_layout(name, data, len, src, &stg_schema, &v, m, err);
 }
 
 const gaussian_dynamic_ply_reader gaussian_stg_ply = {stg_claims, stg_load};

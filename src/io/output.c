@@ -30,6 +30,9 @@ static const struct {
     rr_attr_kind kind;
     attr_role role;
 } attr_table[] = {
+    /* first: another build's state may differ in anything below, and the
+     * build is the cause (a rebuilt shared tree under a running array job) */
+    {ATTR_BUILD, RR_ATTR_TEXT, ROLE_IDENTITY},
     {ATTR_SCENE_HASH, RR_ATTR_TEXT, ROLE_IDENTITY},
     {ATTR_INPUTS_HASH, RR_ATTR_TEXT, ROLE_IDENTITY},
     {ATTR_RESOLUTION, RR_ATTR_TEXT, ROLE_IDENTITY},
@@ -66,6 +69,7 @@ static const struct {
     {ATTR_FRAME_RATE, RR_ATTR_DOUBLE, ROLE_EQUAL},
     {ATTR_RAYS, RR_ATTR_DOUBLE, ROLE_SUMMED},
     {ATTR_RENDER_SECONDS, RR_ATTR_DOUBLE, ROLE_SUMMED},
+    {ATTR_CLAMPED, RR_ATTR_DOUBLE, ROLE_SUMMED},
     {ATTR_LINE_TIMES, RR_ATTR_TEXT, ROLE_WRITTEN},
     {ATTR_STATE, RR_ATTR_TEXT, ROLE_WRITTEN},
     {ATTR_TARGET_ERROR, RR_ATTR_DOUBLE, ROLE_WRITTEN},
@@ -127,6 +131,9 @@ int attrs_check_identity(const attr_list *a, const char *a_name, const attr_list
         if (attr_table[k].role != ROLE_IDENTITY)
             continue;
         const char *key = attr_table[k].key, *va = attrs_get(a, key), *vb = attrs_get(b, key);
+        if (va && vb && strcmp(va, vb) && !strcmp(key, ATTR_BUILD))
+            return rr_fail(err, "%s and %s were rendered by different builds of refrender (%s '%.80s' vs '%.80s'): "
+                                "not the same render", a_name, b_name, key, va, vb);
         if (!va || !vb || strcmp(va, vb))
             return rr_fail(err, "%s and %s differ in %s ('%.160s' vs '%.160s'): not the same render", a_name, b_name,
                            key, va ? va : "missing", vb ? vb : "missing");
@@ -180,8 +187,11 @@ int attrs_combine(attr_list *merged, const char *merged_name, const attr_list *b
             return -1;
     combine_unresolved(merged, b);
     const char *rays = attrs_get(merged, ATTR_RAYS), *secs = attrs_get(merged, ATTR_RENDER_SECONDS);
+    const char *clamped = attrs_get(merged, ATTR_CLAMPED);
     if (rays) /* a double holds counts exactly up to 2^53 rays */
         attrs_set(merged, ATTR_RAYS, "%.17g", strtod(rays, NULL) + strtod(attrs_get(b, ATTR_RAYS), NULL));
+    if (clamped)
+        attrs_set(merged, ATTR_CLAMPED, "%.17g", strtod(clamped, NULL) + strtod(attrs_get(b, ATTR_CLAMPED), NULL));
     if (secs)
         attrs_set(merged, ATTR_RENDER_SECONDS, "%.3f",
                   strtod(secs, NULL) + strtod(attrs_get(b, ATTR_RENDER_SECONDS), NULL));

@@ -6,7 +6,7 @@
  * A render state (a --pass output or a checkpoint) has R G B A of the
  * batches it holds plus exact uint channels state.* with each pixel's batch
  * count and fixed-point sums, so states merge bit-exactly.
- * Both carry string attributes; the identity attributes (scene hash, hash
+ * Both carry string attributes; the identity attributes (the build, scene hash, hash
  * of every input file's content, resolution, sampler, counts, seed, epsilon, sigma, shutter, weight, time
  * factor, batches) must agree for states to be merged or resumed. */
 #ifndef RR_OUTPUT_H
@@ -21,6 +21,7 @@
 /* The name of every attribute refrender writes (README, Output). Their
  * kinds and what resuming and merging do with each are output.c's table,
  * the one list of them; writers name them by these macros. */
+#define ATTR_BUILD "refrender:build"
 #define ATTR_SCENE_HASH "refrender:sceneHash"
 #define ATTR_INPUTS_HASH "refrender:inputsHash"
 #define ATTR_RESOLUTION "refrender:resolution"
@@ -56,6 +57,7 @@
 #define ATTR_FRAME "refrender:frame"
 #define ATTR_FRAME_RATE "refrender:frameRate"
 #define ATTR_RAYS "refrender:rays"
+#define ATTR_CLAMPED "refrender:clampedEstimates"
 #define ATTR_RENDER_SECONDS "refrender:renderSeconds"
 #define ATTR_LINE_TIMES "refrender:lineTimes"
 #define ATTR_STATE "refrender:state"

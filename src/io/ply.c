@@ -591,6 +591,12 @@ int ply_parse(const char *name, const char *data, size_t len, vec3 default_color
     return ply_parse_vertices(name, data, len, &surfel_schema, &v, err);
 }
 
+int ply_stream_vertices(const char *name, input_file *src, const ply_schema *schema, const ply_visitor *v,
+                        rr_error *err)
+{
+    return parse_vertices(name, src->data, src->len, src, schema, v, err);
+}
+
 int ply_read_vertices(const char *path, const ply_schema *schema, const ply_visitor *v, uint64_t *content_hash,
                       rr_error *err)
 {
@@ -598,7 +604,7 @@ int ply_read_vertices(const char *path, const ply_schema *schema, const ply_visi
     if (input_file_stream(path, PLY_MAX_BYTES, &in, err))
         return -1;
     in.hash = content_hash ? *content_hash : INPUT_HASH_INIT;
-    int rc = parse_vertices(path, in.data, in.len, &in, schema, v, err);
+    int rc = ply_stream_vertices(path, &in, schema, v, err);
     if (content_hash)
         *content_hash = input_file_hash(&in);
     input_file_free(&in);

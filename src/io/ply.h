@@ -13,6 +13,7 @@
 #ifndef RR_PLY_H
 #define RR_PLY_H
 
+#include "core/inputfile.h"
 #include "surfels/pointmodel.h"
 #include "surfels/surfel.h"
 
@@ -71,6 +72,12 @@ int ply_parse_vertices(const char *name, const char *data, size_t len, const ply
  * folded into *content_hash unless it is NULL. */
 int ply_read_vertices(const char *path, const ply_schema *schema, const ply_visitor *v, uint64_t *content_hash,
                       rr_error *err);
+/* The same from a file already opened (input_file_stream), which the parse
+ * releases as it reads (input_file_consume): a reader that must look at a
+ * file twice (gaussian_ply.c hands a dynamic model's file on) opens and
+ * hashes it once. */
+int ply_stream_vertices(const char *name, input_file *src, const ply_schema *schema, const ply_visitor *v,
+                        rr_error *err);
 
 /* Writes circular surfels as binary little-endian PLY with float x y z nx ny
  * nz radius and uchar red green blue (the generator's output format). */

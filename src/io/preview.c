@@ -52,17 +52,11 @@ static int load_module(rr_error *err)
 }
 
 /* The extension with its dot, or "" (a dot in a directory name is none). */
-static const char *extension_of(const char *path)
-{
-    const char *slash = strrchr(path, '/'), *dot = strrchr(path, '.');
-    return dot && (!slash || dot > slash) ? dot : "";
-}
-
 int preview_check_format(const char *path, rr_error *err)
 {
     if (load_module(err))
         return -1;
-    const char *ext = extension_of(path);
+    const char *ext = rr_extension(path);
     int rc = module.format(*ext ? ext + 1 : "");
     if (rc == 1)
         return rr_fail(err, "%s: no image format for the extension '%s' (use e.g. .png)", path, ext);
@@ -111,7 +105,7 @@ int preview_write_srgb_into(atomic_set *set, const char *path, int w, int h, con
     free(px);
     if (rc)
         return rr_fail(err, "%s: cannot encode preview: %s", path, why);
-    rc = atomic_create(path, extension_of(path), name, sizeof name, err);
+    rc = atomic_create(path, rr_extension(path), name, sizeof name, err);
     if (!rc && write_all(name, bytes, len)) {
         atomic_discard(name);
         rc = rr_fail(err, "%s: cannot write preview (disk full?)", path);

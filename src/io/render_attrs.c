@@ -7,6 +7,12 @@
 #include "gaussians/gaussian_hit.h"
 #include "core/inputfile.h"
 
+#ifndef RR_BUILD_ID /* the Makefile's: the SHA-256 of the code under src/ */
+#error "RR_BUILD_ID is not defined: build with the Makefile"
+#endif
+
+const char *render_build_id(void) { return RR_BUILD_ID; }
+
 static void describe_weight(FILE *f, const shutter *sh)
 {
     if (sh->kind == WEIGHT_LINEAR)
@@ -120,6 +126,9 @@ void attrs_for_render(attr_list *a, const scene *s, const render_settings *rs, u
                       const char *command)
 {
     const sampler *smp = &rs->smp;
+    /* the code that drew the pixels: a state of another build may draw a
+     * model differently under the same settings */
+    attrs_set(a, ATTR_BUILD, "%s", RR_BUILD_ID);
     attrs_set(a, ATTR_SCENE, "%s", s->path);
     attrs_set(a, ATTR_SCENE_HASH, "%016" PRIx64, s->scene_hash);
     attrs_set(a, ATTR_INPUTS_HASH, "%016" PRIx64, s->inputs_hash);

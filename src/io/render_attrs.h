@@ -7,6 +7,10 @@
 #include "io/output.h"
 #include "render/render.h"
 
+/* The build's identity: the SHA-256 of the code under src/, computed by the
+ * Makefile (-DRR_BUILD_ID); equal sources give an equal id. */
+const char *render_build_id(void);
+
 void attrs_for_render(attr_list *a, const scene *s, const render_settings *rs, uint32_t total_batches,
                       const char *command);
 

@@ -7,14 +7,30 @@
 
 const char *xml_elname(xmlNodePtr n) { return (const char *)n->name; }
 
+/* A name from the file as a message shows it: whole up to 64 bytes, else
+ * its first 64 (not splitting a UTF-8 character) and "...". A 2,000-character
+ * element name once filled the message before its reason. */
+static const char *shown_name(const char *name, char *buf, size_t size)
+{
+    enum { SHOWN = 64 };
+    size_t len = strlen(name), keep = SHOWN;
+    if (len <= SHOWN || size < SHOWN + 4)
+        return name;
+    while (keep > 0 && ((unsigned char)name[keep] & 0xC0) == 0x80) /* a continuation byte */
+        keep--;
+    snprintf(buf, size, "%.*s...", (int)keep, name);
+    return buf;
+}
+
 int xml_fail(xml_ctx *c, xmlNodePtr n, const char *fmt, ...)
 {
-    char what[2048];
+    char what[2048], shown[80];
     va_list ap;
     va_start(ap, fmt);
     vsnprintf(what, sizeof what, fmt, ap);
     va_end(ap);
-    return rr_fail(c->err, "%s:%ld: <%s>: %s", c->name, xmlGetLineNo(n), xml_elname(n), what);
+    return rr_fail(c->err, "%s:%ld: <%s>: %s", c->name, xmlGetLineNo(n), shown_name(xml_elname(n), shown, sizeof shown),
+                   what);
 }
 
 /* Refuses element k, which is none of the NULL-terminated `known`:
@@ -37,9 +53,9 @@ int xml_check_attributes(xml_ctx *c, xmlNodePtr n, const char *const *allowed)
         int ok = 0;
         for (const char *const *p = allowed; *p && !ok; p++)
             ok = !strcmp(*p, (const char *)a->name);
-        char near[128];
+        char near[128], shown[80];
         if (!ok)
-            return xml_fail(c, n, "unknown attribute '%s'%s", (const char *)a->name,
+            return xml_fail(c, n, "unknown attribute '%s'%s", shown_name((const char *)a->name, shown, sizeof shown),
                             rr_did_you_mean((const char *)a->name, allowed, "", "", near, sizeof near));
     }
     return 0;

@@ -26,7 +26,9 @@ typedef enum { WEIGHT_BOX, WEIGHT_LINEAR, WEIGHT_EXP, WEIGHT_TABLE } weight_kind
  *                Cameras.cuh:504-528; bottom-to-top (H - ceil(y)) / (H - 1)
  *                is the same line count from the bottom for y off the pixel
  *                edges), or R = readoutTime once shutter_at_instant has
- *                shrunk [open, close] to an instant
+ *                shrunk [open, close] to an instant; the camera there is
+ *                gsplat's pose between its poses at open and open + R
+ *                (scene_for_shutter)
  * Rows and columns are the full image's, whatever the crop window. */
 typedef enum { ROLLING_OFF, ROLLING_LINES, ROLLING_3DGS_DEBLUR, ROLLING_GSPLAT } rolling_kind;
 typedef enum { READOUT_TOP_TO_BOTTOM, READOUT_BOTTOM_TO_TOP, READOUT_LEFT_TO_RIGHT, READOUT_RIGHT_TO_LEFT } readout_dir;

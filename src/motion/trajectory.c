@@ -12,13 +12,21 @@ static void relative_pose(const trajectory_knot *a, const trajectory_knot *b, ve
     se3_relative(a->p, a->q, b->p, b->q, p, q);
 }
 
+/* A knot's world-to-camera translation -R^T p (R: q's matrix). */
+static vec3 world_to_camera_translation(const trajectory_knot *k)
+{
+    double c[4];
+    quat_conj(k->q, c);
+    return v3_scale(quat_rotate(c, k->p), -1.0);
+}
+
 /* ---- names --------------------------------------------------------------- */
 
-static const char *const INTERP_NAMES[] = {"linear", "se3", "cubic", "bezier", "bezier-se3"};
+static const char *const INTERP_NAMES[] = {"linear", "se3", "cubic", "bezier", "bezier-se3", "gsplat"};
 
 int trajectory_interp_parse(const char *name)
 {
-    for (int k = 0; k < (int)(sizeof INTERP_NAMES / sizeof *INTERP_NAMES); k++)
+    for (int k = 0; k < TRAJECTORY_GSPLAT; k++) /* gsplat's is a rolling shutter's, not a file's */
         if (!strcmp(name, INTERP_NAMES[k]))
             return k;
     return -1;
@@ -51,6 +59,10 @@ static void segment_rates(const trajectory *tr, int k, double *speed, double *tu
     relative_pose(a, b, &p, q);
     se3_twist x = se3_log(p, q);
     double moved = tr->interp == TRAJECTORY_SE3 ? v3_len(x.rho) : v3_len(v3_sub(b->p, a->p));
+    if (tr->interp == TRAJECTORY_GSPLAT) { /* p = -R(u) t(u): |p'| <= |R'| |t(u)| + |t_b - t_a| */
+        vec3 ta = world_to_camera_translation(a), tb = world_to_camera_translation(b);
+        moved = v3_len(x.phi) * fmax(v3_len(ta), v3_len(tb)) + v3_len(v3_sub(tb, ta));
+    }
     *speed = moved / dt, *turn_rate = v3_len(x.phi) / dt;
 }
 
@@ -323,6 +335,29 @@ static void pose_linear(const trajectory *tr, double t, vec3 *p, double q[4])
     quat_slerp(a->q, b->q, u, q);
 }
 
+/* gsplat's rolling-shutter pose between a start and an end pose (v1.5.3
+ * 937e299 gsplat/cuda/include/Cameras.cuh:276-288, interpolate_shutter_pose,
+ * on the world-to-camera matrices it is given, Cameras.cuh:40-61): t_rs =
+ * (1 - u) t_start + u t_end of the world-to-camera translations, and q_rs =
+ * normalize(glm::slerp(q_start, q_end, u)), the short arc (glm 33b4a62,
+ * the submodule v1.5.3 pins: ext/quaternion_common.inl:41-73; it
+ * normalises a lerp below a float epsilon of cos, within 1e-9 of this). The
+ * slerp of the world-to-camera quaternions is the inverse of the
+ * camera-to-world ones' (q_a^-1 (q_a q_b^-1)^u = (q_a (q_a^-1 q_b)^u)^-1: x^u
+ * conjugated is (q x q^-1)^u), so q is linear's; the centre is -R(u) t_rs.
+ * It bends off the line between the centres when the camera turns (linear
+ * lerps the centre). */
+static void pose_gsplat(const trajectory *tr, double t, vec3 *p, double q[4])
+{
+    double u;
+    int k = segment_of(tr, t, 0, tr->count - 1, &u);
+    const trajectory_knot *a = &tr->knots[k], *b = &tr->knots[k + 1];
+    vec3 ta = world_to_camera_translation(a), tb = world_to_camera_translation(b);
+    vec3 tu = v3_add(v3_scale(ta, 1.0 - u), v3_scale(tb, u));
+    quat_slerp(a->q, b->q, u, q);
+    *p = v3_scale(quat_rotate(q, tu), -1.0);
+}
+
 static void pose_se3(const trajectory *tr, double t, vec3 *p, double q[4])
 {
     double u, rq[4], eq[4];
@@ -413,7 +448,8 @@ void trajectory_pose(const trajectory *tr, double t, vec3 *p, double q[4])
     double t0, t1, fq[4];
     trajectory_domain(tr, &t0, &t1);
     t = fmin(fmax(t, t0), t1);
-    int through_knots = tr->interp == TRAJECTORY_LINEAR || tr->interp == TRAJECTORY_SE3;
+    int through_knots = tr->interp == TRAJECTORY_LINEAR || tr->interp == TRAJECTORY_SE3 ||
+                        tr->interp == TRAJECTORY_GSPLAT;
     if (through_knots && t == tr->knots[tr->count - 1].t) { /* u = 1 of the last segment: the knot itself */
         *p = tr->knots[tr->count - 1].p;
         to_opencv(tr->knots[tr->count - 1].q, q, tr->opengl_axes);
@@ -423,6 +459,8 @@ void trajectory_pose(const trajectory *tr, double t, vec3 *p, double q[4])
         pose_linear(tr, t, p, fq);
     } else if (tr->interp == TRAJECTORY_SE3) {
         pose_se3(tr, t, p, fq);
+    } else if (tr->interp == TRAJECTORY_GSPLAT) {
+        pose_gsplat(tr, t, p, fq);
     } else if (tr->interp == TRAJECTORY_CUBIC) {
         pose_cubic(tr, t, p, fq);
     } else {

@@ -24,6 +24,10 @@
  *               blended per component (q signs aligned), q normalised
  *   bezier-se3  Exp(sum_i b_i(u) Log T_i) of the absolute poses in the
  *               file's axes (DeblurGS)
+ *   gsplat      per segment: the world-to-camera translation -R^T p lerped,
+ *               q as linear's (gsplat's rolling-shutter pose, v1.5.3
+ *               Cameras.cuh:276-288); no file names it: a frame under
+ *               rolling="gsplat" moves its camera so (scene_for_shutter)
  */
 #ifndef RR_TRAJECTORY_H
 #define RR_TRAJECTORY_H
@@ -36,6 +40,7 @@ typedef enum {
     TRAJECTORY_CUBIC,
     TRAJECTORY_BEZIER,
     TRAJECTORY_BEZIER_SE3,
+    TRAJECTORY_GSPLAT, /* not read from files: scene_for_shutter's, rolling="gsplat" */
 } trajectory_interp;
 
 typedef struct {
@@ -63,7 +68,8 @@ typedef struct trajectory { /* (animation.h names it to hold one) */
 /* Control poses a Bezier may have (BAD-Gaussians uses up to about 10). */
 #define TRAJECTORY_MAX_BEZIER 32
 
-/* "linear", "se3", "cubic", "bezier", "bezier-se3"; -1 if unknown. */
+/* "linear", "se3", "cubic", "bezier", "bezier-se3"; -1 if unknown (also
+ * "gsplat": no file names it). */
 int trajectory_interp_parse(const char *name);
 const char *trajectory_interp_name(trajectory_interp k);
 /* Knots the interpolation needs at least. */

@@ -50,7 +50,7 @@ static void integrand(const sample_ctx *c, const piece *pc, double t, double out
         if (candidate_hit(c, c->scr->sets[pc->first + (size_t)k], t, &h))
             kbuffer_insert(&kb, &h);
     }
-    *overflow |= kb.dropped > 0;
+    *overflow |= kbuffer_overflowed(&kb);
     vec3 col = s->background;
     if (kb.count) {
         vec3 org, dir;

@@ -53,6 +53,7 @@ typedef struct {
     int width, height;
     pixel_state *px;        /* width * height; may hold batches from a checkpoint */
     uint64_t rays, kbuffer_overflows, clamped;
+    uint64_t gaussians_short; /* samples that dropped Gaussians for lack of memory */
     double seconds;
     double exact_unresolved; /* exact time: shutter time left in pieces too short to certify,
                                 summed over spatial samples (exact.h) */

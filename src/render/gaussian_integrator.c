@@ -304,6 +304,8 @@ static void object_ray(const scene *s, const accel *a, const gaussian_sample *sm
     }
     xform xf = accel_object_at(a, obj, smp->time);
     gaussian_ray_init(&r->ray, smp->view, &xf, smp->x, smp->y, smp->org, smp->dir);
+    if (s->sh_eye_fixed) /* gsplat's rolling shutter: one SH origin for the frame (scene_for_shutter) */
+        r->ray.eye = xform_inverse_point(&xf, s->sh_eye);
     vec3 centre;
     double radius, largest = accel_gaussian_largest_scale(a, obj);
     accel_object_swept_sphere(a, obj, &centre, &radius);

@@ -47,6 +47,8 @@ typedef struct {
     size_t candidates_count, candidates_cap;
     uint64_t *candidate_order;         /* their evaluation order, with sorting space */
     size_t candidate_order_cap;
+    uint64_t short_samples;            /* samples that dropped Gaussians for lack of memory (hits.dropped > 0);
+                                        * statistics: counts on across samples */
 } gaussian_integrator;
 
 void gaussian_integrator_init(gaussian_integrator *g);

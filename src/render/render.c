@@ -21,7 +21,7 @@ const char *blur_space_name(blur_space b)
 render_settings render_settings_default(void)
 {
     render_settings rs = {
-        .smp = {.kind = SAMPLER_THESIS, .seed = 1, .grid = 1, .tspp = 1, .time_factor = 1},
+        .smp = {.kind = SAMPLER_DEFAULT, .seed = 1, .grid = 1, .tspp = 1, .time_factor = 1},
         .threads = 1,
         .batch_begin = 0,
         .batches = 1,
@@ -56,6 +56,7 @@ typedef struct {
     uint32_t round; /* pixels holding `round` batches render batch batch_begin + round */
     atomic_int next_tile, workers_left;
     atomic_uint_fast64_t rays, overflows, clamped, pixel_batches;
+    atomic_uint_fast64_t gaussians_short; /* samples that dropped Gaussians for lack of memory */
     atomic_int scratch_failed; /* a worker could not allocate its scratch */
     atomic_int exact_failed;   /* an exact sample failed (see exact_status): the render stops */
     int exact_status, exact_px, exact_py; /* under lock: the first such failure and its pixel */
@@ -68,7 +69,7 @@ typedef struct {
 
 typedef struct { /* per-thread scratch */
     sampler_scratch ss;
-    double *x, *y, *t;
+    double *x, *y, *t, *w;
     exact_scratch *exact;
     gaussian_integrator gaussian;
 } thread_scratch;
@@ -95,7 +96,7 @@ typedef struct {
 static void fixed_camera_color(render_job *job, static_cache *sc, const kbuffer *result, double rgba[4],
                                uint64_t *overflows)
 {
-    *overflows += result->dropped > 0;
+    *overflows += (uint64_t)kbuffer_overflowed(result);
     int is_static = result == &sc->ray.static_hits;
     if (is_static && sc->shaded) {
         memcpy(rgba, sc->rgba, sizeof sc->rgba);
@@ -128,7 +129,7 @@ static void samples_fixed_camera(render_job *job, static_cache *sc, double x, do
  * colour (the nearest surface hides what is behind it: a Gaussian behind
  * an opaque surface is not seen). */
 static void composite_gaussians(render_job *job, double x, double y, double t, vec3 org, vec3 dir,
-                                const kbuffer *kb, gaussian_integrator *scratch, double rgba[4], uint64_t *overflows)
+                                const kbuffer *kb, gaussian_integrator *scratch, double rgba[4])
 {
     camera_view moved, *view = &job->rest_view;
     if (job->camera_moves)
@@ -138,7 +139,9 @@ static void composite_gaussians(render_job *job, double x, double y, double t, v
     gaussian_blend_init(&blend);
     gaussian_sample smp = {view, x, y, org, dir, t};
     gaussian_integrate(job->sc, job->acc, &smp, kb->count ? kb->closest : INFINITY, scratch, &blend);
-    *overflows += scratch->hits.dropped > 0;
+    /* out of memory, not a full k-buffer: counted apart (a sample with
+     * both was counted twice, and warned of as too many hits) */
+    scratch->short_samples += scratch->hits.dropped > 0;
     vec3 rgb = gaussian_blend_over(&blend, v3(rgba[0], rgba[1], rgba[2]));
     rgba[0] = rgb.x, rgba[1] = rgb.y, rgba[2] = rgb.z;
     rgba[3] = kb->count ? 1.0 : 1.0 - blend.T;
@@ -153,10 +156,10 @@ static void sample_own_ray(render_job *job, double x, double y, double t, gaussi
     kbuffer kb;
     scene_camera_ray(job->sc, x, y, t, &org, &dir);
     accel_trace(job->acc, org, dir, t, &kb);
-    *overflows += kb.dropped > 0;
+    *overflows += (uint64_t)kbuffer_overflowed(&kb);
     sample_color(job, org, dir, &kb, rgba);
     if (job->gaussians)
-        composite_gaussians(job, x, y, t, org, dir, &kb, scratch, rgba, overflows);
+        composite_gaussians(job, x, y, t, org, dir, &kb, scratch, rgba);
 }
 
 /* The next group of samples from `first`: those sharing its raster position
@@ -184,7 +187,7 @@ static int batch_samples(const render_job *job, int px, int py, uint32_t batch, 
     const sampler *smp = &job->rs->smp;
     const shutter *sh = &job->rs->shut;
     uint64_t pixel = (uint64_t)py * (uint64_t)job->img->width + (uint64_t)px;
-    sampler_batch(smp, sh->open, sh->close, pixel, px, py, batch, &scr->ss, scr->x, scr->y, scr->t);
+    sampler_batch(smp, sh->open, sh->close, pixel, px, py, batch, &scr->ss, scr->x, scr->y, scr->t, scr->w);
     int count = (int)sampler_count(smp); /* at most SAMPLER_MAX_TIME_STRATA (check_settings) */
     if (job->rs->filter == PIXEL_FILTER_POINT)
         for (int i = 0; i < count; i++)
@@ -221,18 +224,22 @@ static void to_blur_space(const render_job *job, double rgba[4])
             rgba[c] = clamp01(rgba[c]);
 }
 
-/* One batch of a pixel (thesis sec. 4.5): the mean of its samples' colors.
- * The thesis weights each sample by a(t) and divides by the sum of the
- * weights; here the times are drawn from a(t) instead (batch_samples), the
- * same expectation without the ratio, which is 0/0 for a batch that drew
- * only times of zero weight. For a box a(t) the two are the same numbers.
+/* One batch of a pixel (thesis sec. 4.5): the weighted mean of its
+ * samples' colors. The thesis weights each sample by a(t) and divides by
+ * the sum of the weights; here the times are drawn from a(t) instead
+ * (batch_samples), the same expectation without a ratio that is 0/0 for a
+ * batch that drew only times of zero weight. The weights left are the
+ * sampler's (its shifted time strata, sampler.h): never all 0, and summing
+ * to the count whenever each time stratum holds one sample, when the ratio
+ * is the plain unbiased mean; dividing by their sum keeps a pixel of one
+ * constant colour exactly that colour in every batch.
  * Samples sharing a spatial position (the thesis sampler's s_t times) share
  * the static objects' hits: tracing them again would give the same hits. */
 static void render_pixel_batch(render_job *job, int px, int py, uint32_t batch, thread_scratch *scr,
                                double est[4], uint64_t *rays, uint64_t *overflows)
 {
     int count = batch_samples(job, px, py, batch, scr);
-    double acc[4] = {0, 0, 0, 0};
+    double acc[4] = {0, 0, 0, 0}, weight = 0;
     static_cache sc;
     sc.x = sc.y = NAN;
     for (int i = 0; i < count;) {
@@ -245,14 +252,16 @@ static void render_pixel_batch(render_job *job, int px, int py, uint32_t batch, 
             samples_fixed_camera(job, &sc, scr->x[first], scr->y[first], t, n, rgba, overflows);
         *rays += (uint64_t)n;
         for (int k = 0; k < n; k++) {
+            double w = scr->w[first + k];
             to_blur_space(job, rgba[k]);
             for (int c = 0; c < 4; c++)
-                acc[c] += rgba[k][c];
+                acc[c] += w * rgba[k][c];
+            weight += w;
         }
     }
-    RR_DCHECK(count > 0);
+    RR_DCHECK(count > 0 && weight > 0);
     for (int c = 0; c < 4; c++)
-        est[c] = acc[c] / (double)count;
+        est[c] = acc[c] / weight;
 }
 
 /* One batch of a pixel with exact time integration: the mean over the
@@ -380,9 +389,10 @@ static int scratch_init(thread_scratch *scr, const sampler *s)
     scr->x = malloc(n * sizeof(double));
     scr->y = malloc(n * sizeof(double));
     scr->t = malloc(n * sizeof(double));
+    scr->w = malloc(n * sizeof(double));
     scr->exact = exact_scratch_new();
     gaussian_integrator_init(&scr->gaussian);
-    return sampler_scratch_init(&scr->ss, s) || !scr->x || !scr->y || !scr->t || !scr->exact ? -1 : 0;
+    return sampler_scratch_init(&scr->ss, s) || !scr->x || !scr->y || !scr->t || !scr->w || !scr->exact ? -1 : 0;
 }
 
 static void scratch_free(thread_scratch *scr)
@@ -391,6 +401,7 @@ static void scratch_free(thread_scratch *scr)
     free(scr->x);
     free(scr->y);
     free(scr->t);
+    free(scr->w);
     exact_scratch_free(scr->exact);
     gaussian_integrator_free(&scr->gaussian);
 }
@@ -410,6 +421,7 @@ static void *worker(void *arg)
             if (tile >= job->ntiles)
                 break;
         }
+    atomic_fetch_add(&job->gaussians_short, scr.gaussian.short_samples);
     scratch_free(&scr);
     pthread_mutex_lock(&job->lock);
     atomic_fetch_sub(&job->workers_left, 1);
@@ -544,7 +556,7 @@ static int check_settings(const render_settings *rs, rr_error *err)
         return rr_fail(err, "the batch cap must be at least the batch count");
     if (render_check_exact_blur(rs->exact_time, rs->blur, err))
         return -1;
-    return sampler_check(&rs->smp, render_batch_end(rs), err);
+    return sampler_check(&rs->smp, err);
 }
 
 /* What render_image refuses before any work: settings, a shutter other
@@ -598,6 +610,7 @@ static void job_finish(render_job *job, image *img, double start)
     img->seconds += rr_seconds() - start;
     img->rays += atomic_load(&job->rays);
     img->kbuffer_overflows += atomic_load(&job->overflows);
+    img->gaussians_short += atomic_load(&job->gaussians_short);
     img->clamped += atomic_load(&job->clamped);
     img->exact_unresolved += job->exact_unresolved;
 }

@@ -67,13 +67,6 @@ typedef struct {
     void *user;
 } render_hooks;
 
-/* One past the last batch index the render can reach (batch_begin plus
- * its batches, or its cap with a target error). */
-static inline uint64_t render_batch_end(const render_settings *rs)
-{
-    return (uint64_t)rs->batch_begin + (rs->target_error > 0 ? rs->max_batches : rs->batches);
-}
-
 /* Renders into img (pixels continue from the batches they already have).
  * The result depends only on the scene, the settings and the seed, not on
  * the thread count. Returns -1 if *cancel became non-zero (after a final

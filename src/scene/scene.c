@@ -3,6 +3,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/rotation.h"
 #include "gaussians/gaussian_hit.h"
 #include "motion/trajectory.h"
 
@@ -99,6 +100,58 @@ int scene_check_shutter_in_trajectory(const scene *s, const shutter *sh, rr_erro
                        shutter_rolling_name(sh->rolling.kind), lo, hi, tr->name, trajectory_interp_name(tr->interp),
                        t0, t1);
     return 0;
+}
+
+/* A 2-knot gsplat-interpolated path of the camera's motion from t0 to t1:
+ * the knots are the motion's own poses (its transform of the rest camera),
+ * so the camera at u is gsplat's pose between the camera's two poses (a
+ * fixed rest rotation R0 on the right passes through: slerp(a R0, b R0) =
+ * slerp(a, b) R0, and the lerped -R^T p of the posed camera is R0^T times
+ * the motion's plus a constant, which the centre -R(u) t(u) takes back). */
+static int gsplat_camera_motion(const scene *s, double t0, double t1, animation *out, rr_error *err)
+{
+    trajectory *tr = calloc(1, sizeof *tr);
+    trajectory_knot *k = calloc(2, sizeof *k);
+    if (!tr || !k) {
+        free(tr), free(k);
+        return rr_fail(err, "out of memory");
+    }
+    tr->interp = TRAJECTORY_GSPLAT, tr->count = 2, tr->knots = k;
+    double times[2] = {t0, t1};
+    for (int i = 0; i < 2; i++) {
+        xform m = animation_pose_at(&s->camera_motion, times[i], k[i].q);
+        k[i].t = times[i], k[i].p = m.t;
+    }
+    animation_init_static(out);
+    out->path = tr;
+    rr_error why;
+    if (trajectory_prepare(tr, "the camera's start and end poses", &why)) {
+        animation_free(out);
+        return rr_fail(err, "%s: rolling=\"gsplat\" over [%.17g, %.17g]: %s", s->path, t0, t1, why.msg);
+    }
+    return 0;
+}
+
+int scene_for_shutter(const scene *s, const shutter *sh, scene *out, rr_error *err)
+{
+    *out = *s;
+    if (sh->rolling.kind != ROLLING_GSPLAT || !scene_camera_moves(s))
+        return 0;
+    /* the end pose's time: the last line's (shutter_line_time) */
+    double t0 = sh->open, t1 = t0 + (sh->rolling.readout_time != 0 ? sh->rolling.readout_time : sh->close - sh->open);
+    if (gsplat_camera_motion(s, t0, t1, &out->camera_motion, err))
+        return -1;
+    const trajectory_knot *k = out->camera_motion.path->knots;
+    vec3 c0 = v3_add(k[0].p, quat_rotate(k[0].q, s->cam.position));
+    vec3 c1 = v3_add(k[1].p, quat_rotate(k[1].q, s->cam.position));
+    out->sh_eye_fixed = 1, out->sh_eye = v3_scale(v3_add(c0, c1), 0.5);
+    return 0;
+}
+
+void scene_for_shutter_free(scene *out, const scene *s)
+{
+    if (out->camera_motion.path != s->camera_motion.path)
+        animation_free(&out->camera_motion);
 }
 
 void scene_free(scene *s)

@@ -84,6 +84,9 @@ typedef struct {
     int frames_at_poses;     /* <frames at="trajectory">: frame N's exposure is centred on the camera
                                 trajectory's pose N (a deblurring dataset's frame k spans pose k's
                                 time) */
+    int sh_eye_fixed;        /* rolling="gsplat" (scene_for_shutter): every Gaussian's SH direction is
+                                from sh_eye, not from the camera at the ray's time */
+    vec3 sh_eye;
     vec3 background, ambient;
     double epsilon, kernel_sigma;
     int time_factor;
@@ -123,11 +126,25 @@ int scene_check_trajectory_times(const scene *s, double open, double close, rr_e
  * times and the trajectory's domain otherwise. */
 int scene_check_shutter_in_trajectory(const scene *s, const shutter *sh, rr_error *err);
 
+/* The scene as a frame with shutter sh renders it: *out = *s (sharing
+ * everything), except that under rolling="gsplat" a moving camera moves
+ * as gsplat interpolates its start pose (at sh->open) and end pose (open
+ * plus the readout: shutter_line_time's last line) and every Gaussian's
+ * SH direction starts at the mean of the two poses' centres (gsplat v1.5.3
+ * interpolate_shutter_pose and rendering.py:491-494; TRAJECTORIES.md).
+ * -1 with err set when those poses cannot be interpolated; free *out with
+ * scene_for_shutter_free(out, s), never scene_free. */
+int scene_for_shutter(const scene *s, const shutter *sh, scene *out, rr_error *err);
+void scene_for_shutter_free(scene *out, const scene *s);
+
 /* Records an input file's path; -1 when out of memory. */
 int scene_add_input(scene *s, const char *path);
 
 /* Object-space bounds of an object (before its animation; a Gaussian
- * model's at the kernel radius, without its screen-space filter). */
+ * model's at the kernel radius, without its screen-space filter). A
+ * dynamic Gaussian model's at its rest means only: over a shutter its
+ * Gaussians' paths reach farther, and accel_build.c bounds those
+ * (dynamic_paths); this must not be used for one. */
 aabb scene_object_bounds(const scene_object *o);
 
 #endif

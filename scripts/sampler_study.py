@@ -1,0 +1,224 @@
+#!/usr/bin/python3
+"""Sampler convergence and time to error, measured (`make bench-samplers`;
+src/cmd/BENCH.md, Sampler convergence and Time to error).
+
+usage: sampler_study.py convergence [--views NAME,...] [--counts 16,64,256]
+                        [--samplers sobol,jittered3d,thesis] [--out DIR]
+       sampler_study.py time-to-error [--levels 1,0.1,0.01] [--out DIR]
+                        [--batch-samples N] [--crop X0,X1,Y0,Y1]
+       sampler_study.py table CSV...
+
+Errors are RMS over the RGB of every pixel, in 8-bit levels (1/255), of a
+render against the truth, measured without a reference and without the
+render's own standard errors: two renders of the same settings with other
+seeds are independent and unbiased, so E|X1 - X2|^2 = 2 E|X1 - truth|^2 and
+a render's error is RMS(X1 - X2) / sqrt 2.
+
+convergence: for each view (a scene, its filter, its resolution or crop
+window) and sampler, that error at each count of samples per pixel (one
+batch: spp x tspp, box-filter views split 4 x N/4, point-filter views 1 x N),
+the fitted rate (slope of log error against log samples) and the seconds of
+the largest count. Writes DIR/convergence.csv and DIR/convergence.md (the
+table BENCH.md quotes).
+
+time-to-error: the benchmark-scale view (scenes/bench/scale.xml, made by
+`make scale-models`; --pixel-filter point) with the default sampler and
+--target-error at each level: B = 4 batches of --batch-samples, then more
+batches to every pixel whose largest RGB standard error is above the level
+(up to 8 B per pixel); the seconds of one render and its measured error
+(two seeds). Writes DIR/time_to_error.csv and prints the table. --crop
+measures a crop window of the view instead (its pixels are the full
+render's, bit for bit; seconds then are the crop's).
+
+Progress goes to stderr, a line per render."""
+import argparse
+import csv
+import math
+import os
+import subprocess
+import sys
+import time
+
+import pydeps
+
+pydeps.require(*pydeps.IMAGE_MODULES)  # a missing package: one line, not a traceback
+
+import numpy as np
+
+import imagecompare
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+BIN = os.environ.get("REFRENDER", os.path.join(ROOT, "build", "refrender"))
+SCALE = os.path.join(ROOT, "scenes", "bench", "scale.xml")
+
+# name: (scene relative to ROOT, extra arguments); point-filter views take
+# all samples at the pixel centre (spp 1)
+VIEWS = {
+    "default-box": ("scenes/default.xml", ["--res", "128x128"]),
+    "default-point": ("scenes/default.xml", ["--res", "128x128", "--pixel-filter", "point"]),
+    "diagonal": ("scenes/diagonal.xml", ["--res", "128x96"]),
+    "rotation": ("scenes/rotation.xml", ["--res", "128x96"]),
+    "towards_camera": ("scenes/towards_camera.xml", ["--res", "128x96"]),
+    "camera_pan": ("scenes/camera_pan.xml", ["--res", "128x96"]),
+    "gaussians-2dgs": ("scenes/examples/training_views_2dgs.xml", ["--res", "128x96", "--pixel-filter", "point"]),
+    "stg": ("scenes/examples/stg_lite.xml", ["--res", "128x128", "--pixel-filter", "point", "--frame", 25]),
+    "scale-crop": ("scenes/bench/scale.xml", ["--pixel-filter", "point", "--crop-window", "0.3,0.5,0.3,0.5"]),
+}
+
+
+def progress(text):
+    print(f"sampler_study.py: {text}", file=sys.stderr, flush=True)
+
+
+def render(scene, out, args):
+    """Renders; returns (RGB planes of the data window, wall-clock seconds, header)."""
+    cmd = [BIN, scene, "-o", out, "--quiet", *map(str, args)]
+    start = time.monotonic()
+    proc = subprocess.run(cmd, capture_output=True, text=True)
+    seconds = time.monotonic() - start
+    if proc.returncode:
+        sys.exit(f"sampler_study.py: {' '.join(cmd)} failed:\n{proc.stderr.strip()}")
+    ch, spec, header = imagecompare.read_channels(out, unassociated_alpha=False)
+    rgb = np.stack([ch[c] for c in "RGB"], axis=-1).astype(np.float64)
+    if spec.width != spec.full_width or spec.height != spec.full_height:  # a crop: its own pixels
+        rgb = rgb[:spec.height, :spec.width]
+    return rgb, seconds, header
+
+
+def pair_error(scene, out, args):
+    """Error in 8-bit levels of one render, from two seeds; seconds of one."""
+    a, seconds, header = render(scene, out, [*args, "--seed", 11])
+    b, _, _ = render(scene, out, [*args, "--seed", 12])
+    return 255 * math.sqrt(float(np.mean((a - b) ** 2)) / 2), seconds, header
+
+
+def split(view_args, n):
+    return (1, n) if "point" in view_args else (4, max(1, n // 4))
+
+
+def fit_line(counts, errors):
+    """(slope, intercept) of log error against log samples; NaNs without two errors above 0."""
+    pts = [(math.log(c), math.log(e)) for c, e in zip(counts, errors) if e > 0]
+    if len(pts) < 2:
+        return float("nan"), float("nan")
+    slope, intercept = np.polyfit([p[0] for p in pts], [p[1] for p in pts], 1)
+    return float(slope), float(intercept)
+
+
+def samples_for(level, line):
+    """Samples per pixel the fitted line reaches `level` at (rounded; '' without a fit)."""
+    slope, intercept = line
+    if not slope < 0:
+        return ""
+    n = math.exp((math.log(level) - intercept) / slope)
+    return f"{n:.3g}"
+
+
+def convergence(opts):
+    os.makedirs(opts.out, exist_ok=True)
+    rows = []
+    out = os.path.join(opts.out, "render.exr")
+    for view in opts.views.split(","):
+        scene, args = VIEWS[view]
+        for sampler in opts.samplers.split(","):
+            for n in map(int, opts.counts.split(",")):
+                spp, tspp = split(args, n)
+                err, seconds, _ = pair_error(os.path.join(ROOT, scene), out,
+                                             [*args, "--sampler", sampler, "--spp", spp, "--tspp", tspp])
+                rows.append({"view": view, "sampler": sampler, "samples": spp * tspp, "spp": spp, "tspp": tspp,
+                             "seconds": round(seconds, 3), "error_levels": err})
+                progress(f"{view} {sampler} {spp}x{tspp}: {err:.4g} levels, {seconds:.1f} s")
+    with open(os.path.join(opts.out, "convergence.csv"), "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=list(rows[0]))
+        w.writeheader()
+        w.writerows(rows)
+    table = convergence_table(rows)
+    with open(os.path.join(opts.out, "convergence.md"), "w") as f:
+        f.write(table)
+    print(table)
+
+
+def convergence_table(rows):
+    counts = sorted({r["samples"] for r in rows})
+    head = ("| view | sampler | " + " | ".join(f"{c}" for c in counts) + " | rate | s at " + str(counts[-1]) +
+            " | samples to 1 / 0.1 level |")
+    lines = [head, "|" + "---|" * (len(counts) + 5)]
+    for view in dict.fromkeys(r["view"] for r in rows):
+        best = {c: min(r["error_levels"] for r in rows if r["view"] == view and r["samples"] == c) for c in counts}
+        for sampler in dict.fromkeys(r["sampler"] for r in rows):
+            sel = {r["samples"]: r for r in rows if r["view"] == view and r["sampler"] == sampler}
+            if not sel:
+                continue
+            cells = [cell(sel[c]["error_levels"], best[c]) if c in sel else "" for c in counts]
+            line = fit_line(list(sel), [r["error_levels"] for r in sel.values()])
+            lines.append(f"| {view} | {sampler} | " + " | ".join(cells) +
+                         f" | {line[0]:.2f} | {sel[counts[-1]]['seconds'] if counts[-1] in sel else ''} | "
+                         f"{samples_for(1, line)} / {samples_for(0.1, line)} |")
+    return "\n".join(lines) + "\n"
+
+
+def cell(error, best):
+    """An error and its ratio to the best sampler's at the same count."""
+    return f"{error:.3g} ({error / best:.2f}x)" if best > 0 else f"{error:.3g}"
+
+
+def table_from_csv(opts):
+    rows = []
+    for path in opts.csv:
+        with open(path, newline="") as f:
+            for r in csv.DictReader(f):
+                rows.append({**r, "samples": int(r["samples"]), "seconds": float(r["seconds"]),
+                             "error_levels": float(r["error_levels"])})
+    print(convergence_table(rows))
+
+
+def time_to_error(opts):
+    if not os.path.exists(os.path.join(ROOT, "scenes", "models", "scale_layer0.ply")):
+        sys.exit("sampler_study.py: scenes/models/scale_layer*.ply are missing: run make scale-models")
+    os.makedirs(opts.out, exist_ok=True)
+    out = os.path.join(opts.out, "render.exr")
+    rows = []
+    base = ["--pixel-filter", "point", "--spp", 1, "--tspp", opts.batch_samples, "--batches", 4]
+    if opts.crop:
+        base += ["--crop-window", opts.crop]
+    for level in map(float, opts.levels.split(",")):
+        err, seconds, header = pair_error(SCALE, out, [*base, "--target-error", level / 255])
+        rows.append({"target_levels": level, "seconds": round(seconds, 1), "error_levels": err,
+                     "samples": header.get("refrender:rays", "")})
+        progress(f"target {level} levels: {err:.4g} levels measured, {seconds:.1f} s")
+    with open(os.path.join(opts.out, "time_to_error.csv"), "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=list(rows[0]))
+        w.writeheader()
+        w.writerows(rows)
+    print("| target (8-bit levels) | seconds | measured error (levels) |\n|---|---|---|")
+    for r in rows:
+        print(f"| {r['target_levels']:g} | {r['seconds']} | {r['error_levels']:.3g} |")
+
+
+def main():
+    p = argparse.ArgumentParser(prog="sampler_study.py", description=__doc__.split("\n\n")[0],
+                                epilog=__doc__.split("\n\n", 2)[2], formatter_class=argparse.RawDescriptionHelpFormatter)
+    sub = p.add_subparsers(dest="what", required=True)
+    c = sub.add_parser("convergence", help="error against samples for each view and sampler")
+    c.add_argument("--views", default=",".join(VIEWS), help="views to measure (default: all: %(default)s)")
+    c.add_argument("--counts", default="16,64,256", help="samples per pixel (default: %(default)s)")
+    c.add_argument("--samplers", default="sobol,jittered3d,thesis", help="(default: %(default)s)")
+    c.add_argument("--out", default="out/samplers", help="output directory (default: %(default)s)")
+    t = sub.add_parser("time-to-error", help="seconds to each error level on the benchmark-scale view")
+    t.add_argument("--levels", default="1,0.1,0.01", help="target errors in 8-bit levels (default: %(default)s)")
+    t.add_argument("--batch-samples", type=int, default=64, help="samples per batch (default: %(default)s)")
+    t.add_argument("--crop", help="a crop window X0,X1,Y0,Y1 of the view instead of all of it")
+    t.add_argument("--out", default="out/samplers", help="output directory (default: %(default)s)")
+    tab = sub.add_parser("table", help="the convergence table of one or more convergence.csv files")
+    tab.add_argument("csv", nargs="+")
+    opts = p.parse_args()
+    if opts.what == "table":
+        return table_from_csv(opts)
+    for view in getattr(opts, "views", "").split(",") if opts.what == "convergence" else []:
+        if view not in VIEWS:
+            p.error(f"--views: unknown view '{view}' (known: {', '.join(VIEWS)})")
+    convergence(opts) if opts.what == "convergence" else time_to_error(opts)
+
+
+if __name__ == "__main__":
+    main()
