@@ -24,7 +24,7 @@ import pytest
 from conftest import BIN, ROOT, run
 
 DOCS = ["README.md", "scenes/README.md", "scripts/README.md", "src/EXACT.md", "src/cmd/BENCH.md",
-        "tests/README.md", "reference_images/README.md", "src/GAUSSIANS.md", "src/TRAJECTORIES.md"]
+        "tests/README.md", "reference_images/README.md", "src/GAUSSIANS.md", "src/TRAJECTORIES.md", "src/SPLAT.md"]
 LINK = re.compile(r"\[[^\]]*\]\(([^)\s]+)\)")
 
 
@@ -67,7 +67,7 @@ def test_readme_is_a_front_door():
 
 def help_text():
     texts = [run(["--help"]).stdout]
-    for sub in ["merge", "gen", "surfels", "export"]:
+    for sub in ["merge", "gen", "surfels", "export", "splat"]:
         texts.append(run([sub, "--help"]).stdout)
     return "\n".join(texts)
 

@@ -1,5 +1,5 @@
 """Write faults. Every output (final EXR, render state, merge,
-preview, frames, gen and surfels PLY, scene export) either completes or leaves the previous
+preview, frames, gen and surfels PLY, scene export, refrender splat's EXR) either completes or leaves the previous
 file untouched, and the exit status says which: the LD_PRELOAD shim
 tests/faultinject.c makes the Nth write to a regular file (and every later
 one: a disk that stays full) or the Nth rename fail, for every N until a run
@@ -101,6 +101,22 @@ def test_final_image_and_preview(tmp_path, scene, op):
     # a new image beside an old preview
     assert check_every_fault(tmp_path, [scene, *FAST, "-o", out, "--preview", preview], [out, preview], complete,
                              op, all_or_none=True) >= 2
+
+
+@pytest.mark.parametrize("op", ["write", "rename"])
+def test_splat_image_and_preview(tmp_path, scene, op):
+    """refrender splat's EXR and preview: one result, all or none."""
+    good = tmp_path / "good"
+    good.mkdir()
+    args = ["splat", "accum", scene, "--samples", 3, "--quiet"]
+    assert run([*args, "-o", good / "o.exr", "--preview", good / "p.png"]).returncode == 0
+    out, preview = tmp_path / "o.exr", tmp_path / "p.png"
+
+    def complete(path):
+        return path.read_bytes() != PREVIOUS and (same_pixels(path, good / "o.exr") if path == out else
+                                                  path.read_bytes() == (good / "p.png").read_bytes())
+    assert check_every_fault(tmp_path, [*args, "-o", out, "--preview", preview], [out, preview], complete, op,
+                             all_or_none=True) >= 2
 
 
 @pytest.mark.parametrize("op", ["write", "rename"])

@@ -24,7 +24,7 @@ static int hit_before(const surface_hit *a, const surface_hit *b)
 
 void kbuffer_insert(kbuffer *kb, const surface_hit *h)
 {
-    if (!(h->t <= kb->closest + kb->epsilon))
+    if (!kbuffer_within(h->t, kb->closest, kb->epsilon))
         return;
     int pos = kb->count;
     while (pos > 0 && hit_before(h, &kb->hits[pos - 1]))
@@ -43,7 +43,7 @@ void kbuffer_insert(kbuffer *kb, const surface_hit *h)
     if (h->t < kb->closest) {
         kb->closest = h->t;
         /* entries are sorted by t: drop the tail now beyond the window */
-        while (kb->count > 0 && kb->hits[kb->count - 1].t > kb->closest + kb->epsilon)
+        while (kb->count > 0 && !kbuffer_within(kb->hits[kb->count - 1].t, kb->closest, kb->epsilon))
             kb->count--;
     }
 }

@@ -26,6 +26,15 @@ typedef struct {
     surface_hit hits[KBUFFER_MAX]; /* sorted by (t, obj, prim) */
 } kbuffer;
 
+/* The epsilon rule (thesis sec. 4.1.1: the visibility pass shifts depths
+ * by epsilon along the viewing ray; sec. 4.5 step c): a hit at depth t
+ * blends with the closest one when t <= closest + epsilon, in float as the
+ * buffer holds them. One owner for the ray tracer and src/splat/. */
+static inline int kbuffer_within(float t, float closest, float epsilon)
+{
+    return t <= closest + epsilon;
+}
+
 void kbuffer_reset(kbuffer *kb, float epsilon);
 /* Inserts a hit if it lies within epsilon of the closest so far. */
 void kbuffer_insert(kbuffer *kb, const surface_hit *h);

@@ -12,6 +12,7 @@
 #include <unistd.h>
 
 #include "cmd/bench_gaussian.h"
+#include "cmd/bench_splat.h"
 #include "render/render.h"
 #include "surfels/shapes.h"
 
@@ -541,7 +542,7 @@ static void bench_floor(int speeds, int splats, int tspp, int threads, int res, 
 typedef struct {
     int quick, res, reps, threads;
     int big, small, tspp; /* splat counts of the large and small model; time samples */
-    /* one series: cases, speed, splats, tspp, threads, static80, target, floor, gaussians, scale, stg */
+    /* one series: cases, speed, splats, tspp, threads, static80, target, floor, splat, gaussians, scale, stg */
     const char *only;
     FILE *csv;
 } bench_plan;
@@ -676,9 +677,24 @@ static void series_static80(const bench_plan *p)
         printf("\nstatic80: %.1f%% of the pixels' rays meet the moving object's swept bounds\n", 100 * r.moving_share);
 }
 
+/* The splatting comparands on the small rotating sphere (bench_splat.h). */
+static void series_splat(const bench_plan *p)
+{
+    bench_case c = rotation_case(p, p->small);
+    scene s;
+    surfel *surfels;
+    size_t n;
+    build_scene(&c, &s, &surfels, &n);
+    accel *acc = build_or_die(&s, 1);
+    bench_splat(&s, acc, p->res, p->csv);
+    accel_free(acc);
+    scene_free(&s);
+    free(surfels);
+}
+
 /* Usage: refrender-bench [CSV [quick|full [SERIES]]]. */
 static const char *const SERIES[] = {"cases", "target", "speed", "splats", "tspp", "threads", "floor",
-                                     "static80", "gaussians", "scale", "stg", NULL};
+                                     "static80", "splat", "gaussians", "scale", "stg", NULL};
 
 static void bench_usage(FILE *f)
 {
@@ -752,6 +768,8 @@ int main(int argc, char **argv)
         bench_floor(quick ? 1 : 3, quick ? p.small : p.big, p.tspp, p.threads, p.res, p.reps, p.csv);
     if (wanted(p.only, "static80"))
         series_static80(&p);
+    if (wanted(p.only, "splat"))
+        series_splat(&p);
     if (wanted(p.only, "gaussians") && bench_gaussians(quick, p.threads, p.csv))
         fprintf(stderr, "bench: the gaussians case failed\n");
     /* alone, for quick iterations */

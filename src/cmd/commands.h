@@ -8,5 +8,6 @@ int cmd_gen(int argc, char **argv);
 int cmd_merge(int argc, char **argv);
 int cmd_surfels(int argc, char **argv);
 int cmd_export(int argc, char **argv);
+int cmd_splat(int argc, char **argv);
 
 #endif

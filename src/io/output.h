@@ -64,6 +64,10 @@
 #define ATTR_TARGET_ERROR "refrender:targetError"
 #define ATTR_TARGET_REACHED "refrender:targetReached"
 #define ATTR_CROP_WINDOW "refrender:cropWindow"
+/* refrender splat (src/SPLAT.md): the method, its parameters and its cost */
+#define ATTR_METHOD "refrender:method"
+#define ATTR_METHOD_PARAMETERS "refrender:methodParameters"
+#define ATTR_FRAGMENTS "refrender:fragments"
 
 /* A render's EXR attributes, each held as text (identity checks compare
  * text) and written as its kind (exr.h): the counts, distances, times and

@@ -41,11 +41,16 @@ int splat_geom_init(splat_geom *s, vec3 c, vec3 u, vec3 v)
         *t = DOT3(co, n) / *denom;                                                                     \
         return 1;                                                                                      \
     }                                                                                                  \
-    T splat_radius2_##suffix(const T du[3], const T dv[3], const T co[3], const T d[3], T t)           \
+    void splat_coords_##suffix(const T du[3], const T dv[3], const T co[3], const T d[3], T t, T ab[2])  \
     {                                                                                                  \
         T q[3] = {t * d[0] - co[0], t * d[1] - co[1], t * d[2] - co[2]};                               \
-        T a = DOT3(du, q), b = DOT3(dv, q);                                                            \
-        return a * a + b * b;                                                                          \
+        ab[0] = DOT3(du, q), ab[1] = DOT3(dv, q);                                                      \
+    }                                                                                                  \
+    T splat_radius2_##suffix(const T du[3], const T dv[3], const T co[3], const T d[3], T t)           \
+    {                                                                                                  \
+        T ab[2];                                                                                       \
+        splat_coords_##suffix(du, dv, co, d, t, ab);                                                   \
+        return ab[0] * ab[0] + ab[1] * ab[1];                                                          \
     }
 DEFINE_SPLAT_RULES(float, f)
 DEFINE_SPLAT_RULES(double, d)
@@ -64,6 +69,17 @@ int splat_intersect(const splat_geom *s, const float o[3], const float d[3],
     *t_out = t;
     *r2_out = r2;
     return 1;
+}
+
+void splat_geom_axes(const splat_geom *s, vec3 *u, vec3 *v)
+{
+    /* the inverse of the matrix with rows du, dv, n has the columns
+     * (dv x n, n x du, du x dv) / det, the first two the axes */
+    vec3 du = v3(s->dual_u[0], s->dual_u[1], s->dual_u[2]), dv = v3(s->dual_v[0], s->dual_v[1], s->dual_v[2]);
+    vec3 n = v3(s->plane_normal[0], s->plane_normal[1], s->plane_normal[2]);
+    vec3 c0 = v3_cross(dv, n), c1 = v3_cross(n, du);
+    double det = v3_dot(du, c0);
+    *u = v3_scale(c0, 1.0 / det), *v = v3_scale(c1, 1.0 / det);
 }
 
 double splat_kernel_weight(double r2, double sigma)

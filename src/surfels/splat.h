@@ -27,13 +27,21 @@ int splat_geom_init(splat_geom *s, vec3 c, vec3 u, vec3 v);
  * (exact.c), and a rule restated by hand would drift apart.
  * splat_depth_*: 0 when the ray is parallel to the plane (denom = d.n = 0:
  * no area there); else the crossing's depth t and co = c - o.
- * splat_radius2_*: a^2 + b^2 of the crossing at depth t (thesis eq. 4.2). */
+ * splat_radius2_*: a^2 + b^2 of the crossing at depth t (thesis eq. 4.2);
+ * splat_coords_*: its a and b (the EWA filter of src/splat/ needs them). */
 int splat_depth_f(const float c[3], const float n[3], const float o[3], const float d[3], float co[3],
                   float *denom, float *t);
 float splat_radius2_f(const float du[3], const float dv[3], const float co[3], const float d[3], float t);
 int splat_depth_d(const double c[3], const double n[3], const double o[3], const double d[3], double co[3],
                   double *denom, double *t);
 double splat_radius2_d(const double du[3], const double dv[3], const double co[3], const double d[3], double t);
+void splat_coords_f(const float du[3], const float dv[3], const float co[3], const float d[3], float t, float ab[2]);
+void splat_coords_d(const double du[3], const double dv[3], const double co[3], const double d[3], double t,
+                    double ab[2]);
+
+/* The tangent axes u, v back from the intersection form (the dual basis
+ * inverted; float rounding aside, the axes splat_geom_init was given). */
+void splat_geom_axes(const splat_geom *s, vec3 *u, vec3 *v);
 
 /* Intersects the ray o + t*d with the splat. On a hit with tnear <= t <= tfar
  * returns 1 and sets *t and *r2 = a^2 + b^2 (squared kernel radius). */

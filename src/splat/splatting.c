@@ -1,0 +1,155 @@
+#include "splat/splatting.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+#include "splat/frame.h"
+#include "splat/volumetric.h"
+
+const char *splat_method_name(splat_method m)
+{
+    return m == SPLAT_ACCUM ? "accum" : m == SPLAT_BUCKET ? "bucket" : m == SPLAT_VOLUMETRIC ? "volumetric" : "instant";
+}
+
+const char *splat_filter_name(splat_filter f)
+{
+    return f == SPLAT_FILTER_BOTSCH ? "botsch" : f == SPLAT_FILTER_EWA ? "ewa" : "none";
+}
+
+const char *splat_alpha_name(splat_alpha a) { return a == SPLAT_ALPHA_NORMALIZED ? "normalized" : "thesis"; }
+
+const char *splat_times_name(splat_times t)
+{
+    return t == SPLAT_TIMES_STRATIFIED ? "stratified" : t == SPLAT_TIMES_RANDOM ? "random" : "midpoint";
+}
+
+/* splitmix64 (Steele, Lea, Flood 2014): the seeded offsets of stratified
+ * and random instants. */
+static double next_unit(uint64_t *state)
+{
+    uint64_t z = (*state += 0x9E3779B97F4A7C15ull);
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    return (double)((z ^ (z >> 31)) >> 11) * 0x1.0p-53;
+}
+
+static int by_time(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+/* Sec. 3.6.1: the instants t_j of eq. 3.24 ("chosen stochastically"; which
+ * distribution is not said). */
+void splat_instants(const splat_settings *set, double *times)
+{
+    int n = set->samples;
+    double t0 = set->shut.open, len = set->shut.close - set->shut.open;
+    uint64_t state = set->seed;
+    for (int k = 0; k < n; k++) {
+        double u = set->times == SPLAT_TIMES_MIDPOINT ? 0.5 : next_unit(&state);
+        times[k] = set->times == SPLAT_TIMES_RANDOM ? t0 + u * len : t0 + (k + u) / n * len;
+    }
+    if (set->times == SPLAT_TIMES_RANDOM)
+        qsort(times, (size_t)n, sizeof *times, by_time);
+}
+
+/* Eq. 4.14: (Rd, Gd, Bd, Ad) += As (Rs, Gs, Bs, 1) with As = a(t_j), the
+ * sum then divided by the summed weights; alpha is the accumulated coverage. */
+static void accumulate(double *acc, const float *rgba, size_t n, double w)
+{
+    for (size_t i = 0; i < 4 * n; i++)
+        acc[i] += w * rgba[i];
+}
+
+/* Instants [begin, end) splatted as one object (sec. 4.4): one visibility
+ * pass over all of them, one attribute pass, one normalisation. One
+ * instant is the static three-pass algorithm of sec. 4.1.1. */
+static void splat_group(splat_frame *f, const double *times, int begin, int end, float *rgba)
+{
+    splat_frame_clear(f);
+    for (int j = begin; j < end; j++)
+        splat_visibility_pass(f, times[j]);
+    for (int j = begin; j < end; j++)
+        splat_attribute_pass(f, times[j]);
+    splat_shade_pass(f, rgba);
+}
+
+/* Accumulation (B = N, sec. 4.3) and time buckets (sec. 4.4): bucket b
+ * holds instants [b N / B, (b + 1) N / B); its image enters eq. 4.14 with
+ * the summed a(t_j) of its instants as its weight. */
+static int splat_buckets(splat_frame *f, const splat_settings *set, int buckets, float *rgba, rr_error *err)
+{
+    size_t n = (size_t)f->width * f->height;
+    double *times = malloc((size_t)set->samples * sizeof *times), *acc = calloc(4 * n, sizeof *acc);
+    float *img = malloc(4 * n * sizeof *img);
+    int rc = times && acc && img ? 0 : rr_fail(err, "out of memory for the accumulation buffer");
+    double wsum = 0;
+    if (!rc)
+        splat_instants(set, times);
+    for (int b = 0; !rc && b < buckets; b++) {
+        int begin = (int)((int64_t)b * set->samples / buckets), end = (int)((int64_t)(b + 1) * set->samples / buckets);
+        double w = 0;
+        for (int j = begin; j < end; j++)
+            w += shutter_weight(&set->shut, times[j]);
+        if (begin == end || !(w > 0))
+            continue;
+        splat_group(f, times, begin, end, img);
+        accumulate(acc, img, n, w);
+        wsum += w;
+    }
+    if (!rc && !(wsum > 0))
+        rc = rr_fail(err, "every instant has weight a(t) = 0: nothing to accumulate");
+    for (size_t i = 0; !rc && i < 4 * n; i++)
+        rgba[i] = (float)(acc[i] / wsum);
+    free(times), free(acc), free(img);
+    return rc;
+}
+
+static int check_scene(const scene *s, const splat_settings *set, rr_error *err)
+{
+    /* the kernels stretch along each splat's own world velocity: a moving
+     * camera would need the velocity relative to it, which sec. 3.6.3
+     * does not treat */
+    if (set->method == SPLAT_VOLUMETRIC && scene_camera_moves(s))
+        return rr_fail(err, "%s: the camera moves: volumetric kernels are built for a still camera", s->path);
+    for (int i = 0; i < s->nobjects; i++)
+        if (s->objects[i].kind != OBJECT_POINTS)
+            return rr_fail(err, "%s: object '%s' is %s: refrender splat renders point models (surfels) only", s->path,
+                           s->objects[i].name, s->objects[i].kind == OBJECT_SPHERE ? "an analytic sphere"
+                                                                                  : "a Gaussian-splat model");
+    if (s->shut.rolling.kind != ROLLING_OFF)
+        return rr_fail(err, "%s: a rolling shutter: refrender splat renders global-shutter instants only", s->path);
+    return 0;
+}
+
+int splat_render(const scene *s, const splat_settings *set, splat_result *out, rr_error *err)
+{
+    memset(out, 0, sizeof *out);
+    if (check_scene(s, set, err))
+        return -1;
+    splat_frame f;
+    size_t n = (size_t)s->cam.width * s->cam.height;
+    if (splat_frame_init(&f, s, set->filter))
+        return rr_fail(err, "out of memory for the %dx%d splatting buffers", s->cam.width, s->cam.height);
+    out->width = s->cam.width, out->height = s->cam.height;
+    out->rgba = malloc(4 * n * sizeof *out->rgba);
+    int rc = out->rgba ? 0 : rr_fail(err, "out of memory for the image");
+    if (!rc && set->method == SPLAT_INSTANT)
+        splat_group(&f, &set->instant, 0, 1, out->rgba);
+    else if (!rc && set->method == SPLAT_VOLUMETRIC)
+        rc = splat_volumetric(&f, set, out->rgba, err);
+    else if (!rc)
+        rc = splat_buckets(&f, set, set->method == SPLAT_ACCUM ? set->samples : set->buckets, out->rgba, err);
+    out->fragments = f.fragments;
+    splat_frame_free(&f);
+    if (rc)
+        splat_result_free(out);
+    return rc;
+}
+
+void splat_result_free(splat_result *r)
+{
+    free(r->rgba);
+    r->rgba = NULL;
+}

@@ -1,0 +1,33 @@
+#!/usr/bin/python3
+"""scripts/thesis_table.py (make thesis-table): Table 5.1's five rows on a
+scene at a tiny size, written all or none; a failing render writes nothing."""
+import csv
+import os
+import subprocess
+
+from conftest import BIN, ROOT
+
+SCRIPT = str(ROOT / 'scripts' / 'thesis_table.py')
+
+
+def table(tmp_path, *extra):
+    return subprocess.run(['/usr/bin/python3', SCRIPT, '--out', str(tmp_path / 'out'), '--res', '24x18', '--gt-tspp', '8',
+                           '--gt-batches', '2', '--scenes', 'diagonal', *extra], capture_output=True, text=True)
+
+
+def test_the_five_rows_and_the_claims(tmp_path):
+    proc = table(tmp_path, '--refrender', BIN)
+    assert proc.returncode == 0, proc.stderr
+    out = tmp_path / 'out'
+    assert sorted(os.listdir(out)) == ['thesis_table.csv', 'thesis_table.png', 'thesis_table.tex']
+    rows = list(csv.DictReader(open(out / 'thesis_table.csv')))
+    assert [r['row'] for r in rows] == ['a', 'b', 'c', 'd', 'e']
+    assert all(float(r['rmse']) >= 0 and float(r['gt_noise']) > 0 for r in rows)
+    assert 'accumulation 50 beats 10' in proc.stdout and 'volumetric 1 within 2x' in proc.stdout
+    assert '\\toprule' in (out / 'thesis_table.tex').read_text()
+
+
+def test_a_failing_render_writes_nothing(tmp_path):
+    proc = table(tmp_path, '--refrender', '/bin/false')
+    assert proc.returncode == 1 and proc.stderr.startswith('thesis_table.py: ') and proc.stderr.count('\n') == 1
+    assert not (tmp_path / 'out').exists() or os.listdir(tmp_path / 'out') == []
