@@ -4,8 +4,7 @@ src/cmd/BENCH.md, Sampler convergence and Time to error).
 
 usage: sampler_study.py convergence [--views NAME,...] [--counts 16,64,256]
                         [--samplers sobol,jittered3d,thesis] [--out DIR]
-       sampler_study.py time-to-error [--levels 1,0.1,0.01] [--out DIR]
-                        [--batch-samples N] [--crop X0,X1,Y0,Y1]
+       sampler_study.py time-to-error [--counts 32,128,512] [--out DIR] [--from-csv CSV]
        sampler_study.py table CSV...
 
 Errors are RMS over the RGB of every pixel, in 8-bit levels (1/255), of a
@@ -22,19 +21,18 @@ the largest count. Writes DIR/convergence.csv and DIR/convergence.md (the
 table BENCH.md quotes).
 
 time-to-error: the benchmark-scale view (scenes/bench/scale.xml, made by
-`make scale-models`; --pixel-filter point) with the default sampler and
---target-error at each level: B = 4 batches of --batch-samples, then more
-batches to every pixel whose largest RGB standard error is above the level
-(up to 8 B per pixel); the seconds of one render and its measured error
-(two seeds). Writes DIR/time_to_error.csv and prints the table. --crop
-measures a crop window of the view instead (its pixels are the full
-render's, bit for bit; seconds then are the crop's).
+`make scale-models`; --pixel-filter point) with the default sampler, one
+batch of each of --counts samples per pixel: its error (two seeds), its
+wall-clock and CPU seconds; then, from the fitted error line and the CPU
+seconds' line, the samples and 2-core seconds that reach 1, 0.1 and 0.01 of
+an 8-bit level. Writes DIR/time_to_error.csv and prints the table.
 
 Progress goes to stderr, a line per render."""
 import argparse
 import csv
 import math
 import os
+import resource
 import subprocess
 import sys
 import time
@@ -70,12 +68,20 @@ def progress(text):
     print(f"sampler_study.py: {text}", file=sys.stderr, flush=True)
 
 
-def render(scene, out, args):
-    """Renders; returns (RGB planes of the data window, wall-clock seconds, header)."""
+def cpu_seconds():
+    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return usage.ru_utime + usage.ru_stime
+
+
+def render(scene, out, args, cpu=None):
+    """Renders; returns (RGB planes of the data window, wall-clock seconds, header); adds the
+    render's CPU seconds (all threads) to cpu[0] when given."""
     cmd = [BIN, scene, "-o", out, "--quiet", *map(str, args)]
-    start = time.monotonic()
+    start, start_cpu = time.monotonic(), cpu_seconds()
     proc = subprocess.run(cmd, capture_output=True, text=True)
     seconds = time.monotonic() - start
+    if cpu is not None:
+        cpu[0] += cpu_seconds() - start_cpu
     if proc.returncode:
         sys.exit(f"sampler_study.py: {' '.join(cmd)} failed:\n{proc.stderr.strip()}")
     ch, spec, header = imagecompare.read_channels(out, unassociated_alpha=False)
@@ -85,9 +91,10 @@ def render(scene, out, args):
     return rgb, seconds, header
 
 
-def pair_error(scene, out, args):
-    """Error in 8-bit levels of one render, from two seeds; seconds of one."""
-    a, seconds, header = render(scene, out, [*args, "--seed", 11])
+def pair_error(scene, out, args, cpu=None):
+    """Error in 8-bit levels of one render, from two seeds; seconds of one (its CPU seconds
+    into cpu[0] when given)."""
+    a, seconds, header = render(scene, out, [*args, "--seed", 11], cpu)
     b, _, _ = render(scene, out, [*args, "--seed", 12])
     return 255 * math.sqrt(float(np.mean((a - b) ** 2)) / 2), seconds, header
 
@@ -178,21 +185,43 @@ def time_to_error(opts):
     os.makedirs(opts.out, exist_ok=True)
     out = os.path.join(opts.out, "render.exr")
     rows = []
-    base = ["--pixel-filter", "point", "--spp", 1, "--tspp", opts.batch_samples, "--batches", 4]
-    if opts.crop:
-        base += ["--crop-window", opts.crop]
-    for level in map(float, opts.levels.split(",")):
-        err, seconds, header = pair_error(SCALE, out, [*base, "--target-error", level / 255])
-        rows.append({"target_levels": level, "seconds": round(seconds, 1), "error_levels": err,
-                     "samples": header.get("refrender:rays", "")})
-        progress(f"target {level} levels: {err:.4g} levels measured, {seconds:.1f} s")
+    for n in map(int, opts.counts.split(",")):
+        cpu = [0.0]
+        err, seconds, _ = pair_error(SCALE, out, ["--pixel-filter", "point", "--spp", 1, "--tspp", n], cpu)
+        rows.append({"samples": n, "seconds": round(seconds, 1), "cpu_seconds": round(cpu[0], 1),
+                     "error_levels": err})
+        progress(f"{n} samples: {err:.4g} levels, {seconds:.1f} s ({cpu[0]:.1f} CPU s)")
     with open(os.path.join(opts.out, "time_to_error.csv"), "w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=list(rows[0]))
         w.writeheader()
         w.writerows(rows)
-    print("| target (8-bit levels) | seconds | measured error (levels) |\n|---|---|---|")
-    for r in rows:
-        print(f"| {r['target_levels']:g} | {r['seconds']} | {r['error_levels']:.3g} |")
+    print(time_table(rows))
+
+
+def time_table(rows):
+    """Each level's samples and 2-core seconds, from the fitted error line and CPU seconds
+    growing linearly with the samples (also fitted): a shared machine's wall clock is no
+    measure, its CPU seconds over 2 are an idle 2-core machine's to within the threads'
+    1.8-2.0x (BENCH.md, Measurements)."""
+    counts = [r["samples"] for r in rows]
+    line = fit_line(counts, [r["error_levels"] for r in rows])
+    cost = np.polyfit(counts, [r["cpu_seconds"] for r in rows], 1)
+    lines = ["| samples per pixel | error (8-bit levels) | CPU seconds | 2-core seconds |", "|---|---|---|---|"]
+    lines += [f"| {r['samples']} | {r['error_levels']:.3g} | {r['cpu_seconds']} | {r['cpu_seconds'] / 2:.0f} |"
+              for r in rows]
+    lines += ["", f"rate {line[0]:.2f}; CPU seconds = {cost[1]:.1f} + {cost[0]:.3f} x samples", "",
+              "| target (levels) | samples (fit) | 2-core seconds (fit) |", "|---|---|---|"]
+    for level in (1, 0.1, 0.01):
+        n = float(samples_for(level, line) or "nan")
+        lines.append(f"| {level:g} | {n:.0f} | {(cost[1] + cost[0] * n) / 2:.0f} |")
+    return "\n".join(lines) + "\n"
+
+
+def time_table_from_csv(path):
+    with open(path, newline="") as f:
+        rows = [{"samples": int(r["samples"]), "seconds": float(r["seconds"]), "cpu_seconds": float(r["cpu_seconds"]),
+                 "error_levels": float(r["error_levels"])} for r in csv.DictReader(f)]
+    print(time_table(rows))
 
 
 def main():
@@ -205,15 +234,16 @@ def main():
     c.add_argument("--samplers", default="sobol,jittered3d,thesis", help="(default: %(default)s)")
     c.add_argument("--out", default="out/samplers", help="output directory (default: %(default)s)")
     t = sub.add_parser("time-to-error", help="seconds to each error level on the benchmark-scale view")
-    t.add_argument("--levels", default="1,0.1,0.01", help="target errors in 8-bit levels (default: %(default)s)")
-    t.add_argument("--batch-samples", type=int, default=64, help="samples per batch (default: %(default)s)")
-    t.add_argument("--crop", help="a crop window X0,X1,Y0,Y1 of the view instead of all of it")
+    t.add_argument("--counts", default="32,128,512", help="samples per pixel, one batch (default: %(default)s)")
     t.add_argument("--out", default="out/samplers", help="output directory (default: %(default)s)")
+    t.add_argument("--from-csv", metavar="CSV", help="only print the table of an earlier run's time_to_error.csv")
     tab = sub.add_parser("table", help="the convergence table of one or more convergence.csv files")
     tab.add_argument("csv", nargs="+")
     opts = p.parse_args()
     if opts.what == "table":
         return table_from_csv(opts)
+    if opts.what == "time-to-error" and opts.from_csv:
+        return time_table_from_csv(opts.from_csv)
     for view in getattr(opts, "views", "").split(",") if opts.what == "convergence" else []:
         if view not in VIEWS:
             p.error(f"--views: unknown view '{view}' (known: {', '.join(VIEWS)})")
