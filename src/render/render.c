@@ -55,7 +55,7 @@ typedef struct {
     int tiles_x, tiles_y, ntiles;
     uint32_t round; /* pixels holding `round` batches render batch batch_begin + round */
     atomic_int next_tile, workers_left;
-    atomic_uint_fast64_t rays, overflows, clamped, pixel_batches;
+    atomic_uint_fast64_t rays, overflows, clamped, pixel_batches, static_traversals;
     atomic_uint_fast64_t gaussians_short; /* samples that dropped Gaussians for lack of memory */
     atomic_int scratch_failed; /* a worker could not allocate its scratch */
     atomic_int exact_failed;   /* an exact sample failed (see exact_status): the render stops */
@@ -90,6 +90,7 @@ typedef struct {
     accel_ray ray;
     double rgba[4];
     int shaded;
+    uint64_t traversals; /* accel_ray_begin calls */
 } static_cache;
 
 /* The color of one sample whose hits are `result`. */
@@ -116,6 +117,7 @@ static void samples_fixed_camera(render_job *job, static_cache *sc, double x, do
 {
     if (x != sc->x || y != sc->y) {
         sc->x = x, sc->y = y, sc->shaded = 0;
+        sc->traversals++;
         accel_ray_begin(job->acc, job->sc->cam.position, camera_ray_direction(&job->sc->cam, x, y), &sc->ray);
     }
     kbuffer kbs[ACCEL_PACKET];
@@ -236,18 +238,19 @@ static void to_blur_space(const render_job *job, double rgba[4])
  * Samples sharing a spatial position (the thesis sampler's s_t times) share
  * the static objects' hits: tracing them again would give the same hits. */
 static void render_pixel_batch(render_job *job, int px, int py, uint32_t batch, thread_scratch *scr,
-                               double est[4], uint64_t *rays, uint64_t *overflows)
+                               double est[4], uint64_t *rays, uint64_t *overflows, uint64_t *statics)
 {
     int count = batch_samples(job, px, py, batch, scr);
     double acc[4] = {0, 0, 0, 0}, weight = 0;
     static_cache sc;
     sc.x = sc.y = NAN;
+    sc.traversals = 0;
     for (int i = 0; i < count;) {
         double t[ACCEL_PACKET], rgba[ACCEL_PACKET][4];
         int n, first = i;
         i = next_group(job, scr, first, count, t, &n);
         if ((job->camera_moves || job->gaussians) && n)
-            sample_own_ray(job, scr->x[first], scr->y[first], t[0], &scr->gaussian, rgba[0], overflows);
+            sample_own_ray(job, scr->x[first], scr->y[first], t[0], &scr->gaussian, rgba[0], overflows), (*statics)++;
         else if (n)
             samples_fixed_camera(job, &sc, scr->x[first], scr->y[first], t, n, rgba, overflows);
         *rays += (uint64_t)n;
@@ -259,6 +262,7 @@ static void render_pixel_batch(render_job *job, int px, int py, uint32_t batch, 
             weight += w;
         }
     }
+    *statics += sc.traversals;
     RR_DCHECK(count > 0 && weight > 0);
     for (int c = 0; c < 4; c++)
         est[c] = acc[c] / weight;
@@ -331,7 +335,7 @@ static void render_tile(render_job *job, int tile, thread_scratch *scr)
     int tx = tile % job->tiles_x, ty = tile / job->tiles_x;
     int x1 = (tx + 1) * TILE < img->width ? (tx + 1) * TILE : img->width;
     int y1 = (ty + 1) * TILE < img->height ? (ty + 1) * TILE : img->height;
-    uint64_t rays = 0, overflows = 0, clamped = 0, done = 0;
+    uint64_t rays = 0, overflows = 0, clamped = 0, done = 0, statics = 0;
     double unresolved = 0;
     int stop = 0;
     for (int y = ty * TILE; y < y1 && !stop; y++)
@@ -349,7 +353,7 @@ static void render_tile(render_job *job, int tile, thread_scratch *scr)
                     break;
                 }
             } else
-                render_pixel_batch(job, x, y, batch, scr, est, &rays, &overflows);
+                render_pixel_batch(job, x, y, batch, scr, est, &rays, &overflows, &statics);
             clamped += (uint64_t)film_add_batch(p, est);
             done++;
         }
@@ -360,6 +364,7 @@ static void render_tile(render_job *job, int tile, thread_scratch *scr)
     atomic_fetch_add(&job->overflows, overflows);
     atomic_fetch_add(&job->clamped, clamped);
     atomic_fetch_add(&job->pixel_batches, done);
+    atomic_fetch_add(&job->static_traversals, statics);
 }
 
 /* Blocks while a checkpoint is being written; returns 1 when cancelled. */
@@ -611,6 +616,7 @@ static void job_finish(render_job *job, image *img, double start)
     img->rays += atomic_load(&job->rays);
     img->kbuffer_overflows += atomic_load(&job->overflows);
     img->gaussians_short += atomic_load(&job->gaussians_short);
+    img->static_traversals += atomic_load(&job->static_traversals);
     img->clamped += atomic_load(&job->clamped);
     img->exact_unresolved += job->exact_unresolved;
 }
