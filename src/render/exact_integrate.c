@@ -3,6 +3,7 @@
  * Gauss-Kronrod, each node shaded as the sampled path shades one time. */
 #include "render/exact_internal.h"
 
+#include "render/integrator.h"
 #include "render/shade.h"
 
 /* Components: a r, a g, a b, a coverage, and a itself (the normaliser). */
@@ -154,3 +155,43 @@ int exact_sample(const exact_plan *p, exact_scratch *scr, double x, double y, do
     }
     return EXACT_OK;
 }
+
+/* ---- the exact-time integrator (integrator.h) ---- */
+
+static void *exact_thread_new(const integrator_context *ctx)
+{
+    (void)ctx;
+    return exact_scratch_new();
+}
+
+/* The mean over the batch's spatial positions of each one's exact time
+ * average (the sampler's times and weights are not used). A batch with a
+ * sample missing is no estimate: on failure it returns that sample's
+ * status and counts nothing. */
+static int exact_batch(void *thread, const integrator_context *ctx, const pixel_samples *ps, double est[4],
+                       integrator_counts *c)
+{
+    exact_stats st = {0};
+    for (int ch = 0; ch < 4; ch++)
+        est[ch] = 0;
+    for (int i = 0; i < ps->count; i++) {
+        double rgba[4];
+        int rc = exact_sample(ctx->exact, thread, ps->x[i], ps->y[i], rgba, &st);
+        if (rc)
+            return rc;
+        for (int ch = 0; ch < 4; ch++)
+            est[ch] += rgba[ch] / ps->count;
+    }
+    c->rays += (uint64_t)ps->count;
+    c->overflows += st.overflows;
+    c->unresolved += st.unresolved;
+    return EXACT_OK;
+}
+
+static void exact_thread_free(void *thread, integrator_counts *c)
+{
+    (void)c;
+    exact_scratch_free(thread);
+}
+
+const integrator exact_integrator_ops = {"exact time", exact_thread_new, exact_batch, exact_thread_free};

@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "gaussians/gaussian_dynamic.h"
+#include "render/surfel_integrator.h"
 
 void gaussian_integrator_init(gaussian_integrator *g) { memset(g, 0, sizeof *g); }
 
@@ -373,3 +374,83 @@ void gaussian_integrate(const scene *s, const accel *a, const gaussian_sample *s
         t0 = t1;
     }
 }
+
+/* ---- the sampled-Gaussian integrator (integrator.h) ---- */
+
+/* A thread's state: the surfels' (static reuse included) and the
+ * Gaussians' scratch. */
+typedef struct {
+    surfel_thread *surfels;
+    gaussian_integrator gaussians;
+} gaussian_thread;
+
+/* The Gaussian objects' hits on a sample's ray, composited over the
+ * surfaces' colour (the nearest surface hides what is behind it: a
+ * Gaussian behind an opaque surface is not seen). */
+static void composite_over_surfaces(gaussian_thread *th, const integrator_context *ctx, double x, double y, double t,
+                                    const surfel_sample *surf, double rgba[4])
+{
+    camera_view moved;
+    const camera_view *view = &ctx->rest_view;
+    if (ctx->camera_moves)
+        scene_camera_view(ctx->sc, t, &moved), view = &moved;
+    gaussian_integrator *g = &th->gaussians;
+    gaussian_integrator_reset(g);
+    gaussian_blend blend;
+    gaussian_blend_init(&blend);
+    gaussian_sample smp = {view, x, y, surf->org, surf->dir, t};
+    gaussian_integrate(ctx->sc, ctx->acc, &smp, surf->closest, g, &blend);
+    /* out of memory, not a full k-buffer: counted apart (a sample with
+     * both was counted twice, and warned of as too many hits) */
+    g->short_samples += g->hits.dropped > 0;
+    vec3 rgb = gaussian_blend_over(&blend, v3(rgba[0], rgba[1], rgba[2]));
+    int surface = isfinite(surf->closest);
+    rgba[0] = rgb.x, rgba[1] = rgb.y, rgba[2] = rgb.z;
+    rgba[3] = surface ? 1.0 : 1.0 - blend.T;
+}
+
+static void *gaussian_new(const integrator_context *ctx)
+{
+    (void)ctx;
+    gaussian_thread *th = malloc(sizeof *th);
+    if (!th)
+        return NULL;
+    gaussian_integrator_init(&th->gaussians);
+    if (!(th->surfels = surfel_thread_new())) {
+        free(th);
+        return NULL;
+    }
+    return th;
+}
+
+/* The surfels' group (static reuse for a still camera), then each sample's
+ * Gaussians over it. */
+static int gaussian_group_fn(void *thread, const integrator_context *ctx, const pixel_samples *ps, int first,
+                             double (*rgba)[4], integrator_counts *c)
+{
+    gaussian_thread *th = thread;
+    surfel_sample surf[ACCEL_PACKET];
+    int end = surfel_group(th->surfels, ctx, ps, first, rgba, surf, c);
+    for (int i = first; i < end; i++)
+        composite_over_surfaces(th, ctx, ps->x[i], ps->y[i], ps->t[i], &surf[i - first], rgba[i - first]);
+    return end;
+}
+
+static int gaussian_batch(void *thread, const integrator_context *ctx, const pixel_samples *ps, double est[4],
+                          integrator_counts *c)
+{
+    surfel_thread_begin_batch(((gaussian_thread *)thread)->surfels);
+    integrator_sampled_batch(thread, ctx, ps, gaussian_group_fn, est, c);
+    return 0;
+}
+
+static void gaussian_free(void *thread, integrator_counts *c)
+{
+    gaussian_thread *th = thread;
+    c->gaussians_short += th->gaussians.short_samples;
+    surfel_thread_free(th->surfels);
+    gaussian_integrator_free(&th->gaussians);
+    free(th);
+}
+
+const integrator gaussian_integrator_ops = {"sampled Gaussians", gaussian_new, gaussian_batch, gaussian_free};

@@ -3,7 +3,10 @@
  * It asks accel only which Gaussians a ray may meet in a stretch
  * (accel_gaussian_candidates); the per-object rays, the windows of
  * distance, the chunks evaluated in order of their key floors and the
- * compositing calls are its own, and so is their scratch. */
+ * compositing calls are its own, and so is their scratch. Behind the
+ * integrator seam (integrator.h) it is gaussian_integrator_ops: each
+ * sample's Gaussians composited over the colour the surfel integrator
+ * gives it (surfel_integrator.h, static reuse included). */
 #ifndef RR_GAUSSIAN_INTEGRATOR_H
 #define RR_GAUSSIAN_INTEGRATOR_H
 

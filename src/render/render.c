@@ -6,9 +6,7 @@
 #include <string.h>
 #include <time.h>
 
-#include "render/exact.h"
-#include "render/gaussian_integrator.h"
-#include "render/shade.h"
+#include "render/integrator.h"
 
 #define TILE 16
 
@@ -43,19 +41,15 @@ int render_check_exact_blur(int exact_time, blur_space b, rr_error *err)
 }
 
 typedef struct {
-    const scene *sc;
-    const accel *acc;
-    int camera_moves; /* every sample traces its own world ray */
-    int gaussians;    /* the scene has Gaussian objects: so does every sample */
-    camera_view rest_view; /* the camera at rest (Gaussian hits, still camera) */
+    integrator_context ctx; /* the job owns ctx.exact */
+    const integrator *integ; /* integrator_for(&ctx) */
     const render_settings *rs;
-    exact_plan *exact; /* with rs->exact_time (the job owns it) */
     shutter_cdf time_cdf;    /* times drawn from a(t) (not used for a box) */
     image *img;
     int tiles_x, tiles_y, ntiles;
     uint32_t round; /* pixels holding `round` batches render batch batch_begin + round */
     atomic_int next_tile, workers_left;
-    atomic_uint_fast64_t rays, overflows, clamped, pixel_batches;
+    atomic_uint_fast64_t rays, overflows, clamped, pixel_batches, static_traversals;
     atomic_uint_fast64_t gaussians_short; /* samples that dropped Gaussians for lack of memory */
     atomic_int scratch_failed; /* a worker could not allocate its scratch */
     atomic_int exact_failed;   /* an exact sample failed (see exact_status): the render stops */
@@ -70,113 +64,8 @@ typedef struct {
 typedef struct { /* per-thread scratch */
     sampler_scratch ss;
     double *x, *y, *t, *w;
-    exact_scratch *exact;
-    gaussian_integrator gaussian;
+    void *integ; /* the integrator's per-thread state */
 } thread_scratch;
-
-/* The color and coverage of a k-buffer (background when empty). */
-static void sample_color(const render_job *job, vec3 eye, vec3 dir, const kbuffer *kb, double rgba[4])
-{
-    const scene *s = job->sc;
-    vec3 c = kb->count ? shade_hits(s, kb, eye, dir) : s->background;
-    rgba[0] = c.x, rgba[1] = c.y, rgba[2] = c.z, rgba[3] = kb->count ? 1.0 : 0.0;
-}
-
-/* Per raster position (a fixed camera's world ray): its static hits from
- * accel, and their color, shaded once and reused for every time at which
- * no moving object is hit. */
-typedef struct {
-    double x, y;
-    accel_ray ray;
-    double rgba[4];
-    int shaded;
-} static_cache;
-
-/* The color of one sample whose hits are `result`. */
-static void fixed_camera_color(render_job *job, static_cache *sc, const kbuffer *result, double rgba[4],
-                               uint64_t *overflows)
-{
-    *overflows += (uint64_t)kbuffer_overflowed(result);
-    int is_static = result == &sc->ray.static_hits;
-    if (is_static && sc->shaded) {
-        memcpy(rgba, sc->rgba, sizeof sc->rgba);
-        return;
-    }
-    sample_color(job, job->sc->cam.position, sc->ray.dir, result, rgba);
-    if (is_static) {
-        memcpy(sc->rgba, rgba, sizeof sc->rgba);
-        sc->shaded = 1;
-    }
-}
-
-/* A fixed camera: samples at the same raster position share one world ray
- * (accel_ray), whose n <= ACCEL_PACKET times are traced together. */
-static void samples_fixed_camera(render_job *job, static_cache *sc, double x, double y, const double *t, int n,
-                                 double (*rgba)[4], uint64_t *overflows)
-{
-    if (x != sc->x || y != sc->y) {
-        sc->x = x, sc->y = y, sc->shaded = 0;
-        accel_ray_begin(job->acc, job->sc->cam.position, camera_ray_direction(&job->sc->cam, x, y), &sc->ray);
-    }
-    kbuffer kbs[ACCEL_PACKET];
-    const kbuffer *result[ACCEL_PACKET];
-    accel_ray_trace_times(job->acc, &sc->ray, t, n, kbs, result);
-    for (int i = 0; i < n; i++)
-        fixed_camera_color(job, sc, result[i], rgba[i], overflows);
-}
-
-/* The Gaussian objects' hits on the ray, composited over the surfaces'
- * colour (the nearest surface hides what is behind it: a Gaussian behind
- * an opaque surface is not seen). */
-static void composite_gaussians(render_job *job, double x, double y, double t, vec3 org, vec3 dir,
-                                const kbuffer *kb, gaussian_integrator *scratch, double rgba[4])
-{
-    camera_view moved, *view = &job->rest_view;
-    if (job->camera_moves)
-        scene_camera_view(job->sc, t, view = &moved);
-    gaussian_integrator_reset(scratch);
-    gaussian_blend blend;
-    gaussian_blend_init(&blend);
-    gaussian_sample smp = {view, x, y, org, dir, t};
-    gaussian_integrate(job->sc, job->acc, &smp, kb->count ? kb->closest : INFINITY, scratch, &blend);
-    /* out of memory, not a full k-buffer: counted apart (a sample with
-     * both was counted twice, and warned of as too many hits) */
-    scratch->short_samples += scratch->hits.dropped > 0;
-    vec3 rgb = gaussian_blend_over(&blend, v3(rgba[0], rgba[1], rgba[2]));
-    rgba[0] = rgb.x, rgba[1] = rgb.y, rgba[2] = rgb.z;
-    rgba[3] = kb->count ? 1.0 : 1.0 - blend.T;
-}
-
-/* A moving camera (thesis eq. 3.6), or a scene with Gaussian objects:
- * every sample has its own world ray. */
-static void sample_own_ray(render_job *job, double x, double y, double t, gaussian_integrator *scratch, double rgba[4],
-                           uint64_t *overflows)
-{
-    vec3 org, dir;
-    kbuffer kb;
-    scene_camera_ray(job->sc, x, y, t, &org, &dir);
-    accel_trace(job->acc, org, dir, t, &kb);
-    *overflows += (uint64_t)kbuffer_overflowed(&kb);
-    sample_color(job, org, dir, &kb, rgba);
-    if (job->gaussians)
-        composite_gaussians(job, x, y, t, org, dir, &kb, scratch, rgba);
-}
-
-/* The next group of samples from `first`: those sharing its raster position
- * (fixed camera; the thesis sampler lists a position's times together), at
- * most ACCEL_PACKET. Returns the index after the group. */
-static int next_group(const render_job *job, const thread_scratch *scr, int first, int count, double *t, int *n)
-{
-    int end = first + 1;
-    if (!job->camera_moves && !job->gaussians)
-        while (end < count && end - first < ACCEL_PACKET && scr->x[end] == scr->x[first] &&
-               scr->y[end] == scr->y[first])
-            end++;
-    *n = 0;
-    for (int i = first; i < end; i++)
-        t[(*n)++] = scr->t[i];
-    return end;
-}
 
 /* The positions and times of batch `batch` of pixel (px, py) into the
  * scratch; returns their count. The sampler's times are uniform over the
@@ -201,92 +90,6 @@ static int batch_samples(const render_job *job, int px, int py, uint32_t batch, 
             scr->t[i] = shutter_line_time(sh, line, lines, scr->t[i]);
     }
     return count;
-}
-
-static double clamp01(double v) { return fmin(fmax(v, 0.0), 1.0); }
-
-/* The sRGB transfer function's inverse (IEC 61966-2-1) of a value clamped
- * to [0, 1], as an 8-bit frame would hold it. */
-static double srgb_to_linear(double v)
-{
-    v = clamp01(v);
-    return v <= 0.04045 ? v / 12.92 : pow((v + 0.055) / 1.055, 2.4);
-}
-
-/* A sample's colour in the space the pixel averages (--blur-space). */
-static void to_blur_space(const render_job *job, double rgba[4])
-{
-    if (job->rs->blur == BLUR_SPACE_LINEAR)
-        for (int c = 0; c < 3; c++)
-            rgba[c] = srgb_to_linear(rgba[c]);
-    else if (job->rs->blur == BLUR_SPACE_CLAMPED)
-        for (int c = 0; c < 3; c++)
-            rgba[c] = clamp01(rgba[c]);
-}
-
-/* One batch of a pixel (thesis sec. 4.5): the weighted mean of its
- * samples' colors. The thesis weights each sample by a(t) and divides by
- * the sum of the weights; here the times are drawn from a(t) instead
- * (batch_samples), the same expectation without a ratio that is 0/0 for a
- * batch that drew only times of zero weight. The weights left are the
- * sampler's (its shifted time strata, sampler.h): never all 0, and summing
- * to the count whenever each time stratum holds one sample, when the ratio
- * is the plain unbiased mean; dividing by their sum keeps a pixel of one
- * constant colour exactly that colour in every batch.
- * Samples sharing a spatial position (the thesis sampler's s_t times) share
- * the static objects' hits: tracing them again would give the same hits. */
-static void render_pixel_batch(render_job *job, int px, int py, uint32_t batch, thread_scratch *scr,
-                               double est[4], uint64_t *rays, uint64_t *overflows)
-{
-    int count = batch_samples(job, px, py, batch, scr);
-    double acc[4] = {0, 0, 0, 0}, weight = 0;
-    static_cache sc;
-    sc.x = sc.y = NAN;
-    for (int i = 0; i < count;) {
-        double t[ACCEL_PACKET], rgba[ACCEL_PACKET][4];
-        int n, first = i;
-        i = next_group(job, scr, first, count, t, &n);
-        if ((job->camera_moves || job->gaussians) && n)
-            sample_own_ray(job, scr->x[first], scr->y[first], t[0], &scr->gaussian, rgba[0], overflows);
-        else if (n)
-            samples_fixed_camera(job, &sc, scr->x[first], scr->y[first], t, n, rgba, overflows);
-        *rays += (uint64_t)n;
-        for (int k = 0; k < n; k++) {
-            double w = scr->w[first + k];
-            to_blur_space(job, rgba[k]);
-            for (int c = 0; c < 4; c++)
-                acc[c] += w * rgba[k][c];
-            weight += w;
-        }
-    }
-    RR_DCHECK(count > 0 && weight > 0);
-    for (int c = 0; c < 4; c++)
-        est[c] = acc[c] / weight;
-}
-
-/* One batch of a pixel with exact time integration: the mean over the
- * batch's spatial positions of each one's exact time average. Returns an
- * EXACT_ status: a batch with a sample missing is no estimate, so on
- * failure the pixel gets no batch at all. */
-static int render_pixel_batch_exact(render_job *job, int px, int py, uint32_t batch, thread_scratch *scr,
-                                    double est[4], uint64_t *rays, uint64_t *overflows, double *unresolved)
-{
-    int count = batch_samples(job, px, py, batch, scr);
-    exact_stats st = {0};
-    for (int c = 0; c < 4; c++)
-        est[c] = 0;
-    for (int i = 0; i < count; i++) {
-        double rgba[4];
-        int rc = exact_sample(job->exact, scr->exact, scr->x[i], scr->y[i], rgba, &st);
-        if (rc)
-            return rc;
-        for (int c = 0; c < 4; c++)
-            est[c] += rgba[c] / count;
-    }
-    *rays += (uint64_t)count;
-    *overflows += st.overflows;
-    *unresolved += st.unresolved;
-    return EXACT_OK;
 }
 
 /* Keeps the first failed exact sample (an interrupt is not a failure: the
@@ -325,41 +128,57 @@ static int pixel_in_crop(const render_settings *rs, int x, int y)
     return rs->crop_x1 <= 0 || (x >= rs->crop_x0 && x < rs->crop_x1 && y >= rs->crop_y0 && y < rs->crop_y1);
 }
 
+/* One batch of pixel (x, y) by the job's integrator into its film state;
+ * returns 0, or the integrator's failure (the pixel keeps the batches it
+ * had: a resumed render redoes this one). */
+static int pixel_batch(render_job *job, int x, int y, pixel_state *p, thread_scratch *scr, integrator_counts *c,
+                       uint64_t *clamped)
+{
+    uint32_t batch = job->rs->batch_begin + job->round;
+    pixel_samples ps = {scr->x, scr->y, scr->t, scr->w, batch_samples(job, x, y, batch, scr)};
+    double est[4];
+    int rc = job->integ->pixel_batch(scr->integ, &job->ctx, &ps, est, c);
+    if (!rc)
+        *clamped += (uint64_t)film_add_batch(p, est);
+    return rc;
+}
+
+/* A tile's counts into the job's. */
+static void add_counts(render_job *job, const integrator_counts *c, uint64_t clamped, uint64_t done)
+{
+    pthread_mutex_lock(&job->lock);
+    job->exact_unresolved += c->unresolved;
+    pthread_mutex_unlock(&job->lock);
+    atomic_fetch_add(&job->rays, c->rays);
+    atomic_fetch_add(&job->overflows, c->overflows);
+    atomic_fetch_add(&job->clamped, clamped);
+    atomic_fetch_add(&job->pixel_batches, done);
+    atomic_fetch_add(&job->static_traversals, c->static_traversals);
+    atomic_fetch_add(&job->gaussians_short, c->gaussians_short);
+}
+
 static void render_tile(render_job *job, int tile, thread_scratch *scr)
 {
     image *img = job->img;
     int tx = tile % job->tiles_x, ty = tile / job->tiles_x;
     int x1 = (tx + 1) * TILE < img->width ? (tx + 1) * TILE : img->width;
     int y1 = (ty + 1) * TILE < img->height ? (ty + 1) * TILE : img->height;
-    uint64_t rays = 0, overflows = 0, clamped = 0, done = 0;
-    double unresolved = 0;
+    integrator_counts c = {0};
+    uint64_t clamped = 0, done = 0;
     int stop = 0;
     for (int y = ty * TILE; y < y1 && !stop; y++)
         for (int x = tx * TILE; x < x1 && !stop; x++) {
             pixel_state *p = &img->px[(size_t)y * img->width + x];
             if (!pixel_in_crop(job->rs, x, y) || !pixel_wants_batch(job, p))
                 continue;
-            double est[4];
-            uint32_t batch = job->rs->batch_begin + job->round;
-            if (job->rs->exact_time) {
-                int rc = render_pixel_batch_exact(job, x, y, batch, scr, est, &rays, &overflows, &unresolved);
-                if (rc) { /* the pixel keeps the batches it had: a resumed render redoes this one */
-                    exact_failed(job, rc, x, y);
-                    stop = 1;
-                    break;
-                }
+            int rc = pixel_batch(job, x, y, p, scr, &c, &clamped);
+            if (rc) {
+                exact_failed(job, rc, x, y);
+                stop = 1;
             } else
-                render_pixel_batch(job, x, y, batch, scr, est, &rays, &overflows);
-            clamped += (uint64_t)film_add_batch(p, est);
-            done++;
+                done++;
         }
-    pthread_mutex_lock(&job->lock);
-    job->exact_unresolved += unresolved;
-    pthread_mutex_unlock(&job->lock);
-    atomic_fetch_add(&job->rays, rays);
-    atomic_fetch_add(&job->overflows, overflows);
-    atomic_fetch_add(&job->clamped, clamped);
-    atomic_fetch_add(&job->pixel_batches, done);
+    add_counts(job, &c, clamped, done);
 }
 
 /* Blocks while a checkpoint is being written; returns 1 when cancelled. */
@@ -383,34 +202,37 @@ static void leave_work(render_job *job)
     pthread_mutex_unlock(&job->lock);
 }
 
-static int scratch_init(thread_scratch *scr, const sampler *s)
+static int scratch_init(thread_scratch *scr, const render_job *job)
 {
-    size_t n = (size_t)sampler_count(s);
+    size_t n = (size_t)sampler_count(&job->rs->smp);
     scr->x = malloc(n * sizeof(double));
     scr->y = malloc(n * sizeof(double));
     scr->t = malloc(n * sizeof(double));
     scr->w = malloc(n * sizeof(double));
-    scr->exact = exact_scratch_new();
-    gaussian_integrator_init(&scr->gaussian);
-    return sampler_scratch_init(&scr->ss, s) || !scr->x || !scr->y || !scr->t || !scr->w || !scr->exact ? -1 : 0;
+    scr->integ = job->integ->thread_new(&job->ctx);
+    return sampler_scratch_init(&scr->ss, &job->rs->smp) || !scr->x || !scr->y || !scr->t || !scr->w || !scr->integ
+               ? -1
+               : 0;
 }
 
-static void scratch_free(thread_scratch *scr)
+static void scratch_free(render_job *job, thread_scratch *scr)
 {
+    integrator_counts c = {0};
+    if (scr->integ)
+        job->integ->thread_free(scr->integ, &c);
+    atomic_fetch_add(&job->gaussians_short, c.gaussians_short);
     sampler_scratch_free(&scr->ss);
     free(scr->x);
     free(scr->y);
     free(scr->t);
     free(scr->w);
-    exact_scratch_free(scr->exact);
-    gaussian_integrator_free(&scr->gaussian);
 }
 
 static void *worker(void *arg)
 {
     render_job *job = arg;
     thread_scratch scr;
-    if (scratch_init(&scr, &job->rs->smp))
+    if (scratch_init(&scr, job))
         atomic_store(&job->scratch_failed, 1); /* the render fails: no silently black tiles */
     else
         while (!enter_work(job)) {
@@ -421,8 +243,7 @@ static void *worker(void *arg)
             if (tile >= job->ntiles)
                 break;
         }
-    atomic_fetch_add(&job->gaussians_short, scr.gaussian.short_samples);
-    scratch_free(&scr);
+    scratch_free(job, &scr);
     pthread_mutex_lock(&job->lock);
     atomic_fetch_sub(&job->workers_left, 1);
     pthread_cond_broadcast(&job->cond); /* wakes the coordinator at once */
@@ -584,18 +405,19 @@ static int job_init(render_job *job, const scene *s, const accel *a, const rende
                     volatile sig_atomic_t *cancel, rr_error *err)
 {
     memset(job, 0, sizeof *job);
-    job->sc = s, job->acc = a, job->rs = rs, job->img = img, job->cancel = cancel;
-    job->camera_moves = scene_camera_moves(s);
-    job->gaussians = accel_has_gaussians(a);
-    camera_view_rest(&s->cam, &job->rest_view);
+    job->rs = rs, job->img = img, job->cancel = cancel;
+    job->ctx.sc = s, job->ctx.acc = a, job->ctx.rs = rs;
+    job->ctx.camera_moves = scene_camera_moves(s);
+    camera_view_rest(&s->cam, &job->ctx.rest_view);
     job->tiles_x = (img->width + TILE - 1) / TILE;
     job->tiles_y = (img->height + TILE - 1) / TILE;
     job->ntiles = job->tiles_x * job->tiles_y;
     shutter_cdf_init(&job->time_cdf, &rs->shut);
-    if (rs->exact_time && exact_plan_new(s, a, &rs->shut, 1.0, &job->exact, err))
+    if (rs->exact_time && exact_plan_new(s, a, &rs->shut, 1.0, &job->ctx.exact, err))
         return -1;
-    if (job->exact)
-        exact_plan_watch(job->exact, cancel);
+    if (job->ctx.exact)
+        exact_plan_watch(job->ctx.exact, cancel);
+    job->integ = integrator_for(&job->ctx);
     pthread_mutex_init(&job->lock, NULL);
     pthread_cond_init(&job->cond, NULL);
     return 0;
@@ -606,11 +428,12 @@ static void job_finish(render_job *job, image *img, double start)
 {
     pthread_mutex_destroy(&job->lock);
     pthread_cond_destroy(&job->cond);
-    exact_plan_free(job->exact);
+    exact_plan_free(job->ctx.exact);
     img->seconds += rr_seconds() - start;
     img->rays += atomic_load(&job->rays);
     img->kbuffer_overflows += atomic_load(&job->overflows);
     img->gaussians_short += atomic_load(&job->gaussians_short);
+    img->static_traversals += atomic_load(&job->static_traversals);
     img->clamped += atomic_load(&job->clamped);
     img->exact_unresolved += job->exact_unresolved;
 }
