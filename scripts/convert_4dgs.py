@@ -133,7 +133,7 @@ CAPTURE_NAMES = ["active_sh_degree", "_xyz", "_features_dc", "_features_rest", "
                  "spatial_lr_scale", "_t", "_scaling_t", "_rotation_r", "rot_4d", "env_map", "active_sh_degree_t"]
 MARGINAL_CUT = 0.05  # forward.cu:334, gaussian_renderer/__init__.py:123: kept where marginal > 0.05
 MAX_LOG_SCALE = 100.0  # |_scaling|, |_scaling_t|: e^100 > FLT_MAX; the float64 products stay far from overflow
-MAX_ABS = 1e15  # refrender's GAUSSIAN_MAX_ABS and GAUSSIAN_MAX_SCALE (src/gaussians/gaussian.h)
+MAX_ABS = 1e15  # refrender's RR_MAX_REACH (src/core/common.h): means and exp(scale)
 MAX_MESSAGE = 600  # a message's reason, in characters
 
 
@@ -312,15 +312,15 @@ def first_bad(ok, columns, names, rule):
 def refrender_rules(columns, values, names):
     """Refuses what refrender's reader would (src/io/gaussian_fdgs_ply.c store_motion, check_degrees;
     gaussian_ply_common.c): each value within float32, t_var above 0 as the float32 it reads, a mean
-    within GAUSSIAN_MAX_ABS and exp(scale) within GAUSSIAN_MAX_SCALE of the float32 scales."""
+    within RR_MAX_REACH and exp(scale) within RR_MAX_REACH of the float32 scales."""
     first_bad(np.isfinite(values), columns, names, "is beyond float32")
     first_bad(values[:, 7:8] > 0, columns[:, 7:8], names[7:8], "is 0 as a float32: refrender refuses a temporal "
               "marginal whose variance is not above 0")
     first_bad(np.abs(values[:, 0:3]) <= MAX_ABS, columns[:, 0:3], names[0:3], "is beyond 1e15 from the origin, "
-              "which refrender refuses (GAUSSIAN_MAX_ABS)")
+              "which refrender refuses (RR_MAX_REACH)")
     with np.errstate(over="ignore"):
         first_bad(np.exp(values[:, 9:12].astype(np.float64)) <= MAX_ABS, columns[:, 9:12], names[9:12],
-                  "is a log scale whose exp() is beyond 1e15, which refrender refuses (GAUSSIAN_MAX_SCALE)")
+                  "is a log scale whose exp() is beyond 1e15, which refrender refuses (RR_MAX_REACH)")
 
 
 def convert(capture, args):

@@ -5,8 +5,8 @@ documents is one click from README; README stays a front door (at most
 400 lines); every option a document shows exists in the --help of refrender,
 its subcommands or a script, and every script tool answers --help; every
 file README names exists, and its Layout places every source file and
-script; tests/README.md maps every test file; every `make` target named
-exists; the set-up commands are the ones CI and `make demo` run; and the
+script; tests/README.md maps every test file and says where each source
+under src/ is tested; every `make` target named exists; the set-up commands are the ones CI and `make demo` run; and the
 other commands README shows are run here: the rendering example, the scene
 example, and the researcher's workflow end to end (at a tiny size: the
 options appended last override README's); scripts/README.md's export
@@ -193,6 +193,7 @@ def test_tests_readme_maps_every_test_file():
     exists (a renamed one cannot linger)."""
     text = (ROOT / "tests" / "README.md").read_text()
     named = set(re.findall(r"`((?:tests/)?[\w./-]+\.(?:py|c))`", text))
+    named = {n for n in named if not n.startswith("src/")}  # the sources' table: the next test
     missing = [n for n in named if not any((ROOT / d / n.removeprefix(f"{d}/")).exists() for d in ("tests", "scripts"))]
     assert not missing, missing
     files = {p.name for p in (ROOT / "tests").glob("test_*.[cp]*") if p.suffix in (".c", ".py")}
@@ -207,6 +208,41 @@ def compare_modules():
     (row,) = [line for line in (ROOT / "scripts" / "README.md").read_text().splitlines()
               if line.startswith("|") and "the modules `compare.py` is made of" in line]
     return set(re.findall(r"`([\w-]+\.py)`", row.split("|")[1]))
+
+
+def source_test_table(text):
+    """tests/README.md's "Where each source is tested" rows as {source: [test files]}."""
+    assert "## Where each source is tested" in text, "tests/README.md has no 'Where each source is tested'"
+    section = text.split("## Where each source is tested", 1)[1].split("\n## ", 1)[0]
+    rows = {}
+    for line in section.splitlines():
+        cells = [c.strip() for c in line.strip().strip("|").split("|")]
+        if len(cells) == 2 and cells[0].startswith("`src/"):
+            rows[cells[0].strip("`")] = re.findall(r"`([\w./-]+)`", cells[1])
+    return rows
+
+
+def test_tests_readme_says_where_every_source_is_tested():
+    """tests/ mirrors src/ through a table: every C source under src/ has a row in tests/README.md
+    naming at least one test file, every file a row names exists in tests/, and no row names a
+    source that is gone."""
+    rows = source_test_table((ROOT / "tests" / "README.md").read_text())
+    sources = {str(p.relative_to(ROOT)) for p in (ROOT / "src").rglob("*") if p.suffix in (".c", ".cpp")}
+    assert sorted(sources - set(rows)) == [], "sources without a row"
+    assert sorted(set(rows) - sources) == [], "rows for sources that do not exist"
+    bad = {s: t for s, t in rows.items() if not t or not all((ROOT / "tests" / f).is_file() for f in t)}
+    assert not bad, f"rows naming no test file, or one that does not exist: {bad}"
+
+
+def test_source_table_parser_sees_a_missing_row():
+    """The check above can fail: a table without a source's row, or naming a test file that does
+    not exist, is seen."""
+    text = "## Where each source is tested\n| source | tested in |\n| --- | --- |\n" \
+           "| `src/core/common.c` | `test_common.c` |\n| `src/core/x.c` | `test_nonexistent.c` |\n\n## Next\n" \
+           "| `src/core/camera.c` | `test_camera.c` |\n"
+    rows = source_test_table(text)
+    assert rows == {"src/core/common.c": ["test_common.c"], "src/core/x.c": ["test_nonexistent.c"]}
+    assert not (ROOT / "tests" / "test_nonexistent.c").exists()
 
 
 @pytest.mark.parametrize("script", sorted({p.name for p in (ROOT / "scripts").glob("*.py")} - compare_modules()))

@@ -176,7 +176,7 @@ TEST(gaussian_bad_inputs_name_the_property)
 
 /* Embree drops boxes beyond about 1.8e18, so a Gaussian far
  * out vanished from the image with exit 0: a mean coordinate beyond
- * GAUSSIAN_MAX_ABS (a float's 1e38 too) is refused, naming the vertex. */
+ * RR_MAX_REACH (a float's 1e38 too) is refused, naming the vertex. */
 TEST(gaussian_means_beyond_the_reach_limit_are_refused)
 {
     const char *base[] = {"x", "y", "z", "f_dc_0", "f_dc_1", "f_dc_2", "opacity", "scale_0", "scale_1", "rot_0",

@@ -82,7 +82,7 @@ def test_an_instant_is_the_static_3dgs_model_of_its_gaussians_then(tmp_path):
 
 
 def test_a_gaussian_that_moves_beyond_the_reach_of_rays_is_refused_by_name(tmp_path):
-    """A cubic coefficient of 1e20 takes the last Gaussian past 1e15 (GAUSSIAN_MAX_ABS) during the
+    """A cubic coefficient of 1e20 takes the last Gaussian past 1e15 (RR_MAX_REACH) during the
     shutter: refused naming the file, the Gaussian and the object, nothing written; at an instant
     where it is near, the same model renders."""
     ply = tmp_path / "far.ply"
@@ -91,7 +91,7 @@ def test_a_gaussian_that_moves_beyond_the_reach_of_rays_is_refused_by_name(tmp_p
     out = tmp_path / "x.exr"
     proc = run([path, "--shutter", "0,1", "--spp", 1, "-o", out, "--quiet"])
     assert proc.returncode == 1, proc.stderr
-    for part in (str(ply), "Gaussian 3 of object 'g'", "GAUSSIAN_MAX_ABS"):
+    for part in (str(ply), "Gaussian 3 of object 'g'", "RR_MAX_REACH"):
         assert part in proc.stderr, proc.stderr
     assert not out.exists()
     sharp(path, 0.7, out)  # its trbf_center: D = 0

@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "accel/accel_internal.h"
+#include "core/interval.h"
 #include "gaussians/gaussian_dynamic.h"
 #include "surfels/hitrules.h"
 
@@ -108,31 +109,38 @@ void accel_sphere_intersect(const struct RTCIntersectFunctionNArguments *args)
             sphere_intersect_lane(c, args, lane, id);
 }
 
+/* b rounded outward into Embree's float box, so the box holds b. */
+static void embree_bounds(aabb b, struct RTCBounds *r)
+{
+    float lo[3], hi[3];
+    aabb_round_out(b, lo, hi);
+    r->lower_x = lo[0], r->lower_y = lo[1], r->lower_z = lo[2];
+    r->upper_x = hi[0], r->upper_y = hi[1], r->upper_z = hi[2];
+}
+
 void accel_splat_bounds_cb(const struct RTCBoundsFunctionArguments *args)
 {
     const scene_object *o = args->geometryUserPtr;
     const float *c = o->model.geom[args->primID].center;
     const float *e = &o->model.extent[3 * args->primID];
-    /* pad by a few ulps so float rounding never clips a splat */
-    float pad[3];
-    for (int k = 0; k < 3; k++)
-        pad[k] = e[k] * 1.00001f + 1e-6f * fabsf(c[k]) + 1e-30f;
-    struct RTCBounds *b = args->bounds_o;
-    b->lower_x = c[0] - pad[0], b->lower_y = c[1] - pad[1], b->lower_z = c[2] - pad[2];
-    b->upper_x = c[0] + pad[0], b->upper_y = c[1] + pad[1], b->upper_z = c[2] + pad[2];
+    /* the splat's box with room for float traversal, rounded outward
+     * (core/interval.h), so float rounding never clips a splat */
+    aabb b;
+    double lo[3], hi[3];
+    for (int k = 0; k < 3; k++) {
+        interval box = interval_widen(interval_around(c[k], e[k]), interval_float_room(e[k], c[k]));
+        lo[k] = box.lo, hi[k] = box.hi;
+    }
+    b.lo = v3(lo[0], lo[1], lo[2]), b.hi = v3(hi[0], hi[1], hi[2]);
+    embree_bounds(b, args->bounds_o);
 }
 
 void accel_sphere_bounds_cb(const struct RTCBoundsFunctionArguments *args)
 {
     const scene_object *o = args->geometryUserPtr;
-    aabb b = scene_object_bounds(o);
     /* rounded outward as every other box (a cast to the nearest float put
      * a 1 mm sphere's box at x = 1000 23 um inside it) */
-    float lo[3], hi[3];
-    aabb_round_out(b, lo, hi);
-    struct RTCBounds *r = args->bounds_o;
-    r->lower_x = lo[0], r->lower_y = lo[1], r->lower_z = lo[2];
-    r->upper_x = hi[0], r->upper_y = hi[1], r->upper_z = hi[2];
+    embree_bounds(scene_object_bounds(o), args->bounds_o);
 }
 
 /* We never call rtcOccluded; the callback exists so the geometry is complete. */
@@ -238,15 +246,6 @@ void accel_object_intersect(const struct RTCIntersectFunctionNArguments *args)
     rh->ray.dir_x = saved[3], rh->ray.dir_y = saved[4], rh->ray.dir_z = saved[5];
 }
 
-/* b rounded outward into Embree's float box, so the box holds b. */
-static void embree_bounds(aabb b, struct RTCBounds *r)
-{
-    float lo[3], hi[3];
-    aabb_round_out(b, lo, hi);
-    r->lower_x = lo[0], r->lower_y = lo[1], r->lower_z = lo[2];
-    r->upper_x = hi[0], r->upper_y = hi[1], r->upper_z = hi[2];
-}
-
 void accel_object_bounds_cb(const struct RTCBoundsFunctionArguments *args)
 {
     const top_level *top = args->geometryUserPtr;
@@ -313,8 +312,8 @@ static int ray_meets_box(vec3 org, vec3 dir, aabb b)
     double lo[3] = {b.lo.x, b.lo.y, b.lo.z}, hi[3] = {b.hi.x, b.hi.y, b.hi.z};
     double tmin = 0.0, tmax = INFINITY;
     for (int k = 0; k < 3; k++) {
-        double pad = 1e-4 * (hi[k] - lo[k] + fabs(lo[k]) + fabs(hi[k])) + 1e-6;
-        double l = lo[k] - pad, h = hi[k] + pad;
+        interval slab = interval_widen_rel(interval_make(lo[k], hi[k]), 1e-4, 1e-6);
+        double l = slab.lo, h = slab.hi;
         if (d[k] == 0.0) {
             if (o[k] < l || o[k] > h)
                 return 0;

@@ -104,11 +104,6 @@ typedef struct {
     size_t count, cap;
 } accel_prims;
 
-/* How far from the origin (world units, and in each object's own space)
- * anything may reach during a shutter: accel_build and accel_set_shutter
- * refuse scenes beyond it, well inside Embree's float ray range (1.8e18). */
-#define ACCEL_MAX_REACH 1e15
-
 /* Appends to out, sorted and unique, the primitives of object obj whose
  * BVH bounds overlap one of the object-space boxes (rtcCollide). Returns 0,
  * or one of: */

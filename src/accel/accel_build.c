@@ -160,7 +160,7 @@ static void build_failed(accel *a, const char *fmt, ...)
 
 /* A dynamic model's paths over [open, close] (gaussian_footprint.paths)
  * and their box; NULL (the error named) where a path's box is not finite
- * or passes GAUSSIAN_MAX_ABS, the reach of the static models' means
+ * or passes RR_MAX_REACH, the reach of the static models' means
  * (beyond it Embree's float boxes and rays fail without a word), or
  * memory is short. */
 static double *dynamic_paths(accel *a, const scene_object *o, double open, double close, aabb *box)
@@ -177,13 +177,13 @@ static double *dynamic_paths(accel *a, const scene_object *o, double open, doubl
         int finite = !gaussian_dynamic_bounds(m, i, open, close, p, p + 3, p + 6);
         for (int k = 0; finite && k < 6; k++)
             reach = fmax(reach, fabs(p[k]));
-        if (!finite || !(reach <= GAUSSIAN_MAX_ABS)) {
+        if (!finite || !(reach <= RR_MAX_REACH)) {
             char far[64] = "beyond double range";
             if (finite)
                 snprintf(far, sizeof far, "%g", reach);
             build_failed(a, "%s: Gaussian %zu of object '%s' moves %s from the origin during the shutter [%g, %g]; "
-                            "a Gaussian may only reach %g (GAUSSIAN_MAX_ABS)", o->model_file, i, o->name, far, open,
-                         close, GAUSSIAN_MAX_ABS);
+                            "a Gaussian may only reach %g (RR_MAX_REACH)", o->model_file, i, o->name, far, open,
+                         close, RR_MAX_REACH);
             free(paths);
             return NULL;
         }
@@ -300,17 +300,17 @@ static int check_reach(const accel *a, double open, double close, rr_error *err)
     }
     aabb at_rest = {s->cam.position, s->cam.position};
     double camera = box_reach(animation_swept_bounds(&s->camera_motion, at_rest, open, close));
-    if (!(camera <= ACCEL_MAX_REACH))
+    if (!(camera <= RR_MAX_REACH))
         return rr_fail(err, "%s: the camera reaches %g world units from the origin during the shutter [%g, %g]; "
-                            "rays can only be traced within %g", s->path, camera, open, close, ACCEL_MAX_REACH);
+                            "rays can only be traced within %g", s->path, camera, open, close, RR_MAX_REACH);
     for (int i = 0; i < s->nobjects; i++) {
         const scene_object *o = &s->objects[i];
         double object = box_reach(a->swept[i]), min_scale = animation_min_scale(&o->anim, open, close);
         double ray = sqrt(3.0) * fmax(1.0, camera + object) / min_scale;
-        if (!(object <= ACCEL_MAX_REACH) || !(ray <= ACCEL_MAX_REACH))
+        if (!(object <= RR_MAX_REACH) || !(ray <= RR_MAX_REACH))
             return rr_fail(err, "%s: object '%s' reaches %g world units (smallest scale %g) during the shutter "
                                 "[%g, %g]; rays can only be traced within %g",
-                           s->path, o->name, object, min_scale, open, close, ACCEL_MAX_REACH);
+                           s->path, o->name, object, min_scale, open, close, RR_MAX_REACH);
     }
     return 0;
 }

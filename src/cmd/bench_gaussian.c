@@ -116,7 +116,7 @@ static RTCScene disc_scene(RTCDevice dev, const scene *sc, const gaussian_model 
     float *nrm = rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_NORMAL, 0, RTC_FORMAT_FLOAT3, 12, m->count);
     for (size_t i = 0; i < m->count; i++) {
         const float *q = &m->rotation[4 * i], *s = &m->scale[3 * i];
-        double w = q[0], x = q[1], y = q[2], z = q[3], k = sqrt(2.0 * log(m->opacity[i] * 255.0));
+        double w = q[0], x = q[1], y = q[2], z = q[3], k = sqrt(gaussian_alpha_reach2(m->opacity[i]));
         memcpy(&vtx[4 * i], &m->mean[3 * i], 3 * sizeof(float));
         const float *mu = &m->mean[3 * i];
         vec3 far = v3(fmax(fabs(mu[0] - cam.lo.x), fabs(mu[0] - cam.hi.x)),

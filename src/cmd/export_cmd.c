@@ -225,11 +225,12 @@ static void write_model(FILE *f, const scene_object *o)
         json_string(f, o->model_file);
         /* a renderer reading the export must know the Gaussians move on their own (the file says how) */
         const char *motion = !m->dynamic ? "none" : m->dynamic->kind == GAUSSIAN_DYNAMIC_FDGS ? "4dgs" : "stg-lite";
-        fprintf(f,
-                ", \"kind\": \"%s\", \"semantics\": \"%s\", \"tileRule\": \"%s\", \"order\": \"%s\", "
-                "\"count\": %zu, \"sh_degree\": %d, \"motion\": \"%s\"}}",
-                m->kind == GAUSSIAN_3D ? "3dgs" : "2dgs", gaussian_formation_name(gaussian_formation_of(m)),
-                m->tile_rule ? "on" : "off", gaussian_order_name(m, o->order), m->count, m->sh_degree, motion);
+        fprintf(f, ", \"kind\": \"%s\"", m->kind == GAUSSIAN_3D ? "3dgs" : "2dgs");
+        const char *key[GAUSSIAN_IMAGING_FIELDS], *value[GAUSSIAN_IMAGING_FIELDS];
+        gaussian_imaging(m, o->order, key, value);
+        for (int k = 0; k < GAUSSIAN_IMAGING_FIELDS; k++)
+            fprintf(f, ", \"%s\": \"%s\"", key[k], value[k]);
+        fprintf(f, ", \"count\": %zu, \"sh_degree\": %d, \"motion\": \"%s\"}}", m->count, m->sh_degree, motion);
         return;
     }
     if (o->kind == OBJECT_SPHERE) {

@@ -509,15 +509,11 @@ static void setup_run(render_run *run, const scene *s, const shutter *shut, cons
 
 static int write_preview(atomic_set *set, const char *path, const image *img, rr_error *err)
 {
-    size_t n = (size_t)img->width * img->height;
-    float *rgba = malloc(n * 4 * sizeof *rgba), *var = malloc(n * 4 * sizeof *var);
-    float *se = malloc(n * 4 * sizeof *se), *samples = malloc(n * sizeof *samples);
-    int rc = rgba && var && se && samples ? 0 : rr_fail(err, "out of memory");
-    if (!rc) {
-        image_resolve(img, 1, rgba, var, se, samples);
-        rc = preview_write_srgb_into(set, path, img->width, img->height, rgba, err);
-    }
-    free(rgba), free(var), free(se), free(samples);
+    image_planes p;
+    if (image_planes_resolve(img, 1, &p))
+        return rr_fail(err, "out of memory");
+    int rc = preview_write_srgb_into(set, path, img->width, img->height, p.rgba, err);
+    image_planes_free(&p);
     return rc;
 }
 

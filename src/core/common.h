@@ -5,6 +5,8 @@
 #ifndef RR_COMMON_H
 #define RR_COMMON_H
 
+#include "core/interval.h"
+
 #include <math.h>
 #include <signal.h>
 #include <stddef.h>
@@ -24,6 +26,16 @@ typedef struct {
 /* Largest image refrender renders or reads: 2^26 pixels (8192 x 8192). A
  * render state holds ~112 bytes a pixel, so this bounds what any file,
  * crafted or not, can make the readers allocate (7.5 GB). */
+/* How far from the origin anything may reach, in every space (world and
+ * each object's own), in every input: splat, Gaussian and trajectory
+ * coordinates, activated Gaussian scales, splat radii, and what a scene
+ * sweeps through during a shutter. Readers refuse values beyond it, and
+ * accel_build refuses scenes that reach past it. Why 1e15: values are stored
+ * in floats and squared in ray tests (1e15^2 is far below FLT_MAX =
+ * 3.4e38), and Embree drops boxes beyond about 1.8e18 without a word (a
+ * Gaussian at 1e19 vanished from the image). */
+#define RR_MAX_REACH 1e15
+
 #define RR_MAX_PIXELS ((long long)1 << 26)
 
 /* Formats msg into err (if err is non-NULL) and returns -1. */
@@ -212,17 +224,12 @@ static inline void aabb_add_box(aabb *b, aabb o)
     aabb_add_point(b, o.hi);
 }
 
-/* x rounded outward to a float, for bounds kept in floats (Embree's boxes):
- * the cast rounds to the nearest float, which may lie on either side of x,
- * so one more step out makes the result strictly below (above) x, and a
- * float box so made always holds the double one. */
-static inline float rr_float_below(double x) { return nextafterf((float)x, -INFINITY); }
-static inline float rr_float_above(double x) { return nextafterf((float)x, INFINITY); }
-/* b's corners rounded outward to floats (rr_float_below, rr_float_above). */
+/* b's corners rounded outward to floats (interval_round_out_f). */
 static inline void aabb_round_out(aabb b, float lo[3], float hi[3])
 {
-    lo[0] = rr_float_below(b.lo.x), lo[1] = rr_float_below(b.lo.y), lo[2] = rr_float_below(b.lo.z);
-    hi[0] = rr_float_above(b.hi.x), hi[1] = rr_float_above(b.hi.y), hi[2] = rr_float_above(b.hi.z);
+    interval_round_out_f(interval_make(b.lo.x, b.hi.x), &lo[0], &hi[0]);
+    interval_round_out_f(interval_make(b.lo.y, b.hi.y), &lo[1], &hi[1]);
+    interval_round_out_f(interval_make(b.lo.z, b.hi.z), &lo[2], &hi[2]);
 }
 
 #endif

@@ -49,6 +49,14 @@ const char *gaussian_order_name(const gaussian_model *m, gaussian_order order)
     return m->kind == GAUSSIAN_2D && order == GAUSSIAN_ORDER_HIT_DEPTH ? "hit-depth" : "center-depth";
 }
 
+void gaussian_imaging(const gaussian_model *m, gaussian_order order, const char *key[GAUSSIAN_IMAGING_FIELDS],
+                      const char *value[GAUSSIAN_IMAGING_FIELDS])
+{
+    key[0] = "semantics", value[0] = gaussian_formation_name(gaussian_formation_of(m));
+    key[1] = "tileRule", value[1] = m->tile_rule ? "on" : "off";
+    key[2] = "order", value[2] = gaussian_order_name(m, order);
+}
+
 int gaussian_formation_parse(const char *name, gaussian_kind kind, gaussian_formation *f)
 {
     for (int k = 0; k < FORMATIONS; k++)

@@ -39,14 +39,6 @@ typedef enum {
 
 #define GAUSSIAN_MAX_SH_DEGREE 3
 #define GAUSSIAN_MAX_SH_COEFFS 16 /* (3 + 1)^2 */
-/* The largest activated scale: stored in floats, squared in ray tests. */
-#define GAUSSIAN_MAX_SCALE 1e15
-/* The largest mean coordinate. Embree drops boxes beyond about
- * 1.8e18 without a word, so a Gaussian at 1e19 vanished from the image; with
- * means and scales within 1e15 every box stays in Embree's range, and the
- * renderer's reach check (ACCEL_MAX_REACH, accel.h) refuses by name a scene
- * that reaches past 1e15. */
-#define GAUSSIAN_MAX_ABS 1e15
 
 typedef struct {
     size_t count;
@@ -82,6 +74,14 @@ const char *gaussian_formation_name(gaussian_formation f);
  * (which only a 2D model's takes): "center-depth", "hit-depth" or 3DGRT's
  * "max-response". */
 const char *gaussian_order_name(const gaussian_model *m, gaussian_order order);
+
+/* How a Gaussian object is imaged, as key/value pairs in this order
+ * (semantics, tileRule, order): the one description that the render's
+ * header (render_attrs.c, part of its identity) and `refrender export`
+ * (export_cmd.c) both write, each in its own syntax. */
+enum { GAUSSIAN_IMAGING_FIELDS = 3 };
+void gaussian_imaging(const gaussian_model *m, gaussian_order order, const char *key[GAUSSIAN_IMAGING_FIELDS],
+                      const char *value[GAUSSIAN_IMAGING_FIELDS]);
 /* The formation of that name for a model of that kind; -1 for a name
  * that is none, or one for the other kind. */
 int gaussian_formation_parse(const char *name, gaussian_kind kind, gaussian_formation *f);

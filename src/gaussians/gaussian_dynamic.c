@@ -1,5 +1,6 @@
 #include "gaussians/gaussian_dynamic.h"
 
+#include "core/interval.h"
 #include "core/rotation.h"
 
 #include <float.h>
@@ -9,10 +10,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-/* The unit roundoff of doubles: every +, -, *, / and sqrt below returns
- * the exact result times (1 + d) with |d| <= U (plus, only for results
- * below DBL_MIN, an absolute error of at most DBL_TRUE_MIN). */
-#define U (DBL_EPSILON / 2)
+/* The unit roundoff of doubles (core/interval.h), short for the proofs below. */
+#define U RR_UNIT_ROUNDOFF
 
 /* One float array of a gaussian_dynamic: where its pointer is, and how
  * many floats it holds per Gaussian. */
@@ -228,10 +227,6 @@ void gaussian_dynamic_at(const gaussian_model *m, size_t i, double t, gaussian_d
  *     computed within 6 U. Altogether below 16 eps (M + ov).
  * The spans: see root_spans. */
 
-typedef struct {
-    double lo, hi;
-} span;
-
 /* An upper bound on the rounding of fl(g(y)) in Horner form
  * ((A y + B) y + C: at most 4 roundings a term, gamma_4 < 4.01 U; 5 U with
  * the margin for this bound's own rounding, and one DBL_TRUE_MIN an
@@ -251,7 +246,7 @@ static int certain_sign(double A, double B, double C, double y)
 /* A span around the approximate root r on whose ends g has proved opposite
  * signs (so it holds a root), widening from a few ulps; 0 if none is found
  * (a double root, where g touches 0 without crossing). */
-static int bracket(double A, double B, double C, double r, span *out)
+static int bracket(double A, double B, double C, double r, interval *out)
 {
     double w = 4 * U * fabs(r) + 4 * DBL_TRUE_MIN;
     for (int k = 0; k < 24 && isfinite(w); k++, w *= 8) {
@@ -270,7 +265,7 @@ static int bracket(double A, double B, double C, double r, span *out)
  * sqrt and the division then move d by under 3 U relatively (8 U taken),
  * and the span ends' own two roundings by under 2 U (|v| + d_hi + E).
  * Returns the number of spans (0: g has no real root). */
-static int vertex_spans(double A, double B, double C, span out[2])
+static int vertex_spans(double A, double B, double C, interval out[2])
 {
     double disc = B * B - 4 * A * C, eD = 4 * U * (B * B + 4 * fabs(A * C));
     if (disc + eD < 0)
@@ -278,8 +273,8 @@ static int vertex_spans(double A, double B, double C, span out[2])
     double v = -B / (2 * A), two_a = 2 * fabs(A);
     double d_hi = sqrt(disc + eD) / two_a * (1 + 8 * U), d_lo = sqrt(fmax(disc - eD, 0)) / two_a * (1 - 8 * U);
     double E = 6 * U * (fabs(v) + d_hi) + 2 * DBL_TRUE_MIN;
-    out[0] = (span){v - d_hi - E, v - d_lo + E};
-    out[1] = (span){v + d_lo - E, v + d_hi + E};
+    out[0] = (interval){v - d_hi - E, v - d_lo + E};
+    out[1] = (interval){v + d_lo - E, v + d_hi + E};
     return 2;
 }
 
@@ -290,19 +285,19 @@ static int vertex_spans(double A, double B, double C, span out[2])
  * bracketed by a proved sign change: two disjoint brackets hold both of
  * g's (at most two) roots. Otherwise, near a double root, the vertex
  * spans (vertex_spans) hold them. */
-static int root_spans(double A, double B, double C, span out[2])
+static int root_spans(double A, double B, double C, interval out[2])
 {
     if (A == 0) {
         if (B == 0)
             return 0;
         double r = -C / B, e = 4 * U * fabs(r) + 2 * DBL_TRUE_MIN;
-        out[0] = (span){r - e, r + e};
+        out[0] = (interval){r - e, r + e};
         return 1;
     }
     double disc = B * B - 4 * A * C;
     if (disc >= 0) {
         double q = -0.5 * (B + copysign(sqrt(disc), B)), r1 = q / A, r2 = q != 0 ? C / q : r1;
-        span s[2];
+        interval s[2];
         if (bracket(A, B, C, fmin(r1, r2), &s[0]) && bracket(A, B, C, fmax(r1, r2), &s[1]) && s[0].hi < s[1].lo)
             return out[0] = s[0], out[1] = s[1], 2;
     }
@@ -320,22 +315,22 @@ static void span_extremes(const double c[4], double k0, double k1, double *lo, d
     *lo = fmin(*lo, p - ov), *hi = fmax(*hi, p + ov), *ov_max = fmax(*ov_max, ov);
 }
 
-static int axis_bounds(const double c[4], double a, double b, double *lo, double *hi)
+/* The cubic path's bound over the D-interval D (the proof above). */
+static int axis_bounds(const double c[4], interval D, interval *out)
 {
-    double pa = cubic_at(c, a), pb = cubic_at(c, b), ov = 0;
-    *lo = fmin(pa, pb), *hi = fmax(pa, pb);
-    span s[2];
+    double pa = cubic_at(c, D.lo), pb = cubic_at(c, D.hi), ov = 0;
+    double lo = fmin(pa, pb), hi = fmax(pa, pb);
+    interval s[2];
     int n = root_spans(3 * c[3], 2 * c[2], c[1], s);
     for (int k = 0; k < n; k++) {
-        double k0 = fmax(s[k].lo, a), k1 = fmin(s[k].hi, b);
+        double k0 = fmax(s[k].lo, D.lo), k1 = fmin(s[k].hi, D.hi);
         if (k0 <= k1)
-            span_extremes(c, k0, k1, lo, hi, &ov);
+            span_extremes(c, k0, k1, &lo, &hi, &ov);
     }
-    double R = fmax(fabs(a), fabs(b));
+    double R = fmax(fabs(D.lo), fabs(D.hi));
     double M = fabs(c[0]) + fabs(c[1]) * R + fabs(c[2]) * R * R + fabs(c[3]) * R * R * R;
-    double pad = 16 * DBL_EPSILON * (M + ov);
-    *lo -= pad, *hi += pad;
-    return isfinite(*lo) && isfinite(*hi) ? 0 : -1;
+    *out = interval_widen(interval_make(lo, hi), 16 * DBL_EPSILON * (M + ov));
+    return isfinite(out->lo) && isfinite(out->hi) ? 0 : -1;
 }
 
 /* The largest opacity over [t0, t1]: the RBF peaks at D = 0, so over the
@@ -357,12 +352,28 @@ static double opacity_max(const gaussian_model *m, size_t i, double t0, double t
  * nextafter step holds the exact t - c too), and the computed ends are
  * within 2 U (|x| + |vel| R) of the exact ones (two roundings), R =
  * max(|a|, |b|): the pad 4 eps (|x| + |vel| R) holds both. */
-static int fdgs_axis_bounds(double x, double vel, double a, double b, double *lo, double *hi)
+static int fdgs_axis_bounds(double x, double vel, interval D, interval *out)
 {
-    double pa = x + vel * a, pb = x + vel * b;
-    double pad = 4 * DBL_EPSILON * (fabs(x) + fabs(vel) * fmax(fabs(a), fabs(b)));
-    *lo = fmin(pa, pb) - pad, *hi = fmax(pa, pb) + pad;
-    return isfinite(*lo) && isfinite(*hi) ? 0 : -1;
+    double pa = x + vel * D.lo, pb = x + vel * D.hi;
+    double pad = 4 * DBL_EPSILON * (fabs(x) + fabs(vel) * fmax(fabs(D.lo), fabs(D.hi)));
+    *out = interval_widen(interval_make(fmin(pa, pb), fmax(pa, pb)), pad);
+    return isfinite(out->lo) && isfinite(out->hi) ? 0 : -1;
+}
+
+/* The D-interval of [t0, t1] about the temporal centre c: [fl(t0 - c),
+ * fl(t1 - c)] one step outward holds the computed and the exact t - c of
+ * every t in [t0, t1] (rounding is monotone, and off by at most half a
+ * step). */
+static interval offset_interval(double t0, double t1, double c)
+{
+    return interval_step_out(interval_make(t0 - c, t1 - c));
+}
+
+/* Writes the three axes' intervals to lo, hi. */
+static void store_box(const interval box[3], double lo[3], double hi[3])
+{
+    for (int k = 0; k < 3; k++)
+        lo[k] = box[k].lo, hi[k] = box[k].hi;
 }
 
 /* The largest opacity over [t0, t1]: the marginal peaks at D = 0, so at
@@ -380,12 +391,11 @@ static double fdgs_opacity_max(const gaussian_model *m, size_t i, double t0, dou
 static int fdgs_bounds(const gaussian_model *m, size_t i, double t0, double t1, double lo[3], double hi[3],
                        double *opacity_bound)
 {
-    double center = m->dynamic->t_center[i], l[3], h[3];
-    double a = nextafter(t0 - center, -INFINITY), b = nextafter(t1 - center, INFINITY);
+    interval D = offset_interval(t0, t1, m->dynamic->t_center[i]), box[3];
     for (int k = 0; k < 3; k++)
-        if (fdgs_axis_bounds(m->mean[3 * i + k], m->dynamic->velocity[3 * i + k], a, b, &l[k], &h[k]))
+        if (fdgs_axis_bounds(m->mean[3 * i + k], m->dynamic->velocity[3 * i + k], D, &box[k]))
             return -1;
-    memcpy(lo, l, sizeof l), memcpy(hi, h, sizeof h);
+    store_box(box, lo, hi);
     *opacity_bound = fdgs_opacity_max(m, i, t0, t1);
     return 0;
 }
@@ -396,14 +406,14 @@ int gaussian_dynamic_bounds(const gaussian_model *m, size_t i, double t0, double
     RR_DCHECK(m->dynamic && i < m->count && t0 <= t1);
     if (m->dynamic->kind == GAUSSIAN_DYNAMIC_FDGS)
         return fdgs_bounds(m, i, t0, t1, lo, hi, opacity_bound);
-    double center = m->dynamic->trbf_center[i];
-    double a = nextafter(t0 - center, -INFINITY), b = nextafter(t1 - center, INFINITY), l[3], h[3], c[4];
+    interval D = offset_interval(t0, t1, m->dynamic->trbf_center[i]), box[3];
+    double c[4];
     for (int k = 0; k < 3; k++) {
         axis_coefficients(m, i, k, c);
-        if (axis_bounds(c, a, b, &l[k], &h[k]))
+        if (axis_bounds(c, D, &box[k]))
             return -1;
     }
-    memcpy(lo, l, sizeof l), memcpy(hi, h, sizeof h);
+    store_box(box, lo, hi);
     *opacity_bound = opacity_max(m, i, t0, t1);
     return 0;
 }

@@ -4,6 +4,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/interval.h"
 #include "core/lanes.h"
 #include "core/rotation.h"
 
@@ -207,8 +208,9 @@ static void image_offset(const gaussian_ray *r, vec3 p, double *dx, double *dy)
 
 /* The rasterizers' tile rule (getRect, auxiliary.h): a Gaussian is only
  * evaluated at the pixels of the 16x16 tiles that the square of the given
- * radius about `centre` (pixel-index coordinates) touches. */
-enum { TILE = 16 };
+ * radius about `centre` (pixel-index coordinates) touches. (Not the
+ * renderer's tiles of work, render.c's TILE: these are the CUDA's.) */
+enum { RASTER_TILE = 16 };
 
 /* getRect's min(grid, max(0, (int)v)): the CUDA's (int) cast truncates
  * toward 0; the clamps keep it defined for any v. */
@@ -219,11 +221,12 @@ static int tile_index(double v, int grid)
 
 static int in_rasterizer_tiles(const gaussian_ray *r, double cx, double cy, double radius)
 {
-    int gx = (r->width + TILE - 1) / TILE, gy = (r->height + TILE - 1) / TILE;
+    const int side = RASTER_TILE;
+    int gx = (r->width + side - 1) / side, gy = (r->height + side - 1) / side;
     double px = floor(r->x), py = floor(r->y);
-    int x0 = tile_index((cx - radius) / TILE, gx), x1 = tile_index((cx + radius + TILE - 1) / TILE, gx);
-    int y0 = tile_index((cy - radius) / TILE, gy), y1 = tile_index((cy + radius + TILE - 1) / TILE, gy);
-    return px >= (double)x0 * TILE && px < (double)x1 * TILE && py >= (double)y0 * TILE && py < (double)y1 * TILE;
+    int x0 = tile_index((cx - radius) / side, gx), x1 = tile_index((cx + radius + side - 1) / side, gx);
+    int y0 = tile_index((cy - radius) / side, gy), y1 = tile_index((cy + radius + side - 1) / side, gy);
+    return px >= (double)x0 * side && px < (double)x1 * side && py >= (double)y0 * side && py < (double)y1 * side;
 }
 
 /* 2DGS's tile radius: at e0ed020 (preprocessCUDA) the 3-sigma circle's
@@ -270,7 +273,7 @@ static int in_2dgs_tiles(const gaussian_ray *r, const double row[3][3], double c
  * at most 1, gaussian.c) with its rounding room. */
 #define KERNEL_REACH 3.3302
 #define FILTER_REACH_PX 2.3540
-#define RASTER_REACH2 (2.0 * log(255.0))
+#define RASTER_REACH2 gaussian_alpha_reach2(1.0)
 #define RASTER_REACH2_SLACK (1 + 1e-5)
 /* gaussian_traversal_pad's rounding room, and the key floor's room for
  * the subtraction's rounding where the pad is below it */
@@ -529,7 +532,7 @@ static int hit_2d_from_geometry(const gaussian_model *m, size_t i, gaussian_orde
     /* alpha below 1/255 for certain (opacity <= 1): exp is the costly
      * part, and the exact test follows (a test with the opacity's own log
      * cost a log per candidate) */
-    if (!(rho <= 2.0 * log(1.0 / GAUSSIAN_ALPHA_MIN) + 1e-9) || !(t >= r->tmin && t < r->tmax))
+    if (!(rho <= gaussian_alpha_reach2(1.0) + 1e-9) || !(t >= r->tmin && t < r->tmax))
         return 0;
     double alpha = clamp_alpha(GAUSSIAN_ALPHA_MAX, m->opacity[i], exp(-0.5 * rho));
     if (alpha < GAUSSIAN_ALPHA_MIN)
@@ -667,12 +670,12 @@ int gaussian_hit_3dgrt(const gaussian_model *m, size_t i, const gaussian_ray *r,
     return 1;
 }
 
-/* The kernel radius (in scales) beyond which opacity G < 1/255: G =
- * exp(-r^2 / 2) >= 1 / (255 o) needs r^2 <= 2 ln(255 o); 3DGRT also
- * drops responses at or below GAUSSIAN_GRT_MIN_RESPONSE. 0: never seen. */
+/* The kernel radius (in scales) beyond which alpha < 1/255 (gaussian_alpha_reach2);
+ * 3DGRT also drops responses at or below GAUSSIAN_GRT_MIN_RESPONSE. 0:
+ * never seen. */
 static double kernel_reach(const gaussian_model *m, size_t i)
 {
-    double r2 = 2.0 * log(m->opacity[i] / GAUSSIAN_ALPHA_MIN);
+    double r2 = gaussian_alpha_reach2(m->opacity[i]);
     if (gaussian_formation_of(m) == GAUSSIAN_FORMATION_3DGRT)
         r2 = rr_fmin(r2, -2.0 * log(GAUSSIAN_GRT_MIN_RESPONSE));
     return r2 > 0 ? sqrt(r2) : 0.0;
@@ -712,7 +715,7 @@ double gaussian_filter_near(double min_scale, double max_scale)
 static void filter_2d_reach(const gaussian_model *m, size_t i, const gaussian_view_bound *v, double *along_plane,
                             double *across_view)
 {
-    double px2 = log(m->opacity[i] / GAUSSIAN_ALPHA_MIN);
+    double px2 = 0.5 * gaussian_alpha_reach2(m->opacity[i]); /* exact: halving a double */
     *along_plane = *across_view = 0.0;
     if (!(px2 > 0))
         return;
@@ -730,7 +733,7 @@ static void filter_2d_reach(const gaussian_model *m, size_t i, const gaussian_vi
  * (the hit is at the mean's view depth). */
 static double footprint_3d_reach(const gaussian_model *m, size_t i, const gaussian_view_bound *v)
 {
-    double k2 = 2.0 * log(m->opacity[i] / GAUSSIAN_ALPHA_MIN);
+    double k2 = gaussian_alpha_reach2(m->opacity[i]);
     if (!(k2 > 0))
         return 0.0;
     const float *s = &m->scale[3 * i];
@@ -979,8 +982,9 @@ static aabb bounds_with_reach(const gaussian_model *m, size_t i, const double vi
         for (int j = 0; j < 3; j++) /* a 2D Gaussian's third scale is 0 */
             e2 += (R[a][j] * s[j]) * (R[a][j] * s[j]);
         double e = rr_fmax(k * sqrt(e2), view_reach[a]);
-        double pad = e * 1e-5 + 1e-6 * fabs(c[a]) + 1e-30; /* float rounding never clips a Gaussian */
-        lo[a] = c[a] - e - pad, hi[a] = c[a] + e + pad;
+        /* float rounding never clips a Gaussian (core/interval.h) */
+        interval box = interval_widen(interval_around(c[a], e), interval_float_room(e, c[a]));
+        lo[a] = box.lo, hi[a] = box.hi;
     }
     b.lo = v3(lo[0], lo[1], lo[2]), b.hi = v3(hi[0], hi[1], hi[2]);
     return b;

@@ -41,8 +41,8 @@ typedef struct {
  * the file and the properties: those missing from a partial model,
  * f_rest_* (lite has none), STG's "full" variant (f_t_*, f_dc_3 and up: it
  * needs STG's per-pixel MLP), values that are not finite or beyond float
- * range, means beyond GAUSSIAN_MAX_ABS, exp(scale) beyond
- * GAUSSIAN_MAX_SCALE, and a temporal scale exp(trbf_scale) below FLT_MIN
+ * range, means beyond RR_MAX_REACH, exp(scale) beyond
+ * RR_MAX_REACH, and a temporal scale exp(trbf_scale) below FLT_MIN
  * (the official float opacity is 0/0 at its centre). A zero rot is
  * accepted (STG adds Gaussians with rot 0: ourslite.py:1235). */
 extern const gaussian_dynamic_ply_reader gaussian_stg_ply;
@@ -58,8 +58,8 @@ extern const gaussian_dynamic_ply_reader gaussian_stg_ply;
  * 4DGS's rasterizer reads the time harmonics only at degree 3, at most
  * two), time_duration, sh_degree or sh_degree_t differing between
  * vertices, time_duration or t_var not above 0, values not finite or
- * beyond float range, means beyond GAUSSIAN_MAX_ABS, exp(scale) beyond
- * GAUSSIAN_MAX_SCALE, a zero quaternion. */
+ * beyond float range, means beyond RR_MAX_REACH, exp(scale) beyond
+ * RR_MAX_REACH, a zero quaternion. */
 extern const gaussian_dynamic_ply_reader gaussian_fdgs_ply;
 
 #endif

@@ -147,7 +147,7 @@ static int model_constants(fdgs_sink *s, const double *v, char *why, size_t why_
 }
 
 /* The static arrays (gaussian_dynamic.h): the canonical mean within
- * GAUSSIAN_MAX_ABS, exp(scale) within GAUSSIAN_MAX_SCALE, the unit
+ * RR_MAX_REACH, exp(scale) within RR_MAX_REACH, the unit
  * quaternion of rot_0..3 (the converter's is unit up to float rounding;
  * only zero is refused), sigmoid of the opacity, sh4d as it runs
  * (coefficient S k + j of channel c is sh4d_<3 (S k + j) + c>, the model's

@@ -124,8 +124,8 @@ static int store(float *dst, double v, int slot, char *why, size_t why_size)
     return gaussian_ply_store(dst, v, slot_names[slot], why, why_size);
 }
 
-/* Means within GAUSSIAN_MAX_ABS, scales (two for 2D), after exp, within
- * GAUSSIAN_MAX_SCALE, the unit quaternion. */
+/* Means within RR_MAX_REACH, scales (two for 2D), after exp, within
+ * RR_MAX_REACH, the unit quaternion. */
 static int store_geometry(gaussian_model *m, size_t i, const double *v, char *why, size_t why_size)
 {
     int scales = m->kind == GAUSSIAN_3D ? 3 : 2;

@@ -19,7 +19,7 @@
  * on a file without scale_2 is an error. Errors name the file and the
  * property (missing or duplicated properties, an f_rest count that is no
  * SH degree, non-finite values or ones beyond float range, a mean
- * coordinate beyond GAUSSIAN_MAX_ABS, zero quaternions (others are
+ * coordinate beyond RR_MAX_REACH, zero quaternions (others are
  * normalised whatever their size), counts the file cannot hold). The bytes
  * are folded into *content_hash unless NULL. */
 int gaussian_read(const char *path, gaussian_kind kind, gaussian_model *m, uint64_t *content_hash, rr_error *err);

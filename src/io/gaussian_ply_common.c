@@ -68,13 +68,13 @@ int gaussian_ply_store_mean_scale(gaussian_model *m, size_t i, const double *v, 
                                   int scale, int scales, char *why, size_t why_size)
 {
     for (int k = 0; k < 3; k++) {
-        if (!(fabs(v[x + k]) <= GAUSSIAN_MAX_ABS))
-            return gaussian_ply_bad(why, why_size, "property '%s' = %g is beyond 1e+15 (GAUSSIAN_MAX_ABS) from the "
-                                    "origin, where rays can be traced", names[x + k], v[x + k]);
+        if (!(fabs(v[x + k]) <= RR_MAX_REACH))
+            return snprintf(why, why_size, "property '%s' = %g is beyond %g (RR_MAX_REACH) from the origin, where "
+                            "rays can be traced", names[x + k], v[x + k], RR_MAX_REACH), -1;
         double e = k < scales ? exp(v[scale + k]) : 0.0;
-        if (!(e <= GAUSSIAN_MAX_SCALE))
-            return gaussian_ply_bad(why, why_size, "property '%s' = %g: exp() of it is beyond 1e15 "
-                                    "(GAUSSIAN_MAX_SCALE)", names[scale + k], v[scale + k]);
+        if (!(e <= RR_MAX_REACH))
+            return snprintf(why, why_size, "property '%s' = %g: exp() of it is beyond %g (RR_MAX_REACH)",
+                            names[scale + k], v[scale + k], RR_MAX_REACH), -1;
         m->mean[3 * i + k] = (float)v[x + k];
         m->scale[3 * i + k] = (float)e;
     }

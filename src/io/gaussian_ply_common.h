@@ -49,9 +49,9 @@ int gaussian_ply_begin_3d(gaussian_ply_sink *s, const char *path, const char *la
 int gaussian_ply_allocate(gaussian_model *m, size_t declared, gaussian_dynamic *(*dynamic_alloc)(size_t), char *why,
                           size_t why_size);
 
-/* Gaussian i's mean (slots x..x+2 of v) within GAUSSIAN_MAX_ABS and its
+/* Gaussian i's mean (slots x..x+2 of v) within RR_MAX_REACH and its
  * first `scales` scales (slots scale..), after exp, within
- * GAUSSIAN_MAX_SCALE (gaussian.h: Embree's range); the others 0. */
+ * RR_MAX_REACH (core/common.h: Embree's range); the others 0. */
 int gaussian_ply_store_mean_scale(gaussian_model *m, size_t i, const double *v, const char *const *names, int x,
                                   int scale, int scales, char *why, size_t why_size);
 

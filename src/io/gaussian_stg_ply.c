@@ -77,7 +77,7 @@ static int store_run(float *dst, const double *v, int first, int n, char *why, s
 }
 
 /* The static arrays (gaussian_dynamic.h: the state at D = 0): means within
- * GAUSSIAN_MAX_ABS, exp(scale) within GAUSSIAN_MAX_SCALE, sigmoid of the
+ * RR_MAX_REACH, exp(scale) within RR_MAX_REACH, sigmoid of the
  * opacity, f_dc as RGB, normalize(rot) as F.normalize (0 stays 0). */
 static int store_static(gaussian_model *m, size_t i, const double *v, char *why, size_t why_size)
 {

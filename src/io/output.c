@@ -230,33 +230,28 @@ int output_write_final_into(atomic_set *set, const char *path, const image *img,
                             const attr_list *a, const exr_window *win, rr_error *err)
 {
     size_t n = (size_t)img->width * img->height;
-    float *rgba = malloc(n * 4 * sizeof *rgba), *var = malloc(n * 4 * sizeof *var);
-    float *se = malloc(n * 4 * sizeof *se), *samples = malloc(n * sizeof *samples);
-    int rc = -1;
-    if (rgba && var && se && samples) {
-        image_resolve(img, samples_per_batch, rgba, var, se, samples);
-        uint32_t most = 0;
-        for (size_t i = 0; i < n; i++)
-            most = img->px[i].batches > most ? img->px[i].batches : most;
-        static const char *const names[3][4] = {{"R", "G", "B", "A"},
-                                                {"variance.R", "variance.G", "variance.B", "variance.A"},
-                                                {"stderr.R", "stderr.G", "stderr.B", "stderr.A"}};
-        float *planes[3] = {rgba, var, se};
-        exr_channel chs[13];
-        int nch = 0;
-        for (int k = 0; k < (most >= 2 ? 3 : 1); k++)
-            for (int c = 0; c < 4; c++)
-                chs[nch++] = (exr_channel){names[k][c], EXR_CHANNEL_FLOAT, planes[k] + c, 16};
-        chs[nch++] = (exr_channel){"samples", EXR_CHANNEL_FLOAT, samples, 4};
-        for (int k = 0; k < 3; k++)
-            compact_window(planes[k], 4, win);
-        compact_window(samples, 1, win);
-        exr_string_attr sa[ATTR_MAX];
-        rc = exr_write_window_into(set, path, win, chs, nch, string_attrs(a, sa), a->n, err);
-    } else {
-        rr_fail(err, "out of memory");
-    }
-    free(rgba), free(var), free(se), free(samples);
+    image_planes p;
+    if (image_planes_resolve(img, samples_per_batch, &p))
+        return rr_fail(err, "out of memory");
+    uint32_t most = 0;
+    for (size_t i = 0; i < n; i++)
+        most = img->px[i].batches > most ? img->px[i].batches : most;
+    static const char *const names[3][4] = {{"R", "G", "B", "A"},
+                                            {"variance.R", "variance.G", "variance.B", "variance.A"},
+                                            {"stderr.R", "stderr.G", "stderr.B", "stderr.A"}};
+    float *planes[3] = {p.rgba, p.var, p.se};
+    exr_channel chs[13];
+    int nch = 0;
+    for (int k = 0; k < (most >= 2 ? 3 : 1); k++)
+        for (int c = 0; c < 4; c++)
+            chs[nch++] = (exr_channel){names[k][c], EXR_CHANNEL_FLOAT, planes[k] + c, 16};
+    chs[nch++] = (exr_channel){"samples", EXR_CHANNEL_FLOAT, p.samples, 4};
+    for (int k = 0; k < 3; k++)
+        compact_window(planes[k], 4, win);
+    compact_window(p.samples, 1, win);
+    exr_string_attr sa[ATTR_MAX];
+    int rc = exr_write_window_into(set, path, win, chs, nch, string_attrs(a, sa), a->n, err);
+    image_planes_free(&p);
     return rc;
 }
 

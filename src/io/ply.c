@@ -669,9 +669,9 @@ static int check_surfels(const char *path, const surfel *s, size_t n, rr_error *
         const surfel *p = &s[i];
         double vals[7] = {p->center.x, p->center.y, p->center.z, p->normal.x, p->normal.y, p->normal.z, p->radius};
         for (int k = 0; k < 7; k++)
-            if (!(fabs(vals[k]) <= POINTMODEL_MAX_ABS))
+            if (!(fabs(vals[k]) <= RR_MAX_REACH))
                 return rr_fail(err, "%s: splat %zu has a value %g out of range (at most %g in magnitude)", path, i,
-                               vals[k], POINTMODEL_MAX_ABS);
+                               vals[k], RR_MAX_REACH);
         if (!(p->radius > 0) || v3_len(p->normal) == 0)
             return rr_fail(err, "%s: splat %zu has a zero radius or normal", path, i);
     }

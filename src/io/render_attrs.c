@@ -66,10 +66,11 @@ static void describe_gaussians(FILE *f, const scene *s)
         const scene_object *o = &s->objects[i];
         if (o->kind != OBJECT_GAUSSIANS)
             continue;
-        const gaussian_model *m = &o->gaussians;
-        fprintf(f, "%s%s: semantics=%s tileRule=%s order=%s", any++ ? "; " : "", o->name,
-                gaussian_formation_name(gaussian_formation_of(m)), m->tile_rule ? "on" : "off",
-                gaussian_order_name(m, o->order));
+        const char *key[GAUSSIAN_IMAGING_FIELDS], *value[GAUSSIAN_IMAGING_FIELDS];
+        gaussian_imaging(&o->gaussians, o->order, key, value);
+        fprintf(f, "%s%s:", any++ ? "; " : "", o->name);
+        for (int k = 0; k < GAUSSIAN_IMAGING_FIELDS; k++)
+            fprintf(f, " %s=%s", key[k], value[k]);
     }
     if (!any)
         fputs("none", f);

@@ -243,10 +243,10 @@ static int read_pose(const char *name, size_t i, json_object *frame, trajectory_
      * bit, though a matrix to a quaternion and back rounds (quat_matrix) */
     rr_round_trip_representative(k->q, 4, matrix_round_trip, NULL);
     k->p = v3(m[0][3] + 0.0, m[1][3] + 0.0, m[2][3] + 0.0); /* +0 for -0 (matrix_to_quat) */
-    if (!(fabs(k->p.x) <= TRAJECTORY_MAX_ABS && fabs(k->p.y) <= TRAJECTORY_MAX_ABS &&
-          fabs(k->p.z) <= TRAJECTORY_MAX_ABS))
+    if (!(fabs(k->p.x) <= RR_MAX_REACH && fabs(k->p.y) <= RR_MAX_REACH &&
+          fabs(k->p.z) <= RR_MAX_REACH))
         return rr_fail(err, "%s: frames[%zu]: the position is beyond the %g a position may reach", name, i,
-                       TRAJECTORY_MAX_ABS);
+                       RR_MAX_REACH);
     return 0;
 }
 

@@ -84,9 +84,9 @@ static int tum_knot(const double v[8], const char *name, long lineno, trajectory
     for (int i = 0; i < 4; i++)
         k->q[i] = q[i] * s + 0.0;
     for (int i = 1; i <= 3; i++) /* the renderer traces no farther (accel.h), and Log/Exp stay finite */
-        if (!(fabs(v[i]) <= TRAJECTORY_MAX_ABS))
+        if (!(fabs(v[i]) <= RR_MAX_REACH))
             return rr_fail(err, "%s:%ld: field '%s' is %g, beyond the %g a position may reach", name, lineno,
-                           TUM_FIELDS[i], v[i], TRAJECTORY_MAX_ABS);
+                           TUM_FIELDS[i], v[i], RR_MAX_REACH);
     return 0;
 }
 

@@ -16,7 +16,7 @@
  * write one; it is no part of the text). Refuses, naming name, the line
  * and the field (bytes outside printable ASCII as \xHH): a missing or
  * extra field, one that is not a finite number, a position coordinate
- * beyond TRAJECTORY_MAX_ABS, a zero quaternion or one
+ * beyond RR_MAX_REACH, a zero quaternion or one
  * whose length is not 1 within 1e-3 (it is normalised), times that do not
  * increase. out->interp and out->opengl_axes are left as they are. */
 int tum_parse(const char *text, size_t len, const char *name, trajectory *out, rr_error *err);

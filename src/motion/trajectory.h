@@ -62,9 +62,6 @@ typedef struct trajectory { /* (animation.h names it to hold one) */
     char *name; /* the file, for messages (tum_load) */
 } trajectory;
 
-/* The largest position coordinate accepted (the reach accel.h traces). */
-#define TRAJECTORY_MAX_ABS 1e15
-
 /* Control poses a Bezier may have (BAD-Gaussians uses up to about 10). */
 #define TRAJECTORY_MAX_BEZIER 32
 

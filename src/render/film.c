@@ -105,3 +105,22 @@ void image_resolve(const image *img, int samples_per_batch, float *rgba, float *
         samples[i] = (float)img->px[i].batches * (float)samples_per_batch;
     }
 }
+
+int image_planes_resolve(const image *img, int samples_per_batch, image_planes *p)
+{
+    size_t n = (size_t)img->width * img->height;
+    p->rgba = malloc(n * 4 * sizeof *p->rgba), p->var = malloc(n * 4 * sizeof *p->var);
+    p->se = malloc(n * 4 * sizeof *p->se), p->samples = malloc(n * sizeof *p->samples);
+    if (!p->rgba || !p->var || !p->se || !p->samples) {
+        image_planes_free(p);
+        return -1;
+    }
+    image_resolve(img, samples_per_batch, p->rgba, p->var, p->se, p->samples);
+    return 0;
+}
+
+void image_planes_free(image_planes *p)
+{
+    free(p->rgba), free(p->var), free(p->se), free(p->samples);
+    *p = (image_planes){0};
+}

@@ -70,4 +70,16 @@ void image_free(image *img);
 void image_resolve(const image *img, int samples_per_batch, float *rgba, float *variance,
                    float *stderr_rgba, float *samples);
 
+/* An image resolved into its four planes (image_resolve): rgba, var and se
+ * hold 4 floats a pixel, samples 1. Every writer of a final image or
+ * preview takes them from here. */
+typedef struct {
+    float *rgba, *var, *se, *samples;
+} image_planes;
+
+/* Allocates p's planes and resolves img into them; -1, with nothing left
+ * allocated, when memory runs out. */
+int image_planes_resolve(const image *img, int samples_per_batch, image_planes *p);
+void image_planes_free(image_planes *p);
+
 #endif

@@ -39,9 +39,9 @@ int pointmodel_add(pointmodel *m, vec3 c, vec3 u, vec3 v, vec3 n, vec3 color, rr
     if (!v3_finite(c) || !v3_finite(u) || !v3_finite(v) || !v3_finite(n) || !v3_finite(color))
         return rr_fail(err, "splat has a NaN or infinite value");
     double big = fmax(fmax(largest_abs(c), largest_abs(u)), fmax(largest_abs(v), largest_abs(color)));
-    if (big > POINTMODEL_MAX_ABS || largest_abs(n) > POINTMODEL_MAX_ABS)
+    if (big > RR_MAX_REACH || largest_abs(n) > RR_MAX_REACH)
         return rr_fail(err, "splat value %g is out of range (at most %g in magnitude)",
-                       fmax(big, largest_abs(n)), POINTMODEL_MAX_ABS);
+                       fmax(big, largest_abs(n)), RR_MAX_REACH);
     if (m->count == m->capacity && grow(m, err))
         return -1;
     splat_geom *g = &m->geom[m->count];
@@ -63,8 +63,8 @@ int pointmodel_add(pointmodel *m, vec3 c, vec3 u, vec3 v, vec3 n, vec3 color, rr
 
 int pointmodel_add_circle(pointmodel *m, vec3 c, vec3 n, double radius, vec3 color, rr_error *err)
 {
-    if (!(radius > 0) || !(radius <= POINTMODEL_MAX_ABS))
-        return rr_fail(err, "splat radius must be positive and at most %g, got %g", POINTMODEL_MAX_ABS, radius);
+    if (!(radius > 0) || !(radius <= RR_MAX_REACH))
+        return rr_fail(err, "splat radius must be positive and at most %g, got %g", RR_MAX_REACH, radius);
     if (!v3_finite(n) || v3_len(n) == 0)
         return rr_fail(err, "splat normal is zero or not finite");
     vec3 u, v;

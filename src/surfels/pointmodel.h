@@ -27,11 +27,6 @@ void pointmodel_free(pointmodel *m);
  * degenerate ellipse, non-finite input or out-of-memory. */
 int pointmodel_add(pointmodel *m, vec3 c, vec3 u, vec3 v, vec3 n, vec3 color, rr_error *err);
 
-/* Largest coordinate, axis component or color value a splat may have: splats
- * are stored in floats, and squared kernel radii and box extents must stay
- * finite (1e15^2 is far below FLT_MAX = 3.4e38). */
-#define POINTMODEL_MAX_ABS 1e15
-
 /* Appends a circular splat of the given radius perpendicular to n. */
 int pointmodel_add_circle(pointmodel *m, vec3 c, vec3 n, double radius, vec3 color, rr_error *err);
 
