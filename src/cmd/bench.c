@@ -157,7 +157,10 @@ static void *baseline_worker(void *arg)
     baseline_job *job = arg;
     const sampler *smp = &job->rs->smp;
     sampler_scratch ss;
-    sampler_scratch_init(&ss, smp);
+    if (sampler_scratch_init(&ss, smp)) {
+        fprintf(stderr, "refrender-bench: out of memory for the sampler's scratch\n");
+        exit(1);
+    }
     int n = (int)sampler_count(smp); /* the bench sets small counts */
     double *x = malloc(n * sizeof *x), *y = malloc(n * sizeof *y), *t = malloc(n * sizeof *t);
     double *w = malloc(n * sizeof *w); /* the weights: unused, the rays are what is measured */

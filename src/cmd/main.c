@@ -216,7 +216,8 @@ static int check_combinations(const render_options *o, rr_error *err)
     if (o->target_error > 0 && o->batches < 2)
         return rr_fail(err, "--target-error needs --batches >= 2 to estimate the error");
     if (o->max_batches && o->max_batches < o->batches)
-        return rr_fail(err, "--max-batches must be at least --batches");
+        return rr_fail(err, "--max-batches %d must be at least the %d batches every pixel takes first%s", o->max_batches,
+                       o->batches, o->batches_given ? "" : " (--target-error alone takes 4)");
     if (o->passes && o->preview)
         return rr_fail(err, "--preview is not available for --pass renders (merge first)");
     if (o->frames == 2 && (o->passes || o->checkpoint || o->resume))

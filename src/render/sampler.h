@@ -12,7 +12,8 @@
  *   x+1, x^2+x+1 with Joe-Kuo direction numbers) with hash-based Owen
  *   scrambling (Burley 2020, Laine-Karras permutation) seeded per pixel,
  *   dimension and batch: every batch is its own scramble of the first n
- *   points, so power-of-two n keeps it a scrambled (0, m, 3)-net.
+ *   points, so power-of-two n keeps it a scrambled (0, m, 2)-net in (x, y)
+ *   (a (1, m, 3)-net with t), and it is traced in time order.
  * jittered3d: one sample in each cell of a K x K x tspp grid over
  *   (x, y, t): position and time stratified jointly.
  * thesis (Wolf 2008, sec. 4.5): K x K jittered positions; for each, tspp
