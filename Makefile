@@ -40,13 +40,13 @@ LDLIBS   := -ljson-c -lassimp -lembree3 -lOpenEXRCore -lxml2 -ldl -lpthread -lm
 PREVIEW_LIBS := -lOpenImageIO -lOpenImageIO_Util
 
 LIB_SRCS := core/common core/lanes core/inputfile core/atomicfile accel/kbuffer surfels/splat \
-            surfels/pointmodel io/ply gaussians/gaussian io/gaussian_ply gaussians/gaussian_dynamic \
-            io/gaussian_ply_common io/gaussian_stg_ply io/gaussian_fdgs_ply gaussians/gaussian_hit gaussians/gaussian_blend io/camjson io/transforms \
-            surfels/shapes surfels/surfelize io/meshload core/rotation motion/curve motion/trajectory io/tum \
-            motion/animation io/animfile core/camera motion/shutter render/sampler scene/scene io/preview \
+            surfels/pointmodel formats/ply gaussians/gaussian formats/gaussian_ply gaussians/gaussian_dynamic \
+            formats/gaussian_ply_common formats/gaussian_stg_ply formats/gaussian_fdgs_ply gaussians/gaussian_hit gaussians/gaussian_blend formats/camjson formats/transforms \
+            surfels/shapes surfels/surfelize formats/meshload core/rotation motion/curve motion/trajectory formats/tum \
+            motion/animation formats/animfile core/camera motion/shutter render/sampler scene/scene io/preview \
             io/scene_xml io/scene_xml_util io/scene_xml_anim io/scene_xml_camera io/scene_params accel/accel \
             accel/accel_build accel/accel_collide render/gaussian_integrator render/exact \
-            render/exact_integrate render/integrator render/surfel_integrator render/shade render/film render/render splat/frame splat/splatting splat/volumetric io/exr io/output io/render_attrs \
+            render/exact_integrate render/integrator render/surfel_integrator render/shade render/film render/render splat/frame splat/splatting splat/volumetric formats/exr io/output io/render_attrs \
             cmd/cli
 LIB_OBJS := $(LIB_SRCS:%=$(BUILD)/%.o)
 PREVIEW_SO := $(BUILD)/refrender-preview.so

@@ -91,7 +91,7 @@ Schur complement above and positive definite in floating point.
 Refused, besides what is not a 4DGS rot_4d checkpoint: an empty model;
 scales (_scaling, _scaling_t) beyond +-100 (exp of them is no float32, and the
 float64 conversion would lose the other axes); whatever refrender's reader
-(src/io/gaussian_fdgs_ply.c) then refuses: a value beyond float32, t_var or T
+(src/formats/gaussian_fdgs_ply.c) then refuses: a value beyond float32, t_var or T
 that is not above 0 as a float32, a mean beyond 1e15 from the origin, exp(scale)
 beyond 1e15; --force_sh_3d true with a checkpoint whose SH count per channel
 is no (d + 1)^2 (a force_sh_3d model holds (max_sh_degree + 1)^2,
@@ -310,7 +310,7 @@ def first_bad(ok, columns, names, rule):
 
 
 def refrender_rules(columns, values, names):
-    """Refuses what refrender's reader would (src/io/gaussian_fdgs_ply.c store_motion, check_degrees;
+    """Refuses what refrender's reader would (src/formats/gaussian_fdgs_ply.c store_motion, check_degrees;
     gaussian_ply_common.c): each value within float32, t_var above 0 as the float32 it reads, a mean
     within RR_MAX_REACH and exp(scale) within RR_MAX_REACH of the float32 scales."""
     first_bad(np.isfinite(values), columns, names, "is beyond float32")

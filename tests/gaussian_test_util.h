@@ -9,7 +9,7 @@
 #include <stdint.h>
 
 #include "gaussians/gaussian.h"
-#include "io/gaussian_ply.h"
+#include "formats/gaussian_ply.h"
 
 /* The header of an ascii PLY of n vertices with properties names[0..count),
  * through "end_header\n"; skip names one to leave out (NULL: none), extra

@@ -6,7 +6,7 @@
 #include "accel/accel.h"
 #include "accel/accel_internal.h"
 #include "motion/animation.h"
-#include "io/gaussian_ply.h"
+#include "formats/gaussian_ply.h"
 #include "harness.h"
 #include "io/scene_xml.h"
 

@@ -3,7 +3,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "io/animfile.h"
+#include "formats/animfile.h"
 #include "harness.h"
 
 static rr_warnings last_warnings; /* of the last load */

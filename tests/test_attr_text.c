@@ -4,7 +4,7 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "io/exr.h"
+#include "formats/exr.h"
 #include "harness.h"
 #include "io/output.h"
 

@@ -3,7 +3,7 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "io/camjson.h"
+#include "formats/camjson.h"
 #include "harness.h"
 
 #define ROT "[[0, -1, 0], [1, 0, 0], [0, 0, 1]]" /* not symmetric: rows and columns differ */

@@ -24,7 +24,7 @@ each part hostile (the view, the storage, a zip member, a pickled value, a model
 converter under a 2 GiB address-space limit with a timeout, so a converter that hangs or asks for
 gigabytes fails fast. Each must be refused in one line naming the file (bounded in length), exit 1,
 no output; the expectations come from the format (a view's extent, a member's declared size, the
-archive's size) and from refrender's reader (src/io/gaussian_fdgs_ply.c), not from the converter.
+archive's size) and from refrender's reader (src/formats/gaussian_fdgs_ply.c), not from the converter.
 An -o that is the checkpoint, however named, or a FIFO/directory is refused and left as it was;
 a new PLY gets 0666 less the umask, as open(2) gives a new file."""
 import math

@@ -4,7 +4,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-#include "io/exr.h"
+#include "formats/exr.h"
 #include "harness.h"
 
 TEST(exr_round_trip_is_exact_and_keeps_metadata)

@@ -7,10 +7,10 @@
 #include <unistd.h>
 
 #include "gaussians/gaussian.h"
-#include "io/gaussian_ply.h"
+#include "formats/gaussian_ply.h"
 #include "core/inputfile.h"
 #include "core/lanes.h"
-#include "io/ply.h"
+#include "formats/ply.h"
 #include "harness.h"
 
 /* A PLY of one Gaussian per row of vals, with the given property names, in

@@ -14,7 +14,7 @@
 
 #include "gaussians/gaussian.h"
 #include "gaussians/gaussian_dynamic.h"
-#include "io/gaussian_ply.h"
+#include "formats/gaussian_ply.h"
 #include "gaussian_test_util.h"
 #include "harness.h"
 

@@ -9,7 +9,7 @@
 
 #include "motion/animation.h"
 #include "render/gaussian_integrator.h"
-#include "io/gaussian_ply.h"
+#include "formats/gaussian_ply.h"
 #include "io/scene_xml.h"
 #include "harness.h"
 

@@ -5,7 +5,7 @@
 #include <unistd.h>
 
 #include "harness.h"
-#include "io/meshload.h"
+#include "formats/meshload.h"
 
 static const char *write_file(const char *name, const char *text)
 {

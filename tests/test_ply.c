@@ -7,7 +7,7 @@
 
 #include "harness.h"
 #include "core/inputfile.h"
-#include "io/ply.h"
+#include "formats/ply.h"
 
 static const char *tmp_path(const char *name)
 {

@@ -6,7 +6,7 @@
 
 #include "harness.h"
 #include "render/render.h"
-#include "io/gaussian_ply.h"
+#include "formats/gaussian_ply.h"
 #include "io/scene_xml.h"
 
 /* A disk moving across a 32x16 image: two 16x16 tiles, and pixels whose

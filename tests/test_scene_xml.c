@@ -4,7 +4,7 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "io/animfile.h"
+#include "formats/animfile.h"
 #include "harness.h"
 #include "core/inputfile.h"
 #include "io/scene_xml.h"

@@ -12,7 +12,7 @@
 #include "core/camera.h"
 #include "core/rotation.h"
 #include "motion/trajectory.h"
-#include "io/tum.h"
+#include "formats/tum.h"
 #include "harness.h"
 
 static int parse(const char *text, trajectory *tr, rr_error *e)
@@ -318,7 +318,7 @@ TEST(gsplat_interpolation_lerps_the_world_to_camera_translation)
 
 /* ---- nerfstudio transforms.json ---------------------------------------- */
 
-#include "io/transforms.h"
+#include "formats/transforms.h"
 
 #define CAMERA "\"fl_x\": 50, \"fl_y\": 52, \"cx\": 20.5, \"cy\": 14, \"w\": 40, \"h\": 30"
 #define FRAME(t) "{\"file_path\": \"a.png\", " t "\"transform_matrix\": [[1,0,0,1],[0,1,0,2],[0,0,1,3],[0,0,0,1]]}"

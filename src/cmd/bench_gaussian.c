@@ -10,7 +10,7 @@
 
 #include "gaussians/gaussian_dynamic.h"
 #include "render/gaussian_integrator.h"
-#include "io/gaussian_ply.h"
+#include "formats/gaussian_ply.h"
 #include "render/render.h"
 #include "surfels/shapes.h"
 

@@ -16,8 +16,8 @@
 #include "cmd/commands.h"
 #include "io/scene_xml.h"
 #include "core/rotation.h"
-#include "io/transforms.h"
-#include "io/tum.h"
+#include "formats/transforms.h"
+#include "formats/tum.h"
 
 static void export_usage(FILE *f)
 {

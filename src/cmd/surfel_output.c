@@ -3,7 +3,7 @@
 #include <string.h>
 
 #include "cmd/cli.h"
-#include "io/gaussian_ply.h"
+#include "formats/gaussian_ply.h"
 
 const char surfel_output_help[] =
 "  --gaussians K     write Gaussian splats instead, in the official layout of\n"

@@ -5,7 +5,7 @@
 #define RR_SURFEL_OUTPUT_H
 
 #include "gaussians/gaussian.h"
-#include "io/ply.h"
+#include "formats/ply.h"
 
 typedef struct {
     const char *out;

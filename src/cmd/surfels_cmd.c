@@ -7,7 +7,7 @@
 
 #include "cmd/cli.h"
 #include "cmd/commands.h"
-#include "io/meshload.h"
+#include "formats/meshload.h"
 #include "cmd/surfel_output.h"
 #include "surfels/surfelize.h"
 

@@ -8,7 +8,7 @@
 #include <string.h>
 #include <sys/stat.h>
 
-#include "io/exr.h"
+#include "formats/exr.h"
 
 /* What resuming and merging do with an attribute. */
 typedef enum {

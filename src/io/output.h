@@ -13,7 +13,7 @@
 #define RR_OUTPUT_H
 
 #include "core/common.h"
-#include "io/exr.h"
+#include "formats/exr.h"
 #include "render/film.h"
 
 #define ATTR_MAX 48

@@ -12,10 +12,10 @@
 #include <string.h>
 #include <sys/stat.h>
 
-#include "io/animfile.h"
-#include "io/gaussian_ply.h"
+#include "formats/animfile.h"
+#include "formats/gaussian_ply.h"
 #include "core/inputfile.h"
-#include "io/ply.h"
+#include "formats/ply.h"
 #include "surfels/shapes.h"
 
 /* Splats one generator may make. The fuzz build lowers it (Makefile): a

@@ -5,7 +5,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "io/animfile.h"
+#include "formats/animfile.h"
 
 static int parse_linear(xml_ctx *c, xmlNodePtr n, animation *a)
 {

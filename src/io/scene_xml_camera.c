@@ -2,9 +2,9 @@
  * trained model's camera from its cameras.json (camjson.h) at the size it
  * was trained at, with an optional <animation> moving its rest pose
  * rigidly (keyframes, or two cameras.json poses). scenes/README.md. */
-#include "io/camjson.h"
-#include "io/transforms.h"
-#include "io/tum.h"
+#include "formats/camjson.h"
+#include "formats/transforms.h"
+#include "formats/tum.h"
 #include "io/scene_xml_internal.h"
 
 #include <stdlib.h>

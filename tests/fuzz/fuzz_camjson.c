@@ -1,7 +1,7 @@
 /* libFuzzer target: the cameras.json reader (camjson.c, through json-c). */
 #include <stdint.h>
 
-#include "io/camjson.h"
+#include "formats/camjson.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {

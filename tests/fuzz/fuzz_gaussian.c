@@ -2,7 +2,7 @@
  * the generic PLY layer it shares with the surfel reader. */
 #include <stdint.h>
 
-#include "io/gaussian_ply.h"
+#include "formats/gaussian_ply.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {

@@ -1,7 +1,7 @@
 /* libFuzzer target: the surfel PLY reader (ply.c). */
 #include <stdint.h>
 
-#include "io/ply.h"
+#include "formats/ply.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {

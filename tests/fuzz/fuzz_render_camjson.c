@@ -5,7 +5,7 @@
 #include <stdint.h>
 #include <stdio.h>
 
-#include "io/gaussian_ply.h"
+#include "formats/gaussian_ply.h"
 #include "render_check.h"
 
 static void write_model(void)

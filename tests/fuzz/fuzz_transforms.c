@@ -6,7 +6,7 @@
 #include <stdlib.h>
 
 #include "core/camera.h"
-#include "io/transforms.h"
+#include "formats/transforms.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {

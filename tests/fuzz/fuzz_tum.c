@@ -8,7 +8,7 @@
 #include <stdlib.h>
 
 #include "motion/trajectory.h"
-#include "io/tum.h"
+#include "formats/tum.h"
 
 static void check_poses(trajectory *tr)
 {

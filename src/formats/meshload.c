@@ -1,4 +1,4 @@
-#include "io/meshload.h"
+#include "formats/meshload.h"
 
 #include <assimp/cimport.h>
 #include <assimp/postprocess.h>

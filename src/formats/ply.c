@@ -1,4 +1,4 @@
-#include "io/ply.h"
+#include "formats/ply.h"
 
 #include <math.h>
 

@@ -1,4 +1,4 @@
-#include "io/camjson.h"
+#include "formats/camjson.h"
 
 #include <json-c/json.h>
 #include <stdio.h>

@@ -4,8 +4,8 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "io/gaussian_dynamic_ply.h"
-#include "io/gaussian_ply_common.h"
+#include "formats/gaussian_dynamic_ply.h"
+#include "formats/gaussian_ply_common.h"
 
 /* ---- the layout (scripts/convert_4dgs.py's docstring) --------------------- */
 

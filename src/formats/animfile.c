@@ -1,4 +1,4 @@
-#include "io/animfile.h"
+#include "formats/animfile.h"
 
 #include <ctype.h>
 #include <stdarg.h>

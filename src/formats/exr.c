@@ -1,4 +1,4 @@
-#include "io/exr.h"
+#include "formats/exr.h"
 
 #include <limits.h>
 #include <openexr.h>

@@ -10,7 +10,7 @@
 
 #include "gaussians/gaussian.h"
 #include "gaussians/gaussian_dynamic.h"
-#include "io/ply.h"
+#include "formats/ply.h"
 
 /* The part of a reader's sink that ply.h's callbacks need in every layout. */
 typedef struct {

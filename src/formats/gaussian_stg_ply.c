@@ -5,8 +5,8 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "io/gaussian_dynamic_ply.h"
-#include "io/gaussian_ply_common.h"
+#include "formats/gaussian_dynamic_ply.h"
+#include "formats/gaussian_ply_common.h"
 
 /* ---- the layout (ourslite.py:335-359) ---------------------------------- */
 

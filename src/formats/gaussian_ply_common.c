@@ -1,5 +1,5 @@
 /* What the Gaussian PLY readers share (gaussian_ply_common.h). */
-#include "io/gaussian_ply_common.h"
+#include "formats/gaussian_ply_common.h"
 
 #include <math.h>
 #include <stdio.h>

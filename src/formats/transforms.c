@@ -1,11 +1,11 @@
-#include "io/transforms.h"
+#include "formats/transforms.h"
 
 #include <json-c/json.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "core/camera.h"
-#include "io/camjson.h"
+#include "formats/camjson.h"
 #include "core/inputfile.h"
 #include "core/rotation.h"
 

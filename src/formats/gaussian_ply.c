@@ -1,14 +1,14 @@
 /* Gaussian-splat models' PLY files (gaussian_ply.h): the official layout
  * read through the PLY reader's generic layer (ply.h) and written back. */
-#include "io/gaussian_ply.h"
+#include "formats/gaussian_ply.h"
 
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "core/atomicfile.h"
-#include "io/gaussian_dynamic_ply.h"
-#include "io/gaussian_ply_common.h"
+#include "formats/gaussian_dynamic_ply.h"
+#include "formats/gaussian_ply_common.h"
 
 /* ---- the PLY layout --------------------------------------------------- */
 

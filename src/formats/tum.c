@@ -1,4 +1,4 @@
-#include "io/tum.h"
+#include "formats/tum.h"
 
 #include <errno.h>
 #include <stdlib.h>
