@@ -77,3 +77,23 @@ def test_planted_upward_include_is_found(tmp_path):
     assert 'splat/x.c:1: splat/ includes "io/ply.h" from the higher layer io/' in found
     assert 'core/x.c:1: core/ includes "io/ply.h" from the higher layer io/' in found
     assert any('<embree3/rtcore.h>' in f for f in found)
+
+
+def test_planted_format_reaching_up_is_found(tmp_path):
+    """A format that reaches for the scene or the renderer, or a library
+    used outside its folder, is an error; the scene using a format is not."""
+    plants = {'formats/up.c': '#include "scene/scene.h"\n#include "render/render.h"\n',
+              'formats/lib.c': '#include <json-c/json.h>\n#include <openexr.h>\n#include <libxml/tree.h>\n',
+              'io/lib.c': '#include <json-c/json.h>\n',
+              'scene/down.c': '#include "formats/ply.h"\n',
+              'render/down.c': '#include "formats/exr.h"\n'}
+    for name in ('scene/scene.h', 'render/render.h', 'formats/ply.h', 'formats/exr.h'):
+        plants[name] = ''
+    for name, text in plants.items():
+        (tmp_path / name).parent.mkdir(exist_ok=True)
+        (tmp_path / name).write_text(text)
+    assert sorted(violations(tmp_path)) == [
+        'formats/lib.c:3: includes <libxml/tree.h>, which only io/ may use',
+        'formats/up.c:1: formats/ includes "scene/scene.h" from the higher layer scene/',
+        'formats/up.c:2: formats/ includes "render/render.h" from the higher layer render/',
+        'io/lib.c:1: includes <json-c/json.h>, which only formats/ may use']
