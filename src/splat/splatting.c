@@ -106,13 +106,8 @@ static int splat_buckets(splat_frame *f, const splat_settings *set, int buckets,
     return rc;
 }
 
-static int check_scene(const scene *s, const splat_settings *set, rr_error *err)
+static int check_scene(const scene *s, rr_error *err)
 {
-    /* the kernels stretch along each splat's own world velocity: a moving
-     * camera would need the velocity relative to it, which sec. 3.6.3
-     * does not treat */
-    if (set->method == SPLAT_VOLUMETRIC && scene_camera_moves(s))
-        return rr_fail(err, "%s: the camera moves: volumetric kernels are built for a still camera", s->path);
     for (int i = 0; i < s->nobjects; i++)
         if (s->objects[i].kind != OBJECT_POINTS)
             return rr_fail(err, "%s: object '%s' is %s: refrender splat renders point models (surfels) only", s->path,
@@ -126,7 +121,7 @@ static int check_scene(const scene *s, const splat_settings *set, rr_error *err)
 int splat_render(const scene *s, const splat_settings *set, splat_result *out, rr_error *err)
 {
     memset(out, 0, sizeof *out);
-    if (check_scene(s, set, err))
+    if (check_scene(s, err))
         return -1;
     splat_frame f;
     size_t n = (size_t)s->cam.width * s->cam.height;

@@ -8,7 +8,7 @@
 /* ---- the kernel of one splat at one instant (Appendix C) ----------------- */
 
 typedef struct {
-    vec3 c, n, vel;         /* centre, unit plane normal, instantaneous velocity (world) */
+    vec3 c, n, vel;         /* centre, unit plane normal, velocity relative to the camera (world axes) */
     vec3 shading_n, color;  /* object-space shading normal (world after xform_normal), colour */
     double S0[3][3];        /* the still splat's covariance a0 a0^T + a1 a1^T + (1e-3 r)^2 n n^T */
     double S[3][3], Si[3][3]; /* S = S0 + w w^T and its inverse */
@@ -50,25 +50,59 @@ static vec3 mat_vec(const double m[3][3], vec3 v)
               m[2][0] * v.x + m[2][1] * v.y + m[2][2] * v.z);
 }
 
+/* One object at instant t: its transform there and at t -+ h, and the
+ * camera at the three times (cam NULL for a still camera). */
+typedef struct {
+    xform xf, before, after;
+    double h;
+    const camera_view *cam; /* [0] at t, [1] at t - h, [2] at t + h */
+} instant_motion;
+
+/* The centre's velocity relative to the camera, in world coordinates at t:
+ * v_rel = R_c2w(t) d/dt[W2C(t) p(t)], the motion that moves the splat's
+ * image (sec. 3.6.3 stretches the kernel along "the motion"; thesis eq.
+ * 3.6 lets the camera's parameters vary in time, and the image of a still
+ * splat under a moving camera is the image of the splat moving the other
+ * way under a still one). Both derivatives are central differences of the
+ * paths over t -+ h, as the splat's own velocity always was: the error is
+ * O(h^2) of the paths' third derivative, and the rounding of 1e-16 |p| in
+ * v's numerator puts 1e-16 |p| dt / h = 1e-12 |p| into the kernel's axis
+ * w = v dt sigma_t / sigma for h = 1e-4 dt, far below any extent. A still
+ * camera takes the world velocity as before (bit for bit). */
+static vec3 relative_velocity(const instant_motion *m, vec3 c)
+{
+    vec3 pb = xform_point(&m->before, c), pa = xform_point(&m->after, c);
+    if (!m->cam)
+        return v3_scale(v3_sub(pa, pb), 0.5 / m->h);
+    vec3 vel = v3(0, 0, 0);
+    for (int j = 0; j < 3; j++) {
+        double before = v3_dot(m->cam[1].axis[j], v3_sub(pb, m->cam[1].position));
+        double after = v3_dot(m->cam[2].axis[j], v3_sub(pa, m->cam[2].position));
+        vel = v3_add(vel, v3_scale(m->cam[0].axis[j], (after - before) * 0.5 / m->h));
+    }
+    return vel;
+}
+
 /* Sec. 3.6.3 and App. C: the splat's 2D Gaussian convolved with a 1D
- * Gaussian along its instantaneous velocity is the Gaussian of the summed
+ * Gaussian along its instantaneous velocity (relative to the camera, as
+ * relative_velocity says) is the Gaussian of the summed
  * covariances (exact on the CPU; the GPU eigen-solver of C.2 failed):
  * S = a0 a0^T + a1 a1^T + w w^T, w = v dt sigma_t / sigma (dt the slice the
  * kernel stands for, sigma_t in units of |v| dt, sigma the kernel sigma in
  * radii, so that the 1D Gaussian's standard deviation is sigma_t |v| dt).
  * (1e-3 r)^2 n n^T keeps S invertible when v is 0 or in the plane: C.3.1
  * and C.3.2's epsilon n. Returns 0 for a kernel that cannot be inverted. */
-static int make_kernel(const scene_object *o, size_t i, const xform *xf, const xform *before, const xform *after,
-                       double h, double dt, double sigma_t, double sigma, kernel *k)
+static int make_kernel(const scene_object *o, size_t i, const instant_motion *m, double dt, double sigma_t,
+                       double sigma, kernel *k)
 {
+    const xform *xf = &m->xf;
     const splat_geom *g = &o->model.geom[i];
     vec3 u, v, c = v3(g->center[0], g->center[1], g->center[2]);
     splat_geom_axes(g, &u, &v);
     u = xform_vector(xf, u), v = xform_vector(xf, v);
     k->c = xform_point(xf, c);
     k->n = v3_normalize(v3_cross(u, v));
-    /* instantaneous velocity: central difference of the centre's path */
-    k->vel = v3_scale(v3_sub(xform_point(after, c), xform_point(before, c)), 0.5 / h);
+    k->vel = relative_velocity(m, c);
     k->w = v3_scale(k->vel, dt * sigma_t / sigma);
     double r = fmax(v3_len(u), v3_len(v));
     for (int a = 0; a < 3; a++)
@@ -207,19 +241,21 @@ static void instant_pass(splat_frame *f, const splat_settings *set, double t, do
 {
     splat_frame_clear(f);
     splat_visibility_pass(f, t); /* per instant, of the 2D splats (sec. 4.1.2) */
-    camera_view v;
-    scene_camera_view(f->sc, t, &v);
-    double h = 1e-4 * dt;
+    camera_view cam[3]; /* at t, t - h, t + h */
+    instant_motion m = {.h = 1e-4 * dt, .cam = scene_camera_moves(f->sc) ? cam : NULL};
+    scene_camera_view(f->sc, t, &cam[0]);
+    scene_camera_view(f->sc, t - m.h, &cam[1]), scene_camera_view(f->sc, t + m.h, &cam[2]);
     size_t n = (size_t)f->width * f->height;
     for (size_t i = 0; i < n; i++)
         b->num[i] = b->den[i] = 0;
     for (int j = 0; j < f->sc->nobjects; j++) {
         const scene_object *o = &f->sc->objects[j];
-        xform xf = animation_at(&o->anim, t), before = animation_at(&o->anim, t - h), after = animation_at(&o->anim, t + h);
+        m.xf = animation_at(&o->anim, t), m.before = animation_at(&o->anim, t - m.h);
+        m.after = animation_at(&o->anim, t + m.h);
         for (size_t i = 0; i < o->model.count; i++) {
             kernel k;
-            if (make_kernel(o, i, &xf, &before, &after, h, dt, set->sigma_t, f->sc->kernel_sigma, &k))
-                kernel_pass(f, &v, &k, ak, b);
+            if (make_kernel(o, i, &m, dt, set->sigma_t, f->sc->kernel_sigma, &k))
+                kernel_pass(f, &cam[0], &k, ak, b);
         }
     }
     for (size_t i = 0; i < n; i++)
