@@ -32,7 +32,7 @@ static void to_blur_space(blur_space blur, double rgba[4])
  * weights; here the times are drawn from a(t) instead (render.c's
  * batch_samples), the same expectation without a ratio that is 0/0 for a
  * batch that drew only times of zero weight. The weights left are the
- * sampler's (its shifted time strata, sampler.h): never all 0, and summing
+ * sampler's (its random time halves with error bars, sampler.c): never all 0, and summing
  * to the count whenever each time stratum holds one sample, when the ratio
  * is the plain unbiased mean; dividing by their sum keeps a pixel of one
  * constant colour exactly that colour in every batch. */

@@ -89,7 +89,7 @@ typedef struct {
     int *perm;
     uint64_t *taken; /* thesis: bitset of the strata taken by the current ray */
     sampler_time_key *keys; /* sobol: the batch's points by time */
-    double *points;         /* sobol: x, y, t, w of each point before the sort */
+    double *points;         /* sobol: x, y, w of each point before the sort (its t is in its key) */
 } sampler_scratch;
 
 int sampler_scratch_init(sampler_scratch *sc, const sampler *s);
