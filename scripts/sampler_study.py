@@ -84,11 +84,8 @@ def render(scene, out, args, cpu=None):
         cpu[0] += cpu_seconds() - start_cpu
     if proc.returncode:
         sys.exit(f"sampler_study.py: {' '.join(cmd)} failed:\n{proc.stderr.strip()}")
-    ch, spec, header = imagecompare.read_channels(out, unassociated_alpha=False)
-    rgb = np.stack([ch[c] for c in "RGB"], axis=-1).astype(np.float64)
-    if spec.width != spec.full_width or spec.height != spec.full_height:  # a crop: its own pixels
-        rgb = rgb[:spec.height, :spec.width]
-    return rgb, seconds, header
+    ch, _, header = imagecompare.read_channels(out, unassociated_alpha=False)  # a crop: its data window
+    return np.stack([ch[c] for c in "RGB"], axis=-1).astype(np.float64), seconds, header
 
 
 def pair_error(scene, out, args, cpu=None):
