@@ -96,11 +96,6 @@ class Progress:
         progress(f"{label}: done{error}; {elapsed:.0f} s elapsed, about {left:.0f} s left")
 
 
-def fit_slope(samples, rmse):
-    slope, intercept = np.polyfit(np.log(samples), np.log(rmse), 1)
-    return slope, intercept
-
-
 def plot(rows, path):
     import matplotlib
     matplotlib.use("Agg")
@@ -173,7 +168,7 @@ def main(argv=None):
         w.writeheader()
         w.writerows(rows)
     plot(rows, os.path.join(a.out, "convergence.png"))
-    fits = {s: fit_slope([r["samples"] for r in rows if r["sampler"] == s], [r["rmse"] for r in rows if r["sampler"] == s])
+    fits = {s: imagecompare.loglog_fit([r["samples"] for r in rows if r["sampler"] == s], [r["rmse"] for r in rows if r["sampler"] == s])
             for s in dict.fromkeys(r["sampler"] for r in rows)}
     base = "thesis" if "thesis" in fits else next(iter(fits))
     spp, tspp = split(a.baseline)

@@ -12,6 +12,8 @@ Images are read with OpenImageIO and converted to linear float RGB. Metrics
   FLIP   = mean of the per-pixel LDR-FLIP map (flip.py)
   HDR-FLIP = mean of the per-pixel HDR-FLIP map (flip.py)
 """
+import math
+
 import numpy as np
 import OpenImageIO as oiio
 
@@ -162,6 +164,17 @@ def ssim_map(ref, test, peak=1.0):
     _, full = structural_similarity(r, t, channel_axis=-1, data_range=peak, gaussian_weights=True,
                                     sigma=1.5, use_sample_covariance=False, full=True)
     return full.mean(axis=-1)
+
+
+def loglog_fit(counts, errors):
+    """(slope, intercept) of the least-squares line of log error against
+    log count, over the errors above 0 (an exact 0 has no logarithm); NaNs
+    without two of them."""
+    pts = [(math.log(c), math.log(e)) for c, e in zip(counts, errors) if e > 0]
+    if len(pts) < 2:
+        return float("nan"), float("nan")
+    slope, intercept = np.polyfit([p[0] for p in pts], [p[1] for p in pts], 1)
+    return float(slope), float(intercept)
 
 
 def stderr_fraction(se, ref, test, valid, k):

@@ -100,15 +100,6 @@ def split(view_args, n):
     return (1, n) if "point" in view_args else (4, max(1, n // 4))
 
 
-def fit_line(counts, errors):
-    """(slope, intercept) of log error against log samples; NaNs without two errors above 0."""
-    pts = [(math.log(c), math.log(e)) for c, e in zip(counts, errors) if e > 0]
-    if len(pts) < 2:
-        return float("nan"), float("nan")
-    slope, intercept = np.polyfit([p[0] for p in pts], [p[1] for p in pts], 1)
-    return float(slope), float(intercept)
-
-
 def samples_for(level, line):
     """Samples per pixel the fitted line reaches `level` at (rounded; '' without a fit)."""
     slope, intercept = line
@@ -154,7 +145,7 @@ def convergence_table(rows):
             if not sel:
                 continue
             cells = [cell(sel[c]["error_levels"], best[c]) if c in sel else "" for c in counts]
-            line = fit_line(list(sel), [r["error_levels"] for r in sel.values()])
+            line = imagecompare.loglog_fit(list(sel), [r["error_levels"] for r in sel.values()])
             lines.append(f"| {view} | {sampler} | " + " | ".join(cells) +
                          f" | {line[0]:.2f} | {sel[counts[-1]]['seconds'] if counts[-1] in sel else ''} | "
                          f"{samples_for(1, line)} / {samples_for(0.1, line)} |")
@@ -201,7 +192,7 @@ def time_table(rows):
     measure, its CPU seconds over 2 are an idle 2-core machine's to within the threads'
     1.8-2.0x (BENCH.md, Measurements)."""
     counts = [r["samples"] for r in rows]
-    line = fit_line(counts, [r["error_levels"] for r in rows])
+    line = imagecompare.loglog_fit(counts, [r["error_levels"] for r in rows])
     cost = np.polyfit(counts, [r["cpu_seconds"] for r in rows], 1)
     lines = ["| samples per pixel | error (8-bit levels) | CPU seconds | 2-core seconds |", "|---|---|---|---|"]
     lines += [f"| {r['samples']} | {r['error_levels']:.3g} | {r['cpu_seconds']} | {r['cpu_seconds'] / 2:.0f} |"
