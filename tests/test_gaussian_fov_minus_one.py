@@ -13,8 +13,10 @@ cull at view depth 0.2 (an opaque Gaussian at 0.19 stays invisible) and the SH d
 The BVH must find every pixel the pinned footprint reaches: under a camera that turns and travels
 (transforms.json) while the Gaussians move (<linear>), row r of a sharp frame under a `lines`
 rolling shutter is the reference at the instant r / (H - 1), brute force over all Gaussians and
-pixels; the view is wide (the pinned focal 3 times the camera's), where a reach of the camera's own
-Jacobian is too short (tests/test_gaussian_hit.c shows that for the bounds). On a camera of N3V's
+pixels; the view is wide and flat (the pinned focal 4 times the camera's), where a reach of the
+camera's own Jacobian is too short: boxes built with gaussian_view_stretch instead of the pinned
+stretch miss 11 pixels of this test (planted in accel_build.c; tests/test_gaussian_hit.c shows the
+same for the bounds themselves). On a camera of N3V's
 shape the mode changes the image by about what GAUSSIANS.md reports between refrender and the
 official images (0.24-0.47). 2D models refuse it."""
 import json
@@ -76,7 +78,9 @@ def test_a_sharp_render_is_the_rasterizer_handed_fov_minus_one(tmp_path, turn, t
 
 
 # ---- moving camera and moving Gaussians: the swept reach -------------------------------------------
-MW, MH, MF = 40, 40, 9.0        # a wide view: the pinned focal 0.915 W = 36.6 is 4 times MF
+# A wide, flat view: the pinned focal 0.915 W = 36.6 is 4 times MF, and the pinned Jacobian stretches
+# 1.6 times as far as the camera's own could (gaussian_view_stretch: the image's width dominates both)
+MW, MH, MF = 40, 12, 9.0
 TURN = 8.0                      # degrees about the camera's y axis over the shutter
 TRAVEL = np.array([0.12, -0.05, 0.08])
 VELOCITY = np.array([-0.1, 0.06, 0.03])  # the object's <linear> velocity, per unit of time
@@ -116,8 +120,8 @@ def pinned_widest(W, H):
     return d / np.linalg.norm(d)
 
 
-def moving_model(seed, n=40):
-    """Gaussians over the whole view and just beyond its edges at depths 1.5 to 4: half of them
+def moving_model(seed, n=60):
+    """Gaussians over the whole view and just beyond its edges at depths 2.5 to 4: half of them
     ellipsoids 1 to 3 pixels wide (under the camera's focal length), half needles (scales s, s/100,
     s/100) along the pinned Jacobian's widest direction at mid-shutter, opacity 0.99, whose footprints
     reach farther than the camera's own Jacobian could stretch them."""
@@ -141,7 +145,7 @@ def moving_model(seed, n=40):
 
 
 def test_a_moving_camera_and_moving_gaussians_find_every_pinned_footprint_pixel(tmp_path):
-    model = moving_model(5)
+    model = moving_model(6)
     ply = tmp_path / "m.ply"
     gsply.write(ply, model)
     read = gsply.read(ply)
