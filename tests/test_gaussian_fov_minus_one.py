@@ -3,7 +3,8 @@ transforms.json camera with fl_x, fl_y, cx, cy (N3V/DyNeRF), whose rasterizer is
 (scene/dataset_readers.py:275-293, gaussian_renderer/__init__.py:34-35): sharp renders against
 tests/gs3d_raster_reference.py with rasterizer_tan_fov = (tan(-0.5), tan(-0.5)), written from that
 commit's CUDA (rasterizer_impl.cu:235-236, forward.cu:206-216) without reading refrender's C. Every
-pixel within 1e-4, as test_gaussian_raster.py (float CUDA against double arithmetic: the reference
+pixel within 1e-4 (a converted 4DGS checkpoint too, against tests/fdgs_reference.py handed the same),
+as test_gaussian_raster.py (float CUDA against double arithmetic: the reference
 is float64, refrender double with float storage).
 
 What must change is the footprint (its Jacobian pinned: the reference with the camera's own tan_fov,
@@ -31,6 +32,8 @@ from gsply import rotation
 from conftest import read_exr, run, sharp_gaussian_render
 from test_gaussian_raster import BACKGROUND, TOL, assert_matches, cameras_json, random_model
 from test_gs2d_filter_reach import quat_of
+import fdgs_reference as fdgs
+import test_fdgs as fdgs_test
 
 PINNED = (math.tan(-0.5), math.tan(-0.5))
 SEMANTICS = "3dgs-fov-minus-one"
@@ -75,6 +78,26 @@ def test_a_sharp_render_is_the_rasterizer_handed_fov_minus_one(tmp_path, turn, t
     finally:
         ref.INRIA_NEAR = near
     assert np.abs(uncut - expect).max() > 100 * TOL
+
+
+def test_a_4dgs_checkpoint_is_the_official_renderer_on_an_n3v_camera(tmp_path):
+    """A real-time 4DGS checkpoint (tests/test_fdgs.py's: moving, fading, degree-3 4D SH) through the
+    converter, sharp instants against tests/fdgs_reference.py handed tan(-0.5): what train.py showed
+    while training on N3V."""
+    W, H = 64, 48
+    R, C, f = fdgs_test.camera(W, H)
+    capture = fdgs_test.mixed_capture()
+    convention = fdgs.CONVENTIONS[0]
+    scene = fdgs_test.write_scene(tmp_path, capture, convention, R, C, f, W, H, BACKGROUND)
+    scene.write_text(scene.read_text().replace("<gaussianModel ", f'<gaussianModel semantics="{SEMANTICS}" '))
+    for t in fdgs_test.SHARP_TIMES[:2]:
+        img = read_exr(fdgs_test.render(scene, tmp_path / f"sharp{t}.exr", "--time", t))[0]
+        expect, final_t = fdgs.render_instant(capture, t, convention, fdgs_test.TIME_DURATION, R, C, f, f, W, H,
+                                              BACKGROUND, rasterizer_tan_fov=PINNED)
+        assert_matches(img, expect, final_t)
+        camera_own = fdgs.render_instant(capture, t, convention, fdgs_test.TIME_DURATION, R, C, f, f, W, H,
+                                         BACKGROUND)[0]
+        assert np.abs(camera_own - expect).max() > 100 * TOL
 
 
 # ---- moving camera and moving Gaussians: the swept reach -------------------------------------------
