@@ -258,10 +258,11 @@ static void needle_at_its_reach(gaussian_model *m, const camera_view *v, unsigne
     *x = v->fx * rx + v->cx + u * ax + (uniform(st) - 0.5), *y = v->fy * ry + v->cy + u * ay + (uniform(st) - 0.5);
 }
 
-/* The four rasterizer semantics (3DGRT has no screen footprint). */
-static const gaussian_formation raster_formations[4] = {GAUSSIAN_FORMATION_3DGS, GAUSSIAN_FORMATION_3DGS_ANTIALIASED,
-                                                        GAUSSIAN_FORMATION_GSPLAT,
-                                                        GAUSSIAN_FORMATION_GSPLAT_ANTIALIASED};
+/* The five rasterizer semantics (3DGRT has no screen footprint). */
+enum { RASTER_FORMATIONS = 5 };
+static const gaussian_formation raster_formations[RASTER_FORMATIONS] = {
+    GAUSSIAN_FORMATION_3DGS, GAUSSIAN_FORMATION_3DGS_ANTIALIASED, GAUSSIAN_FORMATION_GSPLAT,
+    GAUSSIAN_FORMATION_GSPLAT_ANTIALIASED, GAUSSIAN_FORMATION_3DGS_FOV_MINUS_ONE};
 
 /* A 100 x 80 camera at the origin with its principal point off the centre
  * (a transforms.json camera's): anywhere in the middle 90% of the image. */
@@ -275,7 +276,7 @@ static camera_view off_centre_view(unsigned *st)
 /* With the principal point off the centre, the cull's reach
  * (gaussian_view_stretch) and the bounds hold the wider clamp: the cull
  * never drops a hit and every hit lies in its bounds, for needles beyond
- * either clamp at the edge of their footprints under the four rasterizer
+ * either clamp at the edge of their footprints under the five rasterizer
  * semantics. */
 TEST(gaussian_3d_raster_culls_and_bounds_hold_an_off_centre_principal_point)
 {
@@ -286,7 +287,7 @@ TEST(gaussian_3d_raster_culls_and_bounds_hold_an_off_centre_principal_point)
         camera_view v = off_centre_view(&st);
         gaussian_model one;
         model_of(&one, 1, GAUSSIAN_3D);
-        one.formation = raster_formations[trial % 4];
+        one.formation = raster_formations[trial % RASTER_FORMATIONS];
         for (int k = 0; k < 400; k++) {
             double x, y;
             vec3 p;
@@ -299,7 +300,8 @@ TEST(gaussian_3d_raster_culls_and_bounds_hold_an_off_centre_principal_point)
             hits += hit, dropped += hit && !kept;
             far_out += hit && fmax(fabs(mean.x / mean.z) * v.fx / 50, fabs(mean.y / mean.z) * v.fy / 40) > 1.3;
             if (hit) {
-                gaussian_view_bound vb = {v3_len(mean), fmin(v.fx, v.fy), gaussian_view_stretch(&v), 0, v3(0, 0, 1), 0};
+                gaussian_view_bound vb = {v3_len(mean), fmin(v.fx, v.fy), gaussian_view_stretch_of(one.formation, &v), 0,
+                                          v3(0, 0, 1), 0};
                 outside += !inside(gaussian_view_bounds(&one, 0, &vb), v3_scale(dir, h.t));
             }
         }
@@ -392,7 +394,7 @@ TEST(gaussian_3d_cull_in_lanes_is_the_scalar_cull_under_an_off_centre_principal_
         camera_view v = off_centre_view(&st);
         gaussian_model one, batch;
         model_of(&one, 1, GAUSSIAN_3D), model_of(&batch, N, GAUSSIAN_3D);
-        one.formation = batch.formation = raster_formations[trial % 4];
+        one.formation = batch.formation = raster_formations[trial % RASTER_FORMATIONS];
         double x = 100 * uniform(&st), y = 80 * uniform(&st);
         gaussian_ray r;
         gaussian_ray_init(&r, &v, &id, x, y, v3(0, 0, 0), v3_normalize(v3((x - v.cx) / v.fx, (y - v.cy) / v.fy, 1)));
