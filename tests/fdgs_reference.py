@@ -206,13 +206,15 @@ def fdgs_at(capture, t, convention, time_duration, campos, sh_degree=None, sh_de
 
 
 def render_instant(capture, t, convention, time_duration, R_c2w, C, fx, fy, W, H, background=(0.0, 0.0, 0.0),
-                   **variant):
+                   rasterizer_tan_fov=None, **variant):
     """The sharp image at timestamp t (pixel centres, Inria's rasterizer without tiles): (image
-    (H, W, 3), final T (H, W)). variant: fdgs_at's keyword arguments (degrees, planted errors)."""
+    (H, W, 3), final T (H, W)). variant: fdgs_at's keyword arguments (degrees, planted errors).
+    rasterizer_tan_fov: the (tanfovx, tanfovy) the rasterizer is handed, (tan(-0.5), tan(-0.5)) for
+    a transforms.json camera with fl_x (gs3d_raster_reference.py); None: the camera's own."""
     model = fdgs_at(capture, t, convention, time_duration, C, **variant)
     if len(model["opacity"]) == 0:
         return np.broadcast_to(np.asarray(background, np.float64), (H, W, 3)).copy(), np.ones((H, W))
-    return raster.render(model, R_c2w, C, fx, fy, W, H, background, "inria")
+    return raster.render(model, R_c2w, C, fx, fy, W, H, background, "inria", rasterizer_tan_fov=rasterizer_tan_fov)
 
 
 def cut_crossings(capture, convention, t0, t1, prefilter_var=-1.0):

@@ -109,6 +109,24 @@ Principal point (cx, cy), arguments of project() and render()
   r = n (W - cx)/fx, l = -n cx/fx, is 1 - 2 cx/W, the opposite sign:
   3DGS never builds one, and the extension does not use that formula.)
 
+The FoV handed to the rasterizer (rasterizer_tan_fov=(tanfovx, tanfovy), INRIA variants only)
+  FDGS = fudan-zvg/4d-gaussian-splatting at 63725f21 (its own copy of the
+  rasterizer, diff-gaussian-rasterization/cuda_rasterizer/). Its reader sets
+  FovX = FovY = -1 for a transforms.json camera with fl_x, fl_y, cx, cy
+  (scene/dataset_readers.py:275-293) and the renderer hands the rasterizer
+  tanfovx = tan(FoVx * 0.5), tanfovy likewise (gaussian_renderer/
+  __init__.py:34-35): tan(-0.5). The rasterizer's focal_x = W / (2 tanfovx),
+  focal_y = H / (2 tanfovy) (rasterizer_impl.cu:235-236) reach only
+  computeCov2D (forward.cu:451), which clamps with limx = 1.3 tanfovx as
+  min(limx, max(-limx, x/z)) (forward.cu:206-211; with limx < 0 that is limx
+  for every x/z) and builds J from focal_x, focal_y and the clamped t
+  (:213-216). The mean is projected by the full projection matrix built from
+  the true fl_x, fl_y (forward.cu:446-448, scene/cameras.py:66-67), so
+  point_image uses the true fx, fy here; in_frustum reads only the view
+  depth (auxiliary.h:153); the radius follows from this cov2D (forward.cu:
+  464-467); the SH direction is mean - camera centre. rasterizer_tan_fov=None:
+  tanfovx = W / (2 fx), as above.
+
 Dilation, antialiasing
   INRIA: det_cov = det(cov) BEFORE, cov += 0.3 I, det = det AFTER
   (forward.cu:215-219); antialiasing: opacity *= sqrt(max(2.5e-5,
@@ -334,7 +352,17 @@ def world_covariance(model, n):
     return Rq @ np.diag(s * s) @ Rq.T
 
 
-def project(model, R_c2w, C, fx, fy, W, H, variant="inria", cx=None, cy=None, inria_off_centre_extension=False):
+def handed_jacobian(tan_fov, x, y, z, W, H):
+    """The rasterizer's focal lengths and clamped (t.x/z, t.y/z) when it is handed tan_fov =
+    (tanfovx, tanfovy) (FDGS rasterizer_impl.cu:235-236, forward.cu:206-211), as written: min(limx,
+    max(-limx, x/z)) with limx = 1.3 tanfovx, whatever its sign."""
+    tanx, tany = tan_fov
+    limx, limy = 1.3 * tanx, 1.3 * tany
+    return W / (2.0 * tanx), H / (2.0 * tany), min(limx, max(-limx, x / z)), min(limy, max(-limy, y / z))
+
+
+def project(model, R_c2w, C, fx, fy, W, H, variant="inria", cx=None, cy=None, inria_off_centre_extension=False,
+            rasterizer_tan_fov=None):
     """Per Gaussian, what the preprocess step produces. Returns a list (index order) of dicts, or
     None where the Gaussian is culled whatever the tiling. Keys: index, depth (view z), xy (the
     mean in the variant's own 2D coordinates), pix_offset (0 for INRIA's pixel-index pixf, 0.5 for
@@ -347,6 +375,8 @@ def project(model, R_c2w, C, fx, fy, W, H, variant="inria", cx=None, cy=None, in
     inria_off_centre_extension=True (this reference's extension, not Inria's code; the GSPLAT
     variants ignore the flag)."""
     family, aa, _ = VARIANTS[variant]
+    if rasterizer_tan_fov is not None and family != "inria":
+        raise ValueError("rasterizer_tan_fov is an INRIA rasterizer's argument, not gsplat's")
     cx, cy = principal_point(family, W, H, cx, cy, inria_off_centre_extension)
     R_c2w, C = np.asarray(R_c2w, np.float64), np.asarray(C, np.float64)
     Rw2c = R_c2w.T
@@ -361,8 +391,12 @@ def project(model, R_c2w, C, fx, fy, W, H, variant="inria", cx=None, cy=None, in
             out.append(None)
             continue
         sigma_c = Rw2c @ world_covariance(model, n) @ Rw2c.T
-        txz, tyz = jacobian_tangents(family, x, y, z, fx, fy, W, H, cx, cy)
-        J = np.array([[fx / z, 0.0, -fx * txz / z], [0.0, fy / z, -fy * tyz / z]])
+        if rasterizer_tan_fov is None:
+            jfx, jfy = fx, fy
+            txz, tyz = jacobian_tangents(family, x, y, z, fx, fy, W, H, cx, cy)
+        else:
+            jfx, jfy, txz, tyz = handed_jacobian(rasterizer_tan_fov, x, y, z, W, H)
+        J = np.array([[jfx / z, 0.0, -jfx * txz / z], [0.0, jfy / z, -jfy * tyz / z]])
         raw = J @ sigma_c @ J.T
         raw = 0.5 * (raw + raw.T)
         det0 = raw[0, 0] * raw[1, 1] - raw[0, 1] * raw[1, 0]
@@ -429,7 +463,7 @@ def project(model, R_c2w, C, fx, fy, W, H, variant="inria", cx=None, cy=None, in
 
 
 def render(model, R_c2w, C, fx, fy, W, H, background, variant="inria", tile_rule=False, cx=None, cy=None,
-           inria_off_centre_extension=False):
+           inria_off_centre_extension=False, rasterizer_tan_fov=None):
     """Render (H, W) pixels of model (dict as tests/gsply.py read() returns) through the camera
     (R_c2w: columns x right, y down, z forward; centre C; principal point (cx, cy) in pixel-edge
     coordinates, the image centre when None -- see project() for the INRIA variants off centre).
@@ -437,8 +471,8 @@ def render(model, R_c2w, C, fx, fy, W, H, background, variant="inria", tile_rule
     if variant not in VARIANTS:
         raise ValueError("variant must be one of %s" % sorted(VARIANTS))
     family, _, alpha_max = VARIANTS[variant]
-    gs = [g for g in project(model, R_c2w, C, fx, fy, W, H, variant, cx, cy, inria_off_centre_extension)
-          if g is not None]
+    gs = [g for g in project(model, R_c2w, C, fx, fy, W, H, variant, cx, cy, inria_off_centre_extension,
+                             rasterizer_tan_fov) if g is not None]
     if tile_rule:
         gs = [g for g in gs if g["tiles"] is not None]
     gs.sort(key=lambda g: (g["depth"], g["index"]))

@@ -258,10 +258,11 @@ static void needle_at_its_reach(gaussian_model *m, const camera_view *v, unsigne
     *x = v->fx * rx + v->cx + u * ax + (uniform(st) - 0.5), *y = v->fy * ry + v->cy + u * ay + (uniform(st) - 0.5);
 }
 
-/* The four rasterizer semantics (3DGRT has no screen footprint). */
-static const gaussian_formation raster_formations[4] = {GAUSSIAN_FORMATION_3DGS, GAUSSIAN_FORMATION_3DGS_ANTIALIASED,
-                                                        GAUSSIAN_FORMATION_GSPLAT,
-                                                        GAUSSIAN_FORMATION_GSPLAT_ANTIALIASED};
+/* The five rasterizer semantics (3DGRT has no screen footprint). */
+enum { RASTER_FORMATIONS = 5 };
+static const gaussian_formation raster_formations[RASTER_FORMATIONS] = {
+    GAUSSIAN_FORMATION_3DGS, GAUSSIAN_FORMATION_3DGS_ANTIALIASED, GAUSSIAN_FORMATION_GSPLAT,
+    GAUSSIAN_FORMATION_GSPLAT_ANTIALIASED, GAUSSIAN_FORMATION_3DGS_FOV_MINUS_ONE};
 
 /* A 100 x 80 camera at the origin with its principal point off the centre
  * (a transforms.json camera's): anywhere in the middle 90% of the image. */
@@ -275,7 +276,7 @@ static camera_view off_centre_view(unsigned *st)
 /* With the principal point off the centre, the cull's reach
  * (gaussian_view_stretch) and the bounds hold the wider clamp: the cull
  * never drops a hit and every hit lies in its bounds, for needles beyond
- * either clamp at the edge of their footprints under the four rasterizer
+ * either clamp at the edge of their footprints under the five rasterizer
  * semantics. */
 TEST(gaussian_3d_raster_culls_and_bounds_hold_an_off_centre_principal_point)
 {
@@ -286,7 +287,7 @@ TEST(gaussian_3d_raster_culls_and_bounds_hold_an_off_centre_principal_point)
         camera_view v = off_centre_view(&st);
         gaussian_model one;
         model_of(&one, 1, GAUSSIAN_3D);
-        one.formation = raster_formations[trial % 4];
+        one.formation = raster_formations[trial % RASTER_FORMATIONS];
         for (int k = 0; k < 400; k++) {
             double x, y;
             vec3 p;
@@ -299,7 +300,8 @@ TEST(gaussian_3d_raster_culls_and_bounds_hold_an_off_centre_principal_point)
             hits += hit, dropped += hit && !kept;
             far_out += hit && fmax(fabs(mean.x / mean.z) * v.fx / 50, fabs(mean.y / mean.z) * v.fy / 40) > 1.3;
             if (hit) {
-                gaussian_view_bound vb = {v3_len(mean), fmin(v.fx, v.fy), gaussian_view_stretch(&v), 0, v3(0, 0, 1), 0};
+                gaussian_view_bound vb = {v3_len(mean), fmin(v.fx, v.fy), gaussian_view_stretch_of(one.formation, &v), 0,
+                                          v3(0, 0, 1), 0};
                 outside += !inside(gaussian_view_bounds(&one, 0, &vb), v3_scale(dir, h.t));
             }
         }
@@ -308,6 +310,71 @@ TEST(gaussian_3d_raster_culls_and_bounds_hold_an_off_centre_principal_point)
     printf("    hits %ld (beyond 1.3 tan(fov/2) %ld): dropped by the cull %ld, outside their bounds %ld\n", hits,
            far_out, dropped, outside);
     CHECK(hits > 5000 && far_out > 1000);
+    CHECK(dropped == 0 && outside == 0);
+}
+
+/* 3dgs-fov-minus-one: the rasterizer handed FoV = -1 (4d-gaussian-splatting
+ * 63725f21, GAUSSIANS.md) builds J = diag(a, b) / z [[1, 0, -t], [0, 1, -t]]
+ * with a = W / (2 tan(-0.5)), b = H / (2 tan(-0.5)), t = 1.3 tan(-0.5)
+ * (rasterizer_impl.cu:235-236, forward.cu:206-216), whatever the camera's
+ * focal length and the mean's x/z. A needle (scales s, s/100, s/100) along
+ * J's widest direction J^T u (u the top eigenvector of J J^T), opacity 1,
+ * anywhere in a wide view (fx = 30 for W = 100: the pinned focal 91.5 is
+ * three times the camera's, as N3V's is 1.7 times), reached by rays
+ * toward its footprint's edge (up to 1.15 x 3.33 sigma): the cull never
+ * drops a hit and every hit lies in the bounds of the pinned stretch; the
+ * camera's own stretch (the other semantics') misses some. */
+static void needle_along_the_pinned_jacobian(gaussian_model *m, const camera_view *v, unsigned *st, double *x,
+                                             double *y)
+{
+    double tn = tan(-0.5), a = v->width / (2 * tn), b = v->height / (2 * tn), t = 1.3 * tn;
+    /* J J^T z^2 = [[a^2 (1 + t^2), a b t^2], [a b t^2, b^2 (1 + t^2)]]: its top eigenvector u */
+    double p = a * a * (1 + t * t), q = a * b * t * t, r = b * b * (1 + t * t);
+    double lam = 0.5 * (p + r) + sqrt(0.25 * (p - r) * (p - r) + q * q), ux = q, uy = lam - p;
+    double z = 0.3 + 3.7 * uniform(st), rx = 3 * (uniform(st) - 0.5), ry = 2.4 * (uniform(st) - 0.5);
+    vec3 d = v3_normalize(v3(a * ux, b * uy, -t * (a * ux + b * uy))); /* J^T u */
+    double q4[4] = {1 + d.x, 0, -d.z, d.y}, len = sqrt(q4[0] * q4[0] + q4[2] * q4[2] + q4[3] * q4[3]);
+    double s = (0.3 + 5 * uniform(st)) * z / v->fx;
+    for (int k = 0; k < 4; k++)
+        m->rotation[k] = (float)(q4[k] / len);
+    m->scale[0] = (float)s, m->scale[1] = m->scale[2] = (float)(s / 100);
+    m->mean[0] = (float)(rx * z), m->mean[1] = (float)(ry * z), m->mean[2] = (float)z;
+    m->opacity[0] = 1.0f;
+    double ax = a * (d.x - t * d.z) / z * s, ay = b * (d.y - t * d.z) / z * s; /* the major sigma, pixels */
+    double u = 1.15 * uniform(st) * 3.33;
+    *x = v->fx * rx + v->cx + u * ax + (uniform(st) - 0.5), *y = v->fy * ry + v->cy + u * ay + (uniform(st) - 0.5);
+}
+
+TEST(gaussian_3d_fov_minus_one_culls_and_bounds_hold_the_pinned_footprint)
+{
+    xform id = {{{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}, {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}, {0, 0, 0}, 0};
+    camera_view v = {v3(0, 0, 0), {v3(1, 0, 0), v3(0, 1, 0), v3(0, 0, 1)}, 30, 30, 50, 40, 100, 80};
+    gaussian_model one;
+    model_of(&one, 1, GAUSSIAN_3D);
+    one.formation = GAUSSIAN_FORMATION_3DGS_FOV_MINUS_ONE;
+    unsigned st = 61;
+    long hits = 0, dropped = 0, outside = 0, outside_camera_stretch = 0;
+    for (int k = 0; k < 40000; k++) {
+        double x, y;
+        vec3 p;
+        needle_along_the_pinned_jacobian(&one, &v, &st, &x, &y);
+        vec3 mean = v3(one.mean[0], one.mean[1], one.mean[2]), dir = v3_normalize(v3((x - v.cx) / v.fx, (y - v.cy) / v.fy, 1));
+        gaussian_ray r;
+        gaussian_ray_init(&r, &v, &id, x, y, v3(0, 0, 0), dir);
+        gaussian_hit h;
+        int kept = gaussian_cull(&one, 0, &r, &p), hit = gaussian_hit_after_cull(&one, 0, GAUSSIAN_ORDER_CENTER_DEPTH, &r, p, &h);
+        hits += hit, dropped += hit && !kept;
+        if (hit) {
+            gaussian_view_bound vb = {v3_len(mean), fmin(v.fx, v.fy), gaussian_view_stretch_of(one.formation, &v), 0, v3(0, 0, 1), 0};
+            outside += !inside(gaussian_view_bounds(&one, 0, &vb), v3_scale(dir, h.t));
+            vb.stretch = gaussian_view_stretch(&v);
+            outside_camera_stretch += !inside(gaussian_view_bounds(&one, 0, &vb), v3_scale(dir, h.t));
+        }
+    }
+    gaussian_model_free(&one);
+    printf("    hits %ld: dropped by the cull %ld, outside their bounds %ld (%ld with the camera's stretch)\n", hits,
+           dropped, outside, outside_camera_stretch);
+    CHECK(hits > 10000 && outside_camera_stretch > 100);
     CHECK(dropped == 0 && outside == 0);
 }
 
@@ -327,7 +394,7 @@ TEST(gaussian_3d_cull_in_lanes_is_the_scalar_cull_under_an_off_centre_principal_
         camera_view v = off_centre_view(&st);
         gaussian_model one, batch;
         model_of(&one, 1, GAUSSIAN_3D), model_of(&batch, N, GAUSSIAN_3D);
-        one.formation = batch.formation = raster_formations[trial % 4];
+        one.formation = batch.formation = raster_formations[trial % RASTER_FORMATIONS];
         double x = 100 * uniform(&st), y = 80 * uniform(&st);
         gaussian_ray r;
         gaussian_ray_init(&r, &v, &id, x, y, v3(0, 0, 0), v3_normalize(v3((x - v.cx) / v.fx, (y - v.cy) / v.fy, 1)));

@@ -167,7 +167,7 @@ def test_3dgrt_is_kept_under_its_name_and_differs_from_the_rasterizer(tmp_path):
 
 
 @pytest.mark.parametrize("attrs,why", [
-    ('kind="3dgs" semantics="2dgs"', "semantics for a 3D model must be 3dgs, 3dgs-antialiased, gsplat"),
+    ('kind="3dgs" semantics="2dgs"', "semantics for a 3D model must be 3dgs, 3dgs-antialiased, 3dgs-fov-minus-one, gsplat"),
     ('kind="2dgs" semantics="3dgs"', "semantics for a 2D model must be 2dgs, 2dgs-center-near or 2dgs-unit-circle"),
     ('kind="3dgs" semantics="3dgrt" tileRule="on"', "3DGRT traces rays and has no tiles"),
     ('kind="3dgs" tileRule="yes"', "tileRule must be on or off"),

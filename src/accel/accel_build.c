@@ -138,7 +138,7 @@ static void gaussian_footprint_for(accel *a, unsigned obj, double open, double c
     camera_view v;
     camera_view_rest(&s->cam, &v);
     f->focal = fmin(v.fx, v.fy);
-    f->stretch = gaussian_view_stretch(&v);
+    f->stretch = gaussian_view_stretch_of(gaussian_formation_of(&o->gaussians), &v);
     double largest = 0;
     for (size_t i = 0; i < 3 * o->gaussians.count; i++)
         largest = fmax(largest, o->gaussians.scale[i]);

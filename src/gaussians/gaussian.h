@@ -32,6 +32,7 @@ typedef enum {
                                           * near skip as 2DGS_CENTER_NEAR's */
     GAUSSIAN_FORMATION_3DGS,             /* diff-gaussian-rasterization: EWA, +0.3 dilation */
     GAUSSIAN_FORMATION_3DGS_ANTIALIASED, /* the same with its `antialiasing` opacity compensation */
+    GAUSSIAN_FORMATION_3DGS_FOV_MINUS_ONE, /* the same handed FoV = -1 (4DGS's N3V cameras): the Jacobian pinned */
     GAUSSIAN_FORMATION_GSPLAT,           /* nerfstudio gsplat, rasterize_mode classic */
     GAUSSIAN_FORMATION_GSPLAT_ANTIALIASED,
     GAUSSIAN_FORMATION_3DGRT             /* ray traced (nv-tlabs/3dgrut, kernel degree 2) */

@@ -24,17 +24,20 @@ typedef struct {
     int tiles_cut;     /* the tile rule can cut a tail: inria's 3-sigma radius; gsplat's box of
                         * sqrt(2 ln(255 o)) sigma per axis holds every alpha >= 1/255 */
     int clamp_at_edges; /* the Jacobian's clamp (jacobian_clamp): gsplat's, past each image edge */
+    int fov_minus_one;  /* the Jacobian as the rasterizer handed FoV = -1 computes it (pinned_jacobian) */
 } raster_rules;
 
-static const raster_rules inria_rules = {0.2, INFINITY, 0.3, 0.99, 0, 0.0, 1, 0};
-static const raster_rules inria_aa_rules = {0.2, INFINITY, 0.3, 0.99, 1, 2.5e-5, 1, 0};
-static const raster_rules gsplat_rules = {0.01, 1e10, 0.3, 0.999, 0, 0.0, 0, 1};
-static const raster_rules gsplat_aa_rules = {0.01, 1e10, 0.3, 0.999, 1, 0.0, 0, 1};
+static const raster_rules inria_rules = {0.2, INFINITY, 0.3, 0.99, 0, 0.0, 1, 0, 0};
+static const raster_rules inria_aa_rules = {0.2, INFINITY, 0.3, 0.99, 1, 2.5e-5, 1, 0, 0};
+static const raster_rules inria_fov_minus_one_rules = {0.2, INFINITY, 0.3, 0.99, 0, 0.0, 1, 0, 1};
+static const raster_rules gsplat_rules = {0.01, 1e10, 0.3, 0.999, 0, 0.0, 0, 1, 0};
+static const raster_rules gsplat_aa_rules = {0.01, 1e10, 0.3, 0.999, 1, 0.0, 0, 1, 0};
 
 static const raster_rules *raster_rules_of(gaussian_formation f)
 {
     switch (f) {
     case GAUSSIAN_FORMATION_3DGS_ANTIALIASED: return &inria_aa_rules;
+    case GAUSSIAN_FORMATION_3DGS_FOV_MINUS_ONE: return &inria_fov_minus_one_rules;
     case GAUSSIAN_FORMATION_GSPLAT: return &gsplat_rules;
     case GAUSSIAN_FORMATION_GSPLAT_ANTIALIASED: return &gsplat_aa_rules;
     default: return &inria_rules;
@@ -77,6 +80,46 @@ double gaussian_view_stretch(const camera_view *v)
     return sqrt(1.0 + lx * lx + ly * ly) * rr_fmax(v->fx, v->fy) / rr_fmin(v->fx, v->fy);
 }
 
+/* fudan-zvg/4d-gaussian-splatting (63725f21) gives a transforms.json camera
+ * with fl_x, fl_y, cx, cy FovX = FovY = -1 (scene/dataset_readers.py:
+ * 275-293), which its rasterizer gets as tanfovx = tanfovy = tan(-0.5)
+ * (gaussian_renderer/__init__.py:34-35): focal_x = W / (2 tanfovx),
+ * focal_y = H / (2 tanfovy) (diff-gaussian-rasterization/cuda_rasterizer/
+ * rasterizer_impl.cu:235-236), and computeCov2D's min(limx, max(-limx,
+ * t.x/t.z)) with limx = 1.3 tanfovx < 0 is limx whatever t.x/t.z
+ * (forward.cu:206-211). Nothing else reads them: the mean is projected by
+ * the true projection matrix (forward.cu:446-448), in_frustum tests only
+ * the view depth (auxiliary.h:153), the SH direction is camera -> mean
+ * (forward.cu:480-482); the tile radius follows from this cov2D
+ * (forward.cu:464-467). tan(-0.5), written out: */
+#define FOV_MINUS_ONE_TAN (-0.54630248984379051326)
+
+/* The pinned Jacobian's focal lengths (negative, as the CUDA's: cov2D
+ * only sees their squares) and its clamped t.x/t.z = t.y/t.z. */
+static void pinned_jacobian(int width, int height, double *fx, double *fy, double *t)
+{
+    *fx = width / (2.0 * FOV_MINUS_ONE_TAN), *fy = height / (2.0 * FOV_MINUS_ONE_TAN);
+    *t = RASTER_CLAMP * FOV_MINUS_ONE_TAN;
+}
+
+/* The pinned Jacobian J = diag(fx, fy) / z [[1, 0, -t], [0, 1, -t]] has
+ * |J|^2 <= max(fx, fy)^2 (1 + 2 t^2) / z^2 (the largest eigenvalue of I +
+ * (t, t)(t, t)^T is 1 + 2 t^2): gaussian_view_stretch's bound with these
+ * focal lengths and clamps, over the true camera's smaller focal length,
+ * which turns pixels about the mean's (truly projected) image into
+ * lengths at its depth. */
+static double pinned_stretch(const camera_view *v)
+{
+    double fx, fy, t;
+    pinned_jacobian(v->width, v->height, &fx, &fy, &t);
+    return sqrt(1.0 + 2.0 * t * t) * rr_fmax(fabs(fx), fabs(fy)) / rr_fmin(v->fx, v->fy);
+}
+
+double gaussian_view_stretch_of(gaussian_formation f, const camera_view *v)
+{
+    return f == GAUSSIAN_FORMATION_3DGS_FOV_MINUS_ONE ? pinned_stretch(v) : gaussian_view_stretch(v);
+}
+
 void gaussian_ray_init(gaussian_ray *r, const camera_view *view, const xform *xf, double x, double y, vec3 org,
                        vec3 dir)
 {
@@ -100,6 +143,7 @@ void gaussian_ray_init(gaussian_ray *r, const camera_view *view, const xform *xf
             col2[j] += xf->r[k][j] * xf->r[k][j];
     r->scale = sqrt(rr_fmax(col2[0], rr_fmax(col2[1], col2[2]))) * (1 + 1e-9);
     r->stretch = gaussian_view_stretch(view);
+    r->stretch_fov_minus_one = pinned_stretch(view);
 }
 
 /* The rotation of a unit quaternion (w, x, y, z), row-major. */
@@ -346,7 +390,8 @@ static int in_2dgs_tiles(const gaussian_ray *r, const double row[3][3], double c
     LANES_TARGET_##T static inline lanes_mask_##T cull_3d_##T(const gaussian_ray *r, const raster_rules *rules, \
                                                               const T p[3], T s)                               \
     {                                                                                                          \
-        T F = rr_fmax(r->fx, r->fy) * s * r->scale * r->stretch, X, Y;                                         \
+        double stretch = rules->fov_minus_one ? r->stretch_fov_minus_one : r->stretch;                         \
+        T F = rr_fmax(r->fx, r->fy) * s * r->scale * stretch, X, Y;                                            \
         scaled_image_offset_##T(r, p, &X, &Y);                                                                 \
         lanes_mask_##T within =                                                                                \
             X * X + Y * Y <= RASTER_REACH2 * (F * F + rules->dilation * p[2] * p[2]) * RASTER_REACH2_SLACK;    \
@@ -574,6 +619,24 @@ int gaussian_filter_centre_2d(const gaussian_model *m, size_t i, const gaussian_
     return g.filtered;
 }
 
+/* The focal lengths and the clamped x/z, y/z of the EWA Jacobian at
+ * camera-space p: the camera's, clamped (jacobian_clamp), or the pinned
+ * ones of a rasterizer handed FoV = -1 (pinned_jacobian). */
+static void jacobian_at(const raster_rules *rules, const gaussian_ray *r, vec3 p, double *fx, double *fy, double *tx,
+                        double *ty)
+{
+    if (rules->fov_minus_one) {
+        pinned_jacobian(r->width, r->height, fx, fy, tx);
+        *ty = *tx;
+        return;
+    }
+    double negx, posx, negy, posy;
+    jacobian_clamp(rules, r->width, r->fx, r->cx, &negx, &posx);
+    jacobian_clamp(rules, r->height, r->fy, r->cy, &negy, &posy);
+    *fx = r->fx, *fy = r->fy;
+    *tx = rr_fmin(posx, rr_fmax(-negx, p.x / p.z)), *ty = rr_fmin(posy, rr_fmax(-negy, p.y / p.z));
+}
+
 /* The 3D rasterizers' image of Gaussian i at the ray's pixel (forward.cu
  * preprocessCUDA, computeCov2D, renderCUDA): cov2D = J W Sigma W^T J^T
  * with J at the mean's clamped x/z, y/z; + dilation on the diagonal;
@@ -587,12 +650,10 @@ static int raster_alpha(const gaussian_model *m, size_t i, const raster_rules *r
     const float *s = &m->scale[3 * i];
     double dx, dy;
     image_offset(r, p, &dx, &dy); /* (the cheap and sure reach test is cull_3d_raster's, run first) */
-    double R[3][3], negx, posx, negy, posy;
-    jacobian_clamp(rules, r->width, r->fx, r->cx, &negx, &posx);
-    jacobian_clamp(rules, r->height, r->fy, r->cy, &negy, &posy);
+    double R[3][3], jx, jy, tx, ty;
+    jacobian_at(rules, r, p, &jx, &jy, &tx, &ty);
     quaternion_matrix(&m->rotation[4 * i], R);
-    double tx = rr_fmin(posx, rr_fmax(-negx, p.x / p.z)), ty = rr_fmin(posy, rr_fmax(-negy, p.y / p.z));
-    vec3 j0 = v3(r->fx / p.z, 0, -r->fx * tx / p.z), j1 = v3(0, r->fy / p.z, -r->fy * ty / p.z);
+    vec3 j0 = v3(jx / p.z, 0, -jx * tx / p.z), j1 = v3(0, jy / p.z, -jy * ty / p.z);
     double c00 = 0, c01 = 0, c11 = 0;
     for (int a = 0; a < 3; a++) { /* column a of L = M R S, through J */
         vec3 col = v3_scale(cam_vector(r->m, v3(R[0][a], R[1][a], R[2][a])), s[a]);

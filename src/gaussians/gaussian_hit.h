@@ -97,6 +97,7 @@ typedef struct {
     double fx, fy, cx, cy;
     int width, height; /* the image's (the rasterizers' tiles) */
     double stretch;    /* gaussian_view_stretch of the camera */
+    double stretch_fov_minus_one; /* the same for 3dgs-fov-minus-one (gaussian_view_stretch_of) */
     double x, y;       /* the ray's raster position */
     vec3 eye;          /* the camera centre, object space */
     vec3 org, dir;     /* the ray, object space (dir: the world unit direction, so t is world distance) */
@@ -193,6 +194,10 @@ double gaussian_filter_near(double min_scale, double max_scale);
  * widest clamp (gsplat's: 0.3 tan(fov / 2) past the farther image edge
  * from the principal point). */
 double gaussian_view_stretch(const camera_view *v);
+/* The stretch under formation f: gaussian_view_stretch, or for
+ * 3dgs-fov-minus-one its pinned Jacobian's, whose focal lengths are the
+ * image's size / (2 tan(-0.5)) whatever the camera's. */
+double gaussian_view_stretch_of(gaussian_formation f, const camera_view *v);
 
 /* How far from the mean (object space) a ray can pass and still get alpha
  * >= 1/255 through a footprint drawn on the screen: 2DGS's low-pass

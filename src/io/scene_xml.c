@@ -363,7 +363,7 @@ static int parse_gaussian_formation(xml_ctx *c, xmlNodePtr n, gaussian_model *m)
     if (got && gaussian_formation_parse(text, m->kind, &m->formation))
         return xml_fail(c, n, "gaussianModel semantics for a %s model must be %s, got '%s'",
                         m->kind == GAUSSIAN_3D ? "3D" : "2D",
-                        m->kind == GAUSSIAN_3D ? "3dgs, 3dgs-antialiased, gsplat, gsplat-antialiased or 3dgrt"
+                        m->kind == GAUSSIAN_3D ? "3dgs, 3dgs-antialiased, 3dgs-fov-minus-one, gsplat, gsplat-antialiased or 3dgrt"
                                                : "2dgs, 2dgs-center-near or 2dgs-unit-circle", text);
     got = xml_attr_text(c, n, "tileRule", text, sizeof text);
     if (got < 0)
