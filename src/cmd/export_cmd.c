@@ -224,7 +224,7 @@ static void write_model(FILE *f, const scene_object *o)
         fputs("{\"gaussians\": {\"file\": ", f);
         json_string(f, o->model_file);
         /* a renderer reading the export must know the Gaussians move on their own (the file says how) */
-        const char *motion = !m->dynamic ? "none" : m->dynamic->kind == GAUSSIAN_DYNAMIC_FDGS ? "4dgs" : "stg-lite";
+        const char *motion = gaussian_dynamic_name(m);
         fprintf(f, ", \"kind\": \"%s\"", m->kind == GAUSSIAN_3D ? "3dgs" : "2dgs");
         const char *key[GAUSSIAN_IMAGING_FIELDS], *value[GAUSSIAN_IMAGING_FIELDS];
         gaussian_imaging(m, o->order, key, value);
