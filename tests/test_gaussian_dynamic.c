@@ -18,7 +18,7 @@
 #include "core/inputfile.h"
 #include "gaussians/gaussian.h"
 #include "core/rotation.h"
-#include "gaussians/gaussian_dynamic.h"
+#include "gaussians/gaussian_stg.h"
 #include "formats/gaussian_ply.h"
 #include "formats/gaussian_dynamic_ply.h"
 #include "io/scene_xml.h"
@@ -205,8 +205,7 @@ static void alloc_model(gaussian_model *m, size_t n)
 {
     gaussian_model_init(m);
     m->kind = GAUSSIAN_3D, m->sh_degree = 0, m->sh_coeffs = 1;
-    CHECK(gaussian_model_alloc(m, n) == 0 && (m->dynamic = gaussian_dynamic_alloc(n)) != NULL);
-    m->rgb_precomputed = 1;
+    CHECK(gaussian_model_alloc(m, n) == 0 && (m->dynamic = gaussian_stg_alloc(n)) != NULL);
     m->count = n;
 }
 
@@ -216,7 +215,7 @@ static void alloc_model(gaussian_model *m, size_t n)
  * 3 a double root, 4 a parabola with its vertex inside. */
 static void random_gaussian(gaussian_model *m, size_t i, uint64_t *s, int kind)
 {
-    gaussian_dynamic *d = m->dynamic;
+    gaussian_stg *d = gaussian_stg_of(m);
     d->trbf_center[i] = (float)lcg_uniform(s, 0, 1);
     d->trbf_scale[i] = (float)lcg_uniform(s, -3, 1);
     m->opacity[i] = (float)lcg_uniform(s, 0.01, 0.99);
@@ -248,8 +247,8 @@ static void random_gaussian(gaussian_model *m, size_t i, uint64_t *s, int kind)
  * 2^11 times below the bound's padding). */
 static long double exact_coordinate(const gaussian_model *m, size_t i, int k, double t)
 {
-    const float *mo = &m->dynamic->motion[9 * i];
-    long double D = (long double)t - m->dynamic->trbf_center[i];
+    const float *mo = &gaussian_stg_of(m)->motion[9 * i];
+    long double D = (long double)t - gaussian_stg_of(m)->trbf_center[i];
     return m->mean[3 * i + k] + D * (mo[k] + D * (mo[3 + k] + D * (long double)mo[6 + k]));
 }
 
@@ -278,8 +277,8 @@ static int bounds_hold(const gaussian_model *m, size_t i, double t0, double t1, 
     }
     /* tightness: the nearest step to an interior extremum is dt/2 away,
      * where p falls by at most max|p''| dt^2 / 8; plus the padding */
-    const float *mo = &m->dynamic->motion[9 * i];
-    double R = fmax(fabs(t0 - m->dynamic->trbf_center[i]), fabs(t1 - m->dynamic->trbf_center[i])), dt = (t1 - t0) / steps;
+    const float *mo = &gaussian_stg_of(m)->motion[9 * i];
+    double R = fmax(fabs(t0 - gaussian_stg_of(m)->trbf_center[i]), fabs(t1 - gaussian_stg_of(m)->trbf_center[i])), dt = (t1 - t0) / steps;
     for (int k = 0; k < 3; k++) {
         double curv = 2 * fabs(mo[3 + k]) + 6 * fabs(mo[6 + k]) * R;
         double M = fabs(m->mean[3 * i + k]) + fabs(mo[k]) * R + fabs(mo[3 + k]) * R * R + fabs(mo[6 + k]) * R * R * R;
@@ -305,7 +304,7 @@ TEST(motion_bounds_hold_20000_steps_of_the_path)
     double slack = -INFINITY;
     for (size_t i = 0; i < n; i++) {
         random_gaussian(&m, i, &seed, (int)(i % 5));
-        double c = m.dynamic->trbf_center[i], t0 = c + lcg_uniform(&seed, -1.2, 0.2), t1 = t0 + lcg_uniform(&seed, 0, 1.4);
+        double c = gaussian_stg_of(&m)->trbf_center[i], t0 = c + lcg_uniform(&seed, -1.2, 0.2), t1 = t0 + lcg_uniform(&seed, 0, 1.4);
         if (i % 50 == 7)
             t1 = t0; /* an instant */
         failures += !bounds_hold(&m, i, t0, t1, &slack);
@@ -460,7 +459,7 @@ static int box_holds(aabb outer, aabb inner)
 static void random_turning_gaussian(gaussian_model *m, size_t i, uint64_t *s)
 {
     random_gaussian(m, i, s, (int)(i % 5));
-    gaussian_dynamic *d = m->dynamic;
+    gaussian_stg *d = gaussian_stg_of(m);
     double size = i % 7 == 3 ? 0 : i % 7 == 5 ? 3e-13 : 1;
     for (int k = 0; k < 4; k++)
         d->rot[4 * i + k] = (float)(size * lcg_uniform(s, -1, 1)), d->omega[4 * i + k] = (float)lcg_uniform(s, -3, 3);
@@ -490,7 +489,7 @@ TEST(a_moving_gaussians_box_holds_its_reach_at_20000_times_of_the_shutter)
         m.formation = (gaussian_formation)kinds[f];
         for (size_t i = 0; i < n; i++) {
             random_turning_gaussian(&m, i, &seed);
-            double c = m.dynamic->trbf_center[i], t0 = c + lcg_uniform(&seed, -1.2, 0.2), t1 = t0 + lcg_uniform(&seed, 0, 1.4);
+            double c = gaussian_stg_of(&m)->trbf_center[i], t0 = c + lcg_uniform(&seed, -1.2, 0.2), t1 = t0 + lcg_uniform(&seed, 0, 1.4);
             double lo[3], hi[3], omax;
             CHECK(gaussian_dynamic_bounds(&m, i, t0, t1, lo, hi, &omax) == 0);
             /* the camera 40 units from the origin: the distance is its farthest from the box */

@@ -13,7 +13,7 @@
 #include <string.h>
 
 #include "gaussians/gaussian.h"
-#include "gaussians/gaussian_dynamic.h"
+#include "gaussians/gaussian_fdgs.h"
 #include "formats/gaussian_ply.h"
 #include "gaussian_test_util.h"
 #include "harness.h"
@@ -82,7 +82,7 @@ TEST(a_4dgs_gaussian_at_t_is_the_official_rules_worked_by_hand)
     CHECK(parse_rows(&r, 1, &m, &e) == 0 && m.dynamic && m.count == 1 && m.kind == GAUSSIAN_3D);
     if (!m.dynamic)
         return;
-    CHECK(m.dynamic->kind == GAUSSIAN_DYNAMIC_FDGS && m.dynamic->time_duration == 2 && m.sh_coeffs == 1);
+    CHECK(m.dynamic->ops == &gaussian_fdgs_ops && gaussian_fdgs_of(&m)->time_duration == 2 && m.sh_coeffs == 1);
     const double Ds[2] = {0.25, -0.5};
     for (int s = 0; s < 2; s++) {
         double D = Ds[s];
@@ -151,7 +151,7 @@ TEST(a_4dgs_colour_is_the_4d_sh_from_the_canonical_mean)
     CHECK(parse_rows(&r, 1, &m, &e) == 0);
     if (!m.dynamic)
         return;
-    CHECK(m.sh_degree == 3 && m.sh_coeffs == 48 && m.dynamic->sh_degree_t == 2);
+    CHECK(m.sh_degree == 3 && m.sh_coeffs == 48 && gaussian_fdgs_of(&m)->sh_degree_t == 2);
     vec3 eye = v3(1 - 0.6, 2 - 0.8, 3); /* the canonical mean from it: (0.6, 0.8, 0), unit */
     float dir[3];
     gaussian_dynamic_view_dir(&m, 0, eye, dir);
@@ -180,19 +180,19 @@ static void random_model(gaussian_model *m, size_t n, uint64_t *s)
 {
     gaussian_model_init(m);
     m->kind = GAUSSIAN_3D, m->sh_degree = 0, m->sh_coeffs = 1;
-    CHECK(gaussian_model_alloc(m, n) == 0 && (m->dynamic = gaussian_dynamic_alloc_fdgs(n)) != NULL);
-    m->dynamic->time_duration = 1, m->dynamic->sh_degree_t = 0;
+    CHECK(gaussian_model_alloc(m, n) == 0 && (m->dynamic = gaussian_fdgs_alloc(n)) != NULL);
+    gaussian_fdgs_of(m)->time_duration = 1, gaussian_fdgs_of(m)->sh_degree_t = 0;
     for (size_t i = 0; i < n; i++) {
         double off = i % 3 == 2 ? 1000 : 3, speed = i % 3 == 1 ? 60 : 1;
         for (int k = 0; k < 3; k++) {
             m->mean[3 * i + k] = (float)lcg_uniform(s, -off, off);
-            m->dynamic->velocity[3 * i + k] = (float)lcg_uniform(s, -speed, speed);
+            gaussian_fdgs_of(m)->velocity[3 * i + k] = (float)lcg_uniform(s, -speed, speed);
             m->scale[3 * i + k] = 0.1f, m->sh[3 * i + (size_t)k] = 0;
         }
         m->rotation[4 * i] = 1, m->rotation[4 * i + 1] = m->rotation[4 * i + 2] = m->rotation[4 * i + 3] = 0;
         m->opacity[i] = (float)lcg_uniform(s, 0.01, 0.99);
-        m->dynamic->t_center[i] = (float)lcg_uniform(s, -1, 1);
-        m->dynamic->t_var[i] = (float)exp(lcg_uniform(s, -8, 1));
+        gaussian_fdgs_of(m)->t_center[i] = (float)lcg_uniform(s, -1, 1);
+        gaussian_fdgs_of(m)->t_var[i] = (float)exp(lcg_uniform(s, -8, 1));
     }
     m->count = n;
 }
@@ -216,16 +216,16 @@ static int fdgs_bounds_hold(const gaussian_model *m, size_t i, double t0, double
         ok &= st.opacity <= omax;
         drawn |= st.opacity > 0;
         for (int k = 0; k < 3; k++) {
-            long double x = m->mean[3 * i + k] + ((long double)t - m->dynamic->t_center[i]) * m->dynamic->velocity[3 * i + k];
+            long double x = m->mean[3 * i + k] + ((long double)t - gaussian_fdgs_of(m)->t_center[i]) * gaussian_fdgs_of(m)->velocity[3 * i + k];
             ok &= st.mean[k] >= lo[k] && st.mean[k] <= hi[k] && x >= lo[k] && x <= hi[k];
             smin[k] = fmin(smin[k], st.mean[k]), smax[k] = fmax(smax[k], st.mean[k]);
         }
     }
     *cut_all += omax == 0;
     ok &= omax > 0 || !drawn;
-    double R = fmax(fabs(t0 - m->dynamic->t_center[i]), fabs(t1 - m->dynamic->t_center[i]));
+    double R = fmax(fabs(t0 - gaussian_fdgs_of(m)->t_center[i]), fabs(t1 - gaussian_fdgs_of(m)->t_center[i]));
     for (int k = 0; k < 3; k++) {
-        double vel = fabs(m->dynamic->velocity[3 * i + k]);
+        double vel = fabs(gaussian_fdgs_of(m)->velocity[3 * i + k]);
         double explained = 16 * DBL_EPSILON * (fabs(m->mean[3 * i + k]) + vel * R);
         *slack = fmax(*slack, fmax(smin[k] - lo[k], hi[k] - smax[k]) - explained);
     }
@@ -241,7 +241,7 @@ TEST(fdgs_bounds_hold_20000_steps_of_the_path)
     int failures = 0, cut_all = 0;
     double slack = -INFINITY;
     for (size_t i = 0; i < n; i++) {
-        double c = m.dynamic->t_center[i], t0 = c + lcg_uniform(&seed, -3, 1), t1 = t0 + lcg_uniform(&seed, 0, 2);
+        double c = gaussian_fdgs_of(&m)->t_center[i], t0 = c + lcg_uniform(&seed, -3, 1), t1 = t0 + lcg_uniform(&seed, 0, 2);
         if (i % 50 == 7)
             t1 = t0; /* an instant */
         failures += !fdgs_bounds_hold(&m, i, t0, t1, &slack, &cut_all);

@@ -433,3 +433,52 @@ TEST(gaussian_model_elements_and_their_errors)
     CHECK(fails_with(xml, "exactly one pointModel, gaussianModel or sphere"));
     unlink(ply);
 }
+
+/* Each object kind is a row (scene_object_row): a scene with a point
+ * model, a sphere and a Gaussian model asks each the same questions. The
+ * sphere's bounds are its centre +- radius and its rest sphere itself; the
+ * splats' rest sphere holds both splats' discs (centre +- radius along
+ * the plane), the Gaussian model's bounds its mean; the counts are what
+ * the file gives; only the point model is a point model (the splatting
+ * comparands' question) and only the Gaussian model Gaussians. */
+TEST(every_object_kind_answers_through_its_row)
+{
+    char ply[] = "/tmp/refrender-rows-XXXXXX";
+    int fd = mkstemp(ply);
+    CHECK(fd >= 0);
+    const char *text = "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
+                       "property float z\nproperty float f_dc_0\nproperty float f_dc_1\nproperty float f_dc_2\n"
+                       "property float opacity\nproperty float scale_0\nproperty float scale_1\n"
+                       "property float rot_0\nproperty float rot_1\nproperty float rot_2\nproperty float rot_3\n"
+                       "end_header\n1 2 3 0.1 0.2 0.3 0 -2 -2 1 0 0 0\n";
+    CHECK(write(fd, text, strlen(text)) == (ssize_t)strlen(text));
+    close(fd);
+    char xml[1024];
+    snprintf(xml, sizeof xml, "<scene><object><pointModel><splat center='0 0 0' normal='0 0 1' radius='1'/>"
+             "<splat center='4 0 0' normal='0 0 1' radius='0.5'/></pointModel></object>"
+             "<object><sphere center='1 2 3' radius='0.5'/></object>"
+             "<object><gaussianModel file='%s'/></object></scene>", ply);
+    scene s;
+    rr_error e = {{0}};
+    CHECK(load_text(xml, &s, &e) == 0);
+    const scene_object_ops *pts = scene_object_row(&s.objects[0]), *sph = scene_object_row(&s.objects[1]);
+    const scene_object_ops *gs = scene_object_row(&s.objects[2]);
+    CHECK(pts->count(&s.objects[0]) == 2 && sph->count(&s.objects[1]) == 1 && gs->count(&s.objects[2]) == 1);
+    CHECK(pts->point_model && !sph->point_model && !gs->point_model);
+    CHECK(!pts->gaussians && !sph->gaussians && gs->gaussians);
+    CHECK(!strcmp(sph->name, "an analytic sphere") && !strcmp(gs->name, "a Gaussian-splat model"));
+    aabb b = scene_object_bounds(&s.objects[1]);
+    CHECK(b.lo.x == 0.5 && b.hi.x == 1.5 && b.lo.y == 1.5 && b.hi.z == 3.5);
+    vec3 c;
+    double r;
+    sph->rest_sphere(&s.objects[1], &c, &r);
+    CHECK(c.x == 1 && c.y == 2 && c.z == 3 && r == 0.5);
+    pts->rest_sphere(&s.objects[0], &c, &r);
+    const double rim[4][2] = {{-1, 0}, {0, 1}, {4.5, 0}, {4, -0.5}};
+    for (int k = 0; k < 4; k++)
+        CHECK(v3_len(v3_sub(v3(rim[k][0], rim[k][1], 0), c)) <= r);
+    b = scene_object_bounds(&s.objects[2]);
+    CHECK(b.lo.x < 1 && b.hi.x > 1 && b.lo.y < 2 && b.hi.y > 2 && b.lo.z < 3 && b.hi.z > 3);
+    scene_free(&s);
+    unlink(ply);
+}

@@ -166,38 +166,14 @@ int accel_ray_meets_swept_sphere(const accel *a, unsigned obj, vec3 org, vec3 di
     return ray_meets_sphere(org, dir, &a->swept_sphere[obj]);
 }
 
-/* A sphere about the object's box center holding the object (rest pose). */
-static void object_sphere(const scene_object *o, vec3 *center, double *radius)
-{
-    if (o->kind == OBJECT_GAUSSIANS) { /* (accel_build.c gives the filter's footprint its own) */
-        RR_DCHECK(!o->gaussians.dynamic); /* its rest means are no bound: object_travel takes its paths' box */
-        aabb b = scene_object_bounds(o);
-        *center = v3_scale(v3_add(b.lo, b.hi), 0.5), *radius = 0.5 * v3_len(v3_sub(b.hi, b.lo));
-        return;
-    }
-    if (o->kind != OBJECT_POINTS) {
-        *center = o->sphere_center, *radius = o->sphere_radius;
-        return;
-    }
-    const pointmodel *m = &o->model;
-    vec3 c = v3_scale(v3_add(m->bounds.lo, m->bounds.hi), 0.5);
-    double r2 = 0;
-    for (size_t i = 0; i < m->count; i++) {
-        const float *p = m->geom[i].center, *e = &m->extent[3 * i];
-        vec3 far = v3(fabs(p[0] - c.x) + e[0], fabs(p[1] - c.y) + e[1], fabs(p[2] - c.z) + e[2]);
-        double d2 = v3_dot(far, far); /* farthest corner of the splat's box */
-        r2 = d2 > r2 ? d2 : r2;
-    }
-    *center = c, *radius = sqrt(r2);
-}
-
-/* Rigid motion keeps every point within the rest radius of the moving center,
- * so the sphere about the center's swept box bounds the object at all times. */
+/* Rigid motion keeps every point within the rest radius of the moving center
+ * (the object's rest sphere: its kind's row), so the sphere about the
+ * center's swept box bounds the object at all times. */
 sphere_bound accel_swept_sphere(const scene_object *o, double t0, double t1)
 {
     vec3 c;
     double r;
-    object_sphere(o, &c, &r);
+    scene_object_row(o)->rest_sphere(o, &c, &r);
     return accel_swept_sphere_about(&o->anim, c, r, t0, t1);
 }
 

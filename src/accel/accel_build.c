@@ -33,10 +33,8 @@ RTCScene accel_user_scene(RTCDevice dev, unsigned nprims, void *user, RTCBoundsF
  * sizes of each other: 8 mean splat extents (measured with make bench, the
  * rotation-speed series: wider groups win at slow motion but lose at fast
  * motion, see src/cmd/BENCH.md). */
-static double coherent_spread(const scene_object *o)
+static double points_spread(const scene_object *o)
 {
-    if (o->kind != OBJECT_POINTS)
-        return o->sphere_radius;
     double sum = 0;
     for (size_t i = 0; i < o->model.count; i++) {
         const float *e = &o->model.extent[3 * i];
@@ -44,6 +42,23 @@ static double coherent_spread(const scene_object *o)
     }
     return o->model.count ? 8.0 * sum / (double)o->model.count : 0.0;
 }
+
+/* A sphere is one primitive: its radius. */
+static double sphere_spread(const scene_object *o) { return o->sphere_radius; }
+
+/* How Embree holds each object kind as user geometry, by object_kind (what
+ * the kind is: scene_object_row). A Gaussian model has no row here: its
+ * BVH is built with each shutter (build_gaussian_object). */
+typedef struct {
+    RTCBoundsFunction bounds;
+    RTCIntersectFunctionN intersect;
+    double (*coherent_spread)(const scene_object *o);
+} accel_object_ops;
+
+static const accel_object_ops accel_rows[] = {
+    [OBJECT_POINTS] = {accel_splat_bounds_cb, accel_splats_intersect, points_spread},
+    [OBJECT_SPHERE] = {accel_sphere_bounds_cb, accel_sphere_intersect, sphere_spread},
+};
 
 /* Embree reports each allocation before it happens and each release after
  * (negative bytes), from its build threads. */
@@ -78,7 +93,7 @@ static void embree_error(void *user, enum RTCError code, const char *str)
     /* name what was being built: an out-of-memory message on a 10M-Gaussian
      * model must say which object and model ran out */
     const scene_object *o = &a->sc->objects[obj];
-    size_t count = o->kind == OBJECT_GAUSSIANS ? o->gaussians.count : o->kind == OBJECT_POINTS ? o->model.count : 1;
+    size_t count = scene_object_row(o)->count(o);
     snprintf(e->msg, sizeof e->msg, "Embree error %d: %s (building the BVH of object '%s', %zu primitives%s%.200s)",
              (int)code, str ? str : "", o->name, count, o->model_file[0] ? ", from " : "", o->model_file);
 }
@@ -242,7 +257,7 @@ static void build_top_levels(accel *a, double open, double close)
     a->ngaussian = 0;
     for (int i = 0; i < s->nobjects; i++) {
         const scene_object *o = &s->objects[i];
-        if (o->kind == OBJECT_GAUSSIANS) {
+        if (scene_object_row(o)->gaussians) {
             a->building_object = i;
             build_gaussian_object(a, (unsigned)i, open, close);
             a->building_object = -1;
@@ -361,16 +376,16 @@ int accel_build(const scene *s, const accel_settings *set, accel **out, rr_error
     }
     for (int i = 0; i < s->nobjects; i++) {
         scene_object *o = &s->objects[i];
-        int points = o->kind == OBJECT_POINTS;
-        if (o->kind == OBJECT_GAUSSIANS) { /* built with the shutter (build_gaussian_object) */
+        const scene_object_ops *kind = scene_object_row(o);
+        if (kind->gaussians) { /* built with the shutter (build_gaussian_object) */
             a->models[i] = &o->gaussians;
             continue;
         }
-        a->coherent_spread[i] = coherent_spread(o);
+        const accel_object_ops *row = &accel_rows[o->kind];
+        RR_DCHECK((unsigned)o->kind < sizeof accel_rows / sizeof *accel_rows && row->bounds);
+        a->coherent_spread[i] = row->coherent_spread(o);
         a->building_object = i;
-        a->object_scenes[i] = accel_user_scene(a->device, points ? (unsigned)o->model.count : 1u, o,
-                                         points ? accel_splat_bounds_cb : accel_sphere_bounds_cb,
-                                         points ? accel_splats_intersect : accel_sphere_intersect, 0);
+        a->object_scenes[i] = accel_user_scene(a->device, (unsigned)kind->count(o), o, row->bounds, row->intersect, 0);
         a->building_object = -1;
     }
     a->reuse_static = set->reuse_static;

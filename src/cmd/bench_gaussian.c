@@ -8,7 +8,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
-#include "gaussians/gaussian_dynamic.h"
+#include "gaussians/gaussian_stg.h"
 #include "render/gaussian_integrator.h"
 #include "formats/gaussian_ply.h"
 #include "render/render.h"
@@ -530,7 +530,7 @@ int bench_gaussian_scale(int quick, int threads, FILE *csv)
 /* ---- moving Gaussians: SpacetimeGaussians lite against itself frozen --- */
 
 /* A sphere of `count` 3D Gaussians made a SpacetimeGaussians-lite model
- * (gaussian_dynamic.h) that passes through the sphere at mid-shutter,
+ * (gaussian_stg.h) that passes through the sphere at mid-shutter,
  * seen by a fixed camera (STG's datasets are fixed multi-view rigs) over
  * frame 25 of a 50-frame segment at half a frame's exposure: the shutter
  * [0.5, 0.51] of model time. Frozen: the same Gaussians as a static model,
@@ -562,7 +562,7 @@ static double stg_uniform(uint64_t *state)
  * Gaussian at STG_MID. */
 static void stg_set_motion(gaussian_model *m, size_t i, uint64_t *rng)
 {
-    gaussian_dynamic *d = m->dynamic;
+    gaussian_stg *d = gaussian_stg_of(m);
     float *x = &m->mean[3 * i], *mo = &d->motion[9 * i];
     double p[3] = {x[0], x[1], x[2]};
     d->trbf_center[i] = (float)(STG_MID + 0.03 * stg_uniform(rng));
@@ -587,8 +587,9 @@ static void stg_set_motion(gaussian_model *m, size_t i, uint64_t *rng)
         m->sh[3 * i + k] = (float)(0.28209479177387814 * m->sh[3 * i + k] + 0.5);
 }
 
-/* The same Gaussians at STG_MID as a static model, its colours the
- * same precomputed RGB. */
+/* The same Gaussians at STG_MID as a static model of SH degree 0 whose
+ * colour is the same RGB (to float rounding: a static model's colour is
+ * C0 dc + 0.5, gaussian_sh_color; the cost of that step is a few flops). */
 static void stg_freeze(gaussian_model *m)
 {
     gaussian_model f = *m;
@@ -602,7 +603,7 @@ static void stg_freeze(gaussian_model *m)
         gaussian_dynamic_at(m, i, STG_MID, &st);
         for (int k = 0; k < 3; k++) {
             f.mean[3 * i + k] = (float)st.mean[k], f.scale[3 * i + k] = (float)st.scale[k];
-            f.sh[3 * i + k] = (float)st.rgb[k];
+            f.sh[3 * i + k] = (float)((st.rgb[k] - 0.5) / 0.28209479177387814);
         }
         for (int k = 0; k < 4; k++)
             f.rotation[4 * i + k] = (float)st.q[k];
@@ -617,11 +618,10 @@ static void stg_scene(const stg_case *c, scene *s)
 {
     gaussian_model *m = one_model_scene(s, c->width, c->height, c->count, GAUSSIAN_3D, 0);
     s->shut.open = STG_OPEN, s->shut.close = STG_CLOSE;
-    if (!(m->dynamic = gaussian_dynamic_alloc(m->count))) {
+    if (!(m->dynamic = gaussian_stg_alloc(m->count))) {
         fprintf(stderr, "bench: out of memory\n");
         exit(1);
     }
-    m->rgb_precomputed = 1;
     uint64_t rng = 1;
     for (size_t i = 0; i < m->count; i++)
         stg_set_motion(m, i, &rng);

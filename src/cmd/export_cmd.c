@@ -217,30 +217,34 @@ static int write_frame(FILE *f, const scene *s, long long frame, int numbered, c
     return 0;
 }
 
-static void write_model(FILE *f, const scene_object *o)
+/* ---- each object kind's model, one writer a kind (model_writers) ---- */
+
+static void write_gaussians(FILE *f, const scene_object *o)
 {
-    if (o->kind == OBJECT_GAUSSIANS) {
-        const gaussian_model *m = &o->gaussians;
-        fputs("{\"gaussians\": {\"file\": ", f);
-        json_string(f, o->model_file);
-        /* a renderer reading the export must know the Gaussians move on their own (the file says how) */
-        const char *motion = !m->dynamic ? "none" : m->dynamic->kind == GAUSSIAN_DYNAMIC_FDGS ? "4dgs" : "stg-lite";
-        fprintf(f, ", \"kind\": \"%s\"", m->kind == GAUSSIAN_3D ? "3dgs" : "2dgs");
-        const char *key[GAUSSIAN_IMAGING_FIELDS], *value[GAUSSIAN_IMAGING_FIELDS];
-        gaussian_imaging(m, o->order, key, value);
-        for (int k = 0; k < GAUSSIAN_IMAGING_FIELDS; k++)
-            fprintf(f, ", \"%s\": \"%s\"", key[k], value[k]);
-        fprintf(f, ", \"count\": %zu, \"sh_degree\": %d, \"motion\": \"%s\"}}", m->count, m->sh_degree, motion);
-        return;
-    }
-    if (o->kind == OBJECT_SPHERE) {
-        fputs("{\"sphere\": {\"center\": ", f);
-        json_vec3(f, o->sphere_center);
-        fprintf(f, ", \"radius\": %.17g, \"color\": ", o->sphere_radius);
-        json_vec3(f, o->sphere_color);
-        fputs("}}", f);
-        return;
-    }
+    const gaussian_model *m = &o->gaussians;
+    fputs("{\"gaussians\": {\"file\": ", f);
+    json_string(f, o->model_file);
+    /* a renderer reading the export must know the Gaussians move on their own (the file says how) */
+    const char *motion = gaussian_dynamic_name(m);
+    fprintf(f, ", \"kind\": \"%s\"", m->kind == GAUSSIAN_3D ? "3dgs" : "2dgs");
+    const char *key[GAUSSIAN_IMAGING_FIELDS], *value[GAUSSIAN_IMAGING_FIELDS];
+    gaussian_imaging(m, o->order, key, value);
+    for (int k = 0; k < GAUSSIAN_IMAGING_FIELDS; k++)
+        fprintf(f, ", \"%s\": \"%s\"", key[k], value[k]);
+    fprintf(f, ", \"count\": %zu, \"sh_degree\": %d, \"motion\": \"%s\"}}", m->count, m->sh_degree, motion);
+}
+
+static void write_sphere(FILE *f, const scene_object *o)
+{
+    fputs("{\"sphere\": {\"center\": ", f);
+    json_vec3(f, o->sphere_center);
+    fprintf(f, ", \"radius\": %.17g, \"color\": ", o->sphere_radius);
+    json_vec3(f, o->sphere_color);
+    fputs("}}", f);
+}
+
+static void write_points(FILE *f, const scene_object *o)
+{
     fputs("{\"file\": ", f);
     o->model_file[0] ? json_string(f, o->model_file) : fputs("null", f);
     fputs(", \"generator\": ", f);
@@ -257,6 +261,20 @@ static void write_model(FILE *f, const scene_object *o)
     } else
         fputs("null", f);
     fprintf(f, ", \"inline_splats\": %zu, \"splats\": %zu}", o->inline_splats, o->model.count);
+}
+
+/* The export's row of each object kind (by object_kind; what the kind is:
+ * scene_object_row). */
+static void (*const model_writers[])(FILE *f, const scene_object *o) = {
+    [OBJECT_POINTS] = write_points,
+    [OBJECT_SPHERE] = write_sphere,
+    [OBJECT_GAUSSIANS] = write_gaussians,
+};
+
+static void write_model(FILE *f, const scene_object *o)
+{
+    RR_DCHECK((unsigned)o->kind < sizeof model_writers / sizeof *model_writers);
+    model_writers[o->kind](f, o);
 }
 
 static void write_objects(FILE *f, const scene *s)

@@ -1,6 +1,11 @@
-/* The dynamic models' PLY readers (the io layer), one per layout; what the
- * values mean at a time t: gaussian_dynamic.h. Each layout's vertex
- * properties are found by name, any order and scalar type, as ply.h reads.
+/* The dynamic models' PLY readers (the formats layer), one per layout, and
+ * their table (gaussian_dynamic_ply.c): a file is read by the reader that
+ * claims one of its vertex properties, and each reader refuses the
+ * properties another one claims, so the table is the one place that says
+ * which layout owns a property. What the values mean at a time t: the
+ * kind's header (gaussians/gaussian_stg.h, gaussian_fdgs.h). Each layout's
+ * vertex properties are found by name, any order and scalar type, as ply.h
+ * reads.
  *
  * SpacetimeGaussians "lite" (gaussian_stg_ply.c):
  * oppo-us-research/SpacetimeGaussians at 427abfc5, scene/ourslite.py
@@ -24,6 +29,9 @@
 #include "gaussians/gaussian.h"
 
 typedef struct {
+    const char *layout;     /* for messages: "SpacetimeGaussians" */
+    const char *possessive; /* "SpacetimeGaussians'" */
+    const char *own;        /* the properties that mark it, for messages: "trbf_*, motion_*, omega_*" */
     /* Whether a vertex property's name is one only this layout has: a file
      * with any of them is read by load, which refuses it unless it is a
      * whole model of the layout. */
@@ -48,7 +56,7 @@ typedef struct {
 extern const gaussian_dynamic_ply_reader gaussian_stg_ply;
 
 /* 4DGS. claims: t_center, vel_<k>, t_var, time_duration, sh_degree,
- * sh_degree_t, sh4d_<k>. load: m->dynamic of kind FDGS, sh_degree the
+ * sh_degree_t, sh4d_<k>. load: m->dynamic of kind 4DGS (gaussian_fdgs.h), sh_degree the
  * spatial degree, sh holding sh4d as it runs. Errors name the file and the
  * properties or the vertex and value: those missing from a partial
  * layout, properties of another layout beside them (SpacetimeGaussians' or
@@ -61,5 +69,18 @@ extern const gaussian_dynamic_ply_reader gaussian_stg_ply;
  * beyond float range, means beyond RR_MAX_REACH, exp(scale) beyond
  * RR_MAX_REACH, a zero quaternion. */
 extern const gaussian_dynamic_ply_reader gaussian_fdgs_ply;
+
+/* Every reader above, NULL-terminated: a new layout is one line here and
+ * one in gaussian_dynamic_ply.c. */
+extern const gaussian_dynamic_ply_reader *const gaussian_dynamic_ply_readers[];
+
+/* The reader that claims the vertex property name; NULL if none does. */
+const gaussian_dynamic_ply_reader *gaussian_dynamic_ply_claimant(const char *name);
+
+/* For reader self's header: refuses (-1, naming file, line and both
+ * layouts) a property another reader claims: a file mixing two layouts is
+ * no model any trainer wrote, so it is refused rather than half read. */
+int gaussian_dynamic_ply_refuse_other(const gaussian_dynamic_ply_reader *self, const char *path, long line,
+                                      const char *name, rr_error *err);
 
 #endif

@@ -6,6 +6,7 @@
 
 #include "formats/gaussian_dynamic_ply.h"
 #include "formats/gaussian_ply_common.h"
+#include "gaussians/gaussian_fdgs.h"
 
 /* ---- the layout (scripts/convert_4dgs.py's docstring) --------------------- */
 
@@ -54,9 +55,8 @@ typedef struct {
 static int see_property(void *user, const char *path, long line, const char *name, rr_error *err)
 {
     (void)user;
-    if (gaussian_stg_ply.claims(name))
-        return rr_fail(err, "%s:%ld: vertex property '%s' is SpacetimeGaussians' beside 4DGS ones (t_center, "
-                            "vel_*, sh4d_*): a layout mixing the two is refused", path, line, name);
+    if (gaussian_dynamic_ply_refuse_other(&gaussian_fdgs_ply, path, line, name, err))
+        return -1;
     if (gaussian_ply_numbered(name, "f_dc_") >= 0 || gaussian_ply_numbered(name, "f_rest_") >= 0)
         return rr_fail(err, "%s:%ld: vertex property '%s' is 3DGS's beside 4DGS ones (t_center, vel_*, sh4d_*): a "
                             "4DGS model's colour is sh4d_* alone", path, line, name);
@@ -140,13 +140,13 @@ static int model_constants(fdgs_sink *s, const double *v, char *why, size_t why_
     s->duration = v[F_DURATION], s->degree = v[F_DEGREE], s->degree_t = v[F_DEGREE_T];
     int d = (int)s->degree, dt = (int)s->degree_t;
     m->sh_degree = d, m->sh_coeffs = (d + 1) * (d + 1) * (dt + 1);
-    if (gaussian_ply_allocate(m, s->base.declared, gaussian_dynamic_alloc_fdgs, why, why_size))
+    if (gaussian_ply_allocate(m, s->base.declared, gaussian_fdgs_alloc, why, why_size))
         return -1;
-    m->dynamic->time_duration = s->duration, m->dynamic->sh_degree_t = dt;
+    gaussian_fdgs_of(m)->time_duration = s->duration, gaussian_fdgs_of(m)->sh_degree_t = dt;
     return 0;
 }
 
-/* The static arrays (gaussian_dynamic.h): the canonical mean within
+/* The static arrays (gaussian_fdgs.h): the canonical mean within
  * RR_MAX_REACH, exp(scale) within RR_MAX_REACH, the unit
  * quaternion of rot_0..3 (the converter's is unit up to float rounding;
  * only zero is refused), sigmoid of the opacity, sh4d as it runs
@@ -165,7 +165,7 @@ static int store_static(gaussian_model *m, size_t i, const double *v, int sh_cou
 
 /* The motion as stored; t_var, a variance divided by, must be above 0 as
  * the float held. */
-static int store_motion(gaussian_dynamic *d, size_t i, const double *v, char *why, size_t why_size)
+static int store_motion(gaussian_fdgs *d, size_t i, const double *v, char *why, size_t why_size)
 {
     if (store(&d->t_center[i], v, F_CENTER, why, why_size) || store(&d->t_var[i], v, F_TVAR, why, why_size))
         return -1;
@@ -186,7 +186,7 @@ static int add_gaussian(void *user, const double *v, const int *present, char *w
         model_constants(s, v, why, why_size))
         return -1;
     size_t i = s->base.next;
-    if (store_motion(m->dynamic, i, v, why, why_size) || store_static(m, i, v, s->sh_count, why, why_size))
+    if (store_motion(gaussian_fdgs_of(m), i, v, why, why_size) || store_static(m, i, v, s->sh_count, why, why_size))
         return -1;
     m->count = ++s->base.next;
     return 0;
@@ -200,4 +200,5 @@ static int fdgs_load(const char *name, const char *data, size_t len, input_file 
     return gaussian_ply_load_layout(name, data, len, src, &fdgs_schema, &v, m, err);
 }
 
-const gaussian_dynamic_ply_reader gaussian_fdgs_ply = {fdgs_claims, fdgs_load};
+const gaussian_dynamic_ply_reader gaussian_fdgs_ply = {"4DGS", "4DGS's", "t_center, vel_*, sh4d_*", fdgs_claims,
+                                                       fdgs_load};

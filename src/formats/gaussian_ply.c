@@ -26,8 +26,7 @@ typedef struct {
      * degree 4 must be refused, not read as degree 3) */
     int rest_names, rest_max;
     unsigned char rest_seen[PLY_MAX_PROPERTIES];
-    int stg;  /* a SpacetimeGaussians property was declared */
-    int fdgs; /* a 4DGS property was declared */
+    const gaussian_dynamic_ply_reader *dynamic; /* the reader of a dynamic layout's property declared */
 } gaussian_sink;
 
 static int require(const char *path, const int *present, int first, int n, rr_error *err)
@@ -52,10 +51,8 @@ static int rest_index(const char *name)
 static int see_property(void *user, const char *path, long line, const char *name, rr_error *err)
 {
     gaussian_sink *s = user;
-    if (gaussian_stg_ply.claims(name)) /* read by gaussian_stg_ply.c instead */
-        return s->stg = 1, rr_fail(err, "%s:%ld: SpacetimeGaussians property '%s'", path, line, name);
-    if (gaussian_fdgs_ply.claims(name)) /* read by gaussian_fdgs_ply.c instead */
-        return s->fdgs = 1, rr_fail(err, "%s:%ld: 4DGS property '%s'", path, line, name);
+    if ((s->dynamic = gaussian_dynamic_ply_claimant(name))) /* read by that reader instead */
+        return rr_fail(err, "%s:%ld: %s property '%s'", path, line, s->dynamic->layout, name);
     if (!strcmp(name, "filter_3D"))
         return rr_fail(err, "%s:%ld: vertex property 'filter_3D': Mip-Splatting's 3D filter is not supported (the "
                             "model would render without it)", path, line);
@@ -184,12 +181,10 @@ static int load(const char *name, const char *data, size_t len, input_file *src,
     ply_visitor v = {begin_model, add_gaussian, sink, see_property};
     int rc = src ? ply_stream_vertices(name, src, &gaussian_schema, &v, err)
                  : ply_parse_vertices(name, data, len, &gaussian_schema, &v, err);
-    int stg = sink->stg, fdgs = sink->fdgs;
+    const gaussian_dynamic_ply_reader *dynamic = sink->dynamic;
     free(sink);
-    RR_CHECK(!(stg || fdgs) || !src || src->released == 0); /* refused in the header: nothing released */
-    if (fdgs)
-        return gaussian_fdgs_ply.load(name, data, len, src, kind, m, err);
-    return stg ? gaussian_stg_ply.load(name, data, len, src, kind, m, err) : gaussian_ply_finish(m, rc, name, err);
+    RR_CHECK(!dynamic || !src || src->released == 0); /* refused in the header: nothing released */
+    return dynamic ? dynamic->load(name, data, len, src, kind, m, err) : gaussian_ply_finish(m, rc, name, err);
 }
 
 int gaussian_parse(const char *name, const char *data, size_t len, gaussian_kind kind, gaussian_model *m,

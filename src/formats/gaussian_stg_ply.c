@@ -7,6 +7,7 @@
 
 #include "formats/gaussian_dynamic_ply.h"
 #include "formats/gaussian_ply_common.h"
+#include "gaussians/gaussian_stg.h"
 
 /* ---- the layout (ourslite.py:335-359) ---------------------------------- */
 
@@ -34,9 +35,8 @@ static int stg_claims(const char *name)
 static int see_property(void *user, const char *path, long line, const char *name, rr_error *err)
 {
     (void)user;
-    if (gaussian_fdgs_ply.claims(name))
-        return rr_fail(err, "%s:%ld: vertex property '%s' is 4DGS's beside SpacetimeGaussians ones (trbf_*, "
-                            "motion_*, omega_*): a layout mixing the two is refused", path, line, name);
+    if (gaussian_dynamic_ply_refuse_other(&gaussian_stg_ply, path, line, name, err))
+        return -1;
     if (gaussian_ply_numbered(name, "f_t_") >= 0 || gaussian_ply_numbered(name, "f_dc_") >= 3)
         return rr_fail(err, "%s:%ld: vertex property '%s': a SpacetimeGaussians \"full\" model (f_t_*, f_dc_3 and "
                             "up) needs STG's per-pixel MLP, not supported (the \"lite\" model is)", path, line, name);
@@ -76,7 +76,7 @@ static int store_run(float *dst, const double *v, int first, int n, char *why, s
     return 0;
 }
 
-/* The static arrays (gaussian_dynamic.h: the state at D = 0): means within
+/* The static arrays (gaussian_stg.h: the state at D = 0): means within
  * RR_MAX_REACH, exp(scale) within RR_MAX_REACH, sigmoid of the
  * opacity, f_dc as RGB, normalize(rot) as F.normalize (0 stays 0). */
 static int store_static(gaussian_model *m, size_t i, const double *v, char *why, size_t why_size)
@@ -84,12 +84,13 @@ static int store_static(gaussian_model *m, size_t i, const double *v, char *why,
     double len2 = 0;
     if (gaussian_ply_store_mean_scale(m, i, v, stg_names, S_X, S_SCALE, 3, why, why_size))
         return -1;
-    if (store_run(&m->sh[3 * i], v, S_DC, 3, why, why_size) || store_run(&m->dynamic->rot[4 * i], v, S_ROT, 4, why, why_size))
+    float *rot = &gaussian_stg_of(m)->rot[4 * i];
+    if (store_run(&m->sh[3 * i], v, S_DC, 3, why, why_size) || store_run(rot, v, S_ROT, 4, why, why_size))
         return -1;
     for (int k = 0; k < 4; k++)
-        len2 += (double)m->dynamic->rot[4 * i + k] * m->dynamic->rot[4 * i + k];
+        len2 += (double)rot[k] * rot[k];
     for (int k = 0; k < 4; k++)
-        m->rotation[4 * i + k] = (float)(m->dynamic->rot[4 * i + k] / fmax(sqrt(len2), GAUSSIAN_DYNAMIC_NORMALIZE_EPS));
+        m->rotation[4 * i + k] = (float)(rot[k] / fmax(sqrt(len2), GAUSSIAN_STG_NORMALIZE_EPS));
     m->opacity[i] = (float)(1.0 / (1.0 + exp(-v[S_OPACITY])));
     return 0;
 }
@@ -97,7 +98,7 @@ static int store_static(gaussian_model *m, size_t i, const double *v, char *why,
 /* The motion as stored; the temporal scale exp(trbf_scale) must be a
  * normal float, as the official code holds it (ourslite.py:835): below,
  * its opacity at D = 0 is 0/0. */
-static int store_motion(gaussian_dynamic *d, size_t i, const double *v, char *why, size_t why_size)
+static int store_motion(gaussian_stg *d, size_t i, const double *v, char *why, size_t why_size)
 {
     if (!(exp(v[S_TSCALE]) >= FLT_MIN))
         return gaussian_ply_bad(why, why_size, "property '%s' = %g: exp() of it, the temporal scale, is below "
@@ -113,13 +114,12 @@ static int add_gaussian(void *user, const double *v, const int *present, char *w
 {
     gaussian_ply_sink *s = user;
     gaussian_model *m = s->m;
-    if (!m->mean && gaussian_ply_allocate(m, s->declared, gaussian_dynamic_alloc, why, why_size))
+    if (!m->mean && gaussian_ply_allocate(m, s->declared, gaussian_stg_alloc, why, why_size))
         return -1;
-    m->rgb_precomputed = 1;
     if (gaussian_ply_check_finite(v, present, stg_names, S_SLOTS, why, why_size))
         return -1;
     size_t i = s->next;
-    if (store_motion(m->dynamic, i, v, why, why_size) || store_static(m, i, v, why, why_size))
+    if (store_motion(gaussian_stg_of(m), i, v, why, why_size) || store_static(m, i, v, why, why_size))
         return -1;
     m->count = ++s->next;
     return 0;
@@ -133,4 +133,5 @@ static int stg_load(const char *name, const char *data, size_t len, input_file *
     return gaussian_ply_load_layout(name, data, len, src, &stg_schema, &v, m, err);
 }
 
-const gaussian_dynamic_ply_reader gaussian_stg_ply = {stg_claims, stg_load};
+const gaussian_dynamic_ply_reader gaussian_stg_ply = {"SpacetimeGaussians", "SpacetimeGaussians'",
+                                                      "trbf_*, motion_*, omega_*", stg_claims, stg_load};

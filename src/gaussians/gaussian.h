@@ -45,19 +45,17 @@ typedef struct {
     size_t count;
     gaussian_kind kind;  /* 2D: surfels (two scales), 3D: ellipsoids */
     int sh_degree;       /* 0 to 3 */
-    int sh_coeffs;       /* (sh_degree + 1)^2; times (sh_degree_t + 1) for 4DGS (gaussian_dynamic.h) */
+    int sh_coeffs;       /* (sh_degree + 1)^2; times (sh_degree_t + 1) for 4DGS (gaussian_fdgs.h) */
     float *mean;         /* 3 per Gaussian */
     float *scale;        /* 3 per Gaussian: exp(scale_i); a 2D Gaussian's third is 0 */
     float *rotation;     /* 4 per Gaussian: the unit quaternion (w, x, y, z) of rot_0..3 */
     float *opacity;      /* 1 per Gaussian: sigmoid(opacity) */
     float *sh;           /* 3 * sh_coeffs per Gaussian: coefficient k of channel c at [3 k + c] */
-    int rgb_precomputed; /* 1: sh[0..2] are plain RGB colours, composited as they are (no SH, no +0.5,
-                          * no clamp: SpacetimeGaussians-lite's f_dc, gaussian_dynamic.h) */
     /* how it is imaged, set by the scene (the file does not say; gaussian_hit.h) */
     gaussian_formation formation;
     int tile_rule;       /* 1: only in the 16x16 tiles the rasterizer would visit */
-    /* Gaussians that move (SpacetimeGaussians, gaussian_dynamic.h), owned;
-     * NULL for a static model */
+    /* Gaussians that move (gaussian_dynamic.h: its kind's row says how,
+     * and what sh holds), owned; NULL for a static model */
     struct gaussian_dynamic *dynamic;
 } gaussian_model;
 
@@ -100,7 +98,7 @@ int gaussian_from_surfels(const struct surfel_s *s, size_t n, gaussian_kind kind
  * the given degree seen along dir (need not be unit): the real SH series
  * plus 0.5, clamped below at 0 (not above), as the official renderers do. */
 vec3 gaussian_sh_color(const float *sh, int degree, vec3 dir);
-/* A 4DGS model's colour (gaussian_dynamic.h): sh holds degree_t + 1
+/* A 4DGS model's colour (gaussian_fdgs.h): sh holds degree_t + 1
  * blocks of (degree + 1)^2 coefficients (3 each, as above), block k
  * weighted by cos(2 pi k dir_t / duration) (k = 0: 1); the time blocks
  * count only at degree 3 (4DGS's rasterizer); + 0.5, clamped below at 0. */

@@ -100,19 +100,15 @@ static int blend_stops(const gaussian_blend *b, const gaussian_hit *g, const gau
     }
 }
 
-/* A hit's colour: its SH seen along the hit's direction, or a model's
- * precomputed RGB as stored (SpacetimeGaussians-lite hands f_dc to the
- * rasterizer as colors_precomp: renderer/__init__.py:339, and the blend
- * reads it without the SH step's +0.5 and clamp, forward.cu:316, 430), or
- * a 4DGS model's 4D SH at the ray's time (the hit's direction is then the
- * canonical mean's: gaussian_dynamic_view_dir). */
+/* A hit's colour: its SH seen along the hit's direction, or for a
+ * dynamic model its kind's colour at the ray's time (SpacetimeGaussians-
+ * lite's stored RGB, 4DGS's 4D SH seen from the direction its row's
+ * view_dir put in the hit: gaussian_dynamic.h). */
 static vec3 hit_color(const gaussian_blend *b, const gaussian_hit *g, const gaussian_model *m)
 {
     const float *sh = &m->sh[(size_t)3 * m->sh_coeffs * g->prim];
     vec3 dir = v3(g->dir[0], g->dir[1], g->dir[2]);
-    if (m->rgb_precomputed)
-        return v3(sh[0], sh[1], sh[2]);
-    if (m->dynamic && m->dynamic->kind == GAUSSIAN_DYNAMIC_FDGS)
+    if (m->dynamic)
         return gaussian_dynamic_color(m, g->prim, b->time, dir);
     return gaussian_sh_color(sh, m->sh_degree, dir);
 }

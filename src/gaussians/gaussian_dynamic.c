@@ -1,7 +1,10 @@
+/* What every dynamic kind shares (gaussian_dynamic.h): the one-block
+ * allocation, the proved bounds of a cubic and of a linear path, and the
+ * reach box of a moving Gaussian. Each kind's own rules live in its file
+ * (gaussian_stg.c, gaussian_fdgs.c). */
 #include "gaussians/gaussian_dynamic.h"
 
 #include "core/interval.h"
-#include "core/rotation.h"
 
 #include <float.h>
 #include <math.h>
@@ -13,31 +16,21 @@
 /* The unit roundoff of doubles (core/interval.h), short for the proofs below. */
 #define U RR_UNIT_ROUNDOFF
 
-/* One float array of a gaussian_dynamic: where its pointer is, and how
- * many floats it holds per Gaussian. */
-typedef struct {
-    size_t member; /* offsetof the float * */
-    size_t width;
-} dynamic_array;
-
-/* A zeroed gaussian_dynamic of kind whose arrays share one block, laid out
- * in the order given (the first owns it: gaussian_dynamic_free), so the
- * block's size is the widths' sum and cannot disagree with the layout;
- * NULL, with nothing left allocated, when an allocation fails or the size
- * overflows. */
-static gaussian_dynamic *alloc_arrays(size_t n, gaussian_dynamic_kind kind, const dynamic_array *arrays, int count)
+gaussian_dynamic *gaussian_dynamic_alloc(size_t n, size_t size, const gaussian_dynamic_ops *ops,
+                                         const gaussian_dynamic_array *arrays, int count)
 {
     size_t floats = 0;
     for (int k = 0; k < count; k++)
         floats += arrays[k].width;
-    gaussian_dynamic *d = calloc(1, sizeof *d);
+    RR_DCHECK(size >= sizeof(gaussian_dynamic) && floats > 0);
+    gaussian_dynamic *d = calloc(1, size);
     float *block = n <= SIZE_MAX / (floats * sizeof(float)) ? malloc(n * floats * sizeof(float)) : NULL;
     if (!d || !block) {
         free(d);
         free(block);
         return NULL;
     }
-    d->kind = kind;
+    d->ops = ops, d->block = block;
     size_t offset = 0;
     for (int k = 0; k < count; k++) {
         *(float **)((char *)d + arrays[k].member) = block + offset;
@@ -46,163 +39,17 @@ static gaussian_dynamic *alloc_arrays(size_t n, gaussian_dynamic_kind kind, cons
     return d;
 }
 
-/* The motion's arrays share one block (trbf_center owns it): per Gaussian
- * 1 + 1 + 9 + 4 + 4 floats. */
-gaussian_dynamic *gaussian_dynamic_alloc(size_t n)
-{
-    static const dynamic_array stg[] = {
-        {offsetof(gaussian_dynamic, trbf_center), 1}, {offsetof(gaussian_dynamic, trbf_scale), 1},
-        {offsetof(gaussian_dynamic, motion), 9}, {offsetof(gaussian_dynamic, omega), 4},
-        {offsetof(gaussian_dynamic, rot), 4}};
-    return alloc_arrays(n, GAUSSIAN_DYNAMIC_STG, stg, (int)(sizeof stg / sizeof *stg));
-}
-
-/* 4DGS's arrays share one block (t_center owns it): per Gaussian 1 + 3 + 1
- * floats. */
-gaussian_dynamic *gaussian_dynamic_alloc_fdgs(size_t n)
-{
-    static const dynamic_array fdgs[] = {
-        {offsetof(gaussian_dynamic, t_center), 1}, {offsetof(gaussian_dynamic, velocity), 3},
-        {offsetof(gaussian_dynamic, t_var), 1}};
-    return alloc_arrays(n, GAUSSIAN_DYNAMIC_FDGS, fdgs, (int)(sizeof fdgs / sizeof *fdgs));
-}
-
 void gaussian_dynamic_free(gaussian_dynamic *d)
 {
     if (d)
-        free(d->kind == GAUSSIAN_DYNAMIC_FDGS ? d->t_center : d->trbf_center); /* the whole block */
+        free(d->block);
     free(d);
 }
 
-/* ---- 4DGS at t ---------------------------------------------------------- */
-
-/* The temporal marginal exp(-0.5 D^2 / t_var) (forward.cu:333, t_var
- * holding cov_t plus any prefilter_var: the converter's). */
-static double fdgs_marginal(double D, float t_var) { return exp(-0.5 * D * D / t_var); }
-
-/* sigmoid(opacity) marginal where the marginal is above the cut, else 0:
- * the CUDA drops the Gaussian (forward.cu:334-336). */
-static double fdgs_opacity(const gaussian_model *m, size_t i, double D)
-{
-    double marginal = fdgs_marginal(D, m->dynamic->t_var[i]);
-    return marginal > GAUSSIAN_FDGS_MARGINAL_CUT ? m->opacity[i] * marginal : 0.0;
-}
-
-/* The mean x + vel D (forward.cu:347-350; dt = timestamp - t, :283). */
-static void fdgs_mean(const gaussian_model *m, size_t i, double D, double mean[3])
-{
-    for (int k = 0; k < 3; k++)
-        mean[k] = m->mean[3 * i + k] + m->dynamic->velocity[3 * i + k] * D;
-}
-
-/* The mean, and the constant conditional covariance's scale and unit
- * quaternion. */
-static void fdgs_at(const gaussian_model *m, size_t i, double t, gaussian_dynamic_state *out)
-{
-    double D = t - m->dynamic->t_center[i];
-    fdgs_mean(m, i, D, out->mean);
-    for (int k = 0; k < 3; k++)
-        out->scale[k] = m->scale[3 * i + k], out->rgb[k] = 0.0;
-    for (int k = 0; k < 4; k++)
-        out->q[k] = m->rotation[4 * i + k];
-    out->opacity = fdgs_opacity(m, i, D);
-}
-
-vec3 gaussian_dynamic_color(const gaussian_model *m, size_t i, double t, vec3 dir)
-{
-    const gaussian_dynamic *dy = m->dynamic;
-    RR_DCHECK(dy && dy->kind == GAUSSIAN_DYNAMIC_FDGS && i < m->count);
-    return gaussian_sh4d_color(&m->sh[(size_t)3 * m->sh_coeffs * i], m->sh_degree, dy->sh_degree_t,
-                               dy->t_center[i] - t, dy->time_duration, dir);
-}
-
-void gaussian_dynamic_view_dir(const gaussian_model *m, size_t i, vec3 eye, float dir[3])
-{
-    const float *mu = &m->mean[3 * i];
-    dir[0] = (float)(mu[0] - eye.x), dir[1] = (float)(mu[1] - eye.y), dir[2] = (float)(mu[2] - eye.z);
-}
-
-/* ---- evaluation at t ---------------------------------------------------- */
-
-/* One coordinate of the mean, c = (x, motion[k], motion[3 + k],
- * motion[6 + k]), in forward.cu:196-198's order:
- * x + D m1 + D^2 m2 + D^3 m3, D^2 = D D and D^3 = D^2 D. */
-static double cubic_at(const double c[4], double D)
-{
-    double D2 = D * D, D3 = D2 * D;
-    return c[0] + D * c[1] + D2 * c[2] + D3 * c[3];
-}
-
-static void axis_coefficients(const gaussian_model *m, size_t i, int k, double c[4])
-{
-    const float *mo = &m->dynamic->motion[9 * i];
-    c[0] = m->mean[3 * i + k], c[1] = mo[k], c[2] = mo[3 + k], c[3] = mo[6 + k];
-}
-
-/* exp(-(D / exp(trbf_scale))^2): forward.cu:202-203 (the scale passed
- * as exp(trbf_scale), ourslite.py:835). */
-static double temporal_weight(double D, float trbf_scale)
-{
-    double y = D / exp(trbf_scale);
-    return exp(-(y * y));
-}
-
-/* D = t - trbf_center (renderer/__init__.py:318, forward.cu:186). */
-static double offset_at(const gaussian_model *m, size_t i, double t)
-{
-    RR_DCHECK(m->dynamic && m->rgb_precomputed && i < m->count);
-    return t - m->dynamic->trbf_center[i];
-}
-
-static void mean_at(const gaussian_model *m, size_t i, double D, double mean[3])
-{
-    double c[4];
-    for (int k = 0; k < 3; k++) {
-        axis_coefficients(m, i, k, c);
-        mean[k] = cubic_at(c, D);
-    }
-}
-
-/* F.normalize(rot + D omega): divided by max(|v|, eps), so 0 stays 0
- * (ourslite.py:123-126); the CUDA does not normalise again
- * (forward.cu:127). Components are floats plus a product with D, so |v|^2
- * neither overflows nor loses a nonzero v below 1e-150. */
-static void rotation_at(const gaussian_model *m, size_t i, double D, double q[4])
-{
-    const gaussian_dynamic *dy = m->dynamic;
-    double v[4], len2 = 0;
-    for (int k = 0; k < 4; k++)
-        v[k] = dy->rot[4 * i + k] + D * dy->omega[4 * i + k], len2 += v[k] * v[k];
-    double div = fmax(sqrt(len2), GAUSSIAN_DYNAMIC_NORMALIZE_EPS);
-    for (int k = 0; k < 4; k++)
-        q[k] = v[k] / div;
-}
-
-static double opacity_at(const gaussian_model *m, size_t i, double D)
-{
-    return m->opacity[i] * temporal_weight(D, m->dynamic->trbf_scale[i]);
-}
-
-void gaussian_dynamic_at(const gaussian_model *m, size_t i, double t, gaussian_dynamic_state *out)
-{
-    if (m->dynamic->kind == GAUSSIAN_DYNAMIC_FDGS) {
-        fdgs_at(m, i, t, out);
-        return;
-    }
-    double D = offset_at(m, i, t);
-    mean_at(m, i, D, out->mean);
-    for (int k = 0; k < 3; k++) {
-        out->scale[k] = m->scale[3 * i + k];
-        out->rgb[k] = m->sh[3 * (size_t)m->sh_coeffs * i + (size_t)k];
-    }
-    rotation_at(m, i, D, out->q);
-    out->opacity = opacity_at(m, i, D);
-}
-
-/* ---- bounds over [t0, t1] ----------------------------------------------
+/* ---- a cubic path over a D-interval ---------------------------------------
  *
- * The mean's coordinate is the cubic p(D) = x + m1 D + m2 D^2 + m3 D^3 with
- * D = t - trbf_center. Its extrema over an interval lie at the interval's
+ * The coordinate is the cubic p(D) = x + m1 D + m2 D^2 + m3 D^3 (c = (x,
+ * m1, m2, m3), floats). Its extrema over an interval lie at the interval's
  * ends or where p' = g(D) = A D^2 + B D + C vanishes (A = 3 m3, B = 2 m2,
  * C = m1: exact, as m1..m3 are floats). The box is the hull of
  *   (a) p at the ends a, b of a D-interval holding every D the path takes,
@@ -213,11 +60,11 @@ void gaussian_dynamic_at(const gaussian_model *m, size_t i, double t, gaussian_d
  *       ends and the spans and (a), (b) hold every value,
  * padded by 16 eps (M + ov), where M = |x| + |m1| R + |m2| R^2 + |m3| R^3
  * (R = max(|a|, |b|)) and ov the largest (b) term. Why that suffices:
- *   - D interval: gaussian_dynamic_at computes D = fl(t - c); rounding is
+ *   - D interval: the kind computes D = fl(t - c); rounding is
  *     monotone, so for t in [t0, t1] fl(t - c) lies in [fl(t0 - c),
  *     fl(t1 - c)], and so does the exact t - c after one step outward
  *     (nextafter: the rounding error is at most half a step);
- *   - evaluation: cubic_at rounds each term at most 4 times (D^3 m3: D^2,
+ *   - evaluation: gaussian_dynamic_cubic_at rounds each term at most 4 times (D^3 m3: D^2,
  *     D^3, the product, the last sum; x: three sums), so at any |D| <= R
  *     |fl(p(D)) - p(D)| <= gamma_4 M, gamma_4 = 4U / (1 - 4U) < 2.01 eps.
  *     The computed candidates are within gamma_4 M of the exact ones, and
@@ -311,14 +158,14 @@ static void span_extremes(const double c[4], double k0, double k1, double *lo, d
     double mid = 0.5 * k0 + 0.5 * k1, h = fmax(mid - k0, k1 - mid) * (1 + 4 * U);
     double g = fabs((A * mid + B) * mid + C) + g_rounding(A, B, C, mid);
     double slope = 2 * fabs(A) * (fabs(mid) + h) + fabs(B);
-    double ov = h * (g + h * slope) * (1 + 1e-10), p = cubic_at(c, mid);
+    double ov = h * (g + h * slope) * (1 + 1e-10), p = gaussian_dynamic_cubic_at(c, mid);
     *lo = fmin(*lo, p - ov), *hi = fmax(*hi, p + ov), *ov_max = fmax(*ov_max, ov);
 }
 
 /* The cubic path's bound over the D-interval D (the proof above). */
-static int axis_bounds(const double c[4], interval D, interval *out)
+int gaussian_dynamic_cubic_bounds(const double c[4], interval D, interval *out)
 {
-    double pa = cubic_at(c, D.lo), pb = cubic_at(c, D.hi), ov = 0;
+    double pa = gaussian_dynamic_cubic_at(c, D.lo), pb = gaussian_dynamic_cubic_at(c, D.hi), ov = 0;
     double lo = fmin(pa, pb), hi = fmax(pa, pb);
     interval s[2];
     int n = root_spans(3 * c[3], 2 * c[2], c[1], s);
@@ -333,154 +180,21 @@ static int axis_bounds(const double c[4], interval D, interval *out)
     return isfinite(out->lo) && isfinite(out->hi) ? 0 : -1;
 }
 
-/* The largest opacity over [t0, t1]: the RBF peaks at D = 0, so over the
- * interval at trbf_center clamped into it. As computed: fl(t - c) is
- * monotone in t, so |D| is least there, and the rest is monotone but for
- * exp, within 1 ulp of exact in glibc: 4 eps covers it. */
-static double opacity_max(const gaussian_model *m, size_t i, double t0, double t1)
-{
-    double c = m->dynamic->trbf_center[i], tc = fmin(fmax(c, t0), t1);
-    return m->opacity[i] * temporal_weight(tc - c, m->dynamic->trbf_scale[i]) * (1 + 4 * DBL_EPSILON);
-}
-
-/* ---- 4DGS over [t0, t1] ----------------------------------------------------
+/* ---- a linear path over a D-interval ---------------------------------------
  *
- * The mean's coordinate x + vel D is linear in D, and as computed,
+ * The coordinate x + vel D is linear in D, and as computed,
  * fl(x + fl(vel D)), monotone in D (each rounding is); D = fl(t - c) is
  * monotone in t. So both the exact and the computed path lie between
- * their values at the ends a, b of the D-interval (gaussian_dynamic_bounds'
- * nextafter step holds the exact t - c too), and the computed ends are
- * within 2 U (|x| + |vel| R) of the exact ones (two roundings), R =
- * max(|a|, |b|): the pad 4 eps (|x| + |vel| R) holds both. */
-static int fdgs_axis_bounds(double x, double vel, interval D, interval *out)
+ * their values at the ends a, b of the D-interval
+ * (gaussian_dynamic_offset_interval's step holds the exact t - c too), and
+ * the computed ends are within 2 U (|x| + |vel| R) of the exact ones (two
+ * roundings), R = max(|a|, |b|): the pad 4 eps (|x| + |vel| R) holds both. */
+int gaussian_dynamic_linear_bounds(double x, double vel, interval D, interval *out)
 {
     double pa = x + vel * D.lo, pb = x + vel * D.hi;
     double pad = 4 * DBL_EPSILON * (fabs(x) + fabs(vel) * fmax(fabs(D.lo), fabs(D.hi)));
     *out = interval_widen(interval_make(fmin(pa, pb), fmax(pa, pb)), pad);
     return isfinite(out->lo) && isfinite(out->hi) ? 0 : -1;
-}
-
-/* The D-interval of [t0, t1] about the temporal centre c: [fl(t0 - c),
- * fl(t1 - c)] one step outward holds the computed and the exact t - c of
- * every t in [t0, t1] (rounding is monotone, and off by at most half a
- * step). */
-static interval offset_interval(double t0, double t1, double c)
-{
-    return interval_step_out(interval_make(t0 - c, t1 - c));
-}
-
-/* Writes the three axes' intervals to lo, hi. */
-static void store_box(const interval box[3], double lo[3], double hi[3])
-{
-    for (int k = 0; k < 3; k++)
-        lo[k] = box[k].lo, hi[k] = box[k].hi;
-}
-
-/* The largest opacity over [t0, t1]: the marginal peaks at D = 0, so at
- * t_center clamped into the interval (fl(t - c) monotone in t, the rest
- * monotone but for exp, within 1 ulp in glibc: 4 eps covers it). 0 when
- * even that is at or below the cut: no instant of the interval draws the
- * Gaussian (fdgs_opacity). */
-static double fdgs_opacity_max(const gaussian_model *m, size_t i, double t0, double t1)
-{
-    double c = m->dynamic->t_center[i], tc = fmin(fmax(c, t0), t1);
-    double marginal = fdgs_marginal(tc - c, m->dynamic->t_var[i]) * (1 + 4 * DBL_EPSILON);
-    return marginal > GAUSSIAN_FDGS_MARGINAL_CUT ? m->opacity[i] * marginal : 0.0;
-}
-
-static int fdgs_bounds(const gaussian_model *m, size_t i, double t0, double t1, double lo[3], double hi[3],
-                       double *opacity_bound)
-{
-    interval D = offset_interval(t0, t1, m->dynamic->t_center[i]), box[3];
-    for (int k = 0; k < 3; k++)
-        if (fdgs_axis_bounds(m->mean[3 * i + k], m->dynamic->velocity[3 * i + k], D, &box[k]))
-            return -1;
-    store_box(box, lo, hi);
-    *opacity_bound = fdgs_opacity_max(m, i, t0, t1);
-    return 0;
-}
-
-int gaussian_dynamic_bounds(const gaussian_model *m, size_t i, double t0, double t1, double lo[3], double hi[3],
-                            double *opacity_bound)
-{
-    RR_DCHECK(m->dynamic && i < m->count && t0 <= t1);
-    if (m->dynamic->kind == GAUSSIAN_DYNAMIC_FDGS)
-        return fdgs_bounds(m, i, t0, t1, lo, hi, opacity_bound);
-    interval D = offset_interval(t0, t1, m->dynamic->trbf_center[i]), box[3];
-    double c[4];
-    for (int k = 0; k < 3; k++) {
-        axis_coefficients(m, i, k, c);
-        if (axis_bounds(c, D, &box[k]))
-            return -1;
-    }
-    store_box(box, lo, hi);
-    *opacity_bound = opacity_max(m, i, t0, t1);
-    return 0;
-}
-
-/* ---- rendering ------------------------------------------------------------ */
-
-void gaussian_dynamic_instant_cull(const gaussian_model *m, size_t i, double t, gaussian_model *out, size_t j)
-{
-    double mean[3];
-    if (m->dynamic->kind == GAUSSIAN_DYNAMIC_FDGS)
-        fdgs_mean(m, i, t - m->dynamic->t_center[i], mean);
-    else
-        mean_at(m, i, offset_at(m, i, t), mean);
-    for (int k = 0; k < 3; k++)
-        out->mean[3 * j + k] = (float)mean[k], out->scale[3 * j + k] = m->scale[3 * i + k];
-}
-
-/* 4DGS's rest: the quaternion as loaded (constant), the opacity with its
- * cut. */
-static void fdgs_instant_rest(const gaussian_model *m, size_t i, double t, gaussian_model *out, size_t j)
-{
-    for (int k = 0; k < 4; k++)
-        out->rotation[4 * j + k] = m->rotation[4 * i + k];
-    out->opacity[j] = (float)fdgs_opacity(m, i, t - m->dynamic->t_center[i]);
-}
-
-void gaussian_dynamic_instant_rest(const gaussian_model *m, size_t i, double t, gaussian_model *out, size_t j)
-{
-    if (m->dynamic->kind == GAUSSIAN_DYNAMIC_FDGS) {
-        fdgs_instant_rest(m, i, t, out, j);
-        return;
-    }
-    double D = offset_at(m, i, t), q[4];
-    rotation_at(m, i, D, q);
-    for (int k = 0; k < 4; k++)
-        out->rotation[4 * j + k] = (float)q[k];
-    out->opacity[j] = (float)opacity_at(m, i, D);
-}
-
-void gaussian_dynamic_prefetch_cull(const gaussian_model *m, size_t i)
-{
-    if (m->dynamic->kind == GAUSSIAN_DYNAMIC_FDGS) {
-        __builtin_prefetch(&m->dynamic->t_center[i]);
-        __builtin_prefetch(&m->dynamic->velocity[3 * i]);
-        __builtin_prefetch(&m->mean[3 * i]);
-        __builtin_prefetch(&m->scale[3 * i]);
-        return;
-    }
-    __builtin_prefetch(&m->dynamic->trbf_center[i]);
-    __builtin_prefetch(&m->dynamic->motion[9 * i]);
-    __builtin_prefetch(&m->dynamic->motion[9 * i + 8]);
-    __builtin_prefetch(&m->mean[3 * i]);
-    __builtin_prefetch(&m->scale[3 * i]);
-}
-
-void gaussian_dynamic_prefetch_rest(const gaussian_model *m, size_t i)
-{
-    if (m->dynamic->kind == GAUSSIAN_DYNAMIC_FDGS) {
-        __builtin_prefetch(&m->rotation[4 * i]);
-        __builtin_prefetch(&m->dynamic->t_var[i]);
-        __builtin_prefetch(&m->opacity[i]);
-        return;
-    }
-    __builtin_prefetch(&m->dynamic->rot[4 * i]);
-    __builtin_prefetch(&m->dynamic->omega[4 * i]);
-    __builtin_prefetch(&m->dynamic->trbf_scale[i]);
-    __builtin_prefetch(&m->opacity[i]);
 }
 
 /* Why the box of one static Gaussian suffices (gaussian_dynamic_reach_bounds).
@@ -490,8 +204,8 @@ void gaussian_dynamic_prefetch_rest(const gaussian_model *m, size_t i)
  * e_a the larger of
  *   - the kernel's reach k(o) |row a of R S|, k(o) = sqrt(2 ln(255 o))
  *     growing with o; |row a of R S| <= s_max |row a of R|, and
- *     |row a of R| <= 1 however q turns: q = normalize(rot + omega D) has
- *     |q| = 1, or |q| < 1 (below torch's eps), or q = 0, and the unit
+ *     |row a of R| <= 1 however q turns: q has |q| = 1, or |q| < 1 (STG's
+ *     normalize(rot + omega D) below torch's eps), or q = 0, and the unit
  *     formula of q = |q| u is |q|^2 R(u) + (1 - |q|^2) I, a convex
  *     combination of two orthogonal matrices (q in floats: |q| <= 1 +
  *     2^-23);

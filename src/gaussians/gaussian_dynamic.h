@@ -1,110 +1,127 @@
-/* Gaussians that move: SpacetimeGaussians "lite" models (Li et al. 2024,
- * oppo-us-research/SpacetimeGaussians at 427abfc5), each Gaussian a
- * function of time t (the scene's time: one model per 50-frame segment,
- * its timestamps (frame - start) / 50). With D = t - trbf_center
- * (renderer/__init__.py:318; forward_lite forward.cu:186):
- *   mean     x + motion[0:3] D + motion[3:6] D^2 + motion[6:9] D^3  (forward.cu:196-198)
- *   rotation normalize(rot + omega D), torch's F.normalize (divided by
- *            max(|q|, 1e-12): q = 0 stays 0) and nothing more: the CUDA
- *            builds its matrix from that q without normalising again
- *            (ourslite.py:40, 123-126; forward.cu:127-138)
- *   scale    exp(scale), constant (ourslite.py:120-121, 837)
- *   opacity  sigmoid(opacity) exp(-(D / exp(trbf_scale))^2): no 1/2, no
- *            temporal cut-off (forward.cu:202-204, ourslite.py:835-836;
- *            helper_train.py:390-391 is the same in training)
- *   colour   f_dc_0..2 as plain RGB, fed as precomputed colours: no SH, no
- *            +0.5, no clamp per Gaussian (ourslite.py:139-140,
- *            renderer/__init__.py:320 and 339; forward.cu:430)
- * Pure data and math (the gaussians layer): the PLY reader is
- * gaussian_stg_ply.c. A model carries this through gaussian_model.dynamic
- * (NULL for static models); its static arrays hold x (mean), exp(scale)
- * (scale), sigmoid(opacity) (opacity), normalize(rot) or 0 (rotation, the
- * state at D = 0) and f_dc as sh[0..2] (sh_degree 0, rgb_precomputed).
+/* Gaussians that move: the seam every dynamic kind plugs into. A dynamic
+ * model is a static gaussian_model (gaussian.h) whose arrays hold the
+ * state at the kind's reference time, plus m->dynamic: the kind's own
+ * struct, whose first member is a gaussian_dynamic pointing at the kind's
+ * row of operations (gaussian_dynamic_ops). Nothing outside a kind's file
+ * tells the kinds apart: the renderer, the BVH, the blend and
+ * `refrender export` call through the row (the wrappers below).
  *
- * A second kind: real-time 4DGS (Yang et al., ICLR 2024;
- * fudan-zvg/4d-gaussian-splatting at 63725f21), each 4D Gaussian
- * conditioned on t as its rasterizer does it (forward.cu:279-352),
- * converted by scripts/convert_4dgs.py (its PLY: gaussian_dynamic_ply.h).
- * With D = t - t_center:
- *   mean     x + vel D, vel = Sigma_xt / Sigma_tt (forward.cu:347-350)
- *   rotation, scale  the conditional covariance, the same at every t
- *            (forward.cu:337-339): rot normalised on load as 3DGS's are
- *   opacity  sigmoid(opacity) marginal, marginal = exp(-0.5 D^2 / t_var),
- *            and 0 (not drawn) unless marginal > 0.05 (forward.cu:333-336)
- *   colour   4D SH (gaussian_sh4d_color) seen from the camera toward the
- *            CANONICAL mean x, not the moved one (forward.cu:79-81,
- *            480-482: orig_points), at dir_t = t_center - t (:83)
- * Its static arrays hold x, exp(scale), normalize(rot), sigmoid(opacity)
- * and sh4d as sh (sh_degree the spatial degree, sh_coeffs
- * (sh_degree + 1)^2 (sh_degree_t + 1)). */
+ * The kinds (one file each, with their rules and sources):
+ *   gaussian_stg.h   SpacetimeGaussians "lite" (Li et al. 2024): cubic
+ *                    mean, turning quaternion, temporal RBF opacity, RGB
+ *   gaussian_fdgs.h  real-time 4DGS (Yang et al., ICLR 2024): 4D Gaussians
+ *                    conditioned on t, linear mean, marginal opacity, 4D SH
+ * Their PLY readers: formats/gaussian_dynamic_ply.h. A new kind is its
+ * own file here defining a row, and a reader there with one line in the
+ * reader table (tests/test_gaussian_dynamic_kinds.c builds a third kind
+ * in the test alone and renders it through these calls).
+ *
+ * Shared below: the one-block allocation every kind uses, the D-interval of
+ * a shutter, the proved bounds of a cubic and of a linear path over it,
+ * and the reach box of a moving Gaussian (gaussian_dynamic_reach_bounds). */
 #ifndef RR_GAUSSIAN_DYNAMIC_H
 #define RR_GAUSSIAN_DYNAMIC_H
 
+#include <stddef.h>
+
 #include "core/common.h"
+#include "core/interval.h"
 #include "gaussians/gaussian.h"
 #include "gaussians/gaussian_hit.h"
-
-/* torch.nn.functional.normalize's eps (the default, ourslite.py:40). */
-#define GAUSSIAN_DYNAMIC_NORMALIZE_EPS 1e-12
-
-/* Which rules a dynamic model follows. */
-typedef enum { GAUSSIAN_DYNAMIC_STG, GAUSSIAN_DYNAMIC_FDGS } gaussian_dynamic_kind;
-
-typedef struct gaussian_dynamic {
-    gaussian_dynamic_kind kind;
-    /* SpacetimeGaussians-lite (kind STG) */
-    float *trbf_center;   /* 1 per Gaussian: the time of its mean and its peak opacity (owns the block
-                           * all five arrays share: gaussian_dynamic_alloc) */
-    float *trbf_scale;    /* 1 per Gaussian, as stored: the temporal scale is exp(trbf_scale) */
-    float *motion;        /* 9 per Gaussian: velocity, then the D^2 and D^3 coefficients (x y z each) */
-    float *omega;         /* 4 per Gaussian: the quaternion's rate, (w x y z) as rot */
-    float *rot;           /* 4 per Gaussian: rot_0..3 as stored (any length, zero allowed) */
-    /* 4DGS (kind FDGS) */
-    float *t_center;      /* 1 per Gaussian: the time of its canonical mean and its peak opacity (owns the
-                           * block the three arrays share: gaussian_dynamic_alloc_fdgs) */
-    float *velocity;      /* 3 per Gaussian: vel_0..2, the mean's (constant) rate */
-    float *t_var;         /* 1 per Gaussian: the temporal marginal's variance (> 0) */
-    double time_duration; /* T of the time harmonics (> 0) */
-    int sh_degree_t;      /* time harmonics k = 1..sh_degree_t (0 to 2; 0 unless sh_degree is 3) */
-} gaussian_dynamic;
-
-/* 4DGS draws a Gaussian only where its marginal is above this
- * (forward.cu:334: mask = marginal_t > 0.05). */
-#define GAUSSIAN_FDGS_MARGINAL_CUT 0.05
 
 /* One Gaussian at one time, as the official renderer draws it. */
 typedef struct {
     double mean[3];
-    double q[4];       /* (w x y z): unit, or shorter than 1 when |rot + omega D| < 1e-12, or 0 */
+    double q[4];       /* (w x y z), as the kind's rasterizer builds its matrix from it (not always unit:
+                        * gaussian_stg.h) */
     double scale[3];
     double opacity;
-    double rgb[3];     /* STG only: a 4DGS colour depends on the view (gaussian_dynamic_color) */
+    double rgb[3];     /* the colour where it does not depend on the view, else 0 (the row's color) */
 } gaussian_dynamic_state;
 
-/* Storage for n Gaussians' motion (NULL when out of memory): STG's, or
- * 4DGS's (_fdgs: time_duration and sh_degree_t left for the reader). */
-gaussian_dynamic *gaussian_dynamic_alloc(size_t n);
-gaussian_dynamic *gaussian_dynamic_alloc_fdgs(size_t n);
+/* A dynamic kind: one row of operations, i the Gaussian's index in m,
+ * m->dynamic of this kind. */
+typedef struct gaussian_dynamic_ops {
+    const char *name; /* for `refrender export`'s "motion": "stg-lite", "4dgs" */
+    /* Gaussian i at time t. */
+    void (*at)(const gaussian_model *m, size_t i, double t, gaussian_dynamic_state *out);
+    /* Its colour at time t seen along dir (a hit's gaussian_hit.dir). */
+    vec3 (*color)(const gaussian_model *m, size_t i, double t, vec3 dir);
+    /* The direction the colour is seen along from the camera centre eye
+     * (object space), when it is not the instant's (the ray toward the
+     * moved mean, which the hit holds); NULL: the instant's. */
+    void (*view_dir)(const gaussian_model *m, size_t i, vec3 eye, float dir[3]);
+    /* Over the times [t0, t1] (t0 <= t1) the mean stays in [lo, hi] (per
+     * axis; both the exact path and what `at` and instant_cull compute),
+     * and the opacity is at most *opacity_max. -1 (nothing written) if the
+     * box is not finite. */
+    int (*bounds)(const gaussian_model *m, size_t i, double t0, double t1, double lo[3], double hi[3],
+                  double *opacity_max);
+    /* The instant at t written into slot j of the scratch model out (see
+     * "rendering" below): cull the mean and scale, rest the rotation and
+     * opacity, in floats as the kind's rasterizer holds them. */
+    void (*instant_cull)(const gaussian_model *m, size_t i, double t, gaussian_model *out, size_t j);
+    void (*instant_rest)(const gaussian_model *m, size_t i, double t, gaussian_model *out, size_t j);
+    /* Start loading what each part reads (no value changes). */
+    void (*prefetch_cull)(const gaussian_model *m, size_t i);
+    void (*prefetch_rest)(const gaussian_model *m, size_t i);
+} gaussian_dynamic_ops;
+
+/* The first member of every kind's struct. */
+typedef struct gaussian_dynamic {
+    const gaussian_dynamic_ops *ops; /* the kind's row */
+    float *block;                    /* owned: every array of the kind's struct (gaussian_dynamic_alloc) */
+} gaussian_dynamic;
+
+/* One float array of a kind's struct: where its pointer is (offsetof), and
+ * how many floats it holds per Gaussian. */
+typedef struct {
+    size_t member;
+    size_t width;
+} gaussian_dynamic_array;
+
+/* A zeroed kind struct of `size` bytes (a gaussian_dynamic first) for n
+ * Gaussians, of row ops, whose `count` arrays share one block laid out in
+ * the order given, so the block's size is the widths' sum and cannot
+ * disagree with the layout; NULL, with nothing left allocated, when an
+ * allocation fails or the size overflows. */
+gaussian_dynamic *gaussian_dynamic_alloc(size_t n, size_t size, const gaussian_dynamic_ops *ops,
+                                         const gaussian_dynamic_array *arrays, int count);
 void gaussian_dynamic_free(gaussian_dynamic *d);
 
-/* Gaussian i of m (m->dynamic not NULL) at time t. */
-void gaussian_dynamic_at(const gaussian_model *m, size_t i, double t, gaussian_dynamic_state *out);
+/* ---- calls through the model's row -------------------------------------- */
 
-/* The colour of Gaussian i of a 4DGS model m at time t seen along dir
- * (gaussian_dynamic_view_dir's): its 4D SH, time argument t_center - t
- * (forward.cu:83). */
-vec3 gaussian_dynamic_color(const gaussian_model *m, size_t i, double t, vec3 dir);
-/* The view direction of that colour, from the camera centre eye (object
- * space) to the CANONICAL mean x, not the moved one (forward.cu:79-81,
- * 480-482 pass orig_points), as a hit holds it (gaussian_hit.dir). */
-void gaussian_dynamic_view_dir(const gaussian_model *m, size_t i, vec3 eye, float dir[3]);
+static inline void gaussian_dynamic_at(const gaussian_model *m, size_t i, double t, gaussian_dynamic_state *out)
+{
+    m->dynamic->ops->at(m, i, t, out);
+}
 
-/* Over the times [t0, t1] (t0 <= t1) Gaussian i's mean stays in
- * [lo, hi] (per axis; both the exact cubic path and what
- * gaussian_dynamic_at computes), and its opacity is at most
- * *opacity_max. Returns -1 (nothing written) if the box is not finite. */
-int gaussian_dynamic_bounds(const gaussian_model *m, size_t i, double t0, double t1, double lo[3], double hi[3],
-                            double *opacity_max);
+static inline vec3 gaussian_dynamic_color(const gaussian_model *m, size_t i, double t, vec3 dir)
+{
+    return m->dynamic->ops->color(m, i, t, dir);
+}
+
+/* Sets dir to the row's view direction; keeps it (the instant's) when the
+ * row has none. */
+static inline void gaussian_dynamic_view_dir(const gaussian_model *m, size_t i, vec3 eye, float dir[3])
+{
+    if (m->dynamic->ops->view_dir)
+        m->dynamic->ops->view_dir(m, i, eye, dir);
+}
+
+static inline int gaussian_dynamic_bounds(const gaussian_model *m, size_t i, double t0, double t1, double lo[3],
+                                          double hi[3], double *opacity_max)
+{
+    RR_DCHECK(m->dynamic && i < m->count && t0 <= t1);
+    return m->dynamic->ops->bounds(m, i, t0, t1, lo, hi, opacity_max);
+}
+
+/* The name `refrender export` writes as the model's motion ("none" for a
+ * static model). */
+static inline const char *gaussian_dynamic_name(const gaussian_model *m)
+{
+    return m->dynamic ? m->dynamic->ops->name : "none";
+}
 
 /* ---- rendering: a moving Gaussian as the static one of its instant ----
  *
@@ -112,24 +129,76 @@ int gaussian_dynamic_bounds(const gaussian_model *m, size_t i, double t0, double
  * draws Gaussian i of a dynamic model as the static Gaussian of its state
  * at t, written into slot j of a scratch model `out` of m's kind and
  * formation (its mean, scale, rotation and opacity arrays have room for
- * slot j; its sh is not read): the mean, the scale, q as the CUDA takes it
- * and the opacity, in floats as the CUDA holds them. The renderer maps
- * the scratch's hits back to i, so the compositing order and the colour
- * are those of Gaussian i itself. In two parts, as the kernels read them:
- * _cull the mean and scale (all a cull reads, gaussian_hit.h), _rest the
- * rotation and opacity (for the candidates the cull keeps). */
-void gaussian_dynamic_instant_cull(const gaussian_model *m, size_t i, double t, gaussian_model *out, size_t j);
-void gaussian_dynamic_instant_rest(const gaussian_model *m, size_t i, double t, gaussian_model *out, size_t j);
-/* Start loading what each part reads of Gaussian i (no value changes). */
-void gaussian_dynamic_prefetch_cull(const gaussian_model *m, size_t i);
-void gaussian_dynamic_prefetch_rest(const gaussian_model *m, size_t i);
+ * slot j; its sh is not read). The renderer maps the scratch's hits back
+ * to i, so the compositing order and the colour are those of Gaussian i
+ * itself. In two parts, as the kernels read them: _cull the mean and scale
+ * (all a cull reads, gaussian_hit.h), _rest the rotation and opacity (for
+ * the candidates the cull keeps). */
+static inline void gaussian_dynamic_instant_cull(const gaussian_model *m, size_t i, double t, gaussian_model *out,
+                                                 size_t j)
+{
+    m->dynamic->ops->instant_cull(m, i, t, out, j);
+}
+
+static inline void gaussian_dynamic_instant_rest(const gaussian_model *m, size_t i, double t, gaussian_model *out,
+                                                 size_t j)
+{
+    m->dynamic->ops->instant_rest(m, i, t, out, j);
+}
+
+static inline void gaussian_dynamic_prefetch_cull(const gaussian_model *m, size_t i)
+{
+    m->dynamic->ops->prefetch_cull(m, i);
+}
+
+static inline void gaussian_dynamic_prefetch_rest(const gaussian_model *m, size_t i)
+{
+    m->dynamic->ops->prefetch_rest(m, i);
+}
+
+/* ---- shared by the kinds' bounds ------------------------------------------ */
+
+/* The D-interval of [t0, t1] about the temporal centre c: [fl(t0 - c),
+ * fl(t1 - c)] one step outward holds the computed and the exact t - c of
+ * every t in [t0, t1] (rounding is monotone, and off by at most half a
+ * step). */
+static inline interval gaussian_dynamic_offset_interval(double t0, double t1, double c)
+{
+    return interval_step_out(interval_make(t0 - c, t1 - c));
+}
+
+/* One coordinate of a cubic path, c = (x, m1, m2, m3), in
+ * SpacetimeGaussians' order (forward.cu:196-198): x + D m1 + D^2 m2 +
+ * D^3 m3, D^2 = D D and D^3 = D^2 D. gaussian_dynamic_cubic_bounds proves
+ * its bound for this evaluation. */
+static inline double gaussian_dynamic_cubic_at(const double c[4], double D)
+{
+    double D2 = D * D, D3 = D2 * D;
+    return c[0] + D * c[1] + D2 * c[2] + D3 * c[3];
+}
+
+/* Over the D-interval D, the exact cubic path of c and what
+ * gaussian_dynamic_cubic_at computes stay in *out; -1 if it is not finite
+ * (the proof: gaussian_dynamic.c). */
+int gaussian_dynamic_cubic_bounds(const double c[4], interval D, interval *out);
+
+/* The same for the linear path x + vel D, computed as x + vel * D. */
+int gaussian_dynamic_linear_bounds(double x, double vel, interval D, interval *out);
+
+/* Writes the three axes' intervals to lo, hi. */
+static inline void gaussian_dynamic_store_box(const interval box[3], double lo[3], double hi[3])
+{
+    for (int k = 0; k < 3; k++)
+        lo[k] = box[k].lo, hi[k] = box[k].hi;
+}
 
 /* Object-space bounds of every point through which Gaussian i can give a
- * ray alpha >= 1/255 at any time whose state gaussian_dynamic_instant_cull/_rest
+ * ray alpha >= 1/255 at any time whose state the row's instant_cull/_rest
  * draws with its mean in [lo, hi] and its opacity at most opacity_max
- * (gaussian_dynamic_bounds' box and bound over the times): the box of
- * gaussian_view_bounds for every such instant, under the view bound v
- * (whose distance must hold the camera's from every point of [lo, hi]). */
+ * (the row's bounds over the times), its scales m->scale's and its
+ * quaternion of length at most 1: the box of gaussian_view_bounds for
+ * every such instant, under the view bound v (whose distance must hold the
+ * camera's from every point of [lo, hi]). */
 aabb gaussian_dynamic_reach_bounds(const gaussian_model *m, size_t i, const double lo[3], const double hi[3],
                                    double opacity_max, const gaussian_view_bound *v);
 

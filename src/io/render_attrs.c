@@ -64,7 +64,7 @@ static void describe_gaussians(FILE *f, const scene *s)
     int any = 0;
     for (int i = 0; i < s->nobjects; i++) {
         const scene_object *o = &s->objects[i];
-        if (o->kind != OBJECT_GAUSSIANS)
+        if (!scene_object_row(o)->gaussians)
             continue;
         const char *key[GAUSSIAN_IMAGING_FIELDS], *value[GAUSSIAN_IMAGING_FIELDS];
         gaussian_imaging(&o->gaussians, o->order, key, value);

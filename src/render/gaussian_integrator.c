@@ -151,14 +151,15 @@ static inline unsigned original_prim(const gaussian_object_ray *r, unsigned prim
 }
 
 /* A hit of object o's model found by ray r, as o's own: its object, its
- * Gaussian's index there (original_prim), and for a 4DGS model the SH
- * direction from the camera to the canonical mean (the instant's is the
- * moved mean's; gaussian_dynamic_view_dir). */
+ * Gaussian's index there (original_prim), and for a dynamic model the
+ * direction its kind sees the colour along (4DGS: from the camera to the
+ * canonical mean; the instant's is the moved mean's:
+ * gaussian_dynamic_view_dir). */
 static inline void own_hit(const gaussian_object_ray *r, const scene_object *o, gaussian_hit *h)
 {
     h->obj = r->obj, h->prim = original_prim(r, h->prim);
     const gaussian_model *m = &o->gaussians;
-    if (m->dynamic && m->dynamic->kind == GAUSSIAN_DYNAMIC_FDGS)
+    if (m->dynamic)
         gaussian_dynamic_view_dir(m, h->prim, r->ray.eye, h->dir);
 }
 

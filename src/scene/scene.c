@@ -1,5 +1,6 @@
 #include "scene/scene.h"
 
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -186,17 +187,68 @@ int scene_add_input(scene *s, const char *path)
     return 0;
 }
 
-aabb scene_object_bounds(const scene_object *o)
+/* ---- the object kinds' rows ---------------------------------------------- */
+
+static size_t points_count(const scene_object *o) { return o->model.count; }
+static aabb points_bounds(const scene_object *o) { return o->model.bounds; }
+
+/* About the box's centre, to the farthest corner of any splat's box. */
+static void points_sphere(const scene_object *o, vec3 *center, double *radius)
 {
-    if (o->kind == OBJECT_POINTS)
-        return o->model.bounds;
-    if (o->kind == OBJECT_GAUSSIANS) {
-        aabb b = aabb_empty();
-        for (size_t i = 0; i < o->gaussians.count; i++)
-            aabb_add_box(&b, gaussian_bounds(&o->gaussians, i, 0.0));
-        return b;
+    const pointmodel *m = &o->model;
+    vec3 c = v3_scale(v3_add(m->bounds.lo, m->bounds.hi), 0.5);
+    double r2 = 0;
+    for (size_t i = 0; i < m->count; i++) {
+        const float *p = m->geom[i].center, *e = &m->extent[3 * i];
+        vec3 far = v3(fabs(p[0] - c.x) + e[0], fabs(p[1] - c.y) + e[1], fabs(p[2] - c.z) + e[2]);
+        double d2 = v3_dot(far, far); /* farthest corner of the splat's box */
+        r2 = d2 > r2 ? d2 : r2;
     }
+    *center = c, *radius = sqrt(r2);
+}
+
+static size_t sphere_count(const scene_object *o) { return (void)o, 1; }
+
+static aabb sphere_bounds(const scene_object *o)
+{
     vec3 r = v3(o->sphere_radius, o->sphere_radius, o->sphere_radius);
     aabb b = {v3_sub(o->sphere_center, r), v3_add(o->sphere_center, r)};
     return b;
+}
+
+static void sphere_sphere(const scene_object *o, vec3 *center, double *radius)
+{
+    *center = o->sphere_center, *radius = o->sphere_radius;
+}
+
+static size_t gaussians_count(const scene_object *o) { return o->gaussians.count; }
+
+/* At the kernel radius, without the screen-space filter (accel_build.c
+ * gives the filter's footprint its own). */
+static aabb gaussians_bounds(const scene_object *o)
+{
+    aabb b = aabb_empty();
+    for (size_t i = 0; i < o->gaussians.count; i++)
+        aabb_add_box(&b, gaussian_bounds(&o->gaussians, i, 0.0));
+    return b;
+}
+
+/* The sphere about the box: half its diagonal. */
+static void gaussians_sphere(const scene_object *o, vec3 *center, double *radius)
+{
+    RR_DCHECK(!o->gaussians.dynamic); /* its rest means are no bound: object_travel (accel_build.c) takes its paths' box */
+    aabb b = gaussians_bounds(o);
+    *center = v3_scale(v3_add(b.lo, b.hi), 0.5), *radius = 0.5 * v3_len(v3_sub(b.hi, b.lo));
+}
+
+static const scene_object_ops object_rows[] = {
+    [OBJECT_POINTS] = {"a point model", 1, 0, points_count, points_bounds, points_sphere},
+    [OBJECT_SPHERE] = {"an analytic sphere", 0, 0, sphere_count, sphere_bounds, sphere_sphere},
+    [OBJECT_GAUSSIANS] = {"a Gaussian-splat model", 0, 1, gaussians_count, gaussians_bounds, gaussians_sphere},
+};
+
+const scene_object_ops *scene_object_row(const scene_object *o)
+{
+    RR_DCHECK((unsigned)o->kind < sizeof object_rows / sizeof *object_rows);
+    return &object_rows[o->kind];
 }

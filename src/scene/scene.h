@@ -48,6 +48,27 @@ typedef struct {
     animation anim;
 } scene_object;
 
+/* What an object kind is, as one row (scene.c's table, by object_kind):
+ * what the layers above ask of an object without testing its kind. The
+ * rows of its other operations live beside their code: accel_build.c (how
+ * Embree holds it), export_cmd.c (its JSON); scene_xml.c reads each by
+ * its element's name. */
+typedef struct {
+    const char *name;  /* for messages: "a point model", "an analytic sphere", "a Gaussian-splat model" */
+    int point_model;   /* 1: splats (surfels): what the splatting comparands draw */
+    int gaussians;     /* 1: a Gaussian-splat model (o->gaussians): its BVH is built for each shutter, its hits
+                        * composited by the Gaussian integrator, its imaging part of a render's identity */
+    size_t (*count)(const scene_object *o); /* its primitives */
+    /* Object-space bounds before its animation (scene_object_bounds). */
+    aabb (*bounds)(const scene_object *o);
+    /* A sphere about its bounds' centre holding it at rest; not for a
+     * dynamic Gaussian model, whose paths accel_build.c bounds. */
+    void (*rest_sphere)(const scene_object *o, vec3 *center, double *radius);
+} scene_object_ops;
+
+/* o's kind's row. */
+const scene_object_ops *scene_object_row(const scene_object *o);
+
 /* Scene parameters: -D name=value on the command line, <default> in the
  * file, $name in attribute values (scene_params.c). */
 #define SCENE_MAX_PARAMS 32
@@ -145,6 +166,6 @@ int scene_add_input(scene *s, const char *path);
  * dynamic Gaussian model's at its rest means only: over a shutter its
  * Gaussians' paths reach farther, and accel_build.c bounds those
  * (dynamic_paths); this must not be used for one. */
-aabb scene_object_bounds(const scene_object *o);
+static inline aabb scene_object_bounds(const scene_object *o) { return scene_object_row(o)->bounds(o); }
 
 #endif

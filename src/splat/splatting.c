@@ -109,10 +109,9 @@ static int splat_buckets(splat_frame *f, const splat_settings *set, int buckets,
 static int check_scene(const scene *s, rr_error *err)
 {
     for (int i = 0; i < s->nobjects; i++)
-        if (s->objects[i].kind != OBJECT_POINTS)
+        if (!scene_object_row(&s->objects[i])->point_model)
             return rr_fail(err, "%s: object '%s' is %s: refrender splat renders point models (surfels) only", s->path,
-                           s->objects[i].name, s->objects[i].kind == OBJECT_SPHERE ? "an analytic sphere"
-                                                                                  : "a Gaussian-splat model");
+                           s->objects[i].name, scene_object_row(&s->objects[i])->name);
     if (s->shut.rolling.kind != ROLLING_OFF)
         return rr_fail(err, "%s: a rolling shutter: refrender splat renders global-shutter instants only", s->path);
     return 0;
