@@ -39,7 +39,7 @@ LDLIBS   := -ljson-c -lassimp -lembree3 -lOpenEXRCore -lxml2 -ldl -lpthread -lm
 # (src/io/preview.h): linked into refrender it cost every run 0.4 s of loading
 PREVIEW_LIBS := -lOpenImageIO -lOpenImageIO_Util
 
-LIB_SRCS := core/common core/lanes core/inputfile core/atomicfile accel/kbuffer surfels/splat \
+LIB_SRCS := core/common core/arena core/lanes core/inputfile core/atomicfile accel/kbuffer surfels/splat \
             surfels/pointmodel formats/ply gaussians/gaussian formats/gaussian_ply gaussians/gaussian_dynamic gaussians/gaussian_stg gaussians/gaussian_fdgs \
             formats/gaussian_ply_common formats/gaussian_dynamic_ply formats/gaussian_stg_ply formats/gaussian_fdgs_ply gaussians/gaussian_hit gaussians/gaussian_blend formats/camjson formats/transforms \
             surfels/shapes surfels/surfelize formats/meshload core/rotation motion/curve motion/trajectory formats/tum \
