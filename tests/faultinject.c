@@ -10,11 +10,16 @@
  *                       and "calls W R" (writes, renames seen) at exit
  *   RR_FAULT_OP=realloc-in-threads  every realloc outside the main thread
  *                       returns NULL, as when memory runs out while the
- *                       render's workers grow their scratch */
+ *                       render's workers grow their scratch
+ *   RR_FAULT_OP=pthread_create  the Nth thread refrender itself starts (its
+ *                       start routine in the executable, not in a library
+ *                       such as Embree's TBB) fails with EAGAIN
+ * The "calls" line also counts the threads refrender itself started. */
 #define _GNU_SOURCE
 #include <dlfcn.h>
 #include <errno.h>
 #include <fcntl.h>
+#include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -22,7 +27,7 @@
 #include <sys/syscall.h>
 #include <unistd.h>
 
-static long calls[2]; /* writes, renames */
+static long calls[3]; /* writes, renames, threads started */
 
 /* A regular file open for writing (closing a file read is no write). */
 static int is_regular(int fd)
@@ -40,18 +45,18 @@ static void log_line(const char *what)
     int fd = open(path, O_WRONLY | O_APPEND | O_CREAT, 0644);
     if (fd >= 0) {
         char line[128];
-        int n = snprintf(line, sizeof line, "%s %ld %ld\n", what, calls[0], calls[1]);
+        int n = snprintf(line, sizeof line, "%s %ld %ld %ld\n", what, calls[0], calls[1], calls[2]);
         ssize_t ignored = syscall(1 /* SYS_write */, fd, line, (size_t)n);
         (void)ignored;
         close(fd);
     }
 }
 
-/* Whether this call (kind 0 write, 1 rename) is to fail. */
+/* Whether this call (kind 0 write, 1 rename, 2 thread start) is to fail. */
 static int should_fail(int kind, int fd)
 {
     const char *at = getenv("RR_FAULT_AT"), *op = getenv("RR_FAULT_OP");
-    int want = op && !strcmp(op, "rename");
+    int want = !op ? 0 : !strcmp(op, "rename") ? 1 : !strcmp(op, "pthread_create") ? 2 : 0;
     if (kind == 0 && !is_regular(fd))
         return 0;
     long n = ++calls[kind], k = at ? atol(at) : 0;
@@ -59,7 +64,7 @@ static int should_fail(int kind, int fd)
         return 0;
     int fail = n == k || (getenv("RR_FAULT_STICKY") && n > k);
     if (fail)
-        log_line(kind ? "rename" : "write");
+        log_line(kind == 2 ? "pthread_create" : kind ? "rename" : "write");
     return fail;
 }
 
@@ -131,4 +136,23 @@ void *realloc(void *p, size_t n)
     if (mode && n > 0 && syscall(SYS_gettid) != getpid())
         return errno = ENOMEM, NULL;
     return real(p, n);
+}
+
+/* Is fn in the executable rather than in a shared library? */
+static int in_executable(void *fn)
+{
+    Dl_info info;
+    return dladdr(fn, &info) && info.dli_fname && !strstr(info.dli_fname, ".so");
+}
+
+int pthread_create(pthread_t *t, const pthread_attr_t *attr, void *(*start)(void *), void *arg)
+{
+    static pthread_mutex_t lock = PTHREAD_MUTEX_INITIALIZER; /* (TBB's threads start threads too) */
+    int fail = 0;
+    if (in_executable((void *)start)) {
+        pthread_mutex_lock(&lock);
+        fail = should_fail(2, -1);
+        pthread_mutex_unlock(&lock);
+    }
+    return fail ? EAGAIN : REAL(pthread_create)(t, attr, start, arg);
 }

@@ -31,7 +31,7 @@ static int fixture_open(const char *xml, double box_scale, exact_fixture *f)
         printf("    %s\n", e.msg);
         return -1;
     }
-    f->scr = exact_scratch_new();
+    f->scr = exact_scratch_new(NULL);
     return f->scr ? 0 : -1;
 }
 

@@ -4,7 +4,9 @@ file untouched, and the exit status says which: the LD_PRELOAD shim
 tests/faultinject.c makes the Nth write to a regular file (and every later
 one: a disk that stays full) or the Nth rename fail, for every N until a run
 meets no fault. A periodic checkpoint that fails is a warning: the render
-goes on and the previous checkpoint stays."""
+goes on and the previous checkpoint stays. The same shim counts and fails
+the render threads refrender starts: one pool for the whole render, and a
+pthread_create that fails is an error or fewer threads, never a hang."""
 import os
 from pathlib import Path
 import subprocess
@@ -25,7 +27,7 @@ PREVIOUS = b"the previous good file"
 
 def faulty_run(args, at, op, log, sticky=True):
     """Runs refrender under the shim; returns the process, whether a fault
-    was injected, and the (writes, renames) it saw."""
+    was injected, and the (writes, renames, threads started) it saw."""
     env = dict(os.environ, LD_PRELOAD=SHIM, RR_FAULT_OP=op, RR_FAULT_LOG=str(log),
                ASAN_OPTIONS="verify_asan_link_order=0")
     if at:
@@ -37,8 +39,8 @@ def faulty_run(args, at, op, log, sticky=True):
     proc = subprocess.run([BIN, *map(str, args)], capture_output=True, text=True, env=env, timeout=120)
     lines = log.read_text().split("\n") if log.exists() else []
     calls = [tuple(map(int, line.split()[1:])) for line in lines if line.startswith("calls")]
-    faulted = any(line.startswith(("write", "rename")) for line in lines)
-    return proc, faulted, calls[-1] if calls else (0, 0)
+    faulted = any(line.startswith(("write", "rename", "pthread_create")) for line in lines)
+    return proc, faulted, calls[-1] if calls else (0, 0, 0)
 
 
 def same_pixels(a, b):
@@ -239,3 +241,35 @@ def test_gaussians_short_of_memory_are_counted_apart_from_full_kbuffers(tmp_path
     assert proc.returncode == 0, proc.stderr
     assert f"warning: {samples} samples had more than 64 hits within epsilon" in proc.stderr, proc.stderr
     assert f"warning: {samples} samples ran out of memory for their Gaussians" in proc.stderr, proc.stderr
+
+
+@pytest.mark.parametrize("rounds", [["--batches", 6], ["--batches", 2, "--target-error", 1e-9, "--max-batches", 6]])
+def test_render_threads_are_started_once_per_render_not_per_round(tmp_path, rounds):
+    # A render of B rounds (batches, or --target-error's extra ones up to
+    # its cap) with --threads 2 starts 2 threads: a pool that works every
+    # round. Threads made each round were 2 per round (12 here).
+    (tmp_path / "s.xml").write_text(SCENE)
+    log = tmp_path / "log"
+    args = [tmp_path / "s.xml", *FAST, "--threads", 2, *rounds, "-o", tmp_path / "o.exr"]
+    proc, _, calls = faulty_run(args, 0, "pthread_create", log)
+    assert proc.returncode == 0, proc.stderr
+    assert calls[2] == 2, calls
+
+
+def test_a_render_thread_that_cannot_start_is_an_error_or_one_thread_fewer(tmp_path):
+    # The first thread failing to start leaves none: a one-line error and
+    # exit 1, at once (no wait for workers that do not exist). The second
+    # failing leaves one: the render goes on with it, and a seed's image is
+    # the same for any thread count (README's --seed).
+    (tmp_path / "s.xml").write_text(SCENE)
+    log = tmp_path / "log"
+    args = [tmp_path / "s.xml", *FAST, "--threads", 3, "--batches", 3]
+    proc = run([*args, "-o", tmp_path / "good.exr"])
+    assert proc.returncode == 0, proc.stderr
+    proc, faulted, _ = faulty_run([*args, "-o", tmp_path / "none.exr"], 1, "pthread_create", log)
+    assert faulted and proc.returncode == 1, proc.stderr
+    assert proc.stderr.strip() == "refrender: could not start render threads", proc.stderr
+    assert not (tmp_path / "none.exr").exists()
+    proc, faulted, calls = faulty_run([*args, "-o", tmp_path / "one.exr"], 2, "pthread_create", log)
+    assert faulted and proc.returncode == 0 and calls[2] == 2, (proc.stderr, calls)  # one started, one failed
+    assert same_pixels(tmp_path / "one.exr", tmp_path / "good.exr")

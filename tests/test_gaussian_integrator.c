@@ -119,7 +119,7 @@ static void check_gathering(const char *xml, int rays, int at_random, unsigned *
     if (loaded(xml, &s, &a))
         return;
     gaussian_integrator windowed;
-    gaussian_integrator_init(&windowed);
+    gaussian_integrator_init(&windowed, NULL);
     gaussian_hits all = {0};
     for (int p = 0; p < rays; p++) {
         double x = 4 * (p % 16) + 2 + 0.37 * (p % 3), y = 4 * (p / 16) + 2 + 0.21 * (p % 5), tmax = INFINITY;
@@ -269,7 +269,7 @@ static void count_moves(const char *xml, int rays, double spread, unsigned *st, 
 {
     gaussian_integrator windowed; /* one ray's hits through the windows */
     gaussian_hits all = {0};      /* and all at once */
-    gaussian_integrator_init(&windowed);
+    gaussian_integrator_init(&windowed, NULL);
     scene s;
     accel *a;
     if (loaded(xml, &s, &a))

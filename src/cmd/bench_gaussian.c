@@ -214,7 +214,7 @@ static double disc_seconds(RTCScene discs, const scene *s, const render_settings
 static void count_hits(const scene *s, const accel *a, gs_result *r)
 {
     gaussian_integrator g;
-    gaussian_integrator_init(&g);
+    gaussian_integrator_init(&g, NULL);
     double gathered = 0, composited = 0;
     for (int y = 0; y < s->cam.height; y++)
         for (int x = 0; x < s->cam.width; x++) {

@@ -171,23 +171,33 @@ void exact_plan_free(exact_plan *p)
     free(p);
 }
 
-exact_scratch *exact_scratch_new(void) { return calloc(1, sizeof(exact_scratch)); }
+exact_scratch *exact_scratch_new(rr_arena *arena)
+{
+    exact_scratch *scr = calloc(1, sizeof *scr);
+    if (!scr)
+        return NULL;
+    if (!arena)
+        rr_arena_init(&scr->own, 0), arena = &scr->own;
+    scr->arena = arena;
+    return scr;
+}
+
+void exact_scratch_begin_batch(exact_scratch *scr)
+{
+    rr_arena_reset(scr->arena);
+    /* every array but prims (accel's own, malloc'd) was in the arena: gone */
+    rr_arena *arena = scr->arena, own = scr->own;
+    accel_prims prims = scr->prims;
+    memset(scr, 0, sizeof *scr);
+    scr->arena = arena, scr->own = own, scr->prims = prims;
+}
 
 void exact_scratch_free(exact_scratch *scr)
 {
     if (!scr)
         return;
-    free(scr->keys);
-    free(scr->info);
     free(scr->prims.ids);
-    free(scr->boxes);
-    free(scr->lists);
-    free(scr->evals);
-    free(scr->inherit);
-    free(scr->sorted);
-    free(scr->leaves);
-    free(scr->sets);
-    free(scr->ray_cache);
+    rr_arena_free(&scr->own); /* (empty when the arena is a worker's) */
     free(scr);
 }
 
@@ -266,7 +276,7 @@ sphere_crossing exact_sphere_crossing(const scene_object *o, const object_ray *r
 
 static int push_key(exact_scratch *scr, unsigned obj, unsigned prim)
 {
-    if (rr_grow((void **)&scr->keys, &scr->keys_cap, scr->nkeys + 1, sizeof *scr->keys))
+    if (rr_arena_grow(scr->arena, (void **)&scr->keys, &scr->keys_cap, scr->nkeys + 1, sizeof *scr->keys))
         return -1;
     scr->keys[scr->nkeys++] = (uint64_t)obj << 32 | prim;
     return 0;
@@ -334,7 +344,7 @@ static int gather_moving(const sample_ctx *c, unsigned obj)
     if (op->time_slices == 0)
         return gather_all(c, obj);
     size_t nboxes = (size_t)op->time_slices * BOX_DEPTH_SLICES;
-    if (rr_grow((void **)&scr->boxes, &scr->boxes_cap, nboxes, sizeof *scr->boxes))
+    if (rr_arena_grow(scr->arena, (void **)&scr->boxes, &scr->boxes_cap, nboxes, sizeof *scr->boxes))
         return EXACT_NO_MEMORY;
     unsigned n = candidate_boxes(c, obj, scr->boxes);
     RR_DCHECK_LE(n, scr->boxes_cap);
@@ -394,7 +404,7 @@ static void describe(const exact_plan *p, uint64_t key, cand_info *info)
 static int describe_candidates(const sample_ctx *c)
 {
     exact_scratch *scr = c->scr;
-    if (rr_grow((void **)&scr->info, &scr->info_cap, scr->nkeys + 1, sizeof *scr->info))
+    if (rr_arena_grow(scr->arena, (void **)&scr->info, &scr->info_cap, scr->nkeys + 1, sizeof *scr->info))
         return -1;
     for (size_t i = 0; i < scr->nkeys; i++)
         describe(c->p, scr->keys[i], &scr->info[i]);
@@ -435,7 +445,7 @@ void exact_candidate(const exact_scratch *scr, int i, unsigned *obj, unsigned *p
 
 int exact_context(const exact_plan *p, exact_scratch *scr, double x, double y, exact_stats *st, sample_ctx *c)
 {
-    if (rr_grow((void **)&scr->ray_cache, &scr->ray_cache_cap, (size_t)p->sc->nobjects + 1, sizeof *scr->ray_cache))
+    if (rr_arena_grow(scr->arena, (void **)&scr->ray_cache, &scr->ray_cache_cap, (size_t)p->sc->nobjects + 1, sizeof *scr->ray_cache))
         return -1;
     memset(scr->ray_cache, 0, ((size_t)p->sc->nobjects + 1) * sizeof *scr->ray_cache);
     scr->evaluations = 0, scr->status = EXACT_OK;
@@ -620,8 +630,8 @@ static int emit_piece(exact_scratch *scr, double a, double b, const int *set, in
         last->b = b;
         return 0;
     }
-    if (rr_grow((void **)&scr->leaves, &scr->leaves_cap, scr->npieces + 1, sizeof *scr->leaves) ||
-        rr_grow((void **)&scr->sets, &scr->sets_cap, scr->nsets + (size_t)n, sizeof *scr->sets))
+    if (rr_arena_grow(scr->arena, (void **)&scr->leaves, &scr->leaves_cap, scr->npieces + 1, sizeof *scr->leaves) ||
+        rr_arena_grow(scr->arena, (void **)&scr->sets, &scr->sets_cap, scr->nsets + (size_t)n, sizeof *scr->sets))
         return -1;
     if (n > 0) /* sets may still be unallocated (NULL) for empty sets */
         memcpy(scr->sets + scr->nsets, set, (size_t)n * sizeof *set);
@@ -710,10 +720,10 @@ static int classify(const sample_ctx *c, double a, double b, int n, size_t top, 
 static int reserve_stack(exact_scratch *scr)
 {
     size_t need = (size_t)(EXACT_MAX_DEPTH + 2) * (scr->nkeys + 1) * 2;
-    return rr_grow((void **)&scr->lists, &scr->lists_cap, need, sizeof *scr->lists) ||
-           rr_grow((void **)&scr->evals, &scr->evals_cap, need, sizeof *scr->evals) ||
-           rr_grow((void **)&scr->inherit, &scr->inherit_cap, need, sizeof *scr->inherit) ||
-           rr_grow((void **)&scr->sorted, &scr->sorted_cap, scr->nkeys + 1, sizeof *scr->sorted);
+    return rr_arena_grow(scr->arena, (void **)&scr->lists, &scr->lists_cap, need, sizeof *scr->lists) ||
+           rr_arena_grow(scr->arena, (void **)&scr->evals, &scr->evals_cap, need, sizeof *scr->evals) ||
+           rr_arena_grow(scr->arena, (void **)&scr->inherit, &scr->inherit_cap, need, sizeof *scr->inherit) ||
+           rr_arena_grow(scr->arena, (void **)&scr->sorted, &scr->sorted_cap, scr->nkeys + 1, sizeof *scr->sorted);
 }
 
 int exact_partition(const sample_ctx *c)

@@ -28,6 +28,7 @@
 #include <stdint.h>
 
 #include "accel/accel.h"
+#include "core/arena.h"
 #include "scene/scene.h"
 #include "motion/shutter.h"
 
@@ -49,7 +50,12 @@ int exact_plan_new(const scene *s, const accel *a, const shutter *shut, double b
                    rr_error *err);
 void exact_plan_free(exact_plan *p);
 
-exact_scratch *exact_scratch_new(void);
+/* A thread's scratch, its arrays in `arena` (NULL: an arena of its own),
+ * which must outlive it; NULL when out of memory. */
+exact_scratch *exact_scratch_new(rr_arena *arena);
+/* Resets the arena: the arrays of the samples before are gone, and the
+ * next samples reuse the memory. */
+void exact_scratch_begin_batch(exact_scratch *scr);
 void exact_scratch_free(exact_scratch *scr);
 
 typedef struct {

@@ -158,10 +158,10 @@ int exact_sample(const exact_plan *p, exact_scratch *scr, double x, double y, do
 
 /* ---- the exact-time integrator (integrator.h) ---- */
 
-static void *exact_thread_new(const integrator_context *ctx)
+static void *exact_thread_new(const integrator_context *ctx, rr_arena *arena)
 {
     (void)ctx;
-    return exact_scratch_new();
+    return exact_scratch_new(arena);
 }
 
 /* The mean over the batch's spatial positions of each one's exact time
@@ -172,6 +172,7 @@ static int exact_batch(void *thread, const integrator_context *ctx, const pixel_
                        integrator_counts *c)
 {
     exact_stats st = {0};
+    exact_scratch_begin_batch(thread);
     for (int ch = 0; ch < 4; ch++)
         est[ch] = 0;
     for (int i = 0; i < ps->count; i++) {

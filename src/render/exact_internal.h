@@ -79,7 +79,12 @@ typedef struct {
     int count;
 } piece;
 
+/* A thread's scratch: its arrays live in `arena` (rr_arena_grow) for one
+ * batch (exact_scratch_begin_batch) and are reused by its samples; prims
+ * is accel_collide_boxes's, which grows it with malloc. */
 struct exact_scratch {
+    rr_arena *arena; /* the worker's, or own */
+    rr_arena own;
     uint64_t *keys; /* candidates: object << 32 | primitive, sorted */
     size_t nkeys, keys_cap;
     cand_info *info; /* one per key */

@@ -8,28 +8,28 @@
 #include "gaussians/gaussian_dynamic.h"
 #include "render/surfel_integrator.h"
 
-void gaussian_integrator_init(gaussian_integrator *g) { memset(g, 0, sizeof *g); }
+void gaussian_integrator_init(gaussian_integrator *g, rr_arena *arena)
+{
+    memset(g, 0, sizeof *g);
+    if (!arena)
+        rr_arena_init(&g->own, 0), arena = &g->own;
+    g->arena = arena;
+}
 
 void gaussian_integrator_reset(gaussian_integrator *g) { g->hits.count = g->hits.dropped = 0; }
 
-static void instant_free(gaussian_instant *in)
+void gaussian_integrator_begin_batch(gaussian_integrator *g)
 {
-    free(in->model.mean);
-    free(in->model.scale);
-    free(in->model.rotation);
-    free(in->model.opacity);
-    free(in->prim);
+    rr_arena_reset(g->arena);
+    g->rays = NULL, g->instants = NULL, g->rays_cap = 0;
+    g->candidates = NULL, g->candidates_count = g->candidates_cap = 0;
+    g->candidate_order = NULL, g->candidate_order_cap = 0;
 }
 
 void gaussian_integrator_free(gaussian_integrator *g)
 {
     gaussian_hits_free(&g->hits);
-    for (size_t k = 0; g->instants && k < g->rays_cap; k++)
-        instant_free(&g->instants[k]);
-    free(g->instants);
-    free(g->rays);
-    free(g->candidates);
-    free(g->candidate_order);
+    rr_arena_free(&g->own); /* (empty when the arena is a worker's) */
     memset(g, 0, sizeof *g);
 }
 
@@ -64,7 +64,7 @@ static void list_candidate(void *user, unsigned prim)
 {
     const listing *l = user;
     gaussian_integrator *g = l->g;
-    if (rr_grow((void **)&g->candidates, &g->candidates_cap, g->candidates_count + 1, sizeof *g->candidates)) {
+    if (rr_arena_grow(g->arena, (void **)&g->candidates, &g->candidates_cap, g->candidates_count + 1, sizeof *g->candidates)) {
         evaluate(l, prim); /* no room to list it: evaluated at once, as listed ones are */
         return;
     }
@@ -80,15 +80,15 @@ static void cull_candidates(const listing *l, size_t first, unsigned ray)
 }
 
 /* Room for n Gaussians in an instant model: its arrays grow together
- * (rr_grow each from the shared capacity, which moves only when all have). */
-static int instant_room(gaussian_instant *in, size_t n)
+ * (rr_arena_grow each from the shared capacity, which moves only when all have). */
+static int instant_room(rr_arena *a, gaussian_instant *in, size_t n)
 {
     size_t mean = in->cap, scale = in->cap, rotation = in->cap, opacity = in->cap, prim = in->cap;
-    if (rr_grow((void **)&in->model.mean, &mean, n, 3 * sizeof *in->model.mean) ||
-        rr_grow((void **)&in->model.scale, &scale, n, 3 * sizeof *in->model.scale) ||
-        rr_grow((void **)&in->model.rotation, &rotation, n, 4 * sizeof *in->model.rotation) ||
-        rr_grow((void **)&in->model.opacity, &opacity, n, sizeof *in->model.opacity) ||
-        rr_grow((void **)&in->prim, &prim, n, sizeof *in->prim))
+    if (rr_arena_grow(a, (void **)&in->model.mean, &mean, n, 3 * sizeof *in->model.mean) ||
+        rr_arena_grow(a, (void **)&in->model.scale, &scale, n, 3 * sizeof *in->model.scale) ||
+        rr_arena_grow(a, (void **)&in->model.rotation, &rotation, n, 4 * sizeof *in->model.rotation) ||
+        rr_arena_grow(a, (void **)&in->model.opacity, &opacity, n, sizeof *in->model.opacity) ||
+        rr_arena_grow(a, (void **)&in->prim, &prim, n, sizeof *in->prim))
         return 0;
     in->cap = mean;
     return 1;
@@ -114,7 +114,7 @@ static void instantiate_for_cull(gaussian_integrator *g, const gaussian_model *m
     gaussian_instant *in = r->instant;
     size_t n = g->candidates_count - first;
     in->model.count = 0;
-    if (!instant_room(in, n)) {
+    if (!instant_room(g->arena, in, n)) {
         g->hits.dropped += n;
         g->candidates_count = first;
         return;
@@ -238,12 +238,9 @@ static void order_by_key_floor(const gaussian_candidate *cand, size_t n, uint64_
 /* Room to order n candidates (3n words), if it can be had. */
 static int order_room(gaussian_integrator *g, size_t n)
 {
-    if (g->candidate_order_cap < 3 * n) {
-        uint64_t *grown = realloc(g->candidate_order, 3 * n * sizeof *grown);
-        if (grown)
-            g->candidate_order = grown, g->candidate_order_cap = 3 * n;
-    }
-    return g->candidate_order_cap >= 3 * n;
+    return n <= SIZE_MAX / 3 &&
+           !rr_arena_grow(g->arena, (void **)&g->candidate_order, &g->candidate_order_cap, 3 * n,
+                          sizeof *g->candidate_order);
 }
 
 /* Evaluates the window's kept candidates EVALUATION_CHUNK at a time in
@@ -324,17 +321,14 @@ static size_t object_rays(const scene *s, const accel *a, const gaussian_sample 
 {
     unsigned count;
     const unsigned *objects = accel_gaussian_objects(a, &count);
-    if (g->rays_cap < count) { /* out of memory: the sample's Gaussians are dropped, and counted so */
-        gaussian_object_ray *grown = realloc(g->rays, count * sizeof *grown);
-        if (!grown)
-            return g->hits.dropped++, 0;
-        g->rays = grown;
-        gaussian_instant *instants = realloc(g->instants, count * sizeof *instants);
-        if (!instants)
-            return g->hits.dropped++, 0;
-        memset(instants + g->rays_cap, 0, (count - g->rays_cap) * sizeof *instants);
-        g->instants = instants, g->rays_cap = count;
-    }
+    /* (the two grow alike from the shared capacity, which moves only when both have) */
+    size_t rays = g->rays_cap, instants = g->rays_cap;
+    if (rr_arena_grow(g->arena, (void **)&g->rays, &rays, count, sizeof *g->rays) ||
+        rr_arena_grow(g->arena, (void **)&g->instants, &instants, count, sizeof *g->instants))
+        return g->hits.dropped++, 0; /* out of memory: the sample's Gaussians are dropped, and counted so */
+    if (instants > g->rays_cap) /* new instants hold no arrays yet */
+        memset(g->instants + g->rays_cap, 0, (instants - g->rays_cap) * sizeof *g->instants);
+    g->rays_cap = instants;
     size_t n = 0;
     for (unsigned k = 0; k < count; k++)
         if (accel_ray_meets_object(a, objects[k], smp->org, smp->dir)) {
@@ -410,13 +404,13 @@ static void composite_over_surfaces(gaussian_thread *th, const integrator_contex
     rgba[3] = surface ? 1.0 : 1.0 - blend.T;
 }
 
-static void *gaussian_new(const integrator_context *ctx)
+static void *gaussian_new(const integrator_context *ctx, rr_arena *arena)
 {
     (void)ctx;
     gaussian_thread *th = malloc(sizeof *th);
     if (!th)
         return NULL;
-    gaussian_integrator_init(&th->gaussians);
+    gaussian_integrator_init(&th->gaussians, arena);
     if (!(th->surfels = surfel_thread_new())) {
         free(th);
         return NULL;
@@ -440,7 +434,9 @@ static int gaussian_group_fn(void *thread, const integrator_context *ctx, const 
 static int gaussian_batch(void *thread, const integrator_context *ctx, const pixel_samples *ps, double est[4],
                           integrator_counts *c)
 {
-    surfel_thread_begin_batch(((gaussian_thread *)thread)->surfels);
+    gaussian_thread *th = thread;
+    surfel_thread_begin_batch(th->surfels);
+    gaussian_integrator_begin_batch(&th->gaussians);
     integrator_sampled_batch(thread, ctx, ps, gaussian_group_fn, est, c);
     return 0;
 }

@@ -13,6 +13,7 @@
 #include <stdint.h>
 
 #include "accel/accel.h"
+#include "core/arena.h"
 #include "gaussians/gaussian_hit.h"
 
 /* A dynamic model's Gaussians at one ray's time, as static ones: slot j
@@ -38,9 +39,14 @@ typedef struct {
     double pad;         /* gaussian_traversal_pad: how far a hit's t can lie outside its box's stretch */
 } gaussian_object_ray;
 
-/* A thread's scratch (grown as needed): zero it with _init, clear the
- * hits of a sample with _reset, release it with _free. */
+/* A thread's scratch: _init it over an arena, clear the hits of a sample
+ * with _reset, release it with _free. The arrays below hits grow in the
+ * arena (rr_arena_grow: a window's candidates one at a time) and are
+ * reused sample after sample until _begin_batch resets the arena; hits is
+ * the compositing heap's own (gaussian_blend.c), kept across batches. */
 typedef struct {
+    rr_arena *arena;                   /* the worker's, or own */
+    rr_arena own;
     gaussian_hits hits;                /* the hits waiting to be composited (gaussian_blend.c's heap) */
     gaussian_object_ray *rays;         /* the sample's ray in each Gaussian object it may meet */
     gaussian_instant *instants;        /* and its dynamic model's Gaussians at the ray's time (rays[k]'s is
@@ -54,10 +60,14 @@ typedef struct {
                                         * statistics: counts on across samples */
 } gaussian_integrator;
 
-void gaussian_integrator_init(gaussian_integrator *g);
+/* arena: the arrays' (NULL: an arena of its own), outliving g. */
+void gaussian_integrator_init(gaussian_integrator *g, rr_arena *arena);
 /* A new sample: no hits waiting, none dropped (hits.added and hits.moved
  * keep counting: statistics). */
 void gaussian_integrator_reset(gaussian_integrator *g);
+/* A new batch: resets the arena, whose arrays are gone (the next samples
+ * reuse its memory). */
+void gaussian_integrator_begin_batch(gaussian_integrator *g);
 void gaussian_integrator_free(gaussian_integrator *g);
 
 /* One sample: the world ray org + t dir (dir unit) at scene time `time`

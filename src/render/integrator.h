@@ -9,12 +9,17 @@
  *    their static reuse;
  *  - exact time (exact.h): each spatial position's exact time average.
  * Each keeps its own per-thread state (thread_new / thread_free), made
- * once per worker thread. */
+ * once per worker thread per render: render.c's pool starts the workers
+ * once and they work every round (batch) of the render. Its scratch
+ * arrays live in the worker's arena (core/arena.h), which the integrator
+ * resets at the start of each batch: nothing in the arena outlives a
+ * batch, and after the first batches a worker mallocs nothing more. */
 #ifndef RR_INTEGRATOR_H
 #define RR_INTEGRATOR_H
 
 #include <stdint.h>
 
+#include "core/arena.h"
 #include "core/camera.h"
 #include "render/exact.h"
 #include "render/render.h"
@@ -47,8 +52,9 @@ typedef struct {
 
 typedef struct {
     const char *name;
-    /* A thread's state; NULL when out of memory. */
-    void *(*thread_new)(const integrator_context *ctx);
+    /* A thread's state, with its scratch in `arena` (the worker's, kept
+     * until after thread_free); NULL when out of memory. */
+    void *(*thread_new)(const integrator_context *ctx, rr_arena *arena);
     /* The batch's estimate (RGBA) into est; returns 0, or an EXACT_ status
      * other than EXACT_OK when the batch has no estimate. */
     int (*pixel_batch)(void *thread, const integrator_context *ctx, const pixel_samples *ps, double est[4],

@@ -56,15 +56,22 @@ typedef struct {
     int exact_status, exact_px, exact_py; /* under lock: the first such failure and its pixel */
     double exact_unresolved;   /* under lock: exact_stats.unresolved summed over tiles */
     pthread_mutex_t lock;
-    pthread_cond_t cond;
+    pthread_cond_t cond;  /* to the coordinator: a worker is ready or done with a round; a pause's end */
+    pthread_cond_t start; /* to the workers: a round begins, or the render ends */
     int paused, active; /* under lock: pause requested; workers inside a tile */
+    /* the pool (under lock): workers started and ready (their scratch made),
+     * rounds begun, and the end of the render */
+    pthread_t *tids;
+    int started, ready, quit;
+    uint64_t rounds_begun;
     volatile sig_atomic_t *cancel;
 } render_job;
 
-typedef struct { /* per-thread scratch */
+typedef struct { /* per-thread scratch, made once per worker per render */
     sampler_scratch ss;
     double *x, *y, *t, *w;
-    void *integ; /* the integrator's per-thread state */
+    rr_arena arena; /* the integrator's scratch, reset by it between batches (integrator.h) */
+    void *integ;    /* the integrator's per-thread state */
 } thread_scratch;
 
 /* The positions and times of batch `batch` of pixel (px, py) into the
@@ -209,7 +216,8 @@ static int scratch_init(thread_scratch *scr, const render_job *job)
     scr->y = malloc(n * sizeof(double));
     scr->t = malloc(n * sizeof(double));
     scr->w = malloc(n * sizeof(double));
-    scr->integ = job->integ->thread_new(&job->ctx);
+    rr_arena_init(&scr->arena, 0);
+    scr->integ = job->integ->thread_new(&job->ctx, &scr->arena);
     return sampler_scratch_init(&scr->ss, &job->rs->smp) || !scr->x || !scr->y || !scr->t || !scr->w || !scr->integ
                ? -1
                : 0;
@@ -221,6 +229,7 @@ static void scratch_free(render_job *job, thread_scratch *scr)
     if (scr->integ)
         job->integ->thread_free(scr->integ, &c);
     atomic_fetch_add(&job->gaussians_short, c.gaussians_short);
+    rr_arena_free(&scr->arena);
     sampler_scratch_free(&scr->ss);
     free(scr->x);
     free(scr->y);
@@ -228,27 +237,90 @@ static void scratch_free(render_job *job, thread_scratch *scr)
     free(scr->w);
 }
 
+/* A round's tiles, taken one at a time until none is left or the render
+ * stops (cancelled, an exact sample failed). */
+static void work_round(render_job *job, thread_scratch *scr)
+{
+    while (!enter_work(job)) {
+        int tile = atomic_fetch_add(&job->next_tile, 1);
+        if (tile < job->ntiles)
+            render_tile(job, tile, scr);
+        leave_work(job);
+        if (tile >= job->ntiles)
+            break;
+    }
+}
+
+/* A worker of the pool: makes its scratch once, then works each round the
+ * coordinator begins (run_round) until the render ends (pool_stop). A
+ * worker without scratch works no round: the render fails before its
+ * first (pool_start). */
 static void *worker(void *arg)
 {
     render_job *job = arg;
     thread_scratch scr;
-    if (scratch_init(&scr, job))
-        atomic_store(&job->scratch_failed, 1); /* the render fails: no silently black tiles */
-    else
-        while (!enter_work(job)) {
-            int tile = atomic_fetch_add(&job->next_tile, 1);
-            if (tile < job->ntiles)
-                render_tile(job, tile, &scr);
-            leave_work(job);
-            if (tile >= job->ntiles)
-                break;
-        }
-    scratch_free(job, &scr);
+    int ok = !scratch_init(&scr, job);
     pthread_mutex_lock(&job->lock);
-    atomic_fetch_sub(&job->workers_left, 1);
-    pthread_cond_broadcast(&job->cond); /* wakes the coordinator at once */
+    if (!ok)
+        atomic_store(&job->scratch_failed, 1); /* the render fails: no silently black tiles */
+    job->ready++;
+    pthread_cond_broadcast(&job->cond);
+    for (uint64_t seen = 0;;) {
+        while (!job->quit && job->rounds_begun == seen)
+            pthread_cond_wait(&job->start, &job->lock);
+        if (job->quit)
+            break;
+        seen = job->rounds_begun;
+        pthread_mutex_unlock(&job->lock);
+        if (ok)
+            work_round(job, &scr);
+        pthread_mutex_lock(&job->lock);
+        atomic_fetch_sub(&job->workers_left, 1);
+        pthread_cond_broadcast(&job->cond); /* wakes the coordinator at once */
+    }
     pthread_mutex_unlock(&job->lock);
+    scratch_free(job, &scr);
     return NULL;
+}
+
+/* Ends the pool: the workers leave their wait for a round, free their
+ * scratch and are joined. */
+static void pool_stop(render_job *job)
+{
+    pthread_mutex_lock(&job->lock);
+    job->quit = 1;
+    pthread_cond_broadcast(&job->start);
+    pthread_mutex_unlock(&job->lock);
+    for (int i = 0; i < job->started; i++)
+        pthread_join(job->tids[i], NULL);
+    free(job->tids);
+    job->tids = NULL, job->started = 0;
+}
+
+/* Starts the render's worker threads, once per render (as many as
+ * pthread_create gives, at least one), and waits until each has made its
+ * scratch. */
+static int pool_start(render_job *job, rr_error *err)
+{
+    int threads = job->rs->threads;
+    job->tids = calloc((size_t)threads, sizeof *job->tids);
+    for (int i = 0; job->tids && i < threads; i++, job->started++)
+        if (pthread_create(&job->tids[i], NULL, worker, job))
+            break;
+    if (!job->started) {
+        free(job->tids);
+        job->tids = NULL;
+        return rr_fail(err, "could not start render threads");
+    }
+    pthread_mutex_lock(&job->lock);
+    while (job->ready < job->started)
+        pthread_cond_wait(&job->cond, &job->lock);
+    pthread_mutex_unlock(&job->lock);
+    if (!atomic_load(&job->scratch_failed))
+        return 0;
+    pool_stop(job);
+    return rr_fail(err, "out of memory for a render thread's samples (%lld per batch)",
+                   (long long)sampler_count(&job->rs->smp));
 }
 
 /* The state written carries the work its batches took so far (the rays of
@@ -312,21 +384,17 @@ static int exact_failure(const render_job *job, rr_error *err)
                    job->exact_px, job->exact_py, why);
 }
 
-/* Runs one round over all tiles with the worker threads, writing periodic
+/* Runs one round over all tiles with the pool's workers, writing periodic
  * checkpoints while they are paused. */
 static int run_round(render_job *job, const render_hooks *hooks, double start, double *last_checkpoint,
                      rr_error *err)
 {
-    int threads = job->rs->threads, started = 0, rc = 0;
-    pthread_t *tids = calloc((size_t)threads, sizeof *tids);
+    pthread_mutex_lock(&job->lock);
     atomic_store(&job->next_tile, 0);
-    atomic_store(&job->workers_left, threads);
-    for (int i = 0; tids && i < threads; i++, started++)
-        if (pthread_create(&tids[i], NULL, worker, job))
-            break;
-    atomic_fetch_sub(&job->workers_left, threads - started);
-    if (!started)
-        rc = rr_fail(err, "could not start render threads");
+    atomic_store(&job->workers_left, job->started);
+    job->rounds_begun++;
+    pthread_cond_broadcast(&job->start);
+    pthread_mutex_unlock(&job->lock);
     double last_report = 0;
     while (atomic_load(&job->workers_left) > 0) {
         wait_for_workers(job);
@@ -336,22 +404,14 @@ static int run_round(render_job *job, const render_hooks *hooks, double start, d
         }
         int due = hooks && hooks->checkpoint && hooks->checkpoint_every > 0 &&
                   rr_seconds() - *last_checkpoint >= hooks->checkpoint_every;
-        if (due && !*job->cancel && !rc) {
+        if (due && !*job->cancel) {
             rr_error ck_err;
             if (checkpoint_paused(job, hooks, start, &ck_err) && hooks->checkpoint_failed)
                 hooks->checkpoint_failed(hooks->user, &ck_err);
             *last_checkpoint = rr_seconds();
         }
     }
-    for (int i = 0; i < started; i++)
-        pthread_join(tids[i], NULL);
-    free(tids);
-    if (!rc && atomic_load(&job->scratch_failed))
-        rc = rr_fail(err, "out of memory for a render thread's samples (%lld per batch)",
-                    (long long)sampler_count(&job->rs->smp));
-    if (!rc && job->exact_status)
-        rc = exact_failure(job, err);
-    return rc;
+    return job->exact_status ? exact_failure(job, err) : 0;
 }
 
 /* Will any pixel take a batch in this round or a later one? A resumed
@@ -420,6 +480,7 @@ static int job_init(render_job *job, const scene *s, const accel *a, const rende
     job->integ = integrator_for(&job->ctx);
     pthread_mutex_init(&job->lock, NULL);
     pthread_cond_init(&job->cond, NULL);
+    pthread_cond_init(&job->start, NULL);
     return 0;
 }
 
@@ -428,6 +489,7 @@ static void job_finish(render_job *job, image *img, double start)
 {
     pthread_mutex_destroy(&job->lock);
     pthread_cond_destroy(&job->cond);
+    pthread_cond_destroy(&job->start);
     exact_plan_free(job->ctx.exact);
     img->seconds += rr_seconds() - start;
     img->rays += atomic_load(&job->rays);
@@ -446,12 +508,14 @@ int render_image(const scene *s, const accel *a, const render_settings *rs, imag
         return -1;
     double start = rr_seconds(), last_checkpoint = start;
     uint32_t rounds = rs->target_error > 0 ? rs->max_batches : rs->batches;
-    int rc = 0;
+    int rc = pool_start(&job, err);
     for (job.round = 0; job.round < rounds && !rc && !*cancel; job.round++) {
         if (job.round >= rs->batches && !any_pixel_wants_more(&job))
             break;
         rc = run_round(&job, hooks, start, &last_checkpoint, err);
     }
+    if (job.started)
+        pool_stop(&job);
     job_finish(&job, img, start);
     if (rc)
         return -1;

@@ -121,9 +121,9 @@ int surfel_group(surfel_thread *st, const integrator_context *ctx, const pixel_s
 
 /* ---- the sampled-surfel integrator (integrator.h) ---- */
 
-static void *surfel_new(const integrator_context *ctx)
+static void *surfel_new(const integrator_context *ctx, rr_arena *arena)
 {
-    (void)ctx;
+    (void)ctx, (void)arena; /* its scratch is fixed-size (k-buffers): nothing grows */
     return surfel_thread_new();
 }
 
