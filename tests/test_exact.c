@@ -234,6 +234,8 @@ static int exact_vs_sampled(const char *xml, int positions, int times)
         double x = f.s.cam.width * (0.2 + 0.6 * sampler_uniform(5, (uint64_t)p, 0, 0));
         double y = f.s.cam.height * (0.2 + 0.6 * sampler_uniform(5, (uint64_t)p, 0, 1));
         double ex[4], mean[4], se[4];
+        if (p % 4 == 0) /* batches of 4 positions, as a render's: the scratch arena reset between them */
+            exact_scratch_begin_batch(f.scr);
         if (exact_sample(f.p, f.scr, x, y, ex, NULL))
             bad++;
         sampled_average(&f, x, y, times, mean, se);

@@ -128,6 +128,8 @@ static void check_gathering(const char *xml, int rays, int at_random, unsigned *
             tmax = p % 2 ? 2.9 + 1.2 * rand_r(st) / RAND_MAX : INFINITY;
         }
         size_t hits, composited;
+        if (p % 16 == 0) /* batches of 16 rays, as a render's: their scratch arena reset between them */
+            gaussian_integrator_begin_batch(&windowed);
         gaussian_integrator_reset(&windowed);
         *mismatched += gathering_differs(a, &s, x, y, tmax, &windowed, &all, &hits, &composited);
         *many += hits > 64, *spent += hits > 64 && composited < hits;
@@ -168,6 +170,70 @@ TEST(gaussian_windows_and_chunks_composite_what_all_hits_at_once_do)
     printf("    rays with more than 64 hits, not all composited: %d of 1024; differing: %d\n", chunked, mismatched);
     CHECK(chunked > 500);
     CHECK(mismatched == 0);
+}
+
+/* The integrator's scratch lives in the worker's arena (core/arena.h) and
+ * is reused batch after batch: a batch of 64 rays through a dense slab
+ * (over 64 candidates a window: the arrays grow, one at a time) mallocs
+ * chunks the first time only, and gives the same blend bit for bit every
+ * time; an arena that can hold nothing drops the rays' Gaussians, counted
+ * (hits.dropped), and composites none, never crashes. Planted: a batch
+ * that forgets to reset the arena (it grew 64 KiB chunks on and on)
+ * mallocs more the second time. */
+TEST(gaussian_scratch_is_the_arenas_reused_each_batch_and_none_left_drops_gaussians)
+{
+    char dir[] = "/tmp/refrender-arena-XXXXXX", ply[160], xml[600];
+    CHECK(mkdtemp(dir) != NULL);
+    unsigned st = 3;
+    snprintf(ply, sizeof ply, "%s/slab.ply", dir);
+    int len = append_slab(xml, sizeof xml, snprintf(xml, sizeof xml, SLAB_CAMERA), ply, 8000, "3dgs", "", "", &st);
+    snprintf(xml + len, sizeof xml - (size_t)len, "</scene>");
+    scene s;
+    accel *a;
+    if (loaded(xml, &s, &a))
+        return;
+    rr_arena arena, none;
+    rr_arena_init(&arena, 4096);
+    rr_arena_init(&none, 0);
+    none.limit = 1;
+    gaussian_integrator g, starved;
+    gaussian_integrator_init(&g, &arena), gaussian_integrator_init(&starved, &none);
+    camera_view view;
+    scene_camera_view(&s, 0, &view);
+    double first[64][4];
+    uint64_t mallocs[3];
+    size_t dropped = 0, composited = 0;
+    for (int batch = 0; batch < 3; batch++) {
+        gaussian_integrator_begin_batch(&g), gaussian_integrator_begin_batch(&starved);
+        for (int p = 0; p < 64; p++) {
+            double x = 20 + 3 * (p % 8), y = 20 + 3 * (p / 8);
+            vec3 org, d;
+            scene_camera_ray(&s, x, y, 0, &org, &d);
+            gaussian_sample smp = {&view, x, y, org, d, 0};
+            gaussian_blend b, nb;
+            gaussian_blend_init(&b), gaussian_blend_init(&nb);
+            gaussian_integrator_reset(&g), gaussian_integrator_reset(&starved);
+            gaussian_integrate(&s, a, &smp, INFINITY, &g, &b);
+            gaussian_integrate(&s, a, &smp, INFINITY, &starved, &nb);
+            double got[4] = {b.sum.x, b.sum.y, b.sum.z, b.T};
+            if (batch == 0)
+                memcpy(first[p], got, sizeof got);
+            CHECK(!memcmp(first[p], got, sizeof got));
+            CHECK(b.composited > 0 && g.hits.dropped == 0);
+            dropped += starved.hits.dropped > 0, composited += nb.composited;
+        }
+        mallocs[batch] = arena.mallocs;
+    }
+    printf("    arena chunks after each batch: %llu %llu %llu (%zu bytes)\n", (unsigned long long)mallocs[0],
+           (unsigned long long)mallocs[1], (unsigned long long)mallocs[2], arena.bytes);
+    CHECK(mallocs[0] > 0 && mallocs[1] == mallocs[0] && mallocs[2] == mallocs[0]);
+    CHECK(dropped == 3 * 64 && composited == 0 && none.bytes == 0);
+    gaussian_integrator_free(&g), gaussian_integrator_free(&starved);
+    rr_arena_free(&arena), rr_arena_free(&none);
+    accel_free(a);
+    scene_free(&s);
+    unlink(ply);
+    rmdir(dir);
 }
 
 /* The same with several Gaussian objects sharing the windows (2D in both
