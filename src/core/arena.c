@@ -25,12 +25,13 @@ void rr_arena_init(rr_arena *a, size_t first_size)
 void rr_arena_free(rr_arena *a)
 {
     size_t first_size = a->first_size, limit = a->limit;
+    uint64_t mallocs = a->mallocs;
     for (rr_arena_chunk *c = a->first, *next; c; c = next) {
         next = c->next;
         free(c);
     }
     rr_arena_init(a, first_size);
-    a->limit = limit;
+    a->limit = limit, a->mallocs = mallocs;
 }
 
 void rr_arena_reset(rr_arena *a)

@@ -22,13 +22,14 @@ typedef struct {
     size_t first_size;           /* bytes of the first chunk */
     size_t limit;                /* bytes all chunks together may take; 0: no limit */
     size_t bytes;                /* bytes all chunks take */
-    uint64_t mallocs;            /* chunks malloc'd so far (tests, statistics) */
+    uint64_t mallocs;            /* chunks malloc'd over the arena's life (tests, statistics) */
 } rr_arena;
 
 /* An empty arena whose first chunk (malloc'd at the first allocation) has
  * first_size bytes (0: 64 KiB). */
 void rr_arena_init(rr_arena *a, size_t first_size);
-/* Frees every chunk; the arena is empty again and may be used anew. */
+/* Frees every chunk; the arena is empty again (its first size, limit and
+ * malloc count kept) and may be used anew. */
 void rr_arena_free(rr_arena *a);
 /* Every block handed out is gone; the chunks stay for the next ones. */
 void rr_arena_reset(rr_arena *a);
