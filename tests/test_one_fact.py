@@ -7,8 +7,10 @@ benchmark); outward rounding of bounds goes
 through core/interval.h (no nextafter or float-room recipe of its own in accel/ or the Gaussian
 bounds); the render tiles and the rasterizers' 16x16 tiles have two names; an image is resolved
 into its four planes in one place (film.c's image_planes_resolve); and the Gaussian object's
-description (semantics, tileRule, order) is written once (gaussian.c's gaussian_imaging). Each
-check fails on the tree before that change."""
+description (semantics, tileRule, order) is written once (gaussian.c's gaussian_imaging); and
+an object's kind is asked of a row, never tested (issue 50, item 2: a kind is named only where an
+object is made, in its enum, and as a row of a table). Each check fails on the tree before that
+change."""
 import re
 
 from conftest import ROOT
@@ -64,3 +66,13 @@ def test_an_image_is_resolved_into_its_planes_in_one_place():
 def test_the_gaussian_objects_description_is_written_once():
     assert where(r'tileRule(=|\\")') == []  # the header's and the export's own spellings
     assert where(r'"tileRule"') == ["src/gaussians/gaussian.c", "src/io/scene_xml.c"]  # the key; the XML attribute
+
+
+def test_object_kinds_are_rows_not_tests():
+    # exact time tested o->kind == OBJECT_SPHERE in exact.c and exact_integrate.c before its
+    # rows (render/exact_kinds.c); any comparison, case or ternary on a kind is a test
+    kind = re.compile(r"OBJECT_(POINTS|SPHERE|GAUSSIANS)\b")
+    allowed = re.compile(r"\[OBJECT_\w+\]\s*=|kind\s*=\s*OBJECT_\w+|enum\s*{\s*OBJECT_POINTS, OBJECT_SPHERE, "
+                         r"OBJECT_GAUSSIANS\s*}")
+    tests = sorted(f for f, text in sources().items() if kind.search(allowed.sub(" ", text)))
+    assert tests == []

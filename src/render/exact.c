@@ -227,51 +227,6 @@ const object_ray *exact_object_ray(const sample_ctx *c, unsigned obj, double t)
     return r;
 }
 
-/* ---- geometry of a candidate ---------------------------------------------- */
-
-static vec3 f3(const float *a) { return v3(a[0], a[1], a[2]); }
-
-/* The largest factor by which the ellipse coordinates (du.q, dv.q) stretch
- * an in-plane displacement q: the spectral norm of the 2x3 map, from the
- * larger eigenvalue of its 2x2 Gram matrix (1 / the smaller radius). */
-static double dual_norm(const splat_geom *g)
-{
-    vec3 du = f3(g->dual_u), dv = f3(g->dual_v);
-    double a = v3_dot(du, du), b = v3_dot(du, dv), c = v3_dot(dv, dv);
-    double lambda = 0.5 * (a + c) + sqrt(0.25 * (a - c) * (a - c) + b * b);
-    return sqrt(lambda) * (1 + 1e-12);
-}
-
-/* The farthest a point of the primitive is from the model-space point c. */
-static double primitive_reach(const scene_object *o, unsigned prim, vec3 c)
-{
-    if (o->kind == OBJECT_SPHERE)
-        return v3_len(v3_sub(o->sphere_center, c)) + o->sphere_radius;
-    const float *e = &o->model.extent[3 * (size_t)prim];
-    /* twice the splat's radius: a plane crossing within the slack of the
-     * ellipse (splat_eval, slack < 1) is inside it */
-    return v3_len(v3_sub(f3(o->model.geom[prim].center), c)) + 2.0 * sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
-}
-
-plane_crossing exact_plane_crossing(const cand_info *g, const object_ray *r)
-{
-    plane_crossing pc = {0, INFINITY, INFINITY};
-    double o[3] = {r->org.x, r->org.y, r->org.z}, d[3] = {r->dir.x, r->dir.y, r->dir.z}, co[3];
-    if (splat_depth_d(g->center, g->normal, o, d, co, &pc.denom, &pc.s))
-        pc.r2 = splat_radius2_d(g->dual_u, g->dual_v, co, d, pc.s);
-    else
-        pc.s = INFINITY;
-    return pc;
-}
-
-sphere_crossing exact_sphere_crossing(const scene_object *o, const object_ray *r, double *s)
-{
-    sphere_crossing sc = sphere_cross(r->org, r->dir, o->sphere_center, o->sphere_radius);
-    int k = sphere_visible_root(sc.root, 0.0, INFINITY);
-    *s = sc.root[k < 0 ? 1 : k];
-    return sc;
-}
-
 /* ---- step 1: candidates --------------------------------------------------- */
 
 static int push_key(exact_scratch *scr, unsigned obj, unsigned prim)
@@ -326,7 +281,7 @@ static unsigned candidate_boxes(const sample_ctx *c, unsigned obj, aabb *boxes)
 static int gather_all(const sample_ctx *c, unsigned obj)
 {
     const scene_object *o = &c->p->sc->objects[obj];
-    size_t count = o->kind == OBJECT_SPHERE ? 1 : o->model.count;
+    size_t count = scene_object_row(o)->count(o);
     if (c->scr->nkeys + count > EXACT_MAX_CANDIDATES)
         return EXACT_TOO_MANY_CANDIDATES;
     for (size_t i = 0; i < count; i++)
@@ -388,16 +343,7 @@ static void describe(const exact_plan *p, uint64_t key, cand_info *info)
     unsigned obj = (unsigned)(key >> 32), prim = (unsigned)key;
     const scene_object *o = &p->sc->objects[obj];
     info->obj = obj, info->prim = prim;
-    info->reach = primitive_reach(o, prim, p->obj[obj].center);
-    if (o->kind == OBJECT_SPHERE)
-        return;
-    const splat_geom *g = &o->model.geom[prim];
-    for (int k = 0; k < 3; k++) {
-        info->center[k] = g->center[k], info->normal[k] = g->plane_normal[k];
-        info->dual_u[k] = g->dual_u[k], info->dual_v[k] = g->dual_v[k];
-    }
-    info->dual_norm = dual_norm(g);
-    info->shading_normal = f3(pointmodel_normal(&o->model, prim));
+    exact_kind_row(o)->describe(o, prim, p->obj[obj].center, info);
 }
 
 /* The certificates' per-candidate constants (exact_internal.h). */
@@ -456,69 +402,6 @@ int exact_context(const exact_plan *p, exact_scratch *scr, double x, double y, e
 
 /* ---- step 2: certified pieces -------------------------------------------- */
 
-/* A splat at the piece's middle, and whether its state holds over the piece.
- * Hit plane crossing P (depth s), ellipse radius r. Over the piece:
- * - the crossing moves by at most sigma = delta / (|D.n| - eps_d) in depth
- *   (the ray point at depth s moves by delta, then slides along the ray to
- *   the plane) and in the plane by the ray point's motion projected along
- *   the ray onto the plane, a projection of norm 1 / cos(ray, normal):
- *   move = delta (|D| + eps_d) / (|D.n| - eps_d) = sigma (|D| + eps_d);
- * - the ellipse coordinates (a, b) = (du.q, dv.q) move by at most
- *   kappa * move, kappa the spectral norm of [du; dv] (dual_norm);
- * so r > 1 + kappa move: never covered; r < 1 - kappa move and s > sigma:
- * always covered. D moves by at most eps_d (its turn rate). The same argument run backwards from a hit at another
- * time gives the first (a hit then puts P within move of the ellipse). */
-static cand_eval splat_eval(const cand_info *g, const object_ray *r, double delta, double eps_d)
-{
-    plane_crossing pc = exact_plane_crossing(g, r);
-    double denom = pc.denom, radius = sqrt(pc.r2);
-    cand_eval e = {0, 1, pc.s, 0.0};
-    e.hit = denom != 0 && e.s >= 0 && radius <= 1;
-    if (delta == 0) /* nothing moves relative to the ray */
-        return e;
-    double cabs = fabs(denom);
-    e.sure = 0;
-    e.sigma = INFINITY; /* depth range unknown */
-    if (!(cabs > eps_d))
-        return e;
-    e.sigma = delta / (cabs - eps_d);
-    double move = e.sigma * (v3_len(r->dir) + eps_d);
-    double slack = g->dual_norm * move;
-    /* which side of the shading normal faces the eye must not change either */
-    double side = fabs(v3_dot(g->shading_normal, r->dir));
-    e.sure = radius > 1 + slack || (e.s < -e.sigma && slack < 1) || (radius < 1 - slack && e.s > e.sigma && side > eps_d);
-    return e;
-}
-
-/* An analytic sphere: the line's distance rho from the center moves by at
- * most delta, and the visible crossing stays within the shell of
- * half-width delta about the surface on the same side (front from outside,
- * back from inside): its depth stays between the shell's crossings. */
-static cand_eval sphere_eval(const scene_object *o, const object_ray *r, double delta)
-{
-    double s;
-    sphere_crossing sc = exact_sphere_crossing(o, r, &s);
-    double R = o->sphere_radius, A = sc.A, B = sc.B, oc2 = sc.oc2;
-    cand_eval e = {0, 1, INFINITY, 0.0};
-    if (sc.disc >= 0) {
-        e.s = s;
-        e.hit = e.s >= 0;
-    }
-    if (delta == 0)
-        return e;
-    double rho = sqrt(fmax(0.0, oc2 - B * B / A)), lam = sqrt(A), centre = -B / A, dist = sqrt(oc2);
-    e.sure = rho > R + delta;
-    e.sigma = INFINITY; /* depth range unknown until certified */
-    if (e.sure || !(rho < R - delta) || fabs(dist - R) <= delta)
-        return e;
-    double outer = sqrt((R + delta) * (R + delta) - rho * rho) / lam;
-    double inner = sqrt(fmax(0.0, (R - delta) * (R - delta) - rho * rho)) / lam;
-    double lo = dist > R ? centre - outer : centre + inner, hi = dist > R ? centre - inner : centre + outer;
-    e.sigma = fmax(e.s - lo, hi - e.s);
-    e.sure = lo > 0 || hi < 0;
-    return e;
-}
-
 /* One candidate at the middle of [a, b]: its state, and whether that
  * state holds over the whole piece. */
 static cand_eval evaluate_one(const sample_ctx *c, int index, double a, double b)
@@ -529,7 +412,7 @@ static cand_eval evaluate_one(const sample_ctx *c, int index, double a, double b
     double h = b - a;
     const object_ray *r = exact_object_ray(c, info->obj, 0.5 * (a + b));
     double delta = reach_delta(op, info->reach, h);
-    return o->kind == OBJECT_SPHERE ? sphere_eval(o, r, delta) : splat_eval(info, r, delta, op->dir_rate * h * 0.5);
+    return exact_kind_row(o)->eval(o, info, r, delta, op->dir_rate * h * 0.5);
 }
 
 /* Evaluates list[0..n) on [a, b] into ev. A candidate whose state was

@@ -16,26 +16,15 @@ static int candidate_hit(const sample_ctx *c, int index, double t, surface_hit *
 {
     const cand_info *info = &c->scr->info[index];
     const scene_object *o = &c->p->sc->objects[info->obj];
+    const exact_kind_ops *row = exact_kind_row(o);
     const object_ray *r = exact_object_ray(c, info->obj, t);
-    vec3 normal, color;
-    double s, r2 = 0.0;
-    if (o->kind == OBJECT_SPHERE) {
-        exact_sphere_crossing(o, r, &s);
-        normal = v3_scale(v3_sub(v3_add(r->org, v3_scale(r->dir, s)), o->sphere_center), 1.0 / o->sphere_radius);
-        color = o->sphere_color;
-    } else {
-        plane_crossing pc = exact_plane_crossing(info, r);
-        if (pc.denom == 0)
-            return 0;
-        s = pc.s, r2 = pc.r2;
-        const float *sc = pointmodel_color(&o->model, info->prim);
-        normal = info->shading_normal;
-        color = v3(sc[0], sc[1], sc[2]);
-    }
-    vec3 wn = xform_normal(&r->xf, normal_facing_eye(normal, r->dir));
-    double w = hit_weight(o->kind == OBJECT_SPHERE, r2, accel_sigma(c->p->acc));
-    *h = (surface_hit){(float)s, info->obj, info->prim, (float)w, (float)r2,
-                       {(float)color.x, (float)color.y, (float)color.z}, {(float)wn.x, (float)wn.y, (float)wn.z}};
+    exact_crossing x;
+    if (!row->cross(o, info, r, &x))
+        return 0;
+    vec3 wn = xform_normal(&r->xf, normal_facing_eye(x.normal, r->dir));
+    double w = hit_weight(row->opaque, x.r2, accel_sigma(c->p->acc));
+    *h = (surface_hit){(float)x.s, info->obj, info->prim, (float)w, (float)x.r2,
+                       {(float)x.color.x, (float)x.color.y, (float)x.color.z}, {(float)wn.x, (float)wn.y, (float)wn.z}};
     return 1;
 }
 

@@ -116,19 +116,30 @@ typedef struct {
     exact_stats *st;
 } sample_ctx;
 
-/* Where a ray crosses a candidate splat's plane (splat_depth_d and
- * splat_radius2_d, the sampled path's rule in double): depth s and squared
- * ellipse radius r2, both INFINITY when the ray is parallel to the plane
- * (denom = D.n = 0: no hit, as in splat_intersect). */
+/* A candidate's crossing at one time, for shading: depth s, squared
+ * ellipse radius r2 (0 for a sphere), object-space normal and colour. */
 typedef struct {
-    double denom, s, r2;
-} plane_crossing;
-plane_crossing exact_plane_crossing(const cand_info *g, const object_ray *r);
+    double s, r2;
+    vec3 normal, color;
+} exact_crossing;
 
-/* A ray against an analytic sphere (hitrules.h) and the depth s of its
- * visible crossing from the origin on (the far root when neither is ahead:
- * then s < 0, no hit). */
-sphere_crossing exact_sphere_crossing(const scene_object *o, const object_ray *r, double *s);
+/* What exact time asks of each object kind, one row per kind
+ * (exact_kinds.c, indexed by object_kind as accel_build.c's rows are). */
+typedef struct {
+    /* The candidate's constants (cand_info) past obj and prim: its reach
+     * from the model-space point c and what its certificates read. */
+    void (*describe)(const scene_object *o, unsigned prim, vec3 c, cand_info *info);
+    /* Its state at the ray r of a piece's middle, and whether that state
+     * holds over the piece: r's points move by at most delta, its
+     * direction by at most eps_d. */
+    cand_eval (*eval)(const scene_object *o, const cand_info *g, const object_ray *r, double delta, double eps_d);
+    /* Its crossing of r for shading; 0: none (parallel to a splat). */
+    int (*cross)(const scene_object *o, const cand_info *g, const object_ray *r, exact_crossing *x);
+    int opaque; /* hit_weight's is_sphere: weight 1, no kernel */
+} exact_kind_ops;
+
+/* o's kind's row (not for a Gaussian model). */
+const exact_kind_ops *exact_kind_row(const scene_object *o);
 
 /* Counts n evaluations of the current sample; 0 while it may go on, else
  * the EXACT_ status that stops it (budget spent or interrupted). */
