@@ -8,9 +8,13 @@
  *   RR_FAULT_STICKY=1   every later write fails too (a disk that stays full)
  *   RR_FAULT_LOG=FILE   a line is appended to FILE for each injected fault,
  *                       and "calls W R" (writes, renames seen) at exit
- *   RR_FAULT_OP=realloc-in-threads  every realloc outside the main thread
- *                       returns NULL, as when memory runs out while the
- *                       render's workers grow their scratch
+ *   RR_FAULT_OP=memory-in-threads  every realloc outside the main thread,
+ *                       and every malloc of ARENA_CHUNK_MIN bytes or more in
+ *                       a thread refrender itself started, returns NULL, as
+ *                       when memory runs out while the render's workers grow
+ *                       their scratch (rr_grow's reallocs, the chunks of
+ *                       their arenas: core/arena.c, whose chunks malloc'd
+ *                       are 64 KiB and up)
  *   RR_FAULT_OP=pthread_create  the Nth thread refrender itself starts (its
  *                       start routine in the executable, not in a library
  *                       such as Embree's TBB) fails with EAGAIN
@@ -121,21 +125,66 @@ int rename(const char *from, const char *to)
     return REAL(rename)(from, to);
 }
 
+/* RR_FAULT_OP=memory-in-threads (read once). */
+static int memory_mode(void)
+{
+    static int mode = -1;
+    if (mode < 0) {
+        const char *op = getenv("RR_FAULT_OP");
+        mode = op && !strcmp(op, "memory-in-threads");
+    }
+    return mode;
+}
+
 /* The render's worker threads are the only ones that grow scratch while
  * rendering; the main thread reads the scene and writes the outputs. */
 void *realloc(void *p, size_t n)
 {
     static void *(*real)(void *, size_t);
-    static int mode = -1;
     if (!real)
         real = (void *(*)(void *, size_t))dlsym(RTLD_NEXT, "realloc");
-    if (mode < 0) {
-        const char *op = getenv("RR_FAULT_OP");
-        mode = op && !strcmp(op, "realloc-in-threads");
-    }
-    if (mode && n > 0 && syscall(SYS_gettid) != getpid())
+    if (memory_mode() && n > 0 && syscall(SYS_gettid) != getpid())
         return errno = ENOMEM, NULL;
     return real(p, n);
+}
+
+/* The smallest arena chunk: rr_arena_init's default first chunk (64 KiB,
+ * core/arena.h). The workers' other mallocs (their sample arrays, integrator
+ * state) are smaller, and the threads of libraries (Embree's TBB) are not
+ * refrender's own: neither fails. */
+#define ARENA_CHUNK_MIN 65536
+static __thread int own_thread; /* started by refrender (pthread_create below) */
+extern void *__libc_malloc(size_t n);
+
+void *malloc(size_t n)
+{
+    static void *(*real)(size_t);
+    static int resolving;
+    if (!real) {
+        if (resolving) /* (dlsym asking for memory while it finds malloc) */
+            return __libc_malloc(n);
+        resolving = 1;
+        real = (void *(*)(size_t))dlsym(RTLD_NEXT, "malloc");
+        resolving = 0;
+    }
+    if (own_thread && n >= ARENA_CHUNK_MIN && memory_mode())
+        return errno = ENOMEM, NULL;
+    return real(n);
+}
+
+/* A thread refrender starts runs its start routine through this, marked
+ * as its own. */
+typedef struct {
+    void *(*start)(void *);
+    void *arg;
+} own_start;
+
+static void *run_own(void *p)
+{
+    own_start s = *(own_start *)p;
+    free(p);
+    own_thread = 1;
+    return s.start(s.arg);
 }
 
 /* Is fn in the executable rather than in a shared library? */
@@ -154,5 +203,14 @@ int pthread_create(pthread_t *t, const pthread_attr_t *attr, void *(*start)(void
         fail = should_fail(2, -1);
         pthread_mutex_unlock(&lock);
     }
-    return fail ? EAGAIN : REAL(pthread_create)(t, attr, start, arg);
+    if (fail)
+        return EAGAIN;
+    own_start *own = in_executable((void *)start) ? malloc(sizeof *own) : NULL;
+    if (!own)
+        return REAL(pthread_create)(t, attr, start, arg);
+    own->start = start, own->arg = arg;
+    int rc = REAL(pthread_create)(t, attr, run_own, own);
+    if (rc)
+        free(own);
+    return rc;
 }

@@ -221,7 +221,9 @@ def test_scene_export_writes_its_three_outputs_or_none(tmp_path, scene, op, stic
 def test_gaussians_short_of_memory_are_counted_apart_from_full_kbuffers(tmp_path):
     # Every sample meets 70 coplanar splats (more than the k-buffer's 64
     # within epsilon) and, with every realloc of the render's worker threads
-    # failing, finds no memory for its Gaussians: each of the W*H*spp*tspp
+    # failing, and every chunk of their arenas (where the Gaussian
+    # integrator's rays, candidates and hits' heap grow), finds no memory
+    # for its Gaussians: each of the W*H*spp*tspp
     # samples is one of each, and the two are told apart (the memory
     # drops were added to the overflow count, one sample twice, and called
     # "more than 64 hits within epsilon").
@@ -234,7 +236,7 @@ def test_gaussians_short_of_memory_are_counted_apart_from_full_kbuffers(tmp_path
     scene.write_text('<scene><camera position="0 0 5" lookat="0 0 0" up="0 1 0" fov="30" width="4" height="3"/>'
                      f'<object><pointModel>{splats}</pointModel></object>'
                      f'<object><gaussianModel file="{ply}"/></object></scene>')
-    env = dict(os.environ, LD_PRELOAD=SHIM, RR_FAULT_OP="realloc-in-threads", ASAN_OPTIONS="verify_asan_link_order=0")
+    env = dict(os.environ, LD_PRELOAD=SHIM, RR_FAULT_OP="memory-in-threads", ASAN_OPTIONS="verify_asan_link_order=0")
     proc = subprocess.run([BIN, *map(str, [scene, "--spp", 1, "--tspp", 2, "--quiet", "-o", tmp_path / "o.exr"])],
                           capture_output=True, text=True, env=env, timeout=120)
     samples = 4 * 3 * 1 * 2

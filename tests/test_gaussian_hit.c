@@ -79,14 +79,58 @@ TEST(gaussian_blend_does_not_depend_on_the_order_hits_come_in)
     /* the first half found holds every key below 4 (found first by key) */
     for (size_t k = 0; k < 64; k++)
         keyed[k] = k;
-    gaussian_hits h = {0};
+    rr_arena hits_arena; /* the heap's memory */
+    rr_arena_init(&hits_arena, 0);
+    gaussian_hits h;
+    gaussian_hits_init(&h, &hits_arena);
     gaussian_blend a, b, c;
     blend_all(&h, hits, 64, fwd, -1.0, models, &a);
     blend_all(&h, hits, 64, shuffled, -1.0, models, &b);
     blend_all(&h, hits, 64, keyed, 4.0, models, &c);
     CHECK(a.composited > 10 && a.T == b.T && a.T == c.T);
     CHECK(a.sum.x == b.sum.x && a.sum.y == c.sum.y && a.sum.z == c.sum.z && a.composited == c.composited);
-    gaussian_hits_free(&h);
+    rr_arena_free(&hits_arena);
+    gaussian_model_free(&m);
+}
+
+/* The hits' heap grows in its arena (a worker's: core/arena.h) and holds
+ * what the arena can: an arena of one 4096-byte chunk holds at most
+ * 4096 / sizeof(gaussian_hit) hits (rr_arena_grow's doubling from 64 may
+ * stop short of that), each hit beyond is dropped and counted, and those
+ * kept composite, all of them (alpha 0.001: T stays far above 1e-4).
+ * Begun anew after the arena's reset, the heap reuses its chunk (no malloc)
+ * and holds as many again; an arena that can hold nothing drops every hit. */
+TEST(gaussian_hits_grow_in_their_arena_and_drop_what_it_cannot_hold)
+{
+    enum { N = 1000 };
+    gaussian_model m;
+    model_of(&m, N, GAUSSIAN_2D);
+    const gaussian_model *models[1] = {&m};
+    rr_arena arena, none;
+    rr_arena_init(&arena, 4096), rr_arena_init(&none, 0);
+    arena.limit = 4096, none.limit = 1;
+    gaussian_hits h, starved;
+    gaussian_hits_init(&h, &arena), gaussian_hits_init(&starved, &none);
+    size_t kept[2];
+    for (int batch = 0; batch < 2; batch++) {
+        rr_arena_reset(&arena);
+        gaussian_hits_begin(&h);
+        h.dropped = 0;
+        for (unsigned k = 0; k < N; k++) {
+            gaussian_hit g = {(float)k, (float)k, 0.001f, {0, 0, 1}, 0, N - 1 - k};
+            gaussian_hits_add(&h, &g), gaussian_hits_add(&starved, &g);
+        }
+        kept[batch] = h.count;
+        CHECK(h.count >= 64 && h.count <= 4096 / sizeof(gaussian_hit) && h.count + h.dropped == N);
+        gaussian_blend b;
+        gaussian_blend_init(&b);
+        gaussian_blend_hits(&b, &h, models, INFINITY);
+        CHECK(b.composited == kept[batch] && h.count == 0);
+    }
+    printf("    hits kept in 4096 bytes: %zu of %d (%zu bytes a hit)\n", kept[0], N, sizeof(gaussian_hit));
+    CHECK(kept[1] == kept[0] && arena.mallocs == 1);
+    CHECK(starved.count == 0 && starved.dropped == 2 * N && none.bytes == 0);
+    rr_arena_free(&arena), rr_arena_free(&none);
     gaussian_model_free(&m);
 }
 
@@ -95,7 +139,10 @@ TEST(gaussian_blend_stops_before_transmittance_would_fall_below_1e_4)
     gaussian_model m;
     model_of(&m, 3, GAUSSIAN_2D);
     const gaussian_model *models[1] = {&m};
-    gaussian_hits h = {0};
+    rr_arena hits_arena; /* the heap's memory */
+    rr_arena_init(&hits_arena, 0);
+    gaussian_hits h;
+    gaussian_hits_init(&h, &hits_arena);
     for (unsigned k = 0; k < 3; k++) {
         gaussian_hit g = {(float)k, (float)k, k ? 0.99f : 0.9f, {0, 0, 1}, 0, k};
         gaussian_hits_add(&h, &g);
@@ -106,7 +153,7 @@ TEST(gaussian_blend_stops_before_transmittance_would_fall_below_1e_4)
     /* 1 -> 0.1 -> 1e-3 -> 1e-5 (below: stops before it) */
     CHECK(b.done && b.composited == 2);
     CHECK_NEAR(b.T, 1e-3, 1e-8);
-    gaussian_hits_free(&h);
+    rr_arena_free(&hits_arena);
     gaussian_model_free(&m);
 }
 
@@ -815,7 +862,10 @@ TEST(gaussian_equal_keys_sort_by_object_and_gaussian_in_n_log_n)
     model_of(&m, N, GAUSSIAN_2D);
     for (size_t i = 0; i < N; i++)
         m.sh[3 * i] = m.sh[3 * i + 1] = m.sh[3 * i + 2] = 0;
-    gaussian_hits h = {0};
+    rr_arena hits_arena; /* the heap's memory */
+    rr_arena_init(&hits_arena, 0);
+    gaussian_hits h;
+    gaussian_hits_init(&h, &hits_arena);
     unsigned st = 5;
     for (size_t i = 0; i < N; i++) { /* prims in a scrambled order, two objects */
         unsigned prim = (unsigned)((i * 7919) % N), obj = (unsigned)(rand_r(&st) & 1);
@@ -829,6 +879,6 @@ TEST(gaussian_equal_keys_sort_by_object_and_gaussian_in_n_log_n)
     gaussian_blend_hits(&b, &h, models, INFINITY);
     alarm(0);
     CHECK(b.composited == N && h.count == 0);
-    gaussian_hits_free(&h);
+    rr_arena_free(&hits_arena);
     gaussian_model_free(&m);
 }

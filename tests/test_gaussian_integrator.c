@@ -120,7 +120,10 @@ static void check_gathering(const char *xml, int rays, int at_random, unsigned *
         return;
     gaussian_integrator windowed;
     gaussian_integrator_init(&windowed, NULL);
-    gaussian_hits all = {0};
+    rr_arena hits_arena; /* the heap's memory */
+    rr_arena_init(&hits_arena, 0);
+    gaussian_hits all;
+    gaussian_hits_init(&all, &hits_arena);
     for (int p = 0; p < rays; p++) {
         double x = 4 * (p % 16) + 2 + 0.37 * (p % 3), y = 4 * (p / 16) + 2 + 0.21 * (p % 5), tmax = INFINITY;
         if (at_random) {
@@ -134,7 +137,7 @@ static void check_gathering(const char *xml, int rays, int at_random, unsigned *
         *mismatched += gathering_differs(a, &s, x, y, tmax, &windowed, &all, &hits, &composited);
         *many += hits > 64, *spent += hits > 64 && composited < hits;
     }
-    gaussian_integrator_free(&windowed), gaussian_hits_free(&all);
+    gaussian_integrator_free(&windowed), rr_arena_free(&hits_arena);
     accel_free(a);
     scene_free(&s);
 }
@@ -334,7 +337,10 @@ typedef struct {
 static void count_moves(const char *xml, int rays, double spread, unsigned *st, move_count *c)
 {
     gaussian_integrator windowed; /* one ray's hits through the windows */
-    gaussian_hits all = {0};      /* and all at once */
+    rr_arena hits_arena; /* the heap's memory */
+    rr_arena_init(&hits_arena, 0);
+    gaussian_hits all;
+    gaussian_hits_init(&all, &hits_arena); /* and all at once */
     gaussian_integrator_init(&windowed, NULL);
     scene s;
     accel *a;
@@ -354,7 +360,7 @@ static void count_moves(const char *xml, int rays, double spread, unsigned *st, 
         if (n > 1)
             c->worst = fmax(c->worst, (double)moves / n_log_n);
     }
-    gaussian_integrator_free(&windowed), gaussian_hits_free(&all);
+    gaussian_integrator_free(&windowed), rr_arena_free(&hits_arena);
     accel_free(a);
     scene_free(&s);
 }

@@ -35,7 +35,7 @@ static inline __attribute__((always_inline)) int hit_before(const gaussian_hit *
  * see-through 2DGS cloud is the same shape. */
 void gaussian_hits_add(gaussian_hits *h, const gaussian_hit *hit)
 {
-    if (rr_grow((void **)&h->hits, &h->cap, h->count + 1, sizeof *h->hits)) {
+    if (rr_arena_grow(h->arena, (void **)&h->hits, &h->cap, h->count + 1, sizeof *h->hits)) {
         h->dropped++;
         return;
     }
@@ -74,11 +74,13 @@ static gaussian_hit take_first(gaussian_hits *h)
     return first;
 }
 
-void gaussian_hits_free(gaussian_hits *h)
+void gaussian_hits_init(gaussian_hits *h, rr_arena *arena)
 {
-    free(h->hits);
     memset(h, 0, sizeof *h);
+    h->arena = arena;
 }
+
+void gaussian_hits_begin(gaussian_hits *h) { h->hits = NULL, h->count = h->cap = 0; }
 
 void gaussian_blend_init(gaussian_blend *b)
 {

@@ -44,6 +44,7 @@
 #include <stdint.h>
 
 #include "motion/animation.h"
+#include "core/arena.h"
 #include "core/camera.h"
 #include "gaussians/gaussian.h"
 
@@ -78,8 +79,12 @@ typedef struct {
     unsigned ray;    /* which ray it was listed for: the caller's index (gaussian_cull_candidates) */
 } gaussian_candidate;
 
-/* A ray's hits (grown as needed; a thread's scratch). */
+/* A ray's hits, a thread's scratch: the heap grows in the thread's arena
+ * (rr_arena_grow), so it is gone with the arena's reset and its owner
+ * begins it anew then (gaussian_hits_begin); out of arena memory a hit is
+ * dropped and counted. */
 typedef struct {
+    rr_arena *arena;    /* where hits grows; outlives it */
     gaussian_hit *hits; /* waiting to be composited: a heap in compositing order (gaussian_blend.c) */
     size_t count, cap;
     size_t dropped;   /* hits that found no memory */
@@ -88,8 +93,11 @@ typedef struct {
     int in_order;     /* hits[0..count) ascend in compositing order (the heap's moves can be skipped) */
 } gaussian_hits;
 
+/* An empty heap growing in arena (the statistics zero). */
+void gaussian_hits_init(gaussian_hits *h, rr_arena *arena);
+/* After arena's reset: no hits and no array (the statistics kept). */
+void gaussian_hits_begin(gaussian_hits *h);
 void gaussian_hits_add(gaussian_hits *h, const gaussian_hit *hit);
-void gaussian_hits_free(gaussian_hits *h);
 
 /* One world ray at one time, seen in one object's space. */
 typedef struct {

@@ -14,6 +14,7 @@ void gaussian_integrator_init(gaussian_integrator *g, rr_arena *arena)
     if (!arena)
         rr_arena_init(&g->own, 0), arena = &g->own;
     g->arena = arena;
+    gaussian_hits_init(&g->hits, arena);
 }
 
 void gaussian_integrator_reset(gaussian_integrator *g) { g->hits.count = g->hits.dropped = 0; }
@@ -21,6 +22,7 @@ void gaussian_integrator_reset(gaussian_integrator *g) { g->hits.count = g->hits
 void gaussian_integrator_begin_batch(gaussian_integrator *g)
 {
     rr_arena_reset(g->arena);
+    gaussian_hits_begin(&g->hits);
     g->rays = NULL, g->instants = NULL, g->rays_cap = 0;
     g->candidates = NULL, g->candidates_count = g->candidates_cap = 0;
     g->candidate_order = NULL, g->candidate_order_cap = 0;
@@ -28,7 +30,6 @@ void gaussian_integrator_begin_batch(gaussian_integrator *g)
 
 void gaussian_integrator_free(gaussian_integrator *g)
 {
-    gaussian_hits_free(&g->hits);
     rr_arena_free(&g->own); /* (empty when the arena is a worker's) */
     memset(g, 0, sizeof *g);
 }

@@ -40,14 +40,14 @@ typedef struct {
 } gaussian_object_ray;
 
 /* A thread's scratch: _init it over an arena, clear the hits of a sample
- * with _reset, release it with _free. The arrays below hits grow in the
- * arena (rr_arena_grow: a window's candidates one at a time) and are
- * reused sample after sample until _begin_batch resets the arena; hits is
- * the compositing heap's own (gaussian_blend.c), kept across batches. */
+ * with _reset, release it with _free. Its arrays, the hits' heap among
+ * them, grow in the arena (rr_arena_grow: a window's candidates one at a
+ * time) and are reused sample after sample until _begin_batch resets the
+ * arena. */
 typedef struct {
     rr_arena *arena;                   /* the worker's, or own */
     rr_arena own;
-    gaussian_hits hits;                /* the hits waiting to be composited (gaussian_blend.c's heap) */
+    gaussian_hits hits;                /* the hits waiting to be composited (gaussian_blend.c's heap, in arena) */
     gaussian_object_ray *rays;         /* the sample's ray in each Gaussian object it may meet */
     gaussian_instant *instants;        /* and its dynamic model's Gaussians at the ray's time (rays[k]'s is
                                         * instants[k]) */
