@@ -20,7 +20,6 @@ stretch miss 11 pixels of this test (planted in accel_build.c; tests/test_gaussi
 same for the bounds themselves). On a camera of N3V's
 shape the mode changes the image by about what GAUSSIANS.md reports between refrender and the
 official images (0.24-0.47). 2D models refuse it."""
-import json
 import math
 
 import numpy as np
@@ -31,7 +30,7 @@ import gsply
 from gsply import rotation
 from conftest import read_exr, run, sharp_gaussian_render
 from test_gaussian_raster import BACKGROUND, TOL, assert_matches, cameras_json, random_model
-from test_gs2d_filter_reach import quat_of
+from test_gs2d_filter_reach import quat_of, turned_y, two_pose_transforms_json
 import fdgs_reference as fdgs
 import test_fdgs as fdgs_test
 
@@ -109,27 +108,10 @@ TRAVEL = np.array([0.12, -0.05, 0.08])
 VELOCITY = np.array([-0.1, 0.06, 0.03])  # the object's <linear> velocity, per unit of time
 
 
-def turned_y(degrees):
-    a = np.radians(degrees)
-    return np.array([[np.cos(a), 0, np.sin(a)], [0, 1, 0], [-np.sin(a), 0, np.cos(a)]])
-
-
 def pose(t):
     """The camera (OpenCV camera-to-world rotation, centre) at time t: two poses at 0 and 1, the
     position lerped, the rotation (about one axis) its angle lerped."""
     return turned_y(TURN * (t - 0.5)), TRAVEL * t
-
-
-def transforms_json(path):
-    gl = np.diag([1.0, -1.0, -1.0])  # OpenGL camera axes from OpenCV's
-    frames = []
-    for t in (0.0, 1.0):
-        R, C = pose(t)
-        c2w = np.eye(4)
-        c2w[:3, :3], c2w[:3, 3] = R @ gl, C
-        frames.append({"file_path": f"{int(t)}.png", "transform_matrix": c2w.tolist()})
-    path.write_text(json.dumps({"camera_model": "PINHOLE", "fl_x": MF, "fl_y": MF, "cx": MW / 2, "cy": MH / 2,
-                                "w": MW, "h": MH, "frames": frames}))
 
 
 def pinned_widest(W, H):
@@ -172,7 +154,7 @@ def test_a_moving_camera_and_moving_gaussians_find_every_pinned_footprint_pixel(
     ply = tmp_path / "m.ply"
     gsply.write(ply, model)
     read = gsply.read(ply)
-    transforms_json(tmp_path / "transforms.json")
+    two_pose_transforms_json(tmp_path / "transforms.json", pose, MF, MW / 2, MH / 2, MW, MH)
     scene = tmp_path / "moving.xml"
     v = " ".join(map(repr, VELOCITY))
     scene.write_text('<scene><camera><trajectory file="transforms.json"/></camera>'

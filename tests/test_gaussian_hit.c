@@ -320,6 +320,32 @@ static camera_view off_centre_view(unsigned *st)
     return v;
 }
 
+/* What a ray through raster (x, y) of view v finds of Gaussian 0 of one:
+ * whether it hits, whether the cull dropped that hit, and whether the hit
+ * lies outside the Gaussian's bounds drawn with the given stretch. */
+typedef struct {
+    int hit, dropped, outside;
+    vec3 mean;
+} needle_probe;
+
+static needle_probe probe_needle(const gaussian_model *one, const camera_view *v, double x, double y, double stretch)
+{
+    xform id = {{{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}, {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}, {0, 0, 0}, 0};
+    vec3 p, dir = v3_normalize(v3((x - v->cx) / v->fx, (y - v->cy) / v->fy, 1));
+    needle_probe out = {0, 0, 0, v3(one->mean[0], one->mean[1], one->mean[2])};
+    gaussian_ray r;
+    gaussian_ray_init(&r, v, &id, x, y, v3(0, 0, 0), dir);
+    gaussian_hit h;
+    int kept = gaussian_cull(one, 0, &r, &p);
+    out.hit = gaussian_hit_after_cull(one, 0, GAUSSIAN_ORDER_CENTER_DEPTH, &r, p, &h);
+    out.dropped = out.hit && !kept;
+    if (out.hit) {
+        gaussian_view_bound vb = {v3_len(out.mean), fmin(v->fx, v->fy), stretch, 0, v3(0, 0, 1), 0};
+        out.outside = !inside(gaussian_view_bounds(one, 0, &vb), v3_scale(dir, h.t));
+    }
+    return out;
+}
+
 /* With the principal point off the centre, the cull's reach
  * (gaussian_view_stretch) and the bounds hold the wider clamp: the cull
  * never drops a hit and every hit lies in its bounds, for needles beyond
@@ -327,7 +353,6 @@ static camera_view off_centre_view(unsigned *st)
  * semantics. */
 TEST(gaussian_3d_raster_culls_and_bounds_hold_an_off_centre_principal_point)
 {
-    xform id = {{{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}, {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}, {0, 0, 0}, 0};
     unsigned st = 57;
     long hits = 0, dropped = 0, outside = 0, far_out = 0;
     for (int trial = 0; trial < 64; trial++) {
@@ -337,20 +362,10 @@ TEST(gaussian_3d_raster_culls_and_bounds_hold_an_off_centre_principal_point)
         one.formation = raster_formations[trial % RASTER_FORMATIONS];
         for (int k = 0; k < 400; k++) {
             double x, y;
-            vec3 p;
             needle_at_its_reach(&one, &v, &st, &x, &y);
-            vec3 mean = v3(one.mean[0], one.mean[1], one.mean[2]), dir = v3_normalize(v3((x - v.cx) / v.fx, (y - v.cy) / v.fy, 1));
-            gaussian_ray r;
-            gaussian_ray_init(&r, &v, &id, x, y, v3(0, 0, 0), dir);
-            gaussian_hit h;
-            int kept = gaussian_cull(&one, 0, &r, &p), hit = gaussian_hit_after_cull(&one, 0, GAUSSIAN_ORDER_CENTER_DEPTH, &r, p, &h);
-            hits += hit, dropped += hit && !kept;
-            far_out += hit && fmax(fabs(mean.x / mean.z) * v.fx / 50, fabs(mean.y / mean.z) * v.fy / 40) > 1.3;
-            if (hit) {
-                gaussian_view_bound vb = {v3_len(mean), fmin(v.fx, v.fy), gaussian_view_stretch_of(one.formation, &v), 0,
-                                          v3(0, 0, 1), 0};
-                outside += !inside(gaussian_view_bounds(&one, 0, &vb), v3_scale(dir, h.t));
-            }
+            needle_probe n = probe_needle(&one, &v, x, y, gaussian_view_stretch_of(one.formation, &v));
+            hits += n.hit, dropped += n.dropped, outside += n.outside;
+            far_out += n.hit && fmax(fabs(n.mean.x / n.mean.z) * v.fx / 50, fabs(n.mean.y / n.mean.z) * v.fy / 40) > 1.3;
         }
         gaussian_model_free(&one);
     }
@@ -394,7 +409,6 @@ static void needle_along_the_pinned_jacobian(gaussian_model *m, const camera_vie
 
 TEST(gaussian_3d_fov_minus_one_culls_and_bounds_hold_the_pinned_footprint)
 {
-    xform id = {{{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}, {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}, {0, 0, 0}, 0};
     camera_view v = {v3(0, 0, 0), {v3(1, 0, 0), v3(0, 1, 0), v3(0, 0, 1)}, 30, 30, 50, 40, 100, 80};
     gaussian_model one;
     model_of(&one, 1, GAUSSIAN_3D);
@@ -403,20 +417,10 @@ TEST(gaussian_3d_fov_minus_one_culls_and_bounds_hold_the_pinned_footprint)
     long hits = 0, dropped = 0, outside = 0, outside_camera_stretch = 0;
     for (int k = 0; k < 40000; k++) {
         double x, y;
-        vec3 p;
         needle_along_the_pinned_jacobian(&one, &v, &st, &x, &y);
-        vec3 mean = v3(one.mean[0], one.mean[1], one.mean[2]), dir = v3_normalize(v3((x - v.cx) / v.fx, (y - v.cy) / v.fy, 1));
-        gaussian_ray r;
-        gaussian_ray_init(&r, &v, &id, x, y, v3(0, 0, 0), dir);
-        gaussian_hit h;
-        int kept = gaussian_cull(&one, 0, &r, &p), hit = gaussian_hit_after_cull(&one, 0, GAUSSIAN_ORDER_CENTER_DEPTH, &r, p, &h);
-        hits += hit, dropped += hit && !kept;
-        if (hit) {
-            gaussian_view_bound vb = {v3_len(mean), fmin(v.fx, v.fy), gaussian_view_stretch_of(one.formation, &v), 0, v3(0, 0, 1), 0};
-            outside += !inside(gaussian_view_bounds(&one, 0, &vb), v3_scale(dir, h.t));
-            vb.stretch = gaussian_view_stretch(&v);
-            outside_camera_stretch += !inside(gaussian_view_bounds(&one, 0, &vb), v3_scale(dir, h.t));
-        }
+        needle_probe n = probe_needle(&one, &v, x, y, gaussian_view_stretch_of(one.formation, &v));
+        hits += n.hit, dropped += n.dropped, outside += n.outside;
+        outside_camera_stretch += probe_needle(&one, &v, x, y, gaussian_view_stretch(&v)).outside;
     }
     gaussian_model_free(&one);
     printf("    hits %ld: dropped by the cull %ld, outside their bounds %ld (%ld with the camera's stretch)\n", hits,

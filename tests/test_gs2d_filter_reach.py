@@ -272,7 +272,8 @@ def pose(t):
     return turned_y(TURN * (t - 0.5)), TRAVEL * t
 
 
-def transforms_json(path):
+def two_pose_transforms_json(path, pose, focal, cx, cy, width, height):
+    """A transforms.json of a pinhole camera at pose(0) and pose(1) (OpenCV rotation, centre)."""
     gl = np.diag([1.0, -1.0, -1.0])  # OpenGL camera axes (x right, y up, z back) from OpenCV's
     frames = []
     for t in (0.0, 1.0):
@@ -280,8 +281,8 @@ def transforms_json(path):
         c2w = np.eye(4)
         c2w[:3, :3], c2w[:3, 3] = R @ gl, C
         frames.append({"file_path": f"{int(t)}.png", "transform_matrix": c2w.tolist()})
-    path.write_text(json.dumps({"camera_model": "PINHOLE", "fl_x": MF, "fl_y": MF, "cx": MW / 2 + DX,
-                                "cy": MH / 2 + DY, "w": MW, "h": MH, "frames": frames}))
+    path.write_text(json.dumps({"camera_model": "PINHOLE", "fl_x": focal, "fl_y": focal, "cx": cx, "cy": cy,
+                                "w": width, "h": height, "frames": frames}))
 
 
 def moving_scene(seed):
@@ -323,7 +324,7 @@ def render_moving(tmp_path, m, semantics="2dgs"):
         assert is_ellipse(m, *pose(r / (MH - 1)), MF, MW + 2 * abs(DX), MH + 2 * abs(DY))
     ply = tmp_path / "m.ply"
     gsply.write(ply, m)
-    transforms_json(tmp_path / "transforms.json")
+    two_pose_transforms_json(tmp_path / "transforms.json", pose, MF, MW / 2 + DX, MH / 2 + DY, MW, MH)
     scene = tmp_path / "moving.xml"
     scene.write_text('<scene><camera><trajectory file="transforms.json"/></camera>'
                      f'<shutter open="0" close="1" rolling="lines" lineDelay="{1 / (MH - 1)!r}"/>'

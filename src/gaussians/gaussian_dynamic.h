@@ -156,7 +156,17 @@ static inline void gaussian_dynamic_prefetch_rest(const gaussian_model *m, size_
     m->dynamic->ops->prefetch_rest(m, i);
 }
 
-/* ---- shared by the kinds' bounds ------------------------------------------ */
+/* ---- shared by the kinds' instants and bounds ------------------------------ */
+
+/* The cull part of an instant (the row's instant_cull) of a kind whose
+ * scale is constant: the mean at the instant, in floats as the kind's
+ * rasterizer holds it, and the scale as loaded. */
+static inline void gaussian_dynamic_store_cull(const gaussian_model *m, size_t i, const double mean[3],
+                                               gaussian_model *out, size_t j)
+{
+    for (int k = 0; k < 3; k++)
+        out->mean[3 * j + k] = (float)mean[k], out->scale[3 * j + k] = m->scale[3 * i + k];
+}
 
 /* The D-interval of [t0, t1] about the temporal centre c: [fl(t0 - c),
  * fl(t1 - c)] one step outward holds the computed and the exact t - c of

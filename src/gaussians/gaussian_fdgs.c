@@ -106,8 +106,7 @@ static void fdgs_instant_cull(const gaussian_model *m, size_t i, double t, gauss
 {
     double mean[3];
     mean_at(m, i, offset_at(m, i, t), mean);
-    for (int k = 0; k < 3; k++)
-        out->mean[3 * j + k] = (float)mean[k], out->scale[3 * j + k] = m->scale[3 * i + k];
+    gaussian_dynamic_store_cull(m, i, mean, out, j);
 }
 
 /* The quaternion as loaded (constant), the opacity with its cut. */
