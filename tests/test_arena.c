@@ -131,3 +131,41 @@ TEST(arena_out_of_memory_is_null_not_an_abort)
     CHECK(a.bytes <= 4096);
     rr_arena_free(&a);
 }
+
+/* rr_arena_renew: an array that reached n elements in one batch is taken
+ * anew at that capacity after the reset, so the next batch's n appends
+ * never move it (growing from nothing moves it log2(n / 64) times); an
+ * array that had none gets none; one the arena cannot hold is NULL, 0
+ * and grows on demand. */
+TEST(arena_renew_takes_an_array_at_its_capacity_so_the_next_batch_never_moves_it)
+{
+    rr_arena a;
+    rr_arena_init(&a, 512);
+    int *v = NULL, *none = NULL;
+    size_t cap = 0, none_cap = 0, n = 5000;
+    for (int batch = 0; batch < 3; batch++) {
+        int moves = 0;
+        for (size_t i = 0; i < n; i++) {
+            int *before = v;
+            CHECK(rr_arena_grow(&a, (void **)&v, &cap, i + 1, sizeof *v) == 0);
+            moves += v != before;
+            v[i] = (int)i;
+        }
+        printf("    batch %d: %d moves\n", batch, moves);
+        CHECK(batch == 0 ? moves > 0 : moves == 0);
+        rr_arena_reset(&a);
+        rr_arena_renew(&a, (void **)&v, &cap, sizeof *v);
+        rr_arena_renew(&a, (void **)&none, &none_cap, sizeof *none);
+        CHECK(v != NULL && cap == 8192 && none == NULL && none_cap == 0);
+    }
+    rr_arena_free(&a);
+    rr_arena tight;
+    rr_arena_init(&tight, 256);
+    tight.limit = 1024;
+    int *w = NULL;
+    size_t wcap = 1000; /* as if it had reached 1000 ints: 4000 bytes, past the limit */
+    rr_arena_renew(&tight, (void **)&w, &wcap, sizeof *w);
+    CHECK(w == NULL && wcap == 0);
+    CHECK(rr_arena_grow(&tight, (void **)&w, &wcap, 10, sizeof *w) == 0 && w != NULL); /* on demand */
+    rr_arena_free(&tight);
+}

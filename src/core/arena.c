@@ -105,17 +105,20 @@ static int is_last_block(const rr_arena *a, const void *p, size_t bytes)
            (size_t)((const unsigned char *)p - c->data) + bytes == c->used;
 }
 
+void rr_arena_renew(rr_arena *a, void **p, size_t *cap, size_t elem)
+{
+    size_t want = *cap;
+    *p = NULL, *cap = 0;
+    if (want)
+        (void)rr_arena_grow(a, p, cap, want, elem); /* (on failure *p, *cap stay NULL, 0) */
+}
+
 int rr_arena_grow(rr_arena *a, void **p, size_t *cap, size_t need, size_t elem)
 {
+    size_t n;
     if (need <= *cap)
         return 0;
-    size_t n = *cap ? *cap : 64;
-    while (n < need) {
-        if (n > SIZE_MAX / 2)
-            return -1;
-        n *= 2;
-    }
-    if (elem && n > SIZE_MAX / elem)
+    if (rr_grown_capacity(*cap, need, elem, &n))
         return -1;
     size_t old = *cap * elem, bytes = n * elem;
     if (is_last_block(a, *p, old)) { /* extended where it lies, when the chunk has room */

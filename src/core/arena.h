@@ -48,4 +48,13 @@ void *rr_arena_alloc(rr_arena *a, size_t size, size_t align);
  * memory or the size overflows. */
 int rr_arena_grow(rr_arena *a, void **p, size_t *cap, size_t need, size_t elem);
 
+/* Right after a reset: a new block for an array of the capacity *cap it
+ * had before the reset (elements of elem bytes; its contents are gone),
+ * so that an array that reached n elements in one batch takes them at
+ * once in the next, where growing from nothing would copy it
+ * log2(n / 64) times, batch after batch, into memory the batch before
+ * had left warm elsewhere. *p = NULL and *cap = 0 when *cap was 0 or
+ * the block cannot be had (it then grows on demand). */
+void rr_arena_renew(rr_arena *a, void **p, size_t *cap, size_t elem);
+
 #endif

@@ -143,17 +143,23 @@ int cmp_double(const void *a, const void *b)
     return (x > y) - (x < y);
 }
 
+int rr_grown_capacity(size_t cap, size_t need, size_t elem, size_t *n)
+{
+    *n = cap ? cap : 64;
+    while (*n < need) {
+        if (*n > SIZE_MAX / 2)
+            return -1;
+        *n *= 2;
+    }
+    return elem && *n > SIZE_MAX / elem ? -1 : 0;
+}
+
 int rr_grow(void **p, size_t *cap, size_t need, size_t elem)
 {
+    size_t n;
     if (need <= *cap)
         return 0;
-    size_t n = *cap ? *cap : 64;
-    while (n < need) {
-        if (n > SIZE_MAX / 2)
-            return -1;
-        n *= 2;
-    }
-    if (elem && n > SIZE_MAX / elem)
+    if (rr_grown_capacity(*cap, need, elem, &n))
         return -1;
     void *grown = realloc(*p, n * elem);
     if (!grown)

@@ -94,6 +94,10 @@ int cmp_double(const void *a, const void *b);
  * 64, so n appends cost O(n) copying in all. 0, or -1 when out of memory or
  * the size overflows (then *p and *cap are unchanged, *p still valid). */
 int rr_grow(void **p, size_t *cap, size_t need, size_t elem);
+/* rr_grow's capacity rule (also rr_arena_grow's): the capacity that holds
+ * need elements of elem bytes, doubling cap (64 if 0), into *n; -1 when
+ * the count or its bytes overflow. */
+int rr_grown_capacity(size_t cap, size_t need, size_t elem, size_t *n);
 
 /* A float's bits as an unsigned that sorts as the float does (a sort
  * key's upper half, rr_sort_u64). */

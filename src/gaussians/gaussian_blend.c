@@ -80,7 +80,11 @@ void gaussian_hits_init(gaussian_hits *h, rr_arena *arena)
     h->arena = arena;
 }
 
-void gaussian_hits_begin(gaussian_hits *h) { h->hits = NULL, h->count = h->cap = 0; }
+void gaussian_hits_begin(gaussian_hits *h)
+{
+    h->count = 0;
+    rr_arena_renew(h->arena, (void **)&h->hits, &h->cap, sizeof *h->hits);
+}
 
 void gaussian_blend_init(gaussian_blend *b)
 {

@@ -81,8 +81,8 @@ typedef struct {
 
 /* A ray's hits, a thread's scratch: the heap grows in the thread's arena
  * (rr_arena_grow), so it is gone with the arena's reset and its owner
- * begins it anew then (gaussian_hits_begin); out of arena memory a hit is
- * dropped and counted. */
+ * begins it anew then (gaussian_hits_begin: empty, at the capacity it
+ * reached); out of arena memory a hit is dropped and counted. */
 typedef struct {
     rr_arena *arena;    /* where hits grows; outlives it */
     gaussian_hit *hits; /* waiting to be composited: a heap in compositing order (gaussian_blend.c) */

@@ -185,11 +185,21 @@ exact_scratch *exact_scratch_new(rr_arena *arena)
 void exact_scratch_begin_batch(exact_scratch *scr)
 {
     rr_arena_reset(scr->arena);
-    /* every array but prims (accel's own, malloc'd) was in the arena: gone */
-    rr_arena *arena = scr->arena, own = scr->own;
-    accel_prims prims = scr->prims;
-    memset(scr, 0, sizeof *scr);
-    scr->arena = arena, scr->own = own, scr->prims = prims;
+    /* every array but prims (accel's own, malloc'd) was in the arena: each
+     * taken anew at the capacity it reached (rr_arena_renew) */
+    rr_arena *a = scr->arena;
+    scr->nkeys = scr->npieces = scr->first_of_break = scr->nsets = 0;
+    scr->evaluations = 0, scr->status = EXACT_OK;
+    rr_arena_renew(a, (void **)&scr->keys, &scr->keys_cap, sizeof *scr->keys);
+    rr_arena_renew(a, (void **)&scr->info, &scr->info_cap, sizeof *scr->info);
+    rr_arena_renew(a, (void **)&scr->boxes, &scr->boxes_cap, sizeof *scr->boxes);
+    rr_arena_renew(a, (void **)&scr->lists, &scr->lists_cap, sizeof *scr->lists);
+    rr_arena_renew(a, (void **)&scr->evals, &scr->evals_cap, sizeof *scr->evals);
+    rr_arena_renew(a, (void **)&scr->inherit, &scr->inherit_cap, sizeof *scr->inherit);
+    rr_arena_renew(a, (void **)&scr->sorted, &scr->sorted_cap, sizeof *scr->sorted);
+    rr_arena_renew(a, (void **)&scr->leaves, &scr->leaves_cap, sizeof *scr->leaves);
+    rr_arena_renew(a, (void **)&scr->sets, &scr->sets_cap, sizeof *scr->sets);
+    rr_arena_renew(a, (void **)&scr->ray_cache, &scr->ray_cache_cap, sizeof *scr->ray_cache);
 }
 
 void exact_scratch_free(exact_scratch *scr)

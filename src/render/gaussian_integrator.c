@@ -21,11 +21,15 @@ void gaussian_integrator_reset(gaussian_integrator *g) { g->hits.count = g->hits
 
 void gaussian_integrator_begin_batch(gaussian_integrator *g)
 {
+    for (size_t k = 0; g->instants && k < g->rays_cap; k++)
+        if (g->instants[k].cap > g->instant_cap_reached)
+            g->instant_cap_reached = g->instants[k].cap;
     rr_arena_reset(g->arena);
     gaussian_hits_begin(&g->hits);
-    g->rays = NULL, g->instants = NULL, g->rays_cap = 0;
-    g->candidates = NULL, g->candidates_count = g->candidates_cap = 0;
-    g->candidate_order = NULL, g->candidate_order_cap = 0;
+    g->rays = NULL, g->instants = NULL, g->rays_cap = 0; /* (one per object: a few) */
+    g->candidates_count = 0;
+    rr_arena_renew(g->arena, (void **)&g->candidates, &g->candidates_cap, sizeof *g->candidates);
+    rr_arena_renew(g->arena, (void **)&g->candidate_order, &g->candidate_order_cap, sizeof *g->candidate_order);
 }
 
 void gaussian_integrator_free(gaussian_integrator *g)
@@ -81,9 +85,13 @@ static void cull_candidates(const listing *l, size_t first, unsigned ray)
 }
 
 /* Room for n Gaussians in an instant model: its arrays grow together
- * (rr_arena_grow each from the shared capacity, which moves only when all have). */
-static int instant_room(rr_arena *a, gaussian_instant *in, size_t n)
+ * (rr_arena_grow each from the shared capacity, which moves only when all have);
+ * a new one (after a reset) at once to the largest capacity an instant
+ * reached (rr_arena_renew's reason). */
+static int instant_room(rr_arena *a, gaussian_instant *in, size_t n, size_t reached)
 {
+    if (!in->cap && n < reached)
+        n = reached;
     size_t mean = in->cap, scale = in->cap, rotation = in->cap, opacity = in->cap, prim = in->cap;
     if (rr_arena_grow(a, (void **)&in->model.mean, &mean, n, 3 * sizeof *in->model.mean) ||
         rr_arena_grow(a, (void **)&in->model.scale, &scale, n, 3 * sizeof *in->model.scale) ||
@@ -115,7 +123,7 @@ static void instantiate_for_cull(gaussian_integrator *g, const gaussian_model *m
     gaussian_instant *in = r->instant;
     size_t n = g->candidates_count - first;
     in->model.count = 0;
-    if (!instant_room(g->arena, in, n)) {
+    if (!instant_room(g->arena, in, n, g->instant_cap_reached)) {
         g->hits.dropped += n;
         g->candidates_count = first;
         return;

@@ -56,6 +56,7 @@ typedef struct {
     size_t candidates_count, candidates_cap;
     uint64_t *candidate_order;         /* their evaluation order, with sorting space */
     size_t candidate_order_cap;
+    size_t instant_cap_reached;        /* the largest capacity of an instant before the last reset */
     uint64_t short_samples;            /* samples that dropped Gaussians for lack of memory (hits.dropped > 0);
                                         * statistics: counts on across samples */
 } gaussian_integrator;
@@ -66,7 +67,8 @@ void gaussian_integrator_init(gaussian_integrator *g, rr_arena *arena);
  * keep counting: statistics). */
 void gaussian_integrator_reset(gaussian_integrator *g);
 /* A new batch: resets the arena, whose arrays are gone (the next samples
- * reuse its memory). */
+ * reuse its memory), and takes each array anew at the capacity it reached
+ * (rr_arena_renew). */
 void gaussian_integrator_begin_batch(gaussian_integrator *g);
 void gaussian_integrator_free(gaussian_integrator *g);
 
