@@ -121,9 +121,11 @@ demo: deps
 test-c: $(TESTBIN)
 	$(TESTBIN)
 
-# LD_PRELOAD shim that fails the Nth write or rename (tests/test_faults.py)
+# LD_PRELOAD shim that fails the Nth write or rename (tests/test_faults.py);
+# under SAN=1 without its malloc (ASan's own must stay: faultinject.c)
+SHIM_FLAGS := $(if $(filter 1,$(SAN)),-DFAULTINJECT_NO_MALLOC)
 $(BUILD)/libfaultinject.so: tests/faultinject.c | $(BUILD)
-	$(CC) -O1 -g -Wall -Wextra -shared -fPIC $< -o $@ -ldl
+	$(CC) -O1 -g -Wall -Wextra $(SHIM_FLAGS) -shared -fPIC $< -o $@ -ldl
 
 # pytest-xdist workers (python3-pytest-xdist): the suite's renders are
 # single processes, so one worker a core halves its time on 2 cores

@@ -154,6 +154,11 @@ void *realloc(void *p, size_t n)
  * refrender's own: neither fails. */
 #define ARENA_CHUNK_MIN 65536
 static __thread int own_thread; /* started by refrender (pthread_create below) */
+
+/* Under AddressSanitizer (make SAN=1) malloc stays ASan's: it must see
+ * every block it frees, and a preloaded malloc took the renders down at
+ * start-up (SIGSEGV). The memory test that needs it is skipped there. */
+#ifndef FAULTINJECT_NO_MALLOC
 extern void *__libc_malloc(size_t n);
 
 void *malloc(size_t n)
@@ -171,6 +176,7 @@ void *malloc(size_t n)
         return errno = ENOMEM, NULL;
     return real(n);
 }
+#endif
 
 /* A thread refrender starts runs its start routine through this, marked
  * as its own. */
