@@ -397,20 +397,31 @@ TEST(animation_text_as_entity_or_cdata_is_not_dropped)
                      "</object></scene>", "missing.anim"));
 }
 
+/* A temporary ASCII PLY (path: a mkstemp template) of one 2DGS Gaussian
+ * with its mean at `mean` ("x y z"), colour f_dc (0.1, 0.2, 0.3), opacity
+ * logit 0, log scales (-2, -2) and the identity rotation. */
+static void write_one_2d_gaussian(char *path, const char *mean)
+{
+    int fd = mkstemp(path);
+    CHECK(fd >= 0);
+    char text[1024];
+    int n = snprintf(text, sizeof text,
+                     "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
+                     "property float z\nproperty float f_dc_0\nproperty float f_dc_1\nproperty float f_dc_2\n"
+                     "property float opacity\nproperty float scale_0\nproperty float scale_1\n"
+                     "property float rot_0\nproperty float rot_1\nproperty float rot_2\nproperty float rot_3\n"
+                     "end_header\n%s 0.1 0.2 0.3 0 -2 -2 1 0 0 0\n",
+                     mean);
+    CHECK(n > 0 && n < (int)sizeof text && write(fd, text, (size_t)n) == n);
+    close(fd);
+}
+
 /* <gaussianModel>: a trained model in an object; every mistake named with
  * the scene's line, the PLY's own errors with the file and property. */
 TEST(gaussian_model_elements_and_their_errors)
 {
     char ply[] = "/tmp/rr_gm_XXXXXX";
-    int fd = mkstemp(ply);
-    CHECK(fd >= 0);
-    const char *text = "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
-                       "property float z\nproperty float f_dc_0\nproperty float f_dc_1\nproperty float f_dc_2\n"
-                       "property float opacity\nproperty float scale_0\nproperty float scale_1\n"
-                       "property float rot_0\nproperty float rot_1\nproperty float rot_2\nproperty float rot_3\n"
-                       "end_header\n0 0 0 0.1 0.2 0.3 0 -2 -2 1 0 0 0\n";
-    CHECK(write(fd, text, strlen(text)) == (ssize_t)strlen(text));
-    close(fd);
+    write_one_2d_gaussian(ply, "0 0 0");
     char xml[1024];
     const char *head = "<scene>\n<object>\n";
     snprintf(xml, sizeof xml, "%s<gaussianModel file=\"%s\" order=\"hit-depth\"/></object></scene>", head, ply);
@@ -444,15 +455,7 @@ TEST(gaussian_model_elements_and_their_errors)
 TEST(every_object_kind_answers_through_its_row)
 {
     char ply[] = "/tmp/refrender-rows-XXXXXX";
-    int fd = mkstemp(ply);
-    CHECK(fd >= 0);
-    const char *text = "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
-                       "property float z\nproperty float f_dc_0\nproperty float f_dc_1\nproperty float f_dc_2\n"
-                       "property float opacity\nproperty float scale_0\nproperty float scale_1\n"
-                       "property float rot_0\nproperty float rot_1\nproperty float rot_2\nproperty float rot_3\n"
-                       "end_header\n1 2 3 0.1 0.2 0.3 0 -2 -2 1 0 0 0\n";
-    CHECK(write(fd, text, strlen(text)) == (ssize_t)strlen(text));
-    close(fd);
+    write_one_2d_gaussian(ply, "1 2 3");
     char xml[1024];
     snprintf(xml, sizeof xml, "<scene><object><pointModel><splat center='0 0 0' normal='0 0 1' radius='1'/>"
              "<splat center='4 0 0' normal='0 0 1' radius='0.5'/></pointModel></object>"
