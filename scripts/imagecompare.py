@@ -70,6 +70,37 @@ def exr_header_names(path):
     return names
 
 
+def _exr_header_end(data):
+    """The offset of the NUL that ends an OpenEXR file's (single) header."""
+    pos = 8
+    while data[pos] != 0:
+        type_end = data.index(b"\0", data.index(b"\0", pos) + 1)
+        pos = type_end + 5 + int.from_bytes(data[type_end + 1:type_end + 5], "little")
+    return pos
+
+
+def tag_exr(path, attributes):
+    """Adds string attributes to a single-part OpenEXR file in place: how a
+    script states oiio:ColorSpace, which OpenImageIO's EXR writer leaves out
+    (it writes no "oiio:" attribute) while its reader honours it. The
+    attributes go at the end of the header and every offset in the chunk
+    table after it moves by their size (OpenEXR file layout: the table's
+    offsets count from the file's start)."""
+    with open(path, "rb") as f:
+        data = f.read()
+    if data[:4] != b"\x76\x2f\x31\x01" or int.from_bytes(data[4:8], "little") & 0x1800:
+        raise CompareError(f"{path}: not a single-part OpenEXR file: cannot add {', '.join(attributes)}")
+    end = _exr_header_end(data)
+    extra = b"".join(name.encode() + b"\0string\0" + len(value.encode()).to_bytes(4, "little") + value.encode()
+                     for name, value in attributes.items())
+    first = int.from_bytes(data[end + 1:end + 9], "little")
+    chunks = (first - end - 1) // 8
+    table = b"".join((int.from_bytes(data[end + 1 + 8 * i:end + 9 + 8 * i], "little") + len(extra)).to_bytes(8, "little")
+                     for i in range(chunks))
+    with open(path, "wb") as f:
+        f.write(data[:end] + extra + data[end:end + 1] + table + data[end + 1 + 8 * chunks:])
+
+
 def _named_space(name):
     n = name.lower()
     if "srgb" in n and not n.startswith("lin"):
