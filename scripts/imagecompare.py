@@ -127,10 +127,13 @@ def _detect_encoding(path, spec, header):
         return Encoding("srgb" if not is_float else "linear",
                         f'oiio:ColorSpace "{stated}" not understood: assumed', False)
     blur = header.get("refrender:blurSpace")
-    if blur is not None:  # refrender before oiio:ColorSpace: a Gaussian model's colours unless decoded
+    if blur is not None or any(k.startswith("refrender:") for k in header):
+        # refrender before oiio:ColorSpace (before refrender:blurSpace every render averaged as model):
+        # a Gaussian model's colours unless decoded, else linear light
         gaussians = header.get("refrender:gaussians", "none") != "none"
         space = "srgb" if gaussians and blur != "linear" else "linear"
-        return Encoding(space, f"refrender:blurSpace {blur}" + (" of a Gaussian model" if gaussians else ""))
+        return Encoding(space, f"refrender:blurSpace {blur or 'absent: model'}" +
+                        (" of a Gaussian model" if gaussians else ""))
     if is_float:
         return Encoding("linear", "float data with no oiio:ColorSpace: assumed linear", False)
     return Encoding("srgb", f"{spec.format} data: sRGB by default")
