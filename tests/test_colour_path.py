@@ -279,3 +279,17 @@ def test_gallery_and_cost_error_read_encodings_and_channels(tmp_path):
     plain = write_channels(tmp_path / "p.exr", {c: channels[c] for c in "RGBA"})
     (_, _, _, rmse, _), = cost_error.measure(str(plain), [("m", str(blender), 1.0)])
     assert rmse == 0.0
+
+
+def test_merged_states_keep_what_their_rgb_holds(tmp_path):
+    """`merge` writes the states' colour space with their pixels (a merged Gaussian render that
+    said nothing would be read as linear light again)."""
+    scene, _ = write_scene(tmp_path)
+    states = [tmp_path / f"p{k}.exr" for k in range(2)]
+    for k, state in enumerate(states):
+        assert run([scene, "--spp", 1, "--tspp", 2, "--batches", 2, "--pass", f"{k}/2", "-o", state,
+                    "--quiet"]).returncode == 0
+    merged = tmp_path / "merged.exr"
+    proc = run(["merge", *states, "-o", merged])
+    assert proc.returncode == 0, proc.stderr
+    assert stated_colour_space(merged) == "sRGB"
