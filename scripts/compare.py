@@ -5,7 +5,10 @@ usage: compare.py REFERENCE TEST [TEST ...] [options]
        compare.py 'gt.%04d.exr' 'method.%04d.exr' [...] --frames 0-23 [options]
        compare.py GT_DIR METHOD_DIR [...] [options]
 
-Reads any format OpenImageIO reads, converts to linear RGB, and reports MAE,
+Reads any format OpenImageIO reads, decodes each image to linear RGB as its
+file says it is encoded (oiio:ColorSpace; a refrender EXR of a Gaussian model
+holds its sRGB-encoded colours, 8-bit PNG and JPEG are sRGB; an encoding
+assumed or two blur spaces that differ are warned of), and reports MAE,
 MSE, RMSE, PSNR, relMSE, SSIM, LDR-FLIP and HDR-FLIP for the whole image and
 for each --crop. Sequences (printf-style patterns or directories) are paired
 by frame number and reported per frame, then as the mean and the worst frame
@@ -31,8 +34,8 @@ import numpy as np
 import flip
 import safefiles
 import sequences
-from imagecompare import (CompareError, basic_metrics, composite, read_image, ssim_map,
-                          stderr_fraction)
+from imagecompare import (CompareError, basic_metrics, composite, encoding_warnings, read_channels, read_image,
+                          ssim_map, stderr_fraction)
 
 COLUMNS = ["MAE", "MSE", "RMSE", "PSNR", "relMSE", "SSIM", "FLIP", "HDR-FLIP"]
 
@@ -43,8 +46,9 @@ def parse_args(argv):
     p.add_argument("reference")
     p.add_argument("tests", nargs="+", metavar="TEST")
     p.add_argument("--ref-colorspace", choices=["auto", "srgb", "linear"], default="auto",
-                   help="transfer function of the reference (auto: file metadata, else sRGB for "
-                        "integer and linear for float formats)")
+                   help="transfer function of the reference (auto: the file's oiio:ColorSpace, or a refrender "
+                        "EXR's refrender:blurSpace, else sRGB for integer and linear for float formats, the "
+                        "latter assumed and warned of)")
     p.add_argument("--test-colorspace", choices=["auto", "srgb", "linear"], default="auto",
                    help="transfer function of the test images (same rule)")
     p.add_argument("--alpha", choices=["ignore", "composite"], default="ignore",
@@ -193,6 +197,20 @@ def print_table(rows, out=None):
         if r.get("notes"):
             print(f"note: {r['image']} [{r['window']}]: {r['notes']}", file=out)
             break
+    print_encodings(rows, out)
+
+
+def print_encodings(rows, out):
+    """Each input's encoding and every warning, once each."""
+    lines = {}
+    for r in rows:
+        if "reference encoding" in r:
+            lines.setdefault(f"encoding: reference {r['reference encoding']}; {r['image']} {r['test encoding']}")
+        for w in (r.get("warnings") or "").split("; "):
+            if w:
+                lines.setdefault(f"warning: {w}")
+    for line in lines:
+        print(line, file=out)
 
 
 def schema(args):
@@ -200,7 +218,8 @@ def schema(args):
     run: empty (CSV) or null (JSON) where a value does not apply; reasons in
     'notes'."""
     return (["image", "frame", "window", "pixels", "nonfinite"] + COLUMNS[:7] + ["FLIP p50w", "FLIP p95w",
-            "HDR-FLIP", f">{args.k_sigma:g}SE", "SE source", "notes"])
+            "HDR-FLIP", f">{args.k_sigma:g}SE", "SE source", "notes", "reference encoding", "test encoding",
+            "warnings"])
 
 
 def write_machine_readable(rows, json_path, csv_path, columns, inputs):
@@ -261,9 +280,12 @@ def compare_images(args, reference, tests, labels, frame=None):
     windows = [("full", (0, 0, width, height))] + [(c, parse_crop(c, width, height)) for c in args.crop]
     mask = np.ones((height, width), bool)
     if args.mask:
-        _, m = load(args.mask, "linear", argparse.Namespace(alpha="ignore", exposure=0.0, background="0 0 0"),
-                    ref.shape)
-        mask = m[..., 0] > 0.5
+        channels, spec, _ = read_channels(args.mask)
+        m = channels[spec.channelnames[0]]
+        if m.shape != (height, width):
+            raise CompareError(f"{args.mask}: size {m.shape[1]}x{m.shape[0]} differs from the reference's "
+                               f"{width}x{height}")
+        mask = m > 0.5
     rows, maps = [], []
     noise = test_noise(args, ref.shape)
     for path, label in zip(tests, labels):
@@ -272,12 +294,14 @@ def compare_images(args, reference, tests, labels, frame=None):
             sequences.check_frame(path, test_img.header, frame)
         se, source = (test_img.stderr, "test stderr channels") if test_img.stderr is not None else noise
         finite = np.isfinite(ref).all(axis=-1) & np.isfinite(test).all(axis=-1)
+        said = {"reference encoding": str(ref_img.encoding), "test encoding": str(test_img.encoding),
+                "warnings": "; ".join(encoding_warnings(ref_img, test_img)) or None}
         for name, win in windows:
             x, y, w, h = win
             res, flip_map, hdr_map = evaluate(ref_img, ref, test, finite & mask, win, args, se, source)
             head = {"image": label, "window": name} if frame is None else {"image": label, "frame": frame,
                                                                            "window": name}
-            res = {**head, "nonfinite": int((~finite[y:y + h, x:x + w]).sum()), **res}
+            res = {**head, "nonfinite": int((~finite[y:y + h, x:x + w]).sum()), **res, **said}
             rows.append(res)
             picture = label if frame is None else f"{label}_f{frame}"
             maps.append((picture, name, win, ref, test, flip_map, hdr_map))

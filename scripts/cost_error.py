@@ -24,7 +24,7 @@ pydeps.require(*pydeps.IMAGE_MODULES, "matplotlib")  # a missing package: one li
 import numpy as np
 
 import flip
-from imagecompare import CompareError, basic_metrics, read_image
+from imagecompare import CompareError, basic_metrics, encoding_warnings, read_image
 
 
 def parse_args(argv):
@@ -69,10 +69,16 @@ def entries_of(args):
 
 
 def measure(reference, entries):
-    ref = read_image(reference).rgb
+    """RMSE and FLIP of each entry, both sides decoded to linear light as their files say
+    (imagecompare.read_image); an assumed encoding or differing blur spaces said on stderr."""
+    ref_img = read_image(reference)
+    ref = ref_img.rgb
     results = []
     for label, image, cost in entries:
-        test = read_image(image).rgb
+        test_img = read_image(image)
+        for warning in encoding_warnings(ref_img, test_img):
+            print(f"cost_error.py: warning: {warning}", file=sys.stderr)
+        test = test_img.rgb
         if test.shape != ref.shape:
             raise CompareError(f"{image}: size differs from the reference's")
         valid = np.isfinite(ref) & np.isfinite(test)

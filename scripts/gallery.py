@@ -1,8 +1,10 @@
 #!/usr/bin/python3
 """Contact sheet of rendered scenes: each image's RGB as stored (a
 refrender EXR's RGB already holds the scene's own background where nothing
-is covered) tone-mapped like refrender's preview (clamped to [0, 1], sRGB
-transfer curve), labelled with its file name, four to a row in the order
+is covered) shown like refrender's preview (clamped to [0, 1]; linear light
+encoded with the sRGB curve, display-encoded values such as a Gaussian
+model's as they are: each file's encoding as compare.py reads it, an assumed
+one said on stderr), labelled with its file name, four to a row in the order
 given.
 
 usage: gallery.py OUT.png IMAGE.exr [IMAGE.exr ...] [--font FONT]
@@ -57,8 +59,10 @@ def tile(path, font):
     font is available. Its RGB is used as stored: a refrender image's RGB
     already holds the scene's background (weighted by 1 - coverage), which
     the committed gallery shows; compositing over black would hide it."""
-    rgb = imagecompare.read_image(path, "linear").rgb
-    srgb = flip.linear_to_srgb(np.clip(rgb, 0, 1)).astype(np.float32)
+    img = imagecompare.read_image(path)
+    if not img.encoding.known:
+        print(f"gallery.py: {path}: colour encoding not stated, {img.encoding}", file=sys.stderr)
+    srgb = flip.linear_to_srgb(img.rgb).astype(np.float32)  # decoded as stated, then clamped and encoded
     if font is None:
         return srgb
     h, w, _ = srgb.shape

@@ -355,7 +355,8 @@ def reference_settings(path):
         raise Failure(f"{path}: no standard errors (render the reference with --batches >= 2)")
     return {"open": float(header["refrender:shutterOpen"]), "close": float(header["refrender:shutterClose"]),
             "filter": header.get("refrender:pixelFilter", "box"), "blur": header.get("refrender:blurSpace", "model"),
-            "res": header["refrender:resolution"], "header": header, "path": path}
+            "res": header["refrender:resolution"], "header": header, "path": path,
+            "color_space": "sRGB" if imagecompare.read_image(path).colorspace == "srgb" else "Linear"}
 
 
 # What must agree between the reference and a frame for the comparison to
@@ -399,8 +400,10 @@ def render_frames(scene, times, settings, extra, out_dir, cache, ref_shape):
     return [cache[t] for t in times]
 
 
-def write_exr(path, rgba, inputs):
-    """A float EXR, whole or not at all (safefiles), checked by reading it back."""
+def write_exr(path, rgba, inputs, color_space, blur_space):
+    """A float EXR, whole or not at all (safefiles), checked by reading it back; its header says
+    what its RGB holds (oiio:ColorSpace "sRGB": display values, or "Linear") and in which space
+    its time average was taken (refrender:blurSpace), as refrender's own images do."""
     import OpenImageIO as oiio
     buf = oiio.ImageBuf(rgba.astype(np.float32))
     buf.specmod().channelnames = ["R", "G", "B", "A"][:rgba.shape[-1]]
@@ -408,7 +411,14 @@ def write_exr(path, rgba, inputs):
     def write(tmp):
         if not buf.write(tmp):
             raise OSError(oiio.geterror() or "OpenImageIO cannot write it")
+        imagecompare.tag_exr(tmp, {"oiio:ColorSpace": color_space, "refrender:blurSpace": blur_space})
     safefiles.write_file(path, write, inputs, imagecompare.check_written)
+
+
+# The refrender blur space a procedure's average matches: model averages the renderer's floats (the
+# reference's own space); srgb averages decoded values (linear light); gamma1 the encoded values
+# clamped to [0, 1] (refrender's clamped); gamma2.2 has no refrender counterpart and is named as is.
+PROCEDURE_BLUR = {"srgb": "linear", "gamma1": "clamped", "gamma2.2": "gamma2.2"}
 
 
 def save_figure(fig, path, inputs, **kw):
@@ -585,7 +595,7 @@ def float_averages(args, settings, ref, se, frames, out):
     rows = []
     for n in args.counts:
         avg = np.mean(frames(frame_times(settings["open"], settings["close"], n, args.times)), axis=0)
-        write_exr(out / f"average_{n}.exr", avg, args.inputs)
+        write_exr(out / f"average_{n}.exr", avg, args.inputs, settings["color_space"], settings["blur"])
         rows.append({"N": n, **measure(avg, ref, se)})
         if args.figure and n == args.counts[0]:
             figure(ref, avg, n, args.figure, args.inputs)
@@ -621,7 +631,8 @@ def procedures(args, settings, ref, se, frames, cache, out):
         renders = [f[..., :3] for f in frames(procedure_times(p, settings["open"], settings["close"]))]
         outs.append((p, emulate(p, renders, display)))
         write_exr(out / f"procedure_{p.name.replace(':', '_').replace(',', '_').replace('=', '')}.exr", outs[-1][1],
-                  args.inputs)
+                  args.inputs, "sRGB" if display == "srgb" else settings["color_space"],  # identity: as rendered
+                  PROCEDURE_BLUR.get(p.space, settings["blur"]))
     frames(frame_times(settings["open"], settings["close"], MOTION_PROBES, "midpoint"))
     moving = moving_pixels(cache.values(), display, ref_rgb.shape)
     rows = [{"procedure": dataclasses.asdict(p), **measure_procedure(o, ref_rgb, se, display, moving)}

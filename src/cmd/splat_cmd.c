@@ -263,7 +263,8 @@ static int write_outputs(const splat_options *o, const scene *s, const splat_res
     exr_window win = {r->width, r->height, 0, 0, r->width, r->height};
     int rc = output_write_final_into(&set, o->output, &img, rs.smp.tspp, &attrs, &win, err);
     if (!rc && o->preview)
-        rc = preview_write_srgb_into(&set, o->preview, r->width, r->height, r->rgba, err);
+        rc = preview_write_srgb_into(&set, o->preview, r->width, r->height, r->rgba,
+                                     attrs_get(&attrs, ATTR_COLOR_SPACE), err);
     image_free(&img);
     if (rc) {
         atomic_set_discard(&set);

@@ -16,7 +16,7 @@
 #include "formats/exr.h"
 #include "render/film.h"
 
-#define ATTR_MAX 48
+#define ATTR_MAX 56
 
 /* The name of every attribute refrender writes (README, Output). Their
  * kinds and what resuming and merging do with each are output.c's table,
@@ -41,6 +41,9 @@
 #define ATTR_WEIGHT_HASH "refrender:weightHash"
 #define ATTR_PIXEL_FILTER "refrender:pixelFilter"
 #define ATTR_BLUR_SPACE "refrender:blurSpace"
+/* what the RGB holds: "sRGB" (a Gaussian model's display-encoded colours) or "Linear" (linear light),
+ * under the name OpenImageIO reads from an EXR header and reports to every reader */
+#define ATTR_COLOR_SPACE "oiio:ColorSpace"
 #define ATTR_GAUSSIANS "refrender:gaussians"
 #define ATTR_GAUSSIANS_HASH "refrender:gaussiansHash"
 #define ATTR_ROLLING_SHUTTER "refrender:rollingShutter"

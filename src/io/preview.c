@@ -66,11 +66,13 @@ int preview_check_format(const char *path, rr_error *err)
     return 0;
 }
 
-/* IEC 61966-2-1 sRGB encoding of a linear value in [0, 1]. */
-static unsigned char srgb8(float linear)
+/* The 8-bit display value of v clamped to [0, 1]: encoded with IEC
+ * 61966-2-1's sRGB curve if v is linear light, else v itself, rounded half
+ * up as torchvision's save_image (clamp(255 v + 0.5)) and Blender do. */
+static unsigned char display8(float v, int encoded)
 {
-    float c = linear < 0.f ? 0.f : (linear > 1.f ? 1.f : linear);
-    float e = c <= 0.0031308f ? 12.92f * c : 1.055f * powf(c, 1.f / 2.4f) - 0.055f;
+    float c = v < 0.f ? 0.f : (v > 1.f ? 1.f : v);
+    float e = encoded ? c : c <= 0.0031308f ? 12.92f * c : 1.055f * powf(c, 1.f / 2.4f) - 0.055f;
     return (unsigned char)lroundf(e * 255.f);
 }
 
@@ -84,12 +86,13 @@ static int write_all(const char *name, const unsigned char *bytes, size_t len)
     return fclose(f) == 0 && ok ? 0 : -1;
 }
 
-int preview_write_srgb(const char *path, int w, int h, const float *rgba, rr_error *err)
+int preview_write_srgb(const char *path, int w, int h, const float *rgba, const char *color_space, rr_error *err)
 {
-    return preview_write_srgb_into(NULL, path, w, h, rgba, err);
+    return preview_write_srgb_into(NULL, path, w, h, rgba, color_space, err);
 }
 
-int preview_write_srgb_into(atomic_set *set, const char *path, int w, int h, const float *rgba, rr_error *err)
+int preview_write_srgb_into(atomic_set *set, const char *path, int w, int h, const float *rgba,
+                            const char *color_space, rr_error *err)
 {
     if (preview_check_format(path, err))
         return -1;
@@ -97,9 +100,10 @@ int preview_write_srgb_into(atomic_set *set, const char *path, int w, int h, con
     unsigned char *px = malloc(3 * count + 1), *bytes = NULL;
     if (!px)
         return rr_fail(err, "%s: out of memory for the preview", path);
+    int encoded = color_space && !strcmp(color_space, "sRGB");
     for (size_t i = 0; i < count; i++)
         for (int c = 0; c < 3; c++)
-            px[3 * i + c] = srgb8(rgba[4 * i + c]);
+            px[3 * i + c] = display8(rgba[4 * i + c], encoded);
     char why[512] = "", name[PATH_MAX + 128];
     int rc = module.encode(path, w, h, px, &bytes, &len, why, sizeof why);
     free(px);

@@ -12,13 +12,17 @@
 extern "C" {
 #endif
 
-/* Writes RGB of interleaved float RGBA: each channel clamped to [0, 1]
- * (no exposure change) and encoded with the sRGB transfer function.
- * Atomic like the EXR output (atomicfile.h), and read back before it
- * replaces anything. Returns 0, or -1 with the reason in err. */
-int preview_write_srgb(const char *path, int w, int h, const float *rgba, rr_error *err);
+/* Writes RGB of interleaved float RGBA as 8-bit display values, each
+ * channel clamped to [0, 1] (no exposure change): linear light is encoded
+ * with the sRGB transfer function; values already sRGB-encoded
+ * (color_space "sRGB", the EXR's oiio:ColorSpace: a Gaussian model's
+ * colours) are copied, rounded as the rasterizers write them. Atomic like
+ * the EXR output (atomicfile.h), and read back before it replaces
+ * anything. Returns 0, or -1 with the reason in err. */
+int preview_write_srgb(const char *path, int w, int h, const float *rgba, const char *color_space, rr_error *err);
 /* The same, its file left in set for atomic_set_commit (set NULL: now). */
-int preview_write_srgb_into(atomic_set *set, const char *path, int w, int h, const float *rgba, rr_error *err);
+int preview_write_srgb_into(atomic_set *set, const char *path, int w, int h, const float *rgba,
+                            const char *color_space, rr_error *err);
 
 /* 0 if OpenImageIO can write the format of path's extension; checked before
  * a render so that a bad --preview name (or a missing module) fails at

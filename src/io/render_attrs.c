@@ -76,6 +76,21 @@ static void describe_gaussians(FILE *f, const scene *s)
         fputs("none", f);
 }
 
+/* What the pixels hold (issue 55): a Gaussian model's colours are display
+ * values, sRGB-encoded (it was fitted to 8-bit sRGB photographs, and the
+ * official rasterizers write them to PNG as they are: gaussian-splatting
+ * 1152adc render.py:34, torchvision's save_image rounding clamp(255 c + 0.5)), so its image is
+ * sRGB-encoded unless --blur-space linear decoded every sample; surfel
+ * shading is linear light. Written under OpenImageIO's name, which every
+ * OpenImageIO reader of the EXR reports (it says "Linear" when it is absent). */
+static const char *color_space(const scene *s, blur_space blur)
+{
+    int gaussians = 0;
+    for (int i = 0; i < s->nobjects; i++)
+        gaussians |= scene_object_row(&s->objects[i])->gaussians;
+    return gaussians && blur != BLUR_SPACE_LINEAR ? "sRGB" : "Linear";
+}
+
 static void weight_text(FILE *f, const void *sh) { describe_weight(f, sh); }
 static void gaussians_text(FILE *f, const void *s) { describe_gaussians(f, s); }
 static void parameters_text(FILE *f, const void *p) { describe_parameters(f, p); }
@@ -155,6 +170,7 @@ void attrs_for_render(attr_list *a, const scene *s, const render_settings *rs, u
     attrs_set(a, ATTR_TIME_INTEGRATION, "%s", rs->exact_time ? "exact" : "sampled");
     attrs_set(a, ATTR_PIXEL_FILTER, "%s", pixel_filter_name(rs->filter));
     attrs_set(a, ATTR_BLUR_SPACE, "%s", blur_space_name(rs->blur));
+    attrs_set(a, ATTR_COLOR_SPACE, "%s", color_space(s, rs->blur));
     set_identity_text(a, ATTR_GAUSSIANS, ATTR_GAUSSIANS_HASH, gaussians_text, s);
     /* the convention compare.py --alpha composite relies on (README, Output) */
     attrs_set(a, ATTR_BACKGROUND, "%.9g %.9g %.9g", s->background.x, s->background.y, s->background.z);
