@@ -137,8 +137,8 @@ int scene_frame_shutter_note(const scene *s, const shutter *first, long long fra
 {
     if (!s->frames_at_poses || (first->open == s->shut.open && first->close == s->shut.close))
         return 0;
-    snprintf(buf, size, "<frames at=\"trajectory\">: each frame's exposure is the shutter [%.17g, %.17g] moved so "
-                        "that its middle is its pose's time (frame %lld: [%.17g, %.17g])", s->shut.open,
+    snprintf(buf, size, "<frames at=\"trajectory\">: each frame's exposure is the shutter [%.9g, %.9g] moved so "
+                        "that its middle is its pose's time (frame %lld: [%.9g, %.9g])", s->shut.open,
              s->shut.close, frame, first->open, first->close);
     return 1;
 }
