@@ -62,7 +62,8 @@ def test_merged_header_is_one_renders_with_the_work_summed(tmp_path):
     missing = sorted(set(one) - set(merged_header))
     assert missing == [], missing
     for key in ("refrender:frame", "refrender:frameRate", "refrender:shutterOpen", "refrender:shutterClose",
-                "worldToCamera", "worldToNDC"):
+                "worldToCamera", "worldToNDC", "refrender:cameraTime", "refrender:worldToCameraOpen",
+                "refrender:worldToCameraClose", "refrender:cameraTimeOpen", "refrender:cameraTimeClose"):
         assert np.array_equal(np.asarray(one[key]), np.asarray(merged_header[key])), key
     assert merged_header["refrender:frame"] == 3 and merged_header["refrender:frameRate"] == 24
     assert merged_header["refrender:rays"] == one["refrender:rays"] == W * H * SPP * TSPP * BATCHES
@@ -90,6 +91,9 @@ def patch_attribute(path, name, type_name, value_bytes):
     ("refrender:shutterClose", "double", struct.pack("<d", 0.2)),
     ("worldToCamera", "m44f", struct.pack("<16f", *np.eye(4).ravel() * 2)),
     ("worldToNDC", "m44f", struct.pack("<16f", *np.eye(4).ravel() * 2)),
+    ("refrender:cameraTime", "double", struct.pack("<d", 0.7)),
+    ("refrender:worldToCameraOpen", "m44f", struct.pack("<16f", *np.eye(4).ravel() * 2)),
+    ("refrender:worldToCameraClose", "m44f", struct.pack("<16f", *np.eye(4).ravel() * 2)),
 ], ids=lambda v: v if isinstance(v, str) and ":" in v or v in ("worldToCamera", "worldToNDC") else "")
 def test_merge_refuses_passes_that_disagree_on(tmp_path, name, type_name, value):
     # A pass numbered as another frame, or seen from another camera, is not a

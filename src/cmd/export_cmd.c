@@ -103,17 +103,6 @@ static void affine_matrix(const double r[3][3], vec3 t, double m[4][4])
     m[3][0] = m[3][1] = m[3][2] = 0, m[3][3] = 1;
 }
 
-/* World to camera space at time t: the inverse of (camera motion at t) after
- * the rest pose. */
-static void world_to_camera(const scene *s, double t, double out[4][4])
-{
-    double rest_inv[4][4], motion_inv[4][4];
-    camera_world_to_camera(&s->cam, rest_inv);
-    xform m = animation_at(&s->camera_motion, t);
-    affine_matrix(m.ri, xform_inverse_point(&m, v3(0, 0, 0)), motion_inv);
-    mat4_mul(rest_inv, motion_inv, out);
-}
-
 static int sample_times(const shutter *sh, int k, double *times)
 {
     int n = 0;
@@ -149,13 +138,14 @@ static int matrix_finite(double m[4][4])
 
 /* JSON has no number for inf or NaN (a velocity of 1e308 at t = 10 once
  * wrote "inf" into the file): such a transform is refused, naming it. */
-static int check_frame(const scene *s, const shutter *sh, const double *times, int n, rr_error *err)
+static int check_frame(const scene *s, const shutter *sh, const char *frame, const double *times, int n,
+                       rr_error *err)
 {
     double m[4][4];
-    if (scene_check_shutter_in_trajectory(s, sh, err)) /* the render's rule: every line's times */
+    if (scene_check_shutter_in_trajectory(s, sh, frame, err)) /* the render's rule: every line's times */
         return -1;
     for (int i = 0; i < n; i++) {
-        world_to_camera(s, times[i], m);
+        scene_world_to_camera(s, times[i], m);
         if (!matrix_finite(m))
             return rr_fail(err, "the camera's transform at time %g is not finite (motion too large)", times[i]);
         for (int o = 0; o < s->nobjects; o++) {
@@ -177,7 +167,9 @@ static int write_frame(FILE *f, const scene *s, long long frame, int numbered, c
         return rr_fail(err, "the shutter [%g, %g] is longer than double precision holds (close - open overflows)",
                        sh->open, sh->close);
     int n = sample_times(sh, k, times);
-    if (check_frame(s, sh, times, n, err))
+    char label[128];
+    scene_frame_label(s, frame, numbered, label, sizeof label);
+    if (check_frame(s, sh, label, times, n, err))
         return -1;
     fputs("    {\"frame\": ", f);
     numbered ? fprintf(f, "%lld", frame) : fputs("null", f);
@@ -195,7 +187,7 @@ static int write_frame(FILE *f, const scene *s, long long frame, int numbered, c
     if (scene_for_shutter(s, sh, &fs, err))
         return -1;
     for (int i = 0; i < n; i++) {
-        world_to_camera(&fs, times[i], m);
+        scene_world_to_camera(&fs, times[i], m);
         fputs(i ? ", " : "", f);
         json_matrix(f, m);
     }
@@ -355,6 +347,9 @@ static int write_json(FILE *f, const scene *s, const export_options *o, rr_error
         shutter sh = s->shut;
         if (o->frames && scene_frame_shutter(s, (int)fr, &sh, err))
             return -1;
+        char note[512];
+        if (fr == o->first && o->frames && scene_frame_shutter_note(s, &sh, fr, note, sizeof note))
+            fprintf(stderr, "refrender export: note: %s\n", note);
         if (fr > o->first)
             fputs(",\n", f);
         if (write_frame(f, s, fr, o->frames, &sh, o->times, err))

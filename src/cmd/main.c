@@ -731,16 +731,30 @@ static int frame_shutter(const scene *s, const render_options *o, long long f, s
 }
 
 /* Every frame's shutter is one the scene has, within its camera
- * trajectory, before the first frame is rendered (a sequence must not stop
- * after writing some frames). */
+ * trajectory, and its camera fits the header, before the first frame is
+ * rendered (a sequence must not stop after writing some frames); a
+ * refused frame is named. */
 static int check_frame_shutters(const scene *s, const render_options *o, rr_error *err)
 {
     for (long long f = o->first_frame; f <= o->last_frame; f++) {
         shutter shut;
-        if (frame_shutter(s, o, f, &shut, err) || scene_check_shutter_in_trajectory(s, &shut, err))
+        char frame[128];
+        scene_frame_label(s, f, o->frames, frame, sizeof frame);
+        if (frame_shutter(s, o, f, &shut, err) || scene_check_shutter_in_trajectory(s, &shut, frame, err) ||
+            scene_check_frame_camera(s, &shut, frame, err))
             return -1;
     }
     return 0;
+}
+
+/* Says so when <frames at="trajectory"> moves the shutter as given onto
+ * the poses (the header records each frame's; a run must not be silent
+ * about a shutter it did not render as written). */
+static void note_moved_shutter(const scene *s, const render_options *o, const shutter *first)
+{
+    char note[512];
+    if (o->frames && !o->quiet && scene_frame_shutter_note(s, first, o->first_frame, note, sizeof note))
+        fprintf(stderr, "refrender: note: %s\n", note);
 }
 
 /* One frame or a sequence, sharing the loaded models and their BVHs; only
@@ -763,6 +777,7 @@ static int render_and_write(const scene *s, const render_options *o, const char 
     if (check_frame_outputs(s, o, err) || check_frame_shutters(s, o, err) ||
         next_frame(s, o, o->first_frame, &shut, &fs, err))
         return -1;
+    note_moved_shutter(s, o, &shut);
     double t0, t1; /* every line's exposure (a rolling shutter's reaches past [open, close]) */
     shutter_span(&shut, s->cam.width, s->cam.height, &t0, &t1);
     accel_settings set = {t0, t1, s->epsilon, s->kernel_sigma, !o->no_static_reuse};

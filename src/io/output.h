@@ -16,7 +16,7 @@
 #include "formats/exr.h"
 #include "render/film.h"
 
-#define ATTR_MAX 56
+#define ATTR_MAX 72
 
 /* The name of every attribute refrender writes (README, Output). Their
  * kinds and what resuming and merging do with each are output.c's table,
@@ -55,6 +55,11 @@
 #define ATTR_EXACT_UNRESOLVED_SHARE "refrender:exactUnresolvedShare"
 #define ATTR_WORLD_TO_CAMERA "worldToCamera"
 #define ATTR_WORLD_TO_NDC "worldToNDC"
+#define ATTR_CAMERA_TIME "refrender:cameraTime"
+#define ATTR_WORLD_TO_CAMERA_OPEN "refrender:worldToCameraOpen"
+#define ATTR_CAMERA_TIME_OPEN "refrender:cameraTimeOpen"
+#define ATTR_WORLD_TO_CAMERA_CLOSE "refrender:worldToCameraClose"
+#define ATTR_CAMERA_TIME_CLOSE "refrender:cameraTimeClose"
 #define ATTR_SHUTTER_OPEN "refrender:shutterOpen"
 #define ATTR_SHUTTER_CLOSE "refrender:shutterClose"
 #define ATTR_FRAME "refrender:frame"
