@@ -295,7 +295,8 @@ def main():
     sub = p.add_subparsers(dest="what", required=True)
     c = sub.add_parser("convergence", help="error against samples for each view and sampler")
     c.add_argument("--views", type=names, default=",".join(VIEWS), help="views to measure (default: all: %(default)s)")
-    c.add_argument("--counts", type=positive_counts, default="16,64,256", help="samples per pixel (default: %(default)s)")
+    c.add_argument("--counts", type=positive_counts, default="16,64,256",
+                   help="samples per pixel (default: %(default)s)")
     c.add_argument("--samplers", type=names, default="sobol,jittered3d,thesis", help="(default: %(default)s)")
     c.add_argument("--out", default="out/samplers", help="output directory (default: %(default)s)")
     t = sub.add_parser("time-to-error", help="seconds to each error level on the benchmark-scale view")

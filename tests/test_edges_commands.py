@@ -98,7 +98,8 @@ def test_merge_writes_the_preview_a_single_render_writes(tmp_path):
     scene.write_text(EMPTY.format(w=12, h=8).replace('center="100 0 0"', 'center="0.5 0 0"'))
     states = [tmp_path / f"p{k}.exr" for k in range(2)]
     for k, st in enumerate(states):
-        assert run([scene, "--spp", 1, "--tspp", 2, "--batches", 2, "--pass", f"{k}/2", "-o", st, "--quiet"]).returncode == 0
+        proc = run([scene, "--spp", 1, "--tspp", 2, "--batches", 2, "--pass", f"{k}/2", "-o", st, "--quiet"])
+        assert proc.returncode == 0, proc.stderr
     one = run([scene, "--spp", 1, "--tspp", 2, "--batches", 2, "-o", tmp_path / "one.exr", "--preview",
                tmp_path / "one.png", "--quiet"])
     assert one.returncode == 0, one.stderr

@@ -1,5 +1,6 @@
 """Write faults. Every output (final EXR, render state, merge and its
-preview, preview, frames, gen and surfels PLY, scene export, refrender splat's EXR) either completes or leaves the previous
+preview, preview, frames, gen and surfels PLY, scene export, refrender
+splat's EXR) either completes or leaves the previous
 file untouched, and the exit status says which: the LD_PRELOAD shim
 tests/faultinject.c makes the Nth write to a regular file (and every later
 one: a disk that stays full) or the Nth rename fail, for every N until a run

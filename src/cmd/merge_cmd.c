@@ -171,7 +171,8 @@ static int merge_files(char **paths, int n, const char *out, const char *preview
         rc = write_merged(out, preview, &merged, &attrs, err);
     }
     if (!rc && !quiet)
-        fprintf(stderr, "refrender merge: %d states -> %s%s%s\n", n, out, preview ? " and " : "", preview ? preview : "");
+        fprintf(stderr, "refrender merge: %d states -> %s%s%s\n", n, out, preview ? " and " : "",
+                preview ? preview : "");
     image_free(&merged);
     free(ranges);
     return rc;
