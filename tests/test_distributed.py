@@ -510,3 +510,21 @@ def test_render_parallel_reads_08_as_eight_passes(tmp_path):
     assert proc.returncode == 0, proc.stderr
     passes = sorted(l.split("--pass ")[1].split()[0] for l in record.read_text().splitlines() if "--pass" in l)
     assert passes == [f"{k}/8" for k in range(8)]
+
+
+def test_slurm_passes_and_frames_are_bounded(tmp_path):
+    """--passes beyond refrender's 524288 batches and a frame range beyond a
+    Slurm array's 4000001 tasks are refused at once (before: --merge looped
+    over 1e9 passes or frames, a subshell each, while a string grew); at the
+    bound, --merge with no pass there names the first 20 missing tasks and
+    the count of the rest within the timeout."""
+    scene, out = scene_file(tmp_path), tmp_path / "out"
+    env = {**os.environ, "REFRENDER": BIN}
+    for args, says in ((["--passes", 999999999], "expected a count from 1 to 524288"),
+                       (["--passes", 524289], "expected a count from 1 to 524288"),
+                       (["--passes", 2, "--frames", "0-999999999"], "more than the 4000001 tasks"),
+                       (["--passes", 8, "--frames", "0-500000"], "more than the 4000001 tasks")):
+        proc = sbatch_task(["--merge", *args, out, "--", scene, *COMMON], env, timeout=30)
+        assert proc.returncode == 2 and says in proc.stderr, (args, proc.stderr)
+    proc = sbatch_task(["--merge", "--passes", 524288, out, "--", scene, *COMMON], env, timeout=120)
+    assert proc.returncode == 2 and "task(s) 0 1 2 " in proc.stderr and " 19 and 524268 more" in proc.stderr, proc.stderr

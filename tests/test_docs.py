@@ -453,3 +453,45 @@ def test_no_script_puts_its_own_folder_on_the_path_again():
     # it again only repeats it.
     inserting = {p.name for p in (ROOT / "scripts").glob("*.py") if "sys.path.insert" in p.read_text()}
     assert not inserting, inserting
+
+
+def test_licence_and_citation_are_there_and_named():
+    """LICENSE is the Apache License 2.0 word for word (Debian's copy of the
+    standard text, when installed, is the independent source), CITATION.cff
+    is Citation File Format 1.2.0 with its required keys, and README names
+    both."""
+    yaml = pytest.importorskip("yaml")
+    text = (ROOT / "LICENSE").read_text()
+    debian = "/usr/share/common-licenses/Apache-2.0"
+    if os.path.exists(debian):
+        assert text == open(debian).read()
+    assert "Apache License" in text and "Version 2.0, January 2004" in text and "END OF TERMS AND CONDITIONS" in text
+    cff = yaml.safe_load((ROOT / "CITATION.cff").read_text())
+    assert cff["cff-version"] == "1.2.0" and cff["license"] == "Apache-2.0"
+    assert all(cff.get(k) for k in ("message", "title", "authors"))
+    readme = (ROOT / "README.md").read_text()
+    assert "[LICENSE](LICENSE)" in readme and "[CITATION.cff](CITATION.cff)" in readme
+
+
+def test_fetch_models_offline_stops_with_one_line(tmp_path):
+    """`make scenes` (the first step of `make test`) without a network: the
+    download of libcgal-demo fails (a stand-in apt-get that fails as an
+    offline one does), and the script stops with a line naming the package,
+    the models that need it and what to do, after converting what needs no
+    download (the glmark2 bunny). README says so."""
+    if not os.path.exists("/usr/share/glmark2/models/bunny.obj"):
+        pytest.skip("glmark2-data not installed")
+    (tmp_path / "scripts").mkdir()
+    shutil.copy(ROOT / "scripts" / "fetch-models.sh", tmp_path / "scripts")
+    fake = tmp_path / "bin"
+    fake.mkdir()
+    for name, body in (("apt-get", "echo 'E: Failed to fetch (offline)' >&2; exit 100"), ("sudo", 'exec "$@"')):
+        (fake / name).write_text(f"#!/bin/sh\n{body}\n")
+        (fake / name).chmod(0o755)
+    proc = subprocess.run(["sh", str(tmp_path / "scripts" / "fetch-models.sh")], capture_output=True, text=True,
+                          env={**os.environ, "PATH": f"{fake}:{os.environ['PATH']}", "REFRENDER": BIN}, timeout=120)
+    assert proc.returncode == 1, proc.stderr
+    last = proc.stderr.strip().splitlines()[-1]
+    assert last.startswith("fetch-models.sh: cannot download Debian's libcgal-demo (offline?") and "kitten" in last
+    assert (tmp_path / "scenes" / "models" / "bunny.ply").stat().st_size > 0
+    assert "offline it stops there with one line" in (ROOT / "README.md").read_text()

@@ -1,5 +1,6 @@
-"""Write faults. Every output (final EXR, render state, merge,
-preview, frames, gen and surfels PLY, scene export, refrender splat's EXR) either completes or leaves the previous
+"""Write faults. Every output (final EXR, render state, merge and its
+preview, preview, frames, gen and surfels PLY, scene export, refrender
+splat's EXR) either completes or leaves the previous
 file untouched, and the exit status says which: the LD_PRELOAD shim
 tests/faultinject.c makes the Nth write to a regular file (and every later
 one: a disk that stays full) or the Nth rename fail, for every N until a run
@@ -119,6 +120,26 @@ def test_splat_image_and_preview(tmp_path, scene, op):
                                                   path.read_bytes() == (good / "p.png").read_bytes())
     assert check_every_fault(tmp_path, [*args, "-o", out, "--preview", preview], [out, preview], complete, op,
                              all_or_none=True) >= 2
+
+
+@pytest.mark.parametrize("op", ["write", "rename"])
+def test_merge_image_and_preview(tmp_path, scene, op):
+    """refrender merge --preview: the merged EXR and its preview are one
+    result, all or none, as a render's (the preview is the one a single
+    render of all batches writes)."""
+    good = tmp_path / "good"
+    good.mkdir()
+    states = [good / "p0.exr", good / "p1.exr"]
+    for k, st in enumerate(states):
+        assert run([scene, *FAST, "--batches", 2, "--pass", f"{k}/2", "-o", st]).returncode == 0
+    assert run([scene, *FAST, "--batches", 2, "-o", good / "o.exr", "--preview", good / "p.png"]).returncode == 0
+    out, preview = tmp_path / "o.exr", tmp_path / "p.png"
+
+    def complete(path):
+        return path.read_bytes() != PREVIOUS and (same_pixels(path, good / "o.exr") if path == out else
+                                                  path.read_bytes() == (good / "p.png").read_bytes())
+    assert check_every_fault(tmp_path, ["merge", *states, "-o", out, "--preview", preview, "--quiet"], [out, preview],
+                             complete, op, all_or_none=True) >= 2
 
 
 @pytest.mark.parametrize("op", ["write", "rename"])

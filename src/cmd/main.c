@@ -219,7 +219,7 @@ static int check_combinations(const render_options *o, rr_error *err)
         return rr_fail(err, "--max-batches %d must be at least the %d batches every pixel takes first%s", o->max_batches,
                        o->batches, o->batches_given ? "" : " (--target-error alone takes 4)");
     if (o->passes && o->preview)
-        return rr_fail(err, "--preview is not available for --pass renders (merge first)");
+        return rr_fail(err, "--preview is not available for --pass renders (refrender merge --preview writes it)");
     if (o->frames == 2 && (o->passes || o->checkpoint || o->resume))
         return rr_fail(err, "--frames renders whole frames: render each frame with --frame to use "
                             "--pass, --checkpoint or --resume");
