@@ -145,7 +145,8 @@ static int write_merged(const char *out, const char *preview, const image *merge
         image_planes p;
         rc = image_planes_resolve(merged, per_batch, &p) ? rr_fail(err, "out of memory") : 0;
         if (!rc) {
-            rc = preview_write_srgb_into(&set, preview, merged->width, merged->height, p.rgba, err);
+            rc = preview_write_srgb_into(&set, preview, merged->width, merged->height, p.rgba,
+                                         attrs_get(attrs, ATTR_COLOR_SPACE), err);
             image_planes_free(&p);
         }
     }
