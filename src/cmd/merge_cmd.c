@@ -9,6 +9,7 @@
 #include "cmd/cli.h"
 #include "cmd/commands.h"
 #include "io/output.h"
+#include "io/render_attrs.h"
 
 static void merge_usage(FILE *f)
 {
@@ -128,6 +129,16 @@ static int add_state(const char *path, image *merged, attr_list *first, const ch
     return rc;
 }
 
+/* The noise the merged image reached, as a single render writes it. */
+static int merged_noise(const image *merged, attr_list *attrs, rr_error *err)
+{
+    noise_stats ns;
+    if (noise_stats_of(merged, &ns))
+        return rr_fail(err, "out of memory");
+    attrs_for_noise(attrs, &ns);
+    return 0;
+}
+
 static int merge_files(char **paths, int n, const char *out, int quiet, rr_error *err)
 {
     batch_range *ranges = calloc((size_t)n, sizeof *ranges);
@@ -142,7 +153,7 @@ static int merge_files(char **paths, int n, const char *out, int quiet, rr_error
     if (!rc) {
         int per_batch = atoi(attrs_get(&attrs, ATTR_SPP)) * atoi(attrs_get(&attrs, ATTR_TSPP));
         attrs_set(&attrs, ATTR_COMMAND, "refrender merge (%d states)", n);
-        rc = output_write_final(out, &merged, per_batch, &attrs, err);
+        rc = merged_noise(&merged, &attrs, err) || output_write_final(out, &merged, per_batch, &attrs, err);
     }
     if (!rc && !quiet)
         fprintf(stderr, "refrender merge: %d states -> %s\n", n, out);
