@@ -50,7 +50,7 @@ typedef struct {
     int tiles_x, tiles_y, ntiles;
     uint32_t round; /* pixels holding `round` batches render batch batch_begin + round */
     /* progress: pixel batches the pixels held when the render began, and
-     * those they are expected to hold at its end (planned_pixel_batches) */
+     * those they are expected to hold at its end (render_planned_pixel_batches) */
     uint64_t held_at_start, planned;
     atomic_int next_tile, workers_left;
     atomic_uint_fast64_t rays, overflows, clamped, pixel_batches, static_traversals;
@@ -374,22 +374,19 @@ static uint64_t expected_batches(const render_settings *rs, const pixel_state *p
     if (rs->target_error <= 0 || p->batches < 2 || !pixel_wants_another(rs, p))
         return first;
     double ratio = film_max_stderr(p) / rs->target_error;
-    double needed = ceil(fmin(p->batches * ratio * ratio, rs->max_batches));
+    double needed = round(fmin(p->batches * ratio * ratio, rs->max_batches));
     uint32_t next = p->batches + 1;
     return (uint64_t)fmax(fmax(needed, first), next);
 }
 
-/* The pixel batches all pixels (of the crop window) will hold when the
- * render ends, expected anew at each round: the progress line and its ETA
- * then cover the adaptive rounds of a target error too (it said 99.9%,
- * ETA 0 s, through them: the plan was the first B batches only). */
-static uint64_t planned_pixel_batches(const render_job *job)
+/* (render.h) Expected anew at each round. */
+uint64_t render_planned_pixel_batches(const render_settings *rs, const image *img)
 {
     uint64_t total = 0;
-    for (int y = 0; y < job->img->height; y++)
-        for (int x = 0; x < job->img->width; x++)
-            if (pixel_in_crop(job->rs, x, y))
-                total += expected_batches(job->rs, &job->img->px[(size_t)y * job->img->width + x]);
+    for (int y = 0; y < img->height; y++)
+        for (int x = 0; x < img->width; x++)
+            if (pixel_in_crop(rs, x, y))
+                total += expected_batches(rs, &img->px[(size_t)y * img->width + x]);
     return total;
 }
 
@@ -556,7 +553,7 @@ int render_image(const scene *s, const accel *a, const render_settings *rs, imag
     for (job.round = 0; job.round < rounds && !rc && !*cancel; job.round++) {
         if (job.round >= rs->batches && !any_pixel_wants_more(&job))
             break;
-        job.planned = planned_pixel_batches(&job);
+        job.planned = render_planned_pixel_batches(rs, img);
         rc = run_round(&job, hooks, start, &last_checkpoint, err);
     }
     if (job.started)
