@@ -574,8 +574,11 @@ static void warn_about_settings(const render_options *o, const render_settings *
         return;
     if (k * k != o->spp)
         fprintf(stderr, "refrender: --spp %d rounded to a %dx%d grid (%d samples)\n", o->spp, k, k, k * k);
-    if (rs->smp.kind == SAMPLER_SOBOL && (n & (n - 1)))
-        fprintf(stderr, "refrender: note: sobol works best with a power-of-two spp*tspp (now %lld)\n", (long long)n);
+    /* any count is first-class (src/SAMPLING.md, Counts that are no power of two); only the error
+     * bars' two time halves need an even one */
+    if (rs->smp.kind == SAMPLER_SOBOL && rs->smp.random_strata && n % 2)
+        fprintf(stderr, "refrender: note: sobol's error bars want an even spp*tspp (now %lld): with an odd one a pixel "
+                        "stepping in time can report too small an error\n", (long long)n);
 }
 
 /* The final image, only the crop window's pixels with --crop-window. */
