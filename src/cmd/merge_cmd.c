@@ -10,6 +10,7 @@
 #include "cmd/commands.h"
 #include "io/output.h"
 #include "io/preview.h"
+#include "io/render_attrs.h"
 
 static void merge_usage(FILE *f)
 {
@@ -132,6 +133,16 @@ static int add_state(const char *path, image *merged, attr_list *first, const ch
     return rc;
 }
 
+/* The noise the merged image reached, as a single render writes it. */
+static int merged_noise(const image *merged, attr_list *attrs, rr_error *err)
+{
+    noise_stats ns;
+    if (noise_stats_of(merged, &ns))
+        return rr_fail(err, "out of memory");
+    attrs_for_noise(attrs, &ns);
+    return 0;
+}
+
 /* The merged image and its preview (NULL: none), both put in place or
  * neither, as a render's outputs (main.c, write_outputs). */
 static int write_merged(const char *out, const char *preview, const image *merged, const attr_list *attrs,
@@ -170,7 +181,7 @@ static int merge_files(char **paths, int n, const char *out, const char *preview
         rc = check_ranges(ranges, n, (uint32_t)strtoul(attrs_get(&attrs, ATTR_BATCHES), NULL, 10), err);
     if (!rc) {
         attrs_set(&attrs, ATTR_COMMAND, "refrender merge (%d states)", n);
-        rc = write_merged(out, preview, &merged, &attrs, err);
+        rc = merged_noise(&merged, &attrs, err) || write_merged(out, preview, &merged, &attrs, err);
     }
     if (!rc && !quiet)
         fprintf(stderr, "refrender merge: %d states -> %s%s%s\n", n, out, preview ? " and " : "",

@@ -16,7 +16,7 @@
 #include "formats/exr.h"
 #include "render/film.h"
 
-#define ATTR_MAX 72
+#define ATTR_MAX 80
 
 /* The name of every attribute refrender writes (README, Output). Their
  * kinds and what resuming and merging do with each are output.c's table,
@@ -72,6 +72,14 @@
 #define ATTR_TARGET_ERROR "refrender:targetError"
 #define ATTR_TARGET_REACHED "refrender:targetReached"
 #define ATTR_CROP_WINDOW "refrender:cropWindow"
+/* the noise a final image reached (render/noise.h): batches held per pixel,
+ * and each pixel's largest RGB standard error over the image */
+#define ATTR_BATCHES_MIN "refrender:batchesMin"
+#define ATTR_BATCHES_MAX "refrender:batchesMax"
+#define ATTR_STDERR_MEAN "refrender:stderrMean"
+#define ATTR_STDERR_P99 "refrender:stderrP99"
+#define ATTR_STDERR_MAX "refrender:stderrMax"
+#define ATTR_STDERR_REACHED "refrender:stderrReached"
 /* refrender splat (src/SPLAT.md): the method, its parameters and its cost */
 #define ATTR_METHOD "refrender:method"
 #define ATTR_METHOD_PARAMETERS "refrender:methodParameters"

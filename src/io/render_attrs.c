@@ -184,3 +184,18 @@ void attrs_for_render(attr_list *a, const scene *s, const render_settings *rs, u
     attrs_set(a, ATTR_SOFTWARE, "refrender %s", RR_VERSION);
 }
 
+
+void attrs_for_noise(attr_list *a, const noise_stats *n)
+{
+    if (!noise_has_stderr(n)) /* one batch: no standard errors, nothing to say */
+        return;
+    char text[160];
+    noise_text(n, text, sizeof text);
+    attrs_set(a, ATTR_BATCHES_MIN, "%u", n->batches_min);
+    attrs_set(a, ATTR_BATCHES_MAX, "%u", n->batches_max);
+    attrs_set(a, ATTR_STDERR_MEAN, "%.9g", n->mean);
+    attrs_set(a, ATTR_STDERR_P99, "%.9g", n->p99);
+    attrs_set(a, ATTR_STDERR_MAX, "%.9g", n->max);
+    attrs_set(a, ATTR_STDERR_REACHED, "%s, each pixel's largest RGB standard error; %u to %u batches a pixel", text,
+              n->batches_min, n->batches_max);
+}

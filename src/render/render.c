@@ -1,5 +1,6 @@
 #include "render/render.h"
 
+#include <math.h>
 #include <pthread.h>
 #include <stdatomic.h>
 #include <stdlib.h>
@@ -48,6 +49,9 @@ typedef struct {
     image *img;
     int tiles_x, tiles_y, ntiles;
     uint32_t round; /* pixels holding `round` batches render batch batch_begin + round */
+    /* progress: pixel batches the pixels held when the render began, and
+     * those they are expected to hold at its end (render_planned_pixel_batches) */
+    uint64_t held_at_start, planned;
     atomic_int next_tile, workers_left;
     atomic_uint_fast64_t rays, overflows, clamped, pixel_batches, static_traversals;
     atomic_uint_fast64_t gaussians_short; /* samples that dropped Gaussians for lack of memory */
@@ -360,11 +364,47 @@ static void wait_for_workers(render_job *job)
     pthread_mutex_unlock(&job->lock);
 }
 
+/* The batches a pixel is expected to hold at the end of the render: the
+ * first B, and with a target error as many as its standard error says it
+ * needs (it falls as 1/sqrt(batches): b (se / target)^2), up to the cap.
+ * Only the progress line uses it; no pixel's batches depend on it. */
+static uint64_t expected_batches(const render_settings *rs, const pixel_state *p)
+{
+    uint32_t first = p->batches > rs->batches ? p->batches : rs->batches;
+    if (rs->target_error <= 0 || p->batches < 2 || !pixel_wants_another(rs, p))
+        return first;
+    double ratio = film_max_stderr(p) / rs->target_error;
+    double needed = round(fmin(p->batches * ratio * ratio, rs->max_batches));
+    uint32_t next = p->batches + 1;
+    return (uint64_t)fmax(fmax(needed, first), next);
+}
+
+/* (render.h) Expected anew at each round. */
+uint64_t render_planned_pixel_batches(const render_settings *rs, const image *img)
+{
+    uint64_t total = 0;
+    for (int y = 0; y < img->height; y++)
+        for (int x = 0; x < img->width; x++)
+            if (pixel_in_crop(rs, x, y))
+                total += expected_batches(rs, &img->px[(size_t)y * img->width + x]);
+    return total;
+}
+
+static uint64_t held_pixel_batches(const image *img)
+{
+    uint64_t held = 0;
+    for (size_t i = 0; i < (size_t)img->width * img->height; i++)
+        held += img->px[i].batches;
+    return held;
+}
+
+/* The share of this render's planned pixel batches done (a resumed render's
+ * earlier ones are not its work: its ETA is for what is left). */
 static void report_progress(render_job *job, const render_hooks *hooks, double start)
 {
     if (!hooks || !hooks->progress)
         return;
-    double planned = (double)job->img->width * job->img->height * job->rs->batches;
+    double planned = (double)(job->planned - job->held_at_start);
     double fraction = fmin(0.999, atomic_load(&job->pixel_batches) / fmax(planned, 1.0));
     hooks->progress(hooks->user, fraction, atomic_load(&job->rays), rr_seconds() - start);
 }
@@ -508,10 +548,12 @@ int render_image(const scene *s, const accel *a, const render_settings *rs, imag
         return -1;
     double start = rr_seconds(), last_checkpoint = start;
     uint32_t rounds = rs->target_error > 0 ? rs->max_batches : rs->batches;
+    job.held_at_start = held_pixel_batches(img);
     int rc = pool_start(&job, err);
     for (job.round = 0; job.round < rounds && !rc && !*cancel; job.round++) {
         if (job.round >= rs->batches && !any_pixel_wants_more(&job))
             break;
+        job.planned = render_planned_pixel_batches(rs, img);
         rc = run_round(&job, hooks, start, &last_checkpoint, err);
     }
     if (job.started)
