@@ -24,6 +24,8 @@ static void splat_usage(FILE *f)
 "Renders a scene's point models with one of the splatting methods of Wolf 2008\n"
 "(src/SPLAT.md), pixel centres only, into refrender's EXR layout (R G B A,\n"
 "samples; refrender:method, refrender:methodParameters, refrender:fragments).\n"
+"Surfel (pointModel) objects only: scenes with Gaussian models or spheres are\n"
+"refused; so are times the ray tracer refuses (objects beyond 1e15 units).\n"
 "Methods:\n"
 "  instant     the static three-pass splatting of one instant (thesis 4.1.1,\n"
 "              4.2.1, 4.2.3); with --filter none it equals\n"

@@ -3,6 +3,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "accel/accel.h"
 #include "splat/frame.h"
 #include "splat/volumetric.h"
 
@@ -106,7 +107,24 @@ static int splat_buckets(splat_frame *f, const splat_settings *set, int buckets,
     return rc;
 }
 
-static int check_scene(const scene *s, rr_error *err)
+/* The ray tracer's reach rule (accel_check_reach) over the instants
+ * splatted: an instant or a shutter the renderer refuses (a --time of
+ * 1e300 moving an object past RR_MAX_REACH) is refused here too. */
+static int check_reach(const scene *s, const splat_settings *set, rr_error *err)
+{
+    double open = set->method == SPLAT_INSTANT ? set->instant : set->shut.open;
+    double close = set->method == SPLAT_INSTANT ? set->instant : set->shut.close;
+    aabb *swept = malloc(((size_t)s->nobjects + 1) * sizeof *swept);
+    if (!swept)
+        return rr_fail(err, "out of memory for the objects' bounds");
+    for (int i = 0; i < s->nobjects; i++)
+        swept[i] = animation_swept_bounds(&s->objects[i].anim, scene_object_bounds(&s->objects[i]), open, close);
+    int rc = accel_check_reach(s, swept, open, close, err);
+    free(swept);
+    return rc;
+}
+
+static int check_scene(const scene *s, const splat_settings *set, rr_error *err)
 {
     for (int i = 0; i < s->nobjects; i++)
         if (!scene_object_row(&s->objects[i])->point_model)
@@ -114,13 +132,13 @@ static int check_scene(const scene *s, rr_error *err)
                            s->objects[i].name, scene_object_row(&s->objects[i])->name);
     if (s->shut.rolling.kind != ROLLING_OFF)
         return rr_fail(err, "%s: a rolling shutter: refrender splat renders global-shutter instants only", s->path);
-    return 0;
+    return check_reach(s, set, err);
 }
 
 int splat_render(const scene *s, const splat_settings *set, splat_result *out, rr_error *err)
 {
     memset(out, 0, sizeof *out);
-    if (check_scene(s, err))
+    if (check_scene(s, set, err))
         return -1;
     splat_frame f;
     size_t n = (size_t)s->cam.width * s->cam.height;
