@@ -5,11 +5,16 @@
 
 #include "accel/accel.h"
 #include "splat/frame.h"
+#include "splat/guan_mueller.h"
 #include "splat/volumetric.h"
 
 const char *splat_method_name(splat_method m)
 {
-    return m == SPLAT_ACCUM ? "accum" : m == SPLAT_BUCKET ? "bucket" : m == SPLAT_VOLUMETRIC ? "volumetric" : "instant";
+    return m == SPLAT_ACCUM        ? "accum"
+           : m == SPLAT_BUCKET     ? "bucket"
+           : m == SPLAT_VOLUMETRIC ? "volumetric"
+           : m == SPLAT_GUAN_MUELLER ? "guan-mueller"
+                                   : "instant";
 }
 
 const char *splat_filter_name(splat_filter f)
@@ -18,6 +23,8 @@ const char *splat_filter_name(splat_filter f)
 }
 
 const char *splat_alpha_name(splat_alpha a) { return a == SPLAT_ALPHA_NORMALIZED ? "normalized" : "thesis"; }
+
+const char *splat_trails_name(splat_trails t) { return t == SPLAT_TRAILS_ADD ? "add" : "blend"; }
 
 const char *splat_times_name(splat_times t)
 {
@@ -151,6 +158,8 @@ int splat_render(const scene *s, const splat_settings *set, splat_result *out, r
         splat_group(&f, &set->instant, 0, 1, out->rgba);
     else if (!rc && set->method == SPLAT_VOLUMETRIC)
         rc = splat_volumetric(&f, set, out->rgba, err);
+    else if (!rc && set->method == SPLAT_GUAN_MUELLER)
+        rc = splat_guan_mueller(&f, set, out->rgba, err);
     else if (!rc)
         rc = splat_buckets(&f, set, set->method == SPLAT_ACCUM ? set->samples : set->buckets, out->rgba, err);
     out->fragments = f.fragments;
