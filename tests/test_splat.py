@@ -231,7 +231,8 @@ def test_usage_errors_exit_2_and_write_nothing(tmp_path, args, message):
 def test_help_names_every_method(tmp_path):
     proc = run(['splat', '--help'])
     assert proc.returncode == 0
-    for word in ('instant', 'accum', 'bucket', 'volumetric', '--filter', '--alpha', '--sigma-t', 'src/SPLAT.md'):
+    for word in ('instant', 'accum', 'bucket', 'volumetric', 'guan-mueller', '--filter', '--alpha', '--sigma-t', '--trails',
+                 'src/SPLAT.md'):
         assert word in proc.stdout
 
 
@@ -256,7 +257,7 @@ def test_bad_scenes_name_file_and_line_and_leave_the_output(tmp_path):
 
 
 @pytest.mark.parametrize('method', [['instant'], ['accum', '--samples', 2], ['bucket', '--samples', 2, '--buckets', 1],
-                                    ['volumetric', '--samples', 2]])
+                                    ['volumetric', '--samples', 2], ['guan-mueller']])
 def test_every_method_renders_every_suite_scene(tmp_path, method):
     """Issue 51: refrender splat renders every suite scene with each method,
     camera_pan's moving camera included (volumetric kernels along the
