@@ -25,7 +25,7 @@ static void splat_usage(FILE *f)
 "(src/SPLAT.md), pixel centres only, into refrender's EXR layout (R G B A,\n"
 "samples; refrender:method, refrender:methodParameters, refrender:fragments).\n"
 "Surfel (pointModel) objects only: scenes with Gaussian models or spheres are\n"
-"refused; so are times the ray tracer refuses (objects beyond 1e15 units).\n"
+"refused; so are the times the ray tracer refuses (an object out of reach).\n"
 "Methods:\n"
 "  instant     the static three-pass splatting of one instant (thesis 4.1.1,\n"
 "              4.2.1, 4.2.3); with --filter none it equals\n"
