@@ -301,9 +301,8 @@ static int check_key_times(const scene *s, const animation *anim, const char *wh
     return 0;
 }
 
-static int check_reach(const accel *a, double open, double close, rr_error *err)
+int accel_check_reach(const scene *s, const aabb *swept, double open, double close, rr_error *err)
 {
-    const scene *s = a->sc;
     if (check_key_times(s, &s->camera_motion, "the camera", open, close, err) ||
         scene_check_trajectory_times(s, open, close, err))
         return -1;
@@ -320,7 +319,7 @@ static int check_reach(const accel *a, double open, double close, rr_error *err)
                             "rays can only be traced within %g", s->path, camera, open, close, RR_MAX_REACH);
     for (int i = 0; i < s->nobjects; i++) {
         const scene_object *o = &s->objects[i];
-        double object = box_reach(a->swept[i]), min_scale = animation_min_scale(&o->anim, open, close);
+        double object = box_reach(swept[i]), min_scale = animation_min_scale(&o->anim, open, close);
         double ray = sqrt(3.0) * fmax(1.0, camera + object) / min_scale;
         if (!(object <= RR_MAX_REACH) || !(ray <= RR_MAX_REACH))
             return rr_fail(err, "%s: object '%s' reaches %g world units (smallest scale %g) during the shutter "
@@ -337,7 +336,7 @@ int accel_set_shutter(accel *a, double open, double close, rr_error *err)
     a->building = 0;
     if (a->build_error.msg[0])
         return rr_fail(err, "%s", a->build_error.msg);
-    return check_reach(a, open, close, err);
+    return accel_check_reach(a->sc, a->swept, open, close, err);
 }
 
 int accel_build(const scene *s, const accel_settings *set, accel **out, rr_error *err)
@@ -391,7 +390,7 @@ int accel_build(const scene *s, const accel_settings *set, accel **out, rr_error
     a->reuse_static = set->reuse_static;
     build_top_levels(a, set->open, set->close);
     a->building = 0;
-    if (a->build_error.msg[0] || check_reach(a, set->open, set->close, err)) {
+    if (a->build_error.msg[0] || accel_check_reach(a->sc, a->swept, set->open, set->close, err)) {
         if (a->build_error.msg[0])
             rr_fail(err, "%s", a->build_error.msg);
         accel_free(a);
