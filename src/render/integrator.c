@@ -42,11 +42,10 @@ int integrator_sampled_batch(void *thread, const integrator_context *ctx, const 
     double acc[4] = {0, 0, 0, 0}, weight = 0;
     for (int first = 0; first < ps->count;) {
         if (ctx->cancel && *ctx->cancel) /* (a group is at most ACCEL_PACKET samples: microseconds) */
-            return EXACT_INTERRUPTED;
+            return EXACT_INTERRUPTED; /* (its rays uncounted: a resumed render counts the batch's once) */
         double rgba[ACCEL_PACKET][4];
         int end = group(thread, ctx, ps, first, rgba, c);
         RR_DCHECK(end > first && end - first <= ACCEL_PACKET);
-        c->rays += (uint64_t)(end - first);
         for (int k = 0; k < end - first; k++) {
             double w = ps->w[first + k];
             to_blur_space(ctx->rs->blur, rgba[k]);
@@ -59,5 +58,6 @@ int integrator_sampled_batch(void *thread, const integrator_context *ctx, const 
     RR_DCHECK(ps->count > 0 && weight > 0);
     for (int ch = 0; ch < 4; ch++)
         est[ch] = acc[ch] / weight;
+    c->rays += (uint64_t)ps->count;
     return 0;
 }
