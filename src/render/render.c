@@ -150,7 +150,7 @@ static int pixel_batch(render_job *job, int x, int y, pixel_state *p, thread_scr
     return rc;
 }
 
-/* A tile's counts into the job's. */
+/* A tile's counts (or those of its pixels done so far) into the job's. */
 static void add_counts(render_job *job, const integrator_counts *c, uint64_t clamped, uint64_t done)
 {
     pthread_mutex_lock(&job->lock);
@@ -169,12 +169,16 @@ static void add_counts(render_job *job, const integrator_counts *c, uint64_t cla
  * once held a SIGTERM 12-18 s, longer than Slurm's KillWait of 30 s under
  * ASan: issue 56.7). Pixels are independent states, so a checkpoint taken
  * between two of them resumes as one taken between tiles. */
-static int pixel_pause_point(render_job *job)
+static int pixel_pause_point(render_job *job, integrator_counts *c, uint64_t *clamped, uint64_t *done)
 {
     if (*job->cancel || atomic_load(&job->exact_failed))
         return 1;
     if (!atomic_load(&job->paused))
         return 0;
+    /* the tile's counts so far go into the checkpoint with its pixels'
+     * batches: a resumed render then counts each batch's rays once */
+    add_counts(job, c, *clamped, *done);
+    *c = (integrator_counts){0}, *clamped = *done = 0;
     pthread_mutex_lock(&job->lock);
     job->active--;
     pthread_cond_broadcast(&job->cond);
@@ -199,7 +203,7 @@ static void render_tile(render_job *job, int tile, thread_scratch *scr)
             pixel_state *p = &img->px[(size_t)y * img->width + x];
             if (!pixel_in_crop(job->rs, x, y) || !pixel_wants_batch(job, p))
                 continue;
-            if ((stop = pixel_pause_point(job)))
+            if ((stop = pixel_pause_point(job, &c, &clamped, &done)))
                 break;
             int rc = pixel_batch(job, x, y, p, scr, &c, &clamped);
             if (rc) {
