@@ -448,7 +448,7 @@ static int run_round(render_job *job, const render_hooks *hooks, double start, d
 }
 
 /* Will any pixel take a batch in this round or a later one? A resumed
- * checkpoint was written between tiles, in the middle of a round, so some
+ * checkpoint was written between pixels, in the middle of a round, so some
  * pixels can be a round ahead of all the others that still want batches. */
 static int any_pixel_wants_more(const render_job *job)
 {
