@@ -3,6 +3,8 @@ the merged header, and the Slurm array script (scripts/slurm-render.sbatch)
 and GNU parallel script run with their environments faked. The same script
 against a real Slurm is tests/cluster_slurm.py (`make test-cluster`)."""
 import os
+import re
+import shutil
 from pathlib import Path
 import struct
 import subprocess
@@ -107,25 +109,46 @@ def test_merge_refuses_passes_that_disagree_on(tmp_path, name, type_name, value)
     assert not out.exists()
 
 
-def source_build_id():
-    """The build id as README's Output section defines it, computed here from
-    the sources: SHA-256 over `sha256sum` lines of every .c, .h and .cpp
-    under src/, in byte order of their paths relative to src/."""
-    import hashlib
-    files = sorted((p.relative_to(ROOT / "src").as_posix() for p in (ROOT / "src").glob("*/*")
-                    if p.suffix in (".c", ".h", ".cpp")), key=str.encode)
-    lines = "".join(f"{hashlib.sha256((ROOT / 'src' / f).read_bytes()).hexdigest()}  {f}\n" for f in files)
-    return hashlib.sha256(lines.encode()).hexdigest()
+def make_build_id(*variables):
+    """`make print-build-id` for the build directory of the refrender under
+    test (build, build-check with DCHECKS=1, build-san with SAN=1), with
+    further make variables; None for a binary built elsewhere."""
+    build_vars = {"build": [], "build-check": ["DCHECKS=1"], "build-san": ["SAN=1"]}.get(Path(BIN).parent.name)
+    if build_vars is None:
+        return None
+    proc = subprocess.run(["make", "-s", "--no-print-directory", "-C", str(ROOT), "print-build-id", *build_vars,
+                           *variables], capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stderr
+    return proc.stdout.strip()
+
+
+def test_build_id_covers_the_compiler_its_flags_and_the_embree_and_tbb_versions(tmp_path):
+    # Issue 56.9: the id hashed src/ only, so a state rendered with other
+    # flags (-ffast-math, another -O), another compiler or another Embree
+    # merged with this build's. Each input changes the id; the same inputs
+    # give the same id, whichever directory asks.
+    ours = make_build_id()
+    if ours is None:
+        pytest.skip("refrender was not built in build/, build-check/ or build-san/")
+    assert re.fullmatch("[0-9a-f]{64}", ours) and ours == make_build_id()
+    fake = tmp_path / "include" / "embree3"
+    fake.mkdir(parents=True)
+    (fake / "rtcore_config.h").write_text('#define RTC_VERSION_STRING "3.99.0"\n')
+    includes = f"INCLUDES=-I{tmp_path / 'include'} -I/usr/include/embree3 -I/usr/include/OpenEXR -I/usr/include/libxml2"
+    changed = {"flags": make_build_id("CFLAGS=-ffast-math"), "embree": make_build_id(includes)}
+    if shutil.which("clang"):
+        changed["compiler"] = make_build_id("CC=clang")
+    assert all(v != ours for v in changed.values()), changed
 
 
 def test_states_of_another_build_do_not_merge_or_resume(tmp_path):
-    # A pass or checkpoint carries the build that rendered it (the hash of
-    # the code under src/, which the test recomputes); one from another
-    # build is refused by name, as a rebuilt shared tree under a running
-    # array job would otherwise mix two renderers' pixels.
+    # A pass or checkpoint carries the build that rendered it (the id the
+    # Makefile prints); one from another build is refused by name, as a
+    # rebuilt shared tree under a running array job would otherwise mix two
+    # renderers' pixels.
     p0, p1 = passes_of_frame(tmp_path, 3)
     ours = read_full(p0)[1]["refrender:build"]
-    assert ours == source_build_id()
+    assert ours == make_build_id() or make_build_id() is None
     other = "0" * 64
     patch_attribute(p1, "refrender:build", "string", other.encode())
     out = tmp_path / "merged.exr"
@@ -137,6 +160,31 @@ def test_states_of_another_build_do_not_merge_or_resume(tmp_path):
     proc = run([scene_file(tmp_path), "--frame", 3, *COMMON, "--pass", "1/2", "-o", resumed, "--resume", p1])
     assert proc.returncode == 1 and "different builds of refrender" in proc.stderr, proc.stderr
     assert not resumed.exists()
+
+
+def test_a_state_from_before_the_build_id_is_called_one_from_an_older_build(tmp_path):
+    # Issue 56.9: a state written before refrender:build existed was refused
+    # as "not a refrender render state". Its header as such a build wrote it
+    # (the attribute renamed in place: no refrender:build) is named a state
+    # of an older build, for merge and for resume; a final image is still
+    # "not a refrender render state" when it lacks an identity attribute.
+    p0, p1 = passes_of_frame(tmp_path, 3)
+    for p in (p0, p1):
+        data = p.read_bytes()
+        assert data.count(b"refrender:build\0") == 1
+        p.write_bytes(data.replace(b"refrender:build\0", b"refrender:bxild\0"))
+    out = tmp_path / "merged.exr"
+    proc = run(["merge", p0, p1, "-o", out])
+    assert proc.returncode == 1 and "a render state from an older build of refrender" in proc.stderr, proc.stderr
+    assert str(p0) in proc.stderr and "no refrender:build" in proc.stderr and not out.exists()
+    resumed = tmp_path / "resumed.exr"
+    proc = run([scene_file(tmp_path), "--frame", 3, *COMMON, "--pass", "1/2", "-o", resumed, "--resume", p1])
+    assert proc.returncode == 1 and "a render state from an older build of refrender" in proc.stderr, proc.stderr
+    assert not resumed.exists()
+    plain = tmp_path / "plain.exr"
+    plain.write_bytes(p0.read_bytes().replace(b"refrender:state\0", b"refrender:sxate\0"))
+    proc = run(["merge", plain, "-o", out])
+    assert proc.returncode == 1 and "not a refrender render state (no refrender:build)" in proc.stderr, proc.stderr
 
 
 def test_merge_refuses_a_pass_that_lacks_the_frame(tmp_path):

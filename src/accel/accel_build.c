@@ -255,7 +255,7 @@ static void build_top_levels(accel *a, double open, double close)
         a->top[k].count = 0;
     }
     a->ngaussian = 0;
-    for (int i = 0; i < s->nobjects; i++) {
+    for (int i = 0; i < s->nobjects && !a->build_error.msg[0]; i++) { /* (one failure is the error) */
         const scene_object *o = &s->objects[i];
         if (scene_object_row(o)->gaussians) {
             a->building_object = i;
@@ -271,7 +271,7 @@ static void build_top_levels(accel *a, double open, double close)
         top_level *top = &a->top[a->is_static[i] ? TOP_STATIC : TOP_MOVING];
         top->ids[top->count++] = (unsigned)i;
     }
-    for (int k = 0; k < 2; k++)
+    for (int k = 0; k < 2 && !a->build_error.msg[0]; k++)
         if (a->top[k].count)
             a->top[k].scene = accel_user_scene(a->device, a->top[k].count, &a->top[k], accel_object_bounds_cb, accel_object_intersect, 0);
 }
@@ -373,7 +373,7 @@ int accel_build(const scene *s, const accel_settings *set, accel **out, rr_error
         accel_free(a);
         return rr_fail(err, "out of memory");
     }
-    for (int i = 0; i < s->nobjects; i++) {
+    for (int i = 0; i < s->nobjects && !a->build_error.msg[0]; i++) {
         scene_object *o = &s->objects[i];
         const scene_object_ops *kind = scene_object_row(o);
         if (kind->gaussians) { /* built with the shutter (build_gaussian_object) */
@@ -400,18 +400,32 @@ int accel_build(const scene *s, const accel_settings *set, accel **out, rr_error
     return 0;
 }
 
-void accel_free(accel *a)
+/* Releases the Embree scenes and device, unless a build failed: Embree's
+ * scene destructor after a commit that ran out of memory cancels the
+ * commit's TBB task group, which allocates again, and the std::bad_alloc
+ * (or TBB's missing_wait) it throws ends the process in std::terminate
+ * (SIGABRT under ulimit -v 232-242 MB, issue 56.6). The failed build's
+ * scenes are left to the process's exit, which follows such an error. */
+static void release_embree(accel *a)
 {
-    if (!a)
+    if (a->build_error.msg[0])
         return;
     for (int i = 0; a->object_scenes && i < a->sc->nobjects; i++)
         if (a->object_scenes[i])
             rtcReleaseScene(a->object_scenes[i]);
-    for (int k = 0; k < 2; k++) {
+    for (int k = 0; k < 2; k++)
         if (a->top[k].scene)
             rtcReleaseScene(a->top[k].scene);
+    rtcReleaseDevice(a->device);
+}
+
+void accel_free(accel *a)
+{
+    if (!a)
+        return;
+    release_embree(a);
+    for (int k = 0; k < 2; k++)
         free(a->top[k].ids);
-    }
     free(a->object_scenes);
     free(a->swept);
     free(a->swept_sphere);
@@ -421,7 +435,6 @@ void accel_free(accel *a)
     free(a->gaussian_ids);
     free(a->footprint);
     free(a->models);
-    rtcReleaseDevice(a->device);
     free(a);
 }
 

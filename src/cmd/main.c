@@ -535,9 +535,6 @@ static void report(const render_options *o, const scene *s, const image *img, in
     if (img->kbuffer_overflows)
         fprintf(stderr, "refrender: warning: %llu samples had more than %d hits within epsilon; "
                         "the farthest were dropped\n", (unsigned long long)img->kbuffer_overflows, KBUFFER_MAX);
-    if (img->gaussians_short)
-        fprintf(stderr, "refrender: warning: %llu samples ran out of memory for their Gaussians and were drawn "
-                        "without some of them\n", (unsigned long long)img->gaussians_short);
     if (img->clamped)
         fprintf(stderr, "refrender: warning: %llu batch estimates exceeded +-%g and were clamped "
                         "(refrender:clampedEstimates)\n", (unsigned long long)img->clamped, FILM_LIMIT);

@@ -80,7 +80,11 @@ uint64_t render_planned_pixel_batches(const render_settings *rs, const image *im
 /* Renders into img (pixels continue from the batches they already have).
  * The result depends only on the scene, the settings and the seed, not on
  * the thread count. Returns -1 if *cancel became non-zero (after a final
- * checkpoint, if there is a hook) or on error. */
+ * checkpoint, if there is a hook) or on error (a batch that failed: an
+ * exact sample past its bounds, a sample's Gaussians out of memory). The
+ * workers read *cancel between pixels and within batches (the batch under
+ * way is left out), and step out between pixels for a periodic checkpoint:
+ * neither waits for the rest of a tile. */
 int render_image(const scene *s, const accel *a, const render_settings *rs, image *img,
                  const render_hooks *hooks, volatile sig_atomic_t *cancel, rr_error *err);
 
