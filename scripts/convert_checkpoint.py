@@ -22,6 +22,11 @@ gsplat (examples/simple_trainer.py at v1.5.3, 937e299)
   world_size], 249-251) in its own file: each converts to its part alone.
   Models with an appearance module (app_opt: "features"/"colors", 272-276)
   are refused: their colour is a network's, per image.
+  examples/simple_trainer_2dgs.py saves the same keys (scales [N,3] too,
+  simple_trainer_2dgs.py:212, 724-730) as ckpt_<step>.pt, with no _rank:
+  a 2DGS model for gsplat's rasterization_2dgs, which refrender does not
+  model. Nothing in the file tells it apart, so a gsplat checkpoint whose
+  name has that form is converted with a warning on stderr.
 nerfstudio splatfacto (v1.1.5, 6b60855, the current release)
   torch.save({"step", "pipeline": pipeline.state_dict(), "optimizers", ...})
   (engine/trainer.py:467-476); the model's parameters are
@@ -59,6 +64,7 @@ output is written whole or not at all, never over the checkpoint
 """
 import argparse
 import os
+import re
 import sys
 
 import pydeps
@@ -216,6 +222,10 @@ def main(argv=None):
         return 1
     print(f"{args.output}: {count} Gaussians, SH degree {degree} ({model['kind']} checkpoint)")
     print("render with " + SEMANTICS_NOTE.format(where=model["where"]))
+    if model["kind"] == "gsplat" and re.fullmatch(r"ckpt_\d+\.pt", os.path.basename(args.checkpoint)):
+        sys.stderr.write(f"convert_checkpoint.py: warning: {args.checkpoint}: ckpt_<step>.pt is how gsplat's "
+                         "simple_trainer_2dgs.py names its 2DGS checkpoints (simple_trainer.py adds _rank<r>); a "
+                         "2DGS model is drawn by rasterization_2dgs, which refrender does not model\n")
     return 0
 
 

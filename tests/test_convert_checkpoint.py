@@ -223,7 +223,8 @@ def test_nerfstudio_exports_render_as_the_inria_ply_in_both_colour_layouts(tmp_p
     m = random_model(21, 14, 3)
     nerfstudio_export(tmp_path / "sh.ply", m, "sh_coeffs")
     hand_inria_ply(tmp_path / "hand.ply", m)
-    assert np.array_equal(render_ply(tmp_path, tmp_path / "sh.ply", "sh"), render_ply(tmp_path, tmp_path / "hand.ply", "h"))
+    sh_render = render_ply(tmp_path, tmp_path / "sh.ply", "sh")
+    assert np.array_equal(sh_render, render_ply(tmp_path, tmp_path / "hand.ply", "h"))
     u8 = nerfstudio_export(tmp_path / "rgb.ply", m, "rgb")
     assert len(np.unique(u8)) > 20  # the colours vary: a wrong mapping would show
     m0 = dict(m, sh=m["sh"][:, :1, :])
@@ -257,12 +258,15 @@ HOSTILE = {
     "neither layout": (lambda p, m: save(p, {"step": 1, "model": state_dict({"w": m["means"]})}),
                        ["neither 'splats'", "keys are step, model"]),
     "missing shN": (lambda p, m: gsplat_checkpoint(p, m, shN=None), ["splats['shN']", "not a tensor"]),
-    "scales [N,2]": (lambda p, m: gsplat_checkpoint(p, m, scales=m["scales"][:, :2]), ["splats['scales']", "expected (12, 3)"]),
+    "scales [N,2]": (lambda p, m: gsplat_checkpoint(p, m, scales=m["scales"][:, :2]),
+                     ["splats['scales']", "expected (12, 3)"]),
     "counts differ": (lambda p, m: gsplat_checkpoint(p, m, opacities=m["opacities"][:-1]), ["splats['opacities']"]),
-    "SH of no degree": (lambda p, m: gsplat_checkpoint(p, m, shN=np.tile(m["sh"][:, 1:, :], (1, 2, 1))), ["no SH degree"]),
+    "SH of no degree": (lambda p, m: gsplat_checkpoint(p, m, shN=np.tile(m["sh"][:, 1:, :], (1, 2, 1))),
+                        ["no SH degree"]),
     "not splatfacto": (lambda p, m: save(p, {"pipeline": state_dict({"_model.field.w": m["means"]})}),
                        ["_model.gauss_params.means"]),
-    "ns quats [N,3]": (lambda p, m: nerfstudio_checkpoint(p, m, quats=m["quats"][:, :3]), ["quats'", "expected (12, 4)"]),
+    "ns quats [N,3]": (lambda p, m: nerfstudio_checkpoint(p, m, quats=m["quats"][:, :3]),
+                       ["quats'", "expected (12, 4)"]),
     "non-finite": (lambda p, m: gsplat_checkpoint(p, m, means=np.where(np.arange(12)[:, None] == 4, np.inf,
                                                                        m["means"]).astype(np.float32)),
                    ["Gaussian 4", "'x'"]),
@@ -293,3 +297,14 @@ def test_the_checkpoint_is_never_the_output(tmp_path):
     before = ckpt.read_bytes()
     proc = convert(ckpt, ckpt)
     assert proc.returncode == 1 and str(ckpt) in proc.stderr and ckpt.read_bytes() == before
+
+
+def test_a_2dgs_trainers_checkpoint_name_gets_a_warning_and_a_3dgs_one_none(tmp_path):
+    """simple_trainer_2dgs.py saves the same keys as ckpt_<step>.pt (724-730), simple_trainer.py as
+    ckpt_<step>_rank<r>.pt (779-781): only the name tells them apart."""
+    m = random_model(4, 5, 1)
+    for name, warned in (("ckpt_6999.pt", True), ("ckpt_6999_rank0.pt", False)):
+        gsplat_checkpoint(tmp_path / name, m)
+        proc = convert(tmp_path / name, tmp_path / (name + ".ply"))
+        assert proc.returncode == 0 and (tmp_path / (name + ".ply")).exists(), proc.stderr
+        assert ("rasterization_2dgs" in proc.stderr) == warned and len(proc.stderr.splitlines()) == warned
