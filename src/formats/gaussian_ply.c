@@ -257,7 +257,7 @@ static void write_header(FILE *f, const gaussian_model *m)
         fprintf(f, "property float %s\n", slot_names[G_REST + k]);
     for (int k = G_OPACITY; k < G_SCALE + scales; k++)
         fprintf(f, "property float %s\n", slot_names[k]);
-    for (int k = G_ROT; k < G_SLOTS; k++)
+    for (int k = G_ROT; k < G_RGB; k++)
         fprintf(f, "property float %s\n", slot_names[k]);
     fputs("end_header\n", f);
 }
