@@ -84,14 +84,16 @@ NS_PREFIXES = ("_model.gauss_params.", "_model.module.gauss_params.", "_model.")
 
 
 def tensor(source, key, what, shape):
-    """source[key] as float64 of shape (None: any N, else the size)."""
+    """source[key] as float32 (what the PLY holds; the trainers' parameters are float32) of shape
+    (None: any N, else the size)."""
     value = source.get(key) if isinstance(source, dict) else None
     if not isinstance(value, LazyTensor):
         raise ConvertError(f"{what} is {describe(value)}, not a tensor")
     if len(value.shape) != len(shape) or any(w is not None and w != s for w, s in zip(shape, value.shape)):
         want = "(" + ", ".join("N" if w is None else str(w) for w in shape) + ")"
         raise ConvertError(f"{what} has shape {clip(value.shape, 80)}, expected {want}")
-    array = value.numpy()
+    with np.errstate(over="ignore"):  # a float64 beyond float32 becomes inf, refused in columns_of
+        array = value.numpy(np.float32)
     if array.dtype.kind != "f":
         raise ConvertError(f"{what} holds {array.dtype} values, not floating point")
     return array
@@ -140,7 +142,7 @@ def nerfstudio_model(top):
     dc = tensor(pipeline, p + "features_dc", f"'{p}features_dc'", (n, 3))
     rest = tensor(pipeline, p + "features_rest", f"'{p}features_rest'", (n, None, 3))
     if rest.shape[1] == 0:  # sh_degree 0: a logit, drawn as sigmoid (splatfacto.py:342-346, 593-597)
-        dc = (1 / (1 + np.exp(-dc)) - 0.5) / SH_C0
+        dc = ((1 / (1 + np.exp(-dc.astype(np.float64))) - 0.5) / SH_C0).astype(np.float32)
     return {"means": means, "scales": tensor(pipeline, p + "scales", f"'{p}scales'", (n, 3)),
             "quats": tensor(pipeline, p + "quats", f"'{p}quats'", (n, 4)),
             "opacities": tensor(pipeline, p + "opacities", f"'{p}opacities'", (n, 1))[:, 0],
@@ -168,14 +170,14 @@ def columns_of(model):
     if n == 0:
         raise ConvertError("the model holds no Gaussians (refrender refuses an empty model)")
     sh_degree(k, "the SH")
-    rest = sh[:, 1:, :].transpose(0, 2, 1).reshape(n, 3 * (k - 1))  # channel-major
     names = (["x", "y", "z", "nx", "ny", "nz", "f_dc_0", "f_dc_1", "f_dc_2"] +
              [f"f_rest_{i}" for i in range(3 * (k - 1))] +
              ["opacity", "scale_0", "scale_1", "scale_2", "rot_0", "rot_1", "rot_2", "rot_3"])
-    values = np.concatenate([means, np.zeros((n, 3)), sh[:, 0, :], rest, model["opacities"][:, None],
-                             model["scales"], model["quats"]], axis=1)
-    with np.errstate(over="ignore", invalid="ignore"):
-        bad = np.argwhere(~np.isfinite(values.astype("<f4")))
+    values = np.zeros((n, len(names)), "<f4")  # filled in place: one copy of the model
+    values[:, 0:3], values[:, 6:9] = means, sh[:, 0, :]
+    values[:, 9:9 + 3 * (k - 1)] = sh[:, 1:, :].transpose(0, 2, 1).reshape(n, 3 * (k - 1))  # channel-major
+    values[:, -8], values[:, -7:-4], values[:, -4:] = model["opacities"], model["scales"], model["quats"]
+    bad = np.argwhere(~np.isfinite(values))
     if len(bad):
         i, c = bad[0]
         raise ConvertError(f"Gaussian {i}: '{names[c]}' = {values[i, c]:.9g} is not a finite float32")
