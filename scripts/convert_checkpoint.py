@@ -57,8 +57,10 @@ simple_trainer.py:125 antialiased False; splatfacto.py:203), and
 
 Refused, one line naming the file and the entry: what is neither layout, a
 missing or misshapen parameter, Gaussian counts that differ, an SH count
-that is no (d+1)^2 for d <= 3, a non-finite value or a zero quaternion (with
-the Gaussian's index), an empty model. Exit 1; usage errors exit 2. The
+that is no (d+1)^2 for d <= 3, a non-finite value (unless --drop-nonfinite
+drops those Gaussians, as both exporters do: gsplat exporter.py:516-527,
+nerfstudio scripts/exporter.py:631-640) or a zero quaternion (with the
+Gaussian's index), an empty model. Exit 1; usage errors exit 2. The
 output is written whole or not at all, never over the checkpoint
 (scripts/safefiles.py).
 """
@@ -163,8 +165,10 @@ def read_model(top):
                        f"its keys are {clip(', '.join(map(str, list(top)[:10])), 160)}")
 
 
-def columns_of(model):
-    """(names, N x P float64) in the Inria layout; refuses what refrender's reader would."""
+def columns_of(model, drop_nonfinite=False):
+    """(names, N x P float32, Gaussians dropped) in the Inria layout; refuses what refrender's reader
+    would, or with drop_nonfinite drops the Gaussians holding a non-finite value, as both
+    exporters do (gsplat exporter.py:516-527, nerfstudio scripts/exporter.py:631-640)."""
     means, sh = model["means"], model["sh"]
     n, k = sh.shape[0], sh.shape[1]
     if n == 0:
@@ -177,14 +181,21 @@ def columns_of(model):
     values[:, 0:3], values[:, 6:9] = means, sh[:, 0, :]
     values[:, 9:9 + 3 * (k - 1)] = sh[:, 1:, :].transpose(0, 2, 1).reshape(n, 3 * (k - 1))  # channel-major
     values[:, -8], values[:, -7:-4], values[:, -4:] = model["opacities"], model["scales"], model["quats"]
-    bad = np.argwhere(~np.isfinite(values))
-    if len(bad):
-        i, c = bad[0]
-        raise ConvertError(f"Gaussian {i}: '{names[c]}' = {values[i, c]:.9g} is not a finite float32")
-    zero = np.flatnonzero(~np.any(model["quats"] != 0, axis=1))
+    finite = np.isfinite(values)
+    kept = finite.all(axis=1)
+    if not kept.all() and not drop_nonfinite:
+        i, c = np.argwhere(~finite)[0]
+        raise ConvertError(f"Gaussian {i}: '{names[c]}' = {values[i, c]:.9g} is not a finite float32 "
+                           f"({np.count_nonzero(~kept)} Gaussians hold one; --drop-nonfinite drops them, as "
+                           "ns-export and gsplat's export_splats do)")
+    if not kept.all():
+        values = values[kept]
+    if len(values) == 0:
+        raise ConvertError("every Gaussian holds a non-finite value: nothing is left to write")
+    zero = np.flatnonzero(~np.any(values[:, -4:] != 0, axis=1))
     if len(zero):
-        raise ConvertError(f"Gaussian {zero[0]}: its quaternion is zero (no rotation)")
-    return names, values
+        raise ConvertError(f"Gaussian {np.flatnonzero(kept)[zero[0]]}: its quaternion is zero (no rotation)")
+    return names, values, n - len(values)
 
 
 def parse_args(argv):
@@ -193,6 +204,9 @@ def parse_args(argv):
                                 epilog=__doc__.split("\n\n", 1)[1])
     p.add_argument("checkpoint", help="gsplat's ckpt_<step>_rank<r>.pt or nerfstudio's step-<step>.ckpt")
     p.add_argument("-o", "--output", required=True, help="the PLY to write (written whole or not at all)")
+    p.add_argument("--drop-nonfinite", action="store_true",
+                   help="drop the Gaussians holding a NaN or infinite value (as float32), as ns-export and gsplat's "
+                        "export_splats do, instead of refusing the checkpoint; the count dropped is printed")
     return p.parse_args(argv)
 
 
@@ -201,18 +215,18 @@ def convert_file(args):
     top, archive = torch_checkpoint.load(args.checkpoint)
     with archive.file:
         model = read_model(top)
-        names, values = columns_of(model)
+        names, values, dropped = columns_of(model, args.drop_nonfinite)
     step = model["step"] if type(model["step"]) is int else "unknown"
     comments = [f"{model['kind']} checkpoint converted by refrender scripts/convert_checkpoint.py",
                 f"source {printable(os.path.basename(args.checkpoint))} step {step}"]
     write_ply(args.output, names, values, comments, args.checkpoint)
-    return model, len(values), sh_degree(model["sh"].shape[1], "the SH")
+    return model, len(values), sh_degree(model["sh"].shape[1], "the SH"), dropped
 
 
 def main(argv=None):
     args = parse_args(argv)
     try:
-        model, count, degree = convert_file(args)
+        model, count, degree, dropped = convert_file(args)
     except safefiles.FileRefused as e:
         sys.stderr.write(f"convert_checkpoint.py: {clip(e, MAX_MESSAGE + 2000)}\n")
         return 1
@@ -222,7 +236,8 @@ def main(argv=None):
             reason = f"{type(e).__name__} while reading it: {e}"
         sys.stderr.write(f"convert_checkpoint.py: {args.checkpoint}: {clip(reason, MAX_MESSAGE)}\n")
         return 1
-    print(f"{args.output}: {count} Gaussians, SH degree {degree} ({model['kind']} checkpoint)")
+    print(f"{args.output}: {count} Gaussians, SH degree {degree} ({model['kind']} checkpoint)"
+          + (f", {dropped} holding a non-finite value dropped" if dropped else ""))
     print("render with " + SEMANTICS_NOTE.format(where=model["where"]))
     if model["kind"] == "gsplat" and re.fullmatch(r"ckpt_\d+\.pt", os.path.basename(args.checkpoint)):
         sys.stderr.write(f"convert_checkpoint.py: warning: {args.checkpoint}: ckpt_<step>.pt is how gsplat's "

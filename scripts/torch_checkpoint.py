@@ -1,6 +1,6 @@
 """Reads a torch.save checkpoint (the zip format of torch >= 1.6) without torch
-and without running anything in it: the module convert_4dgs.py reads its
-checkpoints with (not a tool).
+and without running anything in it: the module convert_4dgs.py and
+convert_checkpoint.py read their checkpoints with (not a tool).
 
 The pickle is read by a restricted unpickler: it may name only
 torch._utils._rebuild_tensor_v2, torch._utils._rebuild_parameter(_with_state),

@@ -291,6 +291,20 @@ def test_a_hostile_checkpoint_is_refused_in_one_line_and_nothing_is_written(tmp_
     assert sorted(p.name for p in tmp_path.iterdir()) == ["ckpt.pt"] and ckpt.read_bytes() == before
 
 
+def test_drop_nonfinite_drops_the_gaussians_both_exporters_drop(tmp_path):
+    m = random_model(8, 12, 1)
+    m["means"][4, 1], m["sh"][9, 2, 0] = np.nan, np.inf
+    gsplat_checkpoint(tmp_path / "c.pt", m)
+    refused(convert(tmp_path / "c.pt", tmp_path / "out.ply"), "Gaussian 4", "'y'", "2 Gaussians", "--drop-nonfinite")
+    proc = subprocess.run(["/usr/bin/python3", SCRIPT, str(tmp_path / "c.pt"), "-o", str(tmp_path / "out.ply"),
+                           "--drop-nonfinite"], capture_output=True, text=True, timeout=60)
+    assert proc.returncode == 0 and "10 Gaussians" in proc.stdout and "2 holding" in proc.stdout, proc.stderr
+    keep = np.setdiff1d(np.arange(12), [4, 9])
+    hand_inria_ply(tmp_path / "hand.ply", {k: v[keep] for k, v in m.items()})
+    got = render_ply(tmp_path, tmp_path / "out.ply", "o")
+    assert np.array_equal(got, render_ply(tmp_path, tmp_path / "hand.ply", "h"))
+
+
 def test_the_checkpoint_is_never_the_output(tmp_path):
     ckpt = tmp_path / "ckpt.pt"
     gsplat_checkpoint(ckpt, random_model(1, 4, 0))
