@@ -58,7 +58,7 @@ simple_trainer.py:125 antialiased False; splatfacto.py:203), and
 Refused, one line naming the file and the entry: what is neither layout, a
 missing or misshapen parameter, Gaussian counts that differ, an SH count
 that is no (d+1)^2 for d <= 3, a non-finite value (unless --drop-nonfinite
-drops those Gaussians, as both exporters do: gsplat exporter.py:516-527,
+drops those Gaussians, as both exporters do: gsplat exporter.py:516-539,
 nerfstudio scripts/exporter.py:631-640) or a zero quaternion (with the
 Gaussian's index), an empty model. Exit 1; usage errors exit 2. The
 output is written whole or not at all, never over the checkpoint
@@ -168,7 +168,7 @@ def read_model(top):
 def columns_of(model, drop_nonfinite=False):
     """(names, N x P float32, Gaussians dropped) in the Inria layout; refuses what refrender's reader
     would, or with drop_nonfinite drops the Gaussians holding a non-finite value, as both
-    exporters do (gsplat exporter.py:516-527, nerfstudio scripts/exporter.py:631-640)."""
+    exporters do (gsplat exporter.py:516-539, nerfstudio scripts/exporter.py:631-640)."""
     means, sh = model["means"], model["sh"]
     n, k = sh.shape[0], sh.shape[1]
     if n == 0:
