@@ -48,6 +48,16 @@ The PLY (binary little endian float32, as graphdeco-inria's save_ply):
   splatfacto.py:342-346, as ns-export writes), which refrender's SH draws as
   sigmoid(features_dc).
 
+Frames: the means are where training put them, in the trainer's normalised
+world, not the dataset's: gsplat's COLMAP parser re-centres, scales and
+turns the world (normalize_world_space, default True, simple_trainer.py:67;
+datasets/colmap.py:218-243) and saves no record of it; nerfstudio orients,
+centres and scales the poses (data/dataparsers/nerfstudio_dataparser.py:
+237-249) and saves the map as dataparser_transforms.json (`transform` 3x4,
+`scale`: c2w' = transform c2w, its translation times scale; data/
+dataparsers/base_dataparser.py:77-86, engine/trainer.py:237-238). Cameras
+must be given in that frame; the converter changes no coordinate.
+
 Semantics: both render through gsplat's rasterization (nerfstudio v1.1.5 pins
 gsplat 1.4.0, pyproject.toml:67, with the same 0.999 alpha cap and SH offset
 as 1.5.3): semantics="gsplat" for rasterize_mode "classic" (the default:
@@ -68,6 +78,7 @@ import argparse
 import os
 import re
 import sys
+from xml.sax.saxutils import quoteattr
 
 import pydeps
 
@@ -82,6 +93,12 @@ from convert_4dgs import write_ply, printable, MAX_MESSAGE  # noqa: E402
 SH_C0 = 0.28209479177387814  # nerfstudio splatfacto.py:99, 107 (RGB2SH / SH2RGB)
 SEMANTICS_NOTE = ('semantics="gsplat" (rasterize_mode classic, the default); "gsplat-antialiased" if it was trained '
                   'with antialiasing ({where})')
+FRAME_NOTE = {  # where the trained frame comes from (module docstring, "Frames")
+    "gsplat": "the means are in the frame simple_trainer normalised the COLMAP model to (normalize_world_space, "
+              "datasets/colmap.py:218-243; not saved): give the cameras in that frame",
+    "nerfstudio splatfacto": "the means are in nerfstudio's dataparser frame: the run's dataparser_transforms.json "
+                             "(transform, scale) maps the dataset's cameras into it",
+}
 NS_PREFIXES = ("_model.gauss_params.", "_model.module.gauss_params.", "_model.")
 
 
@@ -239,6 +256,8 @@ def main(argv=None):
     print(f"{args.output}: {count} Gaussians, SH degree {degree} ({model['kind']} checkpoint)"
           + (f", {dropped} holding a non-finite value dropped" if dropped else ""))
     print("render with " + SEMANTICS_NOTE.format(where=model["where"]))
+    print(f"  <gaussianModel file={quoteattr(args.output)} semantics=\"gsplat\"/>")
+    print("note: " + FRAME_NOTE[model["kind"]])
     if model["kind"] == "gsplat" and re.fullmatch(r"ckpt_\d+\.pt", os.path.basename(args.checkpoint)):
         sys.stderr.write(f"convert_checkpoint.py: warning: {args.checkpoint}: ckpt_<step>.pt is how gsplat's "
                          "simple_trainer_2dgs.py names its 2DGS checkpoints (simple_trainer.py adds _rank<r>); a "

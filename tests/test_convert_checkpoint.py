@@ -170,6 +170,7 @@ def check_renders_as_hand_written(tmp_path, ckpt, m, dc=None):
     proc = convert(ckpt, out)
     assert proc.returncode == 0, proc.stderr
     assert 'semantics="gsplat"' in proc.stdout and "gsplat-antialiased" in proc.stdout, proc.stdout
+    assert f'<gaussianModel file="{out}" semantics="gsplat"/>' in proc.stdout and "frame" in proc.stdout
     hand_inria_ply(hand, m, dc)
     got, want = render_ply(tmp_path, out, "converted"), render_ply(tmp_path, hand, "hand")
     assert np.array_equal(got, want)
