@@ -64,6 +64,9 @@ as 1.5.3): semantics="gsplat" for rasterize_mode "classic" (the default:
 simple_trainer.py:125 antialiased False; splatfacto.py:203), and
 "gsplat-antialiased" for a model trained with --antialiased / rasterize_mode
 "antialiased" (the run's cfg.yml / config.yml says; the checkpoint does not).
+Neither draws a gsplat model trained with --with_ut / --with_eval3d (3DGUT,
+simple_trainer.py:184-185) or a camera_model other than pinhole (69) as
+trained.
 
 Refused, one line naming the file and the entry: what is neither layout, a
 missing or misshapen parameter, Gaussian counts that differ, an SH count
