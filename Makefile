@@ -46,12 +46,12 @@ LIB_SRCS := core/common core/arena core/lanes core/inputfile core/atomicfile acc
             motion/animation formats/animfile core/camera motion/shutter render/sampler scene/scene io/preview \
             io/scene_xml io/scene_xml_util io/scene_xml_anim io/scene_xml_camera io/scene_params accel/accel \
             accel/accel_build accel/accel_collide render/gaussian_integrator render/exact render/exact_kinds \
-            render/exact_integrate render/integrator render/surfel_integrator render/shade render/film render/render splat/frame splat/splatting splat/volumetric formats/exr io/output io/render_attrs \
+            render/exact_integrate render/integrator render/surfel_integrator render/shade render/film render/noise render/render splat/frame splat/splatting splat/volumetric splat/guan_mueller formats/exr io/output io/render_attrs \
             cmd/cli
 LIB_OBJS := $(LIB_SRCS:%=$(BUILD)/%.o)
 PREVIEW_SO := $(BUILD)/refrender-preview.so
 APP_OBJS := $(BUILD)/cmd/main.o $(BUILD)/cmd/gen_cmd.o $(BUILD)/cmd/surfel_output.o $(BUILD)/cmd/merge_cmd.o $(BUILD)/cmd/surfels_cmd.o \
-            $(BUILD)/cmd/export_cmd.o $(BUILD)/cmd/splat_cmd.o
+            $(BUILD)/cmd/export_cmd.o $(BUILD)/cmd/splat_cmd.o $(BUILD)/cmd/noise_report.o
 TEST_SRCS := $(wildcard tests/test_*.c)
 TEST_OBJS := $(TEST_SRCS:tests/%.c=$(BUILD)/tests/%.o) $(BUILD)/tests/harness.o $(BUILD)/tests/gaussian_test_util.o
 
@@ -77,20 +77,36 @@ $(PREVIEW_SO): src/io/preview.cpp $(BUILD)/io/preview-so.d | $(BUILD)
 	$(CXX) $(RR_CPPFLAGS) $(RR_CXXFLAGS) -MF $(BUILD)/io/preview-so.d -fPIC -shared $< -o $@ $(SANLD) $(PREVIEW_LIBS)
 # The build's identity (refrender:build, part of a render's identity: a
 # state from another build is not merged or resumed): the SHA-256 of the
-# code under src/, "sha256sum FILE" lines in C-locale path order, hashed
-# again. Paths and contents only, no times or flags, so the same sources give
-# the same id in every build directory. The id file is replaced only when the
-# id changes (a touched file reruns this recipe but rebuilds nothing), and
-# only render_attrs.o is compiled with it (-DRR_BUILD_ID).
+# code under src/ ("sha256sum FILE" lines in C-locale path order), of the
+# compiler (its --version line), its flags and the Embree and TBB versions
+# compiled against (their headers' version macros), hashed again: each can
+# change a render's bits (issue 56.9). Paths and contents only, no times
+# nor the build directory, so the same sources and toolchain give the same
+# id in every build directory. The recipe runs at each make (flags are no
+# file); the id file is replaced only when the id changes (rebuilding
+# nothing otherwise), and only render_attrs.o is compiled with it
+# (-DRR_BUILD_ID). `make print-build-id` prints the id without writing it.
 BUILD_ID_SRCS := $(sort $(wildcard src/*/*.c src/*/*.h src/*/*.cpp))
+BUILD_ID_VERSIONS := '\#include <embree3/rtcore_config.h>\n\#include <oneapi/tbb/version.h>\nembree RTC_VERSION_STRING tbb TBB_VERSION_STRING\n'
+# $(call build_id_text,COMPILER,FLAGS): the id on stdout
+define build_id_text
+v=$$(printf $(BUILD_ID_VERSIONS) | $(CXX) -E -P -x c++ $(INCLUDES) - | tail -n1) && \
+  case "$$v" in 'embree "'*'" tbb "'*) ;; *) echo "build id: no Embree/TBB version in their headers" >&2; exit 1;; esac && \
+  c=$$($(1) --version | head -n1) && test -n "$$c" && \
+  { (cd src && LC_ALL=C sha256sum $(BUILD_ID_SRCS:src/%=%)) && echo "$$c" && echo 'flags: $(strip $(2))' && \
+    echo "$$v"; } | sha256sum | cut -d' ' -f1
+endef
 define build_id_file
 @mkdir -p $(@D)
-@(cd src && LC_ALL=C sha256sum $(BUILD_ID_SRCS:src/%=%) | sha256sum | cut -d' ' -f1) > $@.tmp && \
+@$(call build_id_text,$(1),$(2)) > $@.tmp && test -s $@.tmp && \
     { cmp -s $@.tmp $@ && rm -f $@.tmp || mv -f $@.tmp $@; }
 endef
 BUILD_ID_FLAG :=
-$(BUILD)/build_id: $(BUILD_ID_SRCS)
-	$(build_id_file)
+.PHONY: build-id-always print-build-id
+$(BUILD)/build_id: $(BUILD_ID_SRCS) build-id-always
+	$(call build_id_file,$(CC),$(RR_CFLAGS) $(CPPFLAGS))
+print-build-id:
+	@$(call build_id_text,$(CC),$(RR_CFLAGS) $(CPPFLAGS))
 $(BUILD)/io/render_attrs.o: $(BUILD)/build_id
 $(BUILD)/io/render_attrs.o: BUILD_ID_FLAG = -DRR_BUILD_ID='"$(file <$(BUILD)/build_id)"'
 $(BUILD)/tests/%.o: tests/%.c $(BUILD)/tests/%.d | $(BUILD)
@@ -181,8 +197,8 @@ $(FUZZ_DIR)/render_check.o: tests/fuzz/render_check.c $(FUZZ_DIR)/render_check.d
 	@mkdir -p $(FUZZ_DIR)
 	clang $(FUZZ_CFLAGS) -MMD -MP -Isrc -c $< -o $@
 	@touch $@
-$(FUZZ_DIR)/build_id: $(BUILD_ID_SRCS)
-	$(build_id_file)
+$(FUZZ_DIR)/build_id: $(BUILD_ID_SRCS) build-id-always
+	$(call build_id_file,clang,$(FUZZ_CFLAGS))
 $(FUZZ_DIR)/io/render_attrs.o: $(FUZZ_DIR)/build_id
 $(FUZZ_DIR)/io/render_attrs.o: BUILD_ID_FLAG = -DRR_BUILD_ID='"$(file <$(FUZZ_DIR)/build_id)"'
 FUZZ_DEPS := $(FUZZ_OBJS:.o=.d) $(FUZZ_TARGETS:%=$(FUZZ_DIR)/fuzz_%.d) $(FUZZ_DIR)/render_check.d

@@ -11,9 +11,14 @@ usage: cost_error.py REFERENCE --entry LABEL,IMAGE,COST [--entry ...]
 
 Writes DIR/cost_error.csv (label, image, cost, rmse, flip) and
 DIR/cost_error.png; prints the table. Images are read as compare.py reads
-them (scripts/imagecompare.py)."""
+them (scripts/imagecompare.py). Every input (the reference, each image, the
+--entries and --refrender-curves files) must be a regular file, refused by
+name otherwise (a FIFO would block the tool); each output is written whole
+or not at all and never over an input (scripts/safefiles.py), both checked
+before anything is measured."""
 import argparse
 import csv
+import io
 import os
 import sys
 
@@ -24,7 +29,8 @@ pydeps.require(*pydeps.IMAGE_MODULES, "matplotlib")  # a missing package: one li
 import numpy as np
 
 import flip
-from imagecompare import CompareError, basic_metrics, encoding_warnings, read_image
+import safefiles
+from imagecompare import CompareError, basic_metrics, check_written, encoding_warnings, read_image
 
 
 def parse_args(argv):
@@ -102,7 +108,8 @@ REFERENCE_STYLES = [("--", "s", "0.25"), (":", "^", "0.45"), ("-.", "D", "0.6"),
                     ((0, (1, 3)), "x", "0.5")]
 
 
-def plot(results, curves, unit, path):
+def plot(results, curves, unit, write):
+    """Draws the figure and gives it to write(fig)."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -122,24 +129,65 @@ def plot(results, curves, unit, path):
         ax.grid(True, which="both", alpha=0.3)
         ax.legend(fontsize=8)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    try:
+        write(fig)
+    finally:
+        plt.close(fig)
+
+
+def outputs(args):
+    return os.path.join(args.out, "cost_error.csv"), os.path.join(args.out, "cost_error.png")
+
+
+def checked_inputs(args, entries):
+    """The input files, each refused unless a regular file, and both outputs
+    checked against them before anything is measured: `--out ce` beside
+    `--entries ce/cost_error.csv` (or an entry image ce/cost_error.png) would
+    otherwise be replaced by the tool's own results."""
+    paths = [args.reference, *(image for _, image, _ in entries)]
+    paths += [p for p in (args.entries, args.refrender_curves) if p]
+    for p in paths:
+        safefiles.require_regular(p)
+    inputs = safefiles.Inputs(paths)
+    inputs.check_directory(args.out, "--out")
+    for path in outputs(args):
+        inputs.check_output(path, "--out")
+    return inputs
+
+
+def write_outputs(args, results, curves, inputs):
+    """The CSV and the plot, each whole or not at all (safefiles)."""
+    table = io.StringIO()
+    w = csv.writer(table)
+    w.writerow(["label", "image", args.cost_unit, "rmse", "flip"])
+    w.writerows(results)
+    csv_path, png_path = outputs(args)
+    os.makedirs(args.out, exist_ok=True)
+    safefiles.write_text(csv_path, table.getvalue(), inputs)
+    plot(results, curves, args.cost_unit,
+         lambda fig: safefiles.write_file(png_path, lambda tmp: fig.savefig(tmp, dpi=110), inputs, check_written))
 
 
 def main(argv=None):
     args = parse_args(argv if argv is not None else sys.argv[1:])
     try:
-        results = measure(args.reference, entries_of(args))
+        for p in (args.entries, args.refrender_curves):  # read before the others: no FIFO may block them
+            if p:
+                safefiles.require_regular(p)
+        entries = entries_of(args)
+        inputs = checked_inputs(args, entries)
+        results = measure(args.reference, entries)
         curves = reference_curves(args.refrender_curves, args.cost_unit) if args.refrender_curves else {}
-    except (CompareError, OSError, KeyError) as e:
+        write_outputs(args, results, curves, inputs)
+    except (CompareError, safefiles.FileRefused) as e:
         print(f"cost_error.py: {e}", file=sys.stderr)
         return 2
-    os.makedirs(args.out, exist_ok=True)
-    with open(os.path.join(args.out, "cost_error.csv"), "w", newline="") as f:
-        w = csv.writer(f)
-        w.writerow(["label", "image", args.cost_unit, "rmse", "flip"])
-        w.writerows(results)
-    plot(results, curves, args.cost_unit, os.path.join(args.out, "cost_error.png"))
+    except KeyError as e:
+        print(f"cost_error.py: a CSV lacks the column {e}", file=sys.stderr)
+        return 2
+    except OSError as e:
+        print(f"cost_error.py: {e.filename + ': ' if e.filename else ''}{e.strerror or e}", file=sys.stderr)
+        return 2
     print(f"{'label':16s} {args.cost_unit:>10s} {'RMSE':>10s} {'FLIP':>8s}  image")
     for label, image, cost, rmse, fl in results:
         print(f"{label:16s} {cost:10.4g} {rmse:10.4g} {fl:8.4f}  {image}")

@@ -30,8 +30,12 @@ cgal_data() { # unpack the three CGAL data files into $CACHE/cgal (unless conver
     if ! (cd "$CACHE/cgal" && apt-get download libcgal-demo >/dev/null 2>&1); then
         SUDO=""
         [ "$(id -u)" -ne 0 ] && SUDO=sudo
-        $SUDO apt-get update -qq
-        (cd "$CACHE/cgal" && apt-get download libcgal-demo >/dev/null)
+        { $SUDO apt-get update -qq && (cd "$CACHE/cgal" && apt-get download libcgal-demo >/dev/null); } || {
+            echo "fetch-models.sh: cannot download Debian's libcgal-demo (offline? apt's message above):" \
+                 "$OUT/armadillo.ply, bunny00.ply and kitten.ply need it, and the scenes and tests that use them;" \
+                 "retry online, or copy $OUT/ from a machine that has them (then nothing is fetched)" >&2
+            exit 1
+        }
     fi
     dpkg-deb -x "$CACHE"/cgal/libcgal-demo_*.deb "$CACHE/cgal/deb"
     tar -xzf "$CACHE/cgal/deb/usr/share/doc/libcgal-dev/data.tar.gz" -C "$CACHE/cgal" \

@@ -46,8 +46,12 @@ def _upscale(img, scale):
 
 
 def colorize(values, cmap, lo, hi):
-    """8-bit RGB of values through a matplotlib colour map over [lo, hi]."""
-    norm = np.clip((np.nan_to_num(values) - lo) / (hi - lo if hi > lo else 1.0), 0.0, 1.0)
+    """8-bit RGB of values through a matplotlib colour map over [lo, hi];
+    NaN as 0, and values beyond the range (an infinite one too) at its ends:
+    clipped before the subtraction, which overflowed for +-inf (nan_to_num's
+    +-1.8e308) less a lo of the other sign."""
+    span = hi - lo if hi > lo else 1.0
+    norm = (np.clip(np.nan_to_num(values), lo, lo + span) - lo) / span
     return (plt.get_cmap(cmap)(norm)[..., :3] * 255 + 0.5).astype(np.uint8)
 
 

@@ -563,6 +563,9 @@ def parse(argv):
     p.add_argument("--plot", help="error against N, log-log (PNG; not with --procedure)")
     p.add_argument("--figure", help="the reference, the first N's average and its error map; with --procedure the "
                    "true blur and each procedure's signed error (PNG)")
+    p.add_argument_group("after --", "REFRENDER-ARGS: refrender options for every render, the reference's too "
+                         "(e.g. -- --res 128x128 -D name=v)")
+    p.usage = p.format_usage().split(" ", 1)[1].rstrip() + " [-- REFRENDER-ARGS ...]"  # argparse's own, and --
     args = p.parse_args(argv)
     if args.procedure:
         for option in ("n", "times", "plot"):

@@ -44,6 +44,7 @@ pydeps.require(*pydeps.IMAGE_MODULES)  # a missing package: one line, not a trac
 import numpy as np
 
 import imagecompare
+import safefiles
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 BIN = os.environ.get("REFRENDER", os.path.join(ROOT, "build", "refrender"))
@@ -62,6 +63,78 @@ VIEWS = {
     "stg": ("scenes/examples/stg_lite.xml", ["--res", "128x128", "--pixel-filter", "point", "--frame", 25]),
     "scale-crop": ("scenes/bench/scale.xml", ["--pixel-filter", "point", "--crop-window", "0.3,0.5,0.3,0.5"]),
 }
+
+
+class StudyError(Exception):
+    """A bad input, reported as one line (no traceback)."""
+
+
+def positive_counts(text):
+    """--counts: a comma-separated list of positive integers (argparse type)."""
+    try:
+        counts = [int(c) for c in text.split(",")]
+    except ValueError:
+        counts = []
+    if not counts or min(counts) < 1:
+        raise argparse.ArgumentTypeError(f"'{text}' is not a comma-separated list of positive integers")
+    return counts
+
+
+def names(text):
+    """--views, --samplers: a comma-separated list of non-empty names (argparse type)."""
+    items = text.split(",")
+    if not all(items):
+        raise argparse.ArgumentTypeError(f"'{text}' has an empty name")
+    return items
+
+
+def positive_integer(text):
+    value = int(text)
+    if value < 1:
+        raise ValueError(text)
+    return value
+
+
+def finite_non_negative(text):
+    value = float(text)
+    if not 0 <= value < math.inf:
+        raise ValueError(text)
+    return value
+
+
+# a CSV's columns and how each is read (a count of 0 has no logarithm for the fits)
+COLUMN_KINDS = {"samples": positive_integer, "seconds": finite_non_negative, "cpu_seconds": finite_non_negative,
+                "error_levels": finite_non_negative, "view": str, "sampler": str}
+
+
+def read_rows(path, columns):
+    """A CSV's rows with `columns` read as COLUMN_KINDS says, refused with one line naming the
+    file (and the line) when it is not a regular file (a FIFO would block), is empty, has only
+    a header, lacks a column or holds a value that is not one."""
+    try:
+        safefiles.require_regular(path)
+    except safefiles.FileRefused as e:
+        raise StudyError(str(e)) from None
+    with open(path, newline="") as f:
+        reader = csv.DictReader(f)
+        if reader.fieldnames is None:
+            raise StudyError(f"{path}: empty: expected a CSV with the columns {', '.join(columns)}")
+        missing = [c for c in columns if c not in reader.fieldnames]
+        if missing:
+            raise StudyError(f"{path}: no column {', '.join(missing)} (it has {', '.join(reader.fieldnames)})")
+        rows = []
+        for r in reader:
+            row = dict(r)
+            for c in columns:
+                try:
+                    row[c] = COLUMN_KINDS[c](r[c] or "")
+                except (ValueError, OverflowError):
+                    kind = "a positive integer" if c == "samples" else "a finite number >= 0"
+                    raise StudyError(f"{path}:{reader.line_num}: {c} '{r[c]}' is not {kind}") from None
+            rows.append(row)
+    if not rows:
+        raise StudyError(f"{path}: no rows, only a header")
+    return rows
 
 
 def progress(text):
@@ -113,10 +186,10 @@ def convergence(opts):
     os.makedirs(opts.out, exist_ok=True)
     rows = []
     out = os.path.join(opts.out, "render.exr")
-    for view in opts.views.split(","):
+    for view in opts.views:
         scene, args = VIEWS[view]
-        for sampler in opts.samplers.split(","):
-            for n in map(int, opts.counts.split(",")):
+        for sampler in opts.samplers:
+            for n in opts.counts:
                 spp, tspp = split(args, n)
                 err, seconds, _ = pair_error(os.path.join(ROOT, scene), out,
                                              [*args, "--sampler", sampler, "--spp", spp, "--tspp", tspp])
@@ -158,13 +231,17 @@ def cell(error, best):
 
 
 def table_from_csv(opts):
-    rows = []
+    """One table of the files' rows; a view, sampler and count given again (in a later file or
+    line) replaces the earlier row, said on stderr, so that no cell's ratio is to a best that
+    was dropped."""
+    rows = {}
     for path in opts.csv:
-        with open(path, newline="") as f:
-            for r in csv.DictReader(f):
-                rows.append({**r, "samples": int(r["samples"]), "seconds": float(r["seconds"]),
-                             "error_levels": float(r["error_levels"])})
-    print(convergence_table(rows))
+        for r in read_rows(path, ["view", "sampler", "samples", "seconds", "error_levels"]):
+            key = (r["view"], r["sampler"], r["samples"])
+            if key in rows:
+                progress(f"{path}: {' '.join(map(str, key))} given again: replaces the earlier row")
+            rows[key] = r
+    print(convergence_table(list(rows.values())))
 
 
 def time_to_error(opts):
@@ -173,7 +250,7 @@ def time_to_error(opts):
     os.makedirs(opts.out, exist_ok=True)
     out = os.path.join(opts.out, "render.exr")
     rows = []
-    for n in map(int, opts.counts.split(",")):
+    for n in opts.counts:
         cpu = [0.0]
         err, seconds, _ = pair_error(SCALE, out, ["--pixel-filter", "point", "--spp", 1, "--tspp", n], cpu)
         rows.append({"samples": n, "seconds": round(seconds, 1), "cpu_seconds": round(cpu[0], 1),
@@ -206,9 +283,9 @@ def time_table(rows):
 
 
 def time_table_from_csv(path):
-    with open(path, newline="") as f:
-        rows = [{"samples": int(r["samples"]), "seconds": float(r["seconds"]), "cpu_seconds": float(r["cpu_seconds"]),
-                 "error_levels": float(r["error_levels"])} for r in csv.DictReader(f)]
+    rows = read_rows(path, ["samples", "seconds", "cpu_seconds", "error_levels"])
+    if len({r["samples"] for r in rows}) < 2:
+        raise StudyError(f"{path}: the fits need two sample counts or more")
     print(time_table(rows))
 
 
@@ -217,25 +294,33 @@ def main():
                                 epilog=__doc__.split("\n\n", 2)[2], formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = p.add_subparsers(dest="what", required=True)
     c = sub.add_parser("convergence", help="error against samples for each view and sampler")
-    c.add_argument("--views", default=",".join(VIEWS), help="views to measure (default: all: %(default)s)")
-    c.add_argument("--counts", default="16,64,256", help="samples per pixel (default: %(default)s)")
-    c.add_argument("--samplers", default="sobol,jittered3d,thesis", help="(default: %(default)s)")
+    c.add_argument("--views", type=names, default=",".join(VIEWS), help="views to measure (default: all: %(default)s)")
+    c.add_argument("--counts", type=positive_counts, default="16,64,256",
+                   help="samples per pixel (default: %(default)s)")
+    c.add_argument("--samplers", type=names, default="sobol,jittered3d,thesis", help="(default: %(default)s)")
     c.add_argument("--out", default="out/samplers", help="output directory (default: %(default)s)")
     t = sub.add_parser("time-to-error", help="seconds to each error level on the benchmark-scale view")
-    t.add_argument("--counts", default="32,128,512", help="samples per pixel, one batch (default: %(default)s)")
+    t.add_argument("--counts", type=positive_counts, default="32,128,512",
+                   help="samples per pixel, one batch, two or more (default: %(default)s)")
     t.add_argument("--out", default="out/samplers", help="output directory (default: %(default)s)")
     t.add_argument("--from-csv", metavar="CSV", help="only print the table of an earlier run's time_to_error.csv")
     tab = sub.add_parser("table", help="the convergence table of one or more convergence.csv files")
     tab.add_argument("csv", nargs="+")
     opts = p.parse_args()
-    if opts.what == "table":
-        return table_from_csv(opts)
-    if opts.what == "time-to-error" and opts.from_csv:
-        return time_table_from_csv(opts.from_csv)
-    for view in getattr(opts, "views", "").split(",") if opts.what == "convergence" else []:
+    for view in opts.views if opts.what == "convergence" else []:
         if view not in VIEWS:
             p.error(f"--views: unknown view '{view}' (known: {', '.join(VIEWS)})")
-    convergence(opts) if opts.what == "convergence" else time_to_error(opts)
+    if opts.what == "time-to-error" and not opts.from_csv and len(set(opts.counts)) < 2:
+        p.error("--counts: the fits need two sample counts or more")
+    try:
+        if opts.what == "table":
+            table_from_csv(opts)
+        elif opts.what == "time-to-error" and opts.from_csv:
+            time_table_from_csv(opts.from_csv)
+        else:
+            convergence(opts) if opts.what == "convergence" else time_to_error(opts)
+    except StudyError as e:
+        sys.exit(f"sampler_study.py: {e}")
 
 
 if __name__ == "__main__":

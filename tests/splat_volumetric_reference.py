@@ -30,9 +30,11 @@ The method per pixel centre, N instants t_k = open + (k + 1/2) / N (close - open
   length in time", sec. 4.2.2);
 - depth test (sec. 4.1.2, eqs. 4.1, C.42-C.44): per instant a depth buffer
   of the 2D splats at the pixel centres (ray/ellipse crossings, the
-  closest distance); the chord midpoint is traced back along v onto the
-  splat plane (t_o = (d - x.n) / (v.n), o = x + v t_o; v in the plane:
-  the orthogonal projection), and the fragment passes when |o - eye| <=
+  closest distance); the chord midpoint's source point o on the splat is
+  its splat part in the kernel's parameter space (source_point; eq.
+  C.44's trace-back along v where v crosses the plane, and still on the
+  splat where v lies in or near the plane, with no threshold on v.n),
+  and the fragment passes when |o - eye| <=
   depth(pixel of o) + epsilon, or that pixel holds no depth or lies
   outside the image;
 - colour: sum a_k h c / sum a_k h over every passing fragment (a weighted
@@ -116,6 +118,23 @@ def ray_ellipse(eye, d, c, a0, a1, n, r):
     return s if u * u + v * v <= 1 else None
 
 
+def source_point(q, c, a0, a1, w, thick):
+    """The point of the 2D splat that generated the kernel point c + q
+    (App. C.5-C.6: "each point in the interior of the volumetric kernel lies
+    on the motion trail of its 2D splat source point"). The kernel is the
+    image of the unit ball under the axes (a0, a1, w, thick): q = alpha a0 +
+    beta a1 + tau w + delta thick. Of the coefficient vectors that give q,
+    the shortest is q's own parameter-space position (its length is the
+    |m| of the weight); the source is its splat part c + alpha a0 + beta a1,
+    on the splat's plane and, inside the kernel, inside the splat, whatever
+    the direction of w (in the plane, near it, or across it). Where w
+    crosses the plane by far more than the thickness this is eq. C.44's
+    trace-back along v (to within the thickness's share)."""
+    axes = np.stack([a0, a1, w, thick], axis=1)
+    coef = np.linalg.lstsq(axes, q, rcond=None)[0]
+    return c + coef[0] * a0 + coef[1] * a1
+
+
 def render(scene, n_instants, alpha='thesis', sigma_t=1 / math.sqrt(12)):
     cam = scene['camera']
     W, H = cam['width'], cam['height']
@@ -158,11 +177,7 @@ def render(scene, n_instants, alpha='thesis', sigma_t=1 / math.sqrt(12)):
                     xm = eye + 0.5 * (s1 + s2) * d
                     m2 = (xm - c) @ Si @ (xm - c)
                     h = math.exp(-m2 / (2 * sigma * sigma))
-                    vn = vel @ n
-                    if abs(vn) > 1e-12 * (np.linalg.norm(vel) + 1e-300):
-                        src = xm + vel * ((c @ n - xm @ n) / vn)
-                    else:
-                        src = xm - ((xm - c) @ n) * n
+                    src = source_point(xm - c, c, a0, a1, w, (1e-3 * r) * n)
                     pw = project(eye, frame, W, H, src)
                     if pw is not None:
                         px, py = int(math.floor(pw[0])), int(math.floor(pw[1]))
@@ -194,7 +209,7 @@ def scene_xml(scene):
     for i, sp in enumerate(scene['splats']):
         m = sp['motion']
         if m['kind'] == 'linear':
-            anim = '<linear velocity="%g %g %g"/>' % tuple(m['velocity'])
+            anim = '<linear velocity="%r %r %r"/>' % tuple(float(x) for x in m['velocity'])
         else:
             anim = '<rotation axis="%g %g %g" center="%g %g %g" degrees_per_unit_time="%r"/>' % (
                 *m['axis'], *m['center'], m['degrees'])

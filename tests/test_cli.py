@@ -1,6 +1,7 @@
 """The command line as a user meets it: help, errors naming file and line,
 atomic output, metadata, preview, generator, default scene, interruption."""
 import os
+import re
 import signal
 import subprocess
 import time
@@ -111,6 +112,11 @@ def test_gen_writes_a_model_that_renders(tmp_path):
     proc = run(["gen", "torus", "--count", 2000, "--radius", 1, "--minor-radius", 0.3, "--checker", 4, "-o", ply])
     assert proc.returncode == 0, proc.stderr
     assert ply.read_bytes().startswith(b"ply\nformat binary_little_endian 1.0")
+    # it says what it wrote (before: nothing), the count the PLY's own header gives
+    vertices = int(re.search(rb"element vertex (\d+)", ply.read_bytes()[:512]).group(1))
+    assert proc.stderr == f"refrender gen: torus: {vertices} splats -> {ply}\n", proc.stderr
+    quiet = run(["gen", "torus", "--count", 20, "-o", tmp_path / "q.ply", "--quiet"])
+    assert quiet.returncode == 0 and quiet.stderr == ""
     scene = tmp_path / "s.xml"
     scene.write_text("<scene><camera position='0 0 4' width='32' height='32'/>"
                      "<object><pointModel file='torus.ply'/><material shading='unlit'/></object></scene>")
@@ -298,3 +304,18 @@ def test_refrender_bench_answers_help_and_refuses_what_it_does_not_know(tmp_path
         assert proc.returncode == status, (args, proc.stderr)
         assert said in (proc.stdout if status == 0 else proc.stderr), (args, proc.stdout, proc.stderr)
         assert list(tmp_path.iterdir()) == [], args
+
+
+def test_a_subnormal_shutter_is_refused_with_its_line(tmp_path):
+    """A shutter 1e-310 long (subnormal: fewer significant bits than a
+    double) was rendered; it is refused as other bad shutters are, with the
+    file and line, and on the command line too."""
+    scene = tmp_path / "s.xml"
+    scene.write_text('<scene>\n<camera width="8" height="8"/>\n<shutter open="0" close="1e-310"/>\n'
+                     '<object><sphere radius="1"/></object></scene>')
+    proc = run([scene, "-o", tmp_path / "o.exr", "--spp", 1, "--tspp", 2, "--quiet"])
+    assert proc.returncode == 1 and f"{scene}:3: <shutter>: " in proc.stderr and "subnormal" in proc.stderr, proc.stderr
+    assert not (tmp_path / "o.exr").exists()
+    scene.write_text(TINY)
+    proc = run([scene, "-o", tmp_path / "o.exr", "--shutter", "0,1e-310", "--quiet"])
+    assert proc.returncode != 0 and "subnormal" in proc.stderr, proc.stderr

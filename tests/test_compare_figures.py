@@ -85,3 +85,17 @@ def test_csv_schema_is_stable_and_latex_bolds_the_best(tmp_path):
     ours = next(line for line in tex.splitlines() if line.startswith("ours"))
     theirs = next(line for line in tex.splitlines() if line.startswith("theirs"))
     assert "\\textbf{0.1}" in ours and "\\textbf" not in theirs.split("&")[4]  # RMSE: ours is best
+
+
+def test_colorize_puts_infinities_at_the_ends_without_overflow():
+    """+-inf and values beyond [lo, hi] take the range's end colours, NaN
+    the colour of 0; with warnings as errors (before: the RuntimeWarning
+    'overflow encountered in subtract' at the end of the suite, from +-inf
+    turned into +-1.8e308 less a lo of the other sign)."""
+    import warnings
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        got = figures.colorize(np.array([[np.inf, -np.inf, np.nan, 5.0, -5.0]]), "RdBu_r", -0.2, 0.2)
+    ends = figures.colorize(np.array([[0.2, -0.2, 0.0]]), "RdBu_r", -0.2, 0.2)
+    assert (got[0, 0] == ends[0, 0]).all() and (got[0, 3] == ends[0, 0]).all()
+    assert (got[0, 1] == ends[0, 1]).all() and (got[0, 4] == ends[0, 1]).all() and (got[0, 2] == ends[0, 2]).all()

@@ -3,6 +3,8 @@ the merged header, and the Slurm array script (scripts/slurm-render.sbatch)
 and GNU parallel script run with their environments faked. The same script
 against a real Slurm is tests/cluster_slurm.py (`make test-cluster`)."""
 import os
+import re
+import shutil
 from pathlib import Path
 import struct
 import subprocess
@@ -62,7 +64,8 @@ def test_merged_header_is_one_renders_with_the_work_summed(tmp_path):
     missing = sorted(set(one) - set(merged_header))
     assert missing == [], missing
     for key in ("refrender:frame", "refrender:frameRate", "refrender:shutterOpen", "refrender:shutterClose",
-                "worldToCamera", "worldToNDC"):
+                "worldToCamera", "worldToNDC", "refrender:cameraTime", "refrender:worldToCameraOpen",
+                "refrender:worldToCameraClose", "refrender:cameraTimeOpen", "refrender:cameraTimeClose"):
         assert np.array_equal(np.asarray(one[key]), np.asarray(merged_header[key])), key
     assert merged_header["refrender:frame"] == 3 and merged_header["refrender:frameRate"] == 24
     assert merged_header["refrender:rays"] == one["refrender:rays"] == W * H * SPP * TSPP * BATCHES
@@ -90,6 +93,9 @@ def patch_attribute(path, name, type_name, value_bytes):
     ("refrender:shutterClose", "double", struct.pack("<d", 0.2)),
     ("worldToCamera", "m44f", struct.pack("<16f", *np.eye(4).ravel() * 2)),
     ("worldToNDC", "m44f", struct.pack("<16f", *np.eye(4).ravel() * 2)),
+    ("refrender:cameraTime", "double", struct.pack("<d", 0.7)),
+    ("refrender:worldToCameraOpen", "m44f", struct.pack("<16f", *np.eye(4).ravel() * 2)),
+    ("refrender:worldToCameraClose", "m44f", struct.pack("<16f", *np.eye(4).ravel() * 2)),
 ], ids=lambda v: v if isinstance(v, str) and ":" in v or v in ("worldToCamera", "worldToNDC") else "")
 def test_merge_refuses_passes_that_disagree_on(tmp_path, name, type_name, value):
     # A pass numbered as another frame, or seen from another camera, is not a
@@ -103,25 +109,46 @@ def test_merge_refuses_passes_that_disagree_on(tmp_path, name, type_name, value)
     assert not out.exists()
 
 
-def source_build_id():
-    """The build id as README's Output section defines it, computed here from
-    the sources: SHA-256 over `sha256sum` lines of every .c, .h and .cpp
-    under src/, in byte order of their paths relative to src/."""
-    import hashlib
-    files = sorted((p.relative_to(ROOT / "src").as_posix() for p in (ROOT / "src").glob("*/*")
-                    if p.suffix in (".c", ".h", ".cpp")), key=str.encode)
-    lines = "".join(f"{hashlib.sha256((ROOT / 'src' / f).read_bytes()).hexdigest()}  {f}\n" for f in files)
-    return hashlib.sha256(lines.encode()).hexdigest()
+def make_build_id(*variables):
+    """`make print-build-id` for the build directory of the refrender under
+    test (build, build-check with DCHECKS=1, build-san with SAN=1), with
+    further make variables; None for a binary built elsewhere."""
+    build_vars = {"build": [], "build-check": ["DCHECKS=1"], "build-san": ["SAN=1"]}.get(Path(BIN).parent.name)
+    if build_vars is None:
+        return None
+    proc = subprocess.run(["make", "-s", "--no-print-directory", "-C", str(ROOT), "print-build-id", *build_vars,
+                           *variables], capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stderr
+    return proc.stdout.strip()
+
+
+def test_build_id_covers_the_compiler_its_flags_and_the_embree_and_tbb_versions(tmp_path):
+    # Issue 56.9: the id hashed src/ only, so a state rendered with other
+    # flags (-ffast-math, another -O), another compiler or another Embree
+    # merged with this build's. Each input changes the id; the same inputs
+    # give the same id, whichever directory asks.
+    ours = make_build_id()
+    if ours is None:
+        pytest.skip("refrender was not built in build/, build-check/ or build-san/")
+    assert re.fullmatch("[0-9a-f]{64}", ours) and ours == make_build_id()
+    fake = tmp_path / "include" / "embree3"
+    fake.mkdir(parents=True)
+    (fake / "rtcore_config.h").write_text('#define RTC_VERSION_STRING "3.99.0"\n')
+    includes = f"INCLUDES=-I{tmp_path / 'include'} -I/usr/include/embree3 -I/usr/include/OpenEXR -I/usr/include/libxml2"
+    changed = {"flags": make_build_id("CFLAGS=-ffast-math"), "embree": make_build_id(includes)}
+    if shutil.which("clang"):
+        changed["compiler"] = make_build_id("CC=clang")
+    assert all(v != ours for v in changed.values()), changed
 
 
 def test_states_of_another_build_do_not_merge_or_resume(tmp_path):
-    # A pass or checkpoint carries the build that rendered it (the hash of
-    # the code under src/, which the test recomputes); one from another
-    # build is refused by name, as a rebuilt shared tree under a running
-    # array job would otherwise mix two renderers' pixels.
+    # A pass or checkpoint carries the build that rendered it (the id the
+    # Makefile prints); one from another build is refused by name, as a
+    # rebuilt shared tree under a running array job would otherwise mix two
+    # renderers' pixels.
     p0, p1 = passes_of_frame(tmp_path, 3)
     ours = read_full(p0)[1]["refrender:build"]
-    assert ours == source_build_id()
+    assert ours == make_build_id() or make_build_id() is None
     other = "0" * 64
     patch_attribute(p1, "refrender:build", "string", other.encode())
     out = tmp_path / "merged.exr"
@@ -133,6 +160,31 @@ def test_states_of_another_build_do_not_merge_or_resume(tmp_path):
     proc = run([scene_file(tmp_path), "--frame", 3, *COMMON, "--pass", "1/2", "-o", resumed, "--resume", p1])
     assert proc.returncode == 1 and "different builds of refrender" in proc.stderr, proc.stderr
     assert not resumed.exists()
+
+
+def test_a_state_from_before_the_build_id_is_called_one_from_an_older_build(tmp_path):
+    # Issue 56.9: a state written before refrender:build existed was refused
+    # as "not a refrender render state". Its header as such a build wrote it
+    # (the attribute renamed in place: no refrender:build) is named a state
+    # of an older build, for merge and for resume; a final image is still
+    # "not a refrender render state" when it lacks an identity attribute.
+    p0, p1 = passes_of_frame(tmp_path, 3)
+    for p in (p0, p1):
+        data = p.read_bytes()
+        assert data.count(b"refrender:build\0") == 1
+        p.write_bytes(data.replace(b"refrender:build\0", b"refrender:bxild\0"))
+    out = tmp_path / "merged.exr"
+    proc = run(["merge", p0, p1, "-o", out])
+    assert proc.returncode == 1 and "a render state from an older build of refrender" in proc.stderr, proc.stderr
+    assert str(p0) in proc.stderr and "no refrender:build" in proc.stderr and not out.exists()
+    resumed = tmp_path / "resumed.exr"
+    proc = run([scene_file(tmp_path), "--frame", 3, *COMMON, "--pass", "1/2", "-o", resumed, "--resume", p1])
+    assert proc.returncode == 1 and "a render state from an older build of refrender" in proc.stderr, proc.stderr
+    assert not resumed.exists()
+    plain = tmp_path / "plain.exr"
+    plain.write_bytes(p0.read_bytes().replace(b"refrender:state\0", b"refrender:sxate\0"))
+    proc = run(["merge", plain, "-o", out])
+    assert proc.returncode == 1 and "not a refrender render state (no refrender:build)" in proc.stderr, proc.stderr
 
 
 def test_merge_refuses_a_pass_that_lacks_the_frame(tmp_path):
@@ -506,3 +558,21 @@ def test_render_parallel_reads_08_as_eight_passes(tmp_path):
     assert proc.returncode == 0, proc.stderr
     passes = sorted(l.split("--pass ")[1].split()[0] for l in record.read_text().splitlines() if "--pass" in l)
     assert passes == [f"{k}/8" for k in range(8)]
+
+
+def test_slurm_passes_and_frames_are_bounded(tmp_path):
+    """--passes beyond refrender's 524288 batches and a frame range beyond a
+    Slurm array's 4000001 tasks are refused at once (before: --merge looped
+    over 1e9 passes or frames, a subshell each, while a string grew); at the
+    bound, --merge with no pass there names the first 20 missing tasks and
+    the count of the rest within the timeout."""
+    scene, out = scene_file(tmp_path), tmp_path / "out"
+    env = {**os.environ, "REFRENDER": BIN}
+    for args, says in ((["--passes", 999999999], "expected a count from 1 to 524288"),
+                       (["--passes", 524289], "expected a count from 1 to 524288"),
+                       (["--passes", 2, "--frames", "0-999999999"], "more than the 4000001 tasks"),
+                       (["--passes", 8, "--frames", "0-500000"], "more than the 4000001 tasks")):
+        proc = sbatch_task(["--merge", *args, out, "--", scene, *COMMON], env, timeout=30)
+        assert proc.returncode == 2 and says in proc.stderr, (args, proc.stderr)
+    proc = sbatch_task(["--merge", "--passes", 524288, out, "--", scene, *COMMON], env, timeout=120)
+    assert proc.returncode == 2 and "task(s) 0 1 2 " in proc.stderr and " 19 and 524268 more" in proc.stderr, proc.stderr

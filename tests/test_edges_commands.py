@@ -4,7 +4,8 @@ whose header declares more pixels than its file can hold is refused before
 anything is allocated for them; a state holding more batches than its own
 range, or a range beyond its render's batches, is called damaged, not
 incomplete (pixels beyond the range are what a --target-error checkpoint
-holds: the message says so)."""
+holds: the message says so); `merge --preview` writes a single render's
+preview and is checked as a render's --preview."""
 import struct
 
 from conftest import run
@@ -85,3 +86,30 @@ def test_surfels_of_coinciding_points_names_the_input_not_the_output(tmp_path):
     proc = run(["surfels", cloud, "-o", out])
     assert proc.returncode == 1 and f"{cloud}: no splat is left of 10 points" in proc.stderr, proc.stderr
     assert "out.ply" not in proc.stderr and not out.exists()
+
+
+def test_merge_writes_the_preview_a_single_render_writes(tmp_path):
+    """`refrender merge --preview`: a parallel render gets its preview, the
+    very bytes one process rendering every batch writes with --preview (the
+    merged EXR is bit-identical to it); checked as a render's --preview: a
+    format OpenImageIO cannot write, a state, or -o's own file is refused
+    before anything is written. Before: merge had no --preview."""
+    scene = tmp_path / "m.xml"
+    scene.write_text(EMPTY.format(w=12, h=8).replace('center="100 0 0"', 'center="0.5 0 0"'))
+    states = [tmp_path / f"p{k}.exr" for k in range(2)]
+    for k, st in enumerate(states):
+        proc = run([scene, "--spp", 1, "--tspp", 2, "--batches", 2, "--pass", f"{k}/2", "-o", st, "--quiet"])
+        assert proc.returncode == 0, proc.stderr
+    one = run([scene, "--spp", 1, "--tspp", 2, "--batches", 2, "-o", tmp_path / "one.exr", "--preview",
+               tmp_path / "one.png", "--quiet"])
+    assert one.returncode == 0, one.stderr
+    proc = run(["merge", *states, "-o", tmp_path / "m.exr", "--preview", tmp_path / "m.png"])
+    assert proc.returncode == 0 and "-> " in proc.stderr and "m.png" in proc.stderr, proc.stderr
+    assert (tmp_path / "m.png").read_bytes() == (tmp_path / "one.png").read_bytes()
+    before = states[0].read_bytes()
+    for preview, says in ((tmp_path / "x.xyz", "no image format"), (states[0], "refusing to overwrite"),
+                          (tmp_path / "n.exr", "name the same file")):
+        out = tmp_path / "n.exr"
+        proc = run(["merge", *states, "-o", out, "--preview", preview])
+        assert proc.returncode == 1 and says in proc.stderr, proc.stderr
+        assert not out.exists() and states[0].read_bytes() == before

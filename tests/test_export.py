@@ -245,3 +245,50 @@ def test_export_takes_the_renders_rule_for_a_rolling_shutter(tmp_path, kind, val
     assert span and abs(float(span[1]) - lo) < 1e-12 and abs(float(span[2]) - hi) < 1e-12, message
     assert f'rolling="{kind}"' in message and "covers [0, 1]" in message and "s.xml" in message
     assert not (tmp_path / "e.json").exists()
+
+
+def test_the_rolling_shutter_is_given_as_fields(tmp_path):
+    """Each frame's rolling shutter as the scene's attributes, one field each
+    (before: one string to parse, 'lines bottom-to-top lineDelay ...')."""
+    scene = tmp_path / "s.xml"
+    for shutter, expect in (('<shutter open="0" close="0.5" rolling="lines" readout="bottom-to-top" lineDelay="0.01"/>',
+                             {"kind": "lines", "readout": "bottom-to-top", "line_delay": 0.01, "readout_time": 0}),
+                            ('<shutter open="0" close="0.5"/>', {"kind": "off"})):
+        scene.write_text(f'<scene>{CAMERA.format(anim=STILL)}{shutter}<object><sphere radius="0.5"/></object></scene>')
+        proc = run(["export", scene, "-o", tmp_path / "e.json"])
+        assert proc.returncode == 0, proc.stderr
+        data = json.loads((tmp_path / "e.json").read_text())
+        assert data["frames"][0]["rolling_shutter"] == expect
+        assert "line_delay" in data["conventions"]["rolling_shutter"]
+
+
+def test_axes_give_opencv_and_opengl_camera_spaces(tmp_path):
+    """--axes opencv|opengl: with the camera at (0, 0, 5) looking at the
+    origin, up +y, the origin is 5 ahead: z = +5 in OpenCV's camera space
+    (x right, y down, z forward), z = -5 in OpenGL's (y up, view along -z);
+    the world's +x is camera +x in both, +y is camera -y in OpenCV's, +y in
+    OpenGL's. The raster of any point is the same whichever axes (the pair
+    world_to_camera, camera_to_raster changes together); a point above the
+    centre lies above the raster's middle row (raster y down)."""
+    scene = tmp_path / "s.xml"
+    scene.write_text('<scene><camera position="0 0 5" lookat="0 0 0" up="0 1 0" fov="40" width="96" height="64"/>'
+                     '<object><sphere radius="0.5"/></object></scene>')
+    got, raster = {}, {}
+    for axes in ("refrender", "opencv", "opengl"):
+        proc = run(["export", scene, "--axes", axes, "-o", tmp_path / f"{axes}.json"])
+        assert proc.returncode == 0, proc.stderr
+        data = json.loads((tmp_path / f"{axes}.json").read_text())
+        w2c = np.asarray(data["frames"][0]["world_to_camera"][0])
+        c2r = np.asarray(data["camera"]["camera_to_raster"])
+        got[axes] = [w2c @ np.array([*p, 1.0]) for p in ((0, 0, 0), (1, 0, 0), (0, 1, 0))]
+        x, y, _, w = c2r @ w2c @ np.array([0.3, 0.4, 0.2, 1.0])
+        raster[axes] = (x / w, y / w)
+        assert axes in data["conventions"]["camera_space"].lower() or axes == "refrender"
+    origin, right, up = got["opencv"]
+    assert np.allclose(origin[:3], [0, 0, 5]) and right[0] > 0 and up[1] < 0
+    origin, right, up = got["opengl"]
+    assert np.allclose(origin[:3], [0, 0, -5]) and right[0] > 0 and up[1] > 0
+    assert np.allclose(raster["opencv"], raster["refrender"]) and np.allclose(raster["opengl"], raster["refrender"])
+    assert raster["opencv"][1] < 32 and raster["opencv"][0] > 48
+    bad = run(["export", scene, "--axes", "directx", "-o", tmp_path / "x.json"])
+    assert bad.returncode == 2 and "--axes: refrender, opencv or opengl" in bad.stderr

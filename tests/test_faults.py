@@ -1,5 +1,6 @@
-"""Write faults. Every output (final EXR, render state, merge,
-preview, frames, gen and surfels PLY, scene export, refrender splat's EXR) either completes or leaves the previous
+"""Write faults. Every output (final EXR, render state, merge and its
+preview, preview, frames, gen and surfels PLY, scene export, refrender
+splat's EXR) either completes or leaves the previous
 file untouched, and the exit status says which: the LD_PRELOAD shim
 tests/faultinject.c makes the Nth write to a regular file (and every later
 one: a disk that stays full) or the Nth rename fail, for every N until a run
@@ -122,6 +123,26 @@ def test_splat_image_and_preview(tmp_path, scene, op):
 
 
 @pytest.mark.parametrize("op", ["write", "rename"])
+def test_merge_image_and_preview(tmp_path, scene, op):
+    """refrender merge --preview: the merged EXR and its preview are one
+    result, all or none, as a render's (the preview is the one a single
+    render of all batches writes)."""
+    good = tmp_path / "good"
+    good.mkdir()
+    states = [good / "p0.exr", good / "p1.exr"]
+    for k, st in enumerate(states):
+        assert run([scene, *FAST, "--batches", 2, "--pass", f"{k}/2", "-o", st]).returncode == 0
+    assert run([scene, *FAST, "--batches", 2, "-o", good / "o.exr", "--preview", good / "p.png"]).returncode == 0
+    out, preview = tmp_path / "o.exr", tmp_path / "p.png"
+
+    def complete(path):
+        return path.read_bytes() != PREVIOUS and (same_pixels(path, good / "o.exr") if path == out else
+                                                  path.read_bytes() == (good / "p.png").read_bytes())
+    assert check_every_fault(tmp_path, ["merge", *states, "-o", out, "--preview", preview, "--quiet"], [out, preview],
+                             complete, op, all_or_none=True) >= 2
+
+
+@pytest.mark.parametrize("op", ["write", "rename"])
 def test_states_merge_and_frames(tmp_path, scene, op):
     good = tmp_path / "good"
     good.mkdir()
@@ -218,15 +239,18 @@ def test_scene_export_writes_its_three_outputs_or_none(tmp_path, scene, op, stic
         assert [p.name for p in tmp_path.iterdir() if ".tmp-" in p.name] == [], n
 
 
-def test_gaussians_short_of_memory_are_counted_apart_from_full_kbuffers(tmp_path):
+@pytest.mark.parametrize("output", [[], ["--batches", 2, "--pass", "0/2"]])
+def test_a_gaussian_render_short_of_memory_fails_and_full_kbuffers_only_warn(tmp_path, output):
     # Every sample meets 70 coplanar splats (more than the k-buffer's 64
-    # within epsilon) and, with every realloc of the render's worker threads
-    # failing, and every chunk of their arenas (where the Gaussian
-    # integrator's rays, candidates and hits' heap grow), finds no memory
-    # for its Gaussians: each of the W*H*spp*tspp
-    # samples is one of each, and the two are told apart (the memory
-    # drops were added to the overflow count, one sample twice, and called
-    # "more than 64 hits within epsilon").
+    # within epsilon) in front of a Gaussian plane. The k-buffer keeps the
+    # nearest 64 and warns (the farthest, behind 64 opaque splats, change
+    # nothing). With every realloc of the render's worker threads failing,
+    # and every chunk of their arenas (where the Gaussian integrator's rays,
+    # candidates and hits' heap grow), a sample's Gaussians find no memory:
+    # drawn without them a pixel can be off by its whole colour (issue 56.1:
+    # a ball of 407 pixels came out as background, exit 0, and its short
+    # --pass merged). The render fails, naming a pixel, and writes nothing:
+    # neither the image nor a render state.
     if b"__asan_init" in Path(BIN).read_bytes():
         pytest.skip("under AddressSanitizer realloc is ASan's own allocator, which the shim cannot fail")
     ply = tmp_path / "g.ply"
@@ -236,13 +260,18 @@ def test_gaussians_short_of_memory_are_counted_apart_from_full_kbuffers(tmp_path
     scene.write_text('<scene><camera position="0 0 5" lookat="0 0 0" up="0 1 0" fov="30" width="4" height="3"/>'
                      f'<object><pointModel>{splats}</pointModel></object>'
                      f'<object><gaussianModel file="{ply}"/></object></scene>')
-    env = dict(os.environ, LD_PRELOAD=SHIM, RR_FAULT_OP="memory-in-threads", ASAN_OPTIONS="verify_asan_link_order=0")
-    proc = subprocess.run([BIN, *map(str, [scene, "--spp", 1, "--tspp", 2, "--quiet", "-o", tmp_path / "o.exr"])],
-                          capture_output=True, text=True, env=env, timeout=120)
+    out = tmp_path / "o.exr"
+    args = [BIN, *map(str, [scene, "--spp", 1, "--tspp", 2, "--quiet", *output, "-o", out])]
+    clean = subprocess.run(args, capture_output=True, text=True, timeout=120)
     samples = 4 * 3 * 1 * 2
-    assert proc.returncode == 0, proc.stderr
-    assert f"warning: {samples} samples had more than 64 hits within epsilon" in proc.stderr, proc.stderr
-    assert f"warning: {samples} samples ran out of memory for their Gaussians" in proc.stderr, proc.stderr
+    assert clean.returncode == 0, clean.stderr
+    assert f"warning: {samples} samples had more than 64 hits within epsilon" in clean.stderr, clean.stderr
+    out.unlink()
+    env = dict(os.environ, LD_PRELOAD=SHIM, RR_FAULT_OP="memory-in-threads", ASAN_OPTIONS="verify_asan_link_order=0")
+    proc = subprocess.run(args, capture_output=True, text=True, env=env, timeout=120)
+    assert proc.returncode == 1, proc.stderr
+    assert "sampled Gaussians at pixel (" in proc.stderr and "out of memory for a sample's Gaussians" in proc.stderr
+    assert list(tmp_path.glob("o.exr*")) == [], proc.stderr
 
 
 @pytest.mark.parametrize("rounds", [["--batches", 6], ["--batches", 2, "--target-error", 1e-9, "--max-batches", 6]])

@@ -363,3 +363,12 @@ def test_one_or_two_frames_still_see_the_motion(tmp_path):
     for n, fraction in found.items():
         pixels = round(fraction * truth.size)
         assert truth.sum() - 2 * rows_touched <= pixels <= truth.sum(), (n, pixels, int(truth.sum()), rows_touched)
+
+
+def test_help_shows_the_refrender_pass_through():
+    """The docs run `nframe_average.py SCENE -- --res 128x128 ...`; --help's
+    usage and its own section say what follows -- (before: neither did)."""
+    helptext = subprocess.run([sys.executable, str(SCRIPT), "--help"], capture_output=True, text=True).stdout
+    usage = helptext.split("\n\n", 1)[0]
+    assert usage.rstrip().endswith("scene [-- REFRENDER-ARGS ...]"), usage
+    assert "REFRENDER-ARGS: refrender options for every render" in helptext

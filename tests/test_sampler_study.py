@@ -5,6 +5,8 @@ count; CPU seconds linear in the samples give a level's 2-core seconds from the 
 the error of a render is measured from two seeds, not from a reference or its own error bars."""
 import importlib
 import math
+import subprocess
+from pathlib import Path
 
 import pytest
 
@@ -48,3 +50,50 @@ def test_a_renders_error_is_measured_from_two_seeds(tmp_path, study):
     same, _, _ = study.pair_error(str(scene), str(tmp_path / "o.exr"), ["--spp", 1, "--tspp", 4, "--time", 0.5, "--pixel-filter", "point"])
     assert same == 0  # one instant at the pixel centres: both seeds give the same image
     assert not math.isnan(err)
+
+
+SCRIPT = str(Path(__file__).resolve().parent.parent / "scripts" / "sampler_study.py")
+HEADER = "view,sampler,samples,spp,tspp,seconds,error_levels\n"
+
+
+def study_run(*args):
+    return subprocess.run(["/usr/bin/python3", SCRIPT, *map(str, args)], capture_output=True, text=True, timeout=60)
+
+
+@pytest.mark.parametrize("text, says", [
+    ("", "empty"), (HEADER, "no rows, only a header"),
+    ("view,sampler,samples,seconds\nv,a,16,1\n", "no column error_levels"),
+    (HEADER + "v,a,0,1,1,1,0.5\nv,a,16,1,16,1,0.2\n", ":2: samples '0' is not a positive integer"),
+    (HEADER + "v,a,16,1,16,1,abc\n", ":2: error_levels 'abc' is not a finite number")])
+def test_a_bad_csv_is_one_line_naming_it(tmp_path, text, says):
+    """Before: IndexError, KeyError, a math domain error, each a traceback."""
+    path = tmp_path / "c.csv"
+    path.write_text(text)
+    proc = study_run("table", path)
+    assert proc.returncode == 1 and "Traceback" not in proc.stderr, proc.stderr
+    assert proc.stderr.strip().splitlines() == [proc.stderr.strip()] and f"{path}" in proc.stderr, proc.stderr
+    assert says in proc.stderr, proc.stderr
+
+
+@pytest.mark.parametrize("args", [("convergence", "--counts", "abc"), ("convergence", "--counts", "0"),
+                                  ("convergence", "--views", ","), ("convergence", "--samplers", ","),
+                                  ("time-to-error", "--counts", "abc"), ("time-to-error", "--counts", "64")])
+def test_bad_options_are_usage_errors(tmp_path, args):
+    proc = study_run(*args, "--out", tmp_path / "o")
+    assert proc.returncode == 2 and "Traceback" not in proc.stderr and "error: " in proc.stderr, proc.stderr
+    assert not (tmp_path / "o").exists()
+
+
+def test_a_row_given_again_replaces_the_earlier_one_in_the_best_too(tmp_path):
+    """a.csv and b.csv both measure v/sobol/16; the later (b's 0.5) is the row
+    kept, so the best at 16 is thesis's 0.4 (not the dropped 0.2): sobol is
+    0.5 / 0.4 = 1.25x, thesis 1.00x. Before: sobol 2.50x, thesis 2.00x."""
+    a, b = tmp_path / "a.csv", tmp_path / "b.csv"
+    a.write_text(HEADER + "v,sobol,16,1,16,1,0.2\n")
+    b.write_text(HEADER + "v,sobol,16,1,16,1,0.5\nv,sobol,64,1,64,1,0.25\nv,thesis,16,1,16,1,0.4\n")
+    proc = study_run("table", a, b)
+    assert proc.returncode == 0, proc.stderr
+    sobol = next(l for l in proc.stdout.splitlines() if l.startswith("| v | sobol |"))
+    thesis = next(l for l in proc.stdout.splitlines() if l.startswith("| v | thesis |"))
+    assert "| 0.5 (1.25x) | 0.25 (1.00x) |" in sobol and "| 0.4 (1.00x) |" in thesis, proc.stdout
+    assert "v sobol 16 given again" in proc.stderr

@@ -193,3 +193,39 @@ def test_nframe_average_json_on_a_full_disk_fails_with_one_line(tmp_path, full_d
     line = one_line(proc.stderr.replace("nframe_average: frame 1/1 at t = 0.5\n", ""))
     assert str(full_disk / "old.json") in line and "No space left on device" in line, line
     assert (full_disk / "old.json").read_text() == "old\n" and left_on(full_disk) == files
+
+
+COST_ERROR, SAMPLER_STUDY = (ROOT / "scripts" / name for name in ("cost_error.py", "sampler_study.py"))
+
+
+def test_cost_error_never_writes_over_its_entries_file_or_an_entry_image(tmp_path):
+    """`--out ce` beside `--entries ce/cost_error.csv`, or an entry image named
+    ce/cost_error.png, are the tool's own outputs' names: refused before
+    anything is measured, the inputs as they were (before: both replaced)."""
+    ref, test = images(tmp_path)
+    out = tmp_path / "ce"
+    out.mkdir()
+    entries = out / "cost_error.csv"
+    entries.write_text(f"label,image,cost\nours,{test},1\n")
+    png = write_image(out / "cost_error.png", np.full((16, 16, 3), 0.55, np.float32))
+    before = {p: p.read_bytes() for p in (entries, png)}
+    for args in (("--entries", entries), ("--entry", f"ours,{png},2")):
+        proc = tool(COST_ERROR, ref, *args, "--out", out)
+        assert proc.returncode == 2 and "is an input" in one_line(proc.stderr), proc.stderr
+        assert {p: p.read_bytes() for p in (entries, png)} == before
+    assert tool(COST_ERROR, ref, "--entries", entries, "--out", tmp_path / "other").returncode == 0
+
+
+def test_a_fifo_csv_is_refused_by_name(tmp_path):
+    """cost_error.py's --entries and --refrender-curves, sampler_study.py's
+    table and time-to-error --from-csv (before: each blocked for ever)."""
+    ref, test = images(tmp_path)
+    fifo = tmp_path / "fifo.csv"
+    os.mkfifo(fifo)
+    for script, args in ((COST_ERROR, (ref, "--entries", fifo)),
+                         (COST_ERROR, (ref, "--entry", f"x,{test},1", "--refrender-curves", fifo)),
+                         (SAMPLER_STUDY, ("table", fifo)), (SAMPLER_STUDY, ("time-to-error", "--from-csv", fifo))):
+        proc = tool(script, *args, "--out", tmp_path / "o", timeout=60) if script == COST_ERROR else \
+            tool(script, *args, timeout=60)
+        assert proc.returncode != 0 and f"{fifo}: is a FIFO" in one_line(proc.stderr), (args, proc.stderr)
+    assert stat.S_ISFIFO(os.stat(fifo).st_mode)

@@ -133,3 +133,15 @@ TEST(shutter_check_rejects_a_length_that_overflows)
     s.open = -1e307, s.close = 1e307;
     CHECK(shutter_check(&s, &e) == 0);
 }
+
+/* A subnormal length ([0, 1e-310]) was accepted; the smallest normal one is not refused. */
+TEST(shutter_check_rejects_a_subnormal_length)
+{
+    shutter s;
+    rr_error e;
+    shutter_default(&s);
+    s.open = 0, s.close = 1e-310;
+    CHECK(shutter_check(&s, &e) != 0 && strstr(e.msg, "subnormal"));
+    s.close = 0x1p-1022; /* DBL_MIN, written as its value (C99 hex float), not through float.h */
+    CHECK(shutter_check(&s, &e) == 0);
+}

@@ -231,7 +231,8 @@ def test_usage_errors_exit_2_and_write_nothing(tmp_path, args, message):
 def test_help_names_every_method(tmp_path):
     proc = run(['splat', '--help'])
     assert proc.returncode == 0
-    for word in ('instant', 'accum', 'bucket', 'volumetric', '--filter', '--alpha', '--sigma-t', 'src/SPLAT.md'):
+    for word in ('instant', 'accum', 'bucket', 'volumetric', 'guan-mueller', '--filter', '--alpha', '--sigma-t', '--trails',
+                 'src/SPLAT.md'):
         assert word in proc.stdout
 
 
@@ -246,6 +247,9 @@ def test_bad_scenes_name_file_and_line_and_leave_the_output(tmp_path):
     sphere.write_text('<scene><camera width="8" height="8"/><object name="ball"><sphere radius="1"/></object></scene>')
     proc = run(['splat', 'accum', sphere, '-o', out])
     assert proc.returncode == 1 and "object 'ball' is an analytic sphere" in proc.stderr, proc.stderr
+    proc = run(['splat', 'volumetric', ROOT / 'scenes' / 'gaussians.xml', '-o', out])  # as README says
+    assert proc.returncode == 1 and 'is a Gaussian-splat model' in proc.stderr and 'point models (surfels) only' in proc.stderr, \
+        proc.stderr
     proc = run(['splat', 'instant', sphere, '-o', tmp_path / 'o.png'])
     assert proc.returncode == 1 and 'OpenEXR' in proc.stderr
     assert out.read_bytes() == b'keep'
@@ -253,7 +257,7 @@ def test_bad_scenes_name_file_and_line_and_leave_the_output(tmp_path):
 
 
 @pytest.mark.parametrize('method', [['instant'], ['accum', '--samples', 2], ['bucket', '--samples', 2, '--buckets', 1],
-                                    ['volumetric', '--samples', 2]])
+                                    ['volumetric', '--samples', 2], ['guan-mueller']])
 def test_every_method_renders_every_suite_scene(tmp_path, method):
     """Issue 51: refrender splat renders every suite scene with each method,
     camera_pan's moving camera included (volumetric kernels along the
@@ -264,3 +268,27 @@ def test_every_method_renders_every_suite_scene(tmp_path, method):
         assert np.isfinite(img).all() and img[..., 3].max() > 0, name
         assert img[..., 3].min() >= 0 and img[..., 3].max() <= 1, name
         assert hdr['refrender:method'] == method[0]
+
+
+@pytest.mark.parametrize('velocity', ['1 0 0', '0 0 0'])
+def test_splat_refuses_the_instants_and_shutters_the_ray_tracer_refuses(tmp_path, velocity):
+    """Issue 56: splat --time accepted 1e300, where the ray tracer refuses any
+    instant or shutter that moves an object past RR_MAX_REACH (1e15). Both
+    now apply one rule (accel_check_reach): for each instant and shutter the
+    two commands accept or refuse alike, and a refusal names the object."""
+    scene = tmp_path / 's.xml'
+    scene.write_text('<scene><camera position="0 0 4" lookat="0 0 0" width="8" height="6"/>'
+                     '<object name="dot"><pointModel><splat center="0 0 0" normal="0 0 1" radius="0.5"/></pointModel>'
+                     f'<animation><linear velocity="{velocity}"/></animation></object></scene>')
+    cases = [(['--time', t], ['instant', '--time', t]) for t in ('1e300', '-1e16', '1e16', '1e14', '0.5')]
+    cases += [(['--shutter', s], [m, '--shutter', s, '--samples', 1]) for s in ('0,1e300', '0,1e14')
+              for m in ('accum', 'volumetric')]
+    refused = 0
+    for render_args, splat_args in cases:
+        truth = run([scene, *render_args, '--spp', 1, '--tspp', 1, '-o', tmp_path / 'r.exr', '--quiet'])
+        mine = run(['splat', splat_args[0], scene, *splat_args[1:], '-o', tmp_path / 's.exr', '--quiet'])
+        assert (mine.returncode == 0) == (truth.returncode == 0), (splat_args, truth.stderr, mine.stderr)
+        if mine.returncode:
+            assert mine.returncode == 1 and "object 'dot' reaches" in mine.stderr, mine.stderr
+            refused += 1
+    assert refused == (5 if velocity != '0 0 0' else 0), refused

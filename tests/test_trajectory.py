@@ -12,6 +12,7 @@
 - Today's two-pose cameras.json motion is "linear" for two knots.
 - Mistakes in the scene are named."""
 import json
+import shutil
 
 import numpy as np
 import pytest
@@ -420,6 +421,44 @@ def test_frames_at_the_trajectory_centre_each_exposure_on_its_pose(tmp_path):
     assert proc.returncode != 0 and "reaches beyond the camera trajectory" in proc.stderr
     proc = run([s, "--frame", 4, "-o", out, "--quiet"])
     assert proc.returncode != 0 and "frame 4: the camera's trajectory has 4 poses (frames 0 to 3)" in proc.stderr
+
+
+def test_a_refused_frame_is_named_and_a_moved_shutter_is_said(tmp_path):
+    """A sequence with a frame whose exposure leaves the camera trajectory is refused before any
+    frame is written, by render and export alike: the message names that frame and, with frames at
+    the trajectory's poses, the pose its exposure was centred on (it said only 'the shutter [0.5,
+    1.5] reaches beyond ...', which is no shutter the scene or the command line gave). Frames at a
+    rate are named too (frame 16, [1.6, 1.7 + 2 ulps], past the last pose at 1.7). <frames at="trajectory"> renders the shutter as written moved onto each pose:
+    a note says so, with the first frame's shutter (the run was silent); --quiet drops it, and frames
+    at a rate, whose shift the shutter's docs state, have none."""
+    for name in ("trajectory.xml", "poses.tum"):
+        shutil.copy(ROOT / "scenes" / "examples" / name, tmp_path / name)
+    example = tmp_path / "trajectory.xml"
+    for frames, frame, window in (("1-6", 1, "[0.5, 1.5]"), ("2-5", 5, "[4.5, 5.5]")):
+        proc = run([example, "--frames", frames, "--res", "12x8", "--spp", 1, "--tspp", 1, "-o",
+                    tmp_path / "t.%04d.exr", "--quiet"])
+        assert proc.returncode == 1 and f"{example}: frame {frame} (its exposure centred on pose {frame}'s time " \
+            f"{frame}): the shutter {window} reaches beyond the camera trajectory" in proc.stderr, proc.stderr
+        assert not list(tmp_path.glob("t.*.exr"))
+        proc = run(["export", example, "--frames", frames, "-o", tmp_path / "e.json"])
+        assert proc.returncode == 1 and f"frame {frame} (its exposure centred on pose {frame}'s time {frame}): " \
+            f"the shutter {window} reaches beyond" in proc.stderr, proc.stderr
+    at_rate = frames_scene(tmp_path, '<frames rate="10"/>')
+    proc = run([at_rate, "--frames", "0-20", "--spp", 1, "--tspp", 1, "-o", tmp_path / "r%d.exr"])
+    assert proc.returncode == 1 and "f.xml: frame 16: the shutter [1.6" in proc.stderr and "note" not in \
+        proc.stderr, proc.stderr
+    note = ('note: <frames at="trajectory">: each frame\'s exposure is the shutter [0, 0.1] moved so that its middle '
+            "is its pose's time (frame {}: {})")
+    s = frames_scene(tmp_path)
+    proc = run([s, "--frame", 2, "--spp", 1, "--tspp", 1, "-o", tmp_path / "o.exr"])
+    assert proc.returncode == 0 and f"refrender: {note.format(2, '[0.95, 1.05]')}\n" in proc.stderr, proc.stderr
+    proc = run([s, "--frame", 2, "--spp", 1, "--tspp", 1, "-o", tmp_path / "o.exr", "--quiet"])
+    assert proc.returncode == 0 and proc.stderr == "", proc.stderr
+    proc = run(["export", s, "--frames", "1-2", "-o", tmp_path / "e.json"])
+    assert proc.returncode == 0 and proc.stderr == f"refrender export: {note.format(1, '[0.45, 0.55]')}\n", \
+        proc.stderr
+    proc = run([s, "--time", 1, "--spp", 1, "-o", tmp_path / "o.exr"])  # no frame: the shutter as given
+    assert proc.returncode == 0 and "note" not in proc.stderr, proc.stderr
 
 
 @pytest.mark.parametrize("frames,camera,message", [

@@ -131,6 +131,14 @@ int accel_object_moves(const accel *a, unsigned obj);
 /* A world sphere holding the object at every time of the current shutter. */
 void accel_object_swept_sphere(const accel *a, unsigned obj, vec3 *center, double *radius);
 
+/* RR_MAX_REACH over the shutter [open, close]: the camera's and each
+ * object's swept reach (swept[i], object i's world box over the shutter),
+ * and the object-space rays they imply, within it; the keyframes' key
+ * times within what swept bounds can list. -1 with err naming the scene
+ * and the object otherwise. accel_set_shutter applies it; refrender splat
+ * too, so both refuse the same scenes and instants. */
+int accel_check_reach(const scene *s, const aabb *swept, double open, double close, rr_error *err);
+
 /* The most memory Embree held at once for the BVHs (build included). */
 size_t accel_embree_peak_bytes(const accel *a);
 

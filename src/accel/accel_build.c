@@ -255,7 +255,7 @@ static void build_top_levels(accel *a, double open, double close)
         a->top[k].count = 0;
     }
     a->ngaussian = 0;
-    for (int i = 0; i < s->nobjects; i++) {
+    for (int i = 0; i < s->nobjects && !a->build_error.msg[0]; i++) { /* (one failure is the error) */
         const scene_object *o = &s->objects[i];
         if (scene_object_row(o)->gaussians) {
             a->building_object = i;
@@ -271,7 +271,7 @@ static void build_top_levels(accel *a, double open, double close)
         top_level *top = &a->top[a->is_static[i] ? TOP_STATIC : TOP_MOVING];
         top->ids[top->count++] = (unsigned)i;
     }
-    for (int k = 0; k < 2; k++)
+    for (int k = 0; k < 2 && !a->build_error.msg[0]; k++)
         if (a->top[k].count)
             a->top[k].scene = accel_user_scene(a->device, a->top[k].count, &a->top[k], accel_object_bounds_cb, accel_object_intersect, 0);
 }
@@ -301,9 +301,8 @@ static int check_key_times(const scene *s, const animation *anim, const char *wh
     return 0;
 }
 
-static int check_reach(const accel *a, double open, double close, rr_error *err)
+int accel_check_reach(const scene *s, const aabb *swept, double open, double close, rr_error *err)
 {
-    const scene *s = a->sc;
     if (check_key_times(s, &s->camera_motion, "the camera", open, close, err) ||
         scene_check_trajectory_times(s, open, close, err))
         return -1;
@@ -320,7 +319,7 @@ static int check_reach(const accel *a, double open, double close, rr_error *err)
                             "rays can only be traced within %g", s->path, camera, open, close, RR_MAX_REACH);
     for (int i = 0; i < s->nobjects; i++) {
         const scene_object *o = &s->objects[i];
-        double object = box_reach(a->swept[i]), min_scale = animation_min_scale(&o->anim, open, close);
+        double object = box_reach(swept[i]), min_scale = animation_min_scale(&o->anim, open, close);
         double ray = sqrt(3.0) * fmax(1.0, camera + object) / min_scale;
         if (!(object <= RR_MAX_REACH) || !(ray <= RR_MAX_REACH))
             return rr_fail(err, "%s: object '%s' reaches %g world units (smallest scale %g) during the shutter "
@@ -337,7 +336,7 @@ int accel_set_shutter(accel *a, double open, double close, rr_error *err)
     a->building = 0;
     if (a->build_error.msg[0])
         return rr_fail(err, "%s", a->build_error.msg);
-    return check_reach(a, open, close, err);
+    return accel_check_reach(a->sc, a->swept, open, close, err);
 }
 
 int accel_build(const scene *s, const accel_settings *set, accel **out, rr_error *err)
@@ -374,7 +373,7 @@ int accel_build(const scene *s, const accel_settings *set, accel **out, rr_error
         accel_free(a);
         return rr_fail(err, "out of memory");
     }
-    for (int i = 0; i < s->nobjects; i++) {
+    for (int i = 0; i < s->nobjects && !a->build_error.msg[0]; i++) {
         scene_object *o = &s->objects[i];
         const scene_object_ops *kind = scene_object_row(o);
         if (kind->gaussians) { /* built with the shutter (build_gaussian_object) */
@@ -391,7 +390,7 @@ int accel_build(const scene *s, const accel_settings *set, accel **out, rr_error
     a->reuse_static = set->reuse_static;
     build_top_levels(a, set->open, set->close);
     a->building = 0;
-    if (a->build_error.msg[0] || check_reach(a, set->open, set->close, err)) {
+    if (a->build_error.msg[0] || accel_check_reach(a->sc, a->swept, set->open, set->close, err)) {
         if (a->build_error.msg[0])
             rr_fail(err, "%s", a->build_error.msg);
         accel_free(a);
@@ -401,18 +400,32 @@ int accel_build(const scene *s, const accel_settings *set, accel **out, rr_error
     return 0;
 }
 
-void accel_free(accel *a)
+/* Releases the Embree scenes and device, unless a build failed: Embree's
+ * scene destructor after a commit that ran out of memory cancels the
+ * commit's TBB task group, which allocates again, and the std::bad_alloc
+ * (or TBB's missing_wait) it throws ends the process in std::terminate
+ * (SIGABRT under ulimit -v 232-242 MB, issue 56.6). The failed build's
+ * scenes are left to the process's exit, which follows such an error. */
+static void release_embree(accel *a)
 {
-    if (!a)
+    if (a->build_error.msg[0])
         return;
     for (int i = 0; a->object_scenes && i < a->sc->nobjects; i++)
         if (a->object_scenes[i])
             rtcReleaseScene(a->object_scenes[i]);
-    for (int k = 0; k < 2; k++) {
+    for (int k = 0; k < 2; k++)
         if (a->top[k].scene)
             rtcReleaseScene(a->top[k].scene);
+    rtcReleaseDevice(a->device);
+}
+
+void accel_free(accel *a)
+{
+    if (!a)
+        return;
+    release_embree(a);
+    for (int k = 0; k < 2; k++)
         free(a->top[k].ids);
-    }
     free(a->object_scenes);
     free(a->swept);
     free(a->swept_sphere);
@@ -422,7 +435,6 @@ void accel_free(accel *a)
     free(a->gaussian_ids);
     free(a->footprint);
     free(a->models);
-    rtcReleaseDevice(a->device);
     free(a);
 }
 

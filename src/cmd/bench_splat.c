@@ -47,7 +47,8 @@ void bench_splat(const scene *s, const accel *acc, int res, FILE *csv)
 {
     static const splat_row rows[] = {{"instant", SPLAT_INSTANT, 1, 1},       {"accum 10", SPLAT_ACCUM, 10, 10},
                                      {"accum 50", SPLAT_ACCUM, 50, 50},       {"bucket 50/5", SPLAT_BUCKET, 50, 5},
-                                     {"volumetric 1", SPLAT_VOLUMETRIC, 1, 1}, {"volumetric 3", SPLAT_VOLUMETRIC, 3, 3}};
+                                     {"volumetric 1", SPLAT_VOLUMETRIC, 1, 1}, {"volumetric 3", SPLAT_VOLUMETRIC, 3, 3},
+                                     {"guan-mueller", SPLAT_GUAN_MUELLER, 1, 1}}; /* against one instant */
     printf("\nsplat: the splatting methods (refrender splat, one thread) against the ray tracer sampling as many\n"
            "instants at every pixel centre (one thread), on the same scene:\n\n"
            "| method | instants | splat s | fragments | truth s | rays | splat / truth |\n"

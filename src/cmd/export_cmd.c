@@ -24,7 +24,7 @@ static void export_usage(FILE *f)
     fputs(
 "usage: refrender export SCENE.xml [--frame N | --frames A-B] [--shutter O,C] [--times K]\n"
 "                        [-D name=value] [--tum PATH.tum [--tum-axes opengl|opencv]]\n"
-"                        [--transforms PATH.json] [--tum-rate HZ] -o SCENE.json\n"
+"                        [--transforms PATH.json] [--tum-rate HZ] [--axes A] -o SCENE.json\n"
 "\n"
 "Writes the scene as another renderer needs it (scripts/README.md, Exporting):\n"
 "resolution, camera intrinsics, and per frame the world-to-camera matrix,\n"
@@ -50,14 +50,33 @@ static void export_usage(FILE *f)
 "                  from the first frame's open to the last one's close instead:\n"
 "                  evenly spaced, as interpolation=\"cubic\" needs (its spline\n"
 "                  spans the second pose to the last but one)\n"
+"  --axes A        the camera space of the JSON's world_to_camera and\n"
+"                  camera_to_raster: refrender (x right, y up, z forward; the\n"
+"                  default), opencv (x right, y down, z forward) or opengl\n"
+"                  (x right, y up, z back); the JSON's conventions say which\n"
 "  -o, --output F  output JSON file (required)\n"
 "All outputs are written or none; none may name an input of the scene or\n"
 "another output.\n", f);
 }
 
+/* --axes: the JSON's camera space, each a flip of one of refrender's axes
+ * (src/core/camera.c: x right, y up, z forward). OpenCV's pinhole model has
+ * x right, y down, z forward (OpenCV 4.x docs, calib3d, "Camera Calibration
+ * and 3D Reconstruction"); OpenGL's eye coordinates x right, y up, the view
+ * along -z (gluLookAt(3G): "the direction of view ... mapped to the negative
+ * z axis"). */
+typedef enum { AXES_REFRENDER, AXES_OPENCV, AXES_OPENGL } camera_axes;
+static const char *const AXES_NAMES[] = {"refrender", "opencv", "opengl"};
+static const char *const AXES_TEXT[] = {
+    "x right, y up, z forward along the view direction (left-handed; --axes refrender)",
+    "x right, y down, z forward along the view direction (OpenCV's; --axes opencv)",
+    "x right, y up, z backward: the view direction is -z (OpenGL's; --axes opengl)"};
+static const int AXES_FLIPPED[] = {-1, 1, 2}; /* the axis negated */
+
 typedef struct {
     const char *scene, *output, *tum, *transforms;
     int tum_opengl; /* --tum-axes */
+    camera_axes axes; /* --axes */
     double tum_rate; /* --tum-rate: poses per unit of scene time; 0: at the export's times */
     int frames, first, last, times;
     int shutter_set; /* --shutter */
@@ -103,17 +122,6 @@ static void affine_matrix(const double r[3][3], vec3 t, double m[4][4])
     m[3][0] = m[3][1] = m[3][2] = 0, m[3][3] = 1;
 }
 
-/* World to camera space at time t: the inverse of (camera motion at t) after
- * the rest pose. */
-static void world_to_camera(const scene *s, double t, double out[4][4])
-{
-    double rest_inv[4][4], motion_inv[4][4];
-    camera_world_to_camera(&s->cam, rest_inv);
-    xform m = animation_at(&s->camera_motion, t);
-    affine_matrix(m.ri, xform_inverse_point(&m, v3(0, 0, 0)), motion_inv);
-    mat4_mul(rest_inv, motion_inv, out);
-}
-
 static int sample_times(const shutter *sh, int k, double *times)
 {
     int n = 0;
@@ -149,13 +157,14 @@ static int matrix_finite(double m[4][4])
 
 /* JSON has no number for inf or NaN (a velocity of 1e308 at t = 10 once
  * wrote "inf" into the file): such a transform is refused, naming it. */
-static int check_frame(const scene *s, const shutter *sh, const double *times, int n, rr_error *err)
+static int check_frame(const scene *s, const shutter *sh, const char *frame, const double *times, int n,
+                       rr_error *err)
 {
     double m[4][4];
-    if (scene_check_shutter_in_trajectory(s, sh, err)) /* the render's rule: every line's times */
+    if (scene_check_shutter_in_trajectory(s, sh, frame, err)) /* the render's rule: every line's times */
         return -1;
     for (int i = 0; i < n; i++) {
-        world_to_camera(s, times[i], m);
+        scene_world_to_camera(s, times[i], m);
         if (!matrix_finite(m))
             return rr_fail(err, "the camera's transform at time %g is not finite (motion too large)", times[i]);
         for (int o = 0; o < s->nobjects; o++) {
@@ -169,15 +178,36 @@ static int check_frame(const scene *s, const shutter *sh, const double *times, i
     return 0;
 }
 
-static int write_frame(FILE *f, const scene *s, long long frame, int numbered, const shutter *sh, int k,
+/* F M (F M's rows: world to the --axes camera space) or M F (M's columns:
+ * from it), F the diagonal flip of the axis --axes negates. */
+static void flip_axes(double m[4][4], camera_axes a, int rows)
+{
+    int axis = AXES_FLIPPED[a];
+    for (int i = 0; i < 4 && axis >= 0; i++)
+        rows ? (m[axis][i] = -m[axis][i]) : (m[i][axis] = -m[i][axis]);
+}
+
+static void write_rolling(FILE *f, const rolling_shutter *r)
+{
+    fprintf(f, "{\"kind\": \"%s\"", shutter_rolling_name(r->kind));
+    if (r->kind != ROLLING_OFF)
+        fprintf(f, ", \"readout\": \"%s\", \"line_delay\": %.17g, \"readout_time\": %.17g",
+                shutter_readout_name(r->readout), r->line_delay, r->readout_time);
+    fputc('}', f);
+}
+
+static int write_frame(FILE *f, const scene *s, long long frame, const export_options *o, const shutter *sh,
                        rr_error *err)
 {
+    int numbered = o->frames, k = o->times;
     double times[1026], m[4][4];
     if (!isfinite(sh->close - sh->open)) /* every time between would be inf or NaN, blamed on a transform */
         return rr_fail(err, "the shutter [%g, %g] is longer than double precision holds (close - open overflows)",
                        sh->open, sh->close);
     int n = sample_times(sh, k, times);
-    if (check_frame(s, sh, times, n, err))
+    char label[128];
+    scene_frame_label(s, frame, numbered, label, sizeof label);
+    if (check_frame(s, sh, label, times, n, err))
         return -1;
     fputs("    {\"frame\": ", f);
     numbered ? fprintf(f, "%lld", frame) : fputs("null", f);
@@ -186,16 +216,15 @@ static int write_frame(FILE *f, const scene *s, long long frame, int numbered, c
         fprintf(f, "%s%.17g", i ? ", " : "", times[i]);
     fputs("],\n     \"weight\": ", f);
     write_weight(f, sh);
-    char rolling[256];
-    shutter_rolling_text(sh, rolling, sizeof rolling); /* each line's window: shutter.h */
     fputs(",\n     \"rolling_shutter\": ", f);
-    json_string(f, rolling);
+    write_rolling(f, &sh->rolling);
     fputs(",\n     \"world_to_camera\": [", f);
     scene fs; /* the camera as the render moves it under this shutter (rolling="gsplat": gsplat's poses) */
     if (scene_for_shutter(s, sh, &fs, err))
         return -1;
     for (int i = 0; i < n; i++) {
-        world_to_camera(&fs, times[i], m);
+        scene_world_to_camera(&fs, times[i], m);
+        flip_axes(m, o->axes, 1);
         fputs(i ? ", " : "", f);
         json_matrix(f, m);
     }
@@ -315,14 +344,17 @@ static const char *const CONVENTIONS =
     "  \"conventions\": {\n"
     "    \"matrices\": \"4x4, row-major nested lists, for column vectors: p' = M p with p = [x, y, z, 1]\",\n"
     "    \"world\": \"the scene file's coordinates; times in scene time units\",\n"
-    "    \"camera_space\": \"x right, y up, z forward along the view direction (left-handed)\",\n"
+    "    \"camera_space\": \"%s\",\n"
     "    \"raster\": \"(0, 0) is the image's top-left corner, x right, y down; pixel (i, j) covers "
     "[i, i+1] x [j, j+1], its center at (i + 0.5, j + 0.5)\",\n"
     "    \"camera_to_raster\": \"[X, Y, Z, W] = M [x, y, z, 1]: raster (X / W, Y / W); Z / W = 1 / depth\",\n"
     "    \"object_to_world\": \"maps the model's own coordinates (PLY file, generator output centered at the "
     "origin, inline splats) to world; rest_offset is included\",\n"
     "    \"weight\": \"a(t); a pixel is the integral of a(t) color(t) over [open, close] divided by the "
-    "integral of a(t); samples are [t, a(t)]\"\n"
+    "integral of a(t); samples are [t, a(t)]\",\n"
+    "    \"rolling_shutter\": \"the scene's <shutter rolling readout lineDelay readoutTime> (scenes/README.md): "
+    "kind off, lines (line r's window [open, close] + r line_delay), 3dgs-deblur (readout_time spans the frame) "
+    "or gsplat (line r at one instant of the readout); readout the lines' order\"\n"
     "  },\n";
 
 static int write_json(FILE *f, const scene *s, const export_options *o, rr_error *err)
@@ -331,7 +363,8 @@ static int write_json(FILE *f, const scene *s, const export_options *o, rr_error
     double m[4][4];
     fprintf(f, "{\n  \"refrender\": \"%s\",\n  \"scene\": ", RR_VERSION);
     json_string(f, s->path);
-    fprintf(f, ",\n  \"inputs_hash\": \"%016llx\",\n%s", (unsigned long long)s->inputs_hash, CONVENTIONS);
+    fprintf(f, ",\n  \"inputs_hash\": \"%016llx\",\n", (unsigned long long)s->inputs_hash);
+    fprintf(f, CONVENTIONS, AXES_TEXT[o->axes]);
     fprintf(f, "  \"resolution\": [%d, %d],\n  \"camera\": {\"fov_y_degrees\": %.17g, \"position\": ", c->width,
             c->height, c->fov_degrees);
     json_vec3(f, c->position);
@@ -341,6 +374,7 @@ static int write_json(FILE *f, const scene *s, const export_options *o, rr_error
     json_vec3(f, c->up);
     fprintf(f, ", \"moves\": %s, \"camera_to_raster\": ", scene_camera_moves(s) ? "true" : "false");
     camera_projection(c, c->width, c->height, m); /* to raster */
+    flip_axes(m, o->axes, 0);
     json_matrix(f, m);
     fprintf(f, "},\n  \"epsilon\": %.17g,\n  \"kernel_sigma\": %.17g,\n  \"background\": ", s->epsilon,
             s->kernel_sigma);
@@ -355,9 +389,12 @@ static int write_json(FILE *f, const scene *s, const export_options *o, rr_error
         shutter sh = s->shut;
         if (o->frames && scene_frame_shutter(s, (int)fr, &sh, err))
             return -1;
+        char note[512];
+        if (fr == o->first && o->frames && scene_frame_shutter_note(s, &sh, fr, note, sizeof note))
+            fprintf(stderr, "refrender export: note: %s\n", note);
         if (fr > o->first)
             fputs(",\n", f);
-        if (write_frame(f, s, fr, o->frames, &sh, o->times, err))
+        if (write_frame(f, s, fr, o, &sh, err))
             return -1;
     }
     fputs("\n  ]\n}\n", f);
@@ -620,6 +657,14 @@ static int export_scene(const export_options *o, rr_error *err)
     return rc;
 }
 
+static int parse_axes(const char *text, camera_axes *axes, rr_error *err)
+{
+    for (int a = AXES_REFRENDER; a <= AXES_OPENGL; a++)
+        if (!strcmp(text, AXES_NAMES[a]))
+            return *axes = (camera_axes)a, 0;
+    return rr_fail(err, "--axes: refrender, opencv or opengl, got '%s'", text);
+}
+
 static int parse_export_args(int argc, char **argv, export_options *o, rr_error *err)
 {
     static const struct option longopts[] = {{"frame", required_argument, 0, 'f'}, {"frames", required_argument, 0, 'F'},
@@ -628,6 +673,7 @@ static int parse_export_args(int argc, char **argv, export_options *o, rr_error 
                                              {"tum", required_argument, 0, 'T'}, {"tum-axes", required_argument, 0, 'A'},
                                              {"transforms", required_argument, 0, 'J'},
                                              {"tum-rate", required_argument, 0, 'R'},
+                                             {"axes", required_argument, 0, 'X'},
                                              {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
     int c;
     char extra;
@@ -661,6 +707,8 @@ static int parse_export_args(int argc, char **argv, export_options *o, rr_error 
         if (c == 'A')
             o->tum_opengl = !strcmp(optarg, "opengl");
         if (c == 's' && (o->shutter_set = 1, cli_shutter(optarg, &o->shutter_open, &o->shutter_close, err)))
+            return -1;
+        if (c == 'X' && parse_axes(optarg, &o->axes, err))
             return -1;
         if (c == '?') {
             cli_suggest_option("refrender export", argv[optind - 1], longopts);

@@ -24,6 +24,7 @@ static void gen_usage(FILE *f)
 "  --checker N       checker cells: per side (plane) or per 180 degrees\n"
 "                    (sphere, torus); 0 = plain color (default 0)\n"
 "  --overlap F       splat radius factor over the hole-free size (default 1.5)\n"
+"  --quiet           no summary line (what was written, on stderr)\n"
 "", f);
     fputs(surfel_output_help, f);
 }
@@ -57,14 +58,15 @@ int cmd_gen(int argc, char **argv)
         {"color2", required_argument, 0, 'd'}, {"checker", required_argument, 0, 'k'},
         {"overlap", required_argument, 0, 'v'}, {"output", required_argument, 0, 'o'},
         {"gaussians", required_argument, 0, 'g'}, {"sh-degree", required_argument, 0, 's'},
-        {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
+        {"quiet", no_argument, 0, 'q'}, {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
     shape_params p;
     shape_params_default(&p);
     surfel_output o = {NULL, GAUSSIAN_AUTO, 0, 0};
     rr_error err;
-    int c;
+    int c, quiet = 0;
     while ((c = getopt_long(argc, argv, "ho:", longopts, NULL)) != -1) {
         if (c == 'h') { gen_usage(stdout); return 0; }
+        if (c == 'q') { quiet = 1; continue; }
         if (c == '?') {
             cli_suggest_option("refrender gen", argv[optind - 1], longopts);
             fputs("Try 'refrender gen --help'.\n", stderr);
@@ -94,5 +96,8 @@ int cmd_gen(int argc, char **argv)
     free(s);
     if (rc)
         fprintf(stderr, "refrender gen: %s\n", err.msg);
+    else if (!quiet) /* as 'refrender surfels' says what it wrote */
+        fprintf(stderr, "refrender gen: %s: %zu %s -> %s\n", p.kind, n,
+                o.gaussians == GAUSSIAN_AUTO ? "splats" : "Gaussians", o.out);
     return rc ? 1 : 0;
 }

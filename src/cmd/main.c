@@ -9,6 +9,7 @@
 
 #include "cmd/cli.h"
 #include "cmd/commands.h"
+#include "cmd/noise_report.h"
 #include "render/exact.h"
 #include "io/output.h"
 #include "io/render_attrs.h"
@@ -43,7 +44,8 @@ static void usage(FILE *f)
 "  --sampler S        sobol (default), jittered3d or thesis (Wolf 2008 sec. 4.5)\n"
 "  --seed N           random seed: same seed, same image, any threads (default 1)\n"
 "  --batches B        independent batches; B >= 2 adds standard errors (default 1)\n"
-"  --target-error X   more batches where the RGB standard error exceeds X (B 4 unless given)\n"
+"  --target-error X   more batches where a pixel's RGB standard error exceeds X, in value\n"
+"                     units (0.002) or 8-bit levels (0.5lv); B 4 unless given\n"
 "  --max-batches N    batch cap for --target-error (default 8*B)\n"
 "Time:\n"
 "  --time-integration M  sampled (default) or exact (src/EXACT.md)\n"
@@ -139,7 +141,7 @@ static int parse_option(int c, const char *arg, render_options *o, rr_error *err
     case OPT_SIGMA: return cli_double("--sigma", arg, 1e-6, &o->sigma, err);
     case OPT_BATCHES: o->batches_given = 1; return cli_int("--batches", arg, 1, FILM_MAX_BATCHES, &o->batches, err);
     case OPT_MAXB: return cli_int("--max-batches", arg, 1, FILM_MAX_BATCHES, &o->max_batches, err);
-    case OPT_TARGET: return cli_double("--target-error", arg, 1e-12, &o->target_error, err);
+    case OPT_TARGET: return noise_parse_target(arg, &o->target_error, err);
     case OPT_CKPT_EVERY: return cli_double("--checkpoint-every", arg, 0.0, &o->checkpoint_every, err);
     case OPT_PROGRESS_EVERY: return cli_double("--progress-every", arg, 0.0, &o->progress_every, err);
     case OPT_PASS: return parse_pass(arg, o, err);
@@ -219,7 +221,7 @@ static int check_combinations(const render_options *o, rr_error *err)
         return rr_fail(err, "--max-batches %d must be at least the %d batches every pixel takes first%s", o->max_batches,
                        o->batches, o->batches_given ? "" : " (--target-error alone takes 4)");
     if (o->passes && o->preview)
-        return rr_fail(err, "--preview is not available for --pass renders (merge first)");
+        return rr_fail(err, "--preview is not available for --pass renders (refrender merge --preview writes it)");
     if (o->frames == 2 && (o->passes || o->checkpoint || o->resume))
         return rr_fail(err, "--frames renders whole frames: render each frame with --frame to use "
                             "--pass, --checkpoint or --resume");
@@ -533,9 +535,6 @@ static void report(const render_options *o, const scene *s, const image *img, in
     if (img->kbuffer_overflows)
         fprintf(stderr, "refrender: warning: %llu samples had more than %d hits within epsilon; "
                         "the farthest were dropped\n", (unsigned long long)img->kbuffer_overflows, KBUFFER_MAX);
-    if (img->gaussians_short)
-        fprintf(stderr, "refrender: warning: %llu samples ran out of memory for their Gaussians and were drawn "
-                        "without some of them\n", (unsigned long long)img->gaussians_short);
     if (img->clamped)
         fprintf(stderr, "refrender: warning: %llu batch estimates exceeded +-%g and were clamped "
                         "(refrender:clampedEstimates)\n", (unsigned long long)img->clamped, FILM_LIMIT);
@@ -554,19 +553,6 @@ static void report_unresolved(const render_options *o, const image *img, const s
         fprintf(stderr, "refrender: warning: exact time left %.3g of the shutter (over all spatial samples) in pieces "
                         "shorter than %g of it, taken with the blended set at their middle\n",
                 share, EXACT_TIME_TOL);
-}
-
-/* --target-error: how many pixels got there (the rest hit --max-batches). */
-static void report_target(const render_options *o, const image *img, attr_list *attrs)
-{
-    size_t n = (size_t)img->width * img->height, reached = 0;
-    for (size_t i = 0; i < n; i++)
-        reached += film_max_stderr(&img->px[i]) <= o->target_error;
-    attrs_set(attrs, ATTR_TARGET_ERROR, "%.17g", o->target_error);
-    attrs_set(attrs, ATTR_TARGET_REACHED, "%zu of %zu pixels", reached, n);
-    if (!o->quiet)
-        fprintf(stderr, "refrender: %zu of %zu pixels reached standard error <= %g; %zu stopped at %u batches\n",
-                reached, n, o->target_error, n - reached, max_batches_of(o));
 }
 
 /* A keyframed scale through zero is held at 1e-9 (animation.h): the
@@ -588,8 +574,11 @@ static void warn_about_settings(const render_options *o, const render_settings *
         return;
     if (k * k != o->spp)
         fprintf(stderr, "refrender: --spp %d rounded to a %dx%d grid (%d samples)\n", o->spp, k, k, k * k);
-    if (rs->smp.kind == SAMPLER_SOBOL && (n & (n - 1)))
-        fprintf(stderr, "refrender: note: sobol works best with a power-of-two spp*tspp (now %lld)\n", (long long)n);
+    /* any count is first-class (src/SAMPLING.md, Counts that are no power of two); only the error
+     * bars' two time halves need an even one */
+    if (rs->smp.kind == SAMPLER_SOBOL && rs->smp.random_strata && n % 2)
+        fprintf(stderr, "refrender: note: sobol's error bars want an even spp*tspp (now %lld): with an odd one a pixel "
+                        "stepping in time can report too small an error\n", (long long)n);
 }
 
 /* The final image, only the crop window's pixels with --crop-window. */
@@ -660,8 +649,8 @@ static int render_one(const scene *s, const shutter *shut, long long frame, acce
     int rc = render_image(s, acc, &run.rs, &img, &hooks, &interrupted, err);
     if (!rc) {
         report(o, s, &img, tty);
-        if (o->target_error > 0)
-            report_target(o, &img, &run.attrs);
+        if (!o->passes) /* a final image: its noise (a pass's state has a share of the batches) */
+            rc = noise_report(&img, o->target_error, max_batches_of(o), o->quiet, &run.attrs, err);
         attrs_set(&run.attrs, ATTR_RENDER_SECONDS, "%.3f", img.seconds);
         attrs_set(&run.attrs, ATTR_RAYS, "%llu", (unsigned long long)img.rays);
         attrs_set(&run.attrs, ATTR_CLAMPED, "%llu", (unsigned long long)img.clamped);
@@ -671,7 +660,8 @@ static int render_one(const scene *s, const shutter *shut, long long frame, acce
             attrs_set(&run.attrs, ATTR_FRAME_RATE, "%.17g", s->frame_rate);
         if (o->frames)
             attrs_set(&run.attrs, ATTR_FRAME, "%lld", frame);
-        rc = write_outputs(&img, &run, output, preview, err);
+        if (!rc)
+            rc = write_outputs(&img, &run, output, preview, err);
     }
     image_free(&img);
     return rc;
@@ -731,16 +721,30 @@ static int frame_shutter(const scene *s, const render_options *o, long long f, s
 }
 
 /* Every frame's shutter is one the scene has, within its camera
- * trajectory, before the first frame is rendered (a sequence must not stop
- * after writing some frames). */
+ * trajectory, and its camera fits the header, before the first frame is
+ * rendered (a sequence must not stop after writing some frames); a
+ * refused frame is named. */
 static int check_frame_shutters(const scene *s, const render_options *o, rr_error *err)
 {
     for (long long f = o->first_frame; f <= o->last_frame; f++) {
         shutter shut;
-        if (frame_shutter(s, o, f, &shut, err) || scene_check_shutter_in_trajectory(s, &shut, err))
+        char frame[128];
+        scene_frame_label(s, f, o->frames, frame, sizeof frame);
+        if (frame_shutter(s, o, f, &shut, err) || scene_check_shutter_in_trajectory(s, &shut, frame, err) ||
+            scene_check_frame_camera(s, &shut, frame, err))
             return -1;
     }
     return 0;
+}
+
+/* Says so when <frames at="trajectory"> moves the shutter as given onto
+ * the poses (the header records each frame's; a run must not be silent
+ * about a shutter it did not render as written). */
+static void note_moved_shutter(const scene *s, const render_options *o, const shutter *first)
+{
+    char note[512];
+    if (o->frames && !o->quiet && scene_frame_shutter_note(s, first, o->first_frame, note, sizeof note))
+        fprintf(stderr, "refrender: note: %s\n", note);
 }
 
 /* One frame or a sequence, sharing the loaded models and their BVHs; only
@@ -763,6 +767,7 @@ static int render_and_write(const scene *s, const render_options *o, const char 
     if (check_frame_outputs(s, o, err) || check_frame_shutters(s, o, err) ||
         next_frame(s, o, o->first_frame, &shut, &fs, err))
         return -1;
+    note_moved_shutter(s, o, &shut);
     double t0, t1; /* every line's exposure (a rolling shutter's reaches past [open, close]) */
     shutter_span(&shut, s->cam.width, s->cam.height, &t0, &t1);
     accel_settings set = {t0, t1, s->epsilon, s->kernel_sigma, !o->no_static_reuse};

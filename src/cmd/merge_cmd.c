@@ -9,22 +9,27 @@
 #include "cmd/cli.h"
 #include "cmd/commands.h"
 #include "io/output.h"
+#include "io/preview.h"
+#include "io/render_attrs.h"
 
 static void merge_usage(FILE *f)
 {
     fputs(
-"usage: refrender merge STATE.exr [STATE.exr ...] -o OUT.exr\n"
+"usage: refrender merge STATE.exr [STATE.exr ...] -o OUT.exr [--preview OUT.png]\n"
 "\n"
 "Combines the render states written by 'refrender --pass K/N' (all N of them)\n"
 "into the final EXR, identical to a single render with all batches. Refuses\n"
 "states of different renders (the build of refrender, hashes of the scene\n"
 "and of every model and .anim file, resolution, sampler, counts, seed,\n"
 "epsilon, sigma, shutter, weight, time factor, batches), of different frames or cameras (frame,\n"
-"frame rate, shutter, worldToCamera, worldToNDC must be equal), overlapping\n"
+"frame rate, shutter, worldToCamera, worldToNDC, the camera's open and close\n"
+"poses and their times must be equal), overlapping\n"
 "or missing batch ranges, incomplete states, and states whose contents no\n"
 "render can produce. The output carries the states' attributes; its\n"
 "refrender:rays and refrender:renderSeconds are the states' sums.\n"
 "  -o, --output F   output EXR (required); written atomically\n"
+"  --preview F      also an 8-bit sRGB preview of the merged image (PNG, by\n"
+"                   extension), as a render's --preview: both files or neither\n"
 "  --quiet          no summary line\n", f);
 }
 
@@ -128,7 +133,42 @@ static int add_state(const char *path, image *merged, attr_list *first, const ch
     return rc;
 }
 
-static int merge_files(char **paths, int n, const char *out, int quiet, rr_error *err)
+/* The noise the merged image reached, as a single render writes it. */
+static int merged_noise(const image *merged, attr_list *attrs, rr_error *err)
+{
+    noise_stats ns;
+    if (noise_stats_of(merged, &ns))
+        return rr_fail(err, "out of memory");
+    attrs_for_noise(attrs, &ns);
+    return 0;
+}
+
+/* The merged image and its preview (NULL: none), both put in place or
+ * neither, as a render's outputs (main.c, write_outputs). */
+static int write_merged(const char *out, const char *preview, const image *merged, const attr_list *attrs,
+                        rr_error *err)
+{
+    int per_batch = atoi(attrs_get(attrs, ATTR_SPP)) * atoi(attrs_get(attrs, ATTR_TSPP));
+    exr_window whole = {merged->width, merged->height, 0, 0, merged->width, merged->height};
+    atomic_set set = {0};
+    int rc = output_write_final_into(&set, out, merged, per_batch, attrs, &whole, err);
+    if (!rc && preview) {
+        image_planes p;
+        rc = image_planes_resolve(merged, per_batch, &p) ? rr_fail(err, "out of memory") : 0;
+        if (!rc) {
+            rc = preview_write_srgb_into(&set, preview, merged->width, merged->height, p.rgba,
+                                         attrs_get(attrs, ATTR_COLOR_SPACE), err);
+            image_planes_free(&p);
+        }
+    }
+    if (rc) {
+        atomic_set_discard(&set);
+        return -1;
+    }
+    return atomic_set_commit(&set, err);
+}
+
+static int merge_files(char **paths, int n, const char *out, const char *preview, int quiet, rr_error *err)
 {
     batch_range *ranges = calloc((size_t)n, sizeof *ranges);
     image merged = {0};
@@ -140,27 +180,41 @@ static int merge_files(char **paths, int n, const char *out, int quiet, rr_error
     if (!rc)
         rc = check_ranges(ranges, n, (uint32_t)strtoul(attrs_get(&attrs, ATTR_BATCHES), NULL, 10), err);
     if (!rc) {
-        int per_batch = atoi(attrs_get(&attrs, ATTR_SPP)) * atoi(attrs_get(&attrs, ATTR_TSPP));
         attrs_set(&attrs, ATTR_COMMAND, "refrender merge (%d states)", n);
-        rc = output_write_final(out, &merged, per_batch, &attrs, err);
+        rc = merged_noise(&merged, &attrs, err) || write_merged(out, preview, &merged, &attrs, err);
     }
     if (!rc && !quiet)
-        fprintf(stderr, "refrender merge: %d states -> %s\n", n, out);
+        fprintf(stderr, "refrender merge: %d states -> %s%s%s\n", n, out, preview ? " and " : "",
+                preview ? preview : "");
     image_free(&merged);
     free(ranges);
     return rc;
 }
 
+/* --preview as a render's: a writable name of a format OpenImageIO writes,
+ * checked before anything is merged, neither a state nor -o's file. */
+static int check_preview(const char *out, const char *preview, char *const *states, int n, rr_error *err)
+{
+    if (cli_check_writable("--preview", preview, err) || preview_check_format(preview, err) ||
+        cli_refuse_overwriting_inputs(preview, states, n, err))
+        return -1;
+    if (cli_same_file(out, preview))
+        return rr_fail(err, "-o and --preview name the same file %s", preview);
+    return 0;
+}
+
 int cmd_merge(int argc, char **argv)
 {
     static const struct option longopts[] = {{"output", required_argument, 0, 'o'},
+                                             {"preview", required_argument, 0, 'p'},
                                              {"quiet", no_argument, 0, 'q'},
                                              {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
-    const char *out = NULL;
+    const char *out = NULL, *preview = NULL;
     int quiet = 0, c;
     while ((c = getopt_long(argc, argv, "ho:", longopts, NULL)) != -1) {
         if (c == 'h') { merge_usage(stdout); return 0; }
         if (c == 'o') out = optarg;
+        else if (c == 'p') preview = optarg;
         else if (c == 'q') quiet = 1;
         else {
             cli_suggest_option("refrender merge", argv[optind - 1], longopts);
@@ -173,9 +227,10 @@ int cmd_merge(int argc, char **argv)
         return 2;
     }
     rr_error err = {{0}};
-    if (cli_check_exr_name("-o", out, 0, &err) || cli_check_writable("-o", out, &err) ||
+    if (cli_check_exr_name("-o", out, 1, &err) || cli_check_writable("-o", out, &err) ||
         cli_refuse_overwriting_inputs(out, argv + optind, argc - optind, &err) ||
-        merge_files(argv + optind, argc - optind, out, quiet, &err)) {
+        (preview && check_preview(out, preview, argv + optind, argc - optind, &err)) ||
+        merge_files(argv + optind, argc - optind, out, preview, quiet, &err)) {
         fprintf(stderr, "refrender merge: %s\n", err.msg);
         return 1;
     }

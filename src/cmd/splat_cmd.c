@@ -24,6 +24,8 @@ static void splat_usage(FILE *f)
 "Renders a scene's point models with one of the splatting methods of Wolf 2008\n"
 "(src/SPLAT.md), pixel centres only, into refrender's EXR layout (R G B A,\n"
 "samples; refrender:method, refrender:methodParameters, refrender:fragments).\n"
+"Surfel (pointModel) objects only: scenes with Gaussian models or spheres are\n"
+"refused; so are the times the ray tracer refuses (an object out of reach).\n"
 "Methods:\n"
 "  instant     the static three-pass splatting of one instant (thesis 4.1.1,\n"
 "              4.2.1, 4.2.3); with --filter none it equals\n"
@@ -35,6 +37,10 @@ static void splat_usage(FILE *f)
 "  volumetric  N instants of volumetric kernels: each splat convolved with a 1D\n"
 "              Gaussian along its velocity relative to the camera (3.6.3, 4.1.2,\n"
 "              4.2.2, App. C), depth tested at its source point, shaded per kernel\n"
+"  guan-mueller  Guan and Mueller 2004's motion hints (not the thesis's): the\n"
+"              object sharp at the shutter's close, composited front to back,\n"
+"              over one trail splat per front-facing point (the disk's screen\n"
+"              covariance plus its motion vector's, centred mid-vector)\n"
 "Options:\n"
 "  --filter F         none (default), botsch (the EWA approximation, eq. 4.13) or\n"
 "                     ewa (Ren, Pfister, Zwicker 2002, eq. 7, per-pixel normalised)\n"
@@ -48,6 +54,8 @@ static void splat_usage(FILE *f)
 "  --sigma-t X        volumetric: the 1D Gaussian's standard deviation in units\n"
 "                     of the slice |v| dt a kernel stands for (default 0.2887 =\n"
 "                     1/sqrt 12, a uniform slice's)\n"
+"  --trails T         guan-mueller: blend (default: the trails composited front\n"
+"                     to back) or add (summed, alpha the clamped sum)\n"
 "  --times M          midpoint (default: (k + 1/2) / N of the shutter, as\n"
 "                     scripts/nframe_average.py), stratified or random\n"
 "  --seed N           stratified and random instants (default 1)\n"
@@ -67,11 +75,12 @@ typedef struct {
     splat_settings set;
     const char *scene, *output, *preview;
     int width, height, quiet, time_set, samples_set, buckets_set, shutter_set, filter_set, alpha_set, sigma_t_set;
+    int trails_set, times_set, seed_set;
     double eps, sigma, shutter_open, shutter_close;
     scene_params params;
 } splat_options;
 
-enum { OPT_ALPHA = 300, OPT_SIGMA_T, OPT_FILTER = 256, OPT_TIME, OPT_SAMPLES, OPT_BUCKETS, OPT_TIMES, OPT_SEED, OPT_SHUTTER, OPT_RES, OPT_EPS,
+enum { OPT_ALPHA = 300, OPT_SIGMA_T, OPT_TRAILS, OPT_FILTER = 256, OPT_TIME, OPT_SAMPLES, OPT_BUCKETS, OPT_TIMES, OPT_SEED, OPT_SHUTTER, OPT_RES, OPT_EPS,
        OPT_SIGMA, OPT_PREVIEW, OPT_QUIET };
 
 static int parse_choice(const char *opt, const char *arg, const char *const *names, int n, int *out, rr_error *err)
@@ -87,7 +96,7 @@ static int parse_choice(const char *opt, const char *arg, const char *const *nam
 static int parse_option(int c, const char *arg, splat_options *o, rr_error *err)
 {
     static const char *const filters[] = {"none", "botsch", "ewa"}, *const times[] = {"midpoint", "stratified", "random"};
-    static const char *const alphas[] = {"thesis", "normalized"};
+    static const char *const alphas[] = {"thesis", "normalized"}, *const trails[] = {"blend", "add"};
     int v = 0;
     switch (c) {
     case OPT_FILTER:
@@ -96,12 +105,15 @@ static int parse_option(int c, const char *arg, splat_options *o, rr_error *err)
     case OPT_ALPHA:
         o->alpha_set = 1;
         return parse_choice("--alpha", arg, alphas, 2, &v, err) ? -1 : (o->set.alpha = v, 0);
+    case OPT_TRAILS:
+        o->trails_set = 1;
+        return parse_choice("--trails", arg, trails, 2, &v, err) ? -1 : (o->set.trails = v, 0);
     case OPT_SIGMA_T: o->sigma_t_set = 1; return cli_double("--sigma-t", arg, 1e-6, &o->set.sigma_t, err);
-    case OPT_TIMES: return parse_choice("--times", arg, times, 3, &v, err) ? -1 : (o->set.times = v, 0);
+    case OPT_TIMES: o->times_set = 1; return parse_choice("--times", arg, times, 3, &v, err) ? -1 : (o->set.times = v, 0);
     case OPT_TIME: o->time_set = 1; return cli_double("--time", arg, -INFINITY, &o->set.instant, err);
     case OPT_SAMPLES: o->samples_set = 1; return cli_int("--samples", arg, 1, 100000, &o->set.samples, err);
     case OPT_BUCKETS: o->buckets_set = 1; return cli_int("--buckets", arg, 1, 100000, &o->set.buckets, err);
-    case OPT_SEED: return cli_u64("--seed", arg, &o->set.seed, err);
+    case OPT_SEED: o->seed_set = 1; return cli_u64("--seed", arg, &o->set.seed, err);
     case OPT_SHUTTER: o->shutter_set = 1; return cli_shutter(arg, &o->shutter_open, &o->shutter_close, err);
     case OPT_RES: return cli_resolution("--res", arg, &o->width, &o->height, err);
     case OPT_EPS: return cli_double("--eps", arg, 0.0, &o->eps, err);
@@ -116,17 +128,24 @@ static int parse_option(int c, const char *arg, splat_options *o, rr_error *err)
 
 static int parse_method(const char *name, splat_method *m, rr_error *err)
 {
-    static const char *const names[] = {"instant", "accum", "bucket", "volumetric"};
-    for (int i = 0; i < 4; i++)
+    static const char *const names[] = {"instant", "accum", "bucket", "volumetric", "guan-mueller"};
+    for (int i = 0; i < 5; i++)
         if (!strcmp(name, names[i]))
             return *m = (splat_method)i, 0;
-    return rr_fail(err, "unknown method '%s': expected instant, accum, bucket or volumetric", name);
+    return rr_fail(err, "unknown method '%s': expected instant, accum, bucket, volumetric or guan-mueller", name);
 }
 
 /* Options that mean nothing for the method chosen are refused, not ignored. */
 static int check_combinations(const splat_options *o, rr_error *err)
 {
     splat_method m = o->set.method;
+    if (m == SPLAT_GUAN_MUELLER && (o->samples_set || o->buckets_set || o->time_set || o->filter_set || o->alpha_set ||
+                                    o->sigma_t_set || o->times_set || o->seed_set))
+        return rr_fail(err, "guan-mueller draws the object at the shutter's close and one trail per point over the "
+                            "shutter: it takes --trails and --shutter, not --samples, --buckets, --time, --filter, "
+                            "--alpha, --sigma-t, --times or --seed");
+    if (m != SPLAT_GUAN_MUELLER && o->trails_set)
+        return rr_fail(err, "--trails is for guan-mueller");
     if (m == SPLAT_INSTANT && (o->samples_set || o->buckets_set))
         return rr_fail(err, "instant splats one instant: --samples and --buckets are for accum and bucket");
     if (m != SPLAT_INSTANT && o->time_set)
@@ -154,7 +173,7 @@ static int parse_args(int argc, char **argv, splat_options *o)
         {"eps", required_argument, 0, OPT_EPS}, {"sigma", required_argument, 0, OPT_SIGMA},
         {"output", required_argument, 0, 'o'}, {"preview", required_argument, 0, OPT_PREVIEW},
         {"alpha", required_argument, 0, OPT_ALPHA}, {"sigma-t", required_argument, 0, OPT_SIGMA_T},
-        {"quiet", no_argument, 0, OPT_QUIET}, {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
+        {"trails", required_argument, 0, OPT_TRAILS}, {"quiet", no_argument, 0, OPT_QUIET}, {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
     rr_error err;
     int c;
     while ((c = getopt_long(argc, argv, "hD:o:", longopts, NULL)) != -1) {
@@ -221,7 +240,9 @@ static void method_attrs(attr_list *a, const splat_options *o, const splat_resul
     const splat_settings *set = &o->set;
     char params[256];
     int len = snprintf(params, sizeof params, "filter=%s", splat_filter_name(set->filter));
-    if (set->method == SPLAT_INSTANT)
+    if (set->method == SPLAT_GUAN_MUELLER)
+        snprintf(params, sizeof params, "trails=%s flash=close", splat_trails_name(set->trails));
+    else if (set->method == SPLAT_INSTANT)
         snprintf(params + len, sizeof params - (size_t)len, " time=%.17g", set->instant);
     else
         len += snprintf(params + len, sizeof params - (size_t)len, " samples=%d times=%s seed=%llu", set->samples,
@@ -247,7 +268,7 @@ static int write_outputs(const splat_options *o, const scene *s, const splat_res
     if (o->set.method == SPLAT_INSTANT)
         shutter_at_instant(&rs.shut, o->set.instant);
     rs.filter = PIXEL_FILTER_POINT; /* pixel centres only */
-    rs.smp.tspp = o->set.method == SPLAT_INSTANT ? 1 : o->set.samples;
+    rs.smp.tspp = o->set.method == SPLAT_INSTANT || o->set.method == SPLAT_GUAN_MUELLER ? 1 : o->set.samples;
     attr_list attrs = {0};
     attrs_for_render(&attrs, s, &rs, 1, cmdline);
     method_attrs(&attrs, o, r, seconds);

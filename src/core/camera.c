@@ -83,23 +83,31 @@ int camera_principal_usable(double focal, double centre, double size)
            fits_float_header(centre / size);
 }
 
+int camera_matrix_fits_header(double m[4][4], double *beyond)
+{
+    for (int r = 0; r < 4; r++)
+        for (int k = 0; k < 4; k++)
+            if (!fits_float_header(m[r][k])) {
+                *beyond = m[r][k];
+                return 0;
+            }
+    return 1;
+}
+
 /* Every entry of the header's worldToCamera and worldToNDC must be a finite
  * float32: the intrinsics' own rules bound the projection's scale, but a far
  * position (1e9 with a focal length of 1e36) or a tiny XML fov still carry past
  * float's range in the product and would be written as infinity. */
 static int header_matrices_fit(const camera *c, rr_error *err)
 {
-    double view[4][4], proj[4][4], ndc[4][4];
+    double view[4][4], proj[4][4], ndc[4][4], beyond;
     camera_world_to_camera(c, view);
     camera_projection(c, 1.0, 1.0, proj);
     mat4_mul(proj, view, ndc);
-    for (int r = 0; r < 4; r++)
-        for (int k = 0; k < 4; k++)
-            if (!fits_float_header(view[r][k]) || !fits_float_header(ndc[r][k]))
-                return rr_fail(err, "camera at position (%g, %g, %g) with fov %g degrees: its worldToCamera "
-                               "or worldToNDC holds %g, beyond the EXR header's float32", c->position.x,
-                               c->position.y, c->position.z, c->fov_degrees,
-                               fits_float_header(view[r][k]) ? ndc[r][k] : view[r][k]);
+    if (!camera_matrix_fits_header(view, &beyond) || !camera_matrix_fits_header(ndc, &beyond))
+        return rr_fail(err, "camera at position (%g, %g, %g) with fov %g degrees: its worldToCamera "
+                       "or worldToNDC holds %g, beyond the EXR header's float32", c->position.x,
+                       c->position.y, c->position.z, c->fov_degrees, beyond);
     return 0;
 }
 

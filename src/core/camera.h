@@ -57,6 +57,11 @@ double camera_principal_offset(double size, double centre);
 int camera_focal_usable(double focal, double size);
 int camera_principal_usable(double focal, double centre, double size);
 
+/* Whether every entry of m fits the EXR header's float32 with room to spare
+ * (the rule camera_prepare applies to the rest pose's worldToCamera and
+ * worldToNDC); 0 with *beyond the first entry that does not. */
+int camera_matrix_fits_header(double m[4][4], double *beyond);
+
 /* The prepared camera at rest. */
 void camera_view_rest(const camera *c, camera_view *v);
 

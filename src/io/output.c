@@ -64,6 +64,11 @@ static const struct {
     {ATTR_EXACT_UNRESOLVED_SHARE, RR_ATTR_TEXT, ROLE_KEPT},
     {ATTR_WORLD_TO_CAMERA, RR_ATTR_M44F, ROLE_EQUAL},
     {ATTR_WORLD_TO_NDC, RR_ATTR_M44F, ROLE_EQUAL},
+    {ATTR_CAMERA_TIME, RR_ATTR_DOUBLE, ROLE_EQUAL},
+    {ATTR_WORLD_TO_CAMERA_OPEN, RR_ATTR_M44F, ROLE_EQUAL},
+    {ATTR_CAMERA_TIME_OPEN, RR_ATTR_DOUBLE, ROLE_EQUAL},
+    {ATTR_WORLD_TO_CAMERA_CLOSE, RR_ATTR_M44F, ROLE_EQUAL},
+    {ATTR_CAMERA_TIME_CLOSE, RR_ATTR_DOUBLE, ROLE_EQUAL},
     {ATTR_SHUTTER_OPEN, RR_ATTR_DOUBLE, ROLE_EQUAL},
     {ATTR_SHUTTER_CLOSE, RR_ATTR_DOUBLE, ROLE_EQUAL},
     {ATTR_FRAME, RR_ATTR_INT, ROLE_EQUAL},
@@ -76,6 +81,12 @@ static const struct {
     {ATTR_TARGET_ERROR, RR_ATTR_DOUBLE, ROLE_WRITTEN},
     {ATTR_TARGET_REACHED, RR_ATTR_TEXT, ROLE_WRITTEN},
     {ATTR_CROP_WINDOW, RR_ATTR_TEXT, ROLE_WRITTEN},
+    {ATTR_BATCHES_MIN, RR_ATTR_INT, ROLE_WRITTEN},
+    {ATTR_BATCHES_MAX, RR_ATTR_INT, ROLE_WRITTEN},
+    {ATTR_STDERR_MEAN, RR_ATTR_DOUBLE, ROLE_WRITTEN},
+    {ATTR_STDERR_P99, RR_ATTR_DOUBLE, ROLE_WRITTEN},
+    {ATTR_STDERR_MAX, RR_ATTR_DOUBLE, ROLE_WRITTEN},
+    {ATTR_STDERR_REACHED, RR_ATTR_TEXT, ROLE_WRITTEN},
     {ATTR_METHOD, RR_ATTR_TEXT, ROLE_WRITTEN},
     {ATTR_METHOD_PARAMETERS, RR_ATTR_TEXT, ROLE_WRITTEN},
     {ATTR_FRAGMENTS, RR_ATTR_DOUBLE, ROLE_WRITTEN},
@@ -333,6 +344,21 @@ int output_write_state_into(atomic_set *set, const char *path, const image *img,
     return rc;
 }
 
+/* A file without the identity attribute `key`: a state an older build
+ * wrote (it has refrender:state, but identities grew since: the build id,
+ * camera matrices, ...), or no refrender state at all. */
+static int missing_identity(const char *path, const char *key, rr_error *err)
+{
+    char range[128], build[ATTR_TEXT_MAX];
+    if (exr_read_string_attr(path, ATTR_STATE, range, sizeof range, NULL))
+        return rr_fail(err, "%s: not a refrender render state (no %s)", path, key);
+    if (exr_read_string_attr(path, ATTR_BUILD, build, sizeof build, NULL))
+        snprintf(build, sizeof build, "older than build ids");
+    return rr_fail(err, "%s: a render state from an older build of refrender (%s '%.80s'; it has no %s): merge or "
+                        "resume it with the build that wrote it, or render it again with this one",
+                   path, ATTR_BUILD, build, key);
+}
+
 static int read_attrs(const char *path, attr_list *a, rr_error *err)
 {
     a->n = 0;
@@ -343,7 +369,7 @@ static int read_attrs(const char *path, attr_list *a, rr_error *err)
         const char *key = attr_table[k].key;
         int rc = exr_read_string_attr(path, key, buf, sizeof buf, err);
         if (rc)
-            return rc > 0 ? rr_fail(err, "%s: not a refrender render state (no %s)", path, key) : -1;
+            return rc > 0 ? missing_identity(path, key, err) : -1;
         attrs_set(a, key, "%s", buf);
     }
     for (int k = 0; k < ATTRS_KNOWN; k++) { /* the optional ones */

@@ -16,7 +16,7 @@
 #include "formats/exr.h"
 #include "render/film.h"
 
-#define ATTR_MAX 56
+#define ATTR_MAX 80
 
 /* The name of every attribute refrender writes (README, Output). Their
  * kinds and what resuming and merging do with each are output.c's table,
@@ -55,6 +55,11 @@
 #define ATTR_EXACT_UNRESOLVED_SHARE "refrender:exactUnresolvedShare"
 #define ATTR_WORLD_TO_CAMERA "worldToCamera"
 #define ATTR_WORLD_TO_NDC "worldToNDC"
+#define ATTR_CAMERA_TIME "refrender:cameraTime"
+#define ATTR_WORLD_TO_CAMERA_OPEN "refrender:worldToCameraOpen"
+#define ATTR_CAMERA_TIME_OPEN "refrender:cameraTimeOpen"
+#define ATTR_WORLD_TO_CAMERA_CLOSE "refrender:worldToCameraClose"
+#define ATTR_CAMERA_TIME_CLOSE "refrender:cameraTimeClose"
 #define ATTR_SHUTTER_OPEN "refrender:shutterOpen"
 #define ATTR_SHUTTER_CLOSE "refrender:shutterClose"
 #define ATTR_FRAME "refrender:frame"
@@ -67,6 +72,14 @@
 #define ATTR_TARGET_ERROR "refrender:targetError"
 #define ATTR_TARGET_REACHED "refrender:targetReached"
 #define ATTR_CROP_WINDOW "refrender:cropWindow"
+/* the noise a final image reached (render/noise.h): batches held per pixel,
+ * and each pixel's largest RGB standard error over the image */
+#define ATTR_BATCHES_MIN "refrender:batchesMin"
+#define ATTR_BATCHES_MAX "refrender:batchesMax"
+#define ATTR_STDERR_MEAN "refrender:stderrMean"
+#define ATTR_STDERR_P99 "refrender:stderrP99"
+#define ATTR_STDERR_MAX "refrender:stderrMax"
+#define ATTR_STDERR_REACHED "refrender:stderrReached"
 /* refrender splat (src/SPLAT.md): the method, its parameters and its cost */
 #define ATTR_METHOD "refrender:method"
 #define ATTR_METHOD_PARAMETERS "refrender:methodParameters"

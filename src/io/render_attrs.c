@@ -122,21 +122,25 @@ static void set_matrix(attr_list *a, const char *key, double m[4][4])
     attrs_set(a, key, "%s", buf);
 }
 
-/* The rest-pose camera (no camera motion) as pbrt-v4 and OpenEXR's
- * standard attributes name it. Camera space: x right, y up, z forward (the
- * view direction; left-handed, as pbrt's). NDC: x = raster x / width,
- * y = raster y / height (0, 0 the top-left image corner, as refrender's
- * raster), z = 1 / depth, after dividing by w = depth. */
-static void camera_matrices(attr_list *a, const camera *cam)
+/* The frame's camera as pbrt-v4 and OpenEXR's standard attributes name it,
+ * at the middle of the frame's exposure, and refrender's at its first and
+ * last instant (scene_frame_camera_of: the pose export writes). Camera
+ * space: x right, y up, z forward (the view direction; left-handed, as
+ * pbrt's). NDC: x = raster x / width, y = raster y / height (0, 0 the
+ * top-left image corner, as refrender's raster), z = 1 / depth, after
+ * dividing by w = depth. s: the scene as the frame renders it. */
+static void camera_matrices(attr_list *a, const scene *s, const shutter *sh)
 {
-    double view[4][4], proj[4][4], ndc[4][4];
-    camera_world_to_camera(cam, view);
-    camera_projection(cam, 1.0, 1.0, proj);
-    mat4_mul(proj, view, ndc);
-    set_matrix(a, ATTR_WORLD_TO_CAMERA, view);
-    set_matrix(a, ATTR_WORLD_TO_NDC, ndc);
+    scene_frame_camera fc;
+    scene_frame_camera_of(s, sh, &fc);
+    set_matrix(a, ATTR_WORLD_TO_CAMERA, fc.world_to_camera[1]);
+    set_matrix(a, ATTR_WORLD_TO_NDC, fc.world_to_ndc);
+    attrs_set(a, ATTR_CAMERA_TIME, "%.17g", fc.time[1]);
+    set_matrix(a, ATTR_WORLD_TO_CAMERA_OPEN, fc.world_to_camera[0]);
+    attrs_set(a, ATTR_CAMERA_TIME_OPEN, "%.17g", fc.time[0]);
+    set_matrix(a, ATTR_WORLD_TO_CAMERA_CLOSE, fc.world_to_camera[2]);
+    attrs_set(a, ATTR_CAMERA_TIME_CLOSE, "%.17g", fc.time[2]);
 }
-
 
 void attrs_for_render(attr_list *a, const scene *s, const render_settings *rs, uint32_t total_batches,
                       const char *command)
@@ -160,7 +164,7 @@ void attrs_for_render(attr_list *a, const scene *s, const render_settings *rs, u
     attrs_set(a, ATTR_SHUTTER, "%.17g %.17g", rs->shut.open, rs->shut.close);
     attrs_set(a, ATTR_SHUTTER_OPEN, "%.17g", rs->shut.open);
     attrs_set(a, ATTR_SHUTTER_CLOSE, "%.17g", rs->shut.close);
-    camera_matrices(a, &s->cam);
+    camera_matrices(a, s, &rs->shut);
     set_identity_text(a, ATTR_WEIGHT_FUNCTION, ATTR_WEIGHT_HASH, weight_text, &rs->shut);
     char rolling[256];
     shutter_rolling_text(&rs->shut, rolling, sizeof rolling);
@@ -180,3 +184,18 @@ void attrs_for_render(attr_list *a, const scene *s, const render_settings *rs, u
     attrs_set(a, ATTR_SOFTWARE, "refrender %s", RR_VERSION);
 }
 
+
+void attrs_for_noise(attr_list *a, const noise_stats *n)
+{
+    if (!noise_has_stderr(n)) /* one batch: no standard errors, nothing to say */
+        return;
+    char text[160];
+    noise_text(n, text, sizeof text);
+    attrs_set(a, ATTR_BATCHES_MIN, "%u", n->batches_min);
+    attrs_set(a, ATTR_BATCHES_MAX, "%u", n->batches_max);
+    attrs_set(a, ATTR_STDERR_MEAN, "%.9g", n->mean);
+    attrs_set(a, ATTR_STDERR_P99, "%.9g", n->p99);
+    attrs_set(a, ATTR_STDERR_MAX, "%.9g", n->max);
+    attrs_set(a, ATTR_STDERR_REACHED, "%s, each pixel's largest RGB standard error; %u to %u batches a pixel", text,
+              n->batches_min, n->batches_max);
+}

@@ -5,6 +5,7 @@
 #define RR_RENDER_ATTRS_H
 
 #include "io/output.h"
+#include "render/noise.h"
 #include "render/render.h"
 
 /* The build's identity: the SHA-256 of the code under src/, computed by the
@@ -13,5 +14,11 @@ const char *render_build_id(void);
 
 void attrs_for_render(attr_list *a, const scene *s, const render_settings *rs, uint32_t total_batches,
                       const char *command);
+
+/* A final image's noise (render/noise.h): the batch range its pixels hold
+ * and, with standard errors, their mean, 99th percentile and max in value
+ * units, and as text in 8-bit levels too. A render and a merge of its
+ * passes write the same. */
+void attrs_for_noise(attr_list *a, const noise_stats *n);
 
 #endif

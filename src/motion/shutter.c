@@ -1,5 +1,6 @@
 #include "motion/shutter.h"
 
+#include <float.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -130,6 +131,12 @@ int shutter_check(const shutter *s, rr_error *err)
         return rr_fail(err, "shutter close (%g) must be greater than open (%g)", s->close, s->open);
     if (!isfinite(s->close - s->open)) /* every time and weight computed from it would overflow */
         return rr_fail(err, "shutter [%g, %g]: its length overflows a double", s->open, s->close);
+    /* A subnormal length keeps fewer significant bits than a double's 53: a
+     * pixel's stratified instants open + length * u round onto fewer distinct
+     * values, and every quotient by the length loses precision. */
+    if (s->close - s->open < DBL_MIN)
+        return rr_fail(err, "shutter [%g, %g]: its length %g is subnormal (below %g)", s->open, s->close,
+                       s->close - s->open, DBL_MIN);
     if (!isfinite(s->center) || !isfinite(s->rate) || s->rate < 0)
         return rr_fail(err, "shutter center must be finite and rate >= 0");
     if (s->kind == WEIGHT_TABLE) {

@@ -53,7 +53,6 @@ typedef struct {
     int width, height;
     pixel_state *px;        /* width * height; may hold batches from a checkpoint */
     uint64_t rays, kbuffer_overflows, clamped;
-    uint64_t gaussians_short; /* samples that dropped Gaussians for lack of memory */
     uint64_t static_traversals; /* traversals of the static objects: one per raster position when
                                    a fixed camera's samples share them (static reuse), one per
                                    sample otherwise; statistics, not written to any file */

@@ -57,8 +57,8 @@ typedef struct {
     uint64_t *candidate_order;         /* their evaluation order, with sorting space */
     size_t candidate_order_cap;
     size_t instant_cap_reached;        /* the largest capacity of an instant before the last reset */
-    uint64_t short_samples;            /* samples that dropped Gaussians for lack of memory (hits.dropped > 0);
-                                        * statistics: counts on across samples */
+    uint64_t short_samples;            /* samples that dropped Gaussians for lack of memory (hits.dropped > 0),
+                                        * counted on across samples: a batch that adds one fails (gaussian_batch) */
 } gaussian_integrator;
 
 /* arena: the arrays' (NULL: an arena of its own), outliving g. */

@@ -36,15 +36,16 @@ static void to_blur_space(blur_space blur, double rgba[4])
  * to the count whenever each time stratum holds one sample, when the ratio
  * is the plain unbiased mean; dividing by their sum keeps a pixel of one
  * constant colour exactly that colour in every batch. */
-void integrator_sampled_batch(void *thread, const integrator_context *ctx, const pixel_samples *ps,
-                              integrator_group_fn *group, double est[4], integrator_counts *c)
+int integrator_sampled_batch(void *thread, const integrator_context *ctx, const pixel_samples *ps,
+                             integrator_group_fn *group, double est[4], integrator_counts *c)
 {
     double acc[4] = {0, 0, 0, 0}, weight = 0;
     for (int first = 0; first < ps->count;) {
+        if (ctx->cancel && *ctx->cancel) /* (a group is at most ACCEL_PACKET samples: microseconds) */
+            return EXACT_INTERRUPTED; /* (its rays uncounted: a resumed render counts the batch's once) */
         double rgba[ACCEL_PACKET][4];
         int end = group(thread, ctx, ps, first, rgba, c);
         RR_DCHECK(end > first && end - first <= ACCEL_PACKET);
-        c->rays += (uint64_t)(end - first);
         for (int k = 0; k < end - first; k++) {
             double w = ps->w[first + k];
             to_blur_space(ctx->rs->blur, rgba[k]);
@@ -57,4 +58,6 @@ void integrator_sampled_batch(void *thread, const integrator_context *ctx, const
     RR_DCHECK(ps->count > 0 && weight > 0);
     for (int ch = 0; ch < 4; ch++)
         est[ch] = acc[ch] / weight;
+    c->rays += (uint64_t)ps->count;
+    return 0;
 }

@@ -32,6 +32,9 @@ typedef struct {
     exact_plan *exact;     /* with rs->exact_time */
     int camera_moves;      /* every sample traces its own world ray */
     camera_view rest_view; /* the camera at rest (Gaussian hits, still camera) */
+    /* render_image's cancel flag (NULL: never cancelled): a batch checks it
+     * as it goes, so a stop waits for no batch, however many samples it has */
+    volatile sig_atomic_t *cancel;
 } integrator_context;
 
 /* One batch of one pixel: count samples at raster (x[i], y[i]), time t[i],
@@ -46,7 +49,6 @@ typedef struct {
     uint64_t rays;              /* samples estimated */
     uint64_t overflows;         /* samples with more than KBUFFER_MAX hits to blend */
     uint64_t static_traversals; /* traversals of the static objects (image.static_traversals) */
-    uint64_t gaussians_short;   /* samples that dropped Gaussians for lack of memory */
     double unresolved;          /* exact time: exact_stats.unresolved */
 } integrator_counts;
 
@@ -76,10 +78,12 @@ extern const integrator surfel_integrator_ops, gaussian_integrator_ops, exact_in
  * of the samples `group` estimates. group(thread, ctx, ps, first, rgba, c)
  * estimates the samples from `first` to the end of a group it chooses (at
  * most ACCEL_PACKET), into rgba[0], rgba[1], ..., and returns the index
- * after the group. */
+ * after the group. Returns 0, or EXACT_INTERRUPTED when *ctx->cancel became
+ * non-zero before the batch's last group (no estimate: the pixel keeps the
+ * batches it had, and a resumed render draws this batch again whole). */
 typedef int integrator_group_fn(void *thread, const integrator_context *ctx, const pixel_samples *ps, int first,
                                 double (*rgba)[4], integrator_counts *c);
-void integrator_sampled_batch(void *thread, const integrator_context *ctx, const pixel_samples *ps,
+int integrator_sampled_batch(void *thread, const integrator_context *ctx, const pixel_samples *ps,
                               integrator_group_fn *group, double est[4], integrator_counts *c);
 
 #endif

@@ -1,5 +1,6 @@
 #include "render/render.h"
 
+#include <math.h>
 #include <pthread.h>
 #include <stdatomic.h>
 #include <stdlib.h>
@@ -48,17 +49,20 @@ typedef struct {
     image *img;
     int tiles_x, tiles_y, ntiles;
     uint32_t round; /* pixels holding `round` batches render batch batch_begin + round */
+    /* progress: pixel batches the pixels held when the render began, and
+     * those they are expected to hold at its end (render_planned_pixel_batches) */
+    uint64_t held_at_start, planned;
     atomic_int next_tile, workers_left;
     atomic_uint_fast64_t rays, overflows, clamped, pixel_batches, static_traversals;
-    atomic_uint_fast64_t gaussians_short; /* samples that dropped Gaussians for lack of memory */
     atomic_int scratch_failed; /* a worker could not allocate its scratch */
-    atomic_int exact_failed;   /* an exact sample failed (see exact_status): the render stops */
-    int exact_status, exact_px, exact_py; /* under lock: the first such failure and its pixel */
+    atomic_int exact_failed;   /* a batch failed (see exact_status): the render stops */
+    int exact_status, exact_px, exact_py; /* under lock: the first failure (an EXACT_ status) and its pixel */
     double exact_unresolved;   /* under lock: exact_stats.unresolved summed over tiles */
     pthread_mutex_t lock;
     pthread_cond_t cond;  /* to the coordinator: a worker is ready or done with a round; a pause's end */
     pthread_cond_t start; /* to the workers: a round begins, or the render ends */
-    int paused, active; /* under lock: pause requested; workers inside a tile */
+    atomic_int paused; /* set under lock: a checkpoint is to be written (pixel_pause_point reads it between pixels) */
+    int active;        /* under lock: workers inside a tile and not stepped out for a checkpoint */
     /* the pool (under lock): workers started and ready (their scratch made),
      * rounds begun, and the end of the render */
     pthread_t *tids;
@@ -99,9 +103,9 @@ static int batch_samples(const render_job *job, int px, int py, uint32_t batch, 
     return count;
 }
 
-/* Keeps the first failed exact sample (an interrupt is not a failure: the
- * cancel flag already stops the render). */
-static void exact_failed(render_job *job, int status, int px, int py)
+/* Keeps the first failed batch (an interrupt is not a failure: the cancel
+ * flag already stops the render). */
+static void batch_failed(render_job *job, int status, int px, int py)
 {
     if (status == EXACT_INTERRUPTED)
         return;
@@ -150,7 +154,7 @@ static int pixel_batch(render_job *job, int x, int y, pixel_state *p, thread_scr
     return rc;
 }
 
-/* A tile's counts into the job's. */
+/* A tile's counts (or those of its pixels done so far) into the job's. */
 static void add_counts(render_job *job, const integrator_counts *c, uint64_t clamped, uint64_t done)
 {
     pthread_mutex_lock(&job->lock);
@@ -161,7 +165,32 @@ static void add_counts(render_job *job, const integrator_counts *c, uint64_t cla
     atomic_fetch_add(&job->clamped, clamped);
     atomic_fetch_add(&job->pixel_batches, done);
     atomic_fetch_add(&job->static_traversals, c->static_traversals);
-    atomic_fetch_add(&job->gaussians_short, c->gaussians_short);
+}
+
+/* Between two pixels of a tile: stops when the render is cancelled or a
+ * batch failed, and steps out while a checkpoint is written, so that
+ * neither waits for the rest of the tile (a tile at a high sample count
+ * once held a SIGTERM 12-18 s, longer than Slurm's KillWait of 30 s under
+ * ASan: issue 56.7). Pixels are independent states, so a checkpoint taken
+ * between two of them resumes as one taken between tiles. */
+static int pixel_pause_point(render_job *job, integrator_counts *c, uint64_t *clamped, uint64_t *done)
+{
+    if (*job->cancel || atomic_load(&job->exact_failed))
+        return 1;
+    if (!atomic_load(&job->paused))
+        return 0;
+    /* the tile's counts so far go into the checkpoint with its pixels'
+     * batches: a resumed render then counts each batch's rays once */
+    add_counts(job, c, *clamped, *done);
+    *c = (integrator_counts){0}, *clamped = *done = 0;
+    pthread_mutex_lock(&job->lock);
+    job->active--;
+    pthread_cond_broadcast(&job->cond);
+    while (job->paused && !*job->cancel)
+        pthread_cond_wait(&job->cond, &job->lock);
+    job->active++; /* (work_round's leave_work takes it back, stopped or not) */
+    pthread_mutex_unlock(&job->lock);
+    return *job->cancel != 0;
 }
 
 static void render_tile(render_job *job, int tile, thread_scratch *scr)
@@ -178,9 +207,11 @@ static void render_tile(render_job *job, int tile, thread_scratch *scr)
             pixel_state *p = &img->px[(size_t)y * img->width + x];
             if (!pixel_in_crop(job->rs, x, y) || !pixel_wants_batch(job, p))
                 continue;
+            if ((stop = pixel_pause_point(job, &c, &clamped, &done)))
+                break;
             int rc = pixel_batch(job, x, y, p, scr, &c, &clamped);
             if (rc) {
-                exact_failed(job, rc, x, y);
+                batch_failed(job, rc, x, y);
                 stop = 1;
             } else
                 done++;
@@ -228,7 +259,6 @@ static void scratch_free(render_job *job, thread_scratch *scr)
     integrator_counts c = {0};
     if (scr->integ)
         job->integ->thread_free(scr->integ, &c);
-    atomic_fetch_add(&job->gaussians_short, c.gaussians_short);
     rr_arena_free(&scr->arena);
     sampler_scratch_free(&scr->ss);
     free(scr->x);
@@ -360,22 +390,65 @@ static void wait_for_workers(render_job *job)
     pthread_mutex_unlock(&job->lock);
 }
 
+/* The batches a pixel is expected to hold at the end of the render: the
+ * first B, and with a target error as many as its standard error says it
+ * needs (it falls as 1/sqrt(batches): b (se / target)^2), up to the cap.
+ * Only the progress line uses it; no pixel's batches depend on it. */
+static uint64_t expected_batches(const render_settings *rs, const pixel_state *p)
+{
+    uint32_t first = p->batches > rs->batches ? p->batches : rs->batches;
+    if (rs->target_error <= 0 || p->batches < 2 || !pixel_wants_another(rs, p))
+        return first;
+    double ratio = film_max_stderr(p) / rs->target_error;
+    double needed = round(fmin(p->batches * ratio * ratio, rs->max_batches));
+    uint32_t next = p->batches + 1;
+    return (uint64_t)fmax(fmax(needed, first), next);
+}
+
+/* (render.h) Expected anew at each round. */
+uint64_t render_planned_pixel_batches(const render_settings *rs, const image *img)
+{
+    uint64_t total = 0;
+    for (int y = 0; y < img->height; y++)
+        for (int x = 0; x < img->width; x++)
+            if (pixel_in_crop(rs, x, y))
+                total += expected_batches(rs, &img->px[(size_t)y * img->width + x]);
+    return total;
+}
+
+static uint64_t held_pixel_batches(const image *img)
+{
+    uint64_t held = 0;
+    for (size_t i = 0; i < (size_t)img->width * img->height; i++)
+        held += img->px[i].batches;
+    return held;
+}
+
+/* The share of this render's planned pixel batches done (a resumed render's
+ * earlier ones are not its work: its ETA is for what is left). */
 static void report_progress(render_job *job, const render_hooks *hooks, double start)
 {
     if (!hooks || !hooks->progress)
         return;
-    double planned = (double)job->img->width * job->img->height * job->rs->batches;
+    double planned = (double)(job->planned - job->held_at_start);
     double fraction = fmin(0.999, atomic_load(&job->pixel_batches) / fmax(planned, 1.0));
     hooks->progress(hooks->user, fraction, atomic_load(&job->rays), rr_seconds() - start);
 }
 
-/* A failed exact sample stops the render: a pixel cannot be left with a
- * partial average, and a sample past the candidate or evaluation bounds
- * says the scene is beyond exact time integration. */
-static int exact_failure(const render_job *job, rr_error *err)
+/* A failed batch stops the render: a pixel cannot be left with a partial
+ * average, nor with samples drawn without some of their Gaussians; an
+ * exact sample past the candidate or evaluation bounds says the scene is
+ * beyond exact time integration. */
+static int batch_failure(const render_job *job, rr_error *err)
 {
     char why[128];
     exact_status_text(job->exact_status, why, sizeof why);
+    if (job->integ != &exact_integrator_ops) { /* (a sampled batch fails only so: gaussian_batch) */
+        RR_DCHECK(job->exact_status == EXACT_NO_MEMORY);
+        return rr_fail(err, "%s at pixel (%d, %d): out of memory for a sample's Gaussians (drawn without them it "
+                            "could be off by its whole colour, far beyond the noise): give the render more memory "
+                            "or fewer threads", job->integ->name, job->exact_px, job->exact_py);
+    }
     if (job->exact_status == EXACT_NO_MEMORY || job->exact_status == EXACT_EMBREE_ERROR)
         return rr_fail(err, "exact time integration at pixel (%d, %d): %s", job->exact_px, job->exact_py, why);
     return rr_fail(err,
@@ -411,11 +484,11 @@ static int run_round(render_job *job, const render_hooks *hooks, double start, d
             *last_checkpoint = rr_seconds();
         }
     }
-    return job->exact_status ? exact_failure(job, err) : 0;
+    return job->exact_status ? batch_failure(job, err) : 0;
 }
 
 /* Will any pixel take a batch in this round or a later one? A resumed
- * checkpoint was written between tiles, in the middle of a round, so some
+ * checkpoint was written between pixels, in the middle of a round, so some
  * pixels can be a round ahead of all the others that still want batches. */
 static int any_pixel_wants_more(const render_job *job)
 {
@@ -466,7 +539,7 @@ static int job_init(render_job *job, const scene *s, const accel *a, const rende
 {
     memset(job, 0, sizeof *job);
     job->rs = rs, job->img = img, job->cancel = cancel;
-    job->ctx.sc = s, job->ctx.acc = a, job->ctx.rs = rs;
+    job->ctx.sc = s, job->ctx.acc = a, job->ctx.rs = rs, job->ctx.cancel = cancel;
     job->ctx.camera_moves = scene_camera_moves(s);
     camera_view_rest(&s->cam, &job->ctx.rest_view);
     job->tiles_x = (img->width + TILE - 1) / TILE;
@@ -494,7 +567,6 @@ static void job_finish(render_job *job, image *img, double start)
     img->seconds += rr_seconds() - start;
     img->rays += atomic_load(&job->rays);
     img->kbuffer_overflows += atomic_load(&job->overflows);
-    img->gaussians_short += atomic_load(&job->gaussians_short);
     img->static_traversals += atomic_load(&job->static_traversals);
     img->clamped += atomic_load(&job->clamped);
     img->exact_unresolved += job->exact_unresolved;
@@ -508,10 +580,12 @@ int render_image(const scene *s, const accel *a, const render_settings *rs, imag
         return -1;
     double start = rr_seconds(), last_checkpoint = start;
     uint32_t rounds = rs->target_error > 0 ? rs->max_batches : rs->batches;
+    job.held_at_start = held_pixel_batches(img);
     int rc = pool_start(&job, err);
     for (job.round = 0; job.round < rounds && !rc && !*cancel; job.round++) {
         if (job.round >= rs->batches && !any_pixel_wants_more(&job))
             break;
+        job.planned = render_planned_pixel_batches(rs, img);
         rc = run_round(&job, hooks, start, &last_checkpoint, err);
     }
     if (job.started)

@@ -67,10 +67,24 @@ typedef struct {
     void *user;
 } render_hooks;
 
+/* The pixel batches the pixels of img (of the crop window) are expected to
+ * hold when a render with rs ends: each at least the first B, and with a
+ * target error as many as its standard error says it needs (a standard
+ * error falls as 1/sqrt(batches): b (se / target)^2, at least one more
+ * while it wants another, at most the cap). Planned anew each round, it
+ * is what the progress line's fraction and ETA measure against, so they
+ * cover the adaptive rounds too (they said 99.9%, ETA 0 s, through them).
+ * No pixel's batches depend on it. */
+uint64_t render_planned_pixel_batches(const render_settings *rs, const image *img);
+
 /* Renders into img (pixels continue from the batches they already have).
  * The result depends only on the scene, the settings and the seed, not on
  * the thread count. Returns -1 if *cancel became non-zero (after a final
- * checkpoint, if there is a hook) or on error. */
+ * checkpoint, if there is a hook) or on error (a batch that failed: an
+ * exact sample past its bounds, a sample's Gaussians out of memory). The
+ * workers read *cancel between pixels and within batches (the batch under
+ * way is left out), and step out between pixels for a periodic checkpoint:
+ * neither waits for the rest of a tile. */
 int render_image(const scene *s, const accel *a, const render_settings *rs, image *img,
                  const render_hooks *hooks, volatile sig_atomic_t *cancel, rr_error *err);
 

@@ -165,8 +165,7 @@ static void thesis_batch(const sampler *s, double t0, double t1, uint64_t seed, 
  * 1.47x at m = n; on pixels stepping in time 1.15x at 2, 1.25x at n). With
  * an odd count jittered3d gives each time its own piece (m = its count:
  * one time in each, the weights still sum to it) and sobol keeps equal
- * strata (its first n points hold no exact halves; it wants power-of-two n
- * anyway). Used only where error bars are asked for and the shutter has a
+ * strata (an odd n has no exact halves). Used only where error bars are asked for and the shutter has a
  * length (sampler.random_strata; a batch alone keeps the equal strata). */
 static double random_boundary(uint64_t key, uint64_t stream, int k, int m)
 {
@@ -292,36 +291,53 @@ static int by_time(const void *a, const void *b)
     return (p->index > q->index) - (p->index < q->index);
 }
 
+/* Times of a count n that is no power of two: the first n points of the
+ * sequence are nets of their power-of-two blocks (400 = 256 + 128 + 16),
+ * whose times are even only at the coarsest block's scale (1/16): at 400
+ * samples the error of the default scene with the point filter was 1.67x
+ * the line from 256 to 512 samples, above the error at 256 itself
+ * (src/SAMPLING.md). So the point of time rank k takes a time of its own in
+ * the k-th 1/n of the shutter, (k + jitter) / n: one in each, as the times
+ * of a power-of-two n already are, in the order the sequence gave.
+ * Unbiased: the time scramble and the jitters are independent of the x and
+ * y scrambles, each point's (x, y) is uniform and the n times together are
+ * one stratified sample of the shutter. keys is sorted by the sequence's
+ * times (u); the point of rank k gets sampler time u[k]. */
+static void rank_stratified_times(uint64_t key, int n, const sampler_time_key *keys, double *u)
+{
+    for (int k = 0; k < n; k++)
+        u[k] = n & (n - 1) ? (k + uniform_keyed(key, (uint64_t)k, DIM_T)) / n : keys[k].t;
+}
+
 /* Each batch is an independent replicate: its own scramble (from the
  * batch's seed) of the sequence's first n points, and with error bars its
  * own time halves. Blocks of one long sequence were not independent (the
  * batches' spread said 3x too much on smooth pixels and up to 16x too
  * little where a pixel steps in time); the price is that B batches average
- * B short sequences, not one long one (src/SAMPLING.md). */
+ * B short sequences, not one long one (src/SAMPLING.md). The points are
+ * traced in time order, as the thesis sampler's times are: successive rays
+ * then meet the same moving splats and BVH nodes while they are in cache
+ * (the sequence's own order jumps across the shutter; on the
+ * benchmark-scale view that made a render 2.3x-3.6x slower). */
 static void sobol_batch(const sampler *s, double t0, double t1, uint64_t seed, uint64_t pixel, int px, int py,
                         sampler_scratch *sc, double *x, double *y, double *t, double *w)
 {
     int n = (int)sampler_count(s);
     uint64_t key = hash_key(seed, pixel);
-    int pieces = time_pieces(n, 1); /* any aligned pair of a (0, 1)-sequence: one in each half */
-    double *p = sc->points; /* x, y, w of point i at 3 i; its time in its key */
+    int pieces = time_pieces(n, 1); /* with rank-stratified times each half holds n / 2 of them */
+    double *p = sc->points; /* x, y of point i at 3 i; its sequence time in its key */
     for (int i = 0; i < n; i++) {
         uint32_t index = (uint32_t)i;
         p[3 * i] = px + sobol_sample(index, 0, seed, pixel);
         p[3 * i + 1] = py + sobol_sample(index, 1, seed, pixel);
-        double u = sobol_sample(index, 2, seed, pixel);
-        double time = shutter_time(t0, t1, stratified_time(s, t0, t1, u, pieces, key, 0, &p[3 * i + 2]));
-        sc->keys[i] = (sampler_time_key){time, (uint32_t)i};
+        sc->keys[i] = (sampler_time_key){sobol_sample(index, 2, seed, pixel), (uint32_t)i};
     }
-    /* traced in time order, as the thesis sampler's times are: successive
-     * rays then meet the same moving splats and BVH nodes while they are
-     * in cache (the sequence's own order jumps across the shutter; on the
-     * benchmark-scale view that made a render 2.3x-3.6x slower). The set
-     * of samples is the same. */
     qsort(sc->keys, (size_t)n, sizeof *sc->keys, by_time);
+    rank_stratified_times(key, n, sc->keys, t); /* sampler times into t, then mapped in place */
     for (int k = 0; k < n; k++) {
         const double *q = &p[3 * sc->keys[k].index];
-        x[k] = q[0], y[k] = q[1], t[k] = sc->keys[k].t, w[k] = q[2];
+        x[k] = q[0], y[k] = q[1];
+        t[k] = shutter_time(t0, t1, stratified_time(s, t0, t1, t[k], pieces, key, 0, &w[k]));
     }
 }
 

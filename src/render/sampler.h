@@ -13,7 +13,9 @@
  *   scrambling (Burley 2020, Laine-Karras permutation) seeded per pixel,
  *   dimension and batch: every batch is its own scramble of the first n
  *   points, so power-of-two n keeps it a scrambled (0, m, 2)-net in (x, y)
- *   (a (1, m, 3)-net with t), and it is traced in time order.
+ *   (a (1, m, 3)-net with t), and it is traced in time order. Its times
+ *   fall one in each 1/n of the shutter for any n (another n takes its
+ *   times by their rank: sampler.c, rank_stratified_times).
  * jittered3d: one sample in each cell of a K x K x tspp grid over
  *   (x, y, t): position and time stratified jointly.
  * thesis (Wolf 2008, sec. 4.5): K x K jittered positions; for each, tspp
@@ -31,7 +33,7 @@
  * strata in every batch, a pixel that steps in time gets batch estimates on
  * a lattice and a standard error of 0 where it is off. A pixel's estimate
  * is sum w c / sum w (render.c); the weights sum to n whenever each time
- * stratum holds one sample (jittered3d always, sobol for power-of-two n). */
+ * stratum holds one sample (jittered3d always, sobol for even n). */
 #ifndef RR_SAMPLER_H
 #define RR_SAMPLER_H
 

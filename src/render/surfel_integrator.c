@@ -137,8 +137,7 @@ static int surfel_batch(void *thread, const integrator_context *ctx, const pixel
                         integrator_counts *c)
 {
     surfel_thread_begin_batch(thread);
-    integrator_sampled_batch(thread, ctx, ps, surfel_group_fn, est, c);
-    return 0;
+    return integrator_sampled_batch(thread, ctx, ps, surfel_group_fn, est, c);
 }
 
 static void surfel_free(void *thread, integrator_counts *c)

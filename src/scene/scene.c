@@ -1,6 +1,7 @@
 #include "scene/scene.h"
 
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -47,6 +48,57 @@ void scene_camera_view(const scene *s, double t, camera_view *v)
         v->axis[k] = xform_vector(&m, v->axis[k]);
 }
 
+void scene_world_to_camera(const scene *s, double t, double m[4][4])
+{
+    double rest[4][4], motion_inv[4][4];
+    camera_world_to_camera(&s->cam, rest);
+    xform x = animation_at(&s->camera_motion, t);
+    vec3 back = xform_inverse_point(&x, v3(0, 0, 0)); /* the inverse motion's translation */
+    double tv[3] = {back.x, back.y, back.z};
+    for (int i = 0; i < 3; i++) {
+        for (int k = 0; k < 3; k++)
+            motion_inv[i][k] = x.ri[i][k];
+        motion_inv[i][3] = tv[i];
+    }
+    motion_inv[3][0] = motion_inv[3][1] = motion_inv[3][2] = 0, motion_inv[3][3] = 1;
+    mat4_mul(rest, motion_inv, m);
+}
+
+void scene_exposure_instants(const scene *s, const shutter *sh, double t[3])
+{
+    shutter_span(sh, s->cam.width, s->cam.height, &t[0], &t[2]);
+    double d = t[2] - t[0]; /* export's middle sample is open + (close - open) * 0.5: the same double */
+    t[1] = isfinite(d) ? t[0] + d * 0.5 : 0.5 * t[0] + 0.5 * t[2];
+}
+
+void scene_frame_camera_of(const scene *fs, const shutter *sh, scene_frame_camera *out)
+{
+    double proj[4][4];
+    scene_exposure_instants(fs, sh, out->time);
+    for (int i = 0; i < 3; i++)
+        scene_world_to_camera(fs, out->time[i], out->world_to_camera[i]);
+    camera_projection(&fs->cam, 1.0, 1.0, proj);
+    mat4_mul(proj, out->world_to_camera[1], out->world_to_ndc);
+}
+
+int scene_check_frame_camera(const scene *s, const shutter *sh, const char *frame, rr_error *err)
+{
+    scene fs;
+    scene_frame_camera fc;
+    if (scene_for_shutter(s, sh, &fs, err))
+        return -1;
+    scene_frame_camera_of(&fs, sh, &fc);
+    scene_for_shutter_free(&fs, s);
+    double beyond;
+    for (int i = 0; i < 3; i++)
+        if (!camera_matrix_fits_header(fc.world_to_camera[i], &beyond) ||
+            (i == 1 && !camera_matrix_fits_header(fc.world_to_ndc, &beyond)))
+            return rr_fail(err, "%s: %sthe camera's pose at time %.17g holds %g in its world-to-camera or "
+                                "world-to-NDC matrix, beyond the EXR header's float32 (motion too large)", s->path,
+                           frame, fc.time[i], beyond);
+    return 0;
+}
+
 int scene_frame_shutter(const scene *s, int frame, shutter *out, rr_error *err)
 {
     double shift;
@@ -70,6 +122,27 @@ int scene_frame_shutter(const scene *s, int frame, shutter *out, rr_error *err)
     return 0;
 }
 
+void scene_frame_label(const scene *s, long long frame, int numbered, char *buf, size_t size)
+{
+    if (!numbered)
+        snprintf(buf, size, "%s", "");
+    else if (s->frames_at_poses && frame >= 0 && frame < s->camera_motion.path->count)
+        snprintf(buf, size, "frame %lld (its exposure centred on pose %lld's time %.17g): ", frame, frame,
+                 s->camera_motion.path->knots[frame].t);
+    else
+        snprintf(buf, size, "frame %lld: ", frame);
+}
+
+int scene_frame_shutter_note(const scene *s, const shutter *first, long long frame, char *buf, size_t size)
+{
+    if (!s->frames_at_poses || (first->open == s->shut.open && first->close == s->shut.close))
+        return 0;
+    snprintf(buf, size, "<frames at=\"trajectory\">: each frame's exposure is the shutter [%.9g, %.9g] moved so "
+                        "that its middle is its pose's time (frame %lld: [%.9g, %.9g])", s->shut.open,
+             s->shut.close, frame, first->open, first->close);
+    return 1;
+}
+
 int scene_check_trajectory_times(const scene *s, double open, double close, rr_error *err)
 {
     const trajectory *tr = s->camera_motion.path;
@@ -84,23 +157,25 @@ int scene_check_trajectory_times(const scene *s, double open, double close, rr_e
     return 0;
 }
 
-int scene_check_shutter_in_trajectory(const scene *s, const shutter *sh, rr_error *err)
+int scene_check_shutter_in_trajectory(const scene *s, const shutter *sh, const char *frame, rr_error *err)
 {
     const trajectory *tr = s->camera_motion.path;
     double t0, t1, lo, hi;
     if (!tr)
         return 0;
     shutter_span(sh, s->cam.width, s->cam.height, &lo, &hi);
-    if (sh->rolling.kind == ROLLING_OFF)
-        return scene_check_trajectory_times(s, lo, hi, err);
     trajectory_domain(tr, &t0, &t1);
-    if (lo < t0 || hi > t1) /* the lines' times, not [open, close], are what leave the poses */
-        return rr_fail(err, "%s: the shutter [%.17g, %.17g] with rolling=\"%s\" exposes lines over "
-                            "[%.17g, %.17g], which reaches beyond the camera trajectory %s, whose %s interpolation "
-                            "covers [%.17g, %.17g]", s->path, sh->open, sh->close,
-                       shutter_rolling_name(sh->rolling.kind), lo, hi, tr->name, trajectory_interp_name(tr->interp),
-                       t0, t1);
-    return 0;
+    if (!(lo < t0 || hi > t1))
+        return 0;
+    if (sh->rolling.kind == ROLLING_OFF)
+        return rr_fail(err, "%s: %sthe shutter [%.17g, %.17g] reaches beyond the camera trajectory %s, whose %s "
+                            "interpolation covers [%.17g, %.17g]", s->path, frame, lo, hi, tr->name,
+                       trajectory_interp_name(tr->interp), t0, t1);
+    /* the lines' times, not [open, close], are what leave the poses */
+    return rr_fail(err, "%s: %sthe shutter [%.17g, %.17g] with rolling=\"%s\" exposes lines over [%.17g, %.17g], "
+                        "which reaches beyond the camera trajectory %s, whose %s interpolation covers [%.17g, %.17g]",
+                   s->path, frame, sh->open, sh->close, shutter_rolling_name(sh->rolling.kind), lo, hi, tr->name,
+                   trajectory_interp_name(tr->interp), t0, t1);
 }
 
 /* A 2-knot gsplat-interpolated path of the camera's motion from t0 to t1:

@@ -128,12 +128,54 @@ void scene_camera_ray(const scene *s, double x, double y, double t, vec3 *org, v
 /* The camera at time t (its animation applied to the rest pose). */
 void scene_camera_view(const scene *s, double t, camera_view *v);
 
+/* World to camera space at time t (4x4, row-major, column vectors; camera
+ * space as camera_world_to_camera's): the inverse of the camera's motion
+ * at t after its rest pose. The one pose `export` writes and the EXR
+ * header's worldToCamera holds (render_attrs.c). */
+void scene_world_to_camera(const scene *s, double t, double m[4][4]);
+
+/* The instants of a frame's header poses (README, Output): t[0] the first
+ * instant any line of the image is exposed, t[2] the last (shutter_span:
+ * [open, close] for a global shutter; a rolling shutter's lines reach past
+ * it) and t[1] the middle between them. Under a rolling shutter the middle
+ * line (row or column (L - 1) / 2 of the readout) is exposed around t[1]
+ * under every preset, also with --time. */
+void scene_exposure_instants(const scene *s, const shutter *sh, double t[3]);
+
+/* A frame's camera as its EXR header records it (README, Output): world
+ * to camera space at each of scene_exposure_instants, world to NDC (x =
+ * raster x / width, y = raster y / height, z = 1 / depth after dividing
+ * by w) at the middle one. fs: the scene as the frame renders it
+ * (scene_for_shutter: rolling="gsplat" moves its camera). */
+typedef struct {
+    double time[3];
+    double world_to_camera[3][4][4];
+    double world_to_ndc[4][4];
+} scene_frame_camera;
+void scene_frame_camera_of(const scene *fs, const shutter *sh, scene_frame_camera *out);
+
+/* -1 with err naming the scene, the frame (its label, as for
+ * scene_check_shutter_in_trajectory), the time and the value when a matrix
+ * of the frame's camera (of s under shutter sh) is beyond the EXR header's
+ * float32 (camera_matrix_fits_header): it would be written as infinity. */
+int scene_check_frame_camera(const scene *s, const shutter *sh, const char *frame, rr_error *err);
+
 /* Frame N's shutter: s->shut (frame 0's) shifted by N / frame_rate; with
  * frames_at_poses, s->shut shifted so that its middle is the camera
  * trajectory's pose N's time. Returns -1 if the scene has no frames or no
  * pose N. Without --frame or --frames, callers render s->shut itself. */
 int scene_frame_shutter(const scene *s, int frame, shutter *out, rr_error *err);
 void scene_free(scene *s);
+
+/* The label that names frame N in a message, "frame 3: " (with frames at
+ * the trajectory's poses, also the pose time its exposure is centred on),
+ * or "" when not numbered (the shutter as given, no --frame). */
+void scene_frame_label(const scene *s, long long frame, int numbered, char *buf, size_t size);
+
+/* A note for the user when <frames at="trajectory"> moves the shutter as
+ * given (the scene's or --shutter's) onto the poses: 1 with the text in buf
+ * (naming frame N's shutter, `first`), 0 when nothing was moved. */
+int scene_frame_shutter_note(const scene *s, const shutter *first, long long frame, char *buf, size_t size);
 
 /* A trajectory file holds poses over its own times only: -1 (err names
  * the file, the times and the interpolation's domain) if [open, close]
@@ -143,9 +185,10 @@ int scene_check_trajectory_times(const scene *s, double open, double close, rr_e
 /* The rule every command that takes a frame's shutter applies (render and
  * export): every time a line of the camera's image is exposed, with a
  * rolling shutter past [open, close] (shutter_span), lies within the camera
- * trajectory's poses; -1 with err naming the scene, the shutter, the lines'
- * times and the trajectory's domain otherwise. */
-int scene_check_shutter_in_trajectory(const scene *s, const shutter *sh, rr_error *err);
+ * trajectory's poses; -1 with err naming the scene, the frame (frame: its
+ * label, "frame 3: ", or "" for the shutter as given), the shutter, the
+ * lines' times and the trajectory's domain otherwise. */
+int scene_check_shutter_in_trajectory(const scene *s, const shutter *sh, const char *frame, rr_error *err);
 
 /* The scene as a frame with shutter sh renders it: *out = *s (sharing
  * everything), except that under rolling="gsplat" a moving camera moves

@@ -3,12 +3,18 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "accel/accel.h"
 #include "splat/frame.h"
+#include "splat/guan_mueller.h"
 #include "splat/volumetric.h"
 
 const char *splat_method_name(splat_method m)
 {
-    return m == SPLAT_ACCUM ? "accum" : m == SPLAT_BUCKET ? "bucket" : m == SPLAT_VOLUMETRIC ? "volumetric" : "instant";
+    return m == SPLAT_ACCUM        ? "accum"
+           : m == SPLAT_BUCKET     ? "bucket"
+           : m == SPLAT_VOLUMETRIC ? "volumetric"
+           : m == SPLAT_GUAN_MUELLER ? "guan-mueller"
+                                   : "instant";
 }
 
 const char *splat_filter_name(splat_filter f)
@@ -17,6 +23,8 @@ const char *splat_filter_name(splat_filter f)
 }
 
 const char *splat_alpha_name(splat_alpha a) { return a == SPLAT_ALPHA_NORMALIZED ? "normalized" : "thesis"; }
+
+const char *splat_trails_name(splat_trails t) { return t == SPLAT_TRAILS_ADD ? "add" : "blend"; }
 
 const char *splat_times_name(splat_times t)
 {
@@ -106,7 +114,24 @@ static int splat_buckets(splat_frame *f, const splat_settings *set, int buckets,
     return rc;
 }
 
-static int check_scene(const scene *s, rr_error *err)
+/* The ray tracer's reach rule (accel_check_reach) over the instants
+ * splatted: an instant or a shutter the renderer refuses (a --time of
+ * 1e300 moving an object past RR_MAX_REACH) is refused here too. */
+static int check_reach(const scene *s, const splat_settings *set, rr_error *err)
+{
+    double open = set->method == SPLAT_INSTANT ? set->instant : set->shut.open;
+    double close = set->method == SPLAT_INSTANT ? set->instant : set->shut.close;
+    aabb *swept = malloc(((size_t)s->nobjects + 1) * sizeof *swept);
+    if (!swept)
+        return rr_fail(err, "out of memory for the objects' bounds");
+    for (int i = 0; i < s->nobjects; i++)
+        swept[i] = animation_swept_bounds(&s->objects[i].anim, scene_object_bounds(&s->objects[i]), open, close);
+    int rc = accel_check_reach(s, swept, open, close, err);
+    free(swept);
+    return rc;
+}
+
+static int check_scene(const scene *s, const splat_settings *set, rr_error *err)
 {
     for (int i = 0; i < s->nobjects; i++)
         if (!scene_object_row(&s->objects[i])->point_model)
@@ -114,13 +139,13 @@ static int check_scene(const scene *s, rr_error *err)
                            s->objects[i].name, scene_object_row(&s->objects[i])->name);
     if (s->shut.rolling.kind != ROLLING_OFF)
         return rr_fail(err, "%s: a rolling shutter: refrender splat renders global-shutter instants only", s->path);
-    return 0;
+    return check_reach(s, set, err);
 }
 
 int splat_render(const scene *s, const splat_settings *set, splat_result *out, rr_error *err)
 {
     memset(out, 0, sizeof *out);
-    if (check_scene(s, err))
+    if (check_scene(s, set, err))
         return -1;
     splat_frame f;
     size_t n = (size_t)s->cam.width * s->cam.height;
@@ -133,6 +158,8 @@ int splat_render(const scene *s, const splat_settings *set, splat_result *out, r
         splat_group(&f, &set->instant, 0, 1, out->rgba);
     else if (!rc && set->method == SPLAT_VOLUMETRIC)
         rc = splat_volumetric(&f, set, out->rgba, err);
+    else if (!rc && set->method == SPLAT_GUAN_MUELLER)
+        rc = splat_guan_mueller(&f, set, out->rgba, err);
     else if (!rc)
         rc = splat_buckets(&f, set, set->method == SPLAT_ACCUM ? set->samples : set->buckets, out->rgba, err);
     out->fragments = f.fragments;

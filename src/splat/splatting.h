@@ -12,7 +12,7 @@
 
 #include "scene/scene.h"
 
-typedef enum { SPLAT_INSTANT, SPLAT_ACCUM, SPLAT_BUCKET, SPLAT_VOLUMETRIC } splat_method;
+typedef enum { SPLAT_INSTANT, SPLAT_ACCUM, SPLAT_BUCKET, SPLAT_VOLUMETRIC, SPLAT_GUAN_MUELLER } splat_method;
 /* none: the reconstruction kernel only; botsch: the EWA approximation of
  * thesis sec. 4.2.3, eq. 4.13 (screen-space radius sqrt 2, attribute pass
  * only); ewa: Ren, Pfister, Zwicker 2002's object-space EWA resampling
@@ -28,6 +28,12 @@ typedef enum { SPLAT_TIMES_MIDPOINT, SPLAT_TIMES_STRATIFIED, SPLAT_TIMES_RANDOM 
  * normalized: each instant's a weighted average, then summed with a(t)
  * (the remedy sec. 6.2 proposes). */
 typedef enum { SPLAT_ALPHA_THESIS, SPLAT_ALPHA_NORMALIZED } splat_alpha;
+
+/* Guan and Mueller's trail image (their sec. 4: "either adding or
+ * alpha-blending can be used to render the motion splats"): blend (the
+ * default) composites the trails front to back; add sums them (alpha the
+ * clamped sum). src/SPLAT.md says why blend is the default. */
+typedef enum { SPLAT_TRAILS_BLEND, SPLAT_TRAILS_ADD } splat_trails;
 
 /* Default standard deviation of a volumetric kernel's 1D Gaussian along
  * its velocity, in units of the slice |v| dt it stands for: that of a
@@ -45,6 +51,7 @@ typedef struct {
     shutter shut;      /* accum, bucket, volumetric: the interval and a(t) */
     splat_alpha alpha; /* volumetric */
     double sigma_t;    /* volumetric: see SPLAT_SIGMA_T_DEFAULT */
+    splat_trails trails; /* guan-mueller */
 } splat_settings;
 
 typedef struct {
@@ -58,6 +65,7 @@ const char *splat_method_name(splat_method m);
 const char *splat_filter_name(splat_filter f);
 const char *splat_times_name(splat_times t);
 const char *splat_alpha_name(splat_alpha a);
+const char *splat_trails_name(splat_trails t);
 
 /* The N instants of accum, bucket and volumetric, ascending. */
 void splat_instants(const splat_settings *set, double *times);

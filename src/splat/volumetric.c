@@ -13,6 +13,7 @@ typedef struct {
     double S0[3][3];        /* the still splat's covariance a0 a0^T + a1 a1^T + (1e-3 r)^2 n n^T */
     double S[3][3], Si[3][3]; /* S = S0 + w w^T and its inverse */
     vec3 w;                 /* the 1D Gaussian's axis along the velocity */
+    vec3 u, v;              /* the splat's axes (world), the source's plane */
     const material *mat;
     const xform *xf;
 } kernel;
@@ -102,6 +103,7 @@ static int make_kernel(const scene_object *o, size_t i, const instant_motion *m,
     u = xform_vector(xf, u), v = xform_vector(xf, v);
     k->c = xform_point(xf, c);
     k->n = v3_normalize(v3_cross(u, v));
+    k->u = u, k->v = v;
     k->vel = relative_velocity(m, c);
     k->w = v3_scale(k->vel, dt * sigma_t / sigma);
     double r = fmax(v3_len(u), v3_len(v));
@@ -152,6 +154,28 @@ static double temporal_density(const kernel *k, vec3 d)
     return 1.0 / sqrt(1.0 + (c * u1 * u1 - 2 * b * u1 * u2 + a * u2 * u2) / det);
 }
 
+/* The source point of a kernel point x (App. C.6): "each point in the
+ * interior of the volumetric kernel lies on the motion trail of its 2D
+ * splat source point" (sec. 4.2.2). The kernel is the unit ball under the
+ * axes (u, v, w, thickness n): x - c = alpha u + beta v + tau w + delta
+ * thickness n, and the source is c + alpha u + beta v. The coefficients
+ * that give x - c with the least norm are x's parameter-space position
+ * (its norm is the |m| of the weight): (alpha, beta) = (u, v)^T S^-1 (x - c),
+ * so the source is c + (u u^T + v v^T) S^-1 (x - c), inside the splat for
+ * every x inside the kernel. Where w crosses the plane this is eqs.
+ * C.42-C.44's trace-back along v (x - v (q.n / v.n)) but for delta
+ * thickness |v| / |v.n|; where v lies in or near the plane, C.44 divides
+ * by a v.n of rounding noise (the central difference leaves 1e-12 |v|
+ * there) and C.3.1's orthogonal projection lands up to |w| off the splat:
+ * both put the source where something else occludes it, or off the image
+ * where the depth test is skipped (issue 56: a hidden splat showed
+ * through, green 0.534 for 0.100). */
+static vec3 source_point(const kernel *k, vec3 x)
+{
+    vec3 p = mat_vec(k->Si, v3_sub(x, k->c));
+    return v3_add(k->c, v3_add(v3_scale(k->u, v3_dot(k->u, p)), v3_scale(k->v, v3_dot(k->v, p))));
+}
+
 /* The ray org + s dir against the kernel's ellipsoid (x - c)^T Si (x - c)
  * = 1 (sec. 4.2.2 after Sigg et al.): the chord's midpoint in parameter
  * space m has |m|^2 = 1 - (L / 2)^2 for a chord of length L there, and the
@@ -170,11 +194,7 @@ static int kernel_fragment(const kernel *k, vec3 org, vec3 dir, double sigma, vf
         return 0;
     vec3 xm = v3_add(org, v3_scale(dir, 0.5 * (s1 + s2))), q = v3_sub(xm, k->c);
     fr->h = exp(-quad(k->Si, q, q) / (2.0 * sigma * sigma));
-    /* eqs. C.42-C.44: back along v onto the splat plane c.n = d; a velocity
-     * in the plane (C.3.1): the orthogonal projection */
-    double vn = v3_dot(k->vel, k->n);
-    fr->src = fabs(vn) > 1e-12 * v3_len(k->vel) ? v3_add(xm, v3_scale(k->vel, -v3_dot(q, k->n) / vn))
-                                                : v3_sub(xm, v3_scale(k->n, v3_dot(q, k->n)));
+    fr->src = source_point(k, xm);
     fr->rho = temporal_density(k, dir);
     return 1;
 }
