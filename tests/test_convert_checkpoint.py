@@ -13,7 +13,8 @@ log scales, logit opacities and quaternions as stored; a splatfacto sh_degree 0 
 as (sigmoid - 0.5) / C0. The scene is first shown to tell the f_rest order apart: the same model
 with f_rest point-major renders differently.
 
-nerfstudio's `ns-export gaussian-splat` PLYs are written as its exporter writes them (exporter.py:
+gsplat's export_splats PLY renders as the converted checkpoint. nerfstudio's `ns-export
+gaussian-splat` PLYs are written as its exporter writes them (exporter.py:
 508-563, 575-606: comments, nx ny nz, float or uchar per property, interleaved): the SH layout
 renders as the hand-written Inria PLY; the RGB layout (uchar red/green/blue, no f_dc/f_rest) renders
 as the SH PLY with f_dc = (u/255 - 0.5) / C0, splatfacto's RGB2SH of the colour it draws.
@@ -232,6 +233,25 @@ def test_nerfstudio_exports_render_as_the_inria_ply_in_both_colour_layouts(tmp_p
     hand_inria_ply(tmp_path / "rgb_as_sh.ply", m0, dc=(u8 / 255.0 - 0.5) / C0)
     got = render_ply(tmp_path, tmp_path / "rgb.ply", "rgb")
     assert np.array_equal(got, render_ply(tmp_path, tmp_path / "rgb_as_sh.ply", "rgbsh"))
+
+
+def test_gsplats_own_export_renders_as_the_converted_checkpoint(tmp_path):
+    """export_splats(format="ply") (gsplat v1.5.3 exporter.py:385-405, 513): no normals, f_rest from
+    shN.permute(0, 2, 1), the rest as stored: the converter's PLY draws the same image."""
+    m = random_model(31, 14, 2)
+    n = len(m["means"])
+    props = [(a, "float", m["means"][:, i]) for i, a in enumerate("xyz")]
+    props += [(f"f_dc_{c}", "float", m["sh"][:, 0, c]) for c in range(3)]
+    rest = m["sh"][:, 1:, :].transpose(0, 2, 1).reshape(n, -1)
+    props += [(f"f_rest_{i}", "float", rest[:, i]) for i in range(rest.shape[1])]
+    props += [("opacity", "float", m["opacities"])] + [(f"scale_{i}", "float", m["scales"][:, i]) for i in range(3)]
+    props += [(f"rot_{i}", "float", m["quats"][:, i]) for i in range(4)]
+    write_ply(tmp_path / "point_cloud_29999.ply", props, n)
+    gsplat_checkpoint(tmp_path / "ckpt_29999_rank0.pt", m)
+    proc = convert(tmp_path / "ckpt_29999_rank0.pt", tmp_path / "converted.ply")
+    assert proc.returncode == 0, proc.stderr
+    assert np.array_equal(render_ply(tmp_path, tmp_path / "point_cloud_29999.ply", "e"),
+                          render_ply(tmp_path, tmp_path / "converted.ply", "c"))
 
 
 def test_rgb_colours_beside_f_rest_without_f_dc_are_refused(tmp_path, render):
