@@ -164,7 +164,8 @@ def nerfstudio_model(top):
     dc = tensor(pipeline, p + "features_dc", f"'{p}features_dc'", (n, 3))
     rest = tensor(pipeline, p + "features_rest", f"'{p}features_rest'", (n, None, 3))
     if rest.shape[1] == 0:  # sh_degree 0: a logit, drawn as sigmoid (splatfacto.py:342-346, 593-597)
-        dc = ((1 / (1 + np.exp(-dc.astype(np.float64))) - 0.5) / SH_C0).astype(np.float32)
+        with np.errstate(over="ignore"):  # exp(1000) is inf: sigmoid 0, as torch.sigmoid gives
+            dc = ((1 / (1 + np.exp(-dc.astype(np.float64))) - 0.5) / SH_C0).astype(np.float32)
     return {"means": means, "scales": tensor(pipeline, p + "scales", f"'{p}scales'", (n, 3)),
             "quats": tensor(pipeline, p + "quats", f"'{p}quats'", (n, 4)),
             "opacities": tensor(pipeline, p + "opacities", f"'{p}opacities'", (n, 1))[:, 0],
