@@ -1,6 +1,6 @@
 """Reads a torch.save checkpoint (the zip format of torch >= 1.6) without torch
-and without running anything in it: the module convert_4dgs.py reads its
-checkpoints with (not a tool).
+and without running anything in it: the module convert_4dgs.py and
+convert_checkpoint.py read their checkpoints with (not a tool).
 
 The pickle is read by a restricted unpickler: it may name only
 torch._utils._rebuild_tensor_v2, torch._utils._rebuild_parameter(_with_state),
@@ -121,14 +121,16 @@ class LazyTensor:
     def __setstate__(self, state):
         raise CheckpointError("the pickle sets the state of a tensor")
 
-    def numpy(self):
-        """The tensor as an array (float64 for floating dtypes), never larger than its storage."""
+    def numpy(self, floating=np.float64):
+        """The tensor as an array (floating dtypes as `floating`: float64 unless a caller that only
+        copies values asks for float32, half the memory), never larger than its storage."""
         data = self.storage.array()
+        dtype = floating if data.dtype.kind == "f" else data.dtype
         if 0 in self.shape:
-            return np.zeros(self.shape, dtype=np.float64 if data.dtype.kind == "f" else data.dtype)
+            return np.zeros(self.shape, dtype=dtype)
         view = np.lib.stride_tricks.as_strided(data[self.offset:], shape=self.shape,
                                                strides=[s * data.itemsize for s in self.stride], writeable=False)
-        return np.array(view, dtype=np.float64 if data.dtype.kind == "f" else data.dtype)
+        return np.array(view, dtype=dtype)
 
 
 def _ints(value, what):

@@ -483,3 +483,37 @@ TEST(gaussian_a_large_model_is_streamed_to_the_same_model_and_hash)
     unlink(path);
     gaussian_model_free(&m), gaussian_model_free(&back), gaussian_model_free(&ref);
 }
+
+#define RGB_GEOMETRY                                                                                              \
+    "property float opacity\nproperty float scale_0\nproperty float scale_1\nproperty float scale_2\n"          \
+    "property float rot_0\nproperty float rot_1\nproperty float rot_2\nproperty float rot_3\n"
+
+/* nerfstudio's RGB export (v1.1.5 scripts/exporter.py:588-593: uchar red/green/blue, no f_dc_*, no
+ * f_rest_*) is SH degree 0 with DC = (u/255 - 0.5)/C0, the RGB2SH of the colour splatfacto draws
+ * (models/splatfacto.py:95-108), C0 = 1/(2 sqrt(pi)); f_dc_*, when present, are the colour. */
+TEST(gaussian_rgb_colours_without_f_dc_become_the_sh_dc)
+{
+    const double c0 = 0.5 / sqrt(acos(-1.0));
+    gaussian_model m;
+    rr_error e;
+    int rc = parse_ascii("property float x\nproperty float y\nproperty float z\nproperty uchar red\n"
+                         "property uchar green\nproperty uchar blue\n" RGB_GEOMETRY,
+                         "0 0 0 255 0 128 0 0 0 0 1 0 0 0", &m, &e);
+    CHECK(rc == 0 && m.sh_degree == 0 && m.sh_coeffs == 1);
+    if (rc == 0) {
+        CHECK(m.sh[0] == (float)(0.5 / c0) && m.sh[1] == (float)(-0.5 / c0));
+        CHECK(m.sh[2] == (float)((128 / 255.0 - 0.5) / c0));
+    }
+    gaussian_model_free(&m);
+    rc = parse_ascii("property float x\nproperty float y\nproperty float z\nproperty float f_dc_0\n"
+                     "property float f_dc_1\nproperty float f_dc_2\nproperty uchar red\nproperty uchar green\n"
+                     "property uchar blue\n" RGB_GEOMETRY,
+                     "0 0 0 0.25 0.5 0.75 255 0 128 0 0 0 0 1 0 0 0", &m, &e);
+    CHECK(rc == 0 && m.sh[0] == 0.25f && m.sh[1] == 0.5f && m.sh[2] == 0.75f);
+    gaussian_model_free(&m);
+    rc = parse_ascii("property float x\nproperty float y\nproperty float z\nproperty uchar red\n"
+                     "property uchar green\n" RGB_GEOMETRY,
+                     "0 0 0 255 0 0 0 0 0 1 0 0 0", &m, &e);
+    CHECK(rc == -1 && strstr(e.msg, "a.ply") && strstr(e.msg, "lacks the vertex property 'blue'"));
+    gaussian_model_free(&m);
+}

@@ -12,12 +12,16 @@
 
 /* ---- the PLY layout --------------------------------------------------- */
 
-enum { G_X = 0, G_NX = 3, G_DC = 6, G_REST = 9, G_OPACITY = 54, G_SCALE = 55, G_ROT = 58, G_SLOTS = 62 };
+enum { G_X = 0, G_NX = 3, G_DC = 6, G_REST = 9, G_OPACITY = 54, G_SCALE = 55, G_ROT = 58, G_RGB = 62, G_SLOTS = 65 };
 static const char *const slot_names[G_SLOTS] = {
     "x", "y", "z", "nx", "ny", "nz", "f_dc_0", "f_dc_1", "f_dc_2",
     "f_rest_0", "f_rest_1", "f_rest_2", "f_rest_3", "f_rest_4", "f_rest_5", "f_rest_6", "f_rest_7", "f_rest_8", "f_rest_9", "f_rest_10", "f_rest_11", "f_rest_12", "f_rest_13", "f_rest_14", "f_rest_15", "f_rest_16", "f_rest_17", "f_rest_18", "f_rest_19", "f_rest_20", "f_rest_21", "f_rest_22", "f_rest_23", "f_rest_24", "f_rest_25", "f_rest_26", "f_rest_27", "f_rest_28", "f_rest_29", "f_rest_30", "f_rest_31", "f_rest_32", "f_rest_33", "f_rest_34", "f_rest_35", "f_rest_36", "f_rest_37", "f_rest_38", "f_rest_39", "f_rest_40", "f_rest_41", "f_rest_42", "f_rest_43", "f_rest_44",
-    "opacity", "scale_0", "scale_1", "scale_2", "rot_0", "rot_1", "rot_2", "rot_3"};
-static const ply_schema gaussian_schema = {slot_names, G_SLOTS, G_SLOTS /* no integer scaling */};
+    "opacity", "scale_0", "scale_1", "scale_2", "rot_0", "rot_1", "rot_2", "rot_3", "red", "green", "blue"};
+/* red/green/blue as nerfstudio's `ns-export gaussian-splat --ply-color-mode rgb` writes them: uchar,
+ * read as u / 255 (integers from G_RGB on divide by their type's maximum). */
+static const ply_schema gaussian_schema = {slot_names, G_SLOTS, G_RGB};
+/* spherical harmonics' Y_0^0 (nerfstudio splatfacto.py's C0, v1.1.5 6b60855, lines 99 and 107) */
+static const double SH_C0 = 0.28209479177387814;
 
 typedef struct {
     gaussian_ply_sink base; /* first: the shared callbacks take it */
@@ -27,6 +31,7 @@ typedef struct {
     int rest_names, rest_max;
     unsigned char rest_seen[PLY_MAX_PROPERTIES];
     const gaussian_dynamic_ply_reader *dynamic; /* the reader of a dynamic layout's property declared */
+    int rgb_colour; /* colour from red/green/blue (no f_dc_*): nerfstudio's RGB export */
 } gaussian_sink;
 
 static int require(const char *path, const int *present, int first, int n, rr_error *err)
@@ -97,11 +102,29 @@ static int sh_degree_of(const char *path, const gaussian_sink *s, rr_error *err)
                    path, n, n, d - 1, below, d, need, d > GAUSSIAN_MAX_SH_DEGREE ? "; degrees above 3 are not supported" : "");
 }
 
+/* Colour from f_dc_* (SH), or, with no f_dc_* at all, from red/green/blue: nerfstudio v1.1.5
+ * (6b60855) scripts/exporter.py:588-593 writes those instead of f_dc_* with --ply-color-mode rgb
+ * and skips f_rest_* (596-606), so such a file is SH degree 0; f_rest_* beside them is refused. */
+static int colour_layout(gaussian_sink *s, const char *path, const int *present, rr_error *err)
+{
+    int any_dc = present[G_DC] || present[G_DC + 1] || present[G_DC + 2];
+    int any_rgb = present[G_RGB] || present[G_RGB + 1] || present[G_RGB + 2];
+    s->rgb_colour = !any_dc && any_rgb;
+    if (!s->rgb_colour)
+        return require(path, present, G_DC, 3, err);
+    if (require(path, present, G_RGB, 3, err))
+        return -1;
+    if (s->rest_names)
+        return rr_fail(err, "%s: vertex properties red/green/blue and f_rest_* without f_dc_*: the SH colour's "
+                            "f_dc_0..2 are missing (nerfstudio's RGB export writes no f_rest_*)", path);
+    return 0;
+}
+
 static int begin_model(void *user, const char *path, const int *present, size_t count, rr_error *err)
 {
     gaussian_sink *s = user;
     gaussian_model *m = s->base.m;
-    if (require(path, present, G_X, 3, err) || require(path, present, G_DC, 3, err) ||
+    if (require(path, present, G_X, 3, err) || colour_layout(s, path, present, err) ||
         require(path, present, G_OPACITY, 1, err) || require(path, present, G_SCALE, 2, err) ||
         require(path, present, G_ROT, 4, err))
         return -1;
@@ -132,11 +155,20 @@ static int store_geometry(gaussian_model *m, size_t i, const double *v, char *wh
                : 0;
 }
 
-/* The SH coefficients, rest channel-major in the file. */
-static int store_sh(gaussian_model *m, size_t i, const double *v, char *why, size_t why_size)
+/* The SH coefficients, rest channel-major in the file. An RGB colour in [0, 1] becomes the DC
+ * coefficient nerfstudio's model holds for it: splatfacto.py:335-339 (v1.1.5) draws
+ * colors = SH2RGB(features_dc) = C0 dc + 0.5 (line 108) at degree 0, so dc = (rgb - 0.5) / C0
+ * (RGB2SH, line 100), which draws the same colour through refrender's SH (C0 dc + 0.5). */
+static int store_sh(gaussian_model *m, size_t i, const double *v, int rgb_colour, char *why, size_t why_size)
 {
     float *sh = m->sh + 3 * (size_t)m->sh_coeffs * i;
     int rest = m->sh_coeffs - 1;
+    if (rgb_colour) {
+        for (int c = 0; c < 3; c++)
+            if (store(&sh[c], (v[G_RGB + c] - 0.5) / SH_C0, G_RGB + c, why, why_size))
+                return -1;
+        return 0;
+    }
     for (int c = 0; c < 3; c++) {
         if (store(&sh[c], v[G_DC + c], G_DC + c, why, why_size))
             return -1;
@@ -158,7 +190,7 @@ static int add_gaussian(void *user, const double *v, const int *present, char *w
     if (gaussian_ply_check_finite(v, present, slot_names, G_SLOTS, why, why_size))
         return -1;
     size_t i = s->base.next;
-    if (store_geometry(m, i, v, why, why_size) || store_sh(m, i, v, why, why_size))
+    if (store_geometry(m, i, v, why, why_size) || store_sh(m, i, v, s->rgb_colour, why, why_size))
         return -1;
     m->opacity[i] = (float)(1.0 / (1.0 + exp(-v[G_OPACITY]))); /* in [0, 1] for any finite value */
     m->count = ++s->base.next;
@@ -225,7 +257,7 @@ static void write_header(FILE *f, const gaussian_model *m)
         fprintf(f, "property float %s\n", slot_names[G_REST + k]);
     for (int k = G_OPACITY; k < G_SCALE + scales; k++)
         fprintf(f, "property float %s\n", slot_names[k]);
-    for (int k = G_ROT; k < G_SLOTS; k++)
+    for (int k = G_ROT; k < G_RGB; k++)
         fprintf(f, "property float %s\n", slot_names[k]);
     fputs("end_header\n", f);
 }
