@@ -434,18 +434,28 @@ def convert_file(args):
     return len(values), int(values[0, 17]), int(values[0, 18]), dropped_env
 
 
+
+# what a conversion may fail with, each said in one line by failure_line
+CONVERSION_FAILURES = (safefiles.FileRefused, ConvertError, OSError, MemoryError, RecursionError)
+
+
+def failure_line(prog, checkpoint, e):
+    """The one line a checkpoint converter prints for a failure (this one's
+    and convert_checkpoint.py's): a refused file names itself; otherwise the
+    checkpoint, then the reason, clipped."""
+    if isinstance(e, safefiles.FileRefused):
+        return f"{prog}: {clip(e, MAX_MESSAGE + 2000)}\n"
+    reason = e.strerror if isinstance(e, OSError) and e.strerror else e
+    if isinstance(e, (MemoryError, RecursionError)):
+        reason = f"{type(e).__name__} while reading it: {e}"
+    return f"{prog}: {checkpoint}: {clip(reason, MAX_MESSAGE)}\n"
+
 def main(argv=None):
     args = parse_args(argv)
     try:
         count, degree, degree_t, dropped_env = convert_file(args)
-    except safefiles.FileRefused as e:  # names its file itself
-        sys.stderr.write(f"convert_4dgs.py: {clip(e, MAX_MESSAGE + 2000)}\n")
-        return 1
-    except (ConvertError, OSError, MemoryError, RecursionError) as e:
-        reason = e.strerror if isinstance(e, OSError) and e.strerror else e
-        if isinstance(e, (MemoryError, RecursionError)):
-            reason = f"{type(e).__name__} while reading it: {e}"
-        sys.stderr.write(f"convert_4dgs.py: {args.checkpoint}: {clip(reason, MAX_MESSAGE)}\n")
+    except CONVERSION_FAILURES as e:
+        sys.stderr.write(failure_line("convert_4dgs.py", args.checkpoint, e))
         return 1
     print(f"{args.output}: {count} Gaussians, SH degree {degree} x time degree {degree_t}"
           + (", env_map dropped" if dropped_env else ""))

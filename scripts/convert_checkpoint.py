@@ -91,7 +91,7 @@ import numpy as np  # noqa: E402
 import safefiles  # noqa: E402
 from torch_checkpoint import CheckpointError as ConvertError, LazyTensor, describe, clip  # noqa: E402
 import torch_checkpoint  # noqa: E402
-from convert_4dgs import write_ply, printable, MAX_MESSAGE  # noqa: E402
+from convert_4dgs import write_ply, printable, CONVERSION_FAILURES, failure_line  # noqa: E402
 
 SH_C0 = 0.28209479177387814  # nerfstudio splatfacto.py:99, 107 (RGB2SH / SH2RGB)
 SEMANTICS_NOTE = ('semantics="gsplat" (rasterize_mode classic, the default); "gsplat-antialiased" if it was trained '
@@ -248,14 +248,8 @@ def main(argv=None):
     args = parse_args(argv)
     try:
         model, count, degree, dropped = convert_file(args)
-    except safefiles.FileRefused as e:
-        sys.stderr.write(f"convert_checkpoint.py: {clip(e, MAX_MESSAGE + 2000)}\n")
-        return 1
-    except (ConvertError, OSError, MemoryError, RecursionError) as e:
-        reason = e.strerror if isinstance(e, OSError) and e.strerror else e
-        if isinstance(e, (MemoryError, RecursionError)):
-            reason = f"{type(e).__name__} while reading it: {e}"
-        sys.stderr.write(f"convert_checkpoint.py: {args.checkpoint}: {clip(reason, MAX_MESSAGE)}\n")
+    except CONVERSION_FAILURES as e:
+        sys.stderr.write(failure_line("convert_checkpoint.py", args.checkpoint, e))
         return 1
     print(f"{args.output}: {count} Gaussians, SH degree {degree} ({model['kind']} checkpoint)"
           + (f", {dropped} holding a non-finite value dropped" if dropped else ""))
