@@ -450,6 +450,7 @@ def failure_line(prog, checkpoint, e):
         reason = f"{type(e).__name__} while reading it: {e}"
     return f"{prog}: {checkpoint}: {clip(reason, MAX_MESSAGE)}\n"
 
+
 def main(argv=None):
     args = parse_args(argv)
     try:
