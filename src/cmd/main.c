@@ -510,19 +510,6 @@ static void setup_run(render_run *run, const scene *s, const shutter *shut, cons
     attrs_for_render(&run->attrs, s, &run->rs, total, cmdline);
 }
 
-/* The preview shows what the header says the RGB holds (its oiio:ColorSpace). */
-static int write_preview(atomic_set *set, const char *path, const image *img, const attr_list *attrs,
-                         rr_error *err)
-{
-    image_planes p;
-    if (image_planes_resolve(img, 1, &p))
-        return rr_fail(err, "out of memory");
-    int rc = preview_write_srgb_into(set, path, img->width, img->height, p.rgba, attrs_get(attrs, ATTR_COLOR_SPACE),
-                                     err);
-    image_planes_free(&p);
-    return rc;
-}
-
 /* The summary line (not with --quiet), and the warnings: those are no
  * progress output, so --quiet keeps them (a clamped estimate once left no
  * trace under --quiet; its count is in the header too). */
@@ -604,7 +591,7 @@ static int write_outputs(const image *img, render_run *run, const char *output, 
                                                       run->rs.batch_begin + run->rs.batches, &run->attrs, err)
                             : write_final(&set, output, img, run, err);
     if (!rc && preview)
-        rc = write_preview(&set, preview, img, &run->attrs, err);
+        rc = output_write_preview_into(&set, preview, img, &run->attrs, err);
     if (rc) {
         atomic_set_discard(&set);
         return -1;

@@ -8,9 +8,9 @@
 
 #include "cmd/cli.h"
 #include "cmd/commands.h"
+#include "cmd/noise_report.h"
 #include "io/output.h"
 #include "io/preview.h"
-#include "io/render_attrs.h"
 
 static void merge_usage(FILE *f)
 {
@@ -133,16 +133,6 @@ static int add_state(const char *path, image *merged, attr_list *first, const ch
     return rc;
 }
 
-/* The noise the merged image reached, as a single render writes it. */
-static int merged_noise(const image *merged, attr_list *attrs, rr_error *err)
-{
-    noise_stats ns;
-    if (noise_stats_of(merged, &ns))
-        return rr_fail(err, "out of memory");
-    attrs_for_noise(attrs, &ns);
-    return 0;
-}
-
 /* The merged image and its preview (NULL: none), both put in place or
  * neither, as a render's outputs (main.c, write_outputs). */
 static int write_merged(const char *out, const char *preview, const image *merged, const attr_list *attrs,
@@ -152,15 +142,8 @@ static int write_merged(const char *out, const char *preview, const image *merge
     exr_window whole = {merged->width, merged->height, 0, 0, merged->width, merged->height};
     atomic_set set = {0};
     int rc = output_write_final_into(&set, out, merged, per_batch, attrs, &whole, err);
-    if (!rc && preview) {
-        image_planes p;
-        rc = image_planes_resolve(merged, per_batch, &p) ? rr_fail(err, "out of memory") : 0;
-        if (!rc) {
-            rc = preview_write_srgb_into(&set, preview, merged->width, merged->height, p.rgba,
-                                         attrs_get(attrs, ATTR_COLOR_SPACE), err);
-            image_planes_free(&p);
-        }
-    }
+    if (!rc && preview)
+        rc = output_write_preview_into(&set, preview, merged, attrs, err);
     if (rc) {
         atomic_set_discard(&set);
         return -1;
@@ -181,7 +164,8 @@ static int merge_files(char **paths, int n, const char *out, const char *preview
         rc = check_ranges(ranges, n, (uint32_t)strtoul(attrs_get(&attrs, ATTR_BATCHES), NULL, 10), err);
     if (!rc) {
         attrs_set(&attrs, ATTR_COMMAND, "refrender merge (%d states)", n);
-        rc = merged_noise(&merged, &attrs, err) || write_merged(out, preview, &merged, &attrs, err);
+        rc = noise_report(&merged, 0, 0, 1, &attrs, err) || /* the noise reached, as a render writes it */
+             write_merged(out, preview, &merged, &attrs, err);
     }
     if (!rc && !quiet)
         fprintf(stderr, "refrender merge: %d states -> %s%s%s\n", n, out, preview ? " and " : "",

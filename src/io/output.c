@@ -9,6 +9,7 @@
 #include <sys/stat.h>
 
 #include "formats/exr.h"
+#include "io/preview.h"
 
 /* What resuming and merging do with an attribute. */
 typedef enum {
@@ -217,13 +218,6 @@ static exr_string_attr *string_attrs(const attr_list *a, exr_string_attr *out)
     return out;
 }
 
-int output_write_final(const char *path, const image *img, int samples_per_batch, const attr_list *a,
-                       rr_error *err)
-{
-    exr_window whole = {img->width, img->height, 0, 0, img->width, img->height};
-    return output_write_final_window(path, img, samples_per_batch, a, &whole, err);
-}
-
 /* Moves the window's pixels (elems floats each) to the front, row after row. */
 static void compact_window(float *plane, int elems, const exr_window *win)
 {
@@ -232,10 +226,16 @@ static void compact_window(float *plane, int elems, const exr_window *win)
         memmove(plane + y * row, plane + ((size_t)(win->y0 + y) * win->full_w + win->x0) * elems, row * sizeof *plane);
 }
 
-int output_write_final_window(const char *path, const image *img, int samples_per_batch, const attr_list *a,
-                              const exr_window *win, rr_error *err)
+/* The preview shows what the header says the RGB holds (its oiio:ColorSpace). */
+int output_write_preview_into(atomic_set *set, const char *path, const image *img, const attr_list *a,
+                              rr_error *err)
 {
-    return output_write_final_into(NULL, path, img, samples_per_batch, a, win, err);
+    image_planes p;
+    if (image_planes_resolve(img, 1, &p)) /* its RGBA only: the samples plane's scale does not matter */
+        return rr_fail(err, "out of memory");
+    int rc = preview_write_srgb_into(set, path, img->width, img->height, p.rgba, attrs_get(a, ATTR_COLOR_SPACE), err);
+    image_planes_free(&p);
+    return rc;
 }
 
 int output_write_final_into(atomic_set *set, const char *path, const image *img, int samples_per_batch,

@@ -106,23 +106,22 @@ typedef struct {
 void attrs_set(attr_list *a, const char *key, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
 const char *attrs_get(const attr_list *a, const char *key);
 
-
-
-int output_write_final(const char *path, const image *img, int samples_per_batch, const attr_list *a,
-                       rr_error *err);
-/* The same for the pixels x0 <= x < x0 + w, y0 <= y < y0 + h only, written
- * as the EXR's data window inside the full image (a crop window). */
-int output_write_final_window(const char *path, const image *img, int samples_per_batch, const attr_list *a,
-                              const exr_window *win, rr_error *err);
-/* batch range [begin, end) is recorded in the attributes */
-int output_write_state(const char *path, const image *img, uint32_t begin, uint32_t end, attr_list *a,
-                       rr_error *err);
-/* The two above with their file left in set, for outputs put in place
- * together (atomic_set_commit; set NULL: now). */
+/* The final image of the pixels x0 <= x < x0 + w, y0 <= y < y0 + h of win
+ * (the whole image, or a crop window written as the EXR's data window),
+ * its file left in set for outputs put in place together
+ * (atomic_set_commit; set NULL: now). */
 int output_write_final_into(atomic_set *set, const char *path, const image *img, int samples_per_batch,
                             const attr_list *a, const exr_window *win, rr_error *err);
+/* A render state, batch range [begin, end) recorded in the attributes;
+ * the _into form as above. */
+int output_write_state(const char *path, const image *img, uint32_t begin, uint32_t end, attr_list *a,
+                       rr_error *err);
 int output_write_state_into(atomic_set *set, const char *path, const image *img, uint32_t begin, uint32_t end,
                             attr_list *a, rr_error *err);
+/* img's 8-bit sRGB preview (io/preview.h), its RGB as a's oiio:ColorSpace
+ * says: a render's --preview and a merge's, left in set as above. */
+int output_write_preview_into(atomic_set *set, const char *path, const image *img, const attr_list *a,
+                              rr_error *err);
 
 /* Reads a state file into img (allocated here) and its attributes. */
 int output_read_state(const char *path, image *img, attr_list *a, uint32_t *begin, uint32_t *end,
