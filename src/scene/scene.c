@@ -143,7 +143,9 @@ int scene_frame_shutter_note(const scene *s, const shutter *first, long long fra
     return 1;
 }
 
-int scene_check_trajectory_times(const scene *s, double open, double close, rr_error *err)
+/* [open, close] within the trajectory's poses; frame: "" or the frame's
+ * label, which the message names */
+static int check_times_in_trajectory(const scene *s, double open, double close, const char *frame, rr_error *err)
 {
     const trajectory *tr = s->camera_motion.path;
     double t0, t1;
@@ -151,10 +153,15 @@ int scene_check_trajectory_times(const scene *s, double open, double close, rr_e
         return 0;
     trajectory_domain(tr, &t0, &t1);
     if (open < t0 || close > t1)
-        return rr_fail(err, "%s: the shutter [%.17g, %.17g] reaches beyond the camera trajectory %s, whose %s "
-                            "interpolation covers [%.17g, %.17g]", s->path, open, close, tr->name,
+        return rr_fail(err, "%s: %sthe shutter [%.17g, %.17g] reaches beyond the camera trajectory %s, whose %s "
+                            "interpolation covers [%.17g, %.17g]", s->path, frame, open, close, tr->name,
                        trajectory_interp_name(tr->interp), t0, t1);
     return 0;
+}
+
+int scene_check_trajectory_times(const scene *s, double open, double close, rr_error *err)
+{
+    return check_times_in_trajectory(s, open, close, "", err);
 }
 
 int scene_check_shutter_in_trajectory(const scene *s, const shutter *sh, const char *frame, rr_error *err)
@@ -164,13 +171,11 @@ int scene_check_shutter_in_trajectory(const scene *s, const shutter *sh, const c
     if (!tr)
         return 0;
     shutter_span(sh, s->cam.width, s->cam.height, &lo, &hi);
+    if (sh->rolling.kind == ROLLING_OFF)
+        return check_times_in_trajectory(s, lo, hi, frame, err);
     trajectory_domain(tr, &t0, &t1);
     if (!(lo < t0 || hi > t1))
         return 0;
-    if (sh->rolling.kind == ROLLING_OFF)
-        return rr_fail(err, "%s: %sthe shutter [%.17g, %.17g] reaches beyond the camera trajectory %s, whose %s "
-                            "interpolation covers [%.17g, %.17g]", s->path, frame, lo, hi, tr->name,
-                       trajectory_interp_name(tr->interp), t0, t1);
     /* the lines' times, not [open, close], are what leave the poses */
     return rr_fail(err, "%s: %sthe shutter [%.17g, %.17g] with rolling=\"%s\" exposes lines over [%.17g, %.17g], "
                         "which reaches beyond the camera trajectory %s, whose %s interpolation covers [%.17g, %.17g]",
