@@ -34,7 +34,7 @@ RR_CPPFLAGS = -D_GNU_SOURCE -Isrc $(INCLUDES) $(BUILD_ID_FLAG) -DRR_SOURCE_SCENE
 # implies it for GCC; clang, or -std=gnu11 with -march=native, would fuse)
 RR_CFLAGS   = -std=c11 -ffp-contract=off $(OPT) -Wall -Wextra $(CFLAGS)
 RR_CXXFLAGS = -std=c++17 $(OPT) -Wall -Wextra $(CXXFLAGS)
-LDLIBS   := -ljson-c -lassimp -lembree3 -lOpenEXRCore -lxml2 -ldl -lpthread -lm
+LDLIBS   := -ljson-c -lassimp -lembree3 -lOpenEXRCore -lxml2 -lpng -ldl -lpthread -lm
 # OpenImageIO only in the preview module, opened when a preview is written
 # (src/io/preview.h): linked into refrender it cost every run 0.4 s of loading
 PREVIEW_LIBS := -lOpenImageIO -lOpenImageIO_Util
@@ -43,7 +43,7 @@ LIB_SRCS := core/common core/arena core/lanes core/inputfile core/atomicfile acc
             surfels/pointmodel formats/ply gaussians/gaussian formats/gaussian_ply gaussians/gaussian_dynamic gaussians/gaussian_stg gaussians/gaussian_fdgs \
             formats/gaussian_ply_common formats/gaussian_dynamic_ply formats/gaussian_stg_ply formats/gaussian_fdgs_ply gaussians/gaussian_hit gaussians/gaussian_blend formats/camjson formats/transforms \
             surfels/shapes surfels/surfelize formats/meshload core/rotation motion/curve motion/trajectory formats/tum \
-            motion/animation formats/animfile core/camera motion/shutter render/sampler scene/scene io/preview \
+            motion/animation formats/animfile core/camera motion/shutter render/sampler scene/scene io/preview io/preview_png \
             io/scene_xml io/scene_xml_util io/scene_xml_anim io/scene_xml_camera io/scene_params accel/accel \
             accel/accel_build accel/accel_collide render/gaussian_integrator render/exact render/exact_kinds \
             render/exact_integrate render/integrator render/surfel_integrator render/shade render/film render/noise render/render splat/frame splat/splatting splat/volumetric splat/guan_mueller formats/exr io/output io/render_attrs \

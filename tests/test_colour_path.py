@@ -293,3 +293,37 @@ def test_merged_states_keep_what_their_rgb_holds(tmp_path):
     proc = run(["merge", *states, "-o", merged])
     assert proc.returncode == 0, proc.stderr
     assert stated_colour_space(merged) == "sRGB"
+
+
+def png_chunks(path):
+    """(type, data) of each chunk, read from the bytes (PNG spec section 5.3)."""
+    data = path.read_bytes()
+    assert data[:8] == b"\x89PNG\r\n\x1a\n"
+    chunks, pos = [], 8
+    while pos < len(data):
+        size = int.from_bytes(data[pos:pos + 4], "big")
+        chunks.append((data[pos + 4:pos + 8], data[pos + 8:pos + 8 + size]))
+        pos += 12 + size
+    return chunks
+
+
+def test_a_png_preview_says_srgb_in_its_own_chunks_and_other_formats_hold_the_same_pixels(tmp_path):
+    """PNG previews are written by libpng, other formats by OpenImageIO (a 0.75 s load). Either
+    way a reader must see an sRGB image: PNG's sRGB chunk and gAMA 1/2.2 (45455, PNG spec 11.3.3.2
+    and 11.3.3.5), as OpenImageIO wrote them; a BMP preview holds the PNG's pixels; and a format
+    whose writer leaves an unreadable file (OpenImageIO 2.4's TIFF through memory: no directory)
+    is refused by name before the render, not written."""
+    scene, _, _ = scene_and_rasterizer_png(tmp_path)
+    exr, preview = sharp(scene, tmp_path / "r.exr")
+    chunks = dict(png_chunks(preview))
+    assert chunks[b"IHDR"][8:10] == bytes([8, 2])  # 8-bit truecolour
+    assert b"sRGB" in chunks and int.from_bytes(chunks[b"gAMA"], "big") == 45455
+    args = [scene, "--time", 0, "--pixel-filter", "point", "--spp", 1, "--quiet"]
+    bmp, tif = tmp_path / "r.bmp", tmp_path / "r.tif"
+    proc = run([*args, "-o", tmp_path / "b.exr", "--preview", bmp])
+    assert proc.returncode == 0, proc.stderr
+    assert np.array_equal(read8(preview), read8(bmp))
+    assert np.ptp(read8(preview)) > 50  # an image, not a flat field
+    proc = run([*args, "-o", tmp_path / "t.exr", "--preview", tif])
+    assert proc.returncode != 0 and str(tif) in proc.stderr and "read back" in proc.stderr
+    assert not tif.exists() and not (tmp_path / "t.exr").exists()

@@ -1,8 +1,10 @@
-/* sRGB preview images through the preview module (preview.cpp), opened on
+/* sRGB preview images: PNG through libpng (preview_png.c), any other
+ * format through the preview module (preview.cpp, OpenImageIO), opened on
  * first use from the directory of the running executable. */
 #include "io/preview.h"
 
 #include <dlfcn.h>
+#include <strings.h>
 #include <limits.h>
 #include <math.h>
 #include <stdio.h>
@@ -11,6 +13,7 @@
 #include <unistd.h>
 
 #include "core/atomicfile.h"
+#include "io/preview_png.h"
 
 #define PREVIEW_MODULE "refrender-preview.so"
 
@@ -51,18 +54,25 @@ static int load_module(rr_error *err)
     return 0;
 }
 
+static int is_png(const char *path) { return !strcasecmp(rr_extension(path), ".png"); }
+
 /* The extension with its dot, or "" (a dot in a directory name is none). */
 int preview_check_format(const char *path, rr_error *err)
 {
+    if (is_png(path))
+        return 0;
     if (load_module(err))
         return -1;
     const char *ext = rr_extension(path);
     int rc = module.format(*ext ? ext + 1 : "");
     if (rc == 1)
         return rr_fail(err, "%s: no image format for the extension '%s' (use e.g. .png)", path, ext);
-    if (rc)
+    if (rc == 2)
         return rr_fail(err, "%s: OpenImageIO cannot write '%s' through memory, which refrender needs to check every "
                             "write (use .png)", path, ext);
+    if (rc)
+        return rr_fail(err, "%s: OpenImageIO's '%s' writer, through memory, writes a file it cannot read back "
+                            "(use .png)", path, ext);
     return 0;
 }
 
@@ -105,7 +115,9 @@ int preview_write_srgb_into(atomic_set *set, const char *path, int w, int h, con
         for (int c = 0; c < 3; c++)
             px[3 * i + c] = display8(rgba[4 * i + c], encoded);
     char why[512] = "", name[PATH_MAX + 128];
-    int rc = module.encode(path, w, h, px, &bytes, &len, why, sizeof why);
+    _Static_assert(sizeof why >= PREVIEW_PNG_WHY, "why holds libpng's reason");
+    int rc = is_png(path) ? preview_png_encode(w, h, px, &bytes, &len, why)
+                          : module.encode(path, w, h, px, &bytes, &len, why, sizeof why);
     free(px);
     if (rc)
         return rr_fail(err, "%s: cannot encode preview: %s", path, why);

@@ -12,16 +12,46 @@
 #include <string>
 #include <vector>
 
+extern "C" int rr_preview_encode(const char *path, int w, int h, const unsigned char *rgb, unsigned char **bytes,
+                                 size_t *len, char *why, size_t why_size);
+
 static void say(char *why, size_t n, const std::string &what) { std::snprintf(why, n, "%s", what.c_str()); }
 
+/* Whether OpenImageIO reads back, at its size, a small image its writer
+ * for ext encoded in memory: OpenImageIO 2.4's TIFF writer through memory
+ * leaves a 324-byte file without its directory ("missing required
+ * ImageLength"), which only a read shows. */
+static bool reads_back(const std::string &ext)
+{
+    const int w = 3, h = 2;
+    unsigned char rgb[w * h * 3] = {0, 64, 128, 255};
+    unsigned char *bytes = nullptr;
+    size_t len = 0;
+    char why[256];
+    std::string name = "trial." + ext;
+    if (rr_preview_encode(name.c_str(), w, h, rgb, &bytes, &len, why, sizeof why))
+        return false;
+    OIIO::Filesystem::IOMemReader reader(bytes, len);
+    auto in = OIIO::ImageInput::open(name, nullptr, &reader);
+    bool ok = in && in->spec().width == w && in->spec().height == h;
+    if (in)
+        in->close();
+    OIIO::geterror(); /* a failed open's message is not ours to keep */
+    std::free(bytes);
+    return ok;
+}
+
 /* 0: OpenImageIO writes format ext ("png", no dot) through memory; 1: no
- * writer for it; 2: a writer that cannot write to memory. */
+ * writer for it; 2: a writer that cannot write to memory; 3: one whose
+ * output it cannot read back. */
 extern "C" int rr_preview_format(const char *ext)
 {
     auto out = OIIO::ImageOutput::create(*ext ? std::string(ext) : std::string("none"));
     if (!out)
         return 1;
-    return out->supports("ioproxy") ? 0 : 2;
+    if (!out->supports("ioproxy"))
+        return 2;
+    return reads_back(ext) ? 0 : 3;
 }
 
 /* Encodes 8-bit RGB as the format of path's name, in memory (OpenImageIO's

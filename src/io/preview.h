@@ -1,7 +1,8 @@
-/* sRGB preview PNG (or any 8-bit format OpenImageIO writes, chosen by the
- * file extension), through OpenImageIO in a module (preview.cpp built as
- * refrender-preview.so next to the executable) opened on first use, so
- * that a run without a preview does not load OpenImageIO at all. */
+/* sRGB preview PNG through libpng (preview_png.c), or any other 8-bit
+ * format OpenImageIO writes, chosen by the file extension, through
+ * OpenImageIO in a module (preview.cpp built as refrender-preview.so next
+ * to the executable) opened on first use, so that only such a preview
+ * loads OpenImageIO. */
 #ifndef RR_PREVIEW_H
 #define RR_PREVIEW_H
 
@@ -24,7 +25,8 @@ int preview_write_srgb(const char *path, int w, int h, const float *rgba, const 
 int preview_write_srgb_into(atomic_set *set, const char *path, int w, int h, const float *rgba,
                             const char *color_space, rr_error *err);
 
-/* 0 if OpenImageIO can write the format of path's extension; checked before
+/* 0 if the format of path's extension can be written (PNG; else
+ * OpenImageIO's writer, through memory, read back); checked before
  * a render so that a bad --preview name (or a missing module) fails at
  * once, naming the file. */
 int preview_check_format(const char *path, rr_error *err);
