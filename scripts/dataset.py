@@ -124,12 +124,24 @@ def build_id():
     return text.split("build ", 1)[1].rstrip(")\n") if "build " in text else text.strip()
 
 
-def identity(args, extra):
-    """What makes two runs' frames interchangeable: the scene's bytes, the build and every setting
-    that reaches a render (not the frame range: parts of one dataset differ in that)."""
-    return {"scene": str(Path(args.scene).resolve()), "scene_sha256": sha256(args.scene), "build": build_id(),
-            "layout": args.layout, "target_error": args.target_error, "hold": args.hold, "bounds": args.bounds,
-            "procedure": args.procedure,
+def inputs_hash(args, extra, staging_parent):
+    """The hash of every file the scene reads (models, cameras, .anim), as refrender export says."""
+    path = staging_parent / f".{Path(args.output).name}.inputs-{os.getpid()}.json"
+    try:
+        run(["export", args.scene, "--times", 0, *scene_options(extra), "-o", path], "refrender export")
+        return json.loads(path.read_text())["inputs_hash"]
+    finally:
+        if path.exists():
+            path.unlink()
+
+
+def identity(args, extra, staging_parent):
+    """What makes two runs' frames interchangeable: the scene's bytes and its inputs', the build and
+    every setting that reaches a render (not the scene's path, which machines sharing a dataset may
+    spell differently, nor the frame range, in which parts of one dataset differ, nor the layout,
+    --hold or --bounds, which only the assembly reads)."""
+    return {"scene_sha256": sha256(args.scene), "inputs_hash": inputs_hash(args, extra, staging_parent),
+            "build": build_id(), "target_error": args.target_error, "procedure": args.procedure,
             "refrender_args": extra}
 
 
@@ -223,13 +235,15 @@ def frame_files(work):
 def write_png(exr, png):
     """An 8-bit PNG of a procedure's EXR, as refrender's preview encodes (src/io/preview.c): RGB
     clamped to [0, 1], display values (oiio:ColorSpace sRGB) as they are, linear ones with the sRGB
-    curve; rounded to the nearest level."""
+    curve; in float32, rounded half up."""
     import OpenImageIO as oiio
     ch, _, header = imagecompare.read_channels(exr, unassociated_alpha=False)
-    rgb = np.clip(np.stack([ch[c] for c in "RGB"], axis=-1).astype(np.float64), 0.0, 1.0)
+    rgb = np.clip(np.stack([ch[c] for c in "RGB"], axis=-1), 0.0, 1.0).astype(np.float32)
     if str(header.get("oiio:ColorSpace", "Linear")).lower() != "srgb":
-        rgb = np.where(rgb <= 0.0031308, 12.92 * rgb, 1.055 * np.power(rgb, 1 / 2.4) - 0.055)
-    buf = oiio.ImageBuf(np.round(rgb * 255).astype(np.uint8))
+        rgb = np.where(rgb <= np.float32(0.0031308), np.float32(12.92) * rgb,
+                       np.float32(1.055) * np.power(rgb, np.float32(1 / 2.4)) - np.float32(0.055))
+    levels = np.floor(rgb * np.float32(255) + np.float32(0.5))  # half up, as preview.c's lroundf
+    buf = oiio.ImageBuf(levels.astype(np.uint8))
     if not buf.write(str(png)):
         raise Failure(f"{png}: cannot write: {oiio.geterror()}")
 
@@ -477,7 +491,7 @@ def main(argv):
         if not out.parent.resolve().is_dir():
             raise Failure(f"{out}: its directory {out.parent} does not exist")
         staging = out.parent / (out.name + ".staging")
-        ident = identity(args, extra)
+        ident = identity(args, extra, out.parent)
         open_staging(staging, ident)
         render_frames(args, extra, staging, ident, first, last)
         if args.no_assemble:
