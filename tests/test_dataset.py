@@ -57,9 +57,13 @@ def made(tmp_path_factory):
     d = tmp_path_factory.mktemp("dataset")
     scene = d / "scene.xml"
     scene.write_text(SCENE)
-    for layout in ("llff", "nerfstudio"):
-        p = dataset(scene, d / layout, layout)
-        assert p.returncode == 0, p.stderr
+    p = dataset(scene, d / "nerfstudio", "nerfstudio")
+    assert p.returncode == 0, p.stderr
+    # the LLFF layout assembled from the same frames, rendering none (the layout is the assembly's)
+    shutil.copytree(d / "nerfstudio/frames", d / "llff.staging/frames")
+    shutil.copy(d / "nerfstudio/settings.json", d / "llff.staging")
+    p = dataset(scene, d / "llff", "llff", extra=["--assemble"])
+    assert p.returncode == 0, p.stderr
     return d
 
 
