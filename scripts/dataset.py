@@ -36,10 +36,13 @@ import subprocess
 import sys
 from pathlib import Path
 
-import numpy as np
+import pydeps
 
-import imagecompare
-import safefiles
+pydeps.require(*pydeps.IMAGE_MODULES)  # a missing package: one line, not a traceback
+import numpy as np  # noqa: E402
+
+import imagecompare  # noqa: E402
+import safefiles  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent
 # Options the dataset sets itself for each render: given after -- they would
