@@ -214,19 +214,15 @@ def camera_time(path):
 
 
 def render_sharp(common, work, frame, middle):
-    """The sharp frame whose camera time is the blurred frame's. --time T puts a rolling shutter's
-    lines at T plus their readout offsets, so its cameraTime is T plus the middle line's offset
-    (src/TRAJECTORIES.md, the camera's header attributes): T is moved back by that once."""
+    """The sharp frame at the blurred frame's camera time: --time T centres a rolling shutter's
+    lines on T as the exposure centres them on cameraTime (src/TRAJECTORIES.md, the camera's header
+    attributes), so both headers' cameraTime must agree; checked."""
     sharp = [w for i, w in enumerate(common) if not (w == "--tspp" or (i and common[i - 1] == "--tspp"))]
-    t = middle
-    for attempt in range(2):
-        run([*sharp, "--time", repr(t), "-o", work / "sharp.exr", "--preview", work / "sharp.png"],
-            f"frame {frame}, sharp at t = {t!r}")
-        got = camera_time(work / "sharp.exr")
-        if abs(got - middle) <= 1e-9 * max(1.0, abs(middle)):
-            return
-        t -= got - middle
-    raise Failure(f"frame {frame}: the sharp render's cameraTime {got!r} is not the blurred one's {middle!r}")
+    run([*sharp, "--time", repr(middle), "-o", work / "sharp.exr", "--preview", work / "sharp.png"],
+        f"frame {frame}, sharp at t = {middle!r}")
+    got = camera_time(work / "sharp.exr")
+    if abs(got - middle) > 1e-9 * max(1.0, abs(middle)):
+        raise Failure(f"frame {frame}: the sharp render's cameraTime {got!r} is not the blurred one's {middle!r}")
 
 
 def frame_files(work):
@@ -381,6 +377,14 @@ def write_llff(staging, records, poses, k, bounds):
         np.save(f, np.array(rows, dtype=np.float64))
 
 
+def readout_time(rolling):
+    """3dgs-deblur's rolling_shutter_time of export's rolling_shutter: 0 for a global shutter, the
+    readout of its own convention; None for the others (lines, gsplat), said per frame only."""
+    if rolling["kind"] == "off":
+        return 0.0
+    return rolling.get("readout_time") if rolling["kind"] == "3dgs-deblur" else None
+
+
 def write_nerfstudio(staging, records, poses, k):
     width, height = records[0]["size"]
     fx, fy, cx, cy = k
@@ -392,7 +396,7 @@ def write_nerfstudio(staging, records, poses, k):
         link(staging / r["sharp" if r["split"] == "test" else "blur"]["png"], staging / name)
         p = poses[r["frame"]]
         frames.append({"file_path": name, "transform_matrix": p["c2w"].tolist(), "time": p["time"],
-                       "exposure_open": p["open"], "exposure_close": p["close"]})
+                       "exposure_open": p["open"], "exposure_close": p["close"], "rolling_shutter": p["rolling"]})
         split[r["split"]].append(name)
     meta = {"camera_model": "OPENCV", "fl_x": fx, "fl_y": fy, "cx": cx, "cy": cy, "w": width, "h": height,
             "k1": 0.0, "k2": 0.0, "p1": 0.0, "p2": 0.0, "frames": frames, "train_filenames": split["train"],
@@ -401,9 +405,11 @@ def write_nerfstudio(staging, records, poses, k):
     exposure = first["exposure"][1] - first["exposure"][0]
     if all(abs((r["exposure"][1] - r["exposure"][0]) - exposure) < 1e-12 for r in records):
         meta["exposure_time"] = exposure
-    readout = first["rolling_shutter"].get("readout_time", 0.0)
-    if all(r["rolling_shutter"].get("readout_time", 0.0) == readout for r in records):
-        meta["rolling_shutter_time"] = readout
+    # 3dgs-deblur's rolling_shutter_time is its readout, first line to last (refrender's readoutTime
+    # of rolling="3dgs-deblur"); 0 for a global shutter; other conventions only in each frame's own
+    readouts = {readout_time(r["rolling_shutter"]) for r in records}
+    if len(readouts) == 1 and None not in readouts:
+        meta["rolling_shutter_time"] = readouts.pop()
     write_json(staging / "transforms.json", meta)
 
 
@@ -481,7 +487,13 @@ def parse(argv):
     return args, extra
 
 
+def stop(signum, frame):
+    """SIGTERM (Slurm's, a kill) ends the run as Ctrl-C does: the render running stopped, no DIR."""
+    raise KeyboardInterrupt
+
+
 def main(argv):
+    signal.signal(signal.SIGTERM, stop)
     args, extra = parse(argv[1:])
     try:
         first, last = parse_range(args.frames)

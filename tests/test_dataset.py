@@ -276,3 +276,20 @@ def test_an_n_frame_procedure_beside_the_true_blur(tmp_path):
     # Deblur-NeRF's 8-bit frames and truncation: every value a whole level, unlike the integral
     ch = imagecompare.read_channels(d / "nframe/deblur-nerf.exr", False)[0]
     assert np.array_equal(ch["R"] * 255, np.round(ch["R"] * 255))
+
+
+def test_a_rolling_shutter_in_transforms_json(tmp_path):
+    """3dgs-deblur's convention (scenes/examples/rolling_shutter.xml as frames): its readout as
+    rolling_shutter_time, and the sharp view at the blurred one's camera time, where --time centres
+    the lines as the exposure does (the middle line's instant, src/TRAJECTORIES.md)."""
+    scene = tmp_path / "rs.xml"
+    scene.write_text(SCENE.replace('<shutter fraction="0.5" weight="box"/>',
+                                   '<shutter fraction="0.5" rolling="3dgs-deblur" readoutTime="0.08"/>'))
+    p = dataset(scene, tmp_path / "ds", "nerfstudio", "1-1")
+    assert p.returncode == 0, p.stderr
+    meta = json.loads((tmp_path / "ds/transforms.json").read_text())
+    assert meta["rolling_shutter_time"] == 0.08 and meta["exposure_time"] == pytest.approx(0.05)
+    assert meta["frames"][0]["rolling_shutter"]["kind"] == "3dgs-deblur"
+    times = [imagecompare.read_channels(tmp_path / f"ds/frames/000001/{k}.exr", False)[2]["refrender:cameraTime"]
+             for k in ("blur", "sharp")]
+    assert times[0] == times[1] == pytest.approx(meta["frames"][0]["time"])
