@@ -436,7 +436,9 @@ def assemble(args, extra, staging, ident, first, last, argv):
     for stale in (staging / "frames").glob("*.tmp-*"):
         shutil.rmtree(stale, ignore_errors=True)
     exported, poses = export_scene(args, extra, first, last, staging)
-    records = [frame_record(staging, f, poses[f], (f - first) % args.hold == 0, args.target_error) for f in range(first, last + 1)]
+    # held out: frames 0, H, 2H, ... of the range, as Deblur-NeRF's arange(N)[::llffhold]
+    records = [frame_record(staging, f, poses[f], (f - first) % args.hold == 0, args.target_error)
+               for f in range(first, last + 1)]
     short = [r["frame"] for r in records if not r["noise"]["target_reached"]]
     if short:
         print(f"refrender dataset: warning: frames {short}: some pixels stayed above --target-error "

@@ -75,6 +75,11 @@ def read_u8(path):
     return px
 
 
+def as_loaded(png):
+    """A PNG as load_llff_data holds it: RGB / 255 in float32."""
+    return (read_u8(png)[..., :3] / 255.0).astype(np.float32)
+
+
 def rgb_and_stderr(path):
     ch = imagecompare.read_channels(path, unassociated_alpha=False)[0]
     return np.stack([ch[c] for c in ("R", "G", "B", "stderr.R", "stderr.G", "stderr.B")], axis=-1)
@@ -92,8 +97,8 @@ def test_llff_reads_as_deblur_nerf_loads_it(made):
     assert list(i_test) == [0, 2] and list(i_train) == [1]
     # held-out views sharp, training views blurred (Deblur-NeRF's synthetic scenes)
     for i, kind in ((0, "sharp"), (1, "blur"), (2, "sharp")):
-        assert np.array_equal(images[i], (read_u8(root / f"frames/00000{i}/{kind}.png")[..., :3] / 255.0).astype(np.float32))
-    assert not np.array_equal(images[0], (read_u8(root / "frames/000000/blur.png")[..., :3] / 255.0).astype(np.float32))
+        assert np.array_equal(images[i], as_loaded(root / f"frames/00000{i}/{kind}.png"))
+    assert not np.array_equal(images[0], as_loaded(root / "frames/000000/blur.png"))
     # its default bd_factor scales translations and bounds by 1 / (0.75 min bound)
     _, scaled, sbds, *_ = llff_ref.load_llff_data(root, factor=1, bd_factor=0.75, llffhold=2)
     assert np.allclose(scaled[:, :, 3], poses[:, :, 3] / 1.5, atol=1e-6) and np.allclose(sbds, bds / 1.5)
@@ -260,7 +265,8 @@ def test_parts_rendered_apart_assemble_and_a_corrupted_frame_is_rendered_again(t
     a, b = (np.load(d / "poses_bounds.npy") for d in (out, made / "llff"))
     assert np.array_equal(a, b)
     for f in range(3):
-        assert (out / f"frames/00000{f}/blur.png").read_bytes() == (made / f"llff/frames/00000{f}/blur.png").read_bytes()
+        new, old = (d / f"frames/00000{f}/blur.png" for d in (out, made / "llff"))
+        assert new.read_bytes() == old.read_bytes()
 
 
 def test_an_n_frame_procedure_beside_the_true_blur(tmp_path):
