@@ -127,23 +127,39 @@ def build_id():
     return text.split("build ", 1)[1].rstrip(")\n") if "build " in text else text.strip()
 
 
-def inputs_hash(args, extra, staging_parent):
-    """The hash of every file the scene reads (models, cameras, .anim), as refrender export says."""
-    path = staging_parent / f".{Path(args.output).name}.inputs-{os.getpid()}.json"
+def export_camera(args, extra, staging_parent):
+    """refrender export's JSON of the scene (its inputs_hash, the camera), before any render."""
+    path = staging_parent / f".{Path(args.output).name}.export-{os.getpid()}.json"
     try:
-        run(["export", args.scene, "--times", 0, *scene_options(extra), "-o", path], "refrender export")
-        return json.loads(path.read_text())["inputs_hash"]
+        run(["export", args.scene, "--times", 0, "--axes", "opencv", *scene_options(extra), "-o", path],
+            "refrender export")
+        return json.loads(path.read_text())
     finally:
         if path.exists():
             path.unlink()
 
 
-def identity(args, extra, staging_parent):
+def check_llff_camera(fx, fy, cx, cy, width, height, tolerance):
+    """LLFF's hwf holds one focal length, and Deblur-NeRF's K puts the principal point at the image
+    centre (run_nerf.py, train()): a camera it cannot say is refused."""
+    if abs(fx - fy) > tolerance * fx or abs(cx - width / 2) > tolerance * width or \
+            abs(cy - height / 2) > tolerance * height:
+        raise Failure(f"--layout llff: its hwf holds one focal length and Deblur-NeRF puts the principal point at "
+                      f"the image centre, but this camera has fx {fx:.9g}, fy {fy:.9g}, centre ({cx:.9g}, {cy:.9g}) "
+                      f"in {width}x{height}: use --layout nerfstudio")
+
+
+def exported_intrinsics(exported):
+    k = np.array(exported["camera"]["camera_to_raster"], dtype=np.float64)  # OpenCV axes
+    return k[0, 0], k[1, 1], k[0, 2], k[1, 2]
+
+
+def identity(args, extra, exported):
     """What makes two runs' frames interchangeable: the scene's bytes and its inputs', the build and
     every setting that reaches a render (not the scene's path, which machines sharing a dataset may
     spell differently, nor the frame range, in which parts of one dataset differ, nor the layout,
     --hold or --bounds, which only the assembly reads)."""
-    return {"scene_sha256": sha256(args.scene), "inputs_hash": inputs_hash(args, extra, staging_parent),
+    return {"scene_sha256": sha256(args.scene), "inputs_hash": exported["inputs_hash"],
             "build": build_id(), "target_error": args.target_error, "procedure": args.procedure,
             "refrender_args": extra}
 
@@ -301,8 +317,7 @@ def intrinsics(exported, header, width, height):
     got = header_intrinsics(header, width, height)
     if exported["resolution"] != [width, height]:
         return got
-    k = np.array(exported["camera"]["camera_to_raster"], dtype=np.float64)  # OpenCV axes
-    want = (k[0, 0], k[1, 1], k[0, 2], k[1, 2])
+    want = exported_intrinsics(exported)
     if any(abs(a - b) > 1e-5 * max(1.0, abs(b)) for a, b in zip(got, want)):
         raise Failure(f"the render's intrinsics {got} are not export's {want}")
     return want
@@ -357,10 +372,7 @@ def link(src, dst):
 def write_llff(staging, records, poses, k, bounds):
     width, height = records[0]["size"]
     fx, fy, cx, cy = k
-    if abs(fx - fy) > 1e-4 * fx or abs(cx - width / 2) > 1e-3 or abs(cy - height / 2) > 1e-3:
-        raise Failure(f"--layout llff: its hwf holds one focal length and the image centre as principal point "
-                      f"(Deblur-NeRF's K), but this camera has fx {fx:.6g}, fy {fy:.6g}, centre ({cx:.6g}, "
-                      f"{cy:.6g}): use --layout nerfstudio")
+    check_llff_camera(fx, fy, cx, cy, width, height, 1e-5)  # the header's float32 at another --res
     images = staging / "images_1"
     images.mkdir()
     rows = []
@@ -508,7 +520,10 @@ def main(argv):
         if not out.parent.resolve().is_dir():
             raise Failure(f"{out}: its directory {out.parent} does not exist")
         staging = out.parent / (out.name + ".staging")
-        ident = identity(args, extra, out.parent)
+        exported = export_camera(args, extra, out.parent)
+        if args.layout == "llff":  # before anything renders
+            check_llff_camera(*exported_intrinsics(exported), *exported["resolution"], 1e-9)
+        ident = identity(args, extra, exported)
         open_staging(staging, ident)
         render_frames(args, extra, staging, ident, first, last)
         if args.no_assemble:

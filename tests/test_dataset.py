@@ -299,3 +299,22 @@ def test_a_rolling_shutter_in_transforms_json(tmp_path):
     times = [imagecompare.read_channels(tmp_path / f"ds/frames/000001/{k}.exr", False)[2]["refrender:cameraTime"]
              for k in ("blur", "sharp")]
     assert times[0] == times[1] == pytest.approx(meta["frames"][0]["time"])
+
+
+def test_a_transforms_json_camera_off_centre(tmp_path):
+    """A camera as nerfstudio wrote it (scenes/examples/transforms.json: principal point (34, 22.5)
+    in 64x48, fl 70): LLFF cannot say it and is refused before anything renders; the nerfstudio
+    layout gives its intrinsics back exactly, as its dataparser reads them."""
+    examples = Path(__file__).resolve().parent.parent / "scenes/examples"
+    for name in ("transforms.json", "sphere_3dgs.ply"):
+        shutil.copy(examples / name, tmp_path)
+    scene = tmp_path / "scene.xml"
+    scene.write_text((examples / "transforms.xml").read_text().replace("<shutter", '<frames rate="1"/><shutter'))
+    p = dataset(scene, tmp_path / "llff", "llff", "0-0")
+    assert p.returncode == 1 and "use --layout nerfstudio" in p.stderr and "(34, 22.5)" in p.stderr, p.stderr
+    assert not (tmp_path / "llff.staging").exists()
+    p = dataset(scene, tmp_path / "ns", "nerfstudio", "0-0")
+    assert p.returncode == 0, p.stderr
+    test = ns_ref.parse(tmp_path / "ns", "test")
+    assert (test["fl_x"], test["fl_y"], test["cx"], test["cy"], test["w"], test["h"]) == pytest.approx(
+        (70, 70, 34, 22.5, 64, 48), rel=1e-12)  # export's doubles: the camera's own, through its fov
