@@ -67,7 +67,7 @@ def test_readme_is_a_front_door():
 
 def help_text():
     texts = [run(["--help"]).stdout]
-    for sub in ["merge", "gen", "surfels", "export", "splat"]:
+    for sub in ["merge", "gen", "surfels", "export", "splat", "dataset"]:
         texts.append(run([sub, "--help"]).stdout)
     return "\n".join(texts)
 

@@ -17,7 +17,7 @@ import pytest
 
 from conftest import ROOT
 
-TOOLS = ["compare.py", "convergence.py", "convert_4dgs.py", "cost_error.py", "gallery.py", "regress.py",
+TOOLS = ["compare.py", "convergence.py", "convert_4dgs.py", "cost_error.py", "dataset.py", "gallery.py", "regress.py",
          "regress_seeds.py", "time_to_error.py"]
 ADVICE = "run with /usr/bin/python3 after scripts/install-deps.sh"
 

@@ -9,5 +9,6 @@ int cmd_merge(int argc, char **argv);
 int cmd_surfels(int argc, char **argv);
 int cmd_export(int argc, char **argv);
 int cmd_splat(int argc, char **argv);
+int cmd_dataset(int argc, char **argv);
 
 #endif

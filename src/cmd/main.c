@@ -32,6 +32,7 @@ static void usage(FILE *f)
 "       refrender surfels MESH|CLOUD [options] -o FILE.ply     (see 'refrender surfels --help')\n"
 "       refrender export SCENE.xml [options] -o SCENE.json     (see 'refrender export --help')\n"
 "       refrender splat METHOD SCENE.xml [options] -o OUT.exr  (the thesis's splatting; 'refrender splat --help')\n"
+"       refrender dataset SCENE.xml --layout llff|nerfstudio --frames A-B -o DIR  (a deblurring benchmark)\n"
 "\n"
 "Renders a ground-truth motion-blurred image of a point-based scene by Monte\n"
 "Carlo ray tracing (Wolf 2008, sec. 4.5) into a 32-bit float EXR. Without SCENE\n"
@@ -858,6 +859,8 @@ int main(int argc, char **argv)
         return cmd_merge(argc - 1, argv + 1);
     if (argc > 1 && !strcmp(argv[1], "splat"))
         return cmd_splat(argc - 1, argv + 1);
+    if (argc > 1 && !strcmp(argv[1], "dataset"))
+        return cmd_dataset(argc - 1, argv + 1);
     if (argc > 1 && !strcmp(argv[1], "surfels"))
         return cmd_surfels(argc - 1, argv + 1);
     return cmd_render(argc, argv);
