@@ -176,7 +176,7 @@ endif
 # in build-fuzz/. `make test` replays each target's committed corpus (a
 # regression run of seconds); `make fuzz FUZZ_SECONDS=N` fuzzes each target
 # for N seconds, keeping what it finds in build-fuzz/corpus/.
-FUZZ_TARGETS := scene ply anim state gaussian camjson render_gaussian render_camjson tum transforms
+FUZZ_TARGETS := scene ply anim state gaussian camjson render_gaussian render_camjson tum transforms colmap llff
 FUZZ_SECONDS ?= 60
 FUZZ_DIR     := build-fuzz
 FUZZ_FLAGS   := -O1 -g -fno-omit-frame-pointer -fsanitize=address,undefined -fno-sanitize-recover=undefined
