@@ -307,7 +307,7 @@ def npy_bytes(header, data):
 
 
 def test_poses_bounds_layouts_numpy_writes_are_read(tmp_path, sources):
-    """float32 and a Fortran-order array (np.save of a transposed array) hold the same poses."""
+    """float32, big-endian and a Fortran-order array (np.save of a transposed array) hold the same poses."""
     want = export(tmp_path, scene(tmp_path, "cameras.json", 'image="B.png"'))["frames"][0]["world_to_camera"][0]
     np.save(tmp_path / "f.npy", np.asfortranarray(llff_rows()))
     assert b"'fortran_order': True" in (tmp_path / "f.npy").read_bytes()[:128]
@@ -316,6 +316,9 @@ def test_poses_bounds_layouts_numpy_writes_are_read(tmp_path, sources):
     np.save(tmp_path / "s.npy", llff_rows().astype(np.float32))
     got = export(tmp_path, scene(tmp_path, "s.npy", 'index="1"'))["frames"][0]["world_to_camera"][0]
     assert np.allclose(got, want, rtol=0, atol=1e-6)
+    np.save(tmp_path / "b.npy", llff_rows().astype(">f8"))
+    got = export(tmp_path, scene(tmp_path, "b.npy", 'index="1"'))["frames"][0]["world_to_camera"][0]
+    assert np.allclose(got, want, rtol=0, atol=1e-12)
 
 
 def test_hostile_poses_bounds_are_refused_naming_file_and_row(tmp_path):
