@@ -26,7 +26,7 @@ import numpy as np
 import pytest
 
 import gsply
-from conftest import coverage_centroid, read_exr, run
+from conftest import ROOT, coverage_centroid, read_exr, run
 
 W, H = 96, 64
 FX, FY = 80.0, 95.0  # the shared cameras' pixels are square (LLFF has one focal); FY for a COLMAP PINHOLE's own
@@ -364,3 +364,17 @@ def test_a_selector_without_a_source_is_refused(tmp_path):
                     '<object name="g"><gaussianModel file="g.ply"/></object></scene>')
     proc = run([path, "-o", tmp_path / "x.exr", "--quiet"])
     assert proc.returncode == 1 and "bad.xml:2" in proc.stderr and "'image' selects a camera" in proc.stderr
+
+
+def test_the_examples_render_training_views_bit_for_bit(tmp_path):
+    """scenes/examples/colmap_views.xml and llff_views.xml hold training_views.xml's two views (as
+    TRAJECTORIES.md says): the same seed renders the same image bit for bit."""
+    images = []
+    for name in ("training_views", "colmap_views", "llff_views"):
+        out = tmp_path / f"{name}.exr"
+        proc = run([ROOT / "scenes" / "examples" / f"{name}.xml", "--res", "32x24", "--spp", 1, "--tspp", 8,
+                    "--seed", 5, "-o", out, "--quiet"])
+        assert proc.returncode == 0, (name, proc.stderr)
+        images.append(read_exr(out)[0])
+    assert images[0][..., 3].sum() > 1
+    assert all(np.array_equal(images[0], img) for img in images[1:])
