@@ -20,7 +20,9 @@ projection (fx x / z + cx, fy y / z + cy; models.h: the upper-left corner is (0,
 rendered through each source equals the cameras.json render. Each hostile input is refused with
 exit 1 and a message naming the file and the record (line, record number or row)."""
 import json
+import shutil
 import struct
+import subprocess
 
 import numpy as np
 import pytest
@@ -230,6 +232,25 @@ def refused(tmp_path, source, select, *why, inner=""):
         assert w in proc.stderr, (w, proc.stderr)
     assert not (tmp_path / "x.exr").exists()
     return proc.stderr
+
+
+@pytest.mark.skipif(not shutil.which("colmap"), reason="COLMAP (Debian's colmap, scripts/install-deps.sh) not installed")
+def test_models_colmap_itself_wrote_give_the_same_poses(tmp_path, sources):
+    """COLMAP's own writers (Debian's colmap 3.8, `model_converter`): our text model written back as
+    binary, our binary model as text (17 digits, its comment lines); each exports cameras.json's poses."""
+    want = export(tmp_path, scene(tmp_path, "cameras.json", 'image="B.png"', name="want.xml"))
+    for src, kind in (("txt", "BIN"), ("bin", "TXT")):
+        (tmp_path / src / f"points3D.{src}").write_bytes(b"# 3D point list\n" if src == "txt" else b"\0" * 8)
+        out = tmp_path / f"colmap-{kind}"
+        out.mkdir()
+        proc = subprocess.run(["colmap", "model_converter", "--input_path", tmp_path / src, "--output_path", out,
+                               "--output_type", kind], capture_output=True, text=True, timeout=60)
+        assert proc.returncode == 0 and (out / f"images.{kind.lower()}").is_file(), proc.stderr
+        got = export(tmp_path, scene(tmp_path, out.name, 'imageId="7"', name=f"{kind}.xml"))
+        for key in ("camera_to_raster", "world_to_camera"):
+            a = got["camera"].get(key, got["frames"][0].get(key))
+            b = want["camera"].get(key, want["frames"][0].get(key))
+            assert np.allclose(a, b, rtol=0, atol=1e-9), (kind, key)
 
 
 def test_colmap_models_refuse_other_camera_models_by_name(tmp_path):
