@@ -289,7 +289,8 @@ def test_hostile_colmap_binaries_are_refused_naming_file_and_record(tmp_path):
                                 + b[20:]), 'image="A.png"', "image record 0", "not 1 within 1e-3")
     refused(tmp_path, bin_model(tmp_path), 'image="D.png"', "images.bin: no image named 'D.png'; it has 3 'A.png'")
     refused(tmp_path, bin_model(tmp_path), 'imageId="4"', "no image of IMAGE_ID 4")
-    refused(tmp_path, bin_model(tmp_path), 'index="0"', "this COLMAP model takes 'imageId'")
+    refused(tmp_path, bin_model(tmp_path), 'index="0"', "'index' selects a row of an LLFF poses_bounds.npy; this "
+            "COLMAP model takes 'image' or 'imageId'")
     refused(tmp_path, "nowhere", 'image="A.png"', "nowhere: cannot open")  # not a directory: a cameras.json
 
 
@@ -374,8 +375,16 @@ def test_hostile_poses_bounds_are_refused_naming_file_and_row(tmp_path):
     refused(tmp_path, src, 'image="D.png"', "no image named 'D.png' among its 3 images")
     (d / "images" / "D.png").write_bytes(b"")
     refused(tmp_path, src, 'image="A.png"', "4 images (names ending in JPG, jpg or png) but", "has 3 rows")
-    refused(tmp_path, src, 'imageId="1"', "this LLFF file takes 'index'")
+    refused(tmp_path, src, 'imageId="1"', "this LLFF file takes 'image' or 'index'")
+    refused(tmp_path, src, 'image="A.png" index="1"', "give 'image' or 'index', not both")
     refused(tmp_path, src, 'image="A.png" trainingResolution="2"', "trainingResolution is 3DGS's rule")
+
+
+def test_a_cameras_json_takes_no_number(tmp_path, sources):
+    for attr in ("imageId", "index"):
+        refused(tmp_path, "cameras.json", f'{attr}="1"', f"'{attr}' selects", "a cameras.json takes 'image'")
+    refused(tmp_path, "cameras.json", 'image="A.png"', "<pose> needs 'image' (an img_name of the file)",
+            inner='<animation><pose time="0" image="A.png"/><pose time="1"/></animation>')
 
 
 def test_a_selector_without_a_source_is_refused(tmp_path):

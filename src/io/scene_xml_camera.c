@@ -69,17 +69,19 @@ static int training_size(xml_ctx *c, xmlNodePtr n, int *width, int *height)
  * exactly one. image must hold 256 bytes. */
 static int read_key(xml_ctx *c, xmlNodePtr n, const camsource *src, camsource_key *key, char *image)
 {
-    static const char *const number_attr[3] = {NULL, "imageId", "index"};
-    const char *want = number_attr[src->kind], *other = number_attr[src->kind == CAMSOURCE_LLFF ? 1 : 2];
+    static const char *const number_attr[3] = {NULL, "imageId", "index"}; /* by camsource_kind */
+    static const char *const source[3] = {"a cameras.json", "this COLMAP model", "this LLFF file"};
+    static const char *const named[3] = {"an img_name of the file", "an image's NAME in the model",
+                                         "a file name in images/ beside it"};
+    const char *want = number_attr[src->kind];
     int got = xml_attr_text(c, n, "image", image, 256), number = 0;
     if (got < 0)
         return -1;
-    if (xmlHasProp(n, (const xmlChar *)other) || (!want && xmlHasProp(n, (const xmlChar *)"index")))
-        return xml_fail(c, n, "'%s' selects %s; %s", xmlHasProp(n, (const xmlChar *)"index") ? "index" : "imageId",
-                        src->kind == CAMSOURCE_JSON ? "no camera of a cameras.json (give 'image', an img_name)"
-                        : "a camera of another source", want ? (src->kind == CAMSOURCE_LLFF
-                        ? "this LLFF file takes 'index' (its row, from 0) or 'image'"
-                        : "this COLMAP model takes 'imageId' (its IMAGE_ID) or 'image'") : "");
+    for (int k = 1; k < 3; k++)
+        if (k != (int)src->kind && xmlHasProp(n, (const xmlChar *)number_attr[k]))
+            return xml_fail(c, n, "'%s' selects %s; %s takes 'image'%s%s%s", number_attr[k],
+                            k == 1 ? "a COLMAP image by its IMAGE_ID" : "a row of an LLFF poses_bounds.npy",
+                            source[src->kind], want ? " or '" : "", want ? want : "", want ? "'" : "");
     if (want && xmlHasProp(n, (const xmlChar *)want)) {
         if (got)
             return xml_fail(c, n, "give 'image' or '%s', not both", want);
@@ -89,9 +91,8 @@ static int read_key(xml_ctx *c, xmlNodePtr n, const camsource *src, camsource_ke
         return 0;
     }
     if (!got)
-        return xml_fail(c, n, "a camera from 'cameras' needs 'image' (%s)%s%s", src->kind == CAMSOURCE_JSON
-                        ? "an img_name of the file" : src->kind == CAMSOURCE_COLMAP ? "an image's NAME in the model"
-                        : "a file name in images/ beside it", want ? " or " : "", want ? want : "");
+        return xml_fail(c, n, "<%s> needs 'image' (%s)%s%s", xml_elname(n), named[src->kind], want ? " or " : "",
+                        want ? want : "");
     key->image = image, key->number = -1;
     return 0;
 }
