@@ -166,7 +166,7 @@ test:
 	$(MAKE) DCHECKS=1 test
 else
 # Everything is built first, a job a core (a fresh clone compiles refrender,
-# the unit tests and ten fuzz targets), then the tests run in order.
+# the unit tests and twelve fuzz targets), then the tests run in order.
 test:
 	$(MAKE) -j$(TEST_JOBS) test-build
 	$(MAKE) test-c test-fuzz test-py
