@@ -290,6 +290,8 @@ def test_hostile_colmap_binaries_are_refused_naming_file_and_record(tmp_path):
     # a quaternion scaled by 1.01: no pose
     refused(tmp_path, bin_model(tmp_path, lambda b: b[:12] + struct.pack("<d", 1.01 * struct.unpack("<d", b[12:20])[0])
                                 + b[20:]), 'image="A.png"', "image record 0", "not 1 within 1e-3")
+    refused(tmp_path, bin_model(tmp_path, lambda b: b[:68] + struct.pack("<i", 9) + b[72:]), 'image="A.png"',
+            "images.bin: image record 0: image 3 ('A.png'): its camera 9 is not in")
     refused(tmp_path, bin_model(tmp_path), 'image="D.png"', "images.bin: no image named 'D.png'; it has 3 'A.png'")
     refused(tmp_path, bin_model(tmp_path), 'imageId="4"', "no image of IMAGE_ID 4")
     refused(tmp_path, bin_model(tmp_path), 'index="0"', "'index' selects a row of an LLFF poses_bounds.npy; this "
@@ -321,6 +323,10 @@ def test_hostile_colmap_text_is_refused_naming_file_and_line(tmp_path):
     refused(tmp_path, "t", 'image="A.png"', "image id 3 appears twice")
     write_colmap_text(tmp_path / "t", [(2, "PINHOLE", W, H, [FX, FY, 48])], imgs)
     refused(tmp_path, "t", 'image="A.png"', "cameras.txt:3", "PINHOLE has 4 parameters, the line 3")
+    write_colmap_text(tmp_path / "t", [(2, "PINHOLE", W, H, [0.0, FY, 48, 32])], imgs)
+    refused(tmp_path, "t", 'image="A.png"', "cameras.txt:3: camera 2: focal 0", "no usable view")
+    write_colmap_text(tmp_path / "t", [(2, "PINHOLE", 70000, H, [FX, FY, 48, 32])], imgs)
+    refused(tmp_path, "t", 'image="A.png"', "cameras.txt:3: camera 2 is 70000x64")
     (tmp_path / "e").mkdir()
     refused(tmp_path, "e", 'image="A.png"', "holds neither cameras.bin and images.bin nor cameras.txt")
 
