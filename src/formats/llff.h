@@ -9,7 +9,8 @@
  * axes re-ordered to [down, right, back] from COLMAP's [right, down,
  * forward] (51), the fourth the camera centre, the fifth [height, width,
  * focal] in pixels of the full-size images (COLMAP's camera, 21-23: its
- * first parameter; the principal point is the image centre, NeRF's K).
+ * first parameter; the principal point is the image centre, as
+ * Deblur-NeRF's K puts it: run_nerf.py 268-271).
  * Loaders turn the axes to [right, up, back] (limacv/Deblur-NeRF aa9d6ce,
  * load_llff.py 246: columns 1, -0, 2); refrender turns them to OpenCV's
  * [right, down, forward]: columns 1, 0, -2. Loaders then rescale and
