@@ -41,7 +41,7 @@ PREVIEW_LIBS := -lOpenImageIO -lOpenImageIO_Util
 
 LIB_SRCS := core/common core/arena core/lanes core/inputfile core/atomicfile accel/kbuffer surfels/splat \
             surfels/pointmodel formats/ply gaussians/gaussian formats/gaussian_ply gaussians/gaussian_dynamic gaussians/gaussian_stg gaussians/gaussian_fdgs \
-            formats/gaussian_ply_common formats/gaussian_dynamic_ply formats/gaussian_stg_ply formats/gaussian_fdgs_ply gaussians/gaussian_hit gaussians/gaussian_blend formats/camjson formats/transforms \
+            formats/gaussian_ply_common formats/gaussian_dynamic_ply formats/gaussian_stg_ply formats/gaussian_fdgs_ply gaussians/gaussian_hit gaussians/gaussian_blend formats/camjson formats/colmap formats/llff formats/camsource formats/transforms \
             surfels/shapes surfels/surfelize formats/meshload core/rotation motion/curve motion/trajectory formats/tum \
             motion/animation formats/animfile core/camera motion/shutter render/sampler scene/scene io/preview io/preview_png \
             io/scene_xml io/scene_xml_util io/scene_xml_anim io/scene_xml_camera io/scene_params accel/accel \
@@ -167,7 +167,7 @@ test:
 	$(MAKE) DCHECKS=1 test
 else
 # Everything is built first, a job a core (a fresh clone compiles refrender,
-# the unit tests and ten fuzz targets), then the tests run in order.
+# the unit tests and twelve fuzz targets), then the tests run in order.
 test:
 	$(MAKE) -j$(TEST_JOBS) test-build
 	$(MAKE) test-c test-fuzz test-py
@@ -177,7 +177,7 @@ endif
 # in build-fuzz/. `make test` replays each target's committed corpus (a
 # regression run of seconds); `make fuzz FUZZ_SECONDS=N` fuzzes each target
 # for N seconds, keeping what it finds in build-fuzz/corpus/.
-FUZZ_TARGETS := scene ply anim state gaussian camjson render_gaussian render_camjson tum transforms
+FUZZ_TARGETS := scene ply anim state gaussian camjson render_gaussian render_camjson tum transforms colmap llff
 FUZZ_SECONDS ?= 60
 FUZZ_DIR     := build-fuzz
 FUZZ_FLAGS   := -O1 -g -fno-omit-frame-pointer -fsanitize=address,undefined -fno-sanitize-recover=undefined

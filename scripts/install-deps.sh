@@ -11,7 +11,7 @@ set -eu
 PACKAGES="build-essential libjson-c-dev libembree-dev libtbb-dev libopenexr-dev libopenimageio-dev
 openimageio-tools python3 python3-openimageio libxml2-dev libpng-dev python3-numpy python3-pytest
 python3-scipy python3-skimage python3-pytest-xdist python3-matplotlib parallel libassimp-dev glmark2-data
-clang libclang-rt-14-dev"
+clang libclang-rt-14-dev colmap"
 CLUSTER_PACKAGES="slurm-wlm munge"
 
 cluster=0

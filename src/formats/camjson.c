@@ -104,7 +104,7 @@ static int read_size(json_object *entry, const char *field, int *out)
  * far out (1e16) the sum rounds back to the position, and the error would
  * then blame a lookat the file does not have. The direction must survive
  * the sum within 1e-6, which holds up to about 1e9 from the origin. */
-static int direction_survives(const double pos[3], const double r[3][3])
+int camjson_direction_survives(const double pos[3], const double r[3][3])
 {
     for (int k = 0; k < 3; k++) {
         volatile double lookat = pos[k] + r[k][2]; /* rounded to a double, as stored */
@@ -158,13 +158,14 @@ static int read_camera(const char *name, size_t index, json_object *entry, camjs
         return entry_fail(err, name, index, entry, "%s: more pixels than refrender renders", "width x height");
     if (read_focal(name, index, entry, c, err))
         return -1;
-    if (!direction_survives(pos, c->c2w)) {
+    if (!camjson_direction_survives(pos, c->c2w)) {
         char what[400];
         snprintf(what, sizeof what, "field '%%s' (%g %g %g) is too far out for the view direction of 'rotation' "
                  "to survive position + direction in double precision (within 1e-6)", pos[0], pos[1], pos[2]);
         return entry_fail(err, name, index, entry, what, "position");
     }
     c->position = v3(pos[0], pos[1], pos[2]);
+    c->cx = 0.5 * c->width, c->cy = 0.5 * c->height; /* 3DGS's projection centres it */
     return 0;
 }
 

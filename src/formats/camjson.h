@@ -19,6 +19,8 @@ typedef struct {
     vec3 position;
     double c2w[3][3]; /* c2w[r][c]: column c is camera axis c in world */
     double fx, fy;
+    double cx, cy; /* the principal point, pixels from the top-left image corner: the centre
+                      here (3DGS renders so), the file's in a COLMAP model (colmap.h) */
 } camjson_camera;
 
 /* A parsed cameras.json: parsed once, however many of its cameras a
@@ -63,5 +65,11 @@ int camjson_parse(const char *name, const char *data, size_t len, const char *im
 int camjson_parse_document(const char *name, const char *data, size_t len, struct json_object **out, rr_error *err);
 int camjson_number_field(struct json_object *o, const char *field, double *out);
 int camjson_numbers(struct json_object *arr, int n, double *out);
+
+/* Whether a camera at pos looking along r's third column keeps that
+ * direction as lookat = pos + direction in double precision (within 1e-6;
+ * it holds to about 1e9 from the origin): the other camera sources'
+ * check too (colmap.h, llff.h). */
+int camjson_direction_survives(const double pos[3], const double r[3][3]);
 
 #endif

@@ -1,8 +1,10 @@
 /* <camera>: a pinhole camera given by its pose and field of view, or a
  * trained model's camera from its cameras.json (camjson.h) at the size it
- * was trained at, with an optional <animation> moving its rest pose
- * rigidly (keyframes, or two cameras.json poses). scenes/README.md. */
-#include "formats/camjson.h"
+ * was trained at, or a COLMAP model's or LLFF poses_bounds.npy's camera
+ * (camsource.h) at the file's size, with an optional <animation> moving
+ * its rest pose rigidly (keyframes, or two poses of the file).
+ * scenes/README.md. */
+#include "formats/camsource.h"
 #include "formats/transforms.h"
 #include "formats/tum.h"
 #include "io/scene_xml_internal.h"
@@ -10,9 +12,9 @@
 #include <stdlib.h>
 #include <string.h>
 
-/* A camera from a trained model's cameras.json (camjson.h): its pose as
- * the rest pose (OpenCV axes: look along z, up is -y), its field of view
- * from fx and fy (square pixels or not), its resolution. */
+/* A camera from a camera source (camsource.h): its pose as the rest pose
+ * (OpenCV axes: look along z, up is -y), its field of view from fx and fy
+ * (square pixels or not), its principal point, its resolution. */
 static int camera_from_pose(camera *cam, vec3 position, const double r[3][3], const camjson_camera *j)
 {
     cam->position = position;
@@ -21,6 +23,10 @@ static int camera_from_pose(camera *cam, vec3 position, const double r[3][3], co
     cam->width = j->width, cam->height = j->height;
     cam->fov_degrees = 360.0 / M_PI * atan(0.5 * j->height / j->fy);
     cam->fov_x_degrees = 360.0 / M_PI * atan(0.5 * j->width / j->fx);
+    if (j->cx != 0.5 * j->width) /* a COLMAP camera's own; centred stays exactly 0 */
+        cam->principal_dx = camera_principal_offset(j->width, j->cx);
+    if (j->cy != 0.5 * j->height)
+        cam->principal_dy = camera_principal_offset(j->height, j->cy);
     return 0;
 }
 
@@ -58,10 +64,47 @@ static int training_size(xml_ctx *c, xmlNodePtr n, int *width, int *height)
     return 0;
 }
 
-static int find_json_camera(xml_ctx *c, xmlNodePtr n, const camjson_file *f, const char *image, camjson_camera *out)
+/* Which of the source's cameras element n names: image="NAME" (every
+ * source), imageId="N" (COLMAP's IMAGE_ID) or index="N" (LLFF's row),
+ * exactly one. image must hold 256 bytes. */
+static int read_key(xml_ctx *c, xmlNodePtr n, const camsource *src, camsource_key *key, char *image)
 {
+    static const char *const number_attr[3] = {NULL, "imageId", "index"}; /* by camsource_kind */
+    static const char *const source[3] = {"a cameras.json", "this COLMAP model", "this LLFF file"};
+    static const char *const named[3] = {"an img_name of the file", "an image's NAME in the model",
+                                         "a file name in images/ beside it"};
+    const char *want = number_attr[src->kind];
+    int got = xml_attr_text(c, n, "image", image, 256), number = 0;
+    if (got < 0)
+        return -1;
+    for (int k = 1; k < 3; k++)
+        if (k != (int)src->kind && xmlHasProp(n, (const xmlChar *)number_attr[k]))
+            return xml_fail(c, n, "'%s' selects %s; %s takes 'image'%s%s%s", number_attr[k],
+                            k == 1 ? "a COLMAP image by its IMAGE_ID" : "a row of an LLFF poses_bounds.npy",
+                            source[src->kind], want ? " or '" : "", want ? want : "", want ? "'" : "");
+    if (want && xmlHasProp(n, (const xmlChar *)want)) {
+        if (got)
+            return xml_fail(c, n, "give 'image' or '%s', not both", want);
+        if (xml_attr_int(c, n, want, &number, 0, INT32_MAX))
+            return -1;
+        key->image = NULL, key->number = number;
+        return 0;
+    }
+    if (!got)
+        return xml_fail(c, n, "<%s> needs 'image' (%s)%s%s", xml_elname(n), named[src->kind], want ? " or " : "",
+                        want ? want : "");
+    key->image = image, key->number = -1;
+    return 0;
+}
+
+static int find_source_camera(xml_ctx *c, xmlNodePtr n, camsource *src, camjson_camera *out)
+{
+    camsource_key key;
+    char image[256];
     rr_error sub;
-    if (camjson_find(f, image, out, &sub))
+    if (read_key(c, n, src, &key, image))
+        return -1;
+    if (camsource_find(src, key, out, c->inputs_hash, &sub))
         return rr_fail(c->err, "%s (camera of %s:%ld)", sub.msg, c->name, xmlGetLineNo(n));
     return 0;
 }
@@ -70,22 +113,21 @@ static int find_json_camera(xml_ctx *c, xmlNodePtr n, const camjson_file *f, con
  * from cameras.json pose A at t0 to pose B at t1, the position linear and
  * the rotation slerped (animation_between_poses); the camera's rest pose
  * becomes the one this motion moves. */
-static int parse_pose_motion(xml_ctx *c, xmlNodePtr anim, const camjson_file *json, camera *cam, animation *a)
+static int parse_pose_motion(xml_ctx *c, xmlNodePtr anim, camsource *src, camera *cam, animation *a)
 {
-    static const char *const ok[] = {"time", "image", NULL};
+    static const char *const ok[] = {"time", "image", "imageId", "index", NULL};
     camjson_camera pose[2];
     double t[2];
     int k = 0;
     for (xmlNodePtr p = anim->children; p; p = p->next) {
         if (!xml_is_element(p))
             continue;
-        char image[256];
         if (strcmp(xml_elname(p), "pose") || k == 2)
             return xml_fail(c, p, "a camera's pose motion is exactly two <pose> elements (for longer paths, "
                                   "keyframes)");
         if (xml_check_attributes(c, p, ok) || xml_attr_double(c, p, "time", &t[k], 1) ||
-            xml_attr_text(c, p, "image", image, sizeof image) <= 0 || find_json_camera(c, p, json, image, &pose[k]))
-            return c->err->msg[0] ? -1 : xml_fail(c, p, "<pose> needs 'image' (an img_name of the cameras.json)");
+            find_source_camera(c, p, src, &pose[k]))
+            return -1;
         k++;
     }
     if (k != 2)
@@ -201,7 +243,7 @@ static int has_pose_child(xmlNodePtr anim)
 }
 
 /* <camera ...> with an optional <animation> moving its rest pose rigidly. */
-static int parse_camera_motion(xml_ctx *c, xmlNodePtr n, camera *cam, animation *a, const camjson_file *json)
+static int parse_camera_motion(xml_ctx *c, xmlNodePtr n, camera *cam, animation *a, camsource *json)
 {
     if (xml_check_no_text(c, n))
         return -1;
@@ -225,7 +267,8 @@ static int parse_camera_motion(xml_ctx *c, xmlNodePtr n, camera *cam, animation 
         }
         if (has_pose_child(k)) {
             if (!json)
-                return xml_fail(c, k, "<pose> needs the camera's 'cameras' (a cameras.json)");
+                return xml_fail(c, k, "<pose> needs the camera's 'cameras' (a cameras.json, COLMAP model or "
+                                      "poses_bounds.npy)");
             if (parse_pose_motion(c, k, json, cam, a))
                 return -1;
             continue;
@@ -243,29 +286,32 @@ static int parse_camera_motion(xml_ctx *c, xmlNodePtr n, camera *cam, animation 
 }
 
 /* <camera cameras="cameras.json" image="NAME" trainingResolution="auto"/>:
- * a trained model's camera; the file, parsed once, stays in *f for the
- * poses of its motion. */
-static int parse_json_camera(xml_ctx *c, xmlNodePtr n, camera *cam, camjson_file *f)
+ * a trained model's camera, or a COLMAP model's or an LLFF file's
+ * (camsource.h); the source, read once, stays in *f for the poses of its
+ * motion. */
+static int parse_json_camera(xml_ctx *c, xmlNodePtr n, camera *cam, camsource *f)
 {
-    char rel[4096], path[8192], image[256];
+    char rel[4096], path[8192];
     static const char *const exclusive[] = {"position", "lookat", "up", "fov", "width", "height", NULL};
     for (const char *const *k = exclusive; *k; k++)
         if (xmlHasProp(n, (const xmlChar *)*k))
             return xml_fail(c, n, "a camera from 'cameras' takes its pose, field of view and size from the file: "
                                   "drop '%s' (--res changes the size)", *k);
-    int got = xml_attr_text(c, n, "image", image, sizeof image);
-    if (got <= 0)
-        return got < 0 ? -1 : xml_fail(c, n, "a camera from 'cameras' needs 'image' (an img_name of the file)");
     if (xml_attr_text(c, n, "cameras", rel, sizeof rel) < 0 || xml_resolve_path(c, n, rel, path, sizeof path))
         return -1;
     rr_error sub;
-    if (camjson_load(path, f, c->inputs_hash, &sub))
+    if (camsource_load(path, f, c->inputs_hash, &sub))
         return rr_fail(c->err, "%s (camera of %s:%ld)", sub.msg, c->name, xmlGetLineNo(n));
+    if (f->kind != CAMSOURCE_JSON && xmlHasProp(n, (const xmlChar *)"trainingResolution"))
+        return xml_fail(c, n, "trainingResolution is 3DGS's rule for a cameras.json: a %s camera renders at the "
+                              "file's size (--res changes it, keeping the field of view)",
+                        f->kind == CAMSOURCE_COLMAP ? "COLMAP" : "poses_bounds.npy");
     camjson_camera j;
-    if (find_json_camera(c, n, f, image, &j))
+    if (find_source_camera(c, n, f, &j))
         return -1;
-    if (scene_add_input(c->sc, path))
-        return xml_fail(c, n, "out of memory");
+    for (int k = 0; k < 2; k++)
+        if (f->files[k] && scene_add_input(c->sc, f->files[k]))
+            return xml_fail(c, n, "out of memory");
     return camera_from_pose(cam, j.position, j.c2w, &j);
 }
 
@@ -283,6 +329,11 @@ static int parse_plain_camera(xml_ctx *c, xmlNodePtr n, camera *cam)
     if (xmlHasProp(n, (const xmlChar *)"trainingResolution"))
         return xml_fail(c, n, "trainingResolution is for a camera from 'cameras' (a cameras.json): give this one "
                               "its width and height");
+    static const char *const selectors[] = {"image", "imageId", "index", NULL};
+    for (const char *const *k = selectors; *k; k++)
+        if (xmlHasProp(n, (const xmlChar *)*k)) /* was ignored: the camera at its default pose instead */
+            return xml_fail(c, n, "'%s' selects a camera of 'cameras' (a cameras.json, COLMAP model or "
+                                  "poses_bounds.npy), which this camera does not name", *k);
     return (!path && (xml_attr_vec3(c, n, "position", &cam->position, 0) ||
                       xml_attr_vec3(c, n, "lookat", &cam->lookat, 0) || xml_attr_vec3(c, n, "up", &cam->up, 0))) ||
                    xml_attr_double(c, n, "fov", &cam->fov_degrees, 0) ||
@@ -293,17 +344,17 @@ static int parse_plain_camera(xml_ctx *c, xmlNodePtr n, camera *cam)
 
 int xml_parse_camera(xml_ctx *c, xmlNodePtr n, camera *cam, animation *motion)
 {
-    static const char *const ok[] = {"position", "lookat", "up",    "fov",
-                                     "width",    "height", "cameras", "image", "trainingResolution", NULL};
+    static const char *const ok[] = {"position", "lookat",  "up",    "fov",   "width", "height", "cameras",
+                                     "image",    "imageId", "index", "trainingResolution", NULL};
     int from_json = xmlHasProp(n, (const xmlChar *)"cameras") != NULL;
     if (xml_check_attributes(c, n, ok))
         return -1;
-    camjson_file json = {0};
+    camsource json = {0};
     int rc = from_json ? parse_json_camera(c, n, cam, &json) : parse_plain_camera(c, n, cam);
     rc = rc || parse_camera_motion(c, n, cam, motion, from_json ? &json : NULL);
     /* after any pose motion, which takes its rest pose's size from the file */
-    rc = rc || (from_json && training_size(c, n, &cam->width, &cam->height));
-    camjson_free(&json);
+    rc = rc || (from_json && json.kind == CAMSOURCE_JSON && training_size(c, n, &cam->width, &cam->height));
+    camsource_free(&json);
     if (rc)
         return -1;
     rr_error sub;
