@@ -105,23 +105,41 @@ def _result(lib, result):
                   window={"x0": x0, "y0": y0, "width": w, "height": h, "full_width": full_w, "full_height": full_h})
 
 
+def _wait(done):
+    """Waits for the render's end; a second Ctrl-C meanwhile changes nothing (it is stopping)."""
+    while True:
+        try:
+            return done.wait()
+        except KeyboardInterrupt:
+            continue
+
+
 def _run(lib, words):
     """Runs the render in a thread of its own while this one waits, so that
     Ctrl-C (KeyboardInterrupt, raised here) stops it: the C watches the flag
-    set then, as the command line watches SIGINT."""
+    set then, as the command line watches SIGINT, and stops within the batch
+    it is in. Its end is an Event, not Thread.join: a join interrupted by
+    KeyboardInterrupt marks a running thread finished (CPython 3.11's
+    Thread._wait_for_tstate_lock, the bpo-45274 fix), so a second join would
+    not wait for the render to stop."""
     argv = (ctypes.c_char_p * (len(words) + 1))(*[w.encode() for w in words], None)
     interrupt, out = ctypes.c_int(0), ctypes.c_void_p()
     message = ctypes.create_string_buffer(8192)
-    status = []
-    worker = threading.Thread(target=lambda: status.append(lib.refrender_render(
-        len(words), argv, ctypes.byref(interrupt), ctypes.byref(out), message, len(message))), name="refrender")
-    worker.start()
+    status, done = [], threading.Event()
+
+    def work():
+        try:
+            status.append(lib.refrender_render(len(words), argv, ctypes.byref(interrupt), ctypes.byref(out),
+                                               message, len(message)))
+        finally:
+            done.set()
+    threading.Thread(target=work, name="refrender", daemon=True).start()
     try:
-        while worker.is_alive():
-            worker.join(0.05)
+        while not done.wait(0.05):
+            pass
     except BaseException:  # KeyboardInterrupt, or any exception raised into this thread
         interrupt.value = 1
-        worker.join()  # the render stops within the batch it is in (README: interrupted renders)
+        _wait(done)
         if out.value:
             lib.refrender_result_free(out)
         raise
