@@ -90,7 +90,8 @@ def test_every_option_shown_in_readme_exists():
     shown = set(re.findall(r"(?<![\w-])--[a-z][a-z0-9-]*", readme))
     not_ours = {"--cropwindow", "--crop", "--label", "--maps", "--latex", "--report", "--sshloginfile", "--json",
                 "--csv", "--heatmaps", "--mask", "--alpha", "--exposure", "--entry", "--refrender-curves",
-                "--cost-unit", "--entries", "--out"}  # pbrt's, compare.py's and the other scripts' own
+                "--cost-unit", "--entries", "--out",
+                "--no-build-isolation", "--no-deps"}  # pbrt's, compare.py's, the other scripts' and pip's own
     nframe = subprocess.run(["/usr/bin/python3", str(ROOT / "scripts" / "nframe_average.py"), "--help"],
                             capture_output=True, text=True).stdout
     missing = shown - known - not_ours - set(re.findall(r"--[a-z][a-z0-9-]*", nframe))
