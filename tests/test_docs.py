@@ -455,8 +455,10 @@ def test_the_gaussian_splatting_workflow_runs(tmp_path):
 
 def test_no_script_puts_its_own_folder_on_the_path_again():
     # Python puts a script's own folder first on sys.path: a script inserting
-    # it again only repeats it.
-    inserting = {p.name for p in (ROOT / "scripts").glob("*.py") if "sys.path.insert" in p.read_text()}
+    # it again only repeats it (inserting ../python, the package's folder, is
+    # how a script imports the refrender package's modules from a clone)
+    inserting = {p.name for p in (ROOT / "scripts").glob("*.py") for line in p.read_text().splitlines()
+                 if "sys.path.insert" in line and 'os.pardir, "python")' not in line}
     assert not inserting, inserting
 
 

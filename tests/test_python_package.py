@@ -227,3 +227,32 @@ def test_ctrl_c_stops_a_render_promptly_with_keyboard_interrupt(tmp_path):
     assert "KeyboardInterrupt" in rest, rest
     assert proc.returncode != 0
     assert not (tmp_path / "rendered.npy").exists()
+
+
+def test_compare_returns_the_rows_compare_py_writes(tmp_path):
+    """refrender.compare is compare.py --json without the file: the same rows, value for value (two renders
+    of other seeds, the whole image and a crop), and its file outputs are refused."""
+    ref, test = tmp_path / "ref.exr", tmp_path / "test.exr"
+    for path, seed in ((ref, 1), (test, 2)):
+        proc = run([SCENE, "--res", "32x24", "--spp", 1, "--tspp", 4, "--batches", 2, "--seed", seed, "--quiet",
+                    "-o", path])
+        assert proc.returncode == 0, proc.stderr
+    written = tmp_path / "rows.json"
+    proc = subprocess.run(["/usr/bin/python3", str(ROOT / "scripts" / "compare.py"), ref, test, "--crop", "4,4,12,12",
+                           "--json", written], capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stderr
+    code = f"""
+import json, sys; sys.path.insert(0, {str(ROOT / 'python')!r})
+import refrender
+print(json.dumps(refrender.compare({str(ref)!r}, {str(test)!r}, crop=["4,4,12,12"])))
+try:
+    refrender.compare({str(ref)!r}, {str(test)!r}, json="x.json")
+except refrender.CompareError as e:
+    print(e)
+"""
+    got = subprocess.run(["/usr/bin/python3", "-c", code], capture_output=True, text=True, cwd=tmp_path)
+    assert got.returncode == 0, got.stderr
+    rows, refusal = got.stdout.splitlines()
+    expected = json.loads(written.read_text())
+    assert len(expected) == 2 and json.loads(rows) == expected
+    assert "--json" in refusal and "compare.py's" in refusal and not (tmp_path / "x.json").exists()
