@@ -10,7 +10,8 @@ render() runs the command line's render in-process (librefrender.so,
 help(refrender.render); the command line's: README.md, `refrender --help`.
 compare(reference, test, ...) returns the rows scripts/compare.py --json
 prints. The scripts' shared modules are this package's: imagecompare,
-flip, safefiles, sequences, comparison (compare.py's body).
+flip, safefiles, sequences, comparison (compare.py's body), heatmaps and
+figures (matplotlib, imported only with them).
 """
 from ._compare import compare
 from ._library import LibraryMissing, library_path

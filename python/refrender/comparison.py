@@ -396,7 +396,7 @@ def main(argv=None):
         print_table(rows)
         write_machine_readable(rows, args.json, args.csv, schema(args), inputs)
         if args.latex:
-            import figures  # matplotlib only when figures are asked for
+            from . import figures  # matplotlib only when figures are asked for
             figures.latex_table(latex_rows(rows, args.latex_summary), COLUMNS + [f">{args.k_sigma:g}SE"], args.latex,
                                 inputs)
         write_pictures(args, rows, maps, inputs)
@@ -426,7 +426,7 @@ def shared_diff_range(args, diffs):
 
 
 def write_native_maps(args, maps, diffs, diff_range, inputs):
-    import figures
+    from . import figures
     flip_lo, flip_hi = parse_floats(args.flip_range, 2, "--flip-range")
     if args.map_scale < 1 or args.inset_scale < 1:
         raise CompareError("--map-scale and --inset-scale must be positive integers")
@@ -454,7 +454,7 @@ def write_pictures(args, rows, maps, inputs):
     if args.maps:
         write_native_maps(args, maps, diffs, diff_range, inputs)
     if args.heatmaps or args.report:
-        import heatmaps  # matplotlib only when pictures are asked for
+        from . import heatmaps  # matplotlib only when pictures are asked for
         if args.heatmaps:
             heatmaps.write_all(maps, args.heatmaps, diff_range, inputs)
         if args.report:  # the report folder holds its own pictures, viewable offline
