@@ -11,6 +11,7 @@ from . import _library
 
 # EXR attribute types as refrender_result_attr_type numbers them (refrender_api.h)
 _TEXT, _INT, _DOUBLE, _MATRIX = 0, 1, 2, 3
+_LOCK = threading.Lock()  # one render at a time: the command's state is the process's
 
 
 class RenderError(RuntimeError):
@@ -171,6 +172,3 @@ def render(scene, *, params=None, **options):
 def version():
     """'refrender VERSION (build ID)' of the library, as `refrender --version`."""
     return _library.load().refrender_version().decode()
-
-
-_LOCK = threading.Lock()  # one render at a time: the command's state is the process's
