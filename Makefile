@@ -32,7 +32,11 @@ RR_CPPFLAGS = -D_GNU_SOURCE -Isrc $(INCLUDES) $(BUILD_ID_FLAG) -DRR_SOURCE_SCENE
 # -ffp-contract=off: the Gaussian kernels in AVX2 lanes (src/core/lanes.h) give
 # the scalar path's answers bit for bit only if neither is fused into FMA (-std=c11
 # implies it for GCC; clang, or -std=gnu11 with -march=native, would fuse)
-RR_CFLAGS   = -std=c11 -ffp-contract=off $(OPT) -Wall -Wextra $(CFLAGS)
+# -fPIC: one set of objects makes both refrender and librefrender.so (the
+# Python package's library), so both render with the very same code;
+# -fno-semantic-interposition lets a file's calls to its own functions be
+# inlined as without -fPIC (the library exports only its API: refrender_api.map)
+RR_CFLAGS   = -std=c11 -ffp-contract=off -fPIC -fno-semantic-interposition $(OPT) -Wall -Wextra $(CFLAGS)
 RR_CXXFLAGS = -std=c++17 $(OPT) -Wall -Wextra $(CXXFLAGS)
 LDLIBS   := -ljson-c -lassimp -lembree3 -lOpenEXRCore -lxml2 -lpng -ldl -lpthread -lm
 # OpenImageIO only in the preview module, opened when a preview is written
@@ -57,19 +61,23 @@ TEST_SRCS := $(wildcard tests/test_*.c)
 TEST_OBJS := $(TEST_SRCS:tests/%.c=$(BUILD)/tests/%.o) $(BUILD)/tests/harness.o $(BUILD)/tests/gaussian_test_util.o
 
 BIN      := $(BUILD)/refrender
+# refrender as a C library (src/api/refrender_api.h) for the Python package
+# (python/, `make python`): the render command's objects and the API
+LIB_SO   := $(BUILD)/librefrender.so
 TESTBIN  := $(BUILD)/unit_tests
 
-.PHONY: all deps demo test test-build test-c test-py test-cluster test-fuzz fuzz bench bench-time bench-samplers scale-models thesis-table clean clean-models scenes references gallery
-all: $(BIN) $(BUILD)/refrender-bench
+.PHONY: all python deps demo test test-build test-c test-py test-cluster test-fuzz fuzz bench bench-time bench-samplers scale-models thesis-table clean clean-models scenes references gallery
+all: $(BIN) $(BUILD)/refrender-bench $(LIB_SO)
+python: $(LIB_SO)
 
 # An object without its .d file (built before dependency tracking, or the
 # .d was lost) depends on a missing file and is rebuilt; objects are touched
 # after compiling because clang writes the .d after the object.
-$(BUILD)/%.o: src/%.c $(BUILD)/%.d | $(BUILD)
+$(BUILD)/%.o: src/%.c $(BUILD)/%.d $(BUILD)/cflags | $(BUILD)
 	@mkdir -p $(@D)
 	$(CC) $(RR_CPPFLAGS) $(RR_CFLAGS) -c $< -o $@
 	@touch $@
-$(BUILD)/cmd/%.o: src/cmd/%.c $(BUILD)/cmd/%.d | $(BUILD)
+$(BUILD)/cmd/%.o: src/cmd/%.c $(BUILD)/cmd/%.d $(BUILD)/cflags | $(BUILD)
 	@mkdir -p $(@D)
 	$(CC) $(RR_CPPFLAGS) $(RR_CFLAGS) -Isrc -c $< -o $@
 	@touch $@
@@ -109,11 +117,17 @@ $(BUILD)/build_id: $(BUILD_ID_SRCS) build-id-always
 print-build-id:
 	@$(call build_id_text,$(CC),$(RR_CFLAGS) $(CPPFLAGS))
 $(BUILD)/io/render_attrs.o: $(BUILD)/build_id
+# The compile flags as a file, replaced only when they change; the objects
+# depend on it, so a build directory made before a change of flags (-fPIC,
+# which librefrender.so needs) is recompiled, not linked stale
+$(BUILD)/cflags: build-id-always
+	@mkdir -p $(@D)
+	@echo '$(RR_CFLAGS) $(CPPFLAGS)' > $@.tmp && { cmp -s $@.tmp $@ && rm -f $@.tmp || mv -f $@.tmp $@; }
 $(BUILD)/io/render_attrs.o: BUILD_ID_FLAG = -DRR_BUILD_ID='"$(file <$(BUILD)/build_id)"'
-$(BUILD)/tests/%.o: tests/%.c $(BUILD)/tests/%.d | $(BUILD)
+$(BUILD)/tests/%.o: tests/%.c $(BUILD)/tests/%.d $(BUILD)/cflags | $(BUILD)
 	$(CC) $(RR_CPPFLAGS) $(RR_CFLAGS) -Isrc -c $< -o $@
 	@touch $@
-DEPFILES := $(LIB_OBJS:.o=.d) $(APP_OBJS:.o=.d) $(TEST_OBJS:.o=.d) $(BUILD)/cmd/bench.d $(BUILD)/cmd/bench_gaussian.d $(BUILD)/cmd/bench_splat.d \
+DEPFILES := $(LIB_OBJS:.o=.d) $(APP_OBJS:.o=.d) $(BUILD)/api/refrender_api.d $(TEST_OBJS:.o=.d) $(BUILD)/cmd/bench.d $(BUILD)/cmd/bench_gaussian.d $(BUILD)/cmd/bench_splat.d \
             $(BUILD)/io/preview-so.d
 $(DEPFILES):
 -include $(wildcard $(DEPFILES))
@@ -122,6 +136,9 @@ $(BUILD):
 
 $(BIN): $(APP_OBJS) $(LIB_OBJS) | $(PREVIEW_SO)
 	$(CC) $(SANLD) -o $@ $^ $(LDLIBS)
+# -Bsymbolic: the library's calls stay inside it, whatever the host process defines
+$(LIB_SO): $(BUILD)/api/refrender_api.o $(APP_OBJS) $(LIB_OBJS) src/api/refrender_api.map
+	$(CC) $(SANLD) -shared -Wl,-Bsymbolic -Wl,--version-script=src/api/refrender_api.map -o $@ $(filter %.o,$^) $(LDLIBS)
 $(TESTBIN): $(TEST_OBJS) $(LIB_OBJS)
 	$(CC) $(SANLD) -o $@ $^ $(LDLIBS)
 $(BUILD)/refrender-bench: $(BUILD)/cmd/bench.o $(BUILD)/cmd/bench_gaussian.o $(BUILD)/cmd/bench_splat.o $(LIB_OBJS)
@@ -147,8 +164,9 @@ $(BUILD)/libfaultinject.so: tests/faultinject.c | $(BUILD)
 # pytest-xdist workers (python3-pytest-xdist): the suite's renders are
 # single processes, so one worker a core halves its time on 2 cores
 TEST_JOBS ?= $(shell nproc)
-test-py: $(BIN) $(TESTBIN) $(BUILD)/refrender-bench $(BUILD)/libfaultinject.so scenes
+test-py: $(BIN) $(TESTBIN) $(BUILD)/refrender-bench $(BUILD)/libfaultinject.so $(LIB_SO) scenes
 	REFRENDER=$(CURDIR)/$(BIN) UNIT_TESTS=$(CURDIR)/$(TESTBIN) FAULTINJECT=$(CURDIR)/$(BUILD)/libfaultinject.so \
+	    REFRENDER_LIB=$(CURDIR)/$(LIB_SO) \
 	    $(PYTHON) -m pytest -q -n $(TEST_JOBS) tests
 
 # A real Slurm (scripts/README.md, "Rendering on a Slurm cluster"): tests/cluster_slurm.py
@@ -210,7 +228,7 @@ $(FUZZ_DIR)/fuzz_%: $(FUZZ_DIR)/fuzz_%.o $(FUZZ_DIR)/render_check.o $(FUZZ_OBJS)
 .SECONDARY: $(FUZZ_OBJS) $(FUZZ_TARGETS:%=$(FUZZ_DIR)/fuzz_%.o) $(FUZZ_DIR)/render_check.o
 
 # (after FUZZ_TARGETS: a rule's prerequisites are expanded where it is read)
-test-build: $(BIN) $(TESTBIN) $(BUILD)/refrender-bench $(BUILD)/libfaultinject.so $(FUZZ_TARGETS:%=$(FUZZ_DIR)/fuzz_%) scenes
+test-build: $(BIN) $(TESTBIN) $(BUILD)/refrender-bench $(BUILD)/libfaultinject.so $(LIB_SO) $(FUZZ_TARGETS:%=$(FUZZ_DIR)/fuzz_%) scenes
 test-fuzz: $(FUZZ_TARGETS:%=$(FUZZ_DIR)/fuzz_%)
 	for t in $(FUZZ_TARGETS); do \
 	    $(FUZZ_DIR)/fuzz_$$t -runs=0 -rss_limit_mb=8192 tests/fuzz/corpus/$$t 2>$(FUZZ_DIR)/replay_$$t.log \

@@ -8,10 +8,12 @@
 #              are daemons, so not in the default set: installing them
 #              starts nothing here (policy-rc.d refuses service starts).
 set -eu
+# python3-venv, python3-pip: tests/test_python_package.py installs the refrender Python package
+# (python/) into a fresh venv with pip, as the README shows
 PACKAGES="build-essential libjson-c-dev libembree-dev libtbb-dev libopenexr-dev libopenimageio-dev
 openimageio-tools python3 python3-openimageio libxml2-dev libpng-dev python3-numpy python3-pytest
 python3-scipy python3-skimage python3-pytest-xdist python3-matplotlib parallel libassimp-dev glmark2-data
-clang libclang-rt-14-dev colmap"
+clang libclang-rt-14-dev colmap python3-venv python3-pip"
 CLUSTER_PACKAGES="slurm-wlm munge"
 
 cluster=0

@@ -19,8 +19,10 @@ ROOT = pathlib.Path(__file__).resolve().parent.parent
 # assembly (the scene XML) and the render's outputs stay in io/ at the top
 # splat/ (the thesis's splatting comparands) sits on render/: it blends
 # and shades with render/shade.h, the ray tracer's own Phong, and the
-# scene reader and output writers of io/ and the commands of cmd/ sit on it
-LAYERS = ['core', 'motion', 'surfels', 'gaussians', 'formats', 'scene', 'accel', 'render', 'splat', 'io', 'cmd']
+# scene reader and output writers of io/ and the commands of cmd/ sit on it;
+# api/ (librefrender.so, the Python package's) runs the render command
+LAYERS = ['core', 'motion', 'surfels', 'gaussians', 'formats', 'scene', 'accel', 'render', 'splat', 'io', 'cmd',
+          'api']
 # a system library and the one folder that may include it
 LIBRARY_OWNER = {'embree3/': 'accel', 'libxml/': 'io', 'openexr.h': 'formats', 'OpenImageIO/': 'io',
                  'json-c/': 'formats', 'assimp/': 'formats'}

@@ -10,6 +10,7 @@
 #include "cmd/cli.h"
 #include "cmd/commands.h"
 #include "cmd/noise_report.h"
+#include "cmd/render_sink.h"
 #include "render/exact.h"
 #include "io/output.h"
 #include "io/render_attrs.h"
@@ -20,8 +21,23 @@
 #define RR_SOURCE_SCENE "scenes/default.xml"
 #endif
 
-static volatile sig_atomic_t interrupted = 0;
-static void on_signal(int sig) { (void)sig; interrupted = 1; }
+static volatile sig_atomic_t signalled = 0;
+static void on_signal(int sig) { (void)sig; signalled = 1; }
+/* the flag the render watches: the signal handlers' on the command line, a
+ * library caller's (render_sink.h) in-process */
+static volatile sig_atomic_t *interrupted = &signalled;
+const render_sink *render_command_sink = NULL;
+static const char default_output[] = "render.exr";
+
+/* The line the command line prints before exiting non-zero; a library
+ * caller gets the same text. */
+static void say_failure(const char *msg)
+{
+    if (render_command_sink)
+        render_command_sink->failed(render_command_sink->user, msg);
+    else
+        fprintf(stderr, "refrender: %s\n", msg);
+}
 
 static void usage(FILE *f)
 {
@@ -260,26 +276,39 @@ static int parse_args(int argc, char **argv, render_options *o)
     while ((c = getopt_long(argc, argv, "hD:o:", longopts, NULL)) != -1) {
         if (c == 'h') { usage(stdout); return 1; }
         if (c == OPT_VERSION) { printf("refrender %s (build %s)\n", RR_VERSION, render_build_id()); return 1; }
+        if (c == '?' && render_command_sink) { /* (the caller set opterr 0: getopt said nothing) */
+            say_failure("unrecognized option, or an option given a value it does not take or without one it needs "
+                        "('refrender --help' lists them)");
+            return 2;
+        }
         if (c == '?') {
             cli_suggest_option("refrender", argv[optind - 1], longopts);
             fputs("Try 'refrender --help'.\n", stderr);
             return 2;
         }
         if (parse_option(c, optarg, o, &err)) {
-            fprintf(stderr, "refrender: %s\n", err.msg);
+            say_failure(err.msg);
             return 2;
         }
     }
     if (optind < argc - 1) {
-        fprintf(stderr, "refrender: expected one scene file, got %d arguments\n", argc - optind);
+        char msg[96];
+        snprintf(msg, sizeof msg, "expected one scene file, got %d arguments", argc - optind);
+        say_failure(msg);
         return 2;
     }
     if (optind == argc - 1)
         o->scene = argv[optind];
     if (o->target_error > 0 && !o->batches_given)
         o->batches = 4; /* an error estimate needs batches (src/SAMPLING.md, Error bars) */
+    if (render_command_sink && (o->passes || o->checkpoint || o->resume || o->preview || o->frames == 2 ||
+                                o->output != default_output)) {
+        say_failure("a library render returns one image in memory: -o, --preview, --pass, --checkpoint, --resume "
+                    "and --frames are the command line's");
+        return 2;
+    }
     if (check_combinations(o, &err)) {
-        fprintf(stderr, "refrender: %s\n", err.msg);
+        say_failure(err.msg);
         return 2;
     }
     return 0;
@@ -580,6 +609,9 @@ static int write_final(atomic_set *set, const char *output, const image *img, re
         const double *c = run->o->crop;
         attrs_set(&run->attrs, ATTR_CROP_WINDOW, "%.17g %.17g %.17g %.17g", c[0], c[1], c[2], c[3]);
     }
+    if (render_command_sink)
+        return render_command_sink->final(render_command_sink->user, img, (int)sampler_count(&rs->smp), &run->attrs,
+                                          &win, err);
     return output_write_final_into(set, output, img, (int)sampler_count(&rs->smp), &run->attrs, &win, err);
 }
 
@@ -634,7 +666,7 @@ static int render_one(const scene *s, const shutter *shut, long long frame, acce
         fprintf(stderr, "refrender: pass %d/%d: batches %u-%u of %u\n", o->pass, o->passes, run.rs.batch_begin,
                 run.rs.batch_begin + run.rs.batches, run.total_batches);
     announce_checkpoints(o, &hooks);
-    int rc = render_image(s, acc, &run.rs, &img, &hooks, &interrupted, err);
+    int rc = render_image(s, acc, &run.rs, &img, &hooks, interrupted, err);
     if (!rc) {
         report(o, s, &img, tty);
         if (!o->passes) /* a final image: its noise (a pass's state has a share of the batches) */
@@ -764,7 +796,7 @@ static int render_and_write(const scene *s, const render_options *o, const char 
         return -1;
     }
     int rc = 0;
-    if (interrupted) /* the build cannot be stopped midway; it is not rendered */
+    if (*interrupted) /* the build cannot be stopped midway; it is not rendered */
         rc = rr_fail(err, "interrupted while building the BVH");
     /* 64-bit: --frame 2147483647 must not wrap around into more frames */
     for (long long f = o->first_frame; !rc && f <= o->last_frame; f++) {
@@ -799,7 +831,7 @@ int cmd_render(int argc, char **argv)
     render_options o;
     memset(&o, 0, sizeof o);
     o.spp = 4, o.tspp = 100, o.threads = cores > 0 ? (int)cores : 1, o.batches = 1;
-    o.eps = o.sigma = -1.0, o.checkpoint_every = 60.0, o.seed = 1, o.output = "render.exr", o.sampler = SAMPLER_DEFAULT;
+    o.eps = o.sigma = -1.0, o.checkpoint_every = 60.0, o.seed = 1, o.output = default_output, o.sampler = SAMPLER_DEFAULT;
     int rc = parse_args(argc, argv, &o);
     if (rc)
         return rc == 1 ? 0 : 2;
@@ -809,8 +841,11 @@ int cmd_render(int argc, char **argv)
         o.tspp = 1;
     /* before loading: a signal while a large model loads or its BVH builds
      * exits 130 as during the render, not 143 */
-    install_signal_handlers();
-    rr_interrupt_watch(&interrupted);
+    if (render_command_sink)
+        interrupted = render_command_sink->interrupt;
+    else
+        install_signal_handlers();
+    rr_interrupt_watch(interrupted);
     char scene_buf[PATH_MAX + 64];
     if (!o.scene)
         o.scene = default_scene(scene_buf, sizeof scene_buf);
@@ -818,24 +853,26 @@ int cmd_render(int argc, char **argv)
     scene s;
     char *cmdline = join_args(argc, argv);
     if (!cmdline) {
-        fputs("refrender: out of memory\n", stderr);
+        say_failure("out of memory");
         return 1;
     }
-    int bad = cli_check_exr_name("-o", o.output, 1, &err) ||
+    /* a library caller's image stays in memory: no -o is written */
+    int bad = (!render_command_sink && cli_check_exr_name("-o", o.output, 1, &err)) ||
         (o.checkpoint && cli_check_exr_name("--checkpoint", o.checkpoint, 0, &err)) ||
-        cli_check_writable("-o", o.output, &err) || (o.preview && cli_check_writable("--preview", o.preview, &err)) ||
+        (!render_command_sink && cli_check_writable("-o", o.output, &err)) ||
+        (o.preview && cli_check_writable("--preview", o.preview, &err)) ||
         (o.preview && preview_check_format(o.preview, &err)) ||
         (o.checkpoint && cli_check_writable("--checkpoint", o.checkpoint, &err)) ||
         scene_load_file_params(o.scene, &o.params, &s, &err);
     if (bad) {
         free(cmdline);
-        fprintf(stderr, "refrender: %s\n", err.msg);
-        return interrupted ? 130 : 1;
+        say_failure(err.msg);
+        return *interrupted ? 130 : 1;
     }
-    if (interrupted) { /* the load ended before it saw the signal */
+    if (*interrupted) { /* the load ended before it saw the signal */
         free(cmdline);
         scene_free(&s);
-        fputs("refrender: interrupted while loading the scene\n", stderr);
+        say_failure("interrupted while loading the scene");
         return 130;
     }
     print_warnings(&s.warnings);
@@ -843,8 +880,8 @@ int cmd_render(int argc, char **argv)
     scene_free(&s);
     free(cmdline);
     if (rc) {
-        fprintf(stderr, "refrender: %s\n", err.msg);
-        return interrupted ? 130 : 1;
+        say_failure(err.msg);
+        return *interrupted ? 130 : 1;
     }
     return 0;
 }

@@ -31,30 +31,40 @@ static const exr_channel *find_channel(const exr_channel *chs, int n, const char
     return NULL;
 }
 
-/* A 4x4 matrix given as 16 numbers. */
-static exr_result_t set_matrix(exr_context_t ctx, int part, const exr_string_attr *a)
+int exr_attr_numbers(const exr_string_attr *a, double out[16])
 {
-    exr_attr_m44f_t m;
     const char *p = a->value;
-    for (int k = 0; k < 16; k++) {
-        char *end;
-        m.m[k] = strtof(p, &end);
-        if (end == p)
-            return EXR_ERR_INVALID_ARGUMENT;
-        p = end;
+    switch (a->kind) {
+    case RR_ATTR_INT: out[0] = (int32_t)strtol(p, NULL, 10); return 1;
+    case RR_ATTR_DOUBLE: out[0] = strtod(p, NULL); return 1;
+    case RR_ATTR_M44F:
+        for (int k = 0; k < 16; k++) { /* a float each, as the file holds it */
+            char *end;
+            out[k] = strtof(p, &end);
+            if (end == p)
+                return -1;
+            p = end;
+        }
+        return 16;
+    case RR_ATTR_TEXT: break;
     }
-    return exr_attr_set_m44f(ctx, part, a->key, &m);
+    return 0;
 }
 
 static exr_result_t set_attr(exr_context_t ctx, int part, const exr_string_attr *a)
 {
-    switch (a->kind) {
-    case RR_ATTR_INT: return exr_attr_set_int(ctx, part, a->key, (int32_t)strtol(a->value, NULL, 10));
-    case RR_ATTR_DOUBLE: return exr_attr_set_double(ctx, part, a->key, strtod(a->value, NULL));
-    case RR_ATTR_M44F: return set_matrix(ctx, part, a);
-    case RR_ATTR_TEXT: break;
+    double v[16];
+    exr_attr_m44f_t m;
+    switch (exr_attr_numbers(a, v)) {
+    case -1: return EXR_ERR_INVALID_ARGUMENT;
+    case 0: return exr_attr_set_string(ctx, part, a->key, a->value);
+    case 16:
+        for (int k = 0; k < 16; k++)
+            m.m[k] = (float)v[k];
+        return exr_attr_set_m44f(ctx, part, a->key, &m);
     }
-    return exr_attr_set_string(ctx, part, a->key, a->value);
+    return a->kind == RR_ATTR_INT ? exr_attr_set_int(ctx, part, a->key, (int32_t)v[0])
+                                  : exr_attr_set_double(ctx, part, a->key, v[0]);
 }
 
 static exr_result_t write_header(exr_context_t ctx, const exr_window *win, const exr_channel *chs, int nch,
@@ -375,7 +385,7 @@ int exr_read_rgba(const char *path, int *w, int *h, float **rgba, rr_error *err)
     return 0;
 }
 
-/* 16 numbers as set_matrix reads them; %.9g gives each float back exactly. */
+/* 16 numbers as exr_attr_numbers reads them; %.9g gives each float back exactly. */
 static void format_matrix(const float m[16], char *buf, size_t size)
 {
     size_t len = 0;

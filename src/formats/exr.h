@@ -17,6 +17,11 @@ typedef struct {
     rr_attr_kind kind;
 } exr_string_attr;
 
+/* The numbers an attribute given as text is stored as (the writer's own
+ * conversion): 1 for an int or a double, 16 for a matrix (each a float),
+ * 0 for a string, -1 for a matrix of fewer than 16 numbers. */
+int exr_attr_numbers(const exr_string_attr *a, double out[16]);
+
 typedef enum { EXR_CHANNEL_FLOAT, EXR_CHANNEL_UINT } exr_channel_type;
 
 /* One channel of an image in memory: element (x, y) is at

@@ -238,12 +238,11 @@ int output_write_preview_into(atomic_set *set, const char *path, const image *im
     return rc;
 }
 
-int output_write_final_into(atomic_set *set, const char *path, const image *img, int samples_per_batch,
-                            const attr_list *a, const exr_window *win, rr_error *err)
+int output_final_channels(const image *img, int samples_per_batch, const exr_window *win, image_planes *p,
+                          exr_channel chs[OUTPUT_FINAL_CHANNELS_MAX], int *nch, rr_error *err)
 {
     size_t n = (size_t)img->width * img->height;
-    image_planes p;
-    if (image_planes_resolve(img, samples_per_batch, &p))
+    if (image_planes_resolve(img, samples_per_batch, p))
         return rr_fail(err, "out of memory");
     uint32_t most = 0;
     for (size_t i = 0; i < n; i++)
@@ -251,16 +250,26 @@ int output_write_final_into(atomic_set *set, const char *path, const image *img,
     static const char *const names[3][4] = {{"R", "G", "B", "A"},
                                             {"variance.R", "variance.G", "variance.B", "variance.A"},
                                             {"stderr.R", "stderr.G", "stderr.B", "stderr.A"}};
-    float *planes[3] = {p.rgba, p.var, p.se};
-    exr_channel chs[13];
-    int nch = 0;
+    float *planes[3] = {p->rgba, p->var, p->se};
+    *nch = 0;
     for (int k = 0; k < (most >= 2 ? 3 : 1); k++)
         for (int c = 0; c < 4; c++)
-            chs[nch++] = (exr_channel){names[k][c], EXR_CHANNEL_FLOAT, planes[k] + c, 16};
-    chs[nch++] = (exr_channel){"samples", EXR_CHANNEL_FLOAT, p.samples, 4};
+            chs[(*nch)++] = (exr_channel){names[k][c], EXR_CHANNEL_FLOAT, planes[k] + c, 16};
+    chs[(*nch)++] = (exr_channel){"samples", EXR_CHANNEL_FLOAT, p->samples, 4};
     for (int k = 0; k < 3; k++)
         compact_window(planes[k], 4, win);
-    compact_window(p.samples, 1, win);
+    compact_window(p->samples, 1, win);
+    return 0;
+}
+
+int output_write_final_into(atomic_set *set, const char *path, const image *img, int samples_per_batch,
+                            const attr_list *a, const exr_window *win, rr_error *err)
+{
+    image_planes p;
+    exr_channel chs[OUTPUT_FINAL_CHANNELS_MAX];
+    int nch;
+    if (output_final_channels(img, samples_per_batch, win, &p, chs, &nch, err))
+        return -1;
     exr_string_attr sa[ATTR_MAX];
     int rc = exr_write_window_into(set, path, win, chs, nch, string_attrs(a, sa), a->n, err);
     image_planes_free(&p);

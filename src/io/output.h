@@ -112,6 +112,14 @@ const char *attrs_get(const attr_list *a, const char *key);
  * (atomic_set_commit; set NULL: now). */
 int output_write_final_into(atomic_set *set, const char *path, const image *img, int samples_per_batch,
                             const attr_list *a, const exr_window *win, rr_error *err);
+/* The channels output_write_final_into writes, as they are in memory: R G
+ * B A, with two or more batches in some pixel variance.* and stderr.* too,
+ * then samples; each of element stride 16 or 4 bytes in p's planes (held
+ * until image_planes_free(p)), win's pixels row after row. For a caller
+ * that keeps the image in memory (src/api/): the very values the file gets. */
+#define OUTPUT_FINAL_CHANNELS_MAX 13
+int output_final_channels(const image *img, int samples_per_batch, const exr_window *win, image_planes *p,
+                          exr_channel chs[OUTPUT_FINAL_CHANNELS_MAX], int *nch, rr_error *err);
 /* A render state, batch range [begin, end) recorded in the attributes;
  * the _into form as above. */
 int output_write_state(const char *path, const image *img, uint32_t begin, uint32_t end, attr_list *a,

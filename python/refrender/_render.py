@@ -1,0 +1,174 @@
+"""refrender.render: the render command run in-process (librefrender.so),
+its final image returned as numpy arrays and its header as a dict, the very
+values `refrender ... -o out.exr` writes into the EXR."""
+import ctypes
+import threading
+from typing import NamedTuple, Optional
+
+import numpy as np
+
+from . import _library
+
+# EXR attribute types as refrender_result_attr_type numbers them (refrender_api.h)
+_TEXT, _INT, _DOUBLE, _MATRIX = 0, 1, 2, 3
+_LOCK = threading.Lock()  # one render at a time: the command's state is the process's
+
+
+class RenderError(RuntimeError):
+    """The render failed: str(e) is the line the command line prints after
+    "refrender: " (the file and line of a bad scene, say); e.status is its
+    exit status (1 bad input or render error, 2 usage error)."""
+
+    def __init__(self, message, status):
+        super().__init__(message)
+        self.status = status
+
+
+class Render(NamedTuple):
+    """A render's final image: rgba (H x W x 4 float32, R G B A), stderr and
+    variance (H x W x 4, of R G B A; None unless a pixel has 2 or more
+    batches), samples (H x W), the header (attribute name -> str, int, float,
+    or a 4 x 4 float32 matrix for worldToCamera and its kin) and window: the
+    data window (x0, y0, width, height) inside the full image (full_width,
+    full_height), as the EXR's (a crop window's pixels with crop_window)."""
+    rgba: np.ndarray
+    stderr: Optional[np.ndarray]
+    variance: Optional[np.ndarray]
+    samples: np.ndarray
+    header: dict
+    window: dict
+
+
+def _option_words(name, value):
+    """One keyword as the command line's words: spp=4 -> --spp=4, True -> the
+    bare flag, False or None -> nothing; a tuple or list joins with ','
+    (shutter=(0, 1), crop_window=...) except res=(W, H) -> WxH."""
+    flag = "--" + name.replace("_", "-")
+    if value is None or value is False:
+        return []
+    if value is True:
+        return [flag]
+    if isinstance(value, (tuple, list)):
+        value = ("x" if name == "res" else ",").join(repr(v) if isinstance(v, float) else str(v) for v in value)
+    elif isinstance(value, float):
+        value = repr(value)  # the shortest text that reads back as the same double
+    return [f"{flag}={value}"]
+
+
+def command_words(scene, params=None, **options):
+    """The command line render() runs (without the program name)."""
+    words = []
+    for name, value in options.items():
+        words += _option_words(name, value)
+    for name, value in (params or {}).items():
+        words += ["-D", f"{name}={value}"]
+    return words + ["--", str(scene)]
+
+
+def _planes(lib, result, height, width):
+    planes = {}
+    for i in range(lib.refrender_result_channels(result)):
+        name = lib.refrender_result_channel_name(result, i).decode()
+        data = np.ctypeslib.as_array(lib.refrender_result_channel(result, i), shape=(height, width))
+        planes[name] = data.copy()
+    return planes
+
+
+def _header(lib, result):
+    header, numbers = {}, (ctypes.c_double * 16)()
+    for i in range(lib.refrender_result_attrs(result)):
+        key = lib.refrender_result_attr_key(result, i).decode()
+        kind = lib.refrender_result_attr_type(result, i)
+        n = lib.refrender_result_attr_numbers(result, i, numbers)
+        if kind == _INT:
+            header[key] = int(numbers[0])
+        elif kind == _DOUBLE:
+            header[key] = float(numbers[0])
+        elif kind == _MATRIX and n == 16:
+            header[key] = np.array(numbers[:16], dtype=np.float32).reshape(4, 4)
+        else:
+            header[key] = lib.refrender_result_attr_text(result, i).decode()
+    return header
+
+
+def _stack(planes, prefix):
+    names = [prefix + c for c in "RGBA"]
+    return np.stack([planes[n] for n in names], axis=-1) if all(n in planes for n in names) else None
+
+
+def _result(lib, result):
+    window = (ctypes.c_int * 6)()
+    lib.refrender_result_window(result, window)
+    full_w, full_h, x0, y0, w, h = window
+    planes = _planes(lib, result, h, w)
+    return Render(rgba=_stack(planes, ""), stderr=_stack(planes, "stderr."), variance=_stack(planes, "variance."),
+                  samples=planes["samples"], header=_header(lib, result),
+                  window={"x0": x0, "y0": y0, "width": w, "height": h, "full_width": full_w, "full_height": full_h})
+
+
+def _wait(done):
+    """Waits for the render's end; a second Ctrl-C meanwhile changes nothing (it is stopping)."""
+    while True:
+        try:
+            return done.wait()
+        except KeyboardInterrupt:
+            continue
+
+
+def _run(lib, words):
+    """Runs the render in a thread of its own while this one waits, so that
+    Ctrl-C (KeyboardInterrupt, raised here) stops it: the C watches the flag
+    set then, as the command line watches SIGINT, and stops within the batch
+    it is in. Its end is an Event, not Thread.join: a join interrupted by
+    KeyboardInterrupt marks a running thread finished (CPython 3.11's
+    Thread._wait_for_tstate_lock, the bpo-45274 fix), so a second join would
+    not wait for the render to stop."""
+    argv = (ctypes.c_char_p * (len(words) + 1))(*[w.encode() for w in words], None)
+    interrupt, out = ctypes.c_int(0), ctypes.c_void_p()
+    message = ctypes.create_string_buffer(8192)
+    status, done = [], threading.Event()
+
+    def work():
+        try:
+            status.append(lib.refrender_render(len(words), argv, ctypes.byref(interrupt), ctypes.byref(out),
+                                               message, len(message)))
+        finally:
+            done.set()
+    threading.Thread(target=work, name="refrender", daemon=True).start()
+    try:
+        while not done.wait(0.05):
+            pass
+    except BaseException:  # KeyboardInterrupt, or any exception raised into this thread
+        interrupt.value = 1
+        _wait(done)
+        if out.value:
+            lib.refrender_result_free(out)
+        raise
+    return status[0], out, message.value.decode(errors="replace")
+
+
+def render(scene, *, params=None, **options):
+    """Renders scene (an XML file) as `refrender SCENE --OPTION=VALUE ...`
+    does and returns its final image (Render). Options are the command
+    line's, with '_' for '-': spp=16, tspp=64, batches=4, seed=7,
+    res=(64, 36) or "64x36", time_integration="exact", target_error="0.5lv",
+    quiet=True; params={"name": value} gives -D name=value. Outputs (-o,
+    preview, pass, checkpoint, resume, frames) are refused: the image is
+    returned. Raises RenderError with the command line's message, or
+    KeyboardInterrupt when interrupted (no image)."""
+    lib = _library.load()
+    with _LOCK:
+        status, out, message = _run(lib, ["refrender", *command_words(scene, params, **options)])
+    if status == 130:
+        raise KeyboardInterrupt(message)
+    if status:
+        raise RenderError(message, status)
+    try:
+        return _result(lib, out)
+    finally:
+        lib.refrender_result_free(out)
+
+
+def version():
+    """'refrender VERSION (build ID)' of the library, as `refrender --version`."""
+    return _library.load().refrender_version().decode()
