@@ -50,7 +50,7 @@ LIB_SRCS := core/common core/arena core/lanes core/inputfile core/atomicfile acc
             cmd/cli
 LIB_OBJS := $(LIB_SRCS:%=$(BUILD)/%.o)
 PREVIEW_SO := $(BUILD)/refrender-preview.so
-APP_OBJS := $(BUILD)/cmd/main.o $(BUILD)/cmd/gen_cmd.o $(BUILD)/cmd/surfel_output.o $(BUILD)/cmd/merge_cmd.o $(BUILD)/cmd/surfels_cmd.o \
+APP_OBJS := $(BUILD)/cmd/main.o $(BUILD)/cmd/render_cmd.o $(BUILD)/cmd/render_frames.o $(BUILD)/cmd/gen_cmd.o $(BUILD)/cmd/surfel_output.o $(BUILD)/cmd/merge_cmd.o $(BUILD)/cmd/surfels_cmd.o \
             $(BUILD)/cmd/export_cmd.o $(BUILD)/cmd/splat_cmd.o $(BUILD)/cmd/noise_report.o
 TEST_SRCS := $(wildcard tests/test_*.c)
 TEST_OBJS := $(TEST_SRCS:tests/%.c=$(BUILD)/tests/%.o) $(BUILD)/tests/harness.o $(BUILD)/tests/gaussian_test_util.o
