@@ -13,6 +13,7 @@
 #include "cmd/noise_report.h"
 #include "cmd/render_cmd.h"
 #include "io/preview.h"
+#include "render/exact.h"
 #include "io/render_attrs.h"
 
 #ifndef RR_SOURCE_SCENE
@@ -126,7 +127,7 @@ static int check_combinations(const render_options *o, rr_error *err)
     if (o->instant_set && (o->shutter_set || o->frames || o->exact_time))
         return rr_fail(err, "--time renders one instant: it cannot be combined with --shutter, --frame(s) or "
                             "--time-integration exact");
-    if (render_check_exact_blur(o->exact_time, o->blur, err))
+    if (o->exact_time && exact_check_blur_space(o->blur, err))
         return -1;
     if (o->passes && o->batches < o->passes)
         return rr_fail(err, "--pass %d/%d needs --batches >= %d (each pass renders whole batches)",

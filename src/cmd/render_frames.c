@@ -11,6 +11,7 @@
 #include "cmd/noise_report.h"
 #include "cmd/render_cmd.h"
 #include "render/exact.h"
+#include "render/integrator.h"
 #include "io/output.h"
 #include "io/render_attrs.h"
 
@@ -144,7 +145,7 @@ static void setup_run(render_run *run, const scene *s, const shutter *shut, cons
         .batches = end - begin,
         .max_batches = max_batches_of(o),
         .target_error = o->target_error,
-        .exact_time = o->exact_time,
+        .integrator = o->exact_time ? integrator_named("exact") : NULL,
         .filter = o->filter,
         .blur = o->blur,
     };
@@ -289,7 +290,7 @@ static int render_one(const scene *s, const shutter *shut, long long frame, acce
         attrs_set(&run.attrs, ATTR_RENDER_SECONDS, "%.3f", img.seconds);
         attrs_set(&run.attrs, ATTR_RAYS, "%llu", (unsigned long long)img.rays);
         attrs_set(&run.attrs, ATTR_CLAMPED, "%llu", (unsigned long long)img.clamped);
-        if (run.rs.exact_time)
+        if (o->exact_time)
             report_unresolved(o, &img, &run.rs.shut, &run.attrs);
         if (o->frames && s->frame_rate > 0)
             attrs_set(&run.attrs, ATTR_FRAME_RATE, "%.17g", s->frame_rate);

@@ -133,6 +133,15 @@ int exact_plan_new(const scene *s, const accel *a, const shutter *shut, double b
 
 void exact_plan_watch(exact_plan *p, volatile sig_atomic_t *cancel) { p->cancel = cancel; }
 
+int exact_check_blur_space(blur_space b, rr_error *err)
+{
+    if (b != BLUR_SPACE_MODEL)
+        return rr_fail(err, "--blur-space %s %s each instant's colour before the time average, which exact time "
+                            "cannot do (it integrates colours over time): use sampled time",
+                       blur_space_name(b), b == BLUR_SPACE_LINEAR ? "decodes" : "clamps");
+    return 0;
+}
+
 void exact_status_text(int status, char *buf, size_t size)
 {
     switch (status) {
@@ -184,7 +193,8 @@ exact_scratch *exact_scratch_new(rr_arena *arena)
 
 void exact_scratch_begin_batch(exact_scratch *scr)
 {
-    rr_arena_reset(scr->arena);
+    if (scr->arena == &scr->own) /* a worker's arena the render loop resets after each batch (integrator.h) */
+        rr_arena_reset(scr->arena);
     /* every array but prims (accel's own, malloc'd) was in the arena: each
      * taken anew at the capacity it reached (rr_arena_renew) */
     rr_arena *a = scr->arena;

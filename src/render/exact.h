@@ -31,6 +31,7 @@
 #include "core/arena.h"
 #include "scene/scene.h"
 #include "motion/shutter.h"
+#include "render/render_settings.h"
 
 /* A piece of the shutter shorter than this fraction of it is not split
  * further: its blended set is the one at its middle. The total time so
@@ -53,8 +54,9 @@ void exact_plan_free(exact_plan *p);
 /* A thread's scratch, its arrays in `arena` (NULL: an arena of its own),
  * which must outlive it; NULL when out of memory. */
 exact_scratch *exact_scratch_new(rr_arena *arena);
-/* Resets the arena: the arrays of the samples before are gone, and the
- * next samples reuse the memory. */
+/* A new batch, after the arena's reset (the render loop resets a
+ * worker's; this one resets an arena of its own): the arrays of the
+ * samples before are gone, and the next samples reuse the memory. */
 void exact_scratch_begin_batch(exact_scratch *scr);
 void exact_scratch_free(exact_scratch *scr);
 
@@ -83,6 +85,13 @@ enum {
  * is refused, naming the sample, rather than left running for hours. */
 #define EXACT_MAX_CANDIDATES 32768
 #define EXACT_MAX_EVALUATIONS 50000000ULL
+
+/* Exact time integration with the blur space: refused (-1, err naming
+ * --blur-space) for linear and clamped, whose change of each instant's
+ * colour must come before the time average, while exact time integrates
+ * colours over time first. One rule for the command line and the exact
+ * integrator's check. */
+int exact_check_blur_space(blur_space b, rr_error *err);
 
 /* A one-line reason for a status other than EXACT_OK, into buf. */
 void exact_status_text(int status, char *buf, size_t size);
