@@ -225,10 +225,7 @@ void exact_scratch_free(exact_scratch *scr)
 
 void exact_world_ray(const sample_ctx *c, double t, vec3 *org, vec3 *dir)
 {
-    if (c->p->camera_moves)
-        scene_camera_ray(c->p->sc, c->x, c->y, t, org, dir);
-    else
-        *org = c->p->sc->cam.position, *dir = c->dir0;
+    scene_camera_ray(c->p->sc, c->x, c->y, t, org, dir);
 }
 
 /* Object obj's ray at time t, cached: candidates come object by object. */
