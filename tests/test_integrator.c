@@ -105,14 +105,14 @@ static int toy_batch_failure(int status, int px, int py, rr_error *err)
     return rr_fail(err, "toy: status %d at pixel (%d, %d)", status, px, py);
 }
 
-static const integrator_row toy_integrator_row = {
+static const integrator_ops toy_integrator_row = {
     .id = "toy", .name = "toy", .check = toy_check, .setup = toy_setup, .teardown = toy_teardown,
     .thread_new = toy_thread_new, .pixel_batch = toy_batch, .thread_free = toy_thread_free,
     .batch_failure = toy_batch_failure,
 };
 
 /* The built-in rows and the toy's: the one line that plugs it in. */
-static const integrator_row *const rows[] = {&surfel_integrator_row, &gaussian_integrator_row, &exact_integrator_row,
+static const integrator_ops *const rows[] = {&surfel_integrator_row, &gaussian_integrator_row, &exact_integrator_row,
                                              &toy_integrator_row};
 
 /* A 16x16 render of the toy row (found by id in `rows`): 2 batches of a

@@ -232,7 +232,7 @@ static int exact_batch_failure(int status, int px, int py, rr_error *err)
                    px, py, why);
 }
 
-const integrator_row exact_integrator_row = {
+const integrator_ops exact_integrator_row = {
     .id = "exact", .name = "exact time", .check = exact_check, .setup = exact_setup, .teardown = exact_teardown,
     .thread_new = exact_thread_new, .pixel_batch = exact_batch, .thread_free = exact_thread_free,
     .batch_failure = exact_batch_failure,

@@ -480,7 +480,7 @@ static int gaussian_batch_failure(int status, int px, int py, rr_error *err)
                         "or fewer threads", gaussian_integrator_row.name, px, py);
 }
 
-const integrator_row gaussian_integrator_row = {
+const integrator_ops gaussian_integrator_row = {
     .id = "gaussians", .name = "sampled Gaussians", .thread_new = gaussian_new, .pixel_batch = gaussian_batch,
     .thread_free = gaussian_free, .batch_failure = gaussian_batch_failure,
 };

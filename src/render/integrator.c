@@ -4,10 +4,10 @@
 #include <string.h>
 
 /* The built-in integrators, looked up by id. */
-static const integrator_row *const integrator_table[] = {&surfel_integrator_row, &gaussian_integrator_row,
+static const integrator_ops *const integrator_table[] = {&surfel_integrator_row, &gaussian_integrator_row,
                                                         &exact_integrator_row};
 
-const integrator_row *integrator_find(const integrator_row *const *table, int n, const char *id)
+const integrator_ops *integrator_find(const integrator_ops *const *table, int n, const char *id)
 {
     for (int i = 0; id && i < n; i++)
         if (!strcmp(table[i]->id, id))
@@ -15,12 +15,12 @@ const integrator_row *integrator_find(const integrator_row *const *table, int n,
     return NULL;
 }
 
-const integrator_row *integrator_named(const char *id)
+const integrator_ops *integrator_named(const char *id)
 {
     return integrator_find(integrator_table, (int)(sizeof integrator_table / sizeof *integrator_table), id);
 }
 
-const integrator_row *integrator_for(const integrator_context *ctx)
+const integrator_ops *integrator_for(const integrator_context *ctx)
 {
     if (ctx->rs->integrator)
         return ctx->rs->integrator;

@@ -8,7 +8,7 @@
  *    each sample's Gaussian hits composited over it; the surfels keep
  *    their static reuse;
  *  - exact time (exact.h): each spatial position's exact time average.
- * Each is one row (integrator_row) of the table integrator_named looks up
+ * Each is one row (integrator_ops) of the table integrator_named looks up
  * (after pbrt-v4's Integrator::Create(name, ...)): it checks what it can
  * render, sets up and tears down its per-render state (exact time's plan),
  * says why a batch failed, and keeps its own per-thread state (thread_new /
@@ -64,7 +64,7 @@ typedef struct {
  * are the row's own, which its batch_failure puts into words. */
 enum { INTEGRATOR_OK = 0, INTEGRATOR_NO_MEMORY = -1, INTEGRATOR_INTERRUPTED = -2 };
 
-typedef struct integrator_row {
+typedef struct integrator_ops {
     const char *id;   /* the name integrator_named finds it by ("exact": --time-integration's) */
     const char *name; /* in messages ("exact time") */
     /* What it cannot render (settings, scene): -1 with err before any work;
@@ -86,20 +86,20 @@ typedef struct integrator_row {
     /* The render's error for a batch of pixel (px, py) that failed with
      * status (never INTEGRATOR_INTERRUPTED); returns -1. */
     int (*batch_failure)(int status, int px, int py, rr_error *err);
-} integrator_row;
+} integrator_ops;
 
 /* The integrators (defined beside their code), and the table of them. */
-extern const integrator_row surfel_integrator_row, gaussian_integrator_row, exact_integrator_row;
+extern const integrator_ops surfel_integrator_row, gaussian_integrator_row, exact_integrator_row;
 
 /* The row of `table` (n rows) whose id is `id`, or NULL. */
-const integrator_row *integrator_find(const integrator_row *const *table, int n, const char *id);
+const integrator_ops *integrator_find(const integrator_ops *const *table, int n, const char *id);
 /* The built-in row named id ("surfels", "gaussians", "exact"), or NULL. */
-const integrator_row *integrator_named(const char *id);
+const integrator_ops *integrator_named(const char *id);
 
 /* The integrator a render of ctx uses: rs->integrator when set, else
  * sampled time, Gaussians when the scene has Gaussian objects, else
  * surfels. */
-const integrator_row *integrator_for(const integrator_context *ctx);
+const integrator_ops *integrator_for(const integrator_context *ctx);
 
 /* A sampled integrator's estimate of one batch (thesis sec. 4.5): the
  * sampler-weighted mean of the colours, each in the render's blur space,

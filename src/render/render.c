@@ -13,7 +13,7 @@
 
 typedef struct {
     integrator_context ctx; /* ctx.plan: the integrator's (its setup and teardown) */
-    const integrator_row *integ; /* integrator_for(&ctx) */
+    const integrator_ops *integ; /* integrator_for(&ctx) */
     const render_settings *rs;
     shutter_cdf time_cdf;    /* times drawn from a(t) (not used for a box) */
     image *img;

@@ -9,7 +9,7 @@
 #include "render/sampler.h"
 #include "motion/shutter.h"
 
-struct integrator_row; /* (integrator.h) */
+struct integrator_ops; /* (integrator.h) */
 
 /* Where a pixel's spatial samples lie: over its area (box, the default),
  * or all at its centre (point: the official Gaussian rasterizers evaluate
@@ -37,7 +37,7 @@ typedef struct {
     double target_error;    /* > 0: pixels whose RGB standard error is above it get more batches */
     /* the integrator (integrator.h, one of its table's rows: integrator_named);
      * NULL: sampled time, by the scene's sampled integrator (integrator_for) */
-    const struct integrator_row *integrator;
+    const struct integrator_ops *integrator;
     int crop_x0, crop_y0, crop_x1, crop_y1; /* crop_x1 > 0: only pixels x0 <= x < x1, y0 <= y < y1 */
     pixel_filter filter;
     blur_space blur;
