@@ -108,13 +108,13 @@ static int weight_breaks(exact_plan *p)
     return 0;
 }
 
-int exact_plan_new(const scene *s, const accel *a, const shutter *shut, double box_scale, exact_plan **out,
-                   rr_error *err)
+int exact_plan_new(const scene *s, const accel *a, const shutter *shut, double box_scale,
+                   volatile sig_atomic_t *cancel, exact_plan **out, rr_error *err)
 {
     exact_plan *p = calloc(1, sizeof *p);
     if (!p)
         return rr_fail(err, "out of memory");
-    p->sc = s, p->acc = a, p->shut = *shut, p->box_scale = box_scale;
+    p->sc = s, p->acc = a, p->shut = *shut, p->box_scale = box_scale, p->cancel = cancel;
     p->tol = EXACT_TIME_TOL * (shut->close - shut->open);
     p->camera_moves = scene_camera_moves(s);
     aabb at_rest = {s->cam.position, s->cam.position};
@@ -131,7 +131,6 @@ int exact_plan_new(const scene *s, const accel *a, const shutter *shut, double b
     return 0;
 }
 
-void exact_plan_watch(exact_plan *p, volatile sig_atomic_t *cancel) { p->cancel = cancel; }
 
 int exact_check_blur_space(blur_space b, rr_error *err)
 {

@@ -46,9 +46,11 @@ typedef struct exact_plan exact_plan;       /* per shutter; read-only, shared by
 typedef struct exact_scratch exact_scratch; /* per thread */
 
 /* box_scale: 1; tests shrink the candidate boxes with it to show that the
- * candidate test can fail. */
-int exact_plan_new(const scene *s, const accel *a, const shutter *shut, double box_scale, exact_plan **out,
-                   rr_error *err);
+ * candidate test can fail. cancel: the flag render_image watches (NULL:
+ * never cancelled), which a sample checks as it goes, so an interrupt
+ * does not wait for a costly sample to end. */
+int exact_plan_new(const scene *s, const accel *a, const shutter *shut, double box_scale,
+                   volatile sig_atomic_t *cancel, exact_plan **out, rr_error *err);
 void exact_plan_free(exact_plan *p);
 
 /* A thread's scratch, its arrays in `arena` (NULL: an arena of its own),
@@ -100,10 +102,6 @@ void exact_status_text(int status, char *buf, size_t size);
  * through raster position (x, y): integral of a(t) rgba(t) over the
  * shutter divided by the integral of a(t). Returns an EXACT_ status. */
 int exact_sample(const exact_plan *p, exact_scratch *scr, double x, double y, double rgba[4], exact_stats *st);
-
-/* The flag render_image watches: a sample checks it as it goes, so an
- * interrupt does not wait for a costly sample to end. */
-void exact_plan_watch(exact_plan *p, volatile sig_atomic_t *cancel);
 
 /* For tests: gathers the candidates for (x, y) into the scratch and
  * returns their count (< 0: an EXACT_ status); exact_candidate reads the i-th

@@ -164,13 +164,12 @@ static int exact_check(const integrator_context *ctx, rr_error *err)
     return 0;
 }
 
-/* The render's plan (exact.h), watching the render's cancel flag. */
+/* The render's plan (exact.h), watching the render's cancel flag (ctx->cancel). */
 static int exact_setup(integrator_context *ctx, rr_error *err)
 {
     exact_plan *plan;
-    if (exact_plan_new(ctx->sc, ctx->acc, &ctx->rs->shut, 1.0, &plan, err))
+    if (exact_plan_new(ctx->sc, ctx->acc, &ctx->rs->shut, 1.0, ctx->cancel, &plan, err))
         return -1;
-    exact_plan_watch(plan, ctx->cancel);
     ctx->plan = plan;
     return 0;
 }
