@@ -50,13 +50,12 @@ LIB_SRCS := core/common core/arena core/lanes core/inputfile core/atomicfile acc
             motion/animation formats/animfile core/camera motion/shutter render/sampler scene/scene io/preview io/preview_png \
             io/scene_xml io/scene_xml_util io/scene_xml_anim io/scene_xml_camera io/scene_params accel/accel \
             accel/accel_build accel/accel_collide render/gaussian_integrator render/exact render/exact_kinds \
-            render/exact_integrate render/integrator render/surfel_integrator render/shade render/film render/noise render/render splat/frame splat/splatting splat/volumetric splat/guan_mueller formats/exr io/output io/render_attrs \
+            render/exact_integrate render/integrator render/surfel_integrator render/shade render/film render/noise render/render render/render_settings splat/frame splat/splatting splat/volumetric splat/guan_mueller formats/exr io/output io/render_attrs \
             cmd/cli
 LIB_OBJS := $(LIB_SRCS:%=$(BUILD)/%.o)
 PREVIEW_SO := $(BUILD)/refrender-preview.so
-APP_OBJS := $(BUILD)/cmd/main.o $(BUILD)/cmd/gen_cmd.o $(BUILD)/cmd/surfel_output.o $(BUILD)/cmd/merge_cmd.o $(BUILD)/cmd/surfels_cmd.o \
-            $(BUILD)/cmd/export_cmd.o $(BUILD)/cmd/splat_cmd.o $(BUILD)/cmd/noise_report.o \
-            $(BUILD)/cmd/dataset_cmd.o
+APP_OBJS := $(BUILD)/cmd/main.o $(BUILD)/cmd/render_cmd.o $(BUILD)/cmd/render_frames.o $(BUILD)/cmd/gen_cmd.o $(BUILD)/cmd/surfel_output.o $(BUILD)/cmd/merge_cmd.o $(BUILD)/cmd/surfels_cmd.o \
+            $(BUILD)/cmd/export_cmd.o $(BUILD)/cmd/splat_cmd.o $(BUILD)/cmd/noise_report.o $(BUILD)/cmd/dataset_cmd.o
 TEST_SRCS := $(wildcard tests/test_*.c)
 TEST_OBJS := $(TEST_SRCS:tests/%.c=$(BUILD)/tests/%.o) $(BUILD)/tests/harness.o $(BUILD)/tests/gaussian_test_util.o
 

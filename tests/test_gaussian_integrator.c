@@ -227,6 +227,7 @@ TEST(gaussian_scratch_is_the_arenas_reused_each_batch_and_none_left_drops_gaussi
             dropped += starved.hits.dropped > 0, composited += nb.composited;
         }
         mallocs[batch] = arena.mallocs;
+        rr_arena_reset(&arena), rr_arena_reset(&none); /* as the render loop after each batch (integrator.h) */
     }
     printf("    arena chunks after each batch: %llu %llu %llu %llu (%zu bytes)\n", (unsigned long long)mallocs[0],
            (unsigned long long)mallocs[1], (unsigned long long)mallocs[2], (unsigned long long)mallocs[3],

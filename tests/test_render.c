@@ -111,7 +111,7 @@ TEST(render_settings_default_is_one_sample_of_one_batch)
     CHECK(rs.smp.kind == SAMPLER_DEFAULT && rs.smp.seed == 1);
     CHECK(rs.smp.grid == 1 && rs.smp.tspp == 1 && rs.smp.time_factor == 1);
     CHECK(rs.threads == 1 && rs.batch_begin == 0 && rs.batches == 1 && rs.max_batches == 1);
-    CHECK(rs.target_error == 0 && rs.exact_time == 0);
+    CHECK(rs.target_error == 0 && rs.integrator == NULL);
     CHECK(rs.crop_x0 == 0 && rs.crop_y0 == 0 && rs.crop_x1 == 0 && rs.crop_y1 == 0);
     CHECK(rs.filter == PIXEL_FILTER_BOX && rs.blur == BLUR_SPACE_MODEL);
     CHECK(rs.shut.open == 0 && rs.shut.close == 1 && rs.shut.kind == WEIGHT_BOX && rs.shut.table_size == 0);

@@ -3,7 +3,11 @@
 #ifndef RR_COMMANDS_H
 #define RR_COMMANDS_H
 
+#include <stdio.h>
+
 int cmd_render(int argc, char **argv);
+/* The program's usage (main.c): the render command's options and the subcommands. */
+void refrender_usage(FILE *f);
 int cmd_gen(int argc, char **argv);
 int cmd_merge(int argc, char **argv);
 int cmd_surfels(int argc, char **argv);

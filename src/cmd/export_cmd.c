@@ -646,7 +646,7 @@ static int export_scene(const export_options *o, rr_error *err)
     if (check_outputs(out, n, err) || scene_load_file_params(o->scene, &o->params, &s, err))
         return -1;
     int rc = 0;
-    if (o->shutter_set) { /* as the render applies it (main.c) */
+    if (o->shutter_set) { /* as the render applies it (render_cmd.c, apply_overrides) */
         s.shut.open = o->shutter_open, s.shut.close = o->shutter_close;
         rc = shutter_check(&s.shut, err);
     }

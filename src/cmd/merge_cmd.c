@@ -134,7 +134,7 @@ static int add_state(const char *path, image *merged, attr_list *first, const ch
 }
 
 /* The merged image and its preview (NULL: none), both put in place or
- * neither, as a render's outputs (main.c, write_outputs). */
+ * neither, as a render's outputs (render_frames.c, write_outputs). */
 static int write_merged(const char *out, const char *preview, const image *merged, const attr_list *attrs,
                         rr_error *err)
 {

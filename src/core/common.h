@@ -79,7 +79,7 @@ void rr_check_failed_values(const char *file, int line, const char *cond, long l
 #endif
 
 /* The process's interrupt flag, set by a command's SIGINT/SIGTERM handler
- * (main.c), for loaders it cannot be handed to: the PLY reader is reached
+ * (render_cmd.c), for loaders it cannot be handed to: the PLY reader is reached
  * through the scene loader, and a large model's load must stop on a signal
  * (reading gigabytes takes long, and an interrupt must not wait for it).
  * Until a flag is watched, nothing is ever interrupted. */

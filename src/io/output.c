@@ -165,7 +165,7 @@ static int check_both_have(const attr_list *a, const char *a_name, const attr_li
     return 0;
 }
 
-/* Exact time's unresolved share is per traced ray (main.c), so the share
+/* Exact time's unresolved share is per traced ray (render_frames.c, report_unresolved), so the share
  * of states together is their ray-weighted mean; called before the rays
  * are summed. */
 static void combine_unresolved(attr_list *merged, const attr_list *b)

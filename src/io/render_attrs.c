@@ -6,6 +6,7 @@
 
 #include "gaussians/gaussian_hit.h"
 #include "core/inputfile.h"
+#include "render/integrator.h"
 
 #ifndef RR_BUILD_ID /* the Makefile's: the SHA-256 of the code under src/ */
 #error "RR_BUILD_ID is not defined: build with the Makefile"
@@ -171,7 +172,7 @@ void attrs_for_render(attr_list *a, const scene *s, const render_settings *rs, u
     attrs_set(a, ATTR_ROLLING_SHUTTER, "%s", rolling);
     line_times(a, &rs->shut, s->cam.width, s->cam.height);
     attrs_set(a, ATTR_TIME_FACTOR, "%d", smp->time_factor);
-    attrs_set(a, ATTR_TIME_INTEGRATION, "%s", rs->exact_time ? "exact" : "sampled");
+    attrs_set(a, ATTR_TIME_INTEGRATION, "%s", rs->integrator ? rs->integrator->id : "sampled");
     attrs_set(a, ATTR_PIXEL_FILTER, "%s", pixel_filter_name(rs->filter));
     attrs_set(a, ATTR_BLUR_SPACE, "%s", blur_space_name(rs->blur));
     attrs_set(a, ATTR_COLOR_SPACE, "%s", color_space(s, rs->blur));

@@ -108,13 +108,13 @@ static int weight_breaks(exact_plan *p)
     return 0;
 }
 
-int exact_plan_new(const scene *s, const accel *a, const shutter *shut, double box_scale, exact_plan **out,
-                   rr_error *err)
+int exact_plan_new(const scene *s, const accel *a, const shutter *shut, double box_scale,
+                   volatile sig_atomic_t *cancel, exact_plan **out, rr_error *err)
 {
     exact_plan *p = calloc(1, sizeof *p);
     if (!p)
         return rr_fail(err, "out of memory");
-    p->sc = s, p->acc = a, p->shut = *shut, p->box_scale = box_scale;
+    p->sc = s, p->acc = a, p->shut = *shut, p->box_scale = box_scale, p->cancel = cancel;
     p->tol = EXACT_TIME_TOL * (shut->close - shut->open);
     p->camera_moves = scene_camera_moves(s);
     aabb at_rest = {s->cam.position, s->cam.position};
@@ -131,7 +131,15 @@ int exact_plan_new(const scene *s, const accel *a, const shutter *shut, double b
     return 0;
 }
 
-void exact_plan_watch(exact_plan *p, volatile sig_atomic_t *cancel) { p->cancel = cancel; }
+
+int exact_check_blur_space(blur_space b, rr_error *err)
+{
+    if (b != BLUR_SPACE_MODEL)
+        return rr_fail(err, "--blur-space %s %s each instant's colour before the time average, which exact time "
+                            "cannot do (it integrates colours over time): use sampled time",
+                       blur_space_name(b), b == BLUR_SPACE_LINEAR ? "decodes" : "clamps");
+    return 0;
+}
 
 void exact_status_text(int status, char *buf, size_t size)
 {
@@ -184,7 +192,8 @@ exact_scratch *exact_scratch_new(rr_arena *arena)
 
 void exact_scratch_begin_batch(exact_scratch *scr)
 {
-    rr_arena_reset(scr->arena);
+    if (scr->arena == &scr->own) /* a worker's arena the render loop resets after each batch (integrator.h) */
+        rr_arena_reset(scr->arena);
     /* every array but prims (accel's own, malloc'd) was in the arena: each
      * taken anew at the capacity it reached (rr_arena_renew) */
     rr_arena *a = scr->arena;
@@ -215,10 +224,7 @@ void exact_scratch_free(exact_scratch *scr)
 
 void exact_world_ray(const sample_ctx *c, double t, vec3 *org, vec3 *dir)
 {
-    if (c->p->camera_moves)
-        scene_camera_ray(c->p->sc, c->x, c->y, t, org, dir);
-    else
-        *org = c->p->sc->cam.position, *dir = c->dir0;
+    scene_camera_ray(c->p->sc, c->x, c->y, t, org, dir);
 }
 
 /* Object obj's ray at time t, cached: candidates come object by object. */

@@ -31,6 +31,7 @@
 #include "core/arena.h"
 #include "scene/scene.h"
 #include "motion/shutter.h"
+#include "render/render_settings.h"
 
 /* A piece of the shutter shorter than this fraction of it is not split
  * further: its blended set is the one at its middle. The total time so
@@ -45,16 +46,19 @@ typedef struct exact_plan exact_plan;       /* per shutter; read-only, shared by
 typedef struct exact_scratch exact_scratch; /* per thread */
 
 /* box_scale: 1; tests shrink the candidate boxes with it to show that the
- * candidate test can fail. */
-int exact_plan_new(const scene *s, const accel *a, const shutter *shut, double box_scale, exact_plan **out,
-                   rr_error *err);
+ * candidate test can fail. cancel: the flag render_image watches (NULL:
+ * never cancelled), which a sample checks as it goes, so an interrupt
+ * does not wait for a costly sample to end. */
+int exact_plan_new(const scene *s, const accel *a, const shutter *shut, double box_scale,
+                   volatile sig_atomic_t *cancel, exact_plan **out, rr_error *err);
 void exact_plan_free(exact_plan *p);
 
 /* A thread's scratch, its arrays in `arena` (NULL: an arena of its own),
  * which must outlive it; NULL when out of memory. */
 exact_scratch *exact_scratch_new(rr_arena *arena);
-/* Resets the arena: the arrays of the samples before are gone, and the
- * next samples reuse the memory. */
+/* A new batch, after the arena's reset (the render loop resets a
+ * worker's; this one resets an arena of its own): the arrays of the
+ * samples before are gone, and the next samples reuse the memory. */
 void exact_scratch_begin_batch(exact_scratch *scr);
 void exact_scratch_free(exact_scratch *scr);
 
@@ -84,6 +88,13 @@ enum {
 #define EXACT_MAX_CANDIDATES 32768
 #define EXACT_MAX_EVALUATIONS 50000000ULL
 
+/* Exact time integration with the blur space: refused (-1, err naming
+ * --blur-space) for linear and clamped, whose change of each instant's
+ * colour must come before the time average, while exact time integrates
+ * colours over time first. One rule for the command line and the exact
+ * integrator's check. */
+int exact_check_blur_space(blur_space b, rr_error *err);
+
 /* A one-line reason for a status other than EXACT_OK, into buf. */
 void exact_status_text(int status, char *buf, size_t size);
 
@@ -91,10 +102,6 @@ void exact_status_text(int status, char *buf, size_t size);
  * through raster position (x, y): integral of a(t) rgba(t) over the
  * shutter divided by the integral of a(t). Returns an EXACT_ status. */
 int exact_sample(const exact_plan *p, exact_scratch *scr, double x, double y, double rgba[4], exact_stats *st);
-
-/* The flag render_image watches: a sample checks it as it goes, so an
- * interrupt does not wait for a costly sample to end. */
-void exact_plan_watch(exact_plan *p, volatile sig_atomic_t *cancel);
 
 /* For tests: gathers the candidates for (x, y) into the scratch and
  * returns their count (< 0: an EXACT_ status); exact_candidate reads the i-th

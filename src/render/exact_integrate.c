@@ -147,6 +147,39 @@ int exact_sample(const exact_plan *p, exact_scratch *scr, double x, double y, do
 
 /* ---- the exact-time integrator (integrator.h) ---- */
 
+_Static_assert((int)EXACT_OK == (int)INTEGRATOR_OK && (int)EXACT_NO_MEMORY == (int)INTEGRATOR_NO_MEMORY &&
+                   (int)EXACT_INTERRUPTED == (int)INTEGRATOR_INTERRUPTED,
+               "exact time's statuses are the integrator seam's where they mean the same");
+
+/* What exact time cannot integrate, refused before any work. */
+static int exact_check(const integrator_context *ctx, rr_error *err)
+{
+    if (exact_check_blur_space(ctx->rs->blur, err))
+        return -1;
+    if (ctx->rs->shut.rolling.kind != ROLLING_OFF)
+        return rr_fail(err, "exact time integration does not integrate a rolling shutter (each line its own "
+                            "window): use sampled time");
+    if (accel_has_gaussians(ctx->acc))
+        return rr_fail(err, "exact time integration does not integrate Gaussian-splat objects: use sampled time");
+    return 0;
+}
+
+/* The render's plan (exact.h), watching the render's cancel flag (ctx->cancel). */
+static int exact_setup(integrator_context *ctx, rr_error *err)
+{
+    exact_plan *plan;
+    if (exact_plan_new(ctx->sc, ctx->acc, &ctx->rs->shut, 1.0, ctx->cancel, &plan, err))
+        return -1;
+    ctx->plan = plan;
+    return 0;
+}
+
+static void exact_teardown(integrator_context *ctx)
+{
+    exact_plan_free(ctx->plan);
+    ctx->plan = NULL;
+}
+
 static void *exact_thread_new(const integrator_context *ctx, rr_arena *arena)
 {
     (void)ctx;
@@ -166,7 +199,7 @@ static int exact_batch(void *thread, const integrator_context *ctx, const pixel_
         est[ch] = 0;
     for (int i = 0; i < ps->count; i++) {
         double rgba[4];
-        int rc = exact_sample(ctx->exact, thread, ps->x[i], ps->y[i], rgba, &st);
+        int rc = exact_sample(ctx->plan, thread, ps->x[i], ps->y[i], rgba, &st);
         if (rc)
             return rc;
         for (int ch = 0; ch < 4; ch++)
@@ -184,4 +217,22 @@ static void exact_thread_free(void *thread, integrator_counts *c)
     exact_scratch_free(thread);
 }
 
-const integrator exact_integrator_ops = {"exact time", exact_thread_new, exact_batch, exact_thread_free};
+/* A sample past the candidate or evaluation bounds says the scene is
+ * beyond exact time integration. */
+static int exact_batch_failure(int status, int px, int py, rr_error *err)
+{
+    char why[128];
+    exact_status_text(status, why, sizeof why);
+    if (status == EXACT_NO_MEMORY || status == EXACT_EMBREE_ERROR)
+        return rr_fail(err, "exact time integration at pixel (%d, %d): %s", px, py, why);
+    return rr_fail(err,
+                   "exact time integration at pixel (%d, %d): one spatial sample needs %s; exact time cannot "
+                   "finish this scene in reasonable time: render it with sampled time (the default)",
+                   px, py, why);
+}
+
+const integrator_ops exact_integrator_row = {
+    .id = "exact", .name = "exact time", .check = exact_check, .setup = exact_setup, .teardown = exact_teardown,
+    .thread_new = exact_thread_new, .pixel_batch = exact_batch, .thread_free = exact_thread_free,
+    .batch_failure = exact_batch_failure,
+};

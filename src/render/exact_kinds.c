@@ -161,15 +161,19 @@ static int sphere_cross_at(const scene_object *o, const cand_info *g, const obje
     return 1;
 }
 
-/* A Gaussian model has no row: render.c refuses exact time for it. */
+/* A Gaussian model has no row: the exact integrator's check refuses exact
+ * time for it (exact_integrate.c, exact_check). */
 static const exact_kind_ops exact_rows[] = {
     [OBJECT_POINTS] = {splat_describe, splat_eval, splat_cross, 0},
     [OBJECT_SPHERE] = {sphere_describe, sphere_eval, sphere_cross_at, 1},
 };
 
+/* The bound is checked before the row is read (a kind past the table
+ * would read beyond it). */
 const exact_kind_ops *exact_kind_row(const scene_object *o)
 {
+    RR_DCHECK((unsigned)o->kind < sizeof exact_rows / sizeof *exact_rows);
     const exact_kind_ops *row = &exact_rows[o->kind];
-    RR_DCHECK((unsigned)o->kind < sizeof exact_rows / sizeof *exact_rows && row->eval);
+    RR_DCHECK(row->eval);
     return row;
 }

@@ -21,10 +21,11 @@ void gaussian_integrator_reset(gaussian_integrator *g) { g->hits.count = g->hits
 
 void gaussian_integrator_begin_batch(gaussian_integrator *g)
 {
-    for (size_t k = 0; g->instants && k < g->rays_cap; k++)
-        if (g->instants[k].cap > g->instant_cap_reached)
-            g->instant_cap_reached = g->instants[k].cap;
-    rr_arena_reset(g->arena);
+    if (g->instant_cap_batch > g->instant_cap_reached)
+        g->instant_cap_reached = g->instant_cap_batch;
+    g->instant_cap_batch = 0;
+    if (g->arena == &g->own) /* a worker's arena the render loop resets after each batch (integrator.h) */
+        rr_arena_reset(g->arena);
     gaussian_hits_begin(&g->hits);
     g->rays = NULL, g->instants = NULL, g->rays_cap = 0; /* (one per object: a few) */
     g->candidates_count = 0;
@@ -128,6 +129,8 @@ static void instantiate_for_cull(gaussian_integrator *g, const gaussian_model *m
         g->candidates_count = first;
         return;
     }
+    if (in->cap > g->instant_cap_batch)
+        g->instant_cap_batch = in->cap;
     for (size_t k = 0; k < n; k++) {
         gaussian_candidate *c = &g->candidates[first + k];
         if (k + INSTANT_PREFETCH_AHEAD < n)
@@ -454,7 +457,7 @@ static int gaussian_batch(void *thread, const integrator_context *ctx, const pix
      * beyond the batch's noise. The batch has no estimate and the render
      * fails, as the surfels' and exact time's do out of memory. */
     if (!rc && th->gaussians.short_samples > short_before)
-        return EXACT_NO_MEMORY;
+        return INTEGRATOR_NO_MEMORY;
     return rc;
 }
 
@@ -467,4 +470,17 @@ static void gaussian_free(void *thread, integrator_counts *c)
     free(th);
 }
 
-const integrator gaussian_integrator_ops = {"sampled Gaussians", gaussian_new, gaussian_batch, gaussian_free};
+/* A sampled batch fails only so (gaussian_batch). */
+static int gaussian_batch_failure(int status, int px, int py, rr_error *err)
+{
+    RR_DCHECK(status == INTEGRATOR_NO_MEMORY);
+    (void)status;
+    return rr_fail(err, "%s at pixel (%d, %d): out of memory for a sample's Gaussians (drawn without them it "
+                        "could be off by its whole colour, far beyond the noise): give the render more memory "
+                        "or fewer threads", gaussian_integrator_row.name, px, py);
+}
+
+const integrator_ops gaussian_integrator_row = {
+    .id = "gaussians", .name = "sampled Gaussians", .thread_new = gaussian_new, .pixel_batch = gaussian_batch,
+    .thread_free = gaussian_free, .batch_failure = gaussian_batch_failure,
+};

@@ -4,7 +4,7 @@
  * (accel_gaussian_candidates); the per-object rays, the windows of
  * distance, the chunks evaluated in order of their key floors and the
  * compositing calls are its own, and so is their scratch. Behind the
- * integrator seam (integrator.h) it is gaussian_integrator_ops: each
+ * integrator seam (integrator.h) it is gaussian_integrator_row: each
  * sample's Gaussians composited over the colour the surfel integrator
  * gives it (surfel_integrator.h, static reuse included). */
 #ifndef RR_GAUSSIAN_INTEGRATOR_H
@@ -42,8 +42,8 @@ typedef struct {
 /* A thread's scratch: _init it over an arena, clear the hits of a sample
  * with _reset, release it with _free. Its arrays, the hits' heap among
  * them, grow in the arena (rr_arena_grow: a window's candidates one at a
- * time) and are reused sample after sample until _begin_batch resets the
- * arena. */
+ * time) and are reused sample after sample until the arena's reset (the
+ * render loop's after each batch, or _begin_batch's of an own arena). */
 typedef struct {
     rr_arena *arena;                   /* the worker's, or own */
     rr_arena own;
@@ -56,7 +56,8 @@ typedef struct {
     size_t candidates_count, candidates_cap;
     uint64_t *candidate_order;         /* their evaluation order, with sorting space */
     size_t candidate_order_cap;
-    size_t instant_cap_reached;        /* the largest capacity of an instant before the last reset */
+    size_t instant_cap_reached;        /* the largest capacity of an instant before the last batch */
+    size_t instant_cap_batch;          /* and in the batch under way */
     uint64_t short_samples;            /* samples that dropped Gaussians for lack of memory (hits.dropped > 0),
                                         * counted on across samples: a batch that adds one fails (gaussian_batch) */
 } gaussian_integrator;
@@ -66,9 +67,10 @@ void gaussian_integrator_init(gaussian_integrator *g, rr_arena *arena);
 /* A new sample: no hits waiting, none dropped (hits.added and hits.moved
  * keep counting: statistics). */
 void gaussian_integrator_reset(gaussian_integrator *g);
-/* A new batch: resets the arena, whose arrays are gone (the next samples
- * reuse its memory), and takes each array anew at the capacity it reached
- * (rr_arena_renew). */
+/* A new batch, after the arena's reset (the render loop resets a
+ * worker's; this one resets an arena of its own): the arrays are gone (the
+ * next samples reuse their memory), each taken anew at the capacity it
+ * reached (rr_arena_renew). */
 void gaussian_integrator_begin_batch(gaussian_integrator *g);
 void gaussian_integrator_free(gaussian_integrator *g);
 

@@ -1,10 +1,30 @@
 #include "render/integrator.h"
 
-const integrator *integrator_for(const integrator_context *ctx)
+#include <math.h>
+#include <string.h>
+
+/* The built-in integrators, looked up by id. */
+static const integrator_ops *const integrator_table[] = {&surfel_integrator_row, &gaussian_integrator_row,
+                                                        &exact_integrator_row};
+
+const integrator_ops *integrator_find(const integrator_ops *const *table, int n, const char *id)
 {
-    if (ctx->rs->exact_time)
-        return &exact_integrator_ops;
-    return accel_has_gaussians(ctx->acc) ? &gaussian_integrator_ops : &surfel_integrator_ops;
+    for (int i = 0; id && i < n; i++)
+        if (!strcmp(table[i]->id, id))
+            return table[i];
+    return NULL;
+}
+
+const integrator_ops *integrator_named(const char *id)
+{
+    return integrator_find(integrator_table, (int)(sizeof integrator_table / sizeof *integrator_table), id);
+}
+
+const integrator_ops *integrator_for(const integrator_context *ctx)
+{
+    if (ctx->rs->integrator)
+        return ctx->rs->integrator;
+    return accel_has_gaussians(ctx->acc) ? &gaussian_integrator_row : &surfel_integrator_row;
 }
 
 static double clamp01(double v) { return fmin(fmax(v, 0.0), 1.0); }
@@ -42,7 +62,7 @@ int integrator_sampled_batch(void *thread, const integrator_context *ctx, const 
     double acc[4] = {0, 0, 0, 0}, weight = 0;
     for (int first = 0; first < ps->count;) {
         if (ctx->cancel && *ctx->cancel) /* (a group is at most ACCEL_PACKET samples: microseconds) */
-            return EXACT_INTERRUPTED; /* (its rays uncounted: a resumed render counts the batch's once) */
+            return INTEGRATOR_INTERRUPTED; /* (its rays uncounted: a resumed render counts the batch's once) */
         double rgba[ACCEL_PACKET][4];
         int end = group(thread, ctx, ps, first, rgba, c);
         RR_DCHECK(end > first && end - first <= ACCEL_PACKET);

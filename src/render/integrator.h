@@ -8,28 +8,35 @@
  *    each sample's Gaussian hits composited over it; the surfels keep
  *    their static reuse;
  *  - exact time (exact.h): each spatial position's exact time average.
- * Each keeps its own per-thread state (thread_new / thread_free), made
- * once per worker thread per render: render.c's pool starts the workers
- * once and they work every round (batch) of the render. Its scratch
- * arrays live in the worker's arena (core/arena.h), which the integrator
- * resets at the start of each batch: nothing in the arena outlives a
- * batch, and after the first batches a worker mallocs nothing more. */
+ * Each is one row (integrator_ops) of the table integrator_named looks up
+ * (after pbrt-v4's Integrator::Create(name, ...)): it checks what it can
+ * render, sets up and tears down its per-render state (exact time's plan),
+ * says why a batch failed, and keeps its own per-thread state (thread_new /
+ * thread_free), made once per worker thread per render: render.c's pool
+ * starts the workers once and they work every round (batch) of the render.
+ * Its scratch arrays live in the worker's arena (core/arena.h), which the
+ * loop resets after each batch (pbrt-v4's scratchBuffer.Reset() after each
+ * pixel sample): nothing in the arena outlives a batch, and after the
+ * first batches a worker mallocs nothing more. The loop knows no row by
+ * name: a new integrator is a row and a line in integrator.c's table. */
 #ifndef RR_INTEGRATOR_H
 #define RR_INTEGRATOR_H
 
+#include <signal.h>
 #include <stdint.h>
 
+#include "accel/accel.h"
 #include "core/arena.h"
 #include "core/camera.h"
-#include "render/exact.h"
-#include "render/render.h"
+#include "render/render_settings.h"
 
-/* What every integrator reads, shared by the threads (read-only). */
+/* What every integrator reads, shared by the threads (read-only during
+ * the render; the row's setup fills `plan`). */
 typedef struct {
     const scene *sc;
     const accel *acc;
     const render_settings *rs;
-    exact_plan *exact;     /* with rs->exact_time */
+    void *plan;            /* the row's per-render state (setup / teardown); NULL without */
     int camera_moves;      /* every sample traces its own world ray */
     camera_view rest_view; /* the camera at rest (Gaussian hits, still camera) */
     /* render_image's cancel flag (NULL: never cancelled): a batch checks it
@@ -52,35 +59,57 @@ typedef struct {
     double unresolved;          /* exact time: exact_stats.unresolved */
 } integrator_counts;
 
-typedef struct {
-    const char *name;
+/* A batch's status: 0, or why it has no estimate. INTEGRATOR_INTERRUPTED
+ * is no failure (the cancel flag stops the render); other negative values
+ * are the row's own, which its batch_failure puts into words. */
+enum { INTEGRATOR_OK = 0, INTEGRATOR_NO_MEMORY = -1, INTEGRATOR_INTERRUPTED = -2 };
+
+typedef struct integrator_ops {
+    const char *id;   /* the name integrator_named finds it by ("exact": --time-integration's) */
+    const char *name; /* in messages ("exact time") */
+    /* What it cannot render (settings, scene): -1 with err before any work;
+     * NULL: it renders anything render_image takes. */
+    int (*check)(const integrator_context *ctx, rr_error *err);
+    /* The per-render state into ctx->plan, once before the workers start,
+     * freed by teardown after they end (NULL: none). */
+    int (*setup)(integrator_context *ctx, rr_error *err);
+    void (*teardown)(integrator_context *ctx);
     /* A thread's state, with its scratch in `arena` (the worker's, kept
-     * until after thread_free); NULL when out of memory. */
+     * until after thread_free, reset after every batch); NULL when out of
+     * memory. */
     void *(*thread_new)(const integrator_context *ctx, rr_arena *arena);
-    /* The batch's estimate (RGBA) into est; returns 0, or an EXACT_ status
-     * other than EXACT_OK when the batch has no estimate. */
+    /* The batch's estimate (RGBA) into est; returns a status (above). */
     int (*pixel_batch)(void *thread, const integrator_context *ctx, const pixel_samples *ps, double est[4],
                        integrator_counts *c);
     /* Adds what the thread counted across batches to c, and frees it. */
     void (*thread_free)(void *thread, integrator_counts *c);
-} integrator;
+    /* The render's error for a batch of pixel (px, py) that failed with
+     * status (never INTEGRATOR_INTERRUPTED); returns -1. */
+    int (*batch_failure)(int status, int px, int py, rr_error *err);
+} integrator_ops;
 
-/* The integrator a render of ctx needs: exact time with rs->exact_time,
- * else sampled Gaussians when the scene has Gaussian objects, else sampled
+/* The integrators (defined beside their code), and the table of them. */
+extern const integrator_ops surfel_integrator_row, gaussian_integrator_row, exact_integrator_row;
+
+/* The row of `table` (n rows) whose id is `id`, or NULL. */
+const integrator_ops *integrator_find(const integrator_ops *const *table, int n, const char *id);
+/* The built-in row named id ("surfels", "gaussians", "exact"), or NULL. */
+const integrator_ops *integrator_named(const char *id);
+
+/* The integrator a render of ctx uses: rs->integrator when set, else
+ * sampled time, Gaussians when the scene has Gaussian objects, else
  * surfels. */
-const integrator *integrator_for(const integrator_context *ctx);
-
-/* The integrators (defined beside their code). */
-extern const integrator surfel_integrator_ops, gaussian_integrator_ops, exact_integrator_ops;
+const integrator_ops *integrator_for(const integrator_context *ctx);
 
 /* A sampled integrator's estimate of one batch (thesis sec. 4.5): the
  * sampler-weighted mean of the colours, each in the render's blur space,
  * of the samples `group` estimates. group(thread, ctx, ps, first, rgba, c)
  * estimates the samples from `first` to the end of a group it chooses (at
  * most ACCEL_PACKET), into rgba[0], rgba[1], ..., and returns the index
- * after the group. Returns 0, or EXACT_INTERRUPTED when *ctx->cancel became
- * non-zero before the batch's last group (no estimate: the pixel keeps the
- * batches it had, and a resumed render draws this batch again whole). */
+ * after the group. Returns 0, or INTEGRATOR_INTERRUPTED when *ctx->cancel
+ * became non-zero before the batch's last group (no estimate: the pixel
+ * keeps the batches it had, and a resumed render draws this batch again
+ * whole). */
 typedef int integrator_group_fn(void *thread, const integrator_context *ctx, const pixel_samples *ps, int first,
                                 double (*rgba)[4], integrator_counts *c);
 int integrator_sampled_batch(void *thread, const integrator_context *ctx, const pixel_samples *ps,

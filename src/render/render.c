@@ -11,39 +11,9 @@
 
 #define TILE 16
 
-const char *pixel_filter_name(pixel_filter f) { return f == PIXEL_FILTER_POINT ? "point" : "box"; }
-const char *blur_space_name(blur_space b)
-{
-    return b == BLUR_SPACE_LINEAR ? "linear" : b == BLUR_SPACE_CLAMPED ? "clamped" : "model";
-}
-
-render_settings render_settings_default(void)
-{
-    render_settings rs = {
-        .smp = {.kind = SAMPLER_DEFAULT, .seed = 1, .grid = 1, .tspp = 1, .time_factor = 1},
-        .threads = 1,
-        .batch_begin = 0,
-        .batches = 1,
-        .max_batches = 1,
-        .filter = PIXEL_FILTER_BOX,
-        .blur = BLUR_SPACE_MODEL,
-    };
-    shutter_default(&rs.shut);
-    return rs;
-}
-
-int render_check_exact_blur(int exact_time, blur_space b, rr_error *err)
-{
-    if (exact_time && b != BLUR_SPACE_MODEL)
-        return rr_fail(err, "--blur-space %s %s each instant's colour before the time average, which exact time "
-                            "cannot do (it integrates colours over time): use sampled time",
-                       blur_space_name(b), b == BLUR_SPACE_LINEAR ? "decodes" : "clamps");
-    return 0;
-}
-
 typedef struct {
-    integrator_context ctx; /* the job owns ctx.exact */
-    const integrator *integ; /* integrator_for(&ctx) */
+    integrator_context ctx; /* ctx.plan: the integrator's (its setup and teardown) */
+    const integrator_ops *integ; /* integrator_for(&ctx) */
     const render_settings *rs;
     shutter_cdf time_cdf;    /* times drawn from a(t) (not used for a box) */
     image *img;
@@ -55,9 +25,10 @@ typedef struct {
     atomic_int next_tile, workers_left;
     atomic_uint_fast64_t rays, overflows, clamped, pixel_batches, static_traversals;
     atomic_int scratch_failed; /* a worker could not allocate its scratch */
-    atomic_int exact_failed;   /* a batch failed (see exact_status): the render stops */
-    int exact_status, exact_px, exact_py; /* under lock: the first failure (an EXACT_ status) and its pixel */
-    double exact_unresolved;   /* under lock: exact_stats.unresolved summed over tiles */
+    atomic_int batch_failed;   /* a batch failed (see failed_status): the render stops */
+    int failed_status, failed_px, failed_py; /* under lock: the first failure (the integrator's status) and its
+                                                pixel */
+    double unresolved;         /* under lock: integrator_counts.unresolved summed over tiles */
     pthread_mutex_t lock;
     pthread_cond_t cond;  /* to the coordinator: a worker is ready or done with a round; a pause's end */
     pthread_cond_t start; /* to the workers: a round begins, or the render ends */
@@ -74,7 +45,7 @@ typedef struct {
 typedef struct { /* per-thread scratch, made once per worker per render */
     sampler_scratch ss;
     double *x, *y, *t, *w;
-    rr_arena arena; /* the integrator's scratch, reset by it between batches (integrator.h) */
+    rr_arena arena; /* the integrator's scratch, reset after every batch (integrator.h) */
     void *integ;    /* the integrator's per-thread state */
 } thread_scratch;
 
@@ -107,13 +78,13 @@ static int batch_samples(const render_job *job, int px, int py, uint32_t batch, 
  * flag already stops the render). */
 static void batch_failed(render_job *job, int status, int px, int py)
 {
-    if (status == EXACT_INTERRUPTED)
+    if (status == INTEGRATOR_INTERRUPTED)
         return;
     pthread_mutex_lock(&job->lock);
-    if (!job->exact_status)
-        job->exact_status = status, job->exact_px = px, job->exact_py = py;
+    if (!job->failed_status)
+        job->failed_status = status, job->failed_px = px, job->failed_py = py;
     pthread_mutex_unlock(&job->lock);
-    atomic_store(&job->exact_failed, 1);
+    atomic_store(&job->batch_failed, 1);
 }
 
 /* Does a pixel holding p->batches batches take another one? Every pixel
@@ -149,6 +120,7 @@ static int pixel_batch(render_job *job, int x, int y, pixel_state *p, thread_scr
     pixel_samples ps = {scr->x, scr->y, scr->t, scr->w, batch_samples(job, x, y, batch, scr)};
     double est[4];
     int rc = job->integ->pixel_batch(scr->integ, &job->ctx, &ps, est, c);
+    rr_arena_reset(&scr->arena); /* nothing of a batch outlives it (integrator.h) */
     if (!rc)
         *clamped += (uint64_t)film_add_batch(p, est);
     return rc;
@@ -158,7 +130,7 @@ static int pixel_batch(render_job *job, int x, int y, pixel_state *p, thread_scr
 static void add_counts(render_job *job, const integrator_counts *c, uint64_t clamped, uint64_t done)
 {
     pthread_mutex_lock(&job->lock);
-    job->exact_unresolved += c->unresolved;
+    job->unresolved += c->unresolved;
     pthread_mutex_unlock(&job->lock);
     atomic_fetch_add(&job->rays, c->rays);
     atomic_fetch_add(&job->overflows, c->overflows);
@@ -175,7 +147,7 @@ static void add_counts(render_job *job, const integrator_counts *c, uint64_t cla
  * between two of them resumes as one taken between tiles. */
 static int pixel_pause_point(render_job *job, integrator_counts *c, uint64_t *clamped, uint64_t *done)
 {
-    if (*job->cancel || atomic_load(&job->exact_failed))
+    if (*job->cancel || atomic_load(&job->batch_failed))
         return 1;
     if (!atomic_load(&job->paused))
         return 0;
@@ -225,7 +197,7 @@ static int enter_work(render_job *job)
     pthread_mutex_lock(&job->lock);
     while (job->paused && !*job->cancel)
         pthread_cond_wait(&job->cond, &job->lock);
-    int stop = *job->cancel != 0 || atomic_load(&job->exact_failed);
+    int stop = *job->cancel != 0 || atomic_load(&job->batch_failed);
     if (!stop)
         job->active++;
     pthread_mutex_unlock(&job->lock);
@@ -268,7 +240,7 @@ static void scratch_free(render_job *job, thread_scratch *scr)
 }
 
 /* A round's tiles, taken one at a time until none is left or the render
- * stops (cancelled, an exact sample failed). */
+ * stops (cancelled, a batch failed). */
 static void work_round(render_job *job, thread_scratch *scr)
 {
     while (!enter_work(job)) {
@@ -436,25 +408,13 @@ static void report_progress(render_job *job, const render_hooks *hooks, double s
 }
 
 /* A failed batch stops the render: a pixel cannot be left with a partial
- * average, nor with samples drawn without some of their Gaussians; an
- * exact sample past the candidate or evaluation bounds says the scene is
- * beyond exact time integration. */
+ * average; the integrator says why (its batch_failure). */
 static int batch_failure(const render_job *job, rr_error *err)
 {
-    char why[128];
-    exact_status_text(job->exact_status, why, sizeof why);
-    if (job->integ != &exact_integrator_ops) { /* (a sampled batch fails only so: gaussian_batch) */
-        RR_DCHECK(job->exact_status == EXACT_NO_MEMORY);
-        return rr_fail(err, "%s at pixel (%d, %d): out of memory for a sample's Gaussians (drawn without them it "
-                            "could be off by its whole colour, far beyond the noise): give the render more memory "
-                            "or fewer threads", job->integ->name, job->exact_px, job->exact_py);
-    }
-    if (job->exact_status == EXACT_NO_MEMORY || job->exact_status == EXACT_EMBREE_ERROR)
-        return rr_fail(err, "exact time integration at pixel (%d, %d): %s", job->exact_px, job->exact_py, why);
-    return rr_fail(err,
-                   "exact time integration at pixel (%d, %d): one spatial sample needs %s; exact time cannot "
-                   "finish this scene in reasonable time: render it with sampled time (the default)",
-                   job->exact_px, job->exact_py, why);
+    if (job->integ->batch_failure)
+        return job->integ->batch_failure(job->failed_status, job->failed_px, job->failed_py, err);
+    return rr_fail(err, "%s at pixel (%d, %d): the batch failed (status %d)", job->integ->name, job->failed_px,
+                   job->failed_py, job->failed_status);
 }
 
 /* Runs one round over all tiles with the pool's workers, writing periodic
@@ -484,7 +444,7 @@ static int run_round(render_job *job, const render_hooks *hooks, double start, d
             *last_checkpoint = rr_seconds();
         }
     }
-    return job->exact_status ? batch_failure(job, err) : 0;
+    return job->failed_status ? batch_failure(job, err) : 0;
 }
 
 /* Will any pixel take a batch in this round or a later one? A resumed
@@ -508,14 +468,12 @@ static int check_settings(const render_settings *rs, rr_error *err)
         return rr_fail(err, "batch and thread counts must be positive");
     if (rs->target_error > 0 && rs->max_batches < rs->batches)
         return rr_fail(err, "the batch cap must be at least the batch count");
-    if (render_check_exact_blur(rs->exact_time, rs->blur, err))
-        return -1;
     return sampler_check(&rs->smp, err);
 }
 
-/* What render_image refuses before any work: settings, a shutter other
- * than the one accel's swept bounds were built for, and what exact time
- * cannot integrate. */
+/* What render_image refuses before any work: settings, and a shutter
+ * other than the one accel's swept bounds were built for (what the
+ * integrator cannot render its row's check refuses: job_init). */
 static int check_render_inputs(const accel *a, const render_settings *rs, const image *img, rr_error *err)
 {
     if (check_settings(rs, err))
@@ -526,11 +484,6 @@ static int check_render_inputs(const accel *a, const render_settings *rs, const 
     if (open != t0 || close != t1) /* swept bounds of another shutter miss hits */
         return rr_fail(err, "internal: accel was built for the times [%g, %g], the render is for [%g, %g]", open,
                        close, t0, t1);
-    if (rs->exact_time && rs->shut.rolling.kind != ROLLING_OFF)
-        return rr_fail(err, "exact time integration does not integrate a rolling shutter (each line its own "
-                            "window): use sampled time");
-    if (rs->exact_time && accel_has_gaussians(a))
-        return rr_fail(err, "exact time integration does not integrate Gaussian-splat objects: use sampled time");
     return 0;
 }
 
@@ -546,11 +499,10 @@ static int job_init(render_job *job, const scene *s, const accel *a, const rende
     job->tiles_y = (img->height + TILE - 1) / TILE;
     job->ntiles = job->tiles_x * job->tiles_y;
     shutter_cdf_init(&job->time_cdf, &rs->shut);
-    if (rs->exact_time && exact_plan_new(s, a, &rs->shut, 1.0, &job->ctx.exact, err))
-        return -1;
-    if (job->ctx.exact)
-        exact_plan_watch(job->ctx.exact, cancel);
     job->integ = integrator_for(&job->ctx);
+    if ((job->integ->check && job->integ->check(&job->ctx, err)) ||
+        (job->integ->setup && job->integ->setup(&job->ctx, err)))
+        return -1;
     pthread_mutex_init(&job->lock, NULL);
     pthread_cond_init(&job->cond, NULL);
     pthread_cond_init(&job->start, NULL);
@@ -563,13 +515,14 @@ static void job_finish(render_job *job, image *img, double start)
     pthread_mutex_destroy(&job->lock);
     pthread_cond_destroy(&job->cond);
     pthread_cond_destroy(&job->start);
-    exact_plan_free(job->ctx.exact);
+    if (job->integ->teardown)
+        job->integ->teardown(&job->ctx);
     img->seconds += rr_seconds() - start;
     img->rays += atomic_load(&job->rays);
     img->kbuffer_overflows += atomic_load(&job->overflows);
     img->static_traversals += atomic_load(&job->static_traversals);
     img->clamped += atomic_load(&job->clamped);
-    img->exact_unresolved += job->exact_unresolved;
+    img->exact_unresolved += job->unresolved;
 }
 
 int render_image(const scene *s, const accel *a, const render_settings *rs, image *img,

@@ -32,7 +32,7 @@
  * its stratum's width (stratified_time in sampler.c): with the same equal
  * strata in every batch, a pixel that steps in time gets batch estimates on
  * a lattice and a standard error of 0 where it is off. A pixel's estimate
- * is sum w c / sum w (render.c); the weights sum to n whenever each time
+ * is sum w c / sum w (integrator.c, integrator_sampled_batch); the weights sum to n whenever each time
  * stratum holds one sample (jittered3d always, sobol for even n). */
 #ifndef RR_SAMPLER_H
 #define RR_SAMPLER_H

@@ -146,4 +146,7 @@ static void surfel_free(void *thread, integrator_counts *c)
     surfel_thread_free(thread);
 }
 
-const integrator surfel_integrator_ops = {"sampled surfels", surfel_new, surfel_batch, surfel_free};
+const integrator_ops surfel_integrator_row = {
+    .id = "surfels", .name = "sampled surfels", .thread_new = surfel_new, .pixel_batch = surfel_batch,
+    .thread_free = surfel_free,
+};

@@ -32,6 +32,10 @@ int scene_camera_moves(const scene *s) { return !animation_is_static(&s->camera_
 void scene_camera_ray(const scene *s, double x, double y, double t, vec3 *org, vec3 *dir)
 {
     vec3 d = camera_ray_direction(&s->cam, x, y);
+    if (!scene_camera_moves(s)) { /* the rest pose, untouched by an identity transform's rounding */
+        *org = s->cam.position, *dir = d;
+        return;
+    }
     xform m = animation_at(&s->camera_motion, t); /* rigid: keeps d unit */
     *org = xform_point(&m, s->cam.position);
     *dir = xform_vector(&m, d);

@@ -121,8 +121,10 @@ void scene_init(scene *s);
 /* Whether the camera moves during [t0, t1] (then no static-hit reuse). */
 int scene_camera_moves(const scene *s);
 
-/* The world ray through raster (x, y) at time t: origin and unit direction
- * (the camera's animation applied; callers skip this for a still camera). */
+/* The world ray through raster (x, y) at time t: origin and unit direction,
+ * the camera's animation applied. A still camera's is its rest pose's at
+ * every t, bit for bit (position, camera_ray_direction): this is the one
+ * place that decides it, so callers need not. */
 void scene_camera_ray(const scene *s, double x, double y, double t, vec3 *org, vec3 *dir);
 
 /* The camera at time t (its animation applied to the rest pose). */

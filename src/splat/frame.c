@@ -39,16 +39,12 @@ void splat_frame_clear(splat_frame *f)
     }
 }
 
-/* The ray through pixel centre (x + 1/2, y + 1/2) at time t, as render.c
- * makes it for --pixel-filter point: a still camera's from its rest pose. */
+/* The ray through pixel centre (x + 1/2, y + 1/2) at time t, as the
+ * sampled integrators make it for --pixel-filter point (scene_camera_ray:
+ * a still camera's from its rest pose). */
 static void pixel_ray(const splat_frame *f, int x, int y, double t, vec3 *org, vec3 *dir)
 {
-    const scene *s = f->sc;
-    if (!f->camera_moves) {
-        *org = s->cam.position, *dir = camera_ray_direction(&s->cam, x + 0.5, y + 0.5);
-        return;
-    }
-    scene_camera_ray(s, x + 0.5, y + 0.5, t, org, dir);
+    scene_camera_ray(f->sc, x + 0.5, y + 0.5, t, org, dir);
 }
 
 void splat_frame_set_rays(splat_frame *f, double t)

@@ -1,0 +1,196 @@
+/* The integrator seam (render/integrator.h): a fourth integrator, defined
+ * here alone, plugs into render_image with one line in a table of rows,
+ * with no edit to render.c, render.h or film.h. Its answers are known
+ * without our renderer: with the point filter every sample of pixel
+ * (px, py) lies at its centre, so a toy estimate of (x / W, y / H) is
+ * exactly the centre's; its setup, check, status and counts are its own. */
+#include <pthread.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "harness.h"
+#include "render/integrator.h"
+#include "render/render.h"
+#include "io/scene_xml.h"
+
+enum { W = 16, H = 16, TOY_FAILED = -7, FAIL_X = 5, FAIL_Y = 3 };
+
+static const char *const EMPTY_SCENE =
+    "<scene><camera position='0 0 0' lookat='0 0 -1' up='0 1 0' fov='20' width='16' height='16'/>"
+    "<object><pointModel><splat center='0 0 -10' normal='0 0 1' radius='0.1' color='1 1 1'/>"
+    "</pointModel></object></scene>";
+
+/* The toy's per-render plan: its estimate's green channel, and whether its
+ * batch at (FAIL_X, FAIL_Y) fails (from toy_fails at setup). */
+typedef struct {
+    double green;
+    int fail;
+} toy_plan;
+static int toy_fails, toy_setups, toy_teardowns;
+static int toy_arena_mallocs; /* most chunks a worker's arena took */
+static pthread_mutex_t toy_lock = PTHREAD_MUTEX_INITIALIZER;
+
+typedef struct {
+    rr_arena *arena;
+} toy_thread;
+
+/* The toy refuses a crop window (any rule of its own would do). */
+static int toy_check(const integrator_context *ctx, rr_error *err)
+{
+    return ctx->rs->crop_x1 > 0 ? rr_fail(err, "toy: no crop window") : 0;
+}
+
+static int toy_setup(integrator_context *ctx, rr_error *err)
+{
+    toy_plan *p = malloc(sizeof *p);
+    if (!p)
+        return rr_fail(err, "toy: out of memory");
+    p->green = 0.25, p->fail = toy_fails;
+    ctx->plan = p;
+    toy_setups++;
+    return 0;
+}
+
+static void toy_teardown(integrator_context *ctx)
+{
+    free(ctx->plan);
+    ctx->plan = NULL;
+    toy_teardowns++;
+}
+
+static void *toy_thread_new(const integrator_context *ctx, rr_arena *arena)
+{
+    (void)ctx;
+    toy_thread *t = malloc(sizeof *t);
+    if (t)
+        t->arena = arena;
+    return t;
+}
+
+/* (x / W, plan's green, y / H, 1): the mean of the samples' raster
+ * positions, all at the pixel's centre with the point filter. Each batch
+ * takes 4 KiB of the arena: without the loop's reset after every batch a
+ * worker's 64 KiB first chunk would not hold its hundreds of batches. */
+static int toy_batch(void *thread, const integrator_context *ctx, const pixel_samples *ps, double est[4],
+                     integrator_counts *c)
+{
+    toy_thread *t = thread;
+    const toy_plan *p = ctx->plan;
+    if (!rr_arena_alloc(t->arena, 4096, 16))
+        return INTEGRATOR_NO_MEMORY;
+    double x = 0, y = 0;
+    for (int i = 0; i < ps->count; i++)
+        x += ps->x[i], y += ps->y[i];
+    x /= ps->count, y /= ps->count;
+    if (p->fail && (int)x == FAIL_X && (int)y == FAIL_Y)
+        return TOY_FAILED;
+    est[0] = x / W, est[1] = p->green, est[2] = y / H, est[3] = 1;
+    c->rays += (uint64_t)ps->count;
+    return INTEGRATOR_OK;
+}
+
+static void toy_thread_free(void *thread, integrator_counts *c)
+{
+    toy_thread *t = thread;
+    (void)c;
+    pthread_mutex_lock(&toy_lock);
+    if ((int)t->arena->mallocs > toy_arena_mallocs)
+        toy_arena_mallocs = (int)t->arena->mallocs;
+    pthread_mutex_unlock(&toy_lock);
+    free(t);
+}
+
+static int toy_batch_failure(int status, int px, int py, rr_error *err)
+{
+    return rr_fail(err, "toy: status %d at pixel (%d, %d)", status, px, py);
+}
+
+static const integrator_ops toy_integrator_row = {
+    .id = "toy", .name = "toy", .check = toy_check, .setup = toy_setup, .teardown = toy_teardown,
+    .thread_new = toy_thread_new, .pixel_batch = toy_batch, .thread_free = toy_thread_free,
+    .batch_failure = toy_batch_failure,
+};
+
+/* The built-in rows and the toy's: the one line that plugs it in. */
+static const integrator_ops *const rows[] = {&surfel_integrator_row, &gaussian_integrator_row, &exact_integrator_row,
+                                             &toy_integrator_row};
+
+/* A 16x16 render of the toy row (found by id in `rows`): 2 batches of a
+ * 2x2 grid at each pixel centre (point filter) on 2 threads. */
+static int toy_render(image *img, int crop, rr_error *err)
+{
+    scene s;
+    accel *a;
+    CHECK(scene_load_memory(EMPTY_SCENE, strlen(EMPTY_SCENE), "mem.xml", ".", &s, err) == 0);
+    accel_settings set = {s.shut.open, s.shut.close, s.epsilon, s.kernel_sigma, 1};
+    CHECK(accel_build(&s, &set, &a, err) == 0);
+    render_settings rs = render_settings_default();
+    rs.smp.grid = 2, rs.shut = s.shut, rs.threads = 2, rs.batches = 2, rs.max_batches = 2;
+    rs.filter = PIXEL_FILTER_POINT;
+    rs.integrator = integrator_find(rows, (int)(sizeof rows / sizeof *rows), "toy");
+    if (crop)
+        rs.crop_x0 = 0, rs.crop_x1 = 8, rs.crop_y0 = 0, rs.crop_y1 = 8;
+    volatile sig_atomic_t cancel = 0;
+    CHECK(image_alloc(img, W, H) == 0);
+    toy_setups = toy_teardowns = toy_arena_mallocs = 0;
+    int rc = render_image(&s, a, &rs, img, NULL, &cancel, err);
+    accel_free(a);
+    scene_free(&s);
+    return rc;
+}
+
+TEST(integrator_rows_are_found_by_id)
+{
+    CHECK(integrator_find(rows, 4, "toy") == &toy_integrator_row);
+    CHECK(integrator_find(rows, 4, "none") == NULL && integrator_find(rows, 4, NULL) == NULL);
+    CHECK(integrator_named("exact") == &exact_integrator_row);
+    CHECK(integrator_named("surfels") == &surfel_integrator_row);
+    CHECK(integrator_named("gaussians") == &gaussian_integrator_row);
+    CHECK(integrator_named("toy") == NULL); /* not built in: plugged in by the table above only */
+}
+
+/* Every pixel holds the toy's exact estimate of its centre, every ray is
+ * counted once, the plan was set up and torn down once, and the loop reset
+ * the worker's arena after each batch (one chunk enough for all). */
+TEST(a_toy_integrator_plugs_into_the_loop_with_one_table_line)
+{
+    image img;
+    rr_error e;
+    toy_fails = 0;
+    CHECK(toy_render(&img, 0, &e) == 0);
+    for (int y = 0; y < H; y++)
+        for (int x = 0; x < W; x++) {
+            double mean[4], var[4];
+            const pixel_state *p = &img.px[(size_t)y * W + x];
+            film_resolve(p, mean, var);
+            CHECK(p->batches == 2);
+            CHECK_NEAR(mean[0], (x + 0.5) / W, 1e-15);
+            CHECK_NEAR(mean[1], 0.25, 1e-15);
+            CHECK_NEAR(mean[2], (y + 0.5) / H, 1e-15);
+            CHECK_NEAR(mean[3], 1.0, 1e-15);
+        }
+    CHECK(img.rays == 2u * 4 * W * H);
+    CHECK(toy_setups == 1 && toy_teardowns == 1);
+    printf("    most arena chunks a worker took: %d\n", toy_arena_mallocs);
+    CHECK(toy_arena_mallocs == 1);
+    image_free(&img);
+}
+
+/* The toy's own check refuses before any setup; its own status is put in
+ * words by its own batch_failure, and its plan is still torn down. */
+TEST(a_toy_integrators_check_and_failure_are_its_own)
+{
+    image img;
+    rr_error e;
+    toy_fails = 0;
+    CHECK(toy_render(&img, 1, &e) == -1);
+    CHECK(!strcmp(e.msg, "toy: no crop window"));
+    CHECK(toy_setups == 0 && toy_teardowns == 0);
+    image_free(&img);
+    toy_fails = 1;
+    CHECK(toy_render(&img, 0, &e) == -1);
+    printf("    %s\n", e.msg);
+    CHECK(!strcmp(e.msg, "toy: status -7 at pixel (5, 3)"));
+    CHECK(toy_setups == 1 && toy_teardowns == 1);
+    image_free(&img);
+}
