@@ -45,7 +45,7 @@ LIB_SRCS := core/common core/arena core/lanes core/inputfile core/atomicfile acc
             surfels/shapes surfels/surfelize formats/meshload core/rotation motion/curve motion/trajectory formats/tum \
             motion/animation formats/animfile core/camera motion/shutter render/sampler scene/scene io/preview \
             io/scene_xml io/scene_xml_util io/scene_xml_anim io/scene_xml_camera io/scene_params accel/accel \
-            accel/accel_build accel/accel_collide accel/accel_timesteps render/gaussian_integrator render/exact render/exact_kinds \
+            accel/accel_build accel/accel_collide render/gaussian_integrator render/exact render/exact_kinds \
             render/exact_integrate render/integrator render/surfel_integrator render/shade render/film render/noise render/render splat/frame splat/splatting splat/volumetric splat/guan_mueller formats/exr io/output io/render_attrs \
             cmd/cli
 LIB_OBJS := $(LIB_SRCS:%=$(BUILD)/%.o)

@@ -561,7 +561,7 @@ static int listed_at(const accel *a, const scene *s, size_t i, double t)
     int all = 1;
     for (int k = 0; k < 7; k++) {
         listed l = {(unsigned)i, 0};
-        accel_gaussian_candidates(a, 0, v3(0, 0, 0), v3_normalize(points[k]), 0.0, 1e3, t, note_listed, &l);
+        accel_gaussian_candidates(a, 0, v3(0, 0, 0), v3_normalize(points[k]), 0.0, 1e3, note_listed, &l);
         all &= l.found;
     }
     return all;

@@ -556,23 +556,19 @@ void accel_gaussian_bounds_cb(const struct RTCBoundsFunctionArguments *args)
  * from a point, convex, is largest at a corner; the object's own motion
  * and the camera's are added as for a static Gaussian (f->travel holds the
  * paths' box). A fast mover is listed wherever it is at any time. */
-aabb accel_dynamic_reach_box(const gaussian_footprint *f, unsigned prim, const double *path)
+void accel_dynamic_gaussian_bounds_cb(const struct RTCBoundsFunctionArguments *args)
 {
+    const gaussian_footprint *f = args->geometryUserPtr;
     const gaussian_model *m = f->acc->models[f->obj];
+    const double *path = &f->paths[PATH_DOUBLES * args->primID];
     double farthest = 0;
     for (int c = 0; c < 8; c++) {
         vec3 corner = v3(path[c & 1 ? 3 : 0], path[c & 2 ? 4 : 1], path[c & 4 ? 5 : 2]);
         farthest = fmax(farthest, v3_len(v3_sub(xform_point(&f->at_open, corner), f->camera_center)));
     }
     gaussian_view_bound view = footprint_view(f, farthest + f->camera_radius + f->travel);
-    return gaussian_dynamic_reach_bounds(m, prim, path, path + 3, path[6], &view);
-}
-
-void accel_dynamic_gaussian_bounds_cb(const struct RTCBoundsFunctionArguments *args)
-{
-    const gaussian_footprint *f = args->geometryUserPtr;
-    const double *path = &f->paths[PATH_DOUBLES * args->primID];
-    write_gaussian_bounds(accel_dynamic_reach_box(f, args->primID, path), args->bounds_o);
+    write_gaussian_bounds(gaussian_dynamic_reach_bounds(m, args->primID, path, path + 3, path[6], &view),
+                          args->bounds_o);
 }
 
 /* Every Gaussian whose box the ray passes is handed on: the ray is never
@@ -585,7 +581,7 @@ void accel_gaussian_gather(const struct RTCIntersectFunctionNArguments *args)
     c->found(c->user, args->primID);
 }
 
-void accel_gaussian_candidates(const accel *a, unsigned obj, vec3 org, vec3 dir, double t0, double t1, double time,
+void accel_gaussian_candidates(const accel *a, unsigned obj, vec3 org, vec3 dir, double t0, double t1,
                                accel_candidate_fn *found, void *user)
 {
     candidate_context c;
@@ -595,8 +591,7 @@ void accel_gaussian_candidates(const accel *a, unsigned obj, vec3 org, vec3 dir,
     /* Embree's float ray holds all of [t0, t1] */
     init_rayhit1(&rh, org, dir, rr_float_above(t1));
     rh.ray.tnear = fmaxf(0.0f, rr_float_below(t0));
-    const gaussian_footprint *f = &a->footprint[obj];
-    rtcIntersect1(f->segments ? accel_segment_scene(f, time) : a->object_scenes[obj], &c.rtc, &rh);
+    rtcIntersect1(a->object_scenes[obj], &c.rtc, &rh);
 }
 
 int accel_has_gaussians(const accel *a) { return a->ngaussian > 0; }

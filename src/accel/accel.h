@@ -74,13 +74,12 @@ const unsigned *accel_gaussian_objects(const accel *a, unsigned *count);
 
 /* Calls found(user, prim) for every Gaussian prim of object obj whose box
  * the object-space ray org + t dir meets at some t in [t0, t1] (the
- * stretch rounded outward to Embree's floats) at scene time `time` (a
- * moving model's boxes are per stretch of the shutter: accel_timesteps.c),
- * in the order of Embree's traversal of obj's BVH: the same Gaussians in
- * the same order for the same ray and time. dir is the world's unit direction moved into object space, so
+ * stretch rounded outward to Embree's floats), in the order of Embree's
+ * traversal of obj's BVH: the same Gaussians in the same order for the
+ * same ray. dir is the world's unit direction moved into object space, so
  * t is world distance. */
 typedef void accel_candidate_fn(void *user, unsigned prim);
-void accel_gaussian_candidates(const accel *a, unsigned obj, vec3 org, vec3 dir, double t0, double t1, double time,
+void accel_gaussian_candidates(const accel *a, unsigned obj, vec3 org, vec3 dir, double t0, double t1,
                                accel_candidate_fn *found, void *user);
 
 /* models[obj]: object obj's Gaussian model, NULL for other objects. */

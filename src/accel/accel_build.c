@@ -144,7 +144,6 @@ static void gaussian_footprint_for(accel *a, unsigned obj, double open, double c
     gaussian_footprint *f = &a->footprint[obj];
     f->acc = a, f->obj = obj;
     f->at_open = animation_at(&o->anim, open);
-    f->open = open, f->close = close;
     aabb cam = animation_swept_bounds(&s->camera_motion, (aabb){s->cam.position, s->cam.position}, open, close);
     f->camera_center = v3_scale(v3_add(cam.lo, cam.hi), 0.5);
     f->camera_radius = 0.5 * v3_len(v3_sub(cam.hi, cam.lo)) * (1 + 1e-6);
@@ -218,7 +217,6 @@ static void build_gaussian_object(accel *a, unsigned obj, double open, double cl
     if (a->object_scenes[obj])
         rtcReleaseScene(a->object_scenes[obj]);
     a->object_scenes[obj] = NULL;
-    accel_release_segments(f);
     aabb paths_box;
     f->paths = o->gaussians.dynamic ? dynamic_paths(a, o, open, close, &paths_box) : NULL;
     if (o->gaussians.dynamic && !f->paths) { /* (named: accel_set_shutter fails) */
@@ -227,14 +225,13 @@ static void build_gaussian_object(accel *a, unsigned obj, double open, double cl
         return;
     }
     gaussian_footprint_for(a, obj, open, close, f->paths ? &paths_box : NULL);
-    if (!f->paths || accel_build_segments(f, o->gaussians.count)) /* (segments: one scene each) */
-        a->object_scenes[obj] = accel_user_scene(a->device, (unsigned)o->gaussians.count, f,
-                                                 f->paths ? accel_dynamic_gaussian_bounds_cb : accel_gaussian_bounds_cb,
-                                                 accel_gaussian_gather, 1);
+    a->object_scenes[obj] = accel_user_scene(a->device, (unsigned)o->gaussians.count, f,
+                                             f->paths ? accel_dynamic_gaussian_bounds_cb : accel_gaussian_bounds_cb,
+                                             accel_gaussian_gather, 1);
     free(f->paths); /* (the bounds are taken while the BVH is built) */
     f->paths = NULL;
     struct RTCBounds rb;
-    accel_gaussian_scene_bounds(a, obj, &rb);
+    rtcGetSceneBounds(a->object_scenes[obj], &rb);
     aabb box = {v3(rb.lower_x, rb.lower_y, rb.lower_z), v3(rb.upper_x, rb.upper_y, rb.upper_z)};
     if (!o->gaussians.count || !(rb.lower_x <= rb.upper_x)) /* nothing can be seen: a point */
         box.lo = box.hi = v3(0, 0, 0);
@@ -416,8 +413,6 @@ static void release_embree(accel *a)
     for (int i = 0; a->object_scenes && i < a->sc->nobjects; i++)
         if (a->object_scenes[i])
             rtcReleaseScene(a->object_scenes[i]);
-    for (int i = 0; a->footprint && i < a->sc->nobjects; i++)
-        accel_release_segments(&a->footprint[i]);
     for (int k = 0; k < 2; k++)
         if (a->top[k].scene)
             rtcReleaseScene(a->top[k].scene);

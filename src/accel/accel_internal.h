@@ -47,11 +47,6 @@ typedef struct {
     double largest;      /* the largest scale of a Gaussian over the shutter, world units */
     vec3 view_axis;      /* the camera's view axis in object space at mid-shutter, and how far */
     double view_cone;    /* it can turn from it (gaussian_view_bound); a zero axis: not known */
-    double open, close;  /* the shutter the BVH is built for */
-    RTCScene *segments;  /* a dynamic model's BVHs, one per 1/time_segments of the shutter (accel_timesteps.c),
-                          * or NULL: one BVH over the shutter (accel.object_scenes) */
-    unsigned time_segments, building; /* how many, and the one being built */
-    float *segment_boxes; /* while they are built: per Gaussian its box in each segment, 6 floats each */
     double *paths;       /* a dynamic model's, while its BVH is built: per Gaussian the box of its mean
                           * over the shutter (lo[3], hi[3]) and its largest opacity then
                           * (gaussian_dynamic_bounds), PATH_DOUBLES each; NULL otherwise */
@@ -118,18 +113,6 @@ void accel_object_bounds_cb(const struct RTCBoundsFunctionArguments *args);
 void accel_gaussian_bounds_cb(const struct RTCBoundsFunctionArguments *args);
 void accel_dynamic_gaussian_bounds_cb(const struct RTCBoundsFunctionArguments *args);
 void accel_gaussian_gather(const struct RTCIntersectFunctionNArguments *args);
-/* A dynamic Gaussian's box given its mean's box over some times and its
- * largest opacity then (path: PATH_DOUBLES, as gaussian_footprint.paths). */
-aabb accel_dynamic_reach_box(const gaussian_footprint *f, unsigned prim, const double *path);
-/* A dynamic model's BVHs per segment of the shutter (accel_timesteps.c),
- * from f->paths: 0 built, -1 not (out of memory, or a shutter of one
- * instant: the caller builds one BVH). */
-int accel_build_segments(gaussian_footprint *f, size_t count);
-void accel_release_segments(gaussian_footprint *f);
-/* The BVH of the segment holding scene time `time`. */
-RTCScene accel_segment_scene(const gaussian_footprint *f, double time);
-/* The bounds of all of Gaussian object obj's boxes (all its segments'). */
-void accel_gaussian_scene_bounds(const struct accel *a, unsigned obj, struct RTCBounds *b);
 /* A committed scene of one user geometry (accel_build.c); compact: a
  * smaller BVH built faster, at some cost in traversal. */
 RTCScene accel_user_scene(RTCDevice dev, unsigned nprims, void *user, RTCBoundsFunction bounds,

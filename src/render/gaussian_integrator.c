@@ -183,8 +183,7 @@ static void list_window(const scene *s, const accel *a, gaussian_integrator *g, 
     listing l = {g, &s->objects[r->obj], r};
     double pad = r->pad + 1e-6 * t1;
     size_t first = g->candidates_count;
-    accel_gaussian_candidates(a, r->obj, r->ray.org, r->ray.dir, t0 - pad, t1 + pad, r->time, list_candidate,
-                              &l);
+    accel_gaussian_candidates(a, r->obj, r->ray.org, r->ray.dir, t0 - pad, t1 + pad, list_candidate, &l);
     if (r->instant)
         instantiate_for_cull(g, &l.o->gaussians, r, first);
     cull_candidates(&l, first, ray);
