@@ -41,7 +41,8 @@ PREVIEW_LIBS := -lOpenImageIO -lOpenImageIO_Util
 
 LIB_SRCS := core/common core/arena core/lanes core/inputfile core/atomicfile accel/kbuffer surfels/splat \
             surfels/pointmodel formats/ply gaussians/gaussian formats/gaussian_ply gaussians/gaussian_dynamic gaussians/gaussian_stg gaussians/gaussian_fdgs \
-            formats/gaussian_ply_common formats/gaussian_dynamic_ply formats/gaussian_stg_ply formats/gaussian_fdgs_ply gaussians/gaussian_hit gaussians/gaussian_blend formats/camjson formats/transforms \
+            formats/gaussian_ply_common formats/gaussian_dynamic_ply formats/gaussian_stg_ply formats/gaussian_fdgs_ply gaussians/gaussian_hit gaussians/gaussian_raster_rules gaussians/gaussian_hit_2d gaussians/gaussian_hit_3d \
+            gaussians/gaussian_cull gaussians/gaussian_reach gaussians/gaussian_blend formats/camjson formats/transforms \
             surfels/shapes surfels/surfelize formats/meshload core/rotation motion/curve motion/trajectory formats/tum \
             motion/animation formats/animfile core/camera motion/shutter render/sampler scene/scene io/preview \
             io/scene_xml io/scene_xml_util io/scene_xml_anim io/scene_xml_camera io/scene_params accel/accel \
