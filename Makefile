@@ -47,7 +47,7 @@ LIB_SRCS := core/common core/arena core/lanes core/inputfile core/atomicfile acc
             motion/animation formats/animfile core/camera motion/shutter render/sampler scene/scene io/preview \
             io/scene_xml io/scene_xml_util io/scene_xml_anim io/scene_xml_camera io/scene_params accel/accel \
             accel/accel_build accel/accel_collide render/gaussian_integrator render/exact render/exact_kinds \
-            render/exact_integrate render/integrator render/surfel_integrator render/shade render/film render/noise render/render splat/frame splat/splatting splat/volumetric splat/guan_mueller formats/exr io/output io/render_attrs \
+            render/exact_integrate render/integrator render/surfel_integrator render/shade render/film render/noise render/render splat/splat_settings splat/frame splat/splatting splat/volumetric splat/guan_mueller formats/exr io/output io/render_attrs \
             cmd/cli
 LIB_OBJS := $(LIB_SRCS:%=$(BUILD)/%.o)
 PREVIEW_SO := $(BUILD)/refrender-preview.so

@@ -5,7 +5,6 @@
 
 #include "core/lanes.h"
 #include "surfels/splat.h"
-#include "gaussians/gaussian_dynamic.h"
 #include "core/rotation.h"
 #include "surfels/surfel.h"
 
@@ -96,7 +95,8 @@ void gaussian_model_free(gaussian_model *m)
     free(m->rotation);
     free(m->opacity);
     free(m->sh);
-    gaussian_dynamic_free(m->dynamic);
+    if (m->dynamic)
+        m->dynamic->ops->free(m->dynamic);
     gaussian_model_init(m);
 }
 

@@ -8,7 +8,7 @@
 #define RR_SPLAT_FRAME_H
 
 #include "render/shade.h"
-#include "splat/splatting.h"
+#include "splat/splat_settings.h"
 
 typedef struct {
     const scene *sc;
