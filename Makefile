@@ -39,15 +39,15 @@ LDLIBS   := -ljson-c -lassimp -lembree3 -lOpenEXRCore -lxml2 -ldl -lpthread -lm
 # (src/io/preview.h): linked into refrender it cost every run 0.4 s of loading
 PREVIEW_LIBS := -lOpenImageIO -lOpenImageIO_Util
 
-LIB_SRCS := core/common core/arena core/lanes core/inputfile core/atomicfile accel/kbuffer surfels/splat \
+LIB_SRCS := core/common core/arena core/lanes core/inputfile core/atomicfile surfels/kbuffer surfels/splat \
             surfels/pointmodel formats/ply gaussians/gaussian formats/gaussian_ply gaussians/gaussian_dynamic gaussians/gaussian_stg gaussians/gaussian_fdgs \
             formats/gaussian_ply_common formats/gaussian_dynamic_ply formats/gaussian_stg_ply formats/gaussian_fdgs_ply gaussians/gaussian_hit gaussians/gaussian_raster_rules gaussians/gaussian_hit_2d gaussians/gaussian_hit_3d \
             gaussians/gaussian_cull gaussians/gaussian_reach gaussians/gaussian_blend formats/camjson formats/transforms \
             surfels/shapes surfels/surfelize formats/meshload core/rotation motion/curve motion/trajectory formats/tum \
             motion/animation formats/animfile core/camera motion/shutter render/sampler scene/scene io/preview \
-            io/scene_xml io/scene_xml_util io/scene_xml_anim io/scene_xml_camera io/scene_params accel/accel \
+            scenexml/scene_xml scenexml/scene_xml_util scenexml/scene_xml_anim scenexml/scene_xml_camera scenexml/scene_params accel/accel \
             accel/accel_build accel/accel_collide render/gaussian_integrator render/exact render/exact_kinds \
-            render/exact_integrate render/integrator render/surfel_integrator render/shade render/film render/noise render/render splat/splat_settings splat/frame splat/splatting splat/volumetric splat/guan_mueller formats/exr io/output io/render_attrs \
+            render/exact_integrate render/integrator render/surfel_integrator scene/shade render/film render/noise render/render splat/splat_settings splat/frame splat/splatting splat/volumetric splat/guan_mueller formats/exr io/output io/render_attrs \
             cmd/cli
 LIB_OBJS := $(LIB_SRCS:%=$(BUILD)/%.o)
 PREVIEW_SO := $(BUILD)/refrender-preview.so

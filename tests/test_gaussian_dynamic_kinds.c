@@ -20,7 +20,7 @@
 #include "accel/accel.h"
 #include "formats/gaussian_ply.h"
 #include "gaussians/gaussian_dynamic.h"
-#include "io/scene_xml.h"
+#include "scenexml/scene_xml.h"
 #include "render/render.h"
 #include "gaussian_test_util.h"
 #include "harness.h"

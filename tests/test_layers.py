@@ -2,8 +2,8 @@
 """src/ is layered: each folder includes only its own folder and the folders
 below it (README "Layout"), so the maths at the bottom never depends on a
 reader or the renderer above it, and each library has one user folder
-(Embree only in accel/, libxml2 only in io/'s scene reader, json-c, OpenEXR
-and Assimp only in formats/, OpenImageIO only in io/'s preview). The check
+(Embree only in accel/, libxml2 only in scenexml/, json-c, OpenEXR and
+Assimp only in formats/, OpenImageIO only in io/'s preview). The check
 parses every #include of src/ and is tried on planted violations, so it can
 fail."""
 import os
@@ -11,18 +11,21 @@ import re
 import pathlib
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
-# bottom to top
-# formats/ (readers and writers of PLY, .anim, TUM, cameras.json,
-# transforms.json, EXR, meshes) sits below scene/ and render/: a format fills
-# the models of surfels/, gaussians/ and motion/, never a scene or a render,
-# so the scene and the renderer may read files (issue 50 item 3); only scene
-# assembly (the scene XML) and the render's outputs stay in io/ at the top
-# splat/ (the thesis's splatting comparands) sits on render/: it blends
-# and shades with render/shade.h, the ray tracer's own Phong, and the
-# scene reader and output writers of io/ and the commands of cmd/ sit on it
-LAYERS = ['core', 'motion', 'surfels', 'gaussians', 'formats', 'scene', 'accel', 'render', 'splat', 'io', 'cmd']
+# bottom to top; each floor says what it holds (issue 57 item 3):
+# surfels/ holds the surfel maths and the k-buffer of a ray's surfel hits
+# (pure data); formats/ (readers and writers of PLY, .anim, TUM,
+# cameras.json, transforms.json, EXR, meshes) fills the models of surfels/,
+# gaussians/ and motion/, never a scene or a render (issue 50 item 3);
+# scene/ holds the scene and its shading (blending and Phong of
+# scene/shade.h, which the ray tracer and the splatting methods share);
+# scenexml/ assembles a scene from its XML and the formats; accel/ traces
+# it; splat/ (the thesis's splatting comparands) sits beside accel/, on the
+# scene and its shading and accel's reach rule, below the ray tracer's
+# render/; io/ holds the render's outputs; cmd/ the commands
+LAYERS = ['core', 'motion', 'surfels', 'gaussians', 'formats', 'scene', 'scenexml', 'accel', 'splat', 'render',
+          'io', 'cmd']
 # a system library and the one folder that may include it
-LIBRARY_OWNER = {'embree3/': 'accel', 'libxml/': 'io', 'openexr.h': 'formats', 'OpenImageIO/': 'io',
+LIBRARY_OWNER = {'embree3/': 'accel', 'libxml/': 'scenexml', 'openexr.h': 'formats', 'OpenImageIO/': 'io',
                  'json-c/': 'formats', 'assimp/': 'formats'}
 # make bench measures refrender against Embree's own disc primitive, so the
 # benchmark (and only it) calls Embree directly
@@ -154,7 +157,7 @@ def test_planted_format_reaching_up_is_found(tmp_path):
         (tmp_path / name).parent.mkdir(exist_ok=True)
         (tmp_path / name).write_text(text)
     assert sorted(violations(tmp_path)) == [
-        'formats/lib.c:3: includes <libxml/tree.h>, which only io/ may use',
+        'formats/lib.c:3: includes <libxml/tree.h>, which only scenexml/ may use',
         'formats/up.c:1: formats/ includes "scene/scene.h" from the higher layer scene/',
         'formats/up.c:2: formats/ includes "render/render.h" from the higher layer render/',
         'io/lib.c:1: includes <json-c/json.h>, which only formats/ may use']

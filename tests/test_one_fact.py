@@ -72,7 +72,7 @@ def test_an_image_is_resolved_into_its_planes_in_one_place():
 
 def test_the_gaussian_objects_description_is_written_once():
     assert where(r'tileRule(=|\\")') == []  # the header's and the export's own spellings
-    assert where(r'"tileRule"') == ["src/gaussians/gaussian.c", "src/io/scene_xml.c"]  # the key; the XML attribute
+    assert where(r'"tileRule"') == ["src/gaussians/gaussian.c", "src/scenexml/scene_xml.c"]  # the key; the XML attribute
 
 
 def test_object_kinds_are_rows_not_tests():

@@ -14,7 +14,7 @@
 #include "io/output.h"
 #include "io/render_attrs.h"
 #include "io/preview.h"
-#include "io/scene_xml.h"
+#include "scenexml/scene_xml.h"
 
 #ifndef RR_SOURCE_SCENE
 #define RR_SOURCE_SCENE "scenes/default.xml"

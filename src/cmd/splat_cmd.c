@@ -13,7 +13,7 @@
 #include "io/output.h"
 #include "io/preview.h"
 #include "io/render_attrs.h"
-#include "io/scene_xml.h"
+#include "scenexml/scene_xml.h"
 #include "splat/splatting.h"
 
 static void splat_usage(FILE *f)

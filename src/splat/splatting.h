@@ -3,7 +3,7 @@
  * splat's footprint is found by projecting its bounds, and each pixel of
  * it is tested with the ground truth's own rules (the ray/ellipse test of
  * surfels/splat.h, the kernel weight, kbuffer.h's epsilon rule, the camera,
- * a(t) and render/shade.h's blend and Phong), so that one instant splatted
+ * a(t) and scene/shade.h's blend and Phong), so that one instant splatted
  * without the EWA approximation is the ray tracer's image at that instant. */
 #ifndef RR_SPLATTING_H
 #define RR_SPLATTING_H

@@ -1,7 +1,7 @@
-#include "io/scene_xml.h"
+#include "scenexml/scene_xml.h"
 
 #include "gaussians/gaussian_hit.h"
-#include "io/scene_xml_internal.h"
+#include "scenexml/scene_xml_internal.h"
 
 #include <libxml/parser.h>
 #include <libxml/xmlerror.h>

@@ -4,7 +4,7 @@
 #ifndef RR_SHADE_H
 #define RR_SHADE_H
 
-#include "accel/kbuffer.h"
+#include "surfels/kbuffer.h"
 #include "scene/scene.h"
 
 /* The kernel-weighted sums of the surface attributes of the hits (or
