@@ -113,7 +113,7 @@ $(BUILD)/io/render_attrs.o: BUILD_ID_FLAG = -DRR_BUILD_ID='"$(file <$(BUILD)/bui
 $(BUILD)/tests/%.o: tests/%.c $(BUILD)/tests/%.d | $(BUILD)
 	$(CC) $(RR_CPPFLAGS) $(RR_CFLAGS) -Isrc -c $< -o $@
 	@touch $@
-DEPFILES := $(LIB_OBJS:.o=.d) $(APP_OBJS:.o=.d) $(TEST_OBJS:.o=.d) $(BUILD)/cmd/bench.d $(BUILD)/cmd/bench_gaussian.d $(BUILD)/cmd/bench_splat.d \
+DEPFILES := $(LIB_OBJS:.o=.d) $(APP_OBJS:.o=.d) $(TEST_OBJS:.o=.d) $(BUILD)/bench/bench.d $(BUILD)/bench/bench_gaussian.d $(BUILD)/bench/bench_splat.d \
             $(BUILD)/io/preview-so.d
 $(DEPFILES):
 -include $(wildcard $(DEPFILES))
@@ -124,7 +124,7 @@ $(BIN): $(APP_OBJS) $(LIB_OBJS) | $(PREVIEW_SO)
 	$(CC) $(SANLD) -o $@ $^ $(LDLIBS)
 $(TESTBIN): $(TEST_OBJS) $(LIB_OBJS)
 	$(CC) $(SANLD) -o $@ $^ $(LDLIBS)
-$(BUILD)/refrender-bench: $(BUILD)/cmd/bench.o $(BUILD)/cmd/bench_gaussian.o $(BUILD)/cmd/bench_splat.o $(LIB_OBJS)
+$(BUILD)/refrender-bench: $(BUILD)/bench/bench.o $(BUILD)/bench/bench_gaussian.o $(BUILD)/bench/bench_splat.o $(LIB_OBJS)
 	$(CC) $(SANLD) -o $@ $^ $(LDLIBS)
 
 deps:
@@ -229,7 +229,7 @@ fuzz: $(FUZZ_TARGETS:%=$(FUZZ_DIR)/fuzz_%)
 
 # Speed and memory against Embree's built-in disc primitive, measured in the
 # same run (a benchmark, not a test). BENCH_ARGS=quick for a short smoke run,
-# BENCH_ARGS="full SERIES" for one series (see src/cmd/BENCH.md).
+# BENCH_ARGS="full SERIES" for one series (see src/bench/BENCH.md).
 bench: $(BUILD)/refrender-bench
 	mkdir -p out
 	$(BUILD)/refrender-bench out/bench.csv $(BENCH_ARGS)
@@ -249,7 +249,7 @@ thesis-table: $(BIN) scenes
 
 # The samplers' convergence on the suite's, the Gaussian examples' and the
 # benchmark-scale view, and the time to 1, 0.1 and 0.01 of an 8-bit level on
-# the benchmark-scale view (scripts/sampler_study.py; src/cmd/BENCH.md).
+# the benchmark-scale view (scripts/sampler_study.py; src/bench/BENCH.md).
 # Part of `make bench` except in quick mode.
 bench-samplers: $(BIN) scenes scale-models
 	$(PYTHON) scripts/sampler_study.py convergence --out out/samplers

@@ -1,4 +1,4 @@
-#include "cmd/bench_splat.h"
+#include "bench/bench_splat.h"
 
 #include "render/render.h"
 #include "splat/splatting.h"

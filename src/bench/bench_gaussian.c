@@ -1,4 +1,4 @@
-#include "cmd/bench_gaussian.h"
+#include "bench/bench_gaussian.h"
 
 #include <embree3/rtcore.h>
 #include <pthread.h>
@@ -662,7 +662,7 @@ int bench_gaussian_stg(int quick, int threads, FILE *csv)
     frozen.frozen = 1;
     int reps = quick ? 1 : 3;
     printf("\nstg: a SpacetimeGaussians-lite model (a sphere of %zu 3D Gaussians, each moving on its own cubic\n"
-           "path, turning and fading: src/cmd/bench_gaussian.c) over a half-frame exposure [%.2f, %.2f], a fixed\n"
+           "path, turning and fading: src/bench/bench_gaussian.c) over a half-frame exposure [%.2f, %.2f], a fixed\n"
            "camera, %dx%d, --pixel-filter point, 1 x %d samples a pixel, %d threads; against the same Gaussians\n"
            "frozen at %.3f (a static model) on the same rays. Moving and frozen alternate, %d run(s) each,\n"
            "each in its own process; seconds: the median (each run).\n\n"

@@ -11,8 +11,8 @@
 #include <time.h>
 #include <unistd.h>
 
-#include "cmd/bench_gaussian.h"
-#include "cmd/bench_splat.h"
+#include "bench/bench_gaussian.h"
+#include "bench/bench_splat.h"
 #include "render/render.h"
 #include "surfels/shapes.h"
 
@@ -704,7 +704,7 @@ static void bench_usage(FILE *f)
     fputs("usage: refrender-bench [OUT.csv [quick|full [SERIES]]]\n"
           "\n"
           "Measures refrender's render path against Embree's built-in disc primitive\n"
-          "(src/cmd/BENCH.md) and writes the CSV (default bench.csv). quick: a short\n"
+          "(src/bench/BENCH.md) and writes the CSV (default bench.csv). quick: a short\n"
           "smoke run; full (the default): the measurements. SERIES runs one series\n"
           "only: cases, target, speed, splats, tspp, threads, floor, static80,\n"
           "gaussians, scale or stg. Takes minutes (quick) to hours (full).\n"
