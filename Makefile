@@ -47,7 +47,7 @@ LIB_SRCS := core/common core/arena core/lanes core/inputfile core/atomicfile sur
             motion/animation formats/animfile core/camera motion/shutter render/sampler scene/scene io/preview \
             scenexml/scene_xml scenexml/scene_xml_util scenexml/scene_xml_anim scenexml/scene_xml_camera scenexml/scene_params accel/accel \
             accel/accel_build accel/accel_collide render/gaussian_integrator render/exact render/exact_kinds \
-            render/exact_integrate render/integrator render/surfel_integrator scene/shade render/film render/noise render/render splat/splat_settings splat/frame splat/splatting splat/volumetric splat/guan_mueller formats/exr io/output io/render_attrs \
+            render/exact_integrate render/integrator render/surfel_integrator scene/shade render/film render/noise render/render splatting/splat_settings splatting/frame splatting/splatting splatting/volumetric splatting/guan_mueller formats/exr io/output io/render_attrs \
             cmd/cli
 LIB_OBJS := $(LIB_SRCS:%=$(BUILD)/%.o)
 PREVIEW_SO := $(BUILD)/refrender-preview.so

@@ -19,11 +19,11 @@ ROOT = pathlib.Path(__file__).resolve().parent.parent
 # scene/ holds the scene and its shading (blending and Phong of
 # scene/shade.h, which the ray tracer and the splatting methods share);
 # scenexml/ assembles a scene from its XML and the formats; accel/ traces
-# it; splat/ (the thesis's splatting comparands) sits beside accel/, on the
+# it; splatting/ (the thesis's splatting comparands) sits beside accel/, on the
 # scene and its shading and accel's reach rule, below the ray tracer's
 # render/; io/ holds the render's outputs; cmd/ the commands; bench/ the
 # second program, refrender-bench ('make bench'), which uses none of cmd/
-LAYERS = ['core', 'motion', 'surfels', 'gaussians', 'formats', 'scene', 'scenexml', 'accel', 'splat', 'render',
+LAYERS = ['core', 'motion', 'surfels', 'gaussians', 'formats', 'scene', 'scenexml', 'accel', 'splatting', 'render',
           'io', 'cmd', 'bench']
 # a system library and the one folder that may include it
 LIBRARY_OWNER = {'embree3/': 'accel', 'libxml/': 'scenexml', 'openexr.h': 'formats', 'OpenImageIO/': 'io',
@@ -115,14 +115,17 @@ def test_no_circle_inside_a_folder():
 
 
 def test_planted_circle_is_found(tmp_path):
-    plants = {'splat/a.c': '#include "splat/a.h"\n#include "splat/b.h"\n', 'splat/a.h': '',
-              'splat/b.c': '#include "splat/b_internal.h"\n', 'splat/b_internal.h': '#include "splat/c.h"\n',
-              'splat/c.h': '#include "splat/a.h"\n', 'splat/d.c': '#include "splat/d.h"\n#include "splat/a.h"\n',
-              'core/x.h': '#include "splat/a.h"\n'}
+    plants = {'splatting/a.c': '#include "splatting/a.h"\n#include "splatting/b.h"\n',
+              'splatting/a.h': '',
+              'splatting/b.c': '#include "splatting/b_internal.h"\n',
+              'splatting/b_internal.h': '#include "splatting/c.h"\n',
+              'splatting/c.h': '#include "splatting/a.h"\n',
+              'splatting/d.c': '#include "splatting/d.h"\n#include "splatting/a.h"\n',
+              'core/x.h': '#include "splatting/a.h"\n'}
     for name, text in plants.items():
         (tmp_path / name).parent.mkdir(exist_ok=True)
         (tmp_path / name).write_text(text)
-    assert circles(tmp_path) == ['splat/a -> splat/b -> splat/c -> splat/a']
+    assert circles(tmp_path) == ['splatting/a -> splatting/b -> splatting/c -> splatting/a']
 
 
 def test_src_includes_only_lower_layers():
@@ -132,14 +135,14 @@ def test_src_includes_only_lower_layers():
 def test_planted_upward_include_is_found(tmp_path):
     for folder, text in [('core', '#include "io/ply.h"\n'), ('io', '#include "core/common.h"\n'),
                          ('motion', '#include <embree3/rtcore.h>\n'),
-                         ('splat', '#include "io/ply.h"\n')]:
+                         ('splatting', '#include "io/ply.h"\n')]:
         (tmp_path / folder).mkdir()
         (tmp_path / folder / 'x.c').write_text(text)
     (tmp_path / 'io' / 'ply.h').write_text('')
     (tmp_path / 'core' / 'common.h').write_text('')
     found = violations(tmp_path)
     assert len(found) == 3, found
-    assert 'splat/x.c:1: splat/ includes "io/ply.h" from the higher layer io/' in found
+    assert 'splatting/x.c:1: splatting/ includes "io/ply.h" from the higher layer io/' in found
     assert 'core/x.c:1: core/ includes "io/ply.h" from the higher layer io/' in found
     assert any('<embree3/rtcore.h>' in f for f in found)
 

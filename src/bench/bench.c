@@ -107,7 +107,8 @@ static void build_scene(const bench_case *c, scene *s, surfel **out, size_t *n)
         pointmodel_sort_spatially(&w->model, NULL, &err);
         free(ws);
     }
-    RR_CHECK(scene_add_light(s, (light){LIGHT_DIRECTIONAL, v3(0, 0, 0), v3_normalize(v3(-1, -1, -1)), v3(1, 1, 1)}) == 0);
+    light sun = {LIGHT_DIRECTIONAL, v3(0, 0, 0), v3_normalize(v3(-1, -1, -1)), v3(1, 1, 1)};
+    RR_CHECK(scene_add_light(s, sun) == 0);
 }
 
 /* ---- baseline: Embree's oriented discs, closest hit ------------------------ */

@@ -11,7 +11,7 @@
 #include <stdint.h>
 
 #include "scene/scene.h"
-#include "splat/splat_settings.h"
+#include "splatting/splat_settings.h"
 
 typedef struct {
     int width, height;

@@ -1,12 +1,12 @@
-#include "splat/splatting.h"
+#include "splatting/splatting.h"
 
 #include <stdlib.h>
 #include <string.h>
 
 #include "accel/accel.h"
-#include "splat/frame.h"
-#include "splat/guan_mueller.h"
-#include "splat/volumetric.h"
+#include "splatting/frame.h"
+#include "splatting/guan_mueller.h"
+#include "splatting/volumetric.h"
 
 /* Eq. 4.14: (Rd, Gd, Bd, Ad) += As (Rs, Gs, Bs, 1) with As = a(t_j), the
  * sum then divided by the summed weights; alpha is the accumulated coverage. */

@@ -1,6 +1,6 @@
 /* The splatting methods' settings (splat_settings.h): their names and the
  * instants they splat. */
-#include "splat/splat_settings.h"
+#include "splatting/splat_settings.h"
 
 #include <stdlib.h>
 

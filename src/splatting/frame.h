@@ -3,12 +3,12 @@
  * summing kernel-weighted attributes of the fragments within epsilon of it
  * (scene/shade.h's sums), and the normalisation and deferred Phong pass.
  * Time buckets (sec. 4.4) run the first two passes for several instants
- * into the same buffers before one normalisation. Internal to src/splat/. */
+ * into the same buffers before one normalisation. Internal to src/splatting/. */
 #ifndef RR_SPLAT_FRAME_H
 #define RR_SPLAT_FRAME_H
 
 #include "scene/shade.h"
-#include "splat/splat_settings.h"
+#include "splatting/splat_settings.h"
 
 typedef struct {
     const scene *sc;
