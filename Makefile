@@ -43,14 +43,15 @@ LDLIBS   := -ljson-c -lassimp -lembree3 -lOpenEXRCore -lxml2 -lpng -ldl -lpthrea
 # (src/io/preview.h): linked into refrender it cost every run 0.4 s of loading
 PREVIEW_LIBS := -lOpenImageIO -lOpenImageIO_Util
 
-LIB_SRCS := core/common core/arena core/lanes core/inputfile core/atomicfile accel/kbuffer surfels/splat \
+LIB_SRCS := core/common core/arena core/lanes core/inputfile core/atomicfile surfels/kbuffer surfels/splat \
             surfels/pointmodel formats/ply gaussians/gaussian formats/gaussian_ply gaussians/gaussian_dynamic gaussians/gaussian_stg gaussians/gaussian_fdgs \
-            formats/gaussian_ply_common formats/gaussian_dynamic_ply formats/gaussian_stg_ply formats/gaussian_fdgs_ply gaussians/gaussian_hit gaussians/gaussian_blend formats/camjson formats/colmap formats/llff formats/camsource formats/transforms \
+            formats/gaussian_ply_common formats/gaussian_dynamic_ply formats/gaussian_stg_ply formats/gaussian_fdgs_ply gaussians/gaussian_hit gaussians/gaussian_raster_rules gaussians/gaussian_hit_2d gaussians/gaussian_hit_3d \
+            gaussians/gaussian_cull gaussians/gaussian_reach gaussians/gaussian_blend formats/camjson formats/colmap formats/llff formats/camsource formats/transforms \
             surfels/shapes surfels/surfelize formats/meshload core/rotation motion/curve motion/trajectory formats/tum \
             motion/animation formats/animfile core/camera motion/shutter render/sampler scene/scene io/preview io/preview_png \
-            io/scene_xml io/scene_xml_util io/scene_xml_anim io/scene_xml_camera io/scene_params accel/accel \
+            scenexml/scene_xml scenexml/scene_xml_util scenexml/scene_xml_anim scenexml/scene_xml_camera scenexml/scene_params accel/accel \
             accel/accel_build accel/accel_collide render/gaussian_integrator render/exact render/exact_kinds \
-            render/exact_integrate render/integrator render/surfel_integrator render/shade render/film render/noise render/render render/render_settings splat/frame splat/splatting splat/volumetric splat/guan_mueller formats/exr io/output io/render_attrs \
+            render/exact_integrate render/integrator render/surfel_integrator scene/shade render/film render/noise render/render render/render_settings splatting/splat_settings splatting/frame splatting/splatting splatting/volumetric splatting/guan_mueller formats/exr io/output io/render_attrs \
             cmd/cli
 LIB_OBJS := $(LIB_SRCS:%=$(BUILD)/%.o)
 PREVIEW_SO := $(BUILD)/refrender-preview.so
@@ -126,7 +127,7 @@ $(BUILD)/io/render_attrs.o: BUILD_ID_FLAG = -DRR_BUILD_ID='"$(file <$(BUILD)/bui
 $(BUILD)/tests/%.o: tests/%.c $(BUILD)/tests/%.d $(BUILD)/cflags | $(BUILD)
 	$(CC) $(RR_CPPFLAGS) $(RR_CFLAGS) -Isrc -c $< -o $@
 	@touch $@
-DEPFILES := $(LIB_OBJS:.o=.d) $(APP_OBJS:.o=.d) $(BUILD)/api/refrender_api.d $(TEST_OBJS:.o=.d) $(BUILD)/cmd/bench.d $(BUILD)/cmd/bench_gaussian.d $(BUILD)/cmd/bench_splat.d \
+DEPFILES := $(LIB_OBJS:.o=.d) $(APP_OBJS:.o=.d) $(BUILD)/api/refrender_api.d $(TEST_OBJS:.o=.d) $(BUILD)/bench/bench.d $(BUILD)/bench/bench_gaussian.d $(BUILD)/bench/bench_splat.d \
             $(BUILD)/io/preview-so.d
 $(DEPFILES):
 -include $(wildcard $(DEPFILES))
@@ -140,7 +141,7 @@ $(LIB_SO): $(BUILD)/api/refrender_api.o $(APP_OBJS) $(LIB_OBJS) src/api/refrende
 	$(CC) $(SANLD) -shared -Wl,-Bsymbolic -Wl,--version-script=src/api/refrender_api.map -o $@ $(filter %.o,$^) $(LDLIBS)
 $(TESTBIN): $(TEST_OBJS) $(LIB_OBJS)
 	$(CC) $(SANLD) -o $@ $^ $(LDLIBS)
-$(BUILD)/refrender-bench: $(BUILD)/cmd/bench.o $(BUILD)/cmd/bench_gaussian.o $(BUILD)/cmd/bench_splat.o $(LIB_OBJS)
+$(BUILD)/refrender-bench: $(BUILD)/bench/bench.o $(BUILD)/bench/bench_gaussian.o $(BUILD)/bench/bench_splat.o $(LIB_OBJS)
 	$(CC) $(SANLD) -o $@ $^ $(LDLIBS)
 
 deps:
@@ -246,7 +247,7 @@ fuzz: $(FUZZ_TARGETS:%=$(FUZZ_DIR)/fuzz_%)
 
 # Speed and memory against Embree's built-in disc primitive, measured in the
 # same run (a benchmark, not a test). BENCH_ARGS=quick for a short smoke run,
-# BENCH_ARGS="full SERIES" for one series (see src/cmd/BENCH.md).
+# BENCH_ARGS="full SERIES" for one series (see src/bench/BENCH.md).
 bench: $(BUILD)/refrender-bench
 	mkdir -p out
 	$(BUILD)/refrender-bench out/bench.csv $(BENCH_ARGS)
@@ -266,7 +267,7 @@ thesis-table: $(BIN) scenes
 
 # The samplers' convergence on the suite's, the Gaussian examples' and the
 # benchmark-scale view, and the time to 1, 0.1 and 0.01 of an 8-bit level on
-# the benchmark-scale view (scripts/sampler_study.py; src/cmd/BENCH.md).
+# the benchmark-scale view (scripts/sampler_study.py; src/bench/BENCH.md).
 # Part of `make bench` except in quick mode.
 bench-samplers: $(BIN) scenes scale-models
 	$(PYTHON) scripts/sampler_study.py convergence --out out/samplers

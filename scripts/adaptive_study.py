@@ -1,6 +1,6 @@
 #!/usr/bin/python3
 """What adaptive allocation by sequence length (issue 58, lever 1) would
-gain, measured by emulating it from fixed-length renders (src/cmd/BENCH.md,
+gain, measured by emulating it from fixed-length renders (src/bench/BENCH.md,
 Time to error: the levers measured).
 
 usage: adaptive_study.py SCENE.xml --tag NAME [--pilot 32] [--counts 32,64,...]

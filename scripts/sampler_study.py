@@ -1,6 +1,6 @@
 #!/usr/bin/python3
 """Sampler convergence and time to error, measured (`make bench-samplers`;
-src/cmd/BENCH.md, Sampler convergence and Time to error).
+src/bench/BENCH.md, Sampler convergence and Time to error).
 
 usage: sampler_study.py convergence [--views NAME,...] [--counts 16,64,256]
                         [--samplers sobol,jittered3d,thesis] [--out DIR]

@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """Time to equal error: --time-integration exact against sampled time
 (Owen-scrambled Sobol' at several spp x tspp splits), measured in one run
-on the same machine (`make bench` runs it; src/cmd/BENCH.md).
+on the same machine (`make bench` runs it; src/bench/BENCH.md).
 
 usage: time_to_error.py [--scenes default,diagonal,...] [--res WxH] [--out DIR]
                         [--targets 0.01,0.002] [--threads N] [--max-seconds S]

@@ -8,7 +8,7 @@
 #include "motion/animation.h"
 #include "formats/gaussian_ply.h"
 #include "harness.h"
-#include "io/scene_xml.h"
+#include "scenexml/scene_xml.h"
 
 static surface_hit hit_at(float t, unsigned prim)
 {

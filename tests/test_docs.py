@@ -23,7 +23,7 @@ import pytest
 
 from conftest import BIN, ROOT, run
 
-DOCS = ["README.md", "scenes/README.md", "scripts/README.md", "src/EXACT.md", "src/cmd/BENCH.md",
+DOCS = ["README.md", "scenes/README.md", "scripts/README.md", "src/EXACT.md", "src/bench/BENCH.md",
         "tests/README.md", "reference_images/README.md", "src/GAUSSIANS.md", "src/TRAJECTORIES.md", "src/SPLAT.md"]
 LINK = re.compile(r"\[[^\]]*\]\(([^)\s]+)\)")
 

@@ -8,8 +8,8 @@
 
 #include "render/exact.h"
 #include "render/sampler.h"
-#include "io/scene_xml.h"
-#include "render/shade.h"
+#include "scenexml/scene_xml.h"
+#include "scene/shade.h"
 #include "harness.h"
 
 typedef struct {

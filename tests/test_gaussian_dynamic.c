@@ -21,7 +21,7 @@
 #include "gaussians/gaussian_stg.h"
 #include "formats/gaussian_ply.h"
 #include "formats/gaussian_dynamic_ply.h"
-#include "io/scene_xml.h"
+#include "scenexml/scene_xml.h"
 #include "gaussian_test_util.h"
 #include "harness.h"
 

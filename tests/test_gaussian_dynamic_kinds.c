@@ -20,7 +20,7 @@
 #include "accel/accel.h"
 #include "formats/gaussian_ply.h"
 #include "gaussians/gaussian_dynamic.h"
-#include "io/scene_xml.h"
+#include "scenexml/scene_xml.h"
 #include "render/render.h"
 #include "gaussian_test_util.h"
 #include "harness.h"
@@ -90,6 +90,7 @@ static void toy_prefetch(const gaussian_model *m, size_t i) { (void)m, (void)i; 
 
 static const gaussian_dynamic_ops toy_ops = {
     "toy-linear", toy_at, toy_color, NULL, toy_bounds, toy_cull, toy_rest, toy_prefetch, toy_prefetch,
+    gaussian_dynamic_free,
 };
 
 /* m made a toy model: Gaussian i moves at velocity vel[i] from its mean at

@@ -10,7 +10,7 @@
 #include "motion/animation.h"
 #include "render/gaussian_integrator.h"
 #include "formats/gaussian_ply.h"
-#include "io/scene_xml.h"
+#include "scenexml/scene_xml.h"
 #include "harness.h"
 
 /* An in-memory scene and its BVHs, with static reuse; fails the test when

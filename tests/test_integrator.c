@@ -11,7 +11,7 @@
 #include "harness.h"
 #include "render/integrator.h"
 #include "render/render.h"
-#include "io/scene_xml.h"
+#include "scenexml/scene_xml.h"
 
 enum { W = 16, H = 16, TOY_FAILED = -7, FAIL_X = 5, FAIL_Y = 3 };
 

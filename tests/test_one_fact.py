@@ -9,8 +9,8 @@ bounds); the render tiles and the rasterizers' 16x16 tiles have two names; an im
 into its four planes in one place (film.c's image_planes_resolve); and the Gaussian object's
 description (semantics, tileRule, order) is written once (gaussian.c's gaussian_imaging); and
 an object's kind is asked of a row, never tested (issue 50, item 2: a kind is named only where an
-object is made, in its enum, and as a row of a table). Each check fails on the tree before that
-change."""
+object is made, in its enum, and as a row of a table); and the AVX2 intrinsics are written only
+in core/lanes.h (issue 57 item 5). Each check fails on the tree before that change."""
 import re
 
 from conftest import ROOT
@@ -47,7 +47,8 @@ def test_the_alpha_floor_is_said_once():
 
 def test_outward_rounding_goes_through_the_interval_helper():
     bounds = {f: t for f, t in sources().items()
-              if f.startswith("src/accel/") or f in ("src/gaussians/gaussian_dynamic.c", "src/gaussians/gaussian_hit.c")}
+              if f.startswith("src/accel/") or f in ("src/gaussians/gaussian_dynamic.c", "src/gaussians/gaussian_reach.c",
+                                                     "src/gaussians/gaussian_cull.c")}
     assert where(r"\bnextafter\(", bounds) == []  # interval_step_out (kbuffer's nextafterf is a cutoff, not a bound)
     assert where(r"1e-30|1\.00001", bounds) == []  # interval_float_room
     assert where(r"DBL_EPSILON\s*/\s*2", bounds) == []  # RR_UNIT_ROUNDOFF
@@ -55,8 +56,14 @@ def test_outward_rounding_goes_through_the_interval_helper():
 
 def test_the_two_kinds_of_tile_have_two_names():
     assert len(where(r"\bTILE\b")) <= 1  # the render's tiles of work (render.c), wherever they go
-    assert "src/gaussians/gaussian_hit.c" not in where(r"\bTILE\b")
-    assert where(r"\bRASTER_TILE\b") == ["src/gaussians/gaussian_hit.c"]
+    assert "src/gaussians/gaussian_raster_rules.c" not in where(r"\bTILE\b")
+    assert where(r"\bRASTER_TILE\b") == ["src/gaussians/gaussian_raster_rules.c"]
+
+
+def test_intrinsics_are_written_only_in_the_lanes_header():
+    # one place knows the AVX2 intrinsics and their bit-for-bit rules (core/lanes.h); a kernel
+    # elsewhere says what it loads (v4d_load3f), not how (issue 57 item 5)
+    assert where(r"\b_mm\w*_\w+\(|immintrin") == ["src/core/lanes.h"]
 
 
 def test_an_image_is_resolved_into_its_planes_in_one_place():
@@ -65,7 +72,7 @@ def test_an_image_is_resolved_into_its_planes_in_one_place():
 
 def test_the_gaussian_objects_description_is_written_once():
     assert where(r'tileRule(=|\\")') == []  # the header's and the export's own spellings
-    assert where(r'"tileRule"') == ["src/gaussians/gaussian.c", "src/io/scene_xml.c"]  # the key; the XML attribute
+    assert where(r'"tileRule"') == ["src/gaussians/gaussian.c", "src/scenexml/scene_xml.c"]  # the key; the XML attribute
 
 
 def test_object_kinds_are_rows_not_tests():

@@ -7,7 +7,7 @@
 #include "harness.h"
 #include "render/render.h"
 #include "formats/gaussian_ply.h"
-#include "io/scene_xml.h"
+#include "scenexml/scene_xml.h"
 
 /* A disk moving across a 32x16 image: two 16x16 tiles, and pixels whose
  * noise differs (edges, interior, background), so a target error stops them

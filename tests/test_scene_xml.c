@@ -7,7 +7,7 @@
 #include "formats/animfile.h"
 #include "harness.h"
 #include "core/inputfile.h"
-#include "io/scene_xml.h"
+#include "scenexml/scene_xml.h"
 
 static int load_text(const char *xml, scene *s, rr_error *e)
 {

@@ -3,8 +3,8 @@
 #include <string.h>
 
 #include "harness.h"
-#include "io/scene_xml.h"
-#include "render/shade.h"
+#include "scenexml/scene_xml.h"
+#include "scene/shade.h"
 
 /* Object 0 unlit, object 1 Phong (diffuse 0.5, specular 0.25, shininess 2);
  * ambient 0.1; one directional light of color (1, 0.5, 0.25) travelling

@@ -1,11 +1,11 @@
-/* splat/splatting.c: the instants of accumulation and time buckets (thesis
+/* splatting/splatting.c: the instants of accumulation and time buckets (thesis
  * sec. 3.6.1 leaves them open): midpoint (k + 1/2) / N as
  * scripts/nframe_average.py, stratified one per stratum, random sorted in
  * the shutter; the seed decides them. */
 #include <math.h>
 
 #include "harness.h"
-#include "splat/splatting.h"
+#include "splatting/splatting.h"
 
 static splat_settings settings(splat_times kind, int n, uint64_t seed)
 {

@@ -4,7 +4,7 @@
 #include <string.h>
 
 #include "harness.h"
-#include "io/scene_xml.h"
+#include "scenexml/scene_xml.h"
 #include "render/surfel_integrator.h"
 
 /* Two unlit objects in front of a grey background. */

@@ -16,7 +16,7 @@
 #define RR_ACCEL_H
 
 #include "gaussians/gaussian.h"
-#include "accel/kbuffer.h"
+#include "surfels/kbuffer.h"
 #include "scene/scene.h"
 
 typedef struct accel accel;

@@ -32,7 +32,7 @@ RTCScene accel_user_scene(RTCDevice dev, unsigned nprims, void *user, RTCBoundsF
 /* Packet traversal pays off while the lanes' rays stay within a few splat
  * sizes of each other: 8 mean splat extents (measured with make bench, the
  * rotation-speed series: wider groups win at slow motion but lose at fast
- * motion, see src/cmd/BENCH.md). */
+ * motion, see src/bench/BENCH.md). */
 static double points_spread(const scene_object *o)
 {
     double sum = 0;

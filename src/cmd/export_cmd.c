@@ -14,7 +14,7 @@
 #include "gaussians/gaussian_hit.h"
 #include "cmd/cli.h"
 #include "cmd/commands.h"
-#include "io/scene_xml.h"
+#include "scenexml/scene_xml.h"
 #include "core/rotation.h"
 #include "formats/transforms.h"
 #include "formats/tum.h"

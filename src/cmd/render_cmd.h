@@ -7,7 +7,7 @@
 #include <signal.h>
 
 #include "render/render.h"
-#include "io/scene_xml.h"
+#include "scenexml/scene_xml.h"
 
 typedef struct {
     int spp, tspp, time_factor, threads, quiet, width, height, batches, max_batches;

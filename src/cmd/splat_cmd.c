@@ -1,4 +1,4 @@
-/* 'refrender splat': the thesis's splatting methods (src/splat/,
+/* 'refrender splat': the thesis's splatting methods (src/splatting/,
  * src/SPLAT.md) rendered into the ground truth's EXR layout, so that
  * compare.py and the tables take them like any method's image. */
 #include <getopt.h>
@@ -13,8 +13,8 @@
 #include "io/output.h"
 #include "io/preview.h"
 #include "io/render_attrs.h"
-#include "io/scene_xml.h"
-#include "splat/splatting.h"
+#include "scenexml/scene_xml.h"
+#include "splatting/splatting.h"
 
 static void splat_usage(FILE *f)
 {

@@ -182,7 +182,7 @@ typedef struct {
 /* fmax and fmin with glibc's values (the number when one is NaN; which
  * zero a tie of +0 and -0 gives, C leaves open, and GCC may swap libm's
  * operands), inlined: at -O2 GCC calls libm's, 3% of a Gaussian render's
- * time (src/cmd/BENCH.md). */
+ * time (src/bench/BENCH.md). */
 static inline double rr_fmax(double x, double y) { return x >= y || y != y ? x : y; }
 static inline double rr_fmin(double x, double y) { return x <= y || y != y ? x : y; }
 

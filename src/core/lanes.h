@@ -57,6 +57,12 @@ RR_LANES_TARGET static inline v4d v4d_gather(const float *const v[4], int a)
 {
     return _mm256_cvtps_pd(_mm_set_ps(v[3][a], v[2][a], v[1][a], v[0][a]));
 }
+/* v[0..2] in lanes 0..2 as doubles (exact), lane 3 zero: a masked load,
+ * which reads no fourth float (v may be an array's last three) */
+RR_LANES_TARGET static inline v4d v4d_load3f(const float *v)
+{
+    return _mm256_cvtps_pd(_mm_maskload_ps(v, _mm_set_epi32(0, -1, -1, -1)));
+}
 
 #define LANES_PICK(x, for_double, for_v4d) _Generic((x), double: for_double, v4d: for_v4d)
 #define LANES_PICK_MASK(m, for_int, for_v4l) _Generic((m), int: for_int, v4l: for_v4l)

@@ -72,7 +72,7 @@ vec3 quat_rotate(const double q[4], vec3 v);
 
 /* The matrix of a unit quaternion in binary64, 1 - 2 (y^2 + z^2) and so
  * on with no division by |q|^2: the Gaussian kernels' formula, which their
- * AVX2 lanes also take, one Gaussian at a time (gaussian_hit.c splat_axes). */
+ * AVX2 lanes also take, one Gaussian at a time (gaussian_hit_2d.c splat_axes). */
 static inline void quat_unit_matrix(double w, double x, double y, double z, double r[3][3])
 {
     r[0][0] = 1 - 2 * (y * y + z * z), r[0][1] = 2 * (x * y - w * z), r[0][2] = 2 * (x * z + w * y);

@@ -5,7 +5,6 @@
 
 #include "core/lanes.h"
 #include "surfels/splat.h"
-#include "gaussians/gaussian_dynamic.h"
 #include "core/rotation.h"
 #include "surfels/surfel.h"
 
@@ -96,7 +95,8 @@ void gaussian_model_free(gaussian_model *m)
     free(m->rotation);
     free(m->opacity);
     free(m->sh);
-    gaussian_dynamic_free(m->dynamic);
+    if (m->dynamic)
+        m->dynamic->ops->free(m->dynamic);
     gaussian_model_init(m);
 }
 
@@ -190,10 +190,7 @@ DEFINE_SH_SUMS(double)
 #if RR_LANES
 enum { SH_SUMS_v4d = 1, SH_CHANNELS_v4d = 3 };
 /* sh[0..2] in lanes 0..2 (the load reads no fourth float) */
-RR_LANES_TARGET static inline v4d sh_channels_v4d(const float *sh)
-{
-    return _mm256_cvtps_pd(_mm_maskload_ps(sh, _mm_set_epi32(0, -1, -1, -1)));
-}
+RR_LANES_TARGET static inline v4d sh_channels_v4d(const float *sh) { return v4d_load3f(sh); }
 RR_LANES_TARGET static inline vec3 sh_sums_vec3_v4d(const v4d sum[1]) { return v3(sum[0][0], sum[0][1], sum[0][2]); }
 DEFINE_SH_SUMS(v4d)
 #endif

@@ -22,7 +22,7 @@ gaussian_dynamic *gaussian_dynamic_alloc(size_t n, size_t size, const gaussian_d
     size_t floats = 0;
     for (int k = 0; k < count; k++)
         floats += arrays[k].width;
-    RR_DCHECK(size >= sizeof(gaussian_dynamic) && floats > 0);
+    RR_DCHECK(size >= sizeof(gaussian_dynamic) && floats > 0 && ops->free);
     gaussian_dynamic *d = calloc(1, size);
     float *block = n <= SIZE_MAX / (floats * sizeof(float)) ? malloc(n * floats * sizeof(float)) : NULL;
     if (!d || !block) {

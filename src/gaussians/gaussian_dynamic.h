@@ -29,49 +29,9 @@
 #include "gaussians/gaussian.h"
 #include "gaussians/gaussian_hit.h"
 
-/* One Gaussian at one time, as the official renderer draws it. */
-typedef struct {
-    double mean[3];
-    double q[4];       /* (w x y z), as the kind's rasterizer builds its matrix from it (not always unit:
-                        * gaussian_stg.h) */
-    double scale[3];
-    double opacity;
-    double rgb[3];     /* the colour where it does not depend on the view, else 0 (the row's color) */
-} gaussian_dynamic_state;
-
-/* A dynamic kind: one row of operations, i the Gaussian's index in m,
- * m->dynamic of this kind. */
-typedef struct gaussian_dynamic_ops {
-    const char *name; /* for `refrender export`'s "motion": "stg-lite", "4dgs" */
-    /* Gaussian i at time t. */
-    void (*at)(const gaussian_model *m, size_t i, double t, gaussian_dynamic_state *out);
-    /* Its colour at time t seen along dir (a hit's gaussian_hit.dir). */
-    vec3 (*color)(const gaussian_model *m, size_t i, double t, vec3 dir);
-    /* The direction the colour is seen along from the camera centre eye
-     * (object space), when it is not the instant's (the ray toward the
-     * moved mean, which the hit holds); NULL: the instant's. */
-    void (*view_dir)(const gaussian_model *m, size_t i, vec3 eye, float dir[3]);
-    /* Over the times [t0, t1] (t0 <= t1) the mean stays in [lo, hi] (per
-     * axis; both the exact path and what `at` and instant_cull compute),
-     * and the opacity is at most *opacity_max. -1 (nothing written) if the
-     * box is not finite. */
-    int (*bounds)(const gaussian_model *m, size_t i, double t0, double t1, double lo[3], double hi[3],
-                  double *opacity_max);
-    /* The instant at t written into slot j of the scratch model out (see
-     * "rendering" below): cull the mean and scale, rest the rotation and
-     * opacity, in floats as the kind's rasterizer holds them. */
-    void (*instant_cull)(const gaussian_model *m, size_t i, double t, gaussian_model *out, size_t j);
-    void (*instant_rest)(const gaussian_model *m, size_t i, double t, gaussian_model *out, size_t j);
-    /* Start loading what each part reads (no value changes). */
-    void (*prefetch_cull)(const gaussian_model *m, size_t i);
-    void (*prefetch_rest)(const gaussian_model *m, size_t i);
-} gaussian_dynamic_ops;
-
-/* The first member of every kind's struct. */
-typedef struct gaussian_dynamic {
-    const gaussian_dynamic_ops *ops; /* the kind's row */
-    float *block;                    /* owned: every array of the kind's struct (gaussian_dynamic_alloc) */
-} gaussian_dynamic;
+/* gaussian_dynamic_state, the row (gaussian_dynamic_ops) and the head of
+ * every kind's struct (gaussian_dynamic) are the model's own (gaussian.h):
+ * it frees its moving part through the row. */
 
 /* One float array of a kind's struct: where its pointer is (offsetof), and
  * how many floats it holds per Gaussian. */

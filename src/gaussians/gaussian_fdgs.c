@@ -135,6 +135,7 @@ static void fdgs_prefetch_rest(const gaussian_model *m, size_t i)
 
 const gaussian_dynamic_ops gaussian_fdgs_ops = {
     .name = "4dgs",
+    .free = gaussian_dynamic_free,
     .at = fdgs_at,
     .color = fdgs_color,
     .view_dir = fdgs_view_dir,

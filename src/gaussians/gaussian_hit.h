@@ -51,8 +51,8 @@
 #define GAUSSIAN_ALPHA_MIN (1.0 / 255.0)
 /* The squared kernel radius (in scales) beyond which alpha = o G falls
  * below GAUSSIAN_ALPHA_MIN: G = exp(-r^2 / 2) >= 1 / (255 o) needs r^2 <=
- * 2 ln(255 o). Every 1/255 reach is this one (gaussian_hit.c's culls and
- * boxes, the benchmark's), or its value at opacity 1 rounded up. */
+ * 2 ln(255 o). Every 1/255 reach is this one (gaussian_cull.c's culls and
+ * gaussian_reach.c's boxes, the benchmark's), or its value at opacity 1 rounded up. */
 static inline double gaussian_alpha_reach2(double opacity) { return 2.0 * log(opacity / GAUSSIAN_ALPHA_MIN); }
 #define GAUSSIAN_ALPHA_MAX 0.99
 #define GAUSSIAN_NEAR 0.2              /* 2DGS: view depth below which hits are skipped */

@@ -163,6 +163,7 @@ static void stg_prefetch_rest(const gaussian_model *m, size_t i)
  * is kept (no view_dir). */
 const gaussian_dynamic_ops gaussian_stg_ops = {
     .name = "stg-lite",
+    .free = gaussian_dynamic_free,
     .at = stg_at,
     .color = stg_color,
     .view_dir = NULL,

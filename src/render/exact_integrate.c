@@ -4,7 +4,7 @@
 #include "render/exact_internal.h"
 
 #include "render/integrator.h"
-#include "render/shade.h"
+#include "scene/shade.h"
 
 /* Components: a r, a g, a b, a coverage, and a itself (the normaliser). */
 enum { NCOMP = 5 };

@@ -65,7 +65,7 @@ static void evaluate(const listing *l, unsigned prim)
  * evaluate_window take them after the traversal). Listing first lets the
  * cull prefetch their loads a few ahead (a prefetch here too, a traversal
  * ahead, measured 1-9% slower on the benchmark-scale view:
- * src/cmd/BENCH.md). */
+ * src/bench/BENCH.md). */
 static void list_candidate(void *user, unsigned prim)
 {
     const listing *l = user;

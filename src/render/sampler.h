@@ -24,7 +24,7 @@
  *   pixel and batch, subset by partial Fisher-Yates). Each stratum is
  *   equally likely and its jitter uniform, so each time is uniform on
  *   [t0, t1]; the random subsets converge like plain Monte Carlo
- *   (src/cmd/BENCH.md, Sampler convergence). Weights all 1: its images are
+ *   (src/bench/BENCH.md, Sampler convergence). Weights all 1: its images are
  *   the thesis's, unchanged.
  *
  * Where error bars are asked for (random_strata), sobol and jittered3d draw
@@ -44,7 +44,7 @@
 typedef enum { SAMPLER_THESIS, SAMPLER_JITTERED3D, SAMPLER_SOBOL } sampler_kind;
 
 /* The default: the lowest error at equal samples on every measured view
- * (src/cmd/BENCH.md, Sampler convergence); the thesis's own sampler
+ * (src/bench/BENCH.md, Sampler convergence); the thesis's own sampler
  * converges like plain Monte Carlo there. */
 #define SAMPLER_DEFAULT SAMPLER_SOBOL
 

@@ -3,7 +3,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "render/shade.h"
+#include "scene/shade.h"
 
 void surfel_kbuffer_rgba(const scene *s, const kbuffer *kb, vec3 org, vec3 dir, double rgba[4])
 {

@@ -1,9 +1,9 @@
 /* The surfel integrator (thesis sec. 4.5 step c): one sample's colour from
  * the splats and spheres it meets. Its parts:
  *  - the epsilon window: the hits within epsilon of the closest, kept in a
- *    k-buffer (accel/kbuffer.h; during traversal, accel's callbacks insert
+ *    k-buffer (surfels/kbuffer.h; during traversal, accel's callbacks insert
  *    into it);
- *  - blending and deferred Phong of the window's hits (render/shade.h);
+ *  - blending and deferred Phong of the window's hits (scene/shade.h);
  *  - static reuse: the samples of a still camera at one raster position
  *    share one world ray, whose static objects are traversed and shaded
  *    once (accel_ray_begin) for all of its times.

@@ -259,6 +259,32 @@ void scene_free(scene *s)
     s->nobjects = s->nlights = 0;
 }
 
+scene_object *scene_add_object(scene *s)
+{
+    scene_object *grown = realloc(s->objects, (size_t)(s->nobjects + 1) * sizeof *grown);
+    if (!grown)
+        return NULL;
+    s->objects = grown;
+    scene_object *o = &s->objects[s->nobjects++];
+    memset(o, 0, sizeof *o);
+    pointmodel_init(&o->model);
+    gaussian_model_init(&o->gaussians);
+    o->mat = material_default();
+    animation_init_static(&o->anim);
+    snprintf(o->name, sizeof o->name, "object%d", s->nobjects);
+    return o;
+}
+
+int scene_add_light(scene *s, light l)
+{
+    light *grown = realloc(s->lights, (size_t)(s->nlights + 1) * sizeof *grown);
+    if (!grown)
+        return -1;
+    s->lights = grown;
+    s->lights[s->nlights++] = l;
+    return 0;
+}
+
 int scene_add_input(scene *s, const char *path)
 {
     char **grown = realloc(s->inputs, (size_t)(s->ninputs + 1) * sizeof *grown);

@@ -117,6 +117,14 @@ typedef struct {
 } scene;
 
 void scene_init(scene *s);
+/* A new object at the end of s's objects: named "object<N>" (N its
+ * number from 1), a point model (empty), the default material, static;
+ * NULL, s unchanged, when out of memory. Pointers to s's objects hold
+ * until the next add. The scene XML and the benchmark make every object
+ * so. */
+scene_object *scene_add_object(scene *s);
+/* l after s's lights; -1, s unchanged, when out of memory. */
+int scene_add_light(scene *s, light l);
 
 /* Whether the camera moves during [t0, t1] (then no static-hit reuse). */
 int scene_camera_moves(const scene *s);

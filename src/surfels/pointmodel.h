@@ -33,7 +33,7 @@ int pointmodel_add_circle(pointmodel *m, vec3 c, vec3 n, double radius, vec3 col
 /* Reorders the splats along a Morton (Z-order) curve of their centers, so
  * that splats near in space are near in memory: the BVH's neighbouring
  * leaves then share cache lines (measured with make bench: see
- * src/cmd/BENCH.md). The image depends on the order only through the summation order
+ * src/bench/BENCH.md). The image depends on the order only through the summation order
  * of hits at exactly equal depth (coplanar splats), i.e. in the last bits.
  * If order_out is given it receives a malloc'ed array (NULL for an empty
  * model): new splat i was old splat (*order_out)[i]. */

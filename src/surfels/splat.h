@@ -28,7 +28,7 @@ int splat_geom_init(splat_geom *s, vec3 c, vec3 u, vec3 v);
  * splat_depth_*: 0 when the ray is parallel to the plane (denom = d.n = 0:
  * no area there); else the crossing's depth t and co = c - o.
  * splat_radius2_*: a^2 + b^2 of the crossing at depth t (thesis eq. 4.2);
- * splat_coords_*: its a and b (the EWA filter of src/splat/ needs them). */
+ * splat_coords_*: its a and b (the EWA filter of src/splatting/ needs them). */
 int splat_depth_f(const float c[3], const float n[3], const float o[3], const float d[3], float co[3],
                   float *denom, float *t);
 float splat_radius2_f(const float du[3], const float dv[3], const float co[3], const float d[3], float t);

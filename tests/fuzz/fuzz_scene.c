@@ -2,7 +2,7 @@
  * .anim paths resolve against a directory that does not exist. */
 #include <stdint.h>
 
-#include "io/scene_xml.h"
+#include "scenexml/scene_xml.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {

@@ -6,7 +6,7 @@
 #include <string.h>
 
 #include "render/render.h"
-#include "io/scene_xml.h"
+#include "scenexml/scene_xml.h"
 
 const char *fuzz_dir(void)
 {

@@ -7,7 +7,7 @@
 #include "formats/camsource.h"
 #include "formats/transforms.h"
 #include "formats/tum.h"
-#include "io/scene_xml_internal.h"
+#include "scenexml/scene_xml_internal.h"
 
 #include <stdlib.h>
 #include <string.h>

@@ -1,4 +1,4 @@
-#include "cmd/bench_gaussian.h"
+#include "bench/bench_gaussian.h"
 
 #include <embree3/rtcore.h>
 #include <pthread.h>
@@ -57,15 +57,12 @@ static gaussian_model *one_model_scene(scene *s, int width, int height, size_t c
     surfel *sf;
     size_t n;
     rr_error err;
-    if (!(s->objects = calloc(1, sizeof *s->objects))) {
+    scene_object *o = scene_add_object(s);
+    if (!o) {
         fprintf(stderr, "bench: out of memory\n");
         exit(1);
     }
-    s->nobjects = 1;
-    scene_object *o = &s->objects[0];
     o->kind = OBJECT_GAUSSIANS;
-    animation_init_static(&o->anim);
-    gaussian_model_init(&o->gaussians);
     if (shape_generate(&p, &sf, &n, &err) || gaussian_from_surfels(sf, n, kind, sh_degree, &o->gaussians, &err)) {
         fprintf(stderr, "bench: %s\n", err.msg);
         exit(1);
@@ -469,7 +466,6 @@ static void scale_scene(const scale_case *c, scene *s)
     s->cam.fov_degrees = 40;
     camera_prepare(&s->cam, NULL);
     s->camera_motion.velocity = v3(0.3, 0.1, 0);
-    s->objects = calloc(3, sizeof *s->objects);
     rr_error err;
     for (int k = 0; k < 3; k++) {
         shape_params p;
@@ -477,17 +473,15 @@ static void scale_scene(const scale_case *c, scene *s)
         p.count = c->per_layer, p.radius = radii[k];
         surfel *sf;
         size_t n;
-        scene_object *o = &s->objects[k];
+        scene_object *o = scene_add_object(s);
+        RR_CHECK(o != NULL); /* a benchmark: no recovery */
         o->kind = OBJECT_GAUSSIANS;
         snprintf(o->name, sizeof o->name, "layer%d", k);
-        animation_init_static(&o->anim);
-        gaussian_model_init(&o->gaussians);
         if (shape_generate(&p, &sf, &n, &err) || gaussian_from_surfels(sf, n, GAUSSIAN_2D, 3, &o->gaussians, &err)) {
             fprintf(stderr, "bench: %s\n", err.msg);
             exit(1);
         }
         free(sf);
-        s->nobjects = k + 1;
     }
 }
 
@@ -662,7 +656,7 @@ int bench_gaussian_stg(int quick, int threads, FILE *csv)
     frozen.frozen = 1;
     int reps = quick ? 1 : 3;
     printf("\nstg: a SpacetimeGaussians-lite model (a sphere of %zu 3D Gaussians, each moving on its own cubic\n"
-           "path, turning and fading: src/cmd/bench_gaussian.c) over a half-frame exposure [%.2f, %.2f], a fixed\n"
+           "path, turning and fading: src/bench/bench_gaussian.c) over a half-frame exposure [%.2f, %.2f], a fixed\n"
            "camera, %dx%d, --pixel-filter point, 1 x %d samples a pixel, %d threads; against the same Gaussians\n"
            "frozen at %.3f (a static model) on the same rays. Moving and frozen alternate, %d run(s) each,\n"
            "each in its own process; seconds: the median (each run).\n\n"

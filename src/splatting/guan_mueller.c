@@ -1,4 +1,4 @@
-#include "splat/guan_mueller.h"
+#include "splatting/guan_mueller.h"
 
 #include <math.h>
 #include <stdlib.h>

@@ -1,4 +1,4 @@
-#include "render/shade.h"
+#include "scene/shade.h"
 
 void shade_sums_init(shade_sums *b)
 {

@@ -1,4 +1,4 @@
-#include "splat/volumetric.h"
+#include "splatting/volumetric.h"
 
 #include <math.h>
 #include <stdlib.h>

@@ -1,4 +1,4 @@
-#include "splat/frame.h"
+#include "splatting/frame.h"
 
 #include <math.h>
 #include <stdlib.h>

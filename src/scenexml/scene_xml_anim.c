@@ -1,6 +1,6 @@
 /* <animation>: linear and rotation, inline <keyframes>, and Maya .anim
  * files (thesis sec. 4.6, Figure 4.11). */
-#include "io/scene_xml_internal.h"
+#include "scenexml/scene_xml_internal.h"
 
 #include <stdlib.h>
 #include <string.h>

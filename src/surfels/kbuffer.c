@@ -1,4 +1,4 @@
-#include "accel/kbuffer.h"
+#include "surfels/kbuffer.h"
 
 #include "core/common.h"
 

@@ -11,8 +11,8 @@
 #include <time.h>
 #include <unistd.h>
 
-#include "cmd/bench_gaussian.h"
-#include "cmd/bench_splat.h"
+#include "bench/bench_gaussian.h"
+#include "bench/bench_splat.h"
 #include "render/render.h"
 #include "surfels/shapes.h"
 
@@ -58,12 +58,8 @@ static void build_scene(const bench_case *c, scene *s, surfel **out, size_t *n)
     p.count = (size_t)c->splats;
     rr_error err;
     shape_generate(&p, out, n, &err);
-    s->nobjects = 1;
-    s->objects = calloc(1, sizeof *s->objects);
-    scene_object *o = &s->objects[0];
-    pointmodel_init(&o->model);
-    o->mat = material_default();
-    animation_init_static(&o->anim);
+    scene_object *o = scene_add_object(s); /* a static point object, the default material */
+    RR_CHECK(o != NULL);                   /* a benchmark: no recovery */
     if (!strcmp(c->motion, "linear"))
         o->anim.velocity = v3(0.3, 0.1, 0);
     if (!strcmp(c->motion, "rotation"))
@@ -94,13 +90,8 @@ static void build_scene(const bench_case *c, scene *s, surfel **out, size_t *n)
     *out = sorted;
     if (c->background) { /* a static wall behind; the sphere covers about 15% of the image */
         s->cam.position = v3(0, 0, 6.5);
-        s->objects = realloc(s->objects, 2 * sizeof *s->objects);
-        s->nobjects = 2;
-        scene_object *w = &s->objects[1];
-        memset(w, 0, sizeof *w);
-        pointmodel_init(&w->model);
-        w->mat = s->objects[0].mat;
-        animation_init_static(&w->anim);
+        scene_object *w = scene_add_object(s); /* the sphere's: the default material */
+        RR_CHECK(w != NULL);
         w->anim.offset = v3(0, 0, -2);
         shape_params wall;
         shape_params_default(&wall);
@@ -116,9 +107,8 @@ static void build_scene(const bench_case *c, scene *s, surfel **out, size_t *n)
         pointmodel_sort_spatially(&w->model, NULL, &err);
         free(ws);
     }
-    s->lights = calloc(1, sizeof *s->lights);
-    s->nlights = 1;
-    s->lights[0] = (light){LIGHT_DIRECTIONAL, v3(0, 0, 0), v3_normalize(v3(-1, -1, -1)), v3(1, 1, 1)};
+    light sun = {LIGHT_DIRECTIONAL, v3(0, 0, 0), v3_normalize(v3(-1, -1, -1)), v3(1, 1, 1)};
+    RR_CHECK(scene_add_light(s, sun) == 0);
 }
 
 /* ---- baseline: Embree's oriented discs, closest hit ------------------------ */
@@ -704,7 +694,7 @@ static void bench_usage(FILE *f)
     fputs("usage: refrender-bench [OUT.csv [quick|full [SERIES]]]\n"
           "\n"
           "Measures refrender's render path against Embree's built-in disc primitive\n"
-          "(src/cmd/BENCH.md) and writes the CSV (default bench.csv). quick: a short\n"
+          "(src/bench/BENCH.md) and writes the CSV (default bench.csv). quick: a short\n"
           "smoke run; full (the default): the measurements. SERIES runs one series\n"
           "only: cases, target, speed, splats, tspp, threads, floor, static80,\n"
           "gaussians, scale or stg. Takes minutes (quick) to hours (full).\n"

@@ -1,5 +1,5 @@
 /* Attribute and element helpers of the scene XML reader. */
-#include "io/scene_xml_internal.h"
+#include "scenexml/scene_xml_internal.h"
 
 #include <stdarg.h>
 #include <stdio.h>

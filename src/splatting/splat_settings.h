@@ -1,16 +1,14 @@
-/* The thesis's splatting methods on the CPU, as comparands for the ground
- * truth (Wolf 2008, sections 3.6, 4.1-4.4; src/SPLAT.md). No Embree: each
- * splat's footprint is found by projecting its bounds, and each pixel of
- * it is tested with the ground truth's own rules (the ray/ellipse test of
- * surfels/splat.h, the kernel weight, kbuffer.h's epsilon rule, the camera,
- * a(t) and render/shade.h's blend and Phong), so that one instant splatted
- * without the EWA approximation is the ray tracer's image at that instant. */
-#ifndef RR_SPLATTING_H
-#define RR_SPLATTING_H
+/* What a splatting method is asked to do (splatting.h's splat_render,
+ * and each method's file: frame.c, volumetric.c, guan_mueller.c), in a
+ * header of its own so that the methods and their dispatcher
+ * (splatting.c) both read the settings and neither reaches the other's
+ * file. */
+#ifndef RR_SPLAT_SETTINGS_H
+#define RR_SPLAT_SETTINGS_H
 
 #include <stdint.h>
 
-#include "scene/scene.h"
+#include "motion/shutter.h"
 
 typedef enum { SPLAT_INSTANT, SPLAT_ACCUM, SPLAT_BUCKET, SPLAT_VOLUMETRIC, SPLAT_GUAN_MUELLER } splat_method;
 /* none: the reconstruction kernel only; botsch: the EWA approximation of
@@ -54,12 +52,6 @@ typedef struct {
     splat_trails trails; /* guan-mueller */
 } splat_settings;
 
-typedef struct {
-    int width, height;
-    float *rgba;           /* 4 per pixel; RGB already holds the background where A < 1 */
-    uint64_t fragments;    /* footprint pixels tested, summed over every pass */
-} splat_result;
-
 /* The name of each choice, as the command line and the EXR header spell them. */
 const char *splat_method_name(splat_method m);
 const char *splat_filter_name(splat_filter f);
@@ -69,10 +61,5 @@ const char *splat_trails_name(splat_trails t);
 
 /* The N instants of accum, bucket and volumetric, ascending. */
 void splat_instants(const splat_settings *set, double *times);
-
-/* Renders s (point models only; -1 with err naming the scene and object
- * otherwise, or when out of memory). out->rgba is allocated here. */
-int splat_render(const scene *s, const splat_settings *set, splat_result *out, rr_error *err);
-void splat_result_free(splat_result *r);
 
 #endif

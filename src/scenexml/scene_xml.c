@@ -1,7 +1,7 @@
-#include "io/scene_xml.h"
+#include "scenexml/scene_xml.h"
 
 #include "gaussians/gaussian_hit.h"
-#include "io/scene_xml_internal.h"
+#include "scenexml/scene_xml_internal.h"
 
 #include <libxml/parser.h>
 #include <libxml/xmlerror.h>
@@ -160,12 +160,7 @@ static int parse_light(xml_ctx *c, xmlNodePtr n, scene *s)
     } else {
         return xml_fail(c, n, "unknown light type '%s' (expected point or directional)", type);
     }
-    light *grown = realloc(s->lights, (size_t)(s->nlights + 1) * sizeof *grown);
-    if (!grown)
-        return xml_fail(c, n, "out of memory");
-    s->lights = grown;
-    s->lights[s->nlights++] = l;
-    return 0;
+    return scene_add_light(s, l) ? xml_fail(c, n, "out of memory") : 0;
 }
 
 /* ---- objects ---------------------------------------------------------- */
@@ -428,17 +423,9 @@ static int parse_object_child(xml_ctx *c, xmlNodePtr k, scene_object *o, int *sh
 static int parse_object(xml_ctx *c, xmlNodePtr n, scene *s)
 {
     static const char *const ok[] = {"name", "position", NULL};
-    scene_object *grown = realloc(s->objects, (size_t)(s->nobjects + 1) * sizeof *grown);
-    if (!grown)
+    scene_object *o = scene_add_object(s);
+    if (!o)
         return xml_fail(c, n, "out of memory");
-    s->objects = grown;
-    scene_object *o = &s->objects[s->nobjects++];
-    memset(o, 0, sizeof *o);
-    pointmodel_init(&o->model);
-    gaussian_model_init(&o->gaussians);
-    o->mat = material_default();
-    animation_init_static(&o->anim);
-    snprintf(o->name, sizeof o->name, "object%d", s->nobjects);
     if (xml_check_attributes(c, n, ok) || xml_attr_text(c, n, "name", o->name, sizeof o->name) < 0 ||
         xml_attr_vec3(c, n, "position", &o->anim.offset, 0) || xml_check_no_text(c, n))
         return -1;

@@ -29,7 +29,7 @@ typedef struct {
 /* The epsilon rule (thesis sec. 4.1.1: the visibility pass shifts depths
  * by epsilon along the viewing ray; sec. 4.5 step c): a hit at depth t
  * blends with the closest one when t <= closest + epsilon, in float as the
- * buffer holds them. One owner for the ray tracer and src/splat/. */
+ * buffer holds them. One owner for the ray tracer and src/splatting/. */
 static inline int kbuffer_within(float t, float closest, float epsilon)
 {
     return t <= closest + epsilon;

@@ -4,13 +4,13 @@
 #ifndef RR_SHADE_H
 #define RR_SHADE_H
 
-#include "accel/kbuffer.h"
+#include "surfels/kbuffer.h"
 #include "scene/scene.h"
 
 /* The kernel-weighted sums of the surface attributes of the hits (or
  * splatted fragments) one pixel blends: the attribute pass of the thesis's
  * three-pass splatting (sec. 4.1.1) and the blend of sec. 4.5 step c are
- * the same sums, kept here once for the ray tracer and src/splat/. */
+ * the same sums, kept here once for the ray tracer and src/splatting/. */
 typedef struct {
     double wsum;
     vec3 color, normal;

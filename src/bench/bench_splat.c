@@ -1,7 +1,7 @@
-#include "cmd/bench_splat.h"
+#include "bench/bench_splat.h"
 
 #include "render/render.h"
-#include "splat/splatting.h"
+#include "splatting/splatting.h"
 
 typedef struct {
     const char *label;

@@ -8,7 +8,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "io/scene_xml_internal.h"
+#include "scenexml/scene_xml_internal.h"
 
 static int valid_name(const char *s, size_t len)
 {

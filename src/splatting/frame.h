@@ -1,14 +1,14 @@
 /* The splatting frame buffer and the passes of one instant (thesis sec.
  * 4.1.1): a visibility pass filling a depth buffer, an attribute pass
  * summing kernel-weighted attributes of the fragments within epsilon of it
- * (render/shade.h's sums), and the normalisation and deferred Phong pass.
+ * (scene/shade.h's sums), and the normalisation and deferred Phong pass.
  * Time buckets (sec. 4.4) run the first two passes for several instants
- * into the same buffers before one normalisation. Internal to src/splat/. */
+ * into the same buffers before one normalisation. Internal to src/splatting/. */
 #ifndef RR_SPLAT_FRAME_H
 #define RR_SPLAT_FRAME_H
 
-#include "render/shade.h"
-#include "splat/splatting.h"
+#include "scene/shade.h"
+#include "splatting/splat_settings.h"
 
 typedef struct {
     const scene *sc;
