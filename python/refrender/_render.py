@@ -3,6 +3,7 @@ its final image returned as numpy arrays and its header as a dict, the very
 values `refrender ... -o out.exr` writes into the EXR."""
 import ctypes
 import threading
+import time
 from typing import NamedTuple, Optional
 
 import numpy as np
@@ -106,11 +107,11 @@ def _result(lib, result):
                   window={"x0": x0, "y0": y0, "width": w, "height": h, "full_width": full_w, "full_height": full_h})
 
 
-def _wait(done):
+def _wait(ended):
     """Waits for the render's end; a second Ctrl-C meanwhile changes nothing (it is stopping)."""
-    while True:
+    while not ended:
         try:
-            return done.wait()
+            time.sleep(0.02)
         except KeyboardInterrupt:
             continue
 
@@ -119,28 +120,30 @@ def _run(lib, words):
     """Runs the render in a thread of its own while this one waits, so that
     Ctrl-C (KeyboardInterrupt, raised here) stops it: the C watches the flag
     set then, as the command line watches SIGINT, and stops within the batch
-    it is in. Its end is an Event, not Thread.join: a join interrupted by
-    KeyboardInterrupt marks a running thread finished (CPython 3.11's
-    Thread._wait_for_tstate_lock, the bpo-45274 fix), so a second join would
-    not wait for the render to stop."""
+    it is in. Its end is a list the worker appends to, polled with sleep:
+    not Thread.join (a join interrupted by KeyboardInterrupt marks a running
+    thread finished: CPython 3.11's Thread._wait_for_tstate_lock, the
+    bpo-45274 fix) and not an Event (a KeyboardInterrupt raised inside
+    Event.wait can leave its Condition's lock held, and the worker's set()
+    then blocks for ever: seen once in a loaded test run)."""
     argv = (ctypes.c_char_p * (len(words) + 1))(*[w.encode() for w in words], None)
     interrupt, out = ctypes.c_int(0), ctypes.c_void_p()
     message = ctypes.create_string_buffer(8192)
-    status, done = [], threading.Event()
+    status, ended = [], []
 
     def work():
         try:
             status.append(lib.refrender_render(len(words), argv, ctypes.byref(interrupt), ctypes.byref(out),
                                                message, len(message)))
         finally:
-            done.set()
+            ended.append(True)
     threading.Thread(target=work, name="refrender", daemon=True).start()
     try:
-        while not done.wait(0.05):
-            pass
+        while not ended:
+            time.sleep(0.02)
     except BaseException:  # KeyboardInterrupt, or any exception raised into this thread
         interrupt.value = 1
-        _wait(done)
+        _wait(ended)
         if out.value:
             lib.refrender_result_free(out)
         raise
