@@ -9,6 +9,7 @@ import os
 import shutil
 import signal
 import subprocess
+import time
 from pathlib import Path
 
 import numpy as np
@@ -202,6 +203,7 @@ def wait_for_sigint_handler(proc):
         status = Path(f"/proc/{proc.pid}/status").read_text()
         if int(next(l for l in status.splitlines() if l.startswith("SigCgt:")).split()[1], 16) & 2:
             return
+        time.sleep(0.001)
     raise AssertionError("the process ended before it caught SIGINT")
 
 
@@ -209,12 +211,14 @@ def test_interrupt_leaves_no_dataset_and_the_same_command_resumes(tmp_path, made
     scene = tmp_path / "scene.xml"
     scene.write_text(SCENE)
     out, staging = tmp_path / "ds", tmp_path / "ds.staging"
-    opts = ["--layout", "nerfstudio", "--frames", "0-1", "-o", out, "--hold", "2"]
+    # three frames: after frame 0 is complete two are left to interrupt (with two, a loaded run once
+    # ended before the SIGINT was sent)
+    opts = ["--layout", "nerfstudio", "--frames", "0-2", "-o", out, "--hold", "2"]
     proc = subprocess.Popen([BIN, "dataset", scene, *opts, *RENDER], stderr=subprocess.PIPE, text=True,
                             start_new_session=True)
     try:
         while not (staging / "frames/000000").is_dir() and proc.poll() is None:
-            pass
+            time.sleep(0.001)
         wait_for_sigint_handler(proc)
         os.killpg(proc.pid, signal.SIGINT)  # as Ctrl-C reaches the whole foreground group
         _, err = proc.communicate(timeout=60)
