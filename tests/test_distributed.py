@@ -292,11 +292,12 @@ def test_slurm_task_resumes_from_its_own_checkpoint(tmp_path):
     # Task 0 is stopped mid-render (SIGTERM, as Slurm's requeue and time limit
     # send): it leaves its checkpoint; run again (SLURM_RESTART_COUNT=1, same
     # index) it resumes from it, and the frame is still one process's image. The pass takes about
-    # 0.7 s (tspp 512): at tspp 64 it took 0.1 s, often ending before the signal reached it.
+    # 0.3 s (64x48, tspp 512; 96x72 took 0.7 s and the test 33 s of a loaded suite): at tspp 64 it
+    # took 0.1 s, often ending before the signal reached it; the first progress line comes at 0.05 s.
     import signal
     import time
     scene, out = scene_file(tmp_path), tmp_path / "out"
-    slow = ["--res", "96x72", "--spp", 4, "--tspp", 512, "--batches", 4, "--seed", 5, "--checkpoint-every", 0]
+    slow = ["--res", "64x48", "--spp", 4, "--tspp", 512, "--batches", 4, "--seed", 5, "--checkpoint-every", 0]
     args = ["--passes", 2, out, "--", scene, *slow]
     log = tmp_path / "task0.log"
     with open(log, "w") as f:
@@ -312,10 +313,10 @@ def test_slurm_task_resumes_from_its_own_checkpoint(tmp_path):
     checkpoints = list(out.glob("run-*/still.p0of2.ckpt.exr"))
     assert len(checkpoints) == 1, log.read_text()
     kept = pixel_batches(checkpoints[0])
-    assert 0 < kept < 96 * 72 * 2, (kept, log.read_text())
+    assert 0 < kept < 64 * 48 * 2, (kept, log.read_text())
     again = sbatch_task(args, task_env(0, array=(0, 1), SLURM_RESTART_COUNT=1))
     assert again.returncode == 0, again.stderr
-    assert f"resuming {checkpoints[0]}: {kept} of {96 * 72 * 2} pixel batches already done" in again.stderr
+    assert f"resuming {checkpoints[0]}: {kept} of {64 * 48 * 2} pixel batches already done" in again.stderr
     assert not checkpoints[0].exists()  # done: a later re-run starts afresh
     assert sbatch_task(args, task_env(1, array=(0, 1))).returncode == 0
     render_ok(scene, *slow, "-o", tmp_path / "one.exr", "--quiet")
