@@ -54,37 +54,33 @@ def state_dict(tensors):
     return sd
 
 
+def map_arrays(v, leaf):
+    """v with each numpy array replaced by leaf(array), dicts (their type and torch's _metadata kept) and
+    lists walked."""
+    if isinstance(v, np.ndarray):
+        return leaf(v)
+    if isinstance(v, dict):
+        out = type(v)((k, map_arrays(x, leaf)) for k, x in v.items())
+        if hasattr(v, "_metadata"):
+            out._metadata = v._metadata
+        return out
+    return [map_arrays(x, leaf) for x in v] if isinstance(v, list) else v
+
+
 def save(path, obj):
     """torch.save(obj, path), float32 arrays as tensors."""
     if torch_available():
         import torch
-
-        def conv(v):
-            if isinstance(v, np.ndarray):
-                return torch.from_numpy(np.ascontiguousarray(v, np.float32))
-            if isinstance(v, dict):
-                out = type(v)((k, conv(x)) for k, x in v.items())
-                if hasattr(v, "_metadata"):
-                    out._metadata = v._metadata
-                return out
-            return [conv(x) for x in v] if isinstance(v, list) else v
-        torch.save(conv(obj), path)
+        torch.save(map_arrays(obj, lambda v: torch.from_numpy(np.ascontiguousarray(v, np.float32))), path)
         return
     storages = []
 
     def fake(v):
-        if isinstance(v, np.ndarray):
-            st = FakeStorage(str(len(storages)), v.ravel())
-            storages.append(st)
-            strides = [int(np.prod(v.shape[i + 1:])) for i in range(v.ndim)]  # C order, as torch
-            return FakeTensor(st, 0, v.shape, strides)
-        if isinstance(v, dict):
-            out = type(v)((k, fake(x)) for k, x in v.items())
-            if hasattr(v, "_metadata"):
-                out._metadata = v._metadata
-            return out
-        return [fake(x) for x in v] if isinstance(v, list) else v
-    fake_torch_save(path, fake(obj), storages)
+        st = FakeStorage(str(len(storages)), v.ravel())
+        storages.append(st)
+        strides = [int(np.prod(v.shape[i + 1:])) for i in range(v.ndim)]  # C order, as torch
+        return FakeTensor(st, 0, v.shape, strides)
+    fake_torch_save(path, map_arrays(obj, fake), storages)
 
 
 def random_model(seed, n, degree):
