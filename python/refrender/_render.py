@@ -3,7 +3,6 @@ its final image returned as numpy arrays and its header as a dict, the very
 values `refrender ... -o out.exr` writes into the EXR."""
 import ctypes
 import threading
-import time
 from typing import NamedTuple, Optional
 
 import numpy as np
@@ -107,11 +106,11 @@ def _result(lib, result):
                   window={"x0": x0, "y0": y0, "width": w, "height": h, "full_width": full_w, "full_height": full_h})
 
 
-def _wait(ended):
+def _wait(ended, finished):
     """Waits for the render's end; a second Ctrl-C meanwhile changes nothing (it is stopping)."""
     while not ended:
         try:
-            time.sleep(0.02)
+            finished.acquire(timeout=0.05)
         except KeyboardInterrupt:
             continue
 
@@ -120,16 +119,19 @@ def _run(lib, words):
     """Runs the render in a thread of its own while this one waits, so that
     Ctrl-C (KeyboardInterrupt, raised here) stops it: the C watches the flag
     set then, as the command line watches SIGINT, and stops within the batch
-    it is in. Its end is a list the worker appends to, polled with sleep:
-    not Thread.join (a join interrupted by KeyboardInterrupt marks a running
-    thread finished: CPython 3.11's Thread._wait_for_tstate_lock, the
-    bpo-45274 fix) and not an Event (a KeyboardInterrupt raised inside
-    Event.wait can leave its Condition's lock held, and the worker's set()
-    then blocks for ever: seen once in a loaded test run)."""
+    it is in. Its end is a list the worker appends to before it releases a
+    plain lock, which wakes the wait at once: not Thread.join (a join
+    interrupted by KeyboardInterrupt marks a running thread finished: CPython
+    3.11's Thread._wait_for_tstate_lock, the bpo-45274 fix) and not an Event
+    (a KeyboardInterrupt raised inside Event.wait can leave its Condition's
+    lock held, and the worker's set() then blocks for ever: seen once in a
+    loaded test run). The list, not the lock, says the render ended: a
+    KeyboardInterrupt may arrive just after an acquire that succeeded."""
     argv = (ctypes.c_char_p * (len(words) + 1))(*[w.encode() for w in words], None)
     interrupt, out = ctypes.c_int(0), ctypes.c_void_p()
     message = ctypes.create_string_buffer(8192)
-    status, ended = [], []
+    status, ended, finished = [], [], threading.Lock()
+    finished.acquire()
 
     def work():
         try:
@@ -137,13 +139,14 @@ def _run(lib, words):
                                                message, len(message)))
         finally:
             ended.append(True)
+            finished.release()
     threading.Thread(target=work, name="refrender", daemon=True).start()
     try:
         while not ended:
-            time.sleep(0.02)
+            finished.acquire(timeout=0.05)
     except BaseException:  # KeyboardInterrupt, or any exception raised into this thread
         interrupt.value = 1
-        _wait(ended)
+        _wait(ended, finished)
         if out.value:
             lib.refrender_result_free(out)
         raise
