@@ -27,7 +27,7 @@ endif
 # The user's CFLAGS/CXXFLAGS/CPPFLAGS come last (make CFLAGS=-O0 still
 # builds); -MMD -MP track header dependencies.
 INCLUDES  := -I/usr/include/embree3 -I/usr/include/OpenEXR -I/usr/include/libxml2
-RR_CPPFLAGS = -D_GNU_SOURCE -Isrc $(INCLUDES) $(BUILD_ID_FLAG) -DRR_SOURCE_SCENE='"$(CURDIR)/scenes/default.xml"' \
+RR_CPPFLAGS = -D_GNU_SOURCE -Isrc $(INCLUDES) $(BUILD_ID_FLAG) \
               -DRR_SOURCE_DIR='"$(CURDIR)"' -MMD -MP $(CPPFLAGS)
 # -ffp-contract=off: the Gaussian kernels in AVX2 lanes (src/core/lanes.h) give
 # the scalar path's answers bit for bit only if neither is fused into FMA (-std=c11

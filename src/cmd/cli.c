@@ -203,3 +203,25 @@ void cli_suggest_option(const char *prog, const char *arg, const struct option *
     if (near)
         fprintf(stderr, "%s: did you mean '--%s'?\n", prog, near);
 }
+
+#ifndef RR_SOURCE_DIR
+#define RR_SOURCE_DIR "."
+#endif
+
+const char *cli_tree_file(const char *rel, char *buf, size_t size)
+{
+    char exe[PATH_MAX];
+    ssize_t n = readlink("/proc/self/exe", exe, sizeof exe - 1);
+    if (n > 0) {
+        exe[n] = 0;
+        char *slash = strrchr(exe, '/');
+        if (slash) {
+            *slash = 0;
+            snprintf(buf, size, "%s/../%s", exe, rel);
+            if (access(buf, R_OK) == 0)
+                return buf;
+        }
+    }
+    snprintf(buf, size, "%s/%s", RR_SOURCE_DIR, rel);
+    return buf;
+}

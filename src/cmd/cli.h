@@ -50,5 +50,11 @@ void cli_suggest_option(const char *prog, const char *arg, const struct option *
 int cli_frame_pattern_ok(const char *pattern);
 void cli_frame_path(const char *pattern, int frame, char *out, size_t size);
 
+/* rel (e.g. "scenes/default.xml") beside the running executable's tree
+ * (build/../rel) when readable there, else in the source tree the binary
+ * was built from (RR_SOURCE_DIR), there or not: the caller's open names
+ * the path it tried. The bundled scene and scripts/dataset.py are found so. */
+const char *cli_tree_file(const char *rel, char *buf, size_t size);
+
 
 #endif

@@ -8,11 +8,9 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "cmd/cli.h"
 #include "cmd/commands.h"
 
-#ifndef RR_SOURCE_DIR
-#define RR_SOURCE_DIR "."
-#endif
 /* Debian's interpreter, which every script names (#!/usr/bin/python3) and
  * scripts/install-deps.sh gives numpy and OpenImageIO */
 #ifndef RR_PYTHON
@@ -29,20 +27,6 @@ static int self_path(char *exe, size_t size)
     return 1;
 }
 
-/* The script beside the executable's tree (build/../scripts) first, then in
- * the source tree the binary was built from, as the default scene is found. */
-static const char *dataset_script(const char *exe, char *buf, size_t size)
-{
-    const char *slash = strrchr(exe, '/');
-    if (slash) {
-        snprintf(buf, size, "%.*s/../scripts/dataset.py", (int)(slash - exe), exe);
-        if (access(buf, R_OK) == 0)
-            return buf;
-    }
-    snprintf(buf, size, "%s/scripts/dataset.py", RR_SOURCE_DIR);
-    return access(buf, R_OK) == 0 ? buf : NULL;
-}
-
 int cmd_dataset(int argc, char **argv)
 {
     char exe[PATH_MAX], script[PATH_MAX + 64];
@@ -50,10 +34,11 @@ int cmd_dataset(int argc, char **argv)
         fprintf(stderr, "refrender dataset: cannot find this executable's path (/proc/self/exe)\n");
         return 1;
     }
-    const char *path = dataset_script(exe, script, sizeof script);
-    if (!path) {
-        fprintf(stderr, "refrender dataset: scripts/dataset.py found neither beside %s nor in %s\n", exe,
-                RR_SOURCE_DIR);
+    /* beside the executable's tree, then in the source tree, as the default scene */
+    const char *path = cli_tree_file("scripts/dataset.py", script, sizeof script);
+    if (access(path, R_OK)) {
+        fprintf(stderr, "refrender dataset: scripts/dataset.py found neither beside %s's tree nor as %s\n", exe,
+                path);
         return 1;
     }
     /* the renders are this binary's, whatever REFRENDER says */

@@ -17,9 +17,6 @@
 #include "render/exact.h"
 #include "io/render_attrs.h"
 
-#ifndef RR_SOURCE_SCENE
-#define RR_SOURCE_SCENE "scenes/default.xml"
-#endif
 
 static volatile sig_atomic_t signalled = 0;
 static void on_signal(int sig) { (void)sig; signalled = 1; }
@@ -232,25 +229,6 @@ static int parse_args(int argc, char **argv, render_options *o)
     return 0;
 }
 
-/* The bundled scene: beside the executable's tree first (build/../scenes),
- * then the source tree the binary was built from. */
-static const char *default_scene(char *buf, size_t size)
-{
-    char exe[PATH_MAX];
-    ssize_t n = readlink("/proc/self/exe", exe, sizeof exe - 1);
-    if (n > 0) {
-        exe[n] = 0;
-        char *slash = strrchr(exe, '/');
-        if (slash) {
-            *slash = 0;
-            snprintf(buf, size, "%s/../scenes/default.xml", exe);
-            if (access(buf, R_OK) == 0)
-                return buf;
-        }
-    }
-    return RR_SOURCE_SCENE;
-}
-
 void render_options_crop_pixels(const render_options *o, int width, int height, int px[4])
 {
     for (int k = 0; k < 4; k++)
@@ -344,7 +322,7 @@ int cmd_render(int argc, char **argv)
     rr_interrupt_watch(interrupted);
     char scene_buf[PATH_MAX + 64];
     if (!o.scene)
-        o.scene = default_scene(scene_buf, sizeof scene_buf);
+        o.scene = cli_tree_file("scenes/default.xml", scene_buf, sizeof scene_buf);
     rr_error err = {{0}};
     scene s;
     char *cmdline = join_args(argc, argv);
