@@ -58,7 +58,8 @@ PREVIEW_SO := $(BUILD)/refrender-preview.so
 APP_OBJS := $(BUILD)/cmd/main.o $(BUILD)/cmd/render_cmd.o $(BUILD)/cmd/render_frames.o $(BUILD)/cmd/gen_cmd.o $(BUILD)/cmd/surfel_output.o $(BUILD)/cmd/merge_cmd.o $(BUILD)/cmd/surfels_cmd.o \
             $(BUILD)/cmd/export_cmd.o $(BUILD)/cmd/splat_cmd.o $(BUILD)/cmd/noise_report.o $(BUILD)/cmd/dataset_cmd.o
 TEST_SRCS := $(wildcard tests/test_*.c)
-TEST_OBJS := $(TEST_SRCS:tests/%.c=$(BUILD)/tests/%.o) $(BUILD)/tests/harness.o $(BUILD)/tests/gaussian_test_util.o
+TEST_OBJS := $(TEST_SRCS:tests/%.c=$(BUILD)/tests/%.o) $(BUILD)/tests/harness.o $(BUILD)/tests/gaussian_test_util.o \
+            $(BUILD)/tests/gaussian_hit_util.o
 
 BIN      := $(BUILD)/refrender
 # refrender as a C library (src/api/refrender_api.h) for the Python package
