@@ -229,6 +229,33 @@ def test_ctrl_c_stops_a_render_promptly_with_keyboard_interrupt(tmp_path):
     assert not (tmp_path / "rendered.npy").exists()
 
 
+# A KeyboardInterrupt raised inside Thread.start once the render thread runs (where a Ctrl-C landed before
+# render() took SIGINT for the render's time; planted here, since a signal's moment cannot be chosen)
+INTERRUPTED_START = f"""
+import sys, threading, time; sys.path.insert(0, {str(ROOT / 'python')!r})
+import refrender
+real_start = threading.Thread.start
+def start_then_interrupt(self):
+    real_start(self)
+    raise KeyboardInterrupt
+threading.Thread.start = start_then_interrupt
+try:
+    refrender.render({str(SCENE)!r}, res=(640, 360), spp=64, tspp=100, threads=1, quiet=True)
+except KeyboardInterrupt:
+    threading.Thread.start = real_start
+    alive = [t.name for t in threading.enumerate() if t.name == "refrender"]
+    print(f"render threads alive: {{len(alive)}}", flush=True)
+"""
+
+
+def test_an_interrupt_inside_the_thread_start_stops_the_render(tmp_path):
+    """The render stops before KeyboardInterrupt reaches the caller, wherever in render() it was raised:
+    no render thread is left running (about 40 minutes of work at one thread) and the process ends."""
+    proc = subprocess.run([sys.executable, "-c", INTERRUPTED_START], capture_output=True, text=True, cwd=tmp_path,
+                          env=lib_env(), timeout=60)
+    assert "render threads alive: 0" in proc.stdout, proc.stdout + proc.stderr
+
+
 def test_compare_returns_the_rows_compare_py_writes(tmp_path):
     """refrender.compare is compare.py --json without the file: the same rows, value for value (two renders
     of other seeds, the whole image and a crop), and its file outputs are refused."""

@@ -1,8 +1,11 @@
 """refrender.render: the render command run in-process (librefrender.so),
 its final image returned as numpy arrays and its header as a dict, the very
 values `refrender ... -o out.exr` writes into the EXR."""
+import contextlib
 import ctypes
+import signal
 import threading
+import time
 from typing import NamedTuple, Optional
 
 import numpy as np
@@ -107,7 +110,7 @@ def _result(lib, result):
 
 
 def _wait(ended, finished):
-    """Waits for the render's end; a second Ctrl-C meanwhile changes nothing (it is stopping)."""
+    """Waits for the render's end; a Ctrl-C meanwhile changes nothing (it is stopping)."""
     while not ended:
         try:
             finished.acquire(timeout=0.05)
@@ -115,18 +118,53 @@ def _wait(ended, finished):
             continue
 
 
+def _began(worker):
+    """Whether the worker thread runs (its end will come): an exception
+    raised inside Thread.start after the thread was created leaves it
+    running; its bootstrap sets its ident at once."""
+    deadline = time.monotonic() + 1.0
+    while worker.ident is None and time.monotonic() < deadline:
+        time.sleep(0.001)
+    return worker.ident is not None
+
+
+@contextlib.contextmanager
+def _sigint_sets(interrupt):
+    """While the render runs, Ctrl-C sets the C's interrupt flag instead of
+    raising KeyboardInterrupt wherever this thread happens to be: raised
+    inside Thread.start (whose Event wait it can interrupt after the worker
+    has begun), it left the render running unwatched while the caller went
+    on, and the process hung at exit (seen in a loaded test run). render()
+    raises KeyboardInterrupt itself once the render has stopped (status 130).
+    Only the main thread receives signals in Python, and a handler the
+    caller installed is theirs: both are left alone."""
+    if (threading.current_thread() is not threading.main_thread()
+            or signal.getsignal(signal.SIGINT) is not signal.default_int_handler):
+        yield
+        return
+
+    def stop(signum, frame):
+        interrupt.value = 1
+    previous = signal.signal(signal.SIGINT, stop)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
 def _run(lib, words):
     """Runs the render in a thread of its own while this one waits, so that
-    Ctrl-C (KeyboardInterrupt, raised here) stops it: the C watches the flag
-    set then, as the command line watches SIGINT, and stops within the batch
-    it is in. Its end is a list the worker appends to before it releases a
-    plain lock, which wakes the wait at once: not Thread.join (a join
-    interrupted by KeyboardInterrupt marks a running thread finished: CPython
-    3.11's Thread._wait_for_tstate_lock, the bpo-45274 fix) and not an Event
-    (a KeyboardInterrupt raised inside Event.wait can leave its Condition's
-    lock held, and the worker's set() then blocks for ever: seen once in a
-    loaded test run). The list, not the lock, says the render ended: a
-    KeyboardInterrupt may arrive just after an acquire that succeeded."""
+    Ctrl-C stops it: the C watches the flag Ctrl-C sets (_sigint_sets), as
+    the command line watches SIGINT, and stops within the batch it is in.
+    Its end is a list the worker appends to before it releases a plain lock,
+    which wakes the wait at once: not Thread.join (a join interrupted by
+    KeyboardInterrupt marks a running thread finished: CPython 3.11's
+    Thread._wait_for_tstate_lock, the bpo-45274 fix) and not an Event (a
+    KeyboardInterrupt raised inside Event.wait can leave its Condition's
+    lock held, and the worker's set() then blocks for ever). The list, not
+    the lock, says the render ended. An exception raised into this thread
+    meanwhile (a handler of the caller's) sets the flag and waits for the
+    render to stop before it goes on."""
     argv = (ctypes.c_char_p * (len(words) + 1))(*[w.encode() for w in words], None)
     interrupt, out = ctypes.c_int(0), ctypes.c_void_p()
     message = ctypes.create_string_buffer(8192)
@@ -140,16 +178,19 @@ def _run(lib, words):
         finally:
             ended.append(True)
             finished.release()
-    threading.Thread(target=work, name="refrender", daemon=True).start()
-    try:
-        while not ended:
-            finished.acquire(timeout=0.05)
-    except BaseException:  # KeyboardInterrupt, or any exception raised into this thread
-        interrupt.value = 1
-        _wait(ended, finished)
-        if out.value:
-            lib.refrender_result_free(out)
-        raise
+    worker = threading.Thread(target=work, name="refrender", daemon=True)
+    with _sigint_sets(interrupt):
+        try:
+            worker.start()
+            while not ended:
+                finished.acquire(timeout=0.05)
+        except BaseException:  # raised into this thread: the render must stop before this goes on
+            interrupt.value = 1
+            if _began(worker):
+                _wait(ended, finished)
+            if out.value:
+                lib.refrender_result_free(out)
+            raise
     return status[0], out, message.value.decode(errors="replace")
 
 
