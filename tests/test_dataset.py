@@ -18,7 +18,7 @@ import pytest
 import deblurnerf_llff_reference as llff_ref
 import imagecompare
 import nerfstudio_reference as ns_ref
-from conftest import BIN
+from conftest import BIN, ROOT
 
 # A camera translating by (-1, 0.2, 0) per second from (0, 0, 4), looking down -z, 10 frames a
 # second, a 180-degree shutter: frame f is exposed over [f/10, f/10 + 0.05], its middle at
@@ -207,17 +207,32 @@ def wait_for_sigint_handler(proc):
     raise AssertionError("the process ended before it caught SIGINT")
 
 
+def stalling_refrender(tmp_path, frame):
+    """A refrender for the dataset's renders that stalls at frame `frame`'s blurred render, after writing
+    the marker it returns: the interrupt then lands while that frame renders however loaded the machine
+    (a real render's moment could not be caught: a loaded run once ended all frames before SIGINT).
+    `refrender dataset` renders with its own binary whatever REFRENDER says, so the script it runs
+    (scripts/dataset.py, same arguments) is run with REFRENDER set to this one."""
+    marker, wrapper = tmp_path / "stalled", tmp_path / "refrender-stalling"
+    wrapper.write_text(f"""#!/bin/sh
+case " $* " in *" --frame {frame} -o "*) : > '{marker}'; exec sleep 60;; esac
+exec '{BIN}' "$@"
+""")
+    wrapper.chmod(0o755)
+    return wrapper, marker
+
+
 def test_interrupt_leaves_no_dataset_and_the_same_command_resumes(tmp_path, made):
     scene = tmp_path / "scene.xml"
     scene.write_text(SCENE)
     out, staging = tmp_path / "ds", tmp_path / "ds.staging"
-    # three frames: after frame 0 is complete two are left to interrupt (with two, a loaded run once
-    # ended before the SIGINT was sent)
-    opts = ["--layout", "nerfstudio", "--frames", "0-2", "-o", out, "--hold", "2"]
-    proc = subprocess.Popen([BIN, "dataset", scene, *opts, *RENDER], stderr=subprocess.PIPE, text=True,
-                            start_new_session=True)
+    opts = ["--layout", "nerfstudio", "--frames", "0-1", "-o", out, "--hold", "2"]
+    wrapper, stalled = stalling_refrender(tmp_path, 1)  # frame 0 complete, frame 1 rendering
+    proc = subprocess.Popen(["/usr/bin/python3", ROOT / "scripts/dataset.py", scene, *opts, *RENDER],
+                            stderr=subprocess.PIPE, text=True, start_new_session=True,
+                            env={**os.environ, "REFRENDER": str(wrapper)})
     try:
-        while not (staging / "frames/000000").is_dir() and proc.poll() is None:
+        while not stalled.exists() and proc.poll() is None:
             time.sleep(0.001)
         wait_for_sigint_handler(proc)
         os.killpg(proc.pid, signal.SIGINT)  # as Ctrl-C reaches the whole foreground group
