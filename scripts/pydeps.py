@@ -6,8 +6,12 @@ conda, a virtual environment) has none of them, and Python's own
 ModuleNotFoundError, raised deep inside an import, says neither which
 interpreter to use nor what to install. Each script calls require() before
 its other imports: a missing module ends the script with one line saying
-what to do, and exit status 2, as every other bad start of a script."""
-import importlib
+what to do, and exit status 2, as every other bad start of a script.
+Modules are looked up, not imported: a script imports what it uses when
+it uses it (importing all of them here cost every run of compare.py, even
+--help and its refusals, 1.2 s of CPU for skimage, matplotlib and
+OpenImageIO)."""
+import importlib.util
 import os
 import sys
 
@@ -25,18 +29,21 @@ IMAGE_MODULES = ("numpy", "scipy", "skimage", "OpenImageIO")
 
 
 def missing_modules(names):
-    """The names among `names` this interpreter cannot import."""
+    """The names among `names` this interpreter cannot find (its import
+    system's finders say where each would load from, without loading it)."""
     missing = []
     for name in names:
         try:
-            importlib.import_module(name)
-        except ImportError:
+            found = importlib.util.find_spec(name) is not None
+        except (ImportError, ValueError):  # a finder's refusal, or a module without a spec
+            found = False
+        if not found:
             missing.append(name)
     return missing
 
 
 def require(*names):
-    """Returns when every module in `names` imports; otherwise prints one
+    """Returns when every module in `names` is found; otherwise prints one
     line naming the missing ones, their Debian packages and the interpreter
     that lacks them, and exits with status 2."""
     missing = missing_modules(names)

@@ -7,8 +7,10 @@ scripts/install-deps.sh), exit status 2, and no traceback.
 Two ways to take packages away, neither depending on what else the machine
 has installed: `python3 -S` (no site directories, so none of Debian's
 dist-packages: every package is missing), and a directory first on
-PYTHONPATH holding an `OpenImageIO` package whose import raises
-ModuleNotFoundError, as a missing one does (only that module missing).
+PYTHONPATH holding a sitecustomize that puts a finder first in
+sys.meta_path which refuses `OpenImageIO` as a missing module is refused
+(only that module missing; a package of that name raising on import would
+not do: the scripts look modules up without importing them).
 With the packages, every tool answers --help (tests/test_docs.py)."""
 import os
 import subprocess
@@ -36,10 +38,13 @@ def test_without_site_packages_the_tool_says_what_to_do(script):
 
 
 def test_one_missing_module_is_named_alone(tmp_path):
-    shim = tmp_path / "OpenImageIO"
-    shim.mkdir()
-    (shim / "__init__.py").write_text(
-        'raise ModuleNotFoundError("No module named \'OpenImageIO\' (test shim)", name="OpenImageIO")\n')
+    (tmp_path / "sitecustomize.py").write_text(
+        "import sys\n"
+        "class HideOpenImageIO:\n"
+        "    def find_spec(self, name, path=None, target=None):\n"
+        "        if name.split('.')[0] == 'OpenImageIO':\n"
+        "            raise ModuleNotFoundError(f'No module named {name!r} (test shim)', name=name)\n"
+        "sys.meta_path.insert(0, HideOpenImageIO())\n")
     env = {**os.environ, "PYTHONPATH": str(tmp_path)}
     proc = run_tool("compare.py", env=env)
     lines = proc.stderr.splitlines()
