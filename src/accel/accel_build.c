@@ -219,7 +219,7 @@ static void build_gaussian_object(accel *a, unsigned obj, double open, double cl
     a->object_scenes[obj] = NULL;
     aabb paths_box;
     f->paths = o->gaussians.dynamic ? dynamic_paths(a, o, open, close, &paths_box) : NULL;
-    if (o->gaussians.dynamic && !f->paths) { /* (named: accel_set_shutter fails) */
+    if (o->gaussians.dynamic && !f->paths) { /* (named: accel_build or accel_retime fails) */
         a->swept[obj] = (aabb){v3(0, 0, 0), v3(0, 0, 0)};
         a->swept_sphere[obj] = (sphere_bound){v3(0, 0, 0), 0};
         return;
