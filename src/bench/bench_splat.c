@@ -28,7 +28,7 @@ static double truth_seconds(const accel *acc, int n, int res, unsigned long long
 static double splat_seconds(const scene *s, const splat_row *row, unsigned long long *fragments)
 {
     splat_settings set = {.method = row->method, .times = SPLAT_TIMES_MIDPOINT, .samples = row->samples,
-                          .buckets = row->buckets, .seed = 1, .shut = s->shut, .sigma_t = SPLAT_SIGMA_T_DEFAULT,
+                          .buckets = row->buckets, .seed = 1, .sigma_t = SPLAT_SIGMA_T_DEFAULT,
                           .instant = 0.5 * (s->shut.open + s->shut.close)};
     splat_result r;
     rr_error err;

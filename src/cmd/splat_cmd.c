@@ -222,7 +222,6 @@ static int apply_overrides(scene *s, splat_options *o, rr_error *err)
     }
     if (!o->time_set)
         o->set.instant = 0.5 * (s->shut.open + s->shut.close);
-    o->set.shut = s->shut;
     rr_error why;
     if (camera_prepare(&s->cam, &why))
         return rr_fail(err, "%s with --res %dx%d: %s", s->path, s->cam.width, s->cam.height, why.msg);
@@ -264,8 +263,7 @@ static int write_outputs(const splat_options *o, const scene *s, const splat_res
                          double seconds, rr_error *err)
 {
     render_settings rs = render_settings_default();
-    scene drawn = *s; /* the scene as the method drew it: --time's instant is its shutter */
-    drawn.shut = o->set.shut;
+    scene drawn = *s; /* the scene as the method drew it: the instant method's shutter is its instant */
     if (o->set.method == SPLAT_INSTANT)
         shutter_at_instant(&drawn.shut, o->set.instant);
     rs.filter = PIXEL_FILTER_POINT; /* pixel centres only */
