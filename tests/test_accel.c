@@ -130,7 +130,7 @@ static int load_and_build(const char *xml, scene *s, accel **a)
         printf("    %s\n", e.msg);
         return -1;
     }
-    accel_settings set = {s->shut.open, s->shut.close, s->epsilon, s->kernel_sigma, 1};
+    accel_settings set = {s->epsilon, s->kernel_sigma, 1};
     if (accel_build(s, &set, a, &e)) {
         printf("    %s\n", e.msg);
         scene_free(s);

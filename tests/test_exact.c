@@ -26,8 +26,8 @@ static int fixture_open(const char *xml, double box_scale, exact_fixture *f)
         printf("    %s\n", e.msg);
         return -1;
     }
-    accel_settings set = {f->s.shut.open, f->s.shut.close, f->s.epsilon, f->s.kernel_sigma, 1};
-    if (accel_build(&f->s, &set, &f->a, &e) || exact_plan_new(&f->s, f->a, &f->s.shut, box_scale, NULL, &f->p, &e)) {
+    accel_settings set = {f->s.epsilon, f->s.kernel_sigma, 1};
+    if (accel_build(&f->s, &set, &f->a, &e) || exact_plan_new(f->a, box_scale, NULL, &f->p, &e)) {
         printf("    %s\n", e.msg);
         return -1;
     }

@@ -569,7 +569,7 @@ static int listed_at(const accel *a, const scene *s, size_t i, double t)
 
 /* The renderer's BVH over the shutter: rays at 20,000 times of it, through
  * a fast mover's mean and the faces of its reach at that time, list it;
- * and after the shutter moves on (the next frame: accel_set_shutter) at
+ * and after the shutter moves on (the next frame's scene: accel_retime) at
  * times of the new one, where the movers are far from where they were.
  * The movers: 4 units a time unit across the view (half the distance),
  * turning with omega from rot 0, and a cubic path; a still one for
@@ -597,7 +597,8 @@ TEST(the_bvh_lists_a_fast_mover_wherever_it_is_during_the_shutter)
     accel *a = NULL;
     rr_error e;
     int rc = scene_load_memory(xml, strlen(xml), "mem.xml", ".", &s, &e);
-    accel_settings set = {0.0, 1.0, 0.0, 1.0, 1};
+    accel_settings set = {0.0, 1.0, 1};
+    scene next; /* the next frame's scene: the same objects, another shutter (as scene_for_shutter's) */
     if (!rc)
         rc = accel_build(&s, &set, &a, &e);
     if (rc)
@@ -606,8 +607,10 @@ TEST(the_bvh_lists_a_fast_mover_wherever_it_is_during_the_shutter)
     int missed = 0;
     for (int frame = 0; !rc && frame < 2; frame++) {
         double t0 = frame ? 2.0 : 0.0, t1 = t0 + 1.0;
-        if (frame)
-            CHECK(accel_set_shutter(a, t0, t1, &e) == 0);
+        if (frame) {
+            next = s, next.shut.open = t0, next.shut.close = t1;
+            CHECK(accel_retime(a, &next, &e) == 0);
+        }
         for (int j = 0; j <= 20000; j++)
             for (size_t i = 0; i < 4; i++)
                 missed += !listed_at(a, &s, i, t0 + (t1 - t0) * j / 20000);

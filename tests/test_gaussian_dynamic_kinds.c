@@ -221,9 +221,11 @@ static int load_scene(const char *ply, double open, double close, int toy, scene
     int rc = scene_load_memory(xml, strlen(xml), "mem.xml", ".", s, &e);
     if (!rc && open == close)
         shutter_at_instant(&s->shut, open);
+    else if (!rc)
+        s->shut.open = open, s->shut.close = close;
     if (!rc && toy)
         make_toy(&s->objects[0].gaussians, three_vel, three_c);
-    accel_settings set = {open, close, s->epsilon, s->kernel_sigma, 1};
+    accel_settings set = {s->epsilon, s->kernel_sigma, 1};
     if (!rc && (rc = accel_build(s, &set, a, &e)))
         scene_free(s);
     if (rc)
@@ -277,11 +279,11 @@ static int render_at(const char *ply, double T, int toy, float *rgba)
     if (load_scene(ply, T, T, toy, &s, &a))
         return -1;
     render_settings rs = render_settings_default();
-    rs.shut = s.shut, rs.filter = PIXEL_FILTER_POINT;
+    rs.filter = PIXEL_FILTER_POINT;
     image img;
     rr_error e;
     volatile sig_atomic_t cancel = 0;
-    int rc = image_alloc(&img, 32, 32) || render_image(&s, a, &rs, &img, NULL, &cancel, &e);
+    int rc = image_alloc(&img, 32, 32) || render_image(a, &rs, &img, NULL, &cancel, &e);
     image_planes p;
     if (!rc && !(rc = image_planes_resolve(&img, 1, &p))) {
         memcpy(rgba, p.rgba, sizeof(float) * 4 * 32 * 32);

@@ -21,7 +21,7 @@ static int loaded(const char *xml, scene *s, accel **a)
     int rc = scene_load_memory(xml, strlen(xml), "mem.xml", ".", s, &e);
     if (rc)
         printf("    %s\n", e.msg);
-    accel_settings set = {s->shut.open, s->shut.close, s->epsilon, s->kernel_sigma, 1};
+    accel_settings set = {s->epsilon, s->kernel_sigma, 1};
     if (!rc && (rc = accel_build(s, &set, a, &e))) {
         printf("    %s\n", e.msg);
         scene_free(s);

@@ -122,10 +122,10 @@ static int toy_render(image *img, int crop, rr_error *err)
     scene s;
     accel *a;
     CHECK(scene_load_memory(EMPTY_SCENE, strlen(EMPTY_SCENE), "mem.xml", ".", &s, err) == 0);
-    accel_settings set = {s.shut.open, s.shut.close, s.epsilon, s.kernel_sigma, 1};
+    accel_settings set = {s.epsilon, s.kernel_sigma, 1};
     CHECK(accel_build(&s, &set, &a, err) == 0);
     render_settings rs = render_settings_default();
-    rs.smp.grid = 2, rs.shut = s.shut, rs.threads = 2, rs.batches = 2, rs.max_batches = 2;
+    rs.smp.grid = 2, rs.threads = 2, rs.batches = 2, rs.max_batches = 2;
     rs.filter = PIXEL_FILTER_POINT;
     rs.integrator = integrator_find(rows, (int)(sizeof rows / sizeof *rows), "toy");
     if (crop)
@@ -133,7 +133,7 @@ static int toy_render(image *img, int crop, rr_error *err)
     volatile sig_atomic_t cancel = 0;
     CHECK(image_alloc(img, W, H) == 0);
     toy_setups = toy_teardowns = toy_arena_mallocs = 0;
-    int rc = render_image(&s, a, &rs, img, NULL, &cancel, err);
+    int rc = render_image(a, &rs, img, NULL, &cancel, err);
     accel_free(a);
     scene_free(&s);
     return rc;

@@ -18,22 +18,21 @@ static const char *const MOVING_DISK =
     "</pointModel><material shading='unlit'/><animation><linear velocity='2.5 0 0'/></animation></object>"
     "</scene>";
 
-static render_settings target_settings(const scene *s, uint32_t max_batches)
+static render_settings target_settings(uint32_t max_batches)
 {
     render_settings rs = render_settings_default();
     rs.smp.seed = 7, rs.smp.tspp = 4, rs.smp.time_factor = 4;
-    rs.shut = s->shut;
     rs.threads = 2;
     rs.batches = 2, rs.max_batches = max_batches, rs.target_error = 0.03;
     return rs;
 }
 
-static int render_into(const scene *s, const accel *a, uint32_t max_batches, image *img)
+static int render_into(const accel *a, uint32_t max_batches, image *img)
 {
     volatile sig_atomic_t cancel = 0;
-    render_settings rs = target_settings(s, max_batches);
+    render_settings rs = target_settings(max_batches);
     rr_error e;
-    return render_image(s, a, &rs, img, NULL, &cancel, &e);
+    return render_image(a, &rs, img, NULL, &cancel, &e);
 }
 
 static int same_pixels(const image *a, const image *b)
@@ -54,17 +53,17 @@ TEST(render_resumed_mid_round_equals_uninterrupted)
     accel *a;
     rr_error e;
     CHECK(scene_load_memory(MOVING_DISK, strlen(MOVING_DISK), "mem.xml", ".", &s, &e) == 0);
-    accel_settings set = {s.shut.open, s.shut.close, s.epsilon, s.kernel_sigma, 1};
+    accel_settings set = {s.epsilon, s.kernel_sigma, 1};
     CHECK(accel_build(&s, &set, &a, &e) == 0);
     image full, before, after;
-    CHECK(image_alloc(&full, 32, 16) == 0 && render_into(&s, a, MAX, &full) == 0);
+    CHECK(image_alloc(&full, 32, 16) == 0 && render_into(a, MAX, &full) == 0);
     int mismatches = 0, rounds_tried = 0;
     for (uint32_t r = BATCHES; r < MAX; r++) {
-        CHECK(image_alloc(&before, 32, 16) == 0 && render_into(&s, a, r, &before) == 0);
-        CHECK(image_alloc(&after, 32, 16) == 0 && render_into(&s, a, r + 1, &after) == 0);
+        CHECK(image_alloc(&before, 32, 16) == 0 && render_into(a, r, &before) == 0);
+        CHECK(image_alloc(&after, 32, 16) == 0 && render_into(a, r + 1, &after) == 0);
         for (int y = 0; y < 16; y++) /* the first tile has finished round r */
             memcpy(&before.px[y * 32], &after.px[y * 32], 16 * sizeof *before.px);
-        CHECK(render_into(&s, a, MAX, &before) == 0);
+        CHECK(render_into(a, MAX, &before) == 0);
         mismatches += !same_pixels(&before, &full);
         rounds_tried++;
         image_free(&before);
@@ -85,26 +84,83 @@ TEST(render_resumed_mid_round_equals_uninterrupted)
     scene_free(&s);
 }
 
-/* Accel's swept bounds hold only for the shutter it was built
- * for; a render over another shutter would miss hits silently. */
-TEST(render_refuses_an_accel_built_for_another_shutter)
+/* A sphere (unlit, colour c) crossing the view of a one-pixel camera
+ * looking down -z: its centre at x = -15 + 10 t on the plane z = -10,
+ * radius 2.5, so the pixel's ray (the z axis) meets it while |x| < 2.5,
+ * for t in (1.25, 1.75). With <frames rate='1'> and the shutter [0, 1],
+ * frame 0 ([0, 1]) never sees it and frame 1 ([1, 2]) sees it for exactly
+ * half its box shutter: coverage 1/2 and colour c/2 on a black
+ * background. The thesis sampler with one spatial sample, 4 times and
+ * time factor 1 puts one time in each quarter of the shutter
+ * (src/SAMPLING.md), and (1.25, 1.75) is two whole quarters: the
+ * estimate is exact, whatever the jitter. */
+static const char *const CROSSING_SPHERE =
+    "<scene><camera position='0 0 0' lookat='0 0 -1' up='0 1 0' fov='20' width='1' height='1'/>"
+    "<shutter open='0' close='1' weight='box'/><frames rate='1'/>"
+    "<object><sphere center='-15 0 -10' radius='2.5' color='1 0.5 0.25'/><material shading='unlit'/>"
+    "<animation><linear velocity='10 0 0'/></animation></object></scene>";
+
+/* The one pixel of a render through accel (of the scene it was built or
+ * retimed for: render_image takes no other) into rgba. */
+static int render_pixel(const accel *a, float rgba[4])
 {
-    scene s;
-    rr_error e;
-    accel *a;
+    render_settings rs = render_settings_default();
+    rs.smp.kind = SAMPLER_THESIS, rs.smp.grid = 1, rs.smp.tspp = 4, rs.smp.time_factor = 1;
+    rs.filter = PIXEL_FILTER_POINT;
+    volatile sig_atomic_t cancel = 0;
     image img;
-    CHECK(scene_load_memory(MOVING_DISK, strlen(MOVING_DISK), "mem.xml", ".", &s, &e) == 0);
-    accel_settings set = {s.shut.open, s.shut.close + 1, s.epsilon, s.kernel_sigma, 1};
-    CHECK(accel_build(&s, &set, &a, &e) == 0);
-    CHECK(image_alloc(&img, 32, 16) == 0);
-    CHECK(render_into(&s, a, 2, &img) == -1);
+    rr_error e;
+    float var[4], se[4], n[1];
+    if (image_alloc(&img, 1, 1))
+        return -1;
+    int rc = render_image(a, &rs, &img, NULL, &cancel, &e);
+    if (rc)
+        printf("    %s\n", e.msg);
+    else
+        image_resolve(&img, 1, rgba, var, se, n);
     image_free(&img);
+    return rc;
+}
+
+/* The shutter's one owner is the scene rendered: a frame's scene
+ * (scene_for_shutter) holds the frame's shutter, accel_build and
+ * accel_retime take their swept interval from it, and render_image reaches
+ * the scene only through the accel, so a frame is rendered over its own
+ * shutter with bounds built for it (CROSSING_SPHERE's analytic values).
+ * Planted: accel_retime keeping the interval of the frame before (frame
+ * 0's bounds miss the sphere in frame 1) fails it. */
+TEST(render_of_a_frame_scene_is_over_that_frames_shutter)
+{
+    scene s, fs;
+    accel *a = NULL;
+    rr_error e;
+    shutter sh;
+    float px[4];
+    const float c[3] = {1, 0.5f, 0.25f};
+    CHECK(scene_load_memory(CROSSING_SPHERE, strlen(CROSSING_SPHERE), "mem.xml", ".", &s, &e) == 0);
+    CHECK(scene_frame_shutter(&s, 0, &sh, &e) == 0 && scene_for_shutter(&s, &sh, &fs, &e) == 0);
+    CHECK(fs.shut.open == 0 && fs.shut.close == 1);
+    accel_settings set = {fs.epsilon, fs.kernel_sigma, 1};
+    CHECK(accel_build(&fs, &set, &a, &e) == 0 && accel_scene(a) == &fs);
+    CHECK(render_pixel(a, px) == 0);
+    printf("    frame 0: %g %g %g alpha %g (expected 0)\n", px[0], px[1], px[2], px[3]);
+    CHECK(px[0] == 0 && px[1] == 0 && px[2] == 0 && px[3] == 0);
+    scene_for_shutter_free(&fs, &s);
+    CHECK(scene_frame_shutter(&s, 1, &sh, &e) == 0 && scene_for_shutter(&s, &sh, &fs, &e) == 0);
+    CHECK(fs.shut.open == 1 && fs.shut.close == 2 && s.shut.open == 0); /* the file's stays frame 0's */
+    CHECK(accel_retime(a, &fs, &e) == 0 && accel_scene(a) == &fs);
+    CHECK(render_pixel(a, px) == 0);
+    printf("    frame 1: %g %g %g alpha %g (expected c/2, 1/2)\n", px[0], px[1], px[2], px[3]);
+    for (int k = 0; k < 3; k++)
+        CHECK_NEAR(px[k], 0.5 * c[k], 1e-6);
+    CHECK_NEAR(px[3], 0.5, 1e-6);
+    scene_for_shutter_free(&fs, &s);
     accel_free(a);
     scene_free(&s);
 }
 
 /* render_settings_default is what render.h documents: one batch of one
- * sample per pixel on one thread, the box shutter [0, 1], every pixel. */
+ * sample per pixel on one thread, every pixel (no shutter: the scene's). */
 TEST(render_settings_default_is_one_sample_of_one_batch)
 {
     render_settings rs = render_settings_default();
@@ -114,8 +170,6 @@ TEST(render_settings_default_is_one_sample_of_one_batch)
     CHECK(rs.target_error == 0 && rs.integrator == NULL);
     CHECK(rs.crop_x0 == 0 && rs.crop_y0 == 0 && rs.crop_x1 == 0 && rs.crop_y1 == 0);
     CHECK(rs.filter == PIXEL_FILTER_BOX && rs.blur == BLUR_SPACE_MODEL);
-    CHECK(rs.shut.open == 0 && rs.shut.close == 1 && rs.shut.kind == WEIGHT_BOX && rs.shut.table_size == 0);
-    CHECK(rs.shut.rolling.kind == ROLLING_OFF);
 }
 
 /* One 3DGS Gaussian in front of the camera at the origin, written to ply. */
@@ -146,14 +200,14 @@ static double static_traversals_per_batch(const char *xml)
         printf("    %s\n", e.msg);
         return -1;
     }
-    accel_settings set = {s.shut.open, s.shut.close, s.epsilon, s.kernel_sigma, 1};
+    accel_settings set = {s.epsilon, s.kernel_sigma, 1};
     CHECK(accel_build(&s, &set, &a, &e) == 0);
     render_settings rs = render_settings_default();
     rs.smp.kind = SAMPLER_THESIS, rs.smp.tspp = 8, rs.smp.time_factor = 2;
-    rs.shut = s.shut, rs.threads = 2, rs.batches = 2;
+    rs.threads = 2, rs.batches = 2;
     image img;
     volatile sig_atomic_t cancel = 0;
-    CHECK(image_alloc(&img, 16, 16) == 0 && render_image(&s, a, &rs, &img, NULL, &cancel, &e) == 0);
+    CHECK(image_alloc(&img, 16, 16) == 0 && render_image(a, &rs, &img, NULL, &cancel, &e) == 0);
     CHECK(img.rays == 8u * 2 * 16 * 16);
     double per_batch = (double)img.static_traversals / (2 * 16 * 16);
     image_free(&img);

@@ -22,7 +22,6 @@
 typedef struct accel accel;
 
 typedef struct {
-    double open, close; /* the shutter interval the swept bounds cover */
     double epsilon;     /* blending distance (world units) */
     double sigma;       /* kernel sigma (splat radii) */
     int reuse_static;   /* 0: every object is treated as moving and every time
@@ -31,13 +30,23 @@ typedef struct {
                            for benchmarks and tests */
 } accel_settings;
 
-/* Builds the BVHs for the scene (which must outlive the accel). */
+/* Builds the BVHs for the scene s, whose shutter s->shut (its one owner)
+ * the swept bounds cover: every line's exposure, scene_exposure_span. s
+ * must outlive the accel and not change under it: the accel is the way
+ * a render is handed its scene (render_image), so no render can be for a
+ * shutter its swept bounds were not built for. */
 int accel_build(const scene *s, const accel_settings *set, accel **out, rr_error *err);
 void accel_free(accel *a);
 
-/* For another shutter interval (the next frame): recomputes the swept
- * bounds and the top levels; the objects' BVHs are kept. */
-int accel_set_shutter(accel *a, double open, double close, rr_error *err);
+/* The scene accel was built (or last retimed) for: the one it traces and
+ * a render of it renders. */
+const scene *accel_scene(const accel *a);
+
+/* For the next frame's scene fs (scene_for_shutter of the scene accel was
+ * built for: the same objects, another shutter): recomputes the swept
+ * bounds and the top levels for fs's shutter and traces fs from then on;
+ * the objects' BVHs are kept. */
+int accel_retime(accel *a, const scene *fs, rr_error *err);
 
 /* World ray org + t*dir (dir unit) at scene time `time`: fills kb with the
  * epsilon-blended hit set. */
@@ -121,9 +130,6 @@ int accel_ray_meets_swept_sphere(const accel *a, unsigned obj, vec3 org, vec3 di
 double accel_epsilon(const accel *a);
 double accel_sigma(const accel *a);
 
-/* The shutter the top levels (swept bounds) were built for. */
-void accel_shutter(const accel *a, double *open, double *close);
-
 /* Whether accel traces the object as moving over the current shutter (a
  * static object's hits are in accel_ray's static_hits). */
 int accel_object_moves(const accel *a, unsigned obj);
@@ -135,8 +141,8 @@ void accel_object_swept_sphere(const accel *a, unsigned obj, vec3 *center, doubl
  * object's swept reach (swept[i], object i's world box over the shutter),
  * and the object-space rays they imply, within it; the keyframes' key
  * times within what swept bounds can list. -1 with err naming the scene
- * and the object otherwise. accel_set_shutter applies it; refrender splat
- * too, so both refuse the same scenes and instants. */
+ * and the object otherwise. accel_build and accel_retime apply it;
+ * refrender splat too, so both refuse the same scenes and instants. */
 int accel_check_reach(const scene *s, const aabb *swept, double open, double close, rr_error *err);
 
 /* The most memory Embree held at once for the BVHs (build included). */

@@ -219,7 +219,7 @@ static void build_gaussian_object(accel *a, unsigned obj, double open, double cl
     a->object_scenes[obj] = NULL;
     aabb paths_box;
     f->paths = o->gaussians.dynamic ? dynamic_paths(a, o, open, close, &paths_box) : NULL;
-    if (o->gaussians.dynamic && !f->paths) { /* (named: accel_set_shutter fails) */
+    if (o->gaussians.dynamic && !f->paths) { /* (named: accel_build or accel_retime fails) */
         a->swept[obj] = (aabb){v3(0, 0, 0), v3(0, 0, 0)};
         a->swept_sphere[obj] = (sphere_bound){v3(0, 0, 0), 0};
         return;
@@ -243,11 +243,11 @@ static void build_gaussian_object(accel *a, unsigned obj, double open, double cl
 }
 
 /* The top levels depend on the shutter interval (swept bounds, which
- * objects stand still); the objects' own BVHs do not. */
+ * objects stand still): [open, close], the scene's exposure span; the
+ * objects' own BVHs do not. */
 static void build_top_levels(accel *a, double open, double close)
 {
     const scene *s = a->sc;
-    a->open = open, a->close = close;
     for (int k = 0; k < 2; k++) {
         if (a->top[k].scene)
             rtcReleaseScene(a->top[k].scene);
@@ -329,8 +329,13 @@ int accel_check_reach(const scene *s, const aabb *swept, double open, double clo
     return 0;
 }
 
-int accel_set_shutter(accel *a, double open, double close, rr_error *err)
+/* The top levels (and Gaussian objects' BVHs) for the shutter of a->sc:
+ * the span of every line's exposure (scene_exposure_span), its reach
+ * checked. */
+static int build_for_shutter(accel *a, rr_error *err)
 {
+    double open, close;
+    scene_exposure_span(a->sc, &open, &close);
     a->building = 1;
     build_top_levels(a, open, close);
     a->building = 0;
@@ -338,6 +343,15 @@ int accel_set_shutter(accel *a, double open, double close, rr_error *err)
         return rr_fail(err, "%s", a->build_error.msg);
     return accel_check_reach(a->sc, a->swept, open, close, err);
 }
+
+int accel_retime(accel *a, const scene *fs, rr_error *err)
+{
+    RR_DCHECK(fs->objects == a->sc->objects && fs->nobjects == a->sc->nobjects); /* the BVHs are kept */
+    a->sc = fs;
+    return build_for_shutter(a, err);
+}
+
+const scene *accel_scene(const accel *a) { return a->sc; }
 
 int accel_build(const scene *s, const accel_settings *set, accel **out, rr_error *err)
 {
@@ -388,9 +402,8 @@ int accel_build(const scene *s, const accel_settings *set, accel **out, rr_error
         a->building_object = -1;
     }
     a->reuse_static = set->reuse_static;
-    build_top_levels(a, set->open, set->close);
     a->building = 0;
-    if (a->build_error.msg[0] || accel_check_reach(a->sc, a->swept, set->open, set->close, err)) {
+    if (a->build_error.msg[0] || build_for_shutter(a, err)) {
         if (a->build_error.msg[0])
             rr_fail(err, "%s", a->build_error.msg);
         accel_free(a);
@@ -440,9 +453,3 @@ void accel_free(accel *a)
 
 double accel_epsilon(const accel *a) { return a->epsilon; }
 double accel_sigma(const accel *a) { return a->sigma; }
-
-void accel_shutter(const accel *a, double *open, double *close)
-{
-    *open = a->open;
-    *close = a->close;
-}

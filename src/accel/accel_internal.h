@@ -64,14 +64,13 @@ struct accel {
     xform *rest;  /* transform of each static object (the same at every time) */
     int *is_static;
     int reuse_static;
-    const scene *sc;
+    const scene *sc;         /* the scene traced, whose shutter the top levels are for (accel_scene) */
     unsigned *gaussian_ids;  /* the Gaussian objects: traced by gathering, not in the top levels */
     unsigned ngaussian;
     gaussian_footprint *footprint; /* per object (used for Gaussian ones) */
     const gaussian_model **models; /* per object: its Gaussian model, or NULL */
     float epsilon;
     double sigma;
-    double open, close; /* the shutter the top levels were built for */
     int building;       /* Embree's error callback records only while building (render threads
                            check rtcGetDeviceError themselves: accel is const to them) */
     int building_object;     /* the object whose BVH is being built (-1: the top levels), for errors */

@@ -165,7 +165,7 @@ static void *baseline_worker(void *arg)
         if (row >= job->sc->cam.height)
             break;
         for (int px = 0; px < job->sc->cam.width; px++) {
-            sampler_batch(smp, job->rs->shut.open, job->rs->shut.close, (uint64_t)row * job->sc->cam.width + px, px,
+            sampler_batch(smp, job->sc->shut.open, job->sc->shut.close, (uint64_t)row * job->sc->cam.width + px, px,
                           row, 0, &ss, x, y, t, w);
             int nhits = 0;
             for (int i = 0; i < n; i++) { /* the same rays the render path traces */
@@ -323,14 +323,14 @@ static double baseline_seconds(RTCScene rtc_scene, const scene *s, const render_
 
 /* ---- one case, in a child process --------------------------------------- */
 
-static double render_mrays(const scene *s, const accel *acc, const render_settings *rs, int res,
+static double render_mrays(const accel *acc, const render_settings *rs, int res,
                            unsigned long long *rays)
 {
     image img;
     rr_error err;
     volatile sig_atomic_t never = 0;
     image_alloc(&img, res, res);
-    render_image(s, acc, rs, &img, NULL, &never, &err);
+    render_image(acc, rs, &img, NULL, &never, &err);
     *rays = img.rays;
     image_free(&img);
     return img.rays / img.seconds * 1e-6;
@@ -343,13 +343,12 @@ static int may_hit_moving(const accel *a, vec3 org, vec3 dir)
     return ray.may_hit_moving;
 }
 
-static render_settings bench_settings(const bench_case *c, const scene *s)
+static render_settings bench_settings(const bench_case *c)
 {
     render_settings rs = render_settings_default();
     /* the thesis sampler, as these rows were always measured: the rays stay comparable */
     rs.smp.kind = SAMPLER_THESIS;
     rs.smp.grid = 2, rs.smp.tspp = c->tspp, rs.smp.time_factor = 4;
-    rs.shut = s->shut;
     rs.threads = c->threads;
     return rs;
 }
@@ -358,7 +357,7 @@ static accel *build_or_die(const scene *s, int reuse_static)
 {
     accel *acc;
     rr_error err;
-    accel_settings set = {s->shut.open, s->shut.close, s->epsilon, s->kernel_sigma, reuse_static};
+    accel_settings set = {s->epsilon, s->kernel_sigma, reuse_static};
     if (accel_build(s, &set, &acc, &err)) {
         fprintf(stderr, "bench: %s\n", err.msg);
         exit(1);
@@ -371,7 +370,7 @@ static accel *setup_case(const bench_case *c, scene *s, surfel **surfels, size_t
                          bench_result *r)
 {
     build_scene(c, s, surfels, n);
-    *rs = bench_settings(c, s);
+    *rs = bench_settings(c);
     double t0 = rr_seconds();
     accel *acc = build_or_die(s, 1);
     r->build_ms = 1e3 * (rr_seconds() - t0);
@@ -394,8 +393,8 @@ static void run_pair_case(const bench_case *c, bench_result *r)
         base_rs.threads = 1;
     double a[16], b[16];
     for (int k = 0; k < c->reps; k++) {
-        a[k] = render_mrays(&s, with, &rs, c->res, &r->rays);
-        b[k] = render_mrays(&s, without, &base_rs, c->res, &r->rays);
+        a[k] = render_mrays(with, &rs, c->res, &r->rays);
+        b[k] = render_mrays(without, &base_rs, c->res, &r->rays);
     }
     r->mrays = median(a, c->reps);
     r->base_mrays = median(b, c->reps);
@@ -438,7 +437,7 @@ static void run_case(const bench_case *c, bench_result *r)
     RTCScene user_eps = c->floor ? floor_build(dev, base, n, (float)s.epsilon, &discs_eps) : NULL;
     double ours[16], theirs[16], same[16], floor[16], floor_eps[16], rays = (double)c->res * c->res * 4 * c->tspp;
     for (int k = 0; k < c->reps; k++) { /* interleaved repetitions */
-        ours[k] = render_mrays(&s, acc, &rs, c->res, &r->rays);
+        ours[k] = render_mrays(acc, &rs, c->res, &r->rays);
         theirs[k] = rays / baseline_seconds(base, &s, &rs, 0, 0, NULL) * 1e-6;
         same[k] = rays / baseline_seconds(base, &s, &rs, 1, 0, NULL) * 1e-6;
         floor[k] = user ? rays / baseline_seconds(user, &s, &rs, 1, 0, NULL) * 1e-6 : 0;

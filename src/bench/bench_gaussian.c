@@ -241,7 +241,7 @@ static double render_timed(const scene *s, const accel *a, const render_settings
     rr_error err;
     volatile sig_atomic_t never = 0;
     image_alloc(&img, s->cam.width, s->cam.height);
-    if (render_image(s, a, rs, &img, NULL, &never, &err)) {
+    if (render_image(a, rs, &img, NULL, &never, &err)) {
         fprintf(stderr, "bench: %s\n", err.msg);
         exit(1);
     }
@@ -264,7 +264,7 @@ static double median3(double *v, int n)
 /* The scene's acceleration structure over its shutter; exits on failure. */
 static accel *build_timed(const scene *s, double *build_ms)
 {
-    accel_settings set = {s->shut.open, s->shut.close, s->epsilon, s->kernel_sigma, 1};
+    accel_settings set = {s->epsilon, s->kernel_sigma, 1};
     accel *a;
     rr_error err;
     double t0 = rr_seconds();
@@ -286,7 +286,6 @@ static void gs_run(const gs_case *c, gs_result *r)
     /* the thesis sampler, as these rows were always measured: the rays stay comparable */
     rs.smp.kind = SAMPLER_THESIS;
     rs.smp.grid = 2, rs.smp.tspp = 4, rs.smp.time_factor = 4;
-    rs.shut = s.shut;
     rs.threads = c->threads;
     accel *a = build_timed(&s, &r->build_ms);
     r->embree_bytes = (double)accel_embree_peak_bytes(a) / (double)m->count;
@@ -446,7 +445,6 @@ static void point_filter_run(scene *s, int tspp, int threads, size_t count, scal
     /* the thesis sampler, as these rows were always measured: the rays stay comparable */
     rs.smp.kind = SAMPLER_THESIS;
     rs.smp.tspp = tspp, rs.smp.time_factor = 4;
-    rs.shut = s->shut;
     rs.threads = threads;
     rs.filter = PIXEL_FILTER_POINT;
     accel *a = build_timed(s, &r->build_ms);

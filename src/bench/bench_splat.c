@@ -10,15 +10,15 @@ typedef struct {
 } splat_row;
 
 /* The ray tracer at the pixel centres, n instants each (seconds). */
-static double truth_seconds(const scene *s, const accel *acc, int n, int res, unsigned long long *rays)
+static double truth_seconds(const accel *acc, int n, int res, unsigned long long *rays)
 {
     render_settings rs = render_settings_default();
-    rs.smp.tspp = n, rs.smp.grid = 1, rs.shut = s->shut, rs.filter = PIXEL_FILTER_POINT, rs.threads = 1;
+    rs.smp.tspp = n, rs.smp.grid = 1, rs.filter = PIXEL_FILTER_POINT, rs.threads = 1;
     image img;
     rr_error err;
     volatile sig_atomic_t never = 0;
     image_alloc(&img, res, res);
-    render_image(s, acc, &rs, &img, NULL, &never, &err);
+    render_image(acc, &rs, &img, NULL, &never, &err);
     double seconds = img.seconds;
     *rays = img.rays;
     image_free(&img);
@@ -28,7 +28,7 @@ static double truth_seconds(const scene *s, const accel *acc, int n, int res, un
 static double splat_seconds(const scene *s, const splat_row *row, unsigned long long *fragments)
 {
     splat_settings set = {.method = row->method, .times = SPLAT_TIMES_MIDPOINT, .samples = row->samples,
-                          .buckets = row->buckets, .seed = 1, .shut = s->shut, .sigma_t = SPLAT_SIGMA_T_DEFAULT,
+                          .buckets = row->buckets, .seed = 1, .sigma_t = SPLAT_SIGMA_T_DEFAULT,
                           .instant = 0.5 * (s->shut.open + s->shut.close)};
     splat_result r;
     rr_error err;
@@ -56,7 +56,7 @@ void bench_splat(const scene *s, const accel *acc, int res, FILE *csv)
     for (size_t i = 0; i < sizeof rows / sizeof rows[0]; i++) {
         unsigned long long fragments = 0, rays = 0;
         double ours = splat_seconds(s, &rows[i], &fragments);
-        double truth = truth_seconds(s, acc, rows[i].samples, res, &rays);
+        double truth = truth_seconds(acc, rows[i].samples, res, &rays);
         if (ours < 0)
             continue;
         printf("| %s | %d | %.3f | %llu | %.3f | %llu | %.2fx |\n", rows[i].label, rows[i].samples, ours, fragments,

@@ -128,8 +128,7 @@ static uint32_t max_batches_of(const render_options *o)
     return o->max_batches ? (uint32_t)o->max_batches : (uint32_t)(eight < FILM_MAX_BATCHES ? eight : FILM_MAX_BATCHES);
 }
 
-static void setup_run(render_run *run, const scene *s, const shutter *shut, const render_options *o,
-                      const char *cmdline)
+static void setup_run(render_run *run, const scene *s, const render_options *o, const char *cmdline)
 {
     uint32_t total = (uint32_t)o->batches;
     uint32_t begin = o->passes ? (uint32_t)((uint64_t)o->pass * total / o->passes) : 0;
@@ -140,7 +139,6 @@ static void setup_run(render_run *run, const scene *s, const shutter *shut, cons
     run->rs = (render_settings){
         .smp = {.kind = o->sampler, .seed = o->seed, .grid = sampler_grid_for_spp(o->spp), .tspp = o->tspp,
                 .time_factor = s->time_factor, .random_strata = total >= 2}, /* error bars (a target error needs B >= 2 too) */
-        .shut = *shut,
         .threads = o->threads,
         .batch_begin = begin,
         .batches = end - begin,
@@ -193,8 +191,9 @@ static void report_unresolved(const render_options *o, const image *img, const s
 
 /* A keyframed scale through zero is held at 1e-9 (animation.h): the
  * object all but vanishes there, which must not pass unnoticed. */
-static void warn_about_scales(const render_options *o, const scene *s, const shutter *shut)
+static void warn_about_scales(const render_options *o, const scene *s)
 {
+    const shutter *shut = &s->shut;
     for (int i = 0; i < s->nobjects && !o->quiet; i++)
         if (animation_scale_clamped(&s->objects[i].anim, shut->open, shut->close))
             fprintf(stderr, "refrender: warning: object '%s': its keyframed scale reaches zero or below during the "
@@ -264,15 +263,16 @@ static void announce_checkpoints(const render_options *o, const render_hooks *h)
         fprintf(stderr, "refrender: checkpoint %s: only when interrupted\n", o->checkpoint);
 }
 
-/* Renders one shutter interval (a frame) into output (and preview). */
-static int render_one(const scene *s, const shutter *shut, long long frame, accel *acc, const render_options *o,
-                      const char *cmdline, const char *output, const char *preview, volatile sig_atomic_t *cancel,
-                      rr_error *err)
+/* Renders the frame accel was built for (its scene, accel_scene, holds the
+ * frame's shutter) into output (and preview). */
+static int render_one(const accel *acc, long long frame, const render_options *o, const char *cmdline,
+                      const char *output, const char *preview, volatile sig_atomic_t *cancel, rr_error *err)
 {
+    const scene *s = accel_scene(acc);
     render_run run;
-    setup_run(&run, s, shut, o, cmdline);
+    setup_run(&run, s, o, cmdline);
     warn_about_settings(o, &run.rs);
-    warn_about_scales(o, s, shut);
+    warn_about_scales(o, s);
     image img;
     if (o->resume ? resume_state(&run, &img, err) : (image_alloc(&img, s->cam.width, s->cam.height)
                                                          ? rr_fail(err, "out of memory for the image") : 0))
@@ -286,7 +286,7 @@ static int render_one(const scene *s, const shutter *shut, long long frame, acce
         fprintf(stderr, "refrender: pass %d/%d: batches %u-%u of %u\n", o->pass, o->passes, run.rs.batch_begin,
                 run.rs.batch_begin + run.rs.batches, run.total_batches);
     announce_checkpoints(o, &hooks);
-    int rc = render_image(s, acc, &run.rs, &img, &hooks, cancel, err);
+    int rc = render_image(acc, &run.rs, &img, &hooks, cancel, err);
     if (!rc) {
         report(o, s, &img, tty);
         if (!o->passes) /* a final image: its noise (a pass's state has a share of the batches) */
@@ -295,7 +295,7 @@ static int render_one(const scene *s, const shutter *shut, long long frame, acce
         attrs_set(&run.attrs, ATTR_RAYS, "%llu", (unsigned long long)img.rays);
         attrs_set(&run.attrs, ATTR_CLAMPED, "%llu", (unsigned long long)img.clamped);
         if (o->exact_time)
-            report_unresolved(o, &img, &run.rs.shut, &run.attrs);
+            report_unresolved(o, &img, &s->shut, &run.attrs);
         if (o->frames && s->frame_rate > 0)
             attrs_set(&run.attrs, ATTR_FRAME_RATE, "%.17g", s->frame_rate);
         if (o->frames)
@@ -387,31 +387,31 @@ static void note_moved_shutter(const scene *s, const render_options *o, const sh
         fprintf(stderr, "refrender: note: %s\n", note);
 }
 
-/* One frame or a sequence, sharing the loaded models and their BVHs; only
- * the top levels are rebuilt for each frame's shutter. */
-/* Frame f's shutter and the scene as it renders it (scene_for_shutter:
- * fs, which the BVHs were built for, is refilled in place); the previous
- * frame's scene is freed first. */
-static int next_frame(const scene *s, const render_options *o, long long f, shutter *shut, scene *fs, rr_error *err)
+/* Frame f's scene, fs: the scene as it renders frame f, which owns the
+ * frame's shutter (scene_for_shutter), refilled in place (the accel
+ * built for it keeps pointing at it); the previous frame's is freed
+ * first. */
+static int next_frame(const scene *s, const render_options *o, long long f, scene *fs, rr_error *err)
 {
+    shutter shut;
     scene_for_shutter_free(fs, s);
     *fs = *s; /* (nothing of its own if the next call fails) */
-    return frame_shutter(s, o, f, shut, err) || scene_for_shutter(s, shut, fs, err) ? -1 : 0;
+    return frame_shutter(s, o, f, &shut, err) || scene_for_shutter(s, &shut, fs, err) ? -1 : 0;
 }
 
+/* One frame or a sequence, sharing the loaded models and their BVHs; only
+ * the top levels are rebuilt for each frame's scene (accel_retime), and
+ * each frame is rendered through the accel, the one way to its scene. */
 int render_frames(const scene *s, const render_options *o, const char *cmdline, volatile sig_atomic_t *cancel,
                   rr_error *err)
 {
     accel *acc;
-    shutter shut;
     scene fs = *s;
     if (check_frame_outputs(s, o, err) || check_frame_shutters(s, o, err) ||
-        next_frame(s, o, o->first_frame, &shut, &fs, err))
+        next_frame(s, o, o->first_frame, &fs, err))
         return -1;
-    note_moved_shutter(s, o, &shut);
-    double t0, t1; /* every line's exposure (a rolling shutter's reaches past [open, close]) */
-    shutter_span(&shut, s->cam.width, s->cam.height, &t0, &t1);
-    accel_settings set = {t0, t1, s->epsilon, s->kernel_sigma, !o->no_static_reuse};
+    note_moved_shutter(s, o, &fs.shut);
+    accel_settings set = {s->epsilon, s->kernel_sigma, !o->no_static_reuse};
     if (accel_build(&fs, &set, &acc, err)) {
         scene_for_shutter_free(&fs, s);
         return -1;
@@ -422,16 +422,14 @@ int render_frames(const scene *s, const render_options *o, const char *cmdline, 
     /* 64-bit: --frame 2147483647 must not wrap around into more frames */
     for (long long f = o->first_frame; !rc && f <= o->last_frame; f++) {
         char out[PATH_MAX], prev[PATH_MAX];
-        if (f > o->first_frame &&
-            (next_frame(s, o, f, &shut, &fs, err) ||
-             (shutter_span(&shut, s->cam.width, s->cam.height, &t0, &t1), accel_set_shutter(acc, t0, t1, err)))) {
+        if (f > o->first_frame && (next_frame(s, o, f, &fs, err) || accel_retime(acc, &fs, err))) {
             rc = -1;
             break;
         }
         const char *preview = frame_names(o, f, out, prev, sizeof out);
         if (o->frames == 2 && !o->quiet)
-            fprintf(stderr, "refrender: frame %lld: shutter [%g, %g] -> %s\n", f, shut.open, shut.close, out);
-        rc = render_one(&fs, &shut, f, acc, o, cmdline, out, preview, cancel, err);
+            fprintf(stderr, "refrender: frame %lld: shutter [%g, %g] -> %s\n", f, fs.shut.open, fs.shut.close, out);
+        rc = render_one(acc, f, o, cmdline, out, preview, cancel, err);
     }
     accel_free(acc);
     scene_for_shutter_free(&fs, s);

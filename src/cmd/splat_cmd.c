@@ -222,7 +222,6 @@ static int apply_overrides(scene *s, splat_options *o, rr_error *err)
     }
     if (!o->time_set)
         o->set.instant = 0.5 * (s->shut.open + s->shut.close);
-    o->set.shut = s->shut;
     rr_error why;
     if (camera_prepare(&s->cam, &why))
         return rr_fail(err, "%s with --res %dx%d: %s", s->path, s->cam.width, s->cam.height, why.msg);
@@ -264,13 +263,13 @@ static int write_outputs(const splat_options *o, const scene *s, const splat_res
                          double seconds, rr_error *err)
 {
     render_settings rs = render_settings_default();
-    rs.shut = o->set.shut;
+    scene drawn = *s; /* the scene as the method drew it: the instant method's shutter is its instant */
     if (o->set.method == SPLAT_INSTANT)
-        shutter_at_instant(&rs.shut, o->set.instant);
+        shutter_at_instant(&drawn.shut, o->set.instant);
     rs.filter = PIXEL_FILTER_POINT; /* pixel centres only */
     rs.smp.tspp = o->set.method == SPLAT_INSTANT || o->set.method == SPLAT_GUAN_MUELLER ? 1 : o->set.samples;
     attr_list attrs = {0};
-    attrs_for_render(&attrs, s, &rs, 1, cmdline);
+    attrs_for_render(&attrs, &drawn, &rs, 1, cmdline);
     method_attrs(&attrs, o, r, seconds);
     image img;
     if (image_alloc(&img, r->width, r->height))

@@ -129,11 +129,12 @@ static void set_matrix(attr_list *a, const char *key, double m[4][4])
  * space: x right, y up, z forward (the view direction; left-handed, as
  * pbrt's). NDC: x = raster x / width, y = raster y / height (0, 0 the
  * top-left image corner, as refrender's raster), z = 1 / depth, after
- * dividing by w = depth. s: the scene as the frame renders it. */
-static void camera_matrices(attr_list *a, const scene *s, const shutter *sh)
+ * dividing by w = depth. s: the scene as the frame renders it (its
+ * shutter the frame's). */
+static void camera_matrices(attr_list *a, const scene *s)
 {
     scene_frame_camera fc;
-    scene_frame_camera_of(s, sh, &fc);
+    scene_frame_camera_of(s, &fc);
     set_matrix(a, ATTR_WORLD_TO_CAMERA, fc.world_to_camera[1]);
     set_matrix(a, ATTR_WORLD_TO_NDC, fc.world_to_ndc);
     attrs_set(a, ATTR_CAMERA_TIME, "%.17g", fc.time[1]);
@@ -162,15 +163,15 @@ void attrs_for_render(attr_list *a, const scene *s, const render_settings *rs, u
     attrs_set(a, ATTR_SEED, "%" PRIu64, smp->seed);
     attrs_set(a, ATTR_EPSILON, "%.17g", s->epsilon);
     attrs_set(a, ATTR_KERNEL_SIGMA, "%.17g", s->kernel_sigma);
-    attrs_set(a, ATTR_SHUTTER, "%.17g %.17g", rs->shut.open, rs->shut.close);
-    attrs_set(a, ATTR_SHUTTER_OPEN, "%.17g", rs->shut.open);
-    attrs_set(a, ATTR_SHUTTER_CLOSE, "%.17g", rs->shut.close);
-    camera_matrices(a, s, &rs->shut);
-    set_identity_text(a, ATTR_WEIGHT_FUNCTION, ATTR_WEIGHT_HASH, weight_text, &rs->shut);
+    attrs_set(a, ATTR_SHUTTER, "%.17g %.17g", s->shut.open, s->shut.close);
+    attrs_set(a, ATTR_SHUTTER_OPEN, "%.17g", s->shut.open);
+    attrs_set(a, ATTR_SHUTTER_CLOSE, "%.17g", s->shut.close);
+    camera_matrices(a, s);
+    set_identity_text(a, ATTR_WEIGHT_FUNCTION, ATTR_WEIGHT_HASH, weight_text, &s->shut);
     char rolling[256];
-    shutter_rolling_text(&rs->shut, rolling, sizeof rolling);
+    shutter_rolling_text(&s->shut, rolling, sizeof rolling);
     attrs_set(a, ATTR_ROLLING_SHUTTER, "%s", rolling);
-    line_times(a, &rs->shut, s->cam.width, s->cam.height);
+    line_times(a, &s->shut, s->cam.width, s->cam.height);
     attrs_set(a, ATTR_TIME_FACTOR, "%d", smp->time_factor);
     attrs_set(a, ATTR_TIME_INTEGRATION, "%s", rs->integrator ? rs->integrator->id : "sampled");
     attrs_set(a, ATTR_PIXEL_FILTER, "%s", pixel_filter_name(rs->filter));

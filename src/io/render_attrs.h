@@ -12,6 +12,8 @@
  * Makefile (-DRR_BUILD_ID); equal sources give an equal id. */
 const char *render_build_id(void);
 
+/* s: the scene as the frame renders it (scene_for_shutter), whose shutter
+ * (s->shut) the header records; rs: the render's settings. */
 void attrs_for_render(attr_list *a, const scene *s, const render_settings *rs, uint32_t total_batches,
                       const char *command);
 

@@ -29,7 +29,7 @@ enum { BOX_DEPTH_SLICES = 32 };
  * scale_rate / min_scale^2. */
 static void object_speed(const exact_plan *p, const scene_object *o, object_plan *op)
 {
-    motion_bound m = animation_motion_bound(&o->anim, p->shut.open, p->shut.close);
+    motion_bound m = animation_motion_bound(&o->anim, p->shut->open, p->shut->close);
     const motion_bound cam = p->camera_speed;
     double cam_reach = v3_len(v3_sub(p->sc->cam.position, cam.center)) + op->depth_hi;
     double camera = cam.linear + cam.angular * cam_reach;
@@ -74,7 +74,7 @@ static void depth_range(const exact_plan *p, object_plan *op)
  * object vanished from exact renders. */
 static int time_slices_for(const exact_plan *p, const object_plan *op)
 {
-    double turn = op->angular * (p->shut.close - p->shut.open);
+    double turn = op->angular * (p->shut->close - p->shut->open);
     if (!isfinite(op->base) || !isfinite(turn))
         return 0;
     double need = ceil(2.0 * turn);
@@ -88,7 +88,7 @@ static void plan_object(exact_plan *p, unsigned i)
     const scene_object *o = &p->sc->objects[i];
     object_plan *op = &p->obj[i];
     accel_object_swept_sphere(p->acc, i, &op->swept_center, &op->swept_radius);
-    op->min_scale = animation_min_scale(&o->anim, p->shut.open, p->shut.close);
+    op->min_scale = animation_min_scale(&o->anim, p->shut->open, p->shut->close);
     op->gathered = p->camera_moves || accel_object_moves(p->acc, i);
     depth_range(p, op);
     if (op->gathered) {
@@ -104,17 +104,19 @@ static int weight_breaks(exact_plan *p)
     p->breaks = malloc(SHUTTER_MAX_KNOTS * sizeof *p->breaks);
     if (!p->breaks)
         return -1;
-    p->nbreaks = shutter_knots(&p->shut, p->breaks);
+    p->nbreaks = shutter_knots(p->shut, p->breaks);
     return 0;
 }
 
-int exact_plan_new(const scene *s, const accel *a, const shutter *shut, double box_scale,
-                   volatile sig_atomic_t *cancel, exact_plan **out, rr_error *err)
+int exact_plan_new(const accel *a, double box_scale, volatile sig_atomic_t *cancel, exact_plan **out,
+                   rr_error *err)
 {
+    const scene *s = accel_scene(a);
+    const shutter *shut = &s->shut;
     exact_plan *p = calloc(1, sizeof *p);
     if (!p)
         return rr_fail(err, "out of memory");
-    p->sc = s, p->acc = a, p->shut = *shut, p->box_scale = box_scale, p->cancel = cancel;
+    p->sc = s, p->acc = a, p->shut = shut, p->box_scale = box_scale, p->cancel = cancel;
     p->tol = EXACT_TIME_TOL * (shut->close - shut->open);
     p->camera_moves = scene_camera_moves(s);
     aabb at_rest = {s->cam.position, s->cam.position};
@@ -258,7 +260,7 @@ static int push_key(exact_scratch *scr, unsigned obj, unsigned prim)
 static int ray_meets_swept_sphere(const sample_ctx *c, unsigned obj)
 {
     vec3 org, dir;
-    exact_world_ray(c, c->p->shut.open, &org, &dir);
+    exact_world_ray(c, c->p->shut->open, &org, &dir);
     return accel_ray_meets_swept_sphere(c->p->acc, obj, org, dir);
 }
 
@@ -270,7 +272,7 @@ static unsigned candidate_boxes(const sample_ctx *c, unsigned obj, aabb *boxes)
 {
     const exact_plan *p = c->p;
     const object_plan *op = &p->obj[obj];
-    double t0 = p->shut.open, len = p->shut.close - t0, h = len / op->time_slices;
+    double t0 = p->shut->open, len = p->shut->close - t0, h = len / op->time_slices;
     unsigned n = 0;
     for (int k = 0; k < op->time_slices; k++) {
         const object_ray *r = exact_object_ray(c, obj, t0 + (k + 0.5) * h);

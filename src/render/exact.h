@@ -45,12 +45,13 @@
 typedef struct exact_plan exact_plan;       /* per shutter; read-only, shared by threads */
 typedef struct exact_scratch exact_scratch; /* per thread */
 
-/* box_scale: 1; tests shrink the candidate boxes with it to show that the
+/* The plan for the scene accel traces (accel_scene), over its shutter.
+ * box_scale: 1; tests shrink the candidate boxes with it to show that the
  * candidate test can fail. cancel: the flag render_image watches (NULL:
  * never cancelled), which a sample checks as it goes, so an interrupt
  * does not wait for a costly sample to end. */
-int exact_plan_new(const scene *s, const accel *a, const shutter *shut, double box_scale,
-                   volatile sig_atomic_t *cancel, exact_plan **out, rr_error *err);
+int exact_plan_new(const accel *a, double box_scale, volatile sig_atomic_t *cancel, exact_plan **out,
+                   rr_error *err);
 void exact_plan_free(exact_plan *p);
 
 /* A thread's scratch, its arrays in `arena` (NULL: an arena of its own),

@@ -32,7 +32,7 @@ static int candidate_hit(const sample_ctx *c, int index, double t, surface_hit *
 static void integrand(const sample_ctx *c, const piece *pc, double t, double out[NCOMP], int *overflow)
 {
     const scene *s = c->p->sc;
-    double w = shutter_weight(&c->p->shut, t);
+    double w = shutter_weight(c->p->shut, t);
     kbuffer kb;
     kbuffer_reset(&kb, (float)accel_epsilon(c->p->acc));
     for (int k = 0; k < pc->count; k++) {
@@ -156,7 +156,7 @@ static int exact_check(const integrator_context *ctx, rr_error *err)
 {
     if (exact_check_blur_space(ctx->rs->blur, err))
         return -1;
-    if (ctx->rs->shut.rolling.kind != ROLLING_OFF)
+    if (ctx->sc->shut.rolling.kind != ROLLING_OFF)
         return rr_fail(err, "exact time integration does not integrate a rolling shutter (each line its own "
                             "window): use sampled time");
     if (accel_has_gaussians(ctx->acc))
@@ -168,7 +168,7 @@ static int exact_check(const integrator_context *ctx, rr_error *err)
 static int exact_setup(integrator_context *ctx, rr_error *err)
 {
     exact_plan *plan;
-    if (exact_plan_new(ctx->sc, ctx->acc, &ctx->rs->shut, 1.0, ctx->cancel, &plan, err))
+    if (exact_plan_new(ctx->acc, 1.0, ctx->cancel, &plan, err))
         return -1;
     ctx->plan = plan;
     return 0;

@@ -37,9 +37,9 @@ typedef struct {
 } object_plan;
 
 struct exact_plan {
-    const scene *sc;
+    const scene *sc;           /* accel_scene(acc) */
     const accel *acc;
-    shutter shut;
+    const shutter *shut;       /* &sc->shut */
     double tol;        /* EXACT_TIME_TOL of the shutter, in time units */
     double box_scale;
     int camera_moves;

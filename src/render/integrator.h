@@ -33,7 +33,7 @@
 /* What every integrator reads, shared by the threads (read-only during
  * the render; the row's setup fills `plan`). */
 typedef struct {
-    const scene *sc;
+    const scene *sc;       /* accel_scene(acc): the scene rendered, its shutter the one owner (sc->shut) */
     const accel *acc;
     const render_settings *rs;
     void *plan;            /* the row's per-render state (setup / teardown); NULL without */

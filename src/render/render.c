@@ -56,7 +56,7 @@ typedef struct { /* per-thread scratch, made once per worker per render */
 static int batch_samples(const render_job *job, int px, int py, uint32_t batch, thread_scratch *scr)
 {
     const sampler *smp = &job->rs->smp;
-    const shutter *sh = &job->rs->shut;
+    const shutter *sh = &job->ctx.sc->shut; /* the scene's: the one accel was built for */
     uint64_t pixel = (uint64_t)py * (uint64_t)job->img->width + (uint64_t)px;
     sampler_batch(smp, sh->open, sh->close, pixel, px, py, batch, &scr->ss, scr->x, scr->y, scr->t, scr->w);
     int count = (int)sampler_count(smp); /* at most SAMPLER_MAX_TIME_STRATA (check_settings) */
@@ -67,7 +67,7 @@ static int batch_samples(const render_job *job, int px, int py, uint32_t batch, 
         for (int i = 0; i < count; i++)
             scr->t[i] = shutter_cdf_time(&job->time_cdf, (scr->t[i] - sh->open) / (sh->close - sh->open));
     if (sh->rolling.kind != ROLLING_OFF) { /* this pixel's line exposes at its own times */
-        int lines, line = shutter_line(sh, px, py, job->img->width, job->img->height, &lines);
+        int lines, line = shutter_line(sh, px, py, job->ctx.sc->cam.width, job->ctx.sc->cam.height, &lines);
         for (int i = 0; i < count; i++)
             scr->t[i] = shutter_line_time(sh, line, lines, scr->t[i]);
     }
@@ -462,6 +462,9 @@ static int any_pixel_wants_more(const render_job *job)
     return 0;
 }
 
+/* What render_image refuses before any work (what the integrator cannot
+ * render its row's check refuses: job_init). The shutter needs no check:
+ * it is the scene's, read through the accel built for it (accel_scene). */
 static int check_settings(const render_settings *rs, rr_error *err)
 {
     if (rs->threads < 1 || rs->batches < 1)
@@ -471,25 +474,10 @@ static int check_settings(const render_settings *rs, rr_error *err)
     return sampler_check(&rs->smp, err);
 }
 
-/* What render_image refuses before any work: settings, and a shutter
- * other than the one accel's swept bounds were built for (what the
- * integrator cannot render its row's check refuses: job_init). */
-static int check_render_inputs(const accel *a, const render_settings *rs, const image *img, rr_error *err)
-{
-    if (check_settings(rs, err))
-        return -1;
-    double open, close, t0, t1;
-    accel_shutter(a, &open, &close);
-    shutter_span(&rs->shut, img->width, img->height, &t0, &t1);
-    if (open != t0 || close != t1) /* swept bounds of another shutter miss hits */
-        return rr_fail(err, "internal: accel was built for the times [%g, %g], the render is for [%g, %g]", open,
-                       close, t0, t1);
-    return 0;
-}
-
-static int job_init(render_job *job, const scene *s, const accel *a, const render_settings *rs, image *img,
+static int job_init(render_job *job, const accel *a, const render_settings *rs, image *img,
                     volatile sig_atomic_t *cancel, rr_error *err)
 {
+    const scene *s = accel_scene(a);
     memset(job, 0, sizeof *job);
     job->rs = rs, job->img = img, job->cancel = cancel;
     job->ctx.sc = s, job->ctx.acc = a, job->ctx.rs = rs, job->ctx.cancel = cancel;
@@ -498,7 +486,7 @@ static int job_init(render_job *job, const scene *s, const accel *a, const rende
     job->tiles_x = (img->width + TILE - 1) / TILE;
     job->tiles_y = (img->height + TILE - 1) / TILE;
     job->ntiles = job->tiles_x * job->tiles_y;
-    shutter_cdf_init(&job->time_cdf, &rs->shut);
+    shutter_cdf_init(&job->time_cdf, &s->shut);
     job->integ = integrator_for(&job->ctx);
     if ((job->integ->check && job->integ->check(&job->ctx, err)) ||
         (job->integ->setup && job->integ->setup(&job->ctx, err)))
@@ -525,11 +513,11 @@ static void job_finish(render_job *job, image *img, double start)
     img->exact_unresolved += job->unresolved;
 }
 
-int render_image(const scene *s, const accel *a, const render_settings *rs, image *img,
-                 const render_hooks *hooks, volatile sig_atomic_t *cancel, rr_error *err)
+int render_image(const accel *a, const render_settings *rs, image *img, const render_hooks *hooks,
+                 volatile sig_atomic_t *cancel, rr_error *err)
 {
     render_job job;
-    if (check_render_inputs(a, rs, img, err) || job_init(&job, s, a, rs, img, cancel, err))
+    if (check_settings(rs, err) || job_init(&job, a, rs, img, cancel, err))
         return -1;
     double start = rr_seconds(), last_checkpoint = start;
     uint32_t rounds = rs->target_error > 0 ? rs->max_batches : rs->batches;

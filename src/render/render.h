@@ -35,16 +35,18 @@ typedef struct {
  * No pixel's batches depend on it. */
 uint64_t render_planned_pixel_batches(const render_settings *rs, const image *img);
 
-/* Renders into img (pixels continue from the batches they already have).
- * The result depends only on the scene, the settings and the seed, not on
- * the thread count. Returns -1 if *cancel became non-zero (after a final
+/* Renders the scene accel traces (accel_scene: its shutter is the one the
+ * swept bounds were built for, so no other can be asked for) into img, an
+ * image of its camera's size (pixels continue from the batches they
+ * already have). The result depends only on the scene, the settings and
+ * the seed, not on the thread count. Returns -1 if *cancel became non-zero (after a final
  * checkpoint, if there is a hook) or on error (a batch that failed, in the
  * words of its integrator's batch_failure: an exact sample past its
  * bounds, a sample's Gaussians out of memory). The workers read *cancel
  * between pixels and within batches (the batch under way is left out),
  * and step out between pixels for a periodic checkpoint:
  * neither waits for the rest of a tile. */
-int render_image(const scene *s, const accel *a, const render_settings *rs, image *img,
-                 const render_hooks *hooks, volatile sig_atomic_t *cancel, rr_error *err);
+int render_image(const accel *a, const render_settings *rs, image *img, const render_hooks *hooks,
+                 volatile sig_atomic_t *cancel, rr_error *err);
 
 #endif

@@ -17,6 +17,5 @@ render_settings render_settings_default(void)
         .filter = PIXEL_FILTER_BOX,
         .blur = BLUR_SPACE_MODEL,
     };
-    shutter_default(&rs.shut);
     return rs;
 }

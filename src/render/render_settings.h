@@ -1,13 +1,14 @@
-/* What a render is asked for: sampler and counts, shutter, batches and
- * target error, crop window, pixel filter, blur space and integrator
- * (render_image in render.h takes them; integrators read them). */
+/* What a render is asked for: sampler and counts, batches and target
+ * error, crop window, pixel filter, blur space and integrator
+ * (render_image in render.h takes them; integrators read them). The
+ * shutter is not among them: the scene rendered owns it (scene.h,
+ * scene.shut), the one accel was built for. */
 #ifndef RR_RENDER_SETTINGS_H
 #define RR_RENDER_SETTINGS_H
 
 #include <stdint.h>
 
 #include "render/sampler.h"
-#include "motion/shutter.h"
 
 struct integrator_ops; /* (integrator.h) */
 
@@ -29,7 +30,6 @@ const char *blur_space_name(blur_space b);
 
 typedef struct {
     sampler smp;            /* kind, seed, counts */
-    shutter shut;           /* the interval sampled and the weight a(t) */
     int threads;
     uint32_t batch_begin;   /* index of this render's first batch (passes) */
     uint32_t batches;       /* batches every pixel gets */
@@ -44,9 +44,8 @@ typedef struct {
 } render_settings;
 
 /* One batch of one sample per pixel (the thesis sampler, seed 1, one spatial
- * stratum, one time, time factor 1) on one thread, over the default shutter
- * (shutter_default), every pixel, box filter, the model's colours, no
- * target error. Callers override what they need by field name, so that a
+ * stratum, one time, time factor 1) on one thread, every pixel, box
+ * filter, the model's colours, no target error. Callers override what they need by field name, so that a
  * field added or moved in render_settings cannot shift their values. */
 render_settings render_settings_default(void);
 

@@ -68,17 +68,22 @@ void scene_world_to_camera(const scene *s, double t, double m[4][4])
     mat4_mul(rest, motion_inv, m);
 }
 
-void scene_exposure_instants(const scene *s, const shutter *sh, double t[3])
+void scene_exposure_span(const scene *s, double *t0, double *t1)
 {
-    shutter_span(sh, s->cam.width, s->cam.height, &t[0], &t[2]);
+    shutter_span(&s->shut, s->cam.width, s->cam.height, t0, t1);
+}
+
+void scene_exposure_instants(const scene *fs, double t[3])
+{
+    scene_exposure_span(fs, &t[0], &t[2]);
     double d = t[2] - t[0]; /* export's middle sample is open + (close - open) * 0.5: the same double */
     t[1] = isfinite(d) ? t[0] + d * 0.5 : 0.5 * t[0] + 0.5 * t[2];
 }
 
-void scene_frame_camera_of(const scene *fs, const shutter *sh, scene_frame_camera *out)
+void scene_frame_camera_of(const scene *fs, scene_frame_camera *out)
 {
     double proj[4][4];
-    scene_exposure_instants(fs, sh, out->time);
+    scene_exposure_instants(fs, out->time);
     for (int i = 0; i < 3; i++)
         scene_world_to_camera(fs, out->time[i], out->world_to_camera[i]);
     camera_projection(&fs->cam, 1.0, 1.0, proj);
@@ -91,7 +96,7 @@ int scene_check_frame_camera(const scene *s, const shutter *sh, const char *fram
     scene_frame_camera fc;
     if (scene_for_shutter(s, sh, &fs, err))
         return -1;
-    scene_frame_camera_of(&fs, sh, &fc);
+    scene_frame_camera_of(&fs, &fc);
     scene_for_shutter_free(&fs, s);
     double beyond;
     for (int i = 0; i < 3; i++)
@@ -220,6 +225,7 @@ static int gsplat_camera_motion(const scene *s, double t0, double t1, animation 
 int scene_for_shutter(const scene *s, const shutter *sh, scene *out, rr_error *err)
 {
     *out = *s;
+    out->shut = *sh;
     if (sh->rolling.kind != ROLLING_GSPLAT || !scene_camera_moves(s))
         return 0;
     /* the end pose's time: the last line's (shutter_line_time) */

@@ -100,7 +100,9 @@ typedef struct {
     scene_params params;  /* the parameters applied (given and defaults), for the render's identity */
     camera cam;
     animation camera_motion; /* the camera's rest pose moved like an object (rigid) */
-    shutter shut;            /* as the file gives it: frame 0's with <frames> (scene_frame_shutter) */
+    shutter shut;            /* the shutter this scene is rendered for, its one owner: as the file (or
+                                --shutter, --time) gives it, frame 0's with <frames>; a frame's scene
+                                (scene_for_shutter) holds that frame's (scene_frame_shutter) */
     double frame_rate;       /* <frames rate>: frame N starts at time N / rate; 0: no frames */
     int frames_at_poses;     /* <frames at="trajectory">: frame N's exposure is centred on the camera
                                 trajectory's pose N (a deblurring dataset's frame k spans pose k's
@@ -144,25 +146,32 @@ void scene_camera_view(const scene *s, double t, camera_view *v);
  * header's worldToCamera holds (render_attrs.c). */
 void scene_world_to_camera(const scene *s, double t, double m[4][4]);
 
-/* The instants of a frame's header poses (README, Output): t[0] the first
- * instant any line of the image is exposed, t[2] the last (shutter_span:
+/* [t0, t1]: every instant a line of the camera's image is exposed under
+ * the scene's own shutter s->shut (shutter_span at the camera's size:
  * [open, close] for a global shutter; a rolling shutter's lines reach past
- * it) and t[1] the middle between them. Under a rolling shutter the middle
- * line (row or column (L - 1) / 2 of the readout) is exposed around t[1]
- * under every preset, also with --time. */
-void scene_exposure_instants(const scene *s, const shutter *sh, double t[3]);
+ * it). The interval accel's swept bounds cover (accel_build). */
+void scene_exposure_span(const scene *s, double *t0, double *t1);
+
+/* The instants of a frame's header poses (README, Output): t[0] and t[2]
+ * the first and last instant any line of the image is exposed
+ * (scene_exposure_span of fs, the frame's scene) and t[1] the middle
+ * between them. Under a rolling shutter the middle line (row or column
+ * (L - 1) / 2 of the readout) is exposed around t[1] under every preset,
+ * also with --time. */
+void scene_exposure_instants(const scene *fs, double t[3]);
 
 /* A frame's camera as its EXR header records it (README, Output): world
  * to camera space at each of scene_exposure_instants, world to NDC (x =
  * raster x / width, y = raster y / height, z = 1 / depth after dividing
  * by w) at the middle one. fs: the scene as the frame renders it
- * (scene_for_shutter: rolling="gsplat" moves its camera). */
+ * (scene_for_shutter: its shutter the frame's; rolling="gsplat" moves its
+ * camera). */
 typedef struct {
     double time[3];
     double world_to_camera[3][4][4];
     double world_to_ndc[4][4];
 } scene_frame_camera;
-void scene_frame_camera_of(const scene *fs, const shutter *sh, scene_frame_camera *out);
+void scene_frame_camera_of(const scene *fs, scene_frame_camera *out);
 
 /* -1 with err naming the scene, the frame (its label, as for
  * scene_check_shutter_in_trajectory), the time and the value when a matrix
@@ -201,7 +210,9 @@ int scene_check_trajectory_times(const scene *s, double open, double close, rr_e
 int scene_check_shutter_in_trajectory(const scene *s, const shutter *sh, const char *frame, rr_error *err);
 
 /* The scene as a frame with shutter sh renders it: *out = *s (sharing
- * everything), except that under rolling="gsplat" a moving camera moves
+ * everything) with out->shut = *sh, the frame's shutter (the one owner a
+ * render, accel and the header read), and under rolling="gsplat" a moving
+ * camera moves
  * as gsplat interpolates its start pose (at sh->open) and end pose (open
  * plus the readout: shutter_line_time's last line) and every Gaussian's
  * SH direction starts at the mean of the two poses' centres (gsplat v1.5.3

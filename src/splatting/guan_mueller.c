@@ -209,7 +209,7 @@ static void trail_raster(splat_frame *f, const gm_trail *tr, vec3 col, splat_tra
  * camera saw each (a moving camera's trails are the motion on the image). */
 static void trail_pass(splat_frame *f, const splat_settings *set, const gm_point *pts, size_t n, gm_layer *m)
 {
-    double t0 = set->shut.open, t1 = set->shut.close;
+    double t0 = f->sc->shut.open, t1 = f->sc->shut.close;
     camera_view v0, v1;
     scene_camera_view(f->sc, t0, &v0), scene_camera_view(f->sc, t1, &v1);
     for (size_t k = 0; k < n; k++) {
@@ -250,11 +250,11 @@ int splat_guan_mueller(splat_frame *f, const splat_settings *set, float *rgba, r
     for (size_t i = 0; i < npx; i++)
         obj.trans[i] = 1.0, mot.trans[i] = set->trails == SPLAT_TRAILS_ADD ? 0.0 : 1.0;
     camera_view v;
-    double flash = set->shut.close; /* the current frame (sec. 4's M_curr) */
+    double flash = f->sc->shut.close; /* the current frame (sec. 4's M_curr) */
     scene_camera_view(f->sc, flash, &v);
     sort_points(f->sc, &v, flash, flash, pts);
     object_pass(f, pts, n, flash, &obj);
-    sort_points(f->sc, &v, set->shut.open, flash, pts);
+    sort_points(f->sc, &v, f->sc->shut.open, flash, pts);
     trail_pass(f, set, pts, n, &mot);
     composite(f, &obj, &mot, set->trails, rgba);
     free(pts), free(mem);

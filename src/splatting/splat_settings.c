@@ -45,10 +45,10 @@ static int by_time(const void *a, const void *b)
 
 /* Sec. 3.6.1: the instants t_j of eq. 3.24 ("chosen stochastically"; which
  * distribution is not said). */
-void splat_instants(const splat_settings *set, double *times)
+void splat_instants(const splat_settings *set, const shutter *shut, double *times)
 {
     int n = set->samples;
-    double t0 = set->shut.open, len = set->shut.close - set->shut.open;
+    double t0 = shut->open, len = shut->close - shut->open;
     uint64_t state = set->seed;
     for (int k = 0; k < n; k++) {
         double u = set->times == SPLAT_TIMES_MIDPOINT ? 0.5 : next_unit(&state);

@@ -46,7 +46,6 @@ typedef struct {
     int buckets;       /* B (bucket): consecutive groups of instants */
     uint64_t seed;     /* stratified and random times */
     double instant;    /* instant: the time splatted */
-    shutter shut;      /* accum, bucket, volumetric: the interval and a(t) */
     splat_alpha alpha; /* volumetric */
     double sigma_t;    /* volumetric: see SPLAT_SIGMA_T_DEFAULT */
     splat_trails trails; /* guan-mueller */
@@ -59,7 +58,8 @@ const char *splat_times_name(splat_times t);
 const char *splat_alpha_name(splat_alpha a);
 const char *splat_trails_name(splat_trails t);
 
-/* The N instants of accum, bucket and volumetric, ascending. */
-void splat_instants(const splat_settings *set, double *times);
+/* The N instants of accum, bucket and volumetric within the shutter
+ * (the scene's, splat_render's s->shut), ascending. */
+void splat_instants(const splat_settings *set, const shutter *shut, double *times);
 
 #endif

@@ -40,12 +40,12 @@ static int splat_buckets(splat_frame *f, const splat_settings *set, int buckets,
     int rc = times && acc && img ? 0 : rr_fail(err, "out of memory for the accumulation buffer");
     double wsum = 0;
     if (!rc)
-        splat_instants(set, times);
+        splat_instants(set, &f->sc->shut, times);
     for (int b = 0; !rc && b < buckets; b++) {
         int begin = (int)((int64_t)b * set->samples / buckets), end = (int)((int64_t)(b + 1) * set->samples / buckets);
         double w = 0;
         for (int j = begin; j < end; j++)
-            w += shutter_weight(&set->shut, times[j]);
+            w += shutter_weight(&f->sc->shut, times[j]);
         if (begin == end || !(w > 0))
             continue;
         splat_group(f, times, begin, end, img);
@@ -65,8 +65,8 @@ static int splat_buckets(splat_frame *f, const splat_settings *set, int buckets,
  * 1e300 moving an object past RR_MAX_REACH) is refused here too. */
 static int check_reach(const scene *s, const splat_settings *set, rr_error *err)
 {
-    double open = set->method == SPLAT_INSTANT ? set->instant : set->shut.open;
-    double close = set->method == SPLAT_INSTANT ? set->instant : set->shut.close;
+    double open = set->method == SPLAT_INSTANT ? set->instant : s->shut.open;
+    double close = set->method == SPLAT_INSTANT ? set->instant : s->shut.close;
     aabb *swept = malloc(((size_t)s->nobjects + 1) * sizeof *swept);
     if (!swept)
         return rr_fail(err, "out of memory for the objects' bounds");

@@ -291,12 +291,13 @@ int splat_volumetric(splat_frame *f, const splat_settings *set, float *rgba, rr_
         return rr_fail(err, "out of memory for the volumetric buffers");
     }
     vbuffers b = {mem, mem + 3 * n, mem + 4 * n, mem + 5 * n, mem + 6 * n};
-    splat_instants(set, times);
-    double asum = 0, dt = (set->shut.close - set->shut.open) / set->samples;
+    const shutter *shut = &f->sc->shut;
+    splat_instants(set, shut, times);
+    double asum = 0, dt = (shut->close - shut->open) / set->samples;
     for (int k = 0; k < set->samples; k++)
-        asum += shutter_weight(&set->shut, times[k]);
+        asum += shutter_weight(shut, times[k]);
     for (int k = 0; asum > 0 && k < set->samples; k++)
-        instant_pass(f, set, times[k], dt, shutter_weight(&set->shut, times[k]) / asum, &b);
+        instant_pass(f, set, times[k], dt, shutter_weight(shut, times[k]) / asum, &b);
     vec3 bg = f->sc->background;
     for (size_t i = 0; i < n; i++) {
         double a = fmin(1.0, fmax(0.0, b.alpha[i])), inv = b.weight[i] > 0 ? 1.0 / b.weight[i] : 0.0;

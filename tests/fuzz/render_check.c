@@ -55,15 +55,14 @@ void fuzz_render_and_check(const char *xml, int box)
         return;
     s.cam.width = s.cam.height = 4; /* as --res: the view is kept */
     accel *a = NULL;
-    accel_settings set = {s.shut.open, s.shut.close, s.epsilon, s.kernel_sigma, 1};
+    accel_settings set = {s.epsilon, s.kernel_sigma, 1};
     if (camera_prepare(&s.cam, &err) == 0 && accel_build(&s, &set, &a, &err) == 0) {
         render_settings rs = render_settings_default();
-        rs.shut = s.shut;
         rs.filter = box ? PIXEL_FILTER_BOX : PIXEL_FILTER_POINT;
         image img;
         volatile sig_atomic_t never = 0;
         if (image_alloc(&img, 4, 4) == 0) {
-            if (render_image(&s, a, &rs, &img, NULL, &never, &err) == 0)
+            if (render_image(a, &rs, &img, NULL, &never, &err) == 0)
                 check_image(&img);
             image_free(&img);
         }
