@@ -61,6 +61,13 @@ TEST_SRCS := $(wildcard tests/test_*.c)
 TEST_OBJS := $(TEST_SRCS:tests/%.c=$(BUILD)/tests/%.o) $(BUILD)/tests/harness.o $(BUILD)/tests/gaussian_test_util.o \
             $(BUILD)/tests/gaussian_hit_util.o
 
+# the libFuzzer targets (tests/fuzz/fuzz_NAME.c); `make test` replays their corpora (below)
+FUZZ_TARGETS := scene ply anim state gaussian camjson render_gaussian render_camjson tum transforms colmap llff
+REPLAY_DIR     := $(BUILD)/replay
+REPLAY_TARGETS := $(FUZZ_TARGETS:%=$(REPLAY_DIR)/replay_%)
+REPLAY_OBJS    := $(FUZZ_TARGETS:%=$(BUILD)/tests/fuzz/fuzz_%.o) $(BUILD)/tests/fuzz/render_check.o \
+                  $(BUILD)/tests/fuzz/replay_main.o
+
 BIN      := $(BUILD)/refrender
 # refrender as a C library (src/api/refrender_api.h) for the Python package
 # (python/, `make python`): the render command's objects and the API
@@ -126,14 +133,15 @@ $(BUILD)/cflags: build-id-always
 	@echo '$(RR_CFLAGS) $(CPPFLAGS)' > $@.tmp && { cmp -s $@.tmp $@ && rm -f $@.tmp || mv -f $@.tmp $@; }
 $(BUILD)/io/render_attrs.o: BUILD_ID_FLAG = -DRR_BUILD_ID='"$(file <$(BUILD)/build_id)"'
 $(BUILD)/tests/%.o: tests/%.c $(BUILD)/tests/%.d $(BUILD)/cflags | $(BUILD)
+	@mkdir -p $(@D)
 	$(CC) $(RR_CPPFLAGS) $(RR_CFLAGS) -Isrc -c $< -o $@
 	@touch $@
 DEPFILES := $(LIB_OBJS:.o=.d) $(APP_OBJS:.o=.d) $(BUILD)/api/refrender_api.d $(TEST_OBJS:.o=.d) $(BUILD)/bench/bench.d $(BUILD)/bench/bench_gaussian.d $(BUILD)/bench/bench_splat.d \
-            $(BUILD)/io/preview-so.d
+            $(BUILD)/io/preview-so.d $(REPLAY_OBJS:.o=.d) $(BUILD)/replay/scene_xml.d
 $(DEPFILES):
 -include $(wildcard $(DEPFILES))
 $(BUILD):
-	mkdir -p $(BUILD)/tests $(BUILD)/cmd
+	mkdir -p $(BUILD)/tests/fuzz $(BUILD)/cmd $(BUILD)/replay
 
 $(BIN): $(APP_OBJS) $(LIB_OBJS) | $(PREVIEW_SO)
 	$(CC) $(SANLD) -o $@ $^ $(LDLIBS)
@@ -196,7 +204,6 @@ endif
 # in build-fuzz/. `make test` replays each target's committed corpus (a
 # regression run of seconds); `make fuzz FUZZ_SECONDS=N` fuzzes each target
 # for N seconds, keeping what it finds in build-fuzz/corpus/.
-FUZZ_TARGETS := scene ply anim state gaussian camjson render_gaussian render_camjson tum transforms colmap llff
 FUZZ_SECONDS ?= 60
 FUZZ_DIR     := build-fuzz
 FUZZ_FLAGS   := -O1 -g -fno-omit-frame-pointer -fsanitize=address,undefined -fno-sanitize-recover=undefined
@@ -228,13 +235,26 @@ $(FUZZ_DIR)/fuzz_%: $(FUZZ_DIR)/fuzz_%.o $(FUZZ_DIR)/render_check.o $(FUZZ_OBJS)
 	clang++ $(FUZZ_FLAGS) -fsanitize=fuzzer $^ -o $@ $(LDLIBS)
 .SECONDARY: $(FUZZ_OBJS) $(FUZZ_TARGETS:%=$(FUZZ_DIR)/fuzz_%.o) $(FUZZ_DIR)/render_check.o
 
-# (after FUZZ_TARGETS: a rule's prerequisites are expanded where it is read)
-test-build: $(BIN) $(TESTBIN) $(BUILD)/refrender-bench $(BUILD)/libfaultinject.so $(LIB_SO) $(FUZZ_TARGETS:%=$(FUZZ_DIR)/fuzz_%) scenes
-test-fuzz: $(FUZZ_TARGETS:%=$(FUZZ_DIR)/fuzz_%)
+# `make test` replays each target's corpus through tests/fuzz/replay_main.c
+# linked with this build's objects (RR_DCHECK on; under SAN=1 ASan and
+# UBSan, as build-fuzz/), not through build-fuzz/'s targets: a second,
+# clang-instrumented build of the whole source was a third of a fresh
+# clone's `make test` build. scene_xml.c is compiled again with the fuzz
+# builds' cap on generated surfels (the corpora were found under it).
+$(REPLAY_DIR)/scene_xml.o: src/scenexml/scene_xml.c $(REPLAY_DIR)/scene_xml.d $(BUILD)/cflags | $(BUILD)
+	@mkdir -p $(@D)
+	$(CC) $(RR_CPPFLAGS) $(RR_CFLAGS) -DSCENE_MAX_GENERATED=1e4 -c $< -o $@
+	@touch $@
+$(REPLAY_DIR)/replay_%: $(BUILD)/tests/fuzz/fuzz_%.o $(BUILD)/tests/fuzz/render_check.o $(BUILD)/tests/fuzz/replay_main.o \
+                       $(REPLAY_DIR)/scene_xml.o $(filter-out $(BUILD)/scenexml/scene_xml.o,$(LIB_OBJS))
+	$(CC) $(SANLD) -o $@ $^ $(LDLIBS)
+.SECONDARY: $(REPLAY_OBJS)
+
+test-build: $(BIN) $(TESTBIN) $(BUILD)/refrender-bench $(BUILD)/libfaultinject.so $(LIB_SO) $(REPLAY_TARGETS) scenes
+test-fuzz: $(REPLAY_TARGETS)
 	for t in $(FUZZ_TARGETS); do \
-	    $(FUZZ_DIR)/fuzz_$$t -runs=0 -rss_limit_mb=8192 tests/fuzz/corpus/$$t 2>$(FUZZ_DIR)/replay_$$t.log \
-	        || { tail -40 $(FUZZ_DIR)/replay_$$t.log; exit 1; }; \
-	    echo "fuzz_$$t: replayed $$(ls tests/fuzz/corpus/$$t | wc -l) corpus inputs"; \
+	    $(REPLAY_DIR)/replay_$$t tests/fuzz/corpus/$$t 2>$(REPLAY_DIR)/replay_$$t.log \
+	        || { tail -40 $(REPLAY_DIR)/replay_$$t.log; exit 1; }; \
 	done
 
 fuzz: $(FUZZ_TARGETS:%=$(FUZZ_DIR)/fuzz_%)
