@@ -173,9 +173,11 @@ $(BUILD)/libfaultinject.so: tests/faultinject.c | $(BUILD)
 # pytest-xdist workers (python3-pytest-xdist): the suite's renders are
 # single processes, so one worker a core halves its time on 2 cores
 TEST_JOBS ?= $(shell nproc)
-test-py: $(BIN) $(TESTBIN) $(BUILD)/refrender-bench $(BUILD)/libfaultinject.so $(LIB_SO) scenes
+# (the C unit tests and the corpus replays run as pytest items too:
+# tests/test_unit_tests.py)
+test-py: $(BIN) $(TESTBIN) $(BUILD)/refrender-bench $(BUILD)/libfaultinject.so $(LIB_SO) $(REPLAY_TARGETS) scenes
 	REFRENDER=$(CURDIR)/$(BIN) UNIT_TESTS=$(CURDIR)/$(TESTBIN) FAULTINJECT=$(CURDIR)/$(BUILD)/libfaultinject.so \
-	    REFRENDER_LIB=$(CURDIR)/$(LIB_SO) \
+	    REFRENDER_LIB=$(CURDIR)/$(LIB_SO) FUZZ_REPLAY_DIR=$(CURDIR)/$(REPLAY_DIR) \
 	    $(PYTHON) -m pytest -q -n $(TEST_JOBS) tests
 
 # A real Slurm (scripts/README.md, "Rendering on a Slurm cluster"): tests/cluster_slurm.py
@@ -193,11 +195,12 @@ ifeq ($(SAN)$(DCHECKS),00)
 test:
 	$(MAKE) DCHECKS=1 test
 else
-# Everything is built first, a job a core (a fresh clone compiles refrender,
-# the unit tests and twelve fuzz targets), then the tests run in order.
+# Everything is built first, a job a core, then pytest runs every test (the
+# C unit tests and the fuzz corpora's replays among its items: pytest's
+# workers share them out with the rest).
 test:
 	$(MAKE) -j$(TEST_JOBS) test-build
-	$(MAKE) test-c test-fuzz test-py
+	$(MAKE) test-py
 endif
 
 # Fuzz targets (tests/fuzz/): libFuzzer with ASan + UBSan, built with clang

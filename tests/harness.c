@@ -58,8 +58,12 @@ int main(int argc, char **argv)
         free(tests);
         return 0;
     }
+    /* --only NAME: that test alone (make test runs each as a pytest item,
+     * tests/test_unit_tests.py, so pytest's workers share them out) */
+    int only = argc > 2 && !strcmp(argv[1], "--only");
+    const char *filter = only ? argv[2] : argc > 1 ? argv[1] : "";
     for (int i = 0; i < ntests; i++) {
-        if (argc > 1 && !strstr(tests[i].name, argv[1]))
+        if (only ? strcmp(tests[i].name, filter) != 0 : !strstr(tests[i].name, filter))
             continue;
         current_failed = 0, current_skip = NULL;
         tests[i].fn();
@@ -77,7 +81,7 @@ int main(int argc, char **argv)
     free(tests);
     /* A filter that names no test ran nothing: that is a failure, not a pass. */
     if (passed + failed + skipped == 0) {
-        fprintf(stderr, "harness: no test matches '%s'\n", argc > 1 ? argv[1] : "");
+        fprintf(stderr, "harness: no test %s '%s'\n", only ? "is named" : "matches", filter);
         return 1;
     }
     return failed ? 1 : 0;
