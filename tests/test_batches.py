@@ -132,7 +132,7 @@ def test_merge_refuses_mismatched_missing_and_overlapping_states(tmp_path):
     assert not (tmp_path / "x.exr").exists()
 
 
-SLOW = [SCENE, "--res", "96x96", "--spp", 4, "--tspp", 48, "--batches", 6, "--threads", 2, "--quiet"]
+SLOW = [SCENE, "--res", "64x64", "--spp", 4, "--tspp", 48, "--batches", 6, "--threads", 2, "--quiet"]
 
 
 def wait_for(path, timeout=60):
@@ -166,7 +166,7 @@ def test_killed_render_resumes_to_the_uninterrupted_image(tmp_path):
 
 def test_sigterm_writes_a_final_checkpoint(tmp_path):
     ck = tmp_path / "ck.exr"
-    longer = [*SLOW, "--max-batches", 60]  # same identity, ~40 s of work: still running at 1.5 s
+    longer = [*SLOW, "--max-batches", 60]  # same identity, ~20 s of work: still running at 1.5 s
     proc = subprocess.Popen([BIN, *map(str, longer), "--batches", "60", "-o", str(tmp_path / "out.exr"),
                              "--checkpoint", str(ck), "--checkpoint-every", "1000"], stderr=subprocess.PIPE, text=True)
     wait_for_handlers(proc)
