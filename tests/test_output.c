@@ -8,6 +8,7 @@
 #include "formats/exr.h"
 #include "harness.h"
 #include "io/output.h"
+#include "render/exact.h"
 
 static const char *state_path(const char *name)
 {
@@ -171,4 +172,28 @@ TEST(huge_data_windows_are_refused_before_allocating)
     int w, h;
     CHECK(exr_read_size(p, &w, &h, &e) != 0 && strstr(e.msg, "data window 20000x20000 is empty or larger than"));
     unlink(p);
+}
+
+/* An integrator's counter per traced ray (exact time's unresolved share)
+ * merges to the ray-weighted mean: states of 100 and 300 rays with shares
+ * 0.1 and 0.4 hold 10 + 120 = 130 share-rays of 400 rays, 0.325 (unequal
+ * rays, so a plain mean, 0.25, or either state's own share fails). A state
+ * without the counter cannot join one with it. */
+TEST(a_counter_per_ray_merges_to_the_ray_weighted_mean)
+{
+    static attr_list merged, b; /* (330 KB each) */
+    rr_error e;
+    merged.n = b.n = 0;
+    attrs_set(&merged, ATTR_RAYS, "100"), attrs_set(&merged, EXACT_UNRESOLVED_SHARE_ATTR, "0.1");
+    attrs_set(&b, ATTR_RAYS, "300"), attrs_set(&b, EXACT_UNRESOLVED_SHARE_ATTR, "0.4");
+    CHECK(attrs_combine(&merged, "a.exr", &b, "b.exr", &e) == 0);
+    printf("    merged share %s of %s rays\n", attrs_get(&merged, EXACT_UNRESOLVED_SHARE_ATTR),
+           attrs_get(&merged, ATTR_RAYS));
+    CHECK(!strcmp(attrs_get(&merged, EXACT_UNRESOLVED_SHARE_ATTR), "0.325"));
+    CHECK(!strcmp(attrs_get(&merged, ATTR_RAYS), "400"));
+    b.n = 0;
+    attrs_set(&b, ATTR_RAYS, "300");
+    CHECK(attrs_combine(&merged, "a.exr", &b, "b.exr", &e) == -1);
+    printf("    %s\n", e.msg);
+    CHECK(strstr(e.msg, "has " EXACT_UNRESOLVED_SHARE_ATTR " but b.exr lacks it") != NULL);
 }

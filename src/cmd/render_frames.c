@@ -11,7 +11,6 @@
 #include "cmd/noise_report.h"
 #include "cmd/render_sink.h"
 #include "cmd/render_cmd.h"
-#include "render/exact.h"
 #include "render/integrator.h"
 #include "io/output.h"
 #include "io/render_attrs.h"
@@ -174,19 +173,15 @@ static void report(const render_options *o, const scene *s, const image *img, in
                         "(refrender:clampedEstimates)\n", (unsigned long long)img->clamped, FILM_LIMIT);
 }
 
-/* Exact time: the share of the shutter, over all spatial samples, left in
- * pieces too short to certify (exact.h, EXACT_TIME_TOL): their blended set
- * is the one at their middle. In the header always; on stderr when above
- * 100 times the tolerance, since every coverage event leaves a few pieces
- * of the tolerance's length. */
-static void report_unresolved(const render_options *o, const image *img, const shutter *shut, attr_list *attrs)
+/* The integrator's own counters into the header, and its warnings about
+ * them on stderr (not with --quiet), whatever they mean (render/counters.h). */
+static void report_counters(const render_options *o, const image *img, const shutter *shut, attr_list *attrs)
 {
-    double share = img->rays > 0 ? img->exact_unresolved / ((double)img->rays * (shut->close - shut->open)) : 0.0;
-    attrs_set(attrs, ATTR_EXACT_UNRESOLVED_SHARE, "%.6g", share);
-    if (share > 100 * EXACT_TIME_TOL && !o->quiet)
-        fprintf(stderr, "refrender: warning: exact time left %.3g of the shutter (over all spatial samples) in pieces "
-                        "shorter than %g of it, taken with the blended set at their middle\n",
-                share, EXACT_TIME_TOL);
+    const counter_set *c = &img->counters;
+    output_counter_attrs(attrs, c, img->rays, shut->close - shut->open);
+    for (int i = 0; i < c->n && !o->quiet; i++)
+        if (c->spec[i].warn)
+            c->spec[i].warn(output_counter_value(c, i, img->rays, shut->close - shut->open));
 }
 
 /* A keyframed scale through zero is held at 1e-9 (animation.h): the
@@ -294,8 +289,7 @@ static int render_one(const accel *acc, long long frame, const render_options *o
         attrs_set(&run.attrs, ATTR_RENDER_SECONDS, "%.3f", img.seconds);
         attrs_set(&run.attrs, ATTR_RAYS, "%llu", (unsigned long long)img.rays);
         attrs_set(&run.attrs, ATTR_CLAMPED, "%llu", (unsigned long long)img.clamped);
-        if (o->exact_time)
-            report_unresolved(o, &img, &s->shut, &run.attrs);
+        report_counters(o, &img, &s->shut, &run.attrs);
         if (o->frames && s->frame_rate > 0)
             attrs_set(&run.attrs, ATTR_FRAME_RATE, "%.17g", s->frame_rate);
         if (o->frames)

@@ -28,7 +28,8 @@ typedef struct {
     atomic_int batch_failed;   /* a batch failed (see failed_status): the render stops */
     int failed_status, failed_px, failed_py; /* under lock: the first failure (the integrator's status) and its
                                                 pixel */
-    double unresolved;         /* under lock: integrator_counts.unresolved summed over tiles */
+    double counter[COUNTERS_MAX]; /* under lock: the row's own counters (integrator_counts.counter) summed over
+                                     tiles */
     pthread_mutex_t lock;
     pthread_cond_t cond;  /* to the coordinator: a worker is ready or done with a round; a pause's end */
     pthread_cond_t start; /* to the workers: a round begins, or the render ends */
@@ -130,7 +131,8 @@ static int pixel_batch(render_job *job, int x, int y, pixel_state *p, thread_scr
 static void add_counts(render_job *job, const integrator_counts *c, uint64_t clamped, uint64_t done)
 {
     pthread_mutex_lock(&job->lock);
-    job->unresolved += c->unresolved;
+    for (int i = 0; i < job->integ->ncounters; i++)
+        job->counter[i] += c->counter[i];
     pthread_mutex_unlock(&job->lock);
     atomic_fetch_add(&job->rays, c->rays);
     atomic_fetch_add(&job->overflows, c->overflows);
@@ -497,6 +499,18 @@ static int job_init(render_job *job, const accel *a, const render_settings *rs, 
     return 0;
 }
 
+/* The row's counters summed by this render into the image's. (A resumed
+ * render's counters hold only its own work: a checkpoint does not carry
+ * them, though it carries the rays.) */
+static void add_row_counters(counter_set *into, const integrator_ops *integ, const double *sum)
+{
+    RR_DCHECK(integ->ncounters >= 0 && integ->ncounters <= COUNTERS_MAX);
+    RR_DCHECK(!into->spec || (into->spec == integ->counters && into->n == integ->ncounters));
+    into->spec = integ->counters, into->n = integ->ncounters;
+    for (int i = 0; i < integ->ncounters; i++)
+        into->sum[i] += sum[i];
+}
+
 /* The job's statistics into the image, and its resources released. */
 static void job_finish(render_job *job, image *img, double start)
 {
@@ -510,7 +524,7 @@ static void job_finish(render_job *job, image *img, double start)
     img->kbuffer_overflows += atomic_load(&job->overflows);
     img->static_traversals += atomic_load(&job->static_traversals);
     img->clamped += atomic_load(&job->clamped);
-    img->exact_unresolved += job->unresolved;
+    add_row_counters(&img->counters, job->integ, job->counter);
 }
 
 int render_image(const accel *a, const render_settings *rs, image *img, const render_hooks *hooks,
