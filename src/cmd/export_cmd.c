@@ -299,10 +299,11 @@ static void (*const model_writers[])(FILE *f, const scene_object *o) = {
     [OBJECT_SPHERE] = write_sphere,
     [OBJECT_GAUSSIANS] = write_gaussians,
 };
+_Static_assert(sizeof model_writers / sizeof *model_writers == OBJECT_KIND_COUNT, "an object kind without its writer");
 
 static void write_model(FILE *f, const scene_object *o)
 {
-    RR_DCHECK((unsigned)o->kind < sizeof model_writers / sizeof *model_writers);
+    RR_DCHECK((unsigned)o->kind < OBJECT_KIND_COUNT);
     model_writers[o->kind](f, o);
 }
 
