@@ -133,7 +133,7 @@ static const integrator_ops *const rows[] = {&surfel_integrator_row, &gaussian_i
 
 /* A 16x16 render of the toy row (found by id in `rows`): 2 batches of a
  * 2x2 grid at each pixel centre (point filter) on 2 threads. */
-static int toy_render(image *img, int crop, rr_error *err)
+static int toy_render(image *img, int crop, const render_hooks *hooks, rr_error *err)
 {
     scene s;
     accel *a;
@@ -149,7 +149,7 @@ static int toy_render(image *img, int crop, rr_error *err)
     volatile sig_atomic_t cancel = 0;
     CHECK(image_alloc(img, W, H) == 0);
     toy_setups = toy_teardowns = toy_arena_mallocs = 0;
-    int rc = render_image(a, &rs, img, NULL, &cancel, err);
+    int rc = render_image(a, &rs, img, hooks, &cancel, err);
     accel_free(a);
     scene_free(&s);
     return rc;
@@ -173,7 +173,7 @@ TEST(a_toy_integrator_plugs_into_the_loop_with_one_table_line)
     image img;
     rr_error e;
     toy_fails = 0;
-    CHECK(toy_render(&img, 0, &e) == 0);
+    CHECK(toy_render(&img, 0, NULL, &e) == 0);
     for (int y = 0; y < H; y++)
         for (int x = 0; x < W; x++) {
             double mean[4], var[4];
@@ -205,14 +205,45 @@ TEST(a_toy_integrators_check_and_failure_are_its_own)
     image img;
     rr_error e;
     toy_fails = 0;
-    CHECK(toy_render(&img, 1, &e) == -1);
+    CHECK(toy_render(&img, 1, NULL, &e) == -1);
     CHECK(!strcmp(e.msg, "toy: no crop window"));
     CHECK(toy_setups == 0 && toy_teardowns == 0);
     image_free(&img);
     toy_fails = 1;
-    CHECK(toy_render(&img, 0, &e) == -1);
+    CHECK(toy_render(&img, 0, NULL, &e) == -1);
     printf("    %s\n", e.msg);
     CHECK(!strcmp(e.msg, "toy: status -7 at pixel (5, 3)"));
     CHECK(toy_setups == 1 && toy_teardowns == 1);
+    image_free(&img);
+}
+
+/* A checkpoint taken while the render runs holds the row's counters as far
+ * as its rays (a resumed render reads them back, render_frames.c): the
+ * toy's "one" counter adds the shutter's length, 3, per ray, so in every
+ * checkpoint its sum is exactly 3 x rays (integers in doubles). Taken at
+ * each of the coordinator's waits (every 1e-9 s), so each of the 2 rounds
+ * has one, the second's after round 1's rays at least. */
+static int toy_checkpoints, toy_checkpoints_with_rays, toy_checkpoints_wrong;
+
+static int toy_checkpoint(void *user, const image *img, rr_error *err)
+{
+    (void)user, (void)err;
+    toy_checkpoints++;
+    toy_checkpoints_with_rays += img->rays > 0;
+    toy_checkpoints_wrong += img->counters.n != 2 || img->counters.sum[TOY_COUNTER_ONE] != 3.0 * (double)img->rays;
+    return 0;
+}
+
+TEST(a_checkpoint_holds_the_rows_counters_as_far_as_its_rays)
+{
+    image img;
+    rr_error e;
+    render_hooks hooks = {NULL, toy_checkpoint, NULL, 1e-9, NULL};
+    toy_fails = toy_checkpoints = toy_checkpoints_with_rays = toy_checkpoints_wrong = 0;
+    CHECK(toy_render(&img, 0, &hooks, &e) == 0);
+    printf("    %d checkpoints, %d with rays, %d without the counters' sums\n", toy_checkpoints,
+           toy_checkpoints_with_rays, toy_checkpoints_wrong);
+    CHECK(toy_checkpoints_with_rays >= 1 && toy_checkpoints_wrong == 0);
+    CHECK(img.counters.sum[TOY_COUNTER_ONE] == 3.0 * (double)img.rays); /* the final sums too */
     image_free(&img);
 }

@@ -33,6 +33,7 @@ static void print_progress(void *user, double fraction, uint64_t rays, double se
 
 typedef struct {
     const render_options *o;
+    const scene *sc; /* the frame's (accel_scene): its shutter is the render's */
     render_settings rs;
     attr_list attrs;
     uint32_t total_batches;
@@ -45,6 +46,7 @@ static int write_checkpoint(void *user, const image *img, rr_error *err)
     attrs_set(&run->attrs, ATTR_RENDER_SECONDS, "%.3f", img->seconds);
     attrs_set(&run->attrs, ATTR_RAYS, "%llu", (unsigned long long)img->rays);
     attrs_set(&run->attrs, ATTR_CLAMPED, "%llu", (unsigned long long)img->clamped);
+    output_counter_attrs(&run->attrs, &img->counters, img->rays, run->sc->shut.close - run->sc->shut.open);
     return output_write_state(run->o->checkpoint, img, run->rs.batch_begin,
                               run->rs.batch_begin + run->rs.batches, &run->attrs, err);
 }
@@ -87,6 +89,24 @@ static int check_resumable_counts(const render_run *run, image *img, rr_error *e
 }
 
 /* Loads --resume into img after checking it is this very render. */
+/* The integrator's counters the state holds (write_checkpoint), summed
+ * again from their header values (to their 6 digits), so that the resumed
+ * render's are the whole render's. Only an integrator asked for by name
+ * (--time-integration) declares counters: the rows the scene chooses
+ * (surfels, Gaussians) have none. */
+static void resume_counters(const render_run *run, const attr_list *saved, image *img)
+{
+    const integrator_ops *row = run->rs.integrator;
+    if (!row)
+        return;
+    img->counters.spec = row->counters, img->counters.n = row->ncounters;
+    double shutter = run->sc->shut.close - run->sc->shut.open;
+    for (int i = 0; i < row->ncounters; i++) {
+        const char *value = attrs_get(saved, row->counters[i].attribute);
+        img->counters.sum[i] = value ? output_counter_sum(&row->counters[i], strtod(value, NULL), img->rays, shutter) : 0.0;
+    }
+}
+
 static int resume_state(render_run *run, image *img, rr_error *err)
 {
     attr_list saved;
@@ -110,6 +130,7 @@ static int resume_state(render_run *run, image *img, rr_error *err)
     img->rays = rays ? (uint64_t)strtod(rays, NULL) : 0;
     img->clamped = clamped ? (uint64_t)strtod(clamped, NULL) : 0;
     img->seconds = seconds ? strtod(seconds, NULL) : 0.0;
+    resume_counters(run, &saved, img);
     if (!run->o->quiet) { /* a log then shows the work kept */
         uint64_t done = 0, n = (uint64_t)img->width * img->height;
         for (uint64_t i = 0; i < n; i++)
@@ -132,7 +153,7 @@ static void setup_run(render_run *run, const scene *s, const render_options *o, 
     uint32_t total = (uint32_t)o->batches;
     uint32_t begin = o->passes ? (uint32_t)((uint64_t)o->pass * total / o->passes) : 0;
     uint32_t end = o->passes ? (uint32_t)((uint64_t)(o->pass + 1) * total / o->passes) : total;
-    run->o = o;
+    run->o = o, run->sc = s;
     run->total_batches = total;
     run->last_progress = 0;
     run->rs = (render_settings){

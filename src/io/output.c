@@ -177,6 +177,12 @@ double output_counter_value(const counter_set *c, int i, uint64_t rays, double s
     return rays > 0 ? c->sum[i] / ((double)rays * shutter_length) : 0.0;
 }
 
+double output_counter_sum(const counter_spec *spec, double value, uint64_t rays, double shutter_length)
+{
+    RR_DCHECK(spec->scale == COUNTER_SHARE_PER_RAY);
+    return value * (double)rays * shutter_length;
+}
+
 void output_counter_attrs(attr_list *a, const counter_set *c, uint64_t rays, double shutter_length)
 {
     for (int i = 0; i < c->n; i++)

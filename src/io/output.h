@@ -148,6 +148,9 @@ int attrs_combine(attr_list *merged, const char *merged_name, const attr_list *b
 /* Counter i's header value (render/counters.h: its scale), for a render
  * of `rays` rays over a shutter of that length. */
 double output_counter_value(const counter_set *c, int i, uint64_t rays, double shutter_length);
+/* The sum a counter's header value stands for (output_counter_value's
+ * inverse, up to the value's 6 digits): a resumed state's. */
+double output_counter_sum(const counter_spec *spec, double value, uint64_t rays, double shutter_length);
 /* Each of the counters as its header attribute. */
 void output_counter_attrs(attr_list *a, const counter_set *c, uint64_t rays, double shutter_length);
 

@@ -2,8 +2,9 @@
  * table (integrator.h) declares a short list of them; the render loop sums
  * them over batches and threads into the image (film.h), and the header
  * writes each as its attribute (io/output.h, output_counter_attrs), none of
- * the three knowing what a counter means. Exact time's share of the
- * shutter left uncertified (exact.h) is one. */
+ * the three knowing what a counter means; a checkpoint's header holds them
+ * too, and a resumed render reads them back (render_frames.c). Exact
+ * time's share of the shutter left uncertified (exact.h) is one. */
 #ifndef RR_COUNTERS_H
 #define RR_COUNTERS_H
 

@@ -327,9 +327,21 @@ static int pool_start(render_job *job, rr_error *err)
                    (long long)sampler_count(&job->rs->smp));
 }
 
+/* The row's counters summed by this render into the image's (which holds
+ * a resumed state's: render_frames.c reads them back). */
+static void add_row_counters(counter_set *into, const integrator_ops *integ, const double *sum)
+{
+    RR_DCHECK(integ->ncounters >= 0 && integ->ncounters <= COUNTERS_MAX);
+    RR_DCHECK(!into->spec || (into->spec == integ->counters && into->n == integ->ncounters));
+    into->spec = integ->counters, into->n = integ->ncounters;
+    for (int i = 0; i < integ->ncounters; i++)
+        into->sum[i] += sum[i];
+}
+
 /* The state written carries the work its batches took so far (the rays of
- * the finished tiles and the seconds), so that a resumed render reports
- * the rays and time of the whole render, as an uninterrupted one. */
+ * the finished tiles, the seconds and the row's counters), so that a
+ * resumed render reports the rays, time and counters of the whole render,
+ * as an uninterrupted one. */
 static int checkpoint_paused(render_job *job, const render_hooks *hooks, double start, rr_error *err)
 {
     pthread_mutex_lock(&job->lock);
@@ -340,9 +352,11 @@ static int checkpoint_paused(render_job *job, const render_hooks *hooks, double 
     image *img = job->img;
     uint64_t rays = img->rays;
     double seconds = img->seconds;
+    counter_set counters = img->counters;
     img->rays += atomic_load(&job->rays), img->seconds += rr_seconds() - start;
+    add_row_counters(&img->counters, job->integ, job->counter); /* (the workers are paused: none adds) */
     int rc = hooks->checkpoint(hooks->user, img, err);
-    img->rays = rays, img->seconds = seconds;
+    img->rays = rays, img->seconds = seconds, img->counters = counters;
     pthread_mutex_lock(&job->lock);
     job->paused = 0;
     pthread_cond_broadcast(&job->cond);
@@ -497,18 +511,6 @@ static int job_init(render_job *job, const accel *a, const render_settings *rs, 
     pthread_cond_init(&job->cond, NULL);
     pthread_cond_init(&job->start, NULL);
     return 0;
-}
-
-/* The row's counters summed by this render into the image's. (A resumed
- * render's counters hold only its own work: a checkpoint does not carry
- * them, though it carries the rays.) */
-static void add_row_counters(counter_set *into, const integrator_ops *integ, const double *sum)
-{
-    RR_DCHECK(integ->ncounters >= 0 && integ->ncounters <= COUNTERS_MAX);
-    RR_DCHECK(!into->spec || (into->spec == integ->counters && into->n == integ->ncounters));
-    into->spec = integ->counters, into->n = integ->ncounters;
-    for (int i = 0; i < integ->ncounters; i++)
-        into->sum[i] += sum[i];
 }
 
 /* The job's statistics into the image, and its resources released. */
