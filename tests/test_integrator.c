@@ -21,7 +21,8 @@ enum { TOY_COUNTER_ONE, TOY_COUNTER_COLUMN }; /* the toy's counters, by index (t
 
 static const char *const EMPTY_SCENE =
     "<scene><camera position='0 0 0' lookat='0 0 -1' up='0 1 0' fov='20' width='16' height='16'/>"
-    "<shutter open='2' close='5'/><object><pointModel><splat center='0 0 -10' normal='0 0 1' radius='0.1' color='1 1 1'/>"
+    "<shutter open='2' close='5'/>"
+    "<object><pointModel><splat center='0 0 -10' normal='0 0 1' radius='0.1' color='1 1 1'/>"
     "</pointModel></object></scene>";
 
 /* The toy's per-render plan: its estimate's green channel, and whether its

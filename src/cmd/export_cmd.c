@@ -644,7 +644,8 @@ static int export_scene(const export_options *o, rr_error *err)
     scene s;
     export_output out[MAX_EXPORT_OUTPUTS];
     int n = export_outputs(o, out);
-    if (check_outputs(out, n, err) || scene_load_file_params(o->scene, &(scene_load_options){&o->params, NULL}, &s, err))
+    scene_load_options load = {&o->params, NULL}; /* (no flag: export catches no signal, one ends it) */
+    if (check_outputs(out, n, err) || scene_load_file_params(o->scene, &load, &s, err))
         return -1;
     int rc = 0;
     if (o->shutter_set) { /* as the render applies it (render_cmd.c, apply_overrides) */

@@ -88,7 +88,6 @@ static int check_resumable_counts(const render_run *run, image *img, rr_error *e
     return 0;
 }
 
-/* Loads --resume into img after checking it is this very render. */
 /* The integrator's counters the state holds (write_checkpoint), summed
  * again from their header values (to their 6 digits), so that the resumed
  * render's are the whole render's. Only an integrator asked for by name
@@ -103,10 +102,12 @@ static void resume_counters(const render_run *run, const attr_list *saved, image
     double shutter = run->sc->shut.close - run->sc->shut.open;
     for (int i = 0; i < row->ncounters; i++) {
         const char *value = attrs_get(saved, row->counters[i].attribute);
-        img->counters.sum[i] = value ? output_counter_sum(&row->counters[i], strtod(value, NULL), img->rays, shutter) : 0.0;
+        double held = value ? strtod(value, NULL) : 0.0;
+        img->counters.sum[i] = output_counter_sum(&row->counters[i], held, img->rays, shutter);
     }
 }
 
+/* Loads --resume into img after checking it is this very render. */
 static int resume_state(render_run *run, image *img, rr_error *err)
 {
     attr_list saved;

@@ -49,7 +49,9 @@ typedef enum {
 } tangent_kind;
 
 /* (INFINITY_KIND_COUNT, last, is how many: curve.c's names assert it) */
-typedef enum { INF_CONSTANT, INF_LINEAR, INF_CYCLE, INF_CYCLE_RELATIVE, INF_OSCILLATE, INFINITY_KIND_COUNT } infinity_kind;
+typedef enum {
+    INF_CONSTANT, INF_LINEAR, INF_CYCLE, INF_CYCLE_RELATIVE, INF_OSCILLATE, INFINITY_KIND_COUNT
+} infinity_kind;
 
 typedef struct {
     double time, value;

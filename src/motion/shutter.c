@@ -20,7 +20,7 @@ void shutter_default(shutter *s)
 
 static const char *const ROLLING_NAMES[] = {"off", "lines", "3dgs-deblur", "gsplat"};
 static const char *const READOUT_NAMES[] = {"top-to-bottom", "bottom-to-top", "left-to-right", "right-to-left"};
-_Static_assert(sizeof ROLLING_NAMES / sizeof *ROLLING_NAMES == ROLLING_KIND_COUNT, "a rolling shutter without its name");
+_Static_assert(sizeof ROLLING_NAMES / sizeof *ROLLING_NAMES == ROLLING_KIND_COUNT, "a rolling kind without its name");
 _Static_assert(sizeof READOUT_NAMES / sizeof *READOUT_NAMES == READOUT_DIR_COUNT, "a readout without its name");
 
 const char *shutter_rolling_name(rolling_kind k) { return ROLLING_NAMES[k]; }
