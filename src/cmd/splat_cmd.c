@@ -129,7 +129,7 @@ static int parse_option(int c, const char *arg, splat_options *o, rr_error *err)
 static int parse_method(const char *name, splat_method *m, rr_error *err)
 {
     static const char *const names[] = {"instant", "accum", "bucket", "volumetric", "guan-mueller"};
-    for (int i = 0; i < 5; i++)
+    for (int i = 0; i < (int)(sizeof names / sizeof *names); i++)
         if (!strcmp(name, names[i]))
             return *m = (splat_method)i, 0;
     return rr_fail(err, "unknown method '%s': expected instant, accum, bucket, volumetric or guan-mueller", name);
