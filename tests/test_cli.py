@@ -172,8 +172,8 @@ def test_sigterm_while_loading_a_large_model_exits_130(tmp_path):
     """Regression: the signal handlers were installed only after the BVH
     build, so SIGTERM while a large model loaded killed the process (exit
     143, -15 here) instead of the documented 130. The handlers now come
-    first, the PLY reader polls the flag, and load and build stop with 130
-    and no output."""
+    first, the PLY reader polls the flag it is handed, and load and build
+    stop with 130 and no output."""
     n = 600_000  # about 150 MB: a few seconds of reading and parsing
     names = ["x", "y", "z", "nx", "ny", "nz", "f_dc_0", "f_dc_1", "f_dc_2", *[f"f_rest_{i}" for i in range(45)],
              "opacity", "scale_0", "scale_1", "scale_2", "rot_0", "rot_1", "rot_2", "rot_3"]
@@ -203,7 +203,9 @@ def test_sigterm_while_loading_a_large_model_exits_130(tmp_path):
     proc.send_signal(signal.SIGTERM)
     _, err = proc.communicate(timeout=60)
     assert proc.returncode == 130, (proc.returncode, err)
-    assert "interrupted" in err and not (tmp_path / "o.exr").exists()
+    # the reader itself stopped (the flag it is handed through the scene loader, issue 57), not the
+    # check after a load that ran to its end: the signal lands seconds before the read can end
+    assert "interrupted while reading vertex" in err and not (tmp_path / "o.exr").exists(), err
 
 
 def test_an_output_name_refrender_will_not_write_is_refused_before_rendering(tmp_path):

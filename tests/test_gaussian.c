@@ -380,12 +380,12 @@ TEST(gaussian_read_takes_a_file_and_hashes_its_bytes)
     rr_error e;
     uint64_t h1 = 1, h2 = 1;
     gaussian_model_init(&m);
-    CHECK(gaussian_read(path, GAUSSIAN_AUTO, &m, &h1, &e) == 0 && m.count == 1 && m.kind == GAUSSIAN_2D);
-    CHECK(gaussian_read(path, GAUSSIAN_AUTO, &m, &h2, &e) == 0 && h1 == h2 && h1 != 1);
+    CHECK(gaussian_read(path, GAUSSIAN_AUTO, &m, &h1, NULL, &e) == 0 && m.count == 1 && m.kind == GAUSSIAN_2D);
+    CHECK(gaussian_read(path, GAUSSIAN_AUTO, &m, &h2, NULL, &e) == 0 && h1 == h2 && h1 != 1);
     gaussian_model_free(&m);
     unlink(path);
     free(buf);
-    CHECK(gaussian_read(path, GAUSSIAN_AUTO, &m, NULL, &e) == -1 && strstr(e.msg, path));
+    CHECK(gaussian_read(path, GAUSSIAN_AUTO, &m, NULL, NULL, &e) == -1 && strstr(e.msg, path));
 }
 
 /* The 3x3 rotation of a unit quaternion (w, x, y, z), as the official
@@ -418,7 +418,7 @@ TEST(gaussians_from_surfels_round_trip_through_the_official_layout)
         int fd = mkstemp(path);
         close(fd);
         CHECK(gaussian_write_ply(path, &m, &e) == 0);
-        CHECK(gaussian_read(path, GAUSSIAN_AUTO, &back, NULL, &e) == 0);
+        CHECK(gaussian_read(path, GAUSSIAN_AUTO, &back, NULL, NULL, &e) == 0);
         unlink(path);
         CHECK(back.count == 4 && (int)back.kind == kind && back.sh_degree == 3);
         for (int i = 0; i < 4 && back.count == 4; i++) {
@@ -470,7 +470,7 @@ TEST(gaussian_a_large_model_is_streamed_to_the_same_model_and_hash)
     close(fd);
     CHECK(gaussian_write_ply(path, &m, &err) == 0);
     uint64_t streamed = INPUT_HASH_INIT;
-    CHECK(gaussian_read(path, GAUSSIAN_AUTO, &back, &streamed, &err) == 0);
+    CHECK(gaussian_read(path, GAUSSIAN_AUTO, &back, &streamed, NULL, &err) == 0);
     input_file whole;
     CHECK(input_file_read(path, (size_t)1 << 30, &whole, &err) == 0);
     CHECK(whole.len > ((size_t)64 << 20));

@@ -386,7 +386,7 @@ static int opens_while_reading(const char *path, gaussian_model *m, uint64_t *h,
     /* closes watched too: inotify merges an event with an identical unread one
      * before it, so two opens in a row would count as one */
     int wd = fd >= 0 ? inotify_add_watch(fd, path, IN_OPEN | IN_CLOSE) : -1;
-    *rc = gaussian_read(path, GAUSSIAN_AUTO, m, h, &e);
+    *rc = gaussian_read(path, GAUSSIAN_AUTO, m, h, NULL, &e);
     int opens = 0;
     char events[4096] __attribute__((aligned(__alignof__(struct inotify_event))));
     ssize_t n;

@@ -311,7 +311,7 @@ TEST(a_third_kind_renders_as_the_static_model_of_its_instant)
     gaussian_model m;
     gaussian_model_init(&m);
     rr_error e;
-    CHECK(gaussian_read(ply, GAUSSIAN_3D, &m, NULL, &e) == 0);
+    CHECK(gaussian_read(ply, GAUSSIAN_3D, &m, NULL, NULL, &e) == 0);
     for (int i = 0; i < 3; i++)
         for (int k = 0; k < 3; k++)
             m.mean[3 * i + k] = (float)(m.mean[3 * i + k] + (float)three_vel[i][k] * (T - (float)three_c[i]));

@@ -3,20 +3,25 @@
  * with no edit to render.c, render.h or film.h. Its answers are known
  * without our renderer: with the point filter every sample of pixel
  * (px, py) lies at its centre, so a toy estimate of (x / W, y / H) is
- * exactly the centre's; its setup, check, status and counts are its own. */
+ * exactly the centre's; its setup, check, status and counts are its own,
+ * its two counters too (summed by the loop, written by output.h's
+ * output_counter_attrs without a line about them anywhere else). */
 #include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "harness.h"
+#include "io/output.h"
 #include "render/integrator.h"
 #include "render/render.h"
 #include "scenexml/scene_xml.h"
 
 enum { W = 16, H = 16, TOY_FAILED = -7, FAIL_X = 5, FAIL_Y = 3 };
+enum { TOY_COUNTER_ONE, TOY_COUNTER_COLUMN }; /* the toy's counters, by index (toy_counters) */
 
 static const char *const EMPTY_SCENE =
     "<scene><camera position='0 0 0' lookat='0 0 -1' up='0 1 0' fov='20' width='16' height='16'/>"
+    "<shutter open='2' close='5'/>"
     "<object><pointModel><splat center='0 0 -10' normal='0 0 1' radius='0.1' color='1 1 1'/>"
     "</pointModel></object></scene>";
 
@@ -86,6 +91,9 @@ static int toy_batch(void *thread, const integrator_context *ctx, const pixel_sa
         return TOY_FAILED;
     est[0] = x / W, est[1] = p->green, est[2] = y / H, est[3] = 1;
     c->rays += (uint64_t)ps->count;
+    double shutter = ctx->sc->shut.close - ctx->sc->shut.open;
+    c->counter[TOY_COUNTER_COLUMN] += ps->count * shutter * x / W;
+    c->counter[TOY_COUNTER_ONE] += ps->count * shutter;
     return INTEGRATOR_OK;
 }
 
@@ -105,10 +113,19 @@ static int toy_batch_failure(int status, int px, int py, rr_error *err)
     return rr_fail(err, "toy: status %d at pixel (%d, %d)", status, px, py);
 }
 
+/* The toy's counters: per sample, its column's centre x / W and 1, each
+ * times the shutter's length (a share of the shutter per ray, as exact
+ * time's). The header values are then the mean column centre over the
+ * image, 1/2 by its symmetry about the middle column line, and 1. */
+static const counter_spec toy_counters[] = {
+    [TOY_COUNTER_ONE] = {"toy:one", COUNTER_SHARE_PER_RAY, NULL},
+    [TOY_COUNTER_COLUMN] = {"toy:meanColumn", COUNTER_SHARE_PER_RAY, NULL},
+};
+
 static const integrator_ops toy_integrator_row = {
     .id = "toy", .name = "toy", .check = toy_check, .setup = toy_setup, .teardown = toy_teardown,
     .thread_new = toy_thread_new, .pixel_batch = toy_batch, .thread_free = toy_thread_free,
-    .batch_failure = toy_batch_failure,
+    .batch_failure = toy_batch_failure, .counters = toy_counters, .ncounters = 2,
 };
 
 /* The built-in rows and the toy's: the one line that plugs it in. */
@@ -117,7 +134,7 @@ static const integrator_ops *const rows[] = {&surfel_integrator_row, &gaussian_i
 
 /* A 16x16 render of the toy row (found by id in `rows`): 2 batches of a
  * 2x2 grid at each pixel centre (point filter) on 2 threads. */
-static int toy_render(image *img, int crop, rr_error *err)
+static int toy_render(image *img, int crop, const render_hooks *hooks, rr_error *err)
 {
     scene s;
     accel *a;
@@ -133,7 +150,7 @@ static int toy_render(image *img, int crop, rr_error *err)
     volatile sig_atomic_t cancel = 0;
     CHECK(image_alloc(img, W, H) == 0);
     toy_setups = toy_teardowns = toy_arena_mallocs = 0;
-    int rc = render_image(a, &rs, img, NULL, &cancel, err);
+    int rc = render_image(a, &rs, img, hooks, &cancel, err);
     accel_free(a);
     scene_free(&s);
     return rc;
@@ -157,7 +174,7 @@ TEST(a_toy_integrator_plugs_into_the_loop_with_one_table_line)
     image img;
     rr_error e;
     toy_fails = 0;
-    CHECK(toy_render(&img, 0, &e) == 0);
+    CHECK(toy_render(&img, 0, NULL, &e) == 0);
     for (int y = 0; y < H; y++)
         for (int x = 0; x < W; x++) {
             double mean[4], var[4];
@@ -170,6 +187,12 @@ TEST(a_toy_integrator_plugs_into_the_loop_with_one_table_line)
             CHECK_NEAR(mean[3], 1.0, 1e-15);
         }
     CHECK(img.rays == 2u * 4 * W * H);
+    CHECK(img.counters.spec == toy_counters && img.counters.n == 2);
+    static attr_list attrs; /* (330 KB) */
+    output_counter_attrs(&attrs, &img.counters, img.rays, 5.0 - 2.0); /* the scene's shutter */
+    printf("    toy:one %s, toy:meanColumn %s\n", attrs_get(&attrs, "toy:one"), attrs_get(&attrs, "toy:meanColumn"));
+    CHECK(attrs.n == 2 && !strcmp(attrs_get(&attrs, "toy:one"), "1"));
+    CHECK(!strcmp(attrs_get(&attrs, "toy:meanColumn"), "0.5"));
     CHECK(toy_setups == 1 && toy_teardowns == 1);
     printf("    most arena chunks a worker took: %d\n", toy_arena_mallocs);
     CHECK(toy_arena_mallocs == 1);
@@ -183,14 +206,45 @@ TEST(a_toy_integrators_check_and_failure_are_its_own)
     image img;
     rr_error e;
     toy_fails = 0;
-    CHECK(toy_render(&img, 1, &e) == -1);
+    CHECK(toy_render(&img, 1, NULL, &e) == -1);
     CHECK(!strcmp(e.msg, "toy: no crop window"));
     CHECK(toy_setups == 0 && toy_teardowns == 0);
     image_free(&img);
     toy_fails = 1;
-    CHECK(toy_render(&img, 0, &e) == -1);
+    CHECK(toy_render(&img, 0, NULL, &e) == -1);
     printf("    %s\n", e.msg);
     CHECK(!strcmp(e.msg, "toy: status -7 at pixel (5, 3)"));
     CHECK(toy_setups == 1 && toy_teardowns == 1);
+    image_free(&img);
+}
+
+/* A checkpoint taken while the render runs holds the row's counters as far
+ * as its rays (a resumed render reads them back, render_frames.c): the
+ * toy's "one" counter adds the shutter's length, 3, per ray, so in every
+ * checkpoint its sum is exactly 3 x rays (integers in doubles). Taken at
+ * each of the coordinator's waits (every 1e-9 s), so each of the 2 rounds
+ * has one, the second's after round 1's rays at least. */
+static int toy_checkpoints, toy_checkpoints_with_rays, toy_checkpoints_wrong;
+
+static int toy_checkpoint(void *user, const image *img, rr_error *err)
+{
+    (void)user, (void)err;
+    toy_checkpoints++;
+    toy_checkpoints_with_rays += img->rays > 0;
+    toy_checkpoints_wrong += img->counters.n != 2 || img->counters.sum[TOY_COUNTER_ONE] != 3.0 * (double)img->rays;
+    return 0;
+}
+
+TEST(a_checkpoint_holds_the_rows_counters_as_far_as_its_rays)
+{
+    image img;
+    rr_error e;
+    render_hooks hooks = {NULL, toy_checkpoint, NULL, 1e-9, NULL};
+    toy_fails = toy_checkpoints = toy_checkpoints_with_rays = toy_checkpoints_wrong = 0;
+    CHECK(toy_render(&img, 0, &hooks, &e) == 0);
+    printf("    %d checkpoints, %d with rays, %d without the counters' sums\n", toy_checkpoints,
+           toy_checkpoints_with_rays, toy_checkpoints_wrong);
+    CHECK(toy_checkpoints_with_rays >= 1 && toy_checkpoints_wrong == 0);
+    CHECK(img.counters.sum[TOY_COUNTER_ONE] == 3.0 * (double)img.rays); /* the final sums too */
     image_free(&img);
 }

@@ -8,6 +8,7 @@
 #include "formats/exr.h"
 #include "harness.h"
 #include "io/output.h"
+#include "render/integrator.h"
 
 static const char *state_path(const char *name)
 {
@@ -171,4 +172,44 @@ TEST(huge_data_windows_are_refused_before_allocating)
     int w, h;
     CHECK(exr_read_size(p, &w, &h, &e) != 0 && strstr(e.msg, "data window 20000x20000 is empty or larger than"));
     unlink(p);
+}
+
+/* Every counter of a built-in integrator row (exact time's unresolved
+ * share; render/counters.h) is a share per traced ray, and merges to the
+ * ray-weighted mean: states of 100 and 300 rays with shares 0.1 and 0.4
+ * hold 10 + 120 = 130 share-rays of 400 rays, 0.325 (unequal rays, so a
+ * plain mean, 0.25, or either state's own share fails; so does a counter
+ * whose attribute is no ROLE_PER_RAY row of output.c's table, which merge
+ * and resume would not read). A state without the counter cannot join one
+ * with it. */
+static void check_counter_merges(const char *key)
+{
+    static attr_list merged, b; /* (330 KB each) */
+    rr_error e;
+    merged.n = b.n = 0;
+    attrs_set(&merged, ATTR_RAYS, "100"), attrs_set(&merged, key, "0.1");
+    attrs_set(&b, ATTR_RAYS, "300"), attrs_set(&b, key, "0.4");
+    CHECK(attrs_combine(&merged, "a.exr", &b, "b.exr", &e) == 0);
+    printf("    %s: merged %s of %s rays\n", key, attrs_get(&merged, key), attrs_get(&merged, ATTR_RAYS));
+    CHECK(!strcmp(attrs_get(&merged, key), "0.325"));
+    CHECK(!strcmp(attrs_get(&merged, ATTR_RAYS), "400"));
+    b.n = 0;
+    attrs_set(&b, ATTR_RAYS, "300");
+    CHECK(attrs_combine(&merged, "a.exr", &b, "b.exr", &e) == -1);
+    CHECK(strstr(e.msg, "but b.exr lacks it") && strstr(e.msg, key));
+}
+
+TEST(every_built_in_counter_merges_to_the_ray_weighted_mean)
+{
+    static const char *const ids[] = {"surfels", "gaussians", "exact"};
+    int counters = 0;
+    for (int k = 0; k < 3; k++) {
+        const integrator_ops *row = integrator_named(ids[k]);
+        CHECK(row != NULL);
+        for (int i = 0; row && i < row->ncounters; i++, counters++) {
+            CHECK(row->counters[i].scale == COUNTER_SHARE_PER_RAY);
+            check_counter_merges(row->counters[i].attribute);
+        }
+    }
+    CHECK(counters >= 1); /* exact time's, at least */
 }

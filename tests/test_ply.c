@@ -7,7 +7,9 @@
 
 #include "harness.h"
 #include "core/inputfile.h"
+#include "formats/gaussian_ply.h"
 #include "formats/ply.h"
+#include "scenexml/scene_xml.h"
 
 static const char *tmp_path(const char *name)
 {
@@ -31,7 +33,7 @@ static const char *read_result(const char *path, pointmodel *m)
     static rr_error e;
     e.msg[0] = 0;
     pointmodel_init(m);
-    if (ply_read(path, v3(0.5, 0.5, 0.5), m, NULL, &e) == 0)
+    if (ply_read(path, v3(0.5, 0.5, 0.5), m, NULL, NULL, &e) == 0)
         e.msg[0] = 0;
     unlink(path);
     return e.msg;
@@ -271,7 +273,7 @@ TEST(ply_refuses_what_is_not_a_regular_file)
     pointmodel m;
     rr_error e;
     pointmodel_init(&m);
-    CHECK(ply_read("/dev/zero", v3(1, 1, 1), &m, NULL, &e) != 0 && strstr(e.msg, "/dev/zero: not a regular file"));
+    CHECK(ply_read("/dev/zero", v3(1, 1, 1), &m, NULL, NULL, &e) != 0 && strstr(e.msg, "/dev/zero: not a regular file"));
     pointmodel_free(&m);
 }
 
@@ -282,9 +284,9 @@ TEST(ply_content_hash_covers_the_bytes)
     rr_error e;
     pointmodel_init(&m);
     CHECK(ply_read(write_text("h1.ply", HEADER_XYZNR "end_header\n0 0 0 0 0 1 0.5\n1 0 0 0 0 1 1\n"),
-                   v3(1, 1, 1), &m, &h1, &e) == 0);
+                   v3(1, 1, 1), &m, &h1, NULL, &e) == 0);
     CHECK(ply_read(write_text("h2.ply", HEADER_XYZNR "end_header\n0 0 0 0 0 1 0.5\n1 0 0 0 0 1 2\n"),
-                   v3(1, 1, 1), &m, &h2, &e) == 0);
+                   v3(1, 1, 1), &m, &h2, NULL, &e) == 0);
     CHECK(h1 != h2 && h1 != INPUT_HASH_INIT);
     const char *text = HEADER_XYZNR "end_header\n0 0 0 0 0 1 0.5\n1 0 0 0 0 1 1\n";
     CHECK(h1 == input_hash(INPUT_HASH_INIT, text, strlen(text)));
@@ -314,4 +316,47 @@ TEST(ply_data_the_header_does_not_declare_is_refused)
     CHECK(fails_with(write_text("i.ply", text), "2.5 is not an int"));
     snprintf(text, sizeof text, "%s0 0 0 0 0 1 0.5 255 0 -2147483648\n1 0 0 0 0 1 0.5 0 0 2147483647\n", ints);
     CHECK(reads_ok(write_text("i.ply", text), 2));
+}
+
+/* The cancel flag is a parameter (issue 57: no global read by the reader):
+ * set before the read, the surfel reader, the Gaussian reader and the
+ * scene loader that reaches them each stop at vertex 0 with the message a
+ * signal during a long load gives, naming the file; unset (or NULL), the
+ * same files load whole. */
+TEST(a_set_cancel_flag_stops_every_model_read_it_is_handed)
+{
+    char surfels[256], gaussians[256], scene_path[256], xml[1024]; /* (write_text's path is one buffer) */
+    snprintf(surfels, sizeof surfels, "%s",
+             write_text("cancel.ply", HEADER_XYZNR "end_header\n0 0 0 0 0 1 0.5\n1 0 0 0 0 1 1\n"));
+    snprintf(gaussians, sizeof gaussians, "%s", write_text("cancel_g.ply",
+        "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\n"
+        "property float y\nproperty float z\nproperty float f_dc_0\nproperty float f_dc_1\nproperty float f_dc_2\n"
+        "property float opacity\nproperty float scale_0\nproperty float scale_1\nproperty float rot_0\n"
+        "property float rot_1\nproperty float rot_2\nproperty float rot_3\nend_header\n0 0 0 0.1 0.1 0.1 0 0 0 1 0 0 0\n"));
+    snprintf(xml, sizeof xml, "<scene><camera position='0 0 5' lookat='0 0 0' width='4' height='4'/><object>"
+             "<pointModel file='%s'/></object></scene>", surfels);
+    snprintf(scene_path, sizeof scene_path, "%s", write_text("cancel.xml", xml));
+    volatile sig_atomic_t stop = 1;
+    pointmodel m;
+    gaussian_model g;
+    scene s;
+    rr_error e;
+    pointmodel_init(&m), gaussian_model_init(&g);
+    CHECK(ply_read(surfels, v3(1, 1, 1), &m, NULL, &stop, &e) == -1 && m.count == 0);
+    printf("    %s\n", e.msg);
+    CHECK(strstr(e.msg, "cancel.ply: interrupted while reading vertex 0 of 2") != NULL);
+    CHECK(gaussian_read(gaussians, GAUSSIAN_AUTO, &g, NULL, &stop, &e) == -1);
+    CHECK(strstr(e.msg, "cancel_g.ply: interrupted while reading vertex 0 of 1") != NULL);
+    CHECK(scene_load_file_params(scene_path, &(scene_load_options){NULL, &stop}, &s, &e) == -1);
+    printf("    %s\n", e.msg);
+    CHECK(strstr(e.msg, "cancel.ply: interrupted while reading vertex 0 of 2") != NULL);
+    stop = 0;
+    CHECK(ply_read(surfels, v3(1, 1, 1), &m, NULL, &stop, &e) == 0 && m.count == 2);
+    CHECK(gaussian_read(gaussians, GAUSSIAN_AUTO, &g, NULL, &stop, &e) == 0 && g.count == 1);
+    CHECK(scene_load_file_params(scene_path, &(scene_load_options){NULL, &stop}, &s, &e) == 0);
+    CHECK(s.nobjects == 1 && s.objects[0].model.count == 2);
+    scene_free(&s), pointmodel_free(&m), gaussian_model_free(&g);
+    CHECK(ply_read(surfels, v3(1, 1, 1), &m, NULL, NULL, &e) == 0 && m.count == 2);
+    pointmodel_free(&m);
+    unlink(surfels), unlink(gaussians), unlink(scene_path);
 }

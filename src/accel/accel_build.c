@@ -47,8 +47,10 @@ static double points_spread(const scene_object *o)
 static double sphere_spread(const scene_object *o) { return o->sphere_radius; }
 
 /* How Embree holds each object kind as user geometry, by object_kind (what
- * the kind is: scene_object_row). A Gaussian model has no row here: its
- * BVH is built with each shutter (build_gaussian_object). */
+ * the kind is: scene_object_row). A Gaussian model's row is empty: its
+ * BVH is built with each shutter (build_gaussian_object). Every kind has
+ * its row, empty or not (asserted): a kind added without one does not
+ * build. */
 typedef struct {
     RTCBoundsFunction bounds;
     RTCIntersectFunctionN intersect;
@@ -58,7 +60,9 @@ typedef struct {
 static const accel_object_ops accel_rows[] = {
     [OBJECT_POINTS] = {accel_splat_bounds_cb, accel_splats_intersect, points_spread},
     [OBJECT_SPHERE] = {accel_sphere_bounds_cb, accel_sphere_intersect, sphere_spread},
+    [OBJECT_GAUSSIANS] = {NULL, NULL, NULL},
 };
+_Static_assert(sizeof accel_rows / sizeof *accel_rows == OBJECT_KIND_COUNT, "an object kind without its Embree row");
 
 /* Embree reports each allocation before it happens and each release after
  * (negative bytes), from its build threads. */
@@ -394,8 +398,9 @@ int accel_build(const scene *s, const accel_settings *set, accel **out, rr_error
             a->models[i] = &o->gaussians;
             continue;
         }
+        RR_DCHECK((unsigned)o->kind < OBJECT_KIND_COUNT);
         const accel_object_ops *row = &accel_rows[o->kind];
-        RR_DCHECK((unsigned)o->kind < sizeof accel_rows / sizeof *accel_rows && row->bounds);
+        RR_DCHECK(row->bounds);
         a->coherent_spread[i] = row->coherent_spread(o);
         a->building_object = i;
         a->object_scenes[i] = accel_user_scene(a->device, (unsigned)kind->count(o), o, row->bounds, row->intersect, 0);

@@ -97,7 +97,6 @@ static int run_command(int argc, char **argv, const render_sink *sink)
     render_command_sink = sink;
     int rc = cmd_render(argc, argv);
     render_command_sink = NULL;
-    rr_interrupt_watch(NULL); /* the caller's flag may go away after the call */
     opterr = saved_opterr;
     return rc;
 }

@@ -367,7 +367,7 @@ static void load_child(const void *in, void *out)
     rr_error err;
     uint64_t hash = 0;
     gaussian_model_init(&m);
-    if (gaussian_read(c->path, GAUSSIAN_AUTO, &m, &hash, &err)) {
+    if (gaussian_read(c->path, GAUSSIAN_AUTO, &m, &hash, NULL, &err)) {
         fprintf(stderr, "bench: %s\n", err.msg);
         _exit(1);
     }

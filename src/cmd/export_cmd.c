@@ -299,10 +299,11 @@ static void (*const model_writers[])(FILE *f, const scene_object *o) = {
     [OBJECT_SPHERE] = write_sphere,
     [OBJECT_GAUSSIANS] = write_gaussians,
 };
+_Static_assert(sizeof model_writers / sizeof *model_writers == OBJECT_KIND_COUNT, "an object kind without its writer");
 
 static void write_model(FILE *f, const scene_object *o)
 {
-    RR_DCHECK((unsigned)o->kind < sizeof model_writers / sizeof *model_writers);
+    RR_DCHECK((unsigned)o->kind < OBJECT_KIND_COUNT);
     model_writers[o->kind](f, o);
 }
 
@@ -643,7 +644,8 @@ static int export_scene(const export_options *o, rr_error *err)
     scene s;
     export_output out[MAX_EXPORT_OUTPUTS];
     int n = export_outputs(o, out);
-    if (check_outputs(out, n, err) || scene_load_file_params(o->scene, &o->params, &s, err))
+    scene_load_options load = {&o->params, NULL}; /* (no flag: export catches no signal, one ends it) */
+    if (check_outputs(out, n, err) || scene_load_file_params(o->scene, &load, &s, err))
         return -1;
     int rc = 0;
     if (o->shutter_set) { /* as the render applies it (render_cmd.c, apply_overrides) */

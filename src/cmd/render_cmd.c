@@ -319,7 +319,6 @@ int cmd_render(int argc, char **argv)
         interrupted = render_command_sink->interrupt;
     else
         install_signal_handlers();
-    rr_interrupt_watch(interrupted);
     char scene_buf[PATH_MAX + 64];
     if (!o.scene)
         o.scene = cli_tree_file("scenes/default.xml", scene_buf, sizeof scene_buf);
@@ -337,7 +336,7 @@ int cmd_render(int argc, char **argv)
         (o.preview && cli_check_writable("--preview", o.preview, &err)) ||
         (o.preview && preview_check_format(o.preview, &err)) ||
         (o.checkpoint && cli_check_writable("--checkpoint", o.checkpoint, &err)) ||
-        scene_load_file_params(o.scene, &o.params, &s, &err);
+        scene_load_file_params(o.scene, &(scene_load_options){&o.params, interrupted}, &s, &err);
     if (bad) {
         free(cmdline);
         say_failure(err.msg);

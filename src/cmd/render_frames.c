@@ -11,7 +11,6 @@
 #include "cmd/noise_report.h"
 #include "cmd/render_sink.h"
 #include "cmd/render_cmd.h"
-#include "render/exact.h"
 #include "render/integrator.h"
 #include "io/output.h"
 #include "io/render_attrs.h"
@@ -34,6 +33,7 @@ static void print_progress(void *user, double fraction, uint64_t rays, double se
 
 typedef struct {
     const render_options *o;
+    const scene *sc; /* the frame's (accel_scene): its shutter is the render's */
     render_settings rs;
     attr_list attrs;
     uint32_t total_batches;
@@ -46,6 +46,7 @@ static int write_checkpoint(void *user, const image *img, rr_error *err)
     attrs_set(&run->attrs, ATTR_RENDER_SECONDS, "%.3f", img->seconds);
     attrs_set(&run->attrs, ATTR_RAYS, "%llu", (unsigned long long)img->rays);
     attrs_set(&run->attrs, ATTR_CLAMPED, "%llu", (unsigned long long)img->clamped);
+    output_counter_attrs(&run->attrs, &img->counters, img->rays, run->sc->shut.close - run->sc->shut.open);
     return output_write_state(run->o->checkpoint, img, run->rs.batch_begin,
                               run->rs.batch_begin + run->rs.batches, &run->attrs, err);
 }
@@ -87,6 +88,25 @@ static int check_resumable_counts(const render_run *run, image *img, rr_error *e
     return 0;
 }
 
+/* The integrator's counters the state holds (write_checkpoint), summed
+ * again from their header values (to their 6 digits), so that the resumed
+ * render's are the whole render's. Only an integrator asked for by name
+ * (--time-integration) declares counters: the rows the scene chooses
+ * (surfels, Gaussians) have none. */
+static void resume_counters(const render_run *run, const attr_list *saved, image *img)
+{
+    const integrator_ops *row = run->rs.integrator;
+    if (!row)
+        return;
+    img->counters.spec = row->counters, img->counters.n = row->ncounters;
+    double shutter = run->sc->shut.close - run->sc->shut.open;
+    for (int i = 0; i < row->ncounters; i++) {
+        const char *value = attrs_get(saved, row->counters[i].attribute);
+        double held = value ? strtod(value, NULL) : 0.0;
+        img->counters.sum[i] = output_counter_sum(&row->counters[i], held, img->rays, shutter);
+    }
+}
+
 /* Loads --resume into img after checking it is this very render. */
 static int resume_state(render_run *run, image *img, rr_error *err)
 {
@@ -111,6 +131,7 @@ static int resume_state(render_run *run, image *img, rr_error *err)
     img->rays = rays ? (uint64_t)strtod(rays, NULL) : 0;
     img->clamped = clamped ? (uint64_t)strtod(clamped, NULL) : 0;
     img->seconds = seconds ? strtod(seconds, NULL) : 0.0;
+    resume_counters(run, &saved, img);
     if (!run->o->quiet) { /* a log then shows the work kept */
         uint64_t done = 0, n = (uint64_t)img->width * img->height;
         for (uint64_t i = 0; i < n; i++)
@@ -133,7 +154,7 @@ static void setup_run(render_run *run, const scene *s, const render_options *o, 
     uint32_t total = (uint32_t)o->batches;
     uint32_t begin = o->passes ? (uint32_t)((uint64_t)o->pass * total / o->passes) : 0;
     uint32_t end = o->passes ? (uint32_t)((uint64_t)(o->pass + 1) * total / o->passes) : total;
-    run->o = o;
+    run->o = o, run->sc = s;
     run->total_batches = total;
     run->last_progress = 0;
     run->rs = (render_settings){
@@ -174,19 +195,15 @@ static void report(const render_options *o, const scene *s, const image *img, in
                         "(refrender:clampedEstimates)\n", (unsigned long long)img->clamped, FILM_LIMIT);
 }
 
-/* Exact time: the share of the shutter, over all spatial samples, left in
- * pieces too short to certify (exact.h, EXACT_TIME_TOL): their blended set
- * is the one at their middle. In the header always; on stderr when above
- * 100 times the tolerance, since every coverage event leaves a few pieces
- * of the tolerance's length. */
-static void report_unresolved(const render_options *o, const image *img, const shutter *shut, attr_list *attrs)
+/* The integrator's own counters into the header, and its warnings about
+ * them on stderr (not with --quiet), whatever they mean (render/counters.h). */
+static void report_counters(const render_options *o, const image *img, const shutter *shut, attr_list *attrs)
 {
-    double share = img->rays > 0 ? img->exact_unresolved / ((double)img->rays * (shut->close - shut->open)) : 0.0;
-    attrs_set(attrs, ATTR_EXACT_UNRESOLVED_SHARE, "%.6g", share);
-    if (share > 100 * EXACT_TIME_TOL && !o->quiet)
-        fprintf(stderr, "refrender: warning: exact time left %.3g of the shutter (over all spatial samples) in pieces "
-                        "shorter than %g of it, taken with the blended set at their middle\n",
-                share, EXACT_TIME_TOL);
+    const counter_set *c = &img->counters;
+    output_counter_attrs(attrs, c, img->rays, shut->close - shut->open);
+    for (int i = 0; i < c->n && !o->quiet; i++)
+        if (c->spec[i].warn)
+            c->spec[i].warn(output_counter_value(c, i, img->rays, shut->close - shut->open));
 }
 
 /* A keyframed scale through zero is held at 1e-9 (animation.h): the
@@ -294,8 +311,7 @@ static int render_one(const accel *acc, long long frame, const render_options *o
         attrs_set(&run.attrs, ATTR_RENDER_SECONDS, "%.3f", img.seconds);
         attrs_set(&run.attrs, ATTR_RAYS, "%llu", (unsigned long long)img.rays);
         attrs_set(&run.attrs, ATTR_CLAMPED, "%llu", (unsigned long long)img.clamped);
-        if (o->exact_time)
-            report_unresolved(o, &img, &s->shut, &run.attrs);
+        report_counters(o, &img, &s->shut, &run.attrs);
         if (o->frames && s->frame_rate > 0)
             attrs_set(&run.attrs, ATTR_FRAME_RATE, "%.17g", s->frame_rate);
         if (o->frames)

@@ -129,7 +129,7 @@ static int parse_option(int c, const char *arg, splat_options *o, rr_error *err)
 static int parse_method(const char *name, splat_method *m, rr_error *err)
 {
     static const char *const names[] = {"instant", "accum", "bucket", "volumetric", "guan-mueller"};
-    for (int i = 0; i < 5; i++)
+    for (int i = 0; i < (int)(sizeof names / sizeof *names); i++)
         if (!strcmp(name, names[i]))
             return *m = (splat_method)i, 0;
     return rr_fail(err, "unknown method '%s': expected instant, accum, bucket, volumetric or guan-mueller", name);
@@ -306,7 +306,7 @@ static int run(splat_options *o, const char *cmdline, rr_error *err)
     scene s;
     if (cli_check_exr_name("-o", o->output, 1, err) || cli_check_writable("-o", o->output, err) ||
         (o->preview && (cli_check_writable("--preview", o->preview, err) || preview_check_format(o->preview, err))) ||
-        scene_load_file_params(o->scene, &o->params, &s, err))
+        scene_load_file_params(o->scene, &(scene_load_options){&o->params, NULL}, &s, err))
         return -1;
     for (int i = 0; i < s.warnings.count && i < RR_WARNINGS_KEPT && !o->quiet; i++)
         fprintf(stderr, "refrender splat: warning: %s\n", s.warnings.msg[i]);

@@ -226,12 +226,6 @@ void rr_check_failed_values(const char *file, int line, const char *cond, long l
     abort();
 }
 
-static volatile sig_atomic_t *interrupt_flag;
-
-void rr_interrupt_watch(volatile sig_atomic_t *flag) { interrupt_flag = flag; }
-
-int rr_interrupted(void) { return interrupt_flag && *interrupt_flag; }
-
 /* Optimal string alignment distance (Damerau-Levenshtein without moving a
  * letter twice), case-insensitive; words longer than the row are far. */
 static int edit_distance(const char *a, const char *b)

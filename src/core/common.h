@@ -78,14 +78,6 @@ void rr_check_failed_values(const char *file, int line, const char *cond, long l
 #define RR_DCHECK_LE(a, b) ((void)0)
 #endif
 
-/* The process's interrupt flag, set by a command's SIGINT/SIGTERM handler
- * (render_cmd.c), for loaders it cannot be handed to: the PLY reader is reached
- * through the scene loader, and a large model's load must stop on a signal
- * (reading gigabytes takes long, and an interrupt must not wait for it).
- * Until a flag is watched, nothing is ever interrupted. */
-void rr_interrupt_watch(volatile sig_atomic_t *flag);
-int rr_interrupted(void);
-
 /* qsort comparator for doubles, ascending. */
 int cmp_double(const void *a, const void *b);
 

@@ -9,6 +9,7 @@
 #ifndef RR_INPUTFILE_H
 #define RR_INPUTFILE_H
 
+#include <signal.h>
 #include <stdint.h>
 
 #include "core/common.h"
@@ -21,6 +22,9 @@ typedef struct {
     int mapped;      /* input_file_stream: data is a read-only mapping */
     size_t released; /* input_file_consume: bytes hashed and dropped from memory */
     uint64_t hash;   /* their hash so far */
+    /* the reader's stop flag (NULL: never; set it after opening): a parse
+     * of the file stops soon after it becomes non-zero (ply.c) */
+    volatile sig_atomic_t *cancel;
 } input_file;
 
 /* Reads path into f; fails naming the file if it is not a regular file, is

@@ -225,12 +225,14 @@ int gaussian_parse(const char *name, const char *data, size_t len, gaussian_kind
     return load(name, data ? data : "", len, NULL, kind, m, err);
 }
 
-int gaussian_read(const char *path, gaussian_kind kind, gaussian_model *m, uint64_t *content_hash, rr_error *err)
+int gaussian_read(const char *path, gaussian_kind kind, gaussian_model *m, uint64_t *content_hash,
+                  volatile sig_atomic_t *cancel, rr_error *err)
 {
     input_file in;
     if (input_file_stream(path, PLY_MAX_BYTES, &in, err))
         return -1;
     in.hash = content_hash ? *content_hash : INPUT_HASH_INIT;
+    in.cancel = cancel; /* every layout's parse reads the file through ply_stream_vertices */
     int rc = load(path, in.data, in.len, &in, kind, m, err);
     if (content_hash)
         *content_hash = input_file_hash(&in);

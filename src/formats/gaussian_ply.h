@@ -21,8 +21,10 @@
  * SH degree, non-finite values or ones beyond float range, a mean
  * coordinate beyond RR_MAX_REACH, zero quaternions (others are
  * normalised whatever their size), counts the file cannot hold). The bytes
- * are folded into *content_hash unless NULL. */
-int gaussian_read(const char *path, gaussian_kind kind, gaussian_model *m, uint64_t *content_hash, rr_error *err);
+ * are folded into *content_hash unless NULL. A non-zero *cancel (NULL:
+ * never) stops the read, as ply_read's. */
+int gaussian_read(const char *path, gaussian_kind kind, gaussian_model *m, uint64_t *content_hash,
+                  volatile sig_atomic_t *cancel, rr_error *err);
 int gaussian_parse(const char *name, const char *data, size_t len, gaussian_kind kind, gaussian_model *m,
                    rr_error *err);
 

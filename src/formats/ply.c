@@ -507,7 +507,7 @@ static int read_vertices(ply_reader *r, const ply_element *e, const ply_visitor 
         double vals[PLY_MAX_SLOTS];
         memset(vals, 0, (size_t)r->schema->count * sizeof *vals); /* (only the schema's slots are read) */
         char why[512];
-        if (i % 65536 == 0 && rr_interrupted()) /* millions of vertices take seconds */
+        if (i % 65536 == 0 && r->src && r->src->cancel && *r->src->cancel) /* millions of vertices take seconds */
             return rr_fail(r->err, "%s: interrupted while reading vertex %zu of %zu", r->path, i, e->count);
         if (i % 65536 == 0 && r->src) /* the file need not stay in memory beside the model */
             input_file_consume(r->src, (size_t)(r->cur - r->data));
@@ -598,12 +598,13 @@ int ply_stream_vertices(const char *name, input_file *src, const ply_schema *sch
 }
 
 int ply_read_vertices(const char *path, const ply_schema *schema, const ply_visitor *v, uint64_t *content_hash,
-                      rr_error *err)
+                      volatile sig_atomic_t *cancel, rr_error *err)
 {
     input_file in;
     if (input_file_stream(path, PLY_MAX_BYTES, &in, err))
         return -1;
     in.hash = content_hash ? *content_hash : INPUT_HASH_INIT;
+    in.cancel = cancel;
     int rc = ply_stream_vertices(path, &in, schema, v, err);
     if (content_hash)
         *content_hash = input_file_hash(&in);
@@ -611,11 +612,12 @@ int ply_read_vertices(const char *path, const ply_schema *schema, const ply_visi
     return rc;
 }
 
-int ply_read(const char *path, vec3 default_color, pointmodel *m, uint64_t *content_hash, rr_error *err)
+int ply_read(const char *path, vec3 default_color, pointmodel *m, uint64_t *content_hash, volatile sig_atomic_t *cancel,
+             rr_error *err)
 {
     surfel_sink sink = {default_color, m, 0};
     ply_visitor v = {check_surfel_properties, add_surfel, &sink, note_gaussian_property};
-    return ply_read_vertices(path, &surfel_schema, &v, content_hash, err);
+    return ply_read_vertices(path, &surfel_schema, &v, content_hash, cancel, err);
 }
 
 /* ---- writer ---------------------------------------------------------- */

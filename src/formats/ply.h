@@ -27,8 +27,12 @@
  * line with fewer or more values than its properties declare is an error.
  * The file's bytes are folded into *content_hash unless it is NULL
  * (inputfile.h). Errors name the file and the header line, ascii line, or
- * binary vertex index. */
-int ply_read(const char *path, vec3 default_color, pointmodel *m, uint64_t *content_hash, rr_error *err);
+ * binary vertex index. A non-zero *cancel (NULL: never) stops the read
+ * within 65536 vertices ("interrupted while reading vertex i of n"):
+ * a command's interrupt flag, so that a signal need not wait for a model
+ * of gigabytes. */
+int ply_read(const char *path, vec3 default_color, pointmodel *m, uint64_t *content_hash, volatile sig_atomic_t *cancel,
+             rr_error *err);
 
 /* The same from len bytes in memory; name is used in messages. */
 int ply_parse(const char *name, const char *data, size_t len, vec3 default_color, pointmodel *m, rr_error *err);
@@ -69,13 +73,15 @@ typedef struct {
 int ply_parse_vertices(const char *name, const char *data, size_t len, const ply_schema *schema,
                        const ply_visitor *v, rr_error *err);
 /* The same from a file (inputfile.h: at most PLY_MAX_BYTES), its bytes
- * folded into *content_hash unless it is NULL. */
+ * folded into *content_hash unless it is NULL, stopped by *cancel as
+ * ply_read. */
 int ply_read_vertices(const char *path, const ply_schema *schema, const ply_visitor *v, uint64_t *content_hash,
-                      rr_error *err);
+                      volatile sig_atomic_t *cancel, rr_error *err);
 /* The same from a file already opened (input_file_stream), which the parse
  * releases as it reads (input_file_consume): a reader that must look at a
  * file twice (gaussian_ply.c hands a dynamic model's file on) opens and
- * hashes it once. */
+ * hashes it once; src->cancel stops it. (A parse from memory has no stop
+ * flag: only files are large enough to need one.) */
 int ply_stream_vertices(const char *name, input_file *src, const ply_schema *schema, const ply_visitor *v,
                         rr_error *err);
 

@@ -10,6 +10,7 @@
 
 #include "formats/exr.h"
 #include "io/preview.h"
+#include "render/exact.h"
 
 /* What resuming and merging do with an attribute. */
 typedef enum {
@@ -17,6 +18,7 @@ typedef enum {
     ROLE_KEPT,     /* describes the render; read back from a state */
     ROLE_EQUAL,    /* the frame and the camera: equal in every state of a merge, or absent from all */
     ROLE_SUMMED,   /* the work of the states together: rays and seconds add up */
+    ROLE_PER_RAY,  /* an integrator's counter per traced ray (render/counters.h): the ray-weighted mean */
     ROLE_WRITTEN   /* describes one run only: not read back */
 } attr_role;
 
@@ -62,7 +64,6 @@ static const struct {
     {ATTR_SOFTWARE, RR_ATTR_TEXT, ROLE_KEPT},
     {ATTR_BACKGROUND, RR_ATTR_TEXT, ROLE_KEPT},
     {ATTR_ALPHA, RR_ATTR_TEXT, ROLE_KEPT},
-    {ATTR_EXACT_UNRESOLVED_SHARE, RR_ATTR_TEXT, ROLE_KEPT},
     {ATTR_WORLD_TO_CAMERA, RR_ATTR_M44F, ROLE_EQUAL},
     {ATTR_WORLD_TO_NDC, RR_ATTR_M44F, ROLE_EQUAL},
     {ATTR_CAMERA_TIME, RR_ATTR_DOUBLE, ROLE_EQUAL},
@@ -77,6 +78,7 @@ static const struct {
     {ATTR_RAYS, RR_ATTR_DOUBLE, ROLE_SUMMED},
     {ATTR_RENDER_SECONDS, RR_ATTR_DOUBLE, ROLE_SUMMED},
     {ATTR_CLAMPED, RR_ATTR_DOUBLE, ROLE_SUMMED},
+    {EXACT_UNRESOLVED_SHARE_ATTR, RR_ATTR_TEXT, ROLE_PER_RAY},
     {ATTR_LINE_TIMES, RR_ATTR_TEXT, ROLE_WRITTEN},
     {ATTR_STATE, RR_ATTR_TEXT, ROLE_WRITTEN},
     {ATTR_TARGET_ERROR, RR_ATTR_DOUBLE, ROLE_WRITTEN},
@@ -165,18 +167,39 @@ static int check_both_have(const attr_list *a, const char *a_name, const attr_li
     return 0;
 }
 
-/* Exact time's unresolved share is per traced ray (render_frames.c, report_unresolved), so the share
- * of states together is their ray-weighted mean; called before the rays
- * are summed. */
-static void combine_unresolved(attr_list *merged, const attr_list *b)
+/* A counter's header value (COUNTER_SHARE_PER_RAY, the only scale) as
+ * text: a render and a merge write it alike. */
+static void set_share_per_ray(attr_list *a, const char *key, double share) { attrs_set(a, key, "%.6g", share); }
+
+double output_counter_value(const counter_set *c, int i, uint64_t rays, double shutter_length)
 {
-    const char *sa = attrs_get(merged, ATTR_EXACT_UNRESOLVED_SHARE), *sb = attrs_get(b, ATTR_EXACT_UNRESOLVED_SHARE);
+    RR_DCHECK(c->spec[i].scale == COUNTER_SHARE_PER_RAY);
+    return rays > 0 ? c->sum[i] / ((double)rays * shutter_length) : 0.0;
+}
+
+double output_counter_sum(const counter_spec *spec, double value, uint64_t rays, double shutter_length)
+{
+    RR_DCHECK(spec->scale == COUNTER_SHARE_PER_RAY);
+    (void)spec; /* (read by the check only: the one scale there is) */
+    return value * (double)rays * shutter_length;
+}
+
+void output_counter_attrs(attr_list *a, const counter_set *c, uint64_t rays, double shutter_length)
+{
+    for (int i = 0; i < c->n; i++)
+        set_share_per_ray(a, c->spec[i].attribute, output_counter_value(c, i, rays, shutter_length));
+}
+
+/* A counter per traced ray (ROLE_PER_RAY): the share of states together
+ * is their ray-weighted mean; called before the rays are summed. */
+static void combine_per_ray(attr_list *merged, const attr_list *b, const char *key)
+{
+    const char *sa = attrs_get(merged, key), *sb = attrs_get(b, key);
     const char *ra = attrs_get(merged, ATTR_RAYS), *rb = attrs_get(b, ATTR_RAYS);
     if (!sa || !sb || !ra || !rb)
         return;
     double wa = strtod(ra, NULL), wb = strtod(rb, NULL);
-    double share = wa + wb > 0 ? (strtod(sa, NULL) * wa + strtod(sb, NULL) * wb) / (wa + wb) : 0.0;
-    attrs_set(merged, ATTR_EXACT_UNRESOLVED_SHARE, "%.6g", share);
+    set_share_per_ray(merged, key, wa + wb > 0 ? (strtod(sa, NULL) * wa + strtod(sb, NULL) * wb) / (wa + wb) : 0.0);
 }
 
 int attrs_combine(attr_list *merged, const char *merged_name, const attr_list *b, const char *b_name, rr_error *err)
@@ -192,13 +215,13 @@ int attrs_combine(attr_list *merged, const char *merged_name, const attr_list *b
             return rr_fail(err, "%s and %s differ in %s ('%.160s' vs '%.160s'): not the same frame and camera",
                            merged_name, b_name, key, va, vb);
     }
-    if (check_both_have(merged, merged_name, b, b_name, ATTR_EXACT_UNRESOLVED_SHARE, err))
-        return -1;
     for (int k = 0; k < ATTRS_KNOWN; k++)
-        if (attr_table[k].role == ROLE_SUMMED &&
+        if ((attr_table[k].role == ROLE_PER_RAY || attr_table[k].role == ROLE_SUMMED) &&
             check_both_have(merged, merged_name, b, b_name, attr_table[k].key, err))
             return -1;
-    combine_unresolved(merged, b);
+    for (int k = 0; k < ATTRS_KNOWN; k++)
+        if (attr_table[k].role == ROLE_PER_RAY)
+            combine_per_ray(merged, b, attr_table[k].key);
     const char *rays = attrs_get(merged, ATTR_RAYS), *secs = attrs_get(merged, ATTR_RENDER_SECONDS);
     const char *clamped = attrs_get(merged, ATTR_CLAMPED);
     if (rays) /* a double holds counts exactly up to 2^53 rays */

@@ -52,7 +52,6 @@
 #define ATTR_SOFTWARE "software"
 #define ATTR_BACKGROUND "refrender:background"
 #define ATTR_ALPHA "refrender:alpha"
-#define ATTR_EXACT_UNRESOLVED_SHARE "refrender:exactUnresolvedShare"
 #define ATTR_WORLD_TO_CAMERA "worldToCamera"
 #define ATTR_WORLD_TO_NDC "worldToNDC"
 #define ATTR_CAMERA_TIME "refrender:cameraTime"
@@ -141,9 +140,18 @@ int attrs_check_identity(const attr_list *a, const char *a_name, const attr_list
 
 /* Folds state b's descriptive attributes into merged (a merge's first
  * state): the frame, frame rate, shutter and camera matrices must be equal
- * in both, or absent from both; rays and render seconds are summed; exact
- * time's unresolved share becomes the ray-weighted mean. Fails naming the
- * attribute and both files. */
+ * in both, or absent from both; rays and render seconds are summed; an
+ * integrator's counter per ray (exact time's unresolved share) becomes the
+ * ray-weighted mean. Fails naming the attribute and both files. */
 int attrs_combine(attr_list *merged, const char *merged_name, const attr_list *b, const char *b_name, rr_error *err);
+
+/* Counter i's header value (render/counters.h: its scale), for a render
+ * of `rays` rays over a shutter of that length. */
+double output_counter_value(const counter_set *c, int i, uint64_t rays, double shutter_length);
+/* The sum a counter's header value stands for (output_counter_value's
+ * inverse, up to the value's 6 digits): a resumed state's. */
+double output_counter_sum(const counter_spec *spec, double value, uint64_t rays, double shutter_length);
+/* Each of the counters as its header attribute. */
+void output_counter_attrs(attr_list *a, const counter_set *c, uint64_t rays, double shutter_length);
 
 #endif

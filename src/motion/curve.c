@@ -24,7 +24,8 @@ int tangent_from_name(const char *name, tangent_kind *k)
 int infinity_from_name(const char *name, infinity_kind *k)
 {
     static const char *const names[] = {"constant", "linear", "cycle", "cycleRelative", "oscillate"};
-    for (int i = 0; i < 5; i++)
+    _Static_assert(sizeof names / sizeof *names == INFINITY_KIND_COUNT, "an infinity mode without its name");
+    for (int i = 0; i < INFINITY_KIND_COUNT; i++)
         if (!strcmp(name, names[i])) {
             *k = (infinity_kind)i;
             return 0;

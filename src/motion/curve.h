@@ -48,7 +48,10 @@ typedef enum {
     TAN_LINEAR, TAN_FLAT, TAN_SPLINE, TAN_CLAMPED, TAN_FIXED, TAN_STEP, TAN_STEPNEXT, TAN_AUTO, TAN_PLATEAU
 } tangent_kind;
 
-typedef enum { INF_CONSTANT, INF_LINEAR, INF_CYCLE, INF_CYCLE_RELATIVE, INF_OSCILLATE } infinity_kind;
+/* (INFINITY_KIND_COUNT, last, is how many: curve.c's names assert it) */
+typedef enum {
+    INF_CONSTANT, INF_LINEAR, INF_CYCLE, INF_CYCLE_RELATIVE, INF_OSCILLATE, INFINITY_KIND_COUNT
+} infinity_kind;
 
 typedef struct {
     double time, value;

@@ -20,6 +20,8 @@ void shutter_default(shutter *s)
 
 static const char *const ROLLING_NAMES[] = {"off", "lines", "3dgs-deblur", "gsplat"};
 static const char *const READOUT_NAMES[] = {"top-to-bottom", "bottom-to-top", "left-to-right", "right-to-left"};
+_Static_assert(sizeof ROLLING_NAMES / sizeof *ROLLING_NAMES == ROLLING_KIND_COUNT, "a rolling kind without its name");
+_Static_assert(sizeof READOUT_NAMES / sizeof *READOUT_NAMES == READOUT_DIR_COUNT, "a readout without its name");
 
 const char *shutter_rolling_name(rolling_kind k) { return ROLLING_NAMES[k]; }
 const char *shutter_readout_name(readout_dir d) { return READOUT_NAMES[d]; }
@@ -32,8 +34,8 @@ static int name_index(const char *const *names, int n, const char *name)
     return -1;
 }
 
-int shutter_rolling_parse(const char *name) { return name_index(ROLLING_NAMES, 4, name); }
-int shutter_readout_parse(const char *name) { return name_index(READOUT_NAMES, 4, name); }
+int shutter_rolling_parse(const char *name) { return name_index(ROLLING_NAMES, ROLLING_KIND_COUNT, name); }
+int shutter_readout_parse(const char *name) { return name_index(READOUT_NAMES, READOUT_DIR_COUNT, name); }
 
 int shutter_line(const shutter *s, int x, int y, int width, int height, int *lines)
 {

@@ -30,8 +30,12 @@ typedef enum { WEIGHT_BOX, WEIGHT_LINEAR, WEIGHT_EXP, WEIGHT_TABLE } weight_kind
  *                gsplat's pose between its poses at open and open + R
  *                (scene_for_shutter)
  * Rows and columns are the full image's, whatever the crop window. */
-typedef enum { ROLLING_OFF, ROLLING_LINES, ROLLING_3DGS_DEBLUR, ROLLING_GSPLAT } rolling_kind;
-typedef enum { READOUT_TOP_TO_BOTTOM, READOUT_BOTTOM_TO_TOP, READOUT_LEFT_TO_RIGHT, READOUT_RIGHT_TO_LEFT } readout_dir;
+/* (each enum's _COUNT, last, is how many there are: shutter.c's name
+ * tables assert they have that many at compile time) */
+typedef enum { ROLLING_OFF, ROLLING_LINES, ROLLING_3DGS_DEBLUR, ROLLING_GSPLAT, ROLLING_KIND_COUNT } rolling_kind;
+typedef enum {
+    READOUT_TOP_TO_BOTTOM, READOUT_BOTTOM_TO_TOP, READOUT_LEFT_TO_RIGHT, READOUT_RIGHT_TO_LEFT, READOUT_DIR_COUNT
+} readout_dir;
 
 typedef struct {
     rolling_kind kind;

@@ -37,6 +37,9 @@
  * further: its blended set is the one at its middle. The total time so
  * classified is reported (exact_stats.unresolved). */
 #define EXACT_TIME_TOL 1e-9
+/* Exact time's one counter (integrator.h, counters.h): that total time,
+ * in the header as a share of the shutter per spatial sample. */
+#define EXACT_UNRESOLVED_SHARE_ATTR "refrender:exactUnresolvedShare"
 /* Gauss-Kronrod: a piece is split until the 7- and 15-point rules agree to
  * this fraction of the piece's largest integral (its weight integral or a
  * color's). */

@@ -3,11 +3,16 @@
  * Gauss-Kronrod, each node shaded as the sampled path shades one time. */
 #include "render/exact_internal.h"
 
+#include <stdio.h>
+
 #include "render/integrator.h"
 #include "scene/shade.h"
 
 /* Components: a r, a g, a b, a coverage, and a itself (the normaliser). */
 enum { NCOMP = 5 };
+
+/* Exact time's own counters (exact_counters, below), by index. */
+enum { EXACT_COUNTER_UNRESOLVED };
 
 /* One blended candidate at time t, as accel's callbacks would report it
  * (same side rule, world normal, kernel weight). Returns 0 when the ray is
@@ -207,7 +212,7 @@ static int exact_batch(void *thread, const integrator_context *ctx, const pixel_
     }
     c->rays += (uint64_t)ps->count;
     c->overflows += st.overflows;
-    c->unresolved += st.unresolved;
+    c->counter[EXACT_COUNTER_UNRESOLVED] += st.unresolved;
     return EXACT_OK;
 }
 
@@ -231,8 +236,25 @@ static int exact_batch_failure(int status, int px, int py, rr_error *err)
                    px, py, why);
 }
 
+/* The share of the shutter, over all spatial samples, left in pieces too
+ * short to certify (EXACT_TIME_TOL): their blended set is the one at their
+ * middle. Said on stderr when above 100 times the tolerance, since every
+ * coverage event leaves a few pieces of the tolerance's length. */
+static void warn_unresolved(double share)
+{
+    if (share > 100 * EXACT_TIME_TOL)
+        fprintf(stderr, "refrender: warning: exact time left %.3g of the shutter (over all spatial samples) in pieces "
+                        "shorter than %g of it, taken with the blended set at their middle\n",
+                share, EXACT_TIME_TOL);
+}
+
+static const counter_spec exact_counters[] = {
+    [EXACT_COUNTER_UNRESOLVED] = {EXACT_UNRESOLVED_SHARE_ATTR, COUNTER_SHARE_PER_RAY, warn_unresolved},
+};
+
 const integrator_ops exact_integrator_row = {
     .id = "exact", .name = "exact time", .check = exact_check, .setup = exact_setup, .teardown = exact_teardown,
     .thread_new = exact_thread_new, .pixel_batch = exact_batch, .thread_free = exact_thread_free,
-    .batch_failure = exact_batch_failure,
+    .batch_failure = exact_batch_failure, .counters = exact_counters,
+    .ncounters = (int)(sizeof exact_counters / sizeof *exact_counters),
 };

@@ -161,18 +161,20 @@ static int sphere_cross_at(const scene_object *o, const cand_info *g, const obje
     return 1;
 }
 
-/* A Gaussian model has no row: the exact integrator's check refuses exact
- * time for it (exact_integrate.c, exact_check). */
+/* A Gaussian model's row is empty: the exact integrator's check refuses
+ * exact time for it (exact_integrate.c, exact_check). Every kind has its
+ * row, empty or not (asserted): a kind added without one does not build. */
 static const exact_kind_ops exact_rows[] = {
     [OBJECT_POINTS] = {splat_describe, splat_eval, splat_cross, 0},
     [OBJECT_SPHERE] = {sphere_describe, sphere_eval, sphere_cross_at, 1},
+    [OBJECT_GAUSSIANS] = {NULL, NULL, NULL, 0},
 };
+_Static_assert(sizeof exact_rows / sizeof *exact_rows == OBJECT_KIND_COUNT, "an object kind without its exact row");
 
-/* The bound is checked before the row is read (a kind past the table
- * would read beyond it). */
+/* The bound is checked before the row is read or its address taken. */
 const exact_kind_ops *exact_kind_row(const scene_object *o)
 {
-    RR_DCHECK((unsigned)o->kind < sizeof exact_rows / sizeof *exact_rows);
+    RR_DCHECK((unsigned)o->kind < OBJECT_KIND_COUNT);
     const exact_kind_ops *row = &exact_rows[o->kind];
     RR_DCHECK(row->eval);
     return row;

@@ -16,6 +16,8 @@
 
 #include <stdint.h>
 
+#include "render/counters.h"
+
 #define FILM_SCALE 16777216.0 /* 2^24 */
 #define FILM_LIMIT 1048576.0  /* 2^20 */
 /* Most batches a pixel may hold: each adds at most 2^44 (FILM_LIMIT *
@@ -57,8 +59,7 @@ typedef struct {
                                    a fixed camera's samples share them (static reuse), one per
                                    sample otherwise; statistics, not written to any file */
     double seconds;
-    double exact_unresolved; /* exact time: shutter time left in pieces too short to certify,
-                                summed over spatial samples (exact.h) */
+    counter_set counters; /* the integrator's own counters, summed over the render (counters.h) */
 } image;
 
 int image_alloc(image *img, int width, int height);

@@ -17,8 +17,12 @@
  * Its scratch arrays live in the worker's arena (core/arena.h), which the
  * loop resets after each batch (pbrt-v4's scratchBuffer.Reset() after each
  * pixel sample): nothing in the arena outlives a batch, and after the
- * first batches a worker mallocs nothing more. The loop knows no row by
- * name: a new integrator is a row and a line in integrator.c's table. */
+ * first batches a worker mallocs nothing more. A row also declares its
+ * own counters (counters.h: exact time's unresolved share): the loop sums
+ * them into the image, and the header writes them (output.h,
+ * output_counter_attrs), knowing no more than their attribute and scale.
+ * The loop knows no row by name: a new integrator is a row and a line in
+ * integrator.c's table. */
 #ifndef RR_INTEGRATOR_H
 #define RR_INTEGRATOR_H
 
@@ -28,6 +32,7 @@
 #include "accel/accel.h"
 #include "core/arena.h"
 #include "core/camera.h"
+#include "render/counters.h"
 #include "render/render_settings.h"
 
 /* What every integrator reads, shared by the threads (read-only during
@@ -51,12 +56,13 @@ typedef struct {
     int count;
 } pixel_samples;
 
-/* What a thread's batches cost, summed into the render's statistics. */
+/* What a thread's batches cost, summed into the render's statistics (the
+ * fixed counts here, the row's own in `counter`). */
 typedef struct {
     uint64_t rays;              /* samples estimated */
     uint64_t overflows;         /* samples with more than KBUFFER_MAX hits to blend */
     uint64_t static_traversals; /* traversals of the static objects (image.static_traversals) */
-    double unresolved;          /* exact time: exact_stats.unresolved */
+    double counter[COUNTERS_MAX]; /* the row's own counters, by index in its `counters` */
 } integrator_counts;
 
 /* A batch's status: 0, or why it has no estimate. INTEGRATOR_INTERRUPTED
@@ -86,6 +92,11 @@ typedef struct integrator_ops {
     /* The render's error for a batch of pixel (px, py) that failed with
      * status (never INTEGRATOR_INTERRUPTED); returns -1. */
     int (*batch_failure)(int status, int px, int py, rr_error *err);
+    /* Its own counters (counters.h; at most COUNTERS_MAX): its batches add
+     * to integrator_counts.counter[i], the loop sums them into the image's
+     * counters and the header writes counters[i].attribute. */
+    const counter_spec *counters;
+    int ncounters;
 } integrator_ops;
 
 /* The integrators (defined beside their code), and the table of them. */

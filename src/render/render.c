@@ -28,7 +28,8 @@ typedef struct {
     atomic_int batch_failed;   /* a batch failed (see failed_status): the render stops */
     int failed_status, failed_px, failed_py; /* under lock: the first failure (the integrator's status) and its
                                                 pixel */
-    double unresolved;         /* under lock: integrator_counts.unresolved summed over tiles */
+    double counter[COUNTERS_MAX]; /* under lock: the row's own counters (integrator_counts.counter) summed over
+                                     tiles */
     pthread_mutex_t lock;
     pthread_cond_t cond;  /* to the coordinator: a worker is ready or done with a round; a pause's end */
     pthread_cond_t start; /* to the workers: a round begins, or the render ends */
@@ -130,7 +131,8 @@ static int pixel_batch(render_job *job, int x, int y, pixel_state *p, thread_scr
 static void add_counts(render_job *job, const integrator_counts *c, uint64_t clamped, uint64_t done)
 {
     pthread_mutex_lock(&job->lock);
-    job->unresolved += c->unresolved;
+    for (int i = 0; i < job->integ->ncounters; i++)
+        job->counter[i] += c->counter[i];
     pthread_mutex_unlock(&job->lock);
     atomic_fetch_add(&job->rays, c->rays);
     atomic_fetch_add(&job->overflows, c->overflows);
@@ -325,9 +327,21 @@ static int pool_start(render_job *job, rr_error *err)
                    (long long)sampler_count(&job->rs->smp));
 }
 
+/* The row's counters summed by this render into the image's (which holds
+ * a resumed state's: render_frames.c reads them back). */
+static void add_row_counters(counter_set *into, const integrator_ops *integ, const double *sum)
+{
+    RR_DCHECK(integ->ncounters >= 0 && integ->ncounters <= COUNTERS_MAX);
+    RR_DCHECK(!into->spec || (into->spec == integ->counters && into->n == integ->ncounters));
+    into->spec = integ->counters, into->n = integ->ncounters;
+    for (int i = 0; i < integ->ncounters; i++)
+        into->sum[i] += sum[i];
+}
+
 /* The state written carries the work its batches took so far (the rays of
- * the finished tiles and the seconds), so that a resumed render reports
- * the rays and time of the whole render, as an uninterrupted one. */
+ * the finished tiles, the seconds and the row's counters), so that a
+ * resumed render reports the rays, time and counters of the whole render,
+ * as an uninterrupted one. */
 static int checkpoint_paused(render_job *job, const render_hooks *hooks, double start, rr_error *err)
 {
     pthread_mutex_lock(&job->lock);
@@ -338,9 +352,11 @@ static int checkpoint_paused(render_job *job, const render_hooks *hooks, double 
     image *img = job->img;
     uint64_t rays = img->rays;
     double seconds = img->seconds;
+    counter_set counters = img->counters;
     img->rays += atomic_load(&job->rays), img->seconds += rr_seconds() - start;
+    add_row_counters(&img->counters, job->integ, job->counter); /* (the workers are paused: none adds) */
     int rc = hooks->checkpoint(hooks->user, img, err);
-    img->rays = rays, img->seconds = seconds;
+    img->rays = rays, img->seconds = seconds, img->counters = counters;
     pthread_mutex_lock(&job->lock);
     job->paused = 0;
     pthread_cond_broadcast(&job->cond);
@@ -510,7 +526,7 @@ static void job_finish(render_job *job, image *img, double start)
     img->kbuffer_overflows += atomic_load(&job->overflows);
     img->static_traversals += atomic_load(&job->static_traversals);
     img->clamped += atomic_load(&job->clamped);
-    img->exact_unresolved += job->unresolved;
+    add_row_counters(&img->counters, job->integ, job->counter);
 }
 
 int render_image(const accel *a, const render_settings *rs, image *img, const render_hooks *hooks,

@@ -18,7 +18,7 @@ const char *sampler_name(sampler_kind k) { return names[k]; }
 
 int sampler_from_name(const char *name, sampler_kind *k)
 {
-    for (int i = 0; i < 3; i++)
+    for (int i = 0; i < (int)(sizeof names / sizeof *names); i++)
         if (!strcmp(name, names[i])) {
             *k = (sampler_kind)i;
             return 0;

@@ -362,9 +362,10 @@ static const scene_object_ops object_rows[] = {
     [OBJECT_SPHERE] = {"an analytic sphere", 0, 0, sphere_count, sphere_bounds, sphere_sphere},
     [OBJECT_GAUSSIANS] = {"a Gaussian-splat model", 0, 1, gaussians_count, gaussians_bounds, gaussians_sphere},
 };
+_Static_assert(sizeof object_rows / sizeof *object_rows == OBJECT_KIND_COUNT, "an object kind without its row");
 
 const scene_object_ops *scene_object_row(const scene_object *o)
 {
-    RR_DCHECK((unsigned)o->kind < sizeof object_rows / sizeof *object_rows);
+    RR_DCHECK((unsigned)o->kind < OBJECT_KIND_COUNT);
     return &object_rows[o->kind];
 }

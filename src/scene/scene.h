@@ -28,7 +28,10 @@ static inline material material_default(void)
     return m;
 }
 
-typedef enum { OBJECT_POINTS, OBJECT_SPHERE, OBJECT_GAUSSIANS } object_kind;
+/* OBJECT_KIND_COUNT, last, is how many kinds there are: every table
+ * indexed by kind has that many rows, which each table asserts at compile
+ * time, so that a kind added without its rows does not build. */
+typedef enum { OBJECT_POINTS, OBJECT_SPHERE, OBJECT_GAUSSIANS, OBJECT_KIND_COUNT } object_kind;
 
 typedef struct {
     object_kind kind;

@@ -293,7 +293,7 @@ static int parse_point_model(xml_ctx *c, xmlNodePtr n, scene_object *o)
         if (xml_resolve_path(c, n, rel, path, sizeof path))
             return -1;
         rr_error sub;
-        if (ply_read(path, default_color, &o->model, c->inputs_hash, &sub))
+        if (ply_read(path, default_color, &o->model, c->inputs_hash, c->cancel, &sub))
             return model_failed(c, n, &sub, "point model", path);
         if (scene_add_input(c->sc, path))
             return xml_fail(c, n, "out of memory");
@@ -389,7 +389,7 @@ static int parse_gaussian_model(xml_ctx *c, xmlNodePtr n, scene_object *o)
     if (xml_resolve_path(c, n, rel, path, sizeof path))
         return -1;
     rr_error sub;
-    if (gaussian_read(path, kind, &o->gaussians, c->inputs_hash, &sub))
+    if (gaussian_read(path, kind, &o->gaussians, c->inputs_hash, c->cancel, &sub))
         return model_failed(c, n, &sub, "gaussianModel", path);
     if (o->gaussians.kind == GAUSSIAN_3D && xmlHasProp(n, (const xmlChar *)"order"))
         return xml_fail(c, n, "'order' is for 2D Gaussian models: 3D ones go by the centre's view depth (the "
@@ -552,7 +552,7 @@ int scene_load_memory(const char *xml, size_t len, const char *name, const char 
 }
 
 int scene_load_memory_params(const char *xml, size_t len, const char *name, const char *base_dir,
-                             const scene_params *params, scene *s, rr_error *err)
+                             const scene_load_options *opt, scene *s, rr_error *err)
 {
     xml_error_sink sink = {{{0}}, name};
     scene_init(s); /* on any error s is left empty, safe to scene_free */
@@ -566,7 +566,8 @@ int scene_load_memory_params(const char *xml, size_t len, const char *name, cons
     if (!doc)
         return rr_fail(err, "%s", sink.first.msg[0] ? sink.first.msg : "cannot parse scene");
     snprintf(s->path, sizeof s->path, "%s", name);
-    xml_ctx c = {.name = name, .base_dir = base_dir, .inputs_hash = &s->inputs_hash, .sc = s, .err = err, .params = params};
+    xml_ctx c = {.name = name, .base_dir = base_dir, .inputs_hash = &s->inputs_hash, .sc = s, .err = err,
+                 .params = opt ? opt->params : NULL, .cancel = opt ? opt->cancel : NULL};
     int rc = parse_scene(&c, doc, s);
     xmlFreeDoc(doc);
     if (rc)
@@ -579,7 +580,7 @@ int scene_load_file(const char *path, scene *s, rr_error *err)
     return scene_load_file_params(path, NULL, s, err);
 }
 
-int scene_load_file_params(const char *path, const scene_params *params, scene *s, rr_error *err)
+int scene_load_file_params(const char *path, const scene_load_options *opt, scene *s, rr_error *err)
 {
     scene_init(s);
     if (strlen(path) >= sizeof s->path)
@@ -595,7 +596,7 @@ int scene_load_file_params(const char *path, const scene_params *params, scene *
         *slash = 0;
     else
         strcpy(dir, ".");
-    int rc = scene_load_memory_params(in.data, in.len, path, dir, params, s, err);
+    int rc = scene_load_memory_params(in.data, in.len, path, dir, opt, s, err);
     input_file_free(&in);
     if (!rc && scene_add_input(s, path)) {
         scene_free(s);

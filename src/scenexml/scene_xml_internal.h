@@ -5,6 +5,7 @@
 #define RR_SCENE_XML_INTERNAL_H
 
 #include <libxml/parser.h>
+#include <signal.h>
 #include <stdint.h>
 
 #include "scene/scene.h"
@@ -20,6 +21,7 @@ typedef struct {
     int frames_line; /* <frames at="trajectory">, checked once the camera is read */
     rr_error *err;
     const scene_params *params; /* given on the command line (may be NULL) */
+    volatile sig_atomic_t *cancel; /* stops a model's read (scene_load_options; may be NULL) */
 } xml_ctx;
 
 const char *xml_elname(xmlNodePtr n);
