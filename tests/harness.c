@@ -49,6 +49,15 @@ int harness_failed_now(void) { return current_failed; }
 
 void harness_skip(const char *why) { current_skip = why; }
 
+/* Is name among the n names? */
+static int named(const char *name, int n, char **names)
+{
+    for (int k = 0; k < n; k++)
+        if (!strcmp(name, names[k]))
+            return 1;
+    return 0;
+}
+
 int main(int argc, char **argv)
 {
     int passed = 0, failed = 0, skipped = 0;
@@ -58,12 +67,13 @@ int main(int argc, char **argv)
         free(tests);
         return 0;
     }
-    /* --only NAME: that test alone (make test runs each as a pytest item,
-     * tests/test_unit_tests.py, so pytest's workers share them out) */
+    /* --only NAME...: those tests alone (make test runs each file's as a
+     * pytest item, tests/test_unit_tests.py, so pytest's workers share
+     * them out); otherwise the tests whose name holds the filter */
     int only = argc > 2 && !strcmp(argv[1], "--only");
     const char *filter = only ? argv[2] : argc > 1 ? argv[1] : "";
     for (int i = 0; i < ntests; i++) {
-        if (only ? strcmp(tests[i].name, filter) != 0 : !strstr(tests[i].name, filter))
+        if (only ? !named(tests[i].name, argc - 2, argv + 2) : !strstr(tests[i].name, filter))
             continue;
         current_failed = 0, current_skip = NULL;
         tests[i].fn();
