@@ -106,8 +106,11 @@ TEST(exr_zip_round_trip_is_exact_for_any_chunk_content)
     /* The channel sets refrender writes: final image without and with error
      * channels (4 + 1, 12 + 1 floats) and a render state (4 float + 25 uint). */
     static const int sets[3][2] = {{5, 5}, {13, 13}, {29, 4}};
-    char path[128];
-    snprintf(path, sizeof path, "/tmp/refrender-test-zip-%d.exr", (int)getpid());
+    /* in a directory of its own: each write lists its directory (atomicfile.c's
+     * stale temporaries), and a shared /tmp may hold hundreds of entries */
+    char dir[] = "/tmp/refrender-test-zip-XXXXXX", path[128];
+    CHECK(mkdtemp(dir) != NULL);
+    snprintf(path, sizeof path, "%s/zip.exr", dir);
     uint32_t rng = 2463534242u;
     int failures = 0, cases = 0;
     uint32_t *data = malloc((size_t)64 * 17 * 29 * sizeof *data);
@@ -120,6 +123,7 @@ TEST(exr_zip_round_trip_is_exact_for_any_chunk_content)
                     failures += !round_trips(path, w, h, sets[s][0], sets[s][1], data);
                 }
     unlink(path);
+    rmdir(dir);
     free(data);
     if (failures)
         printf("  %d of %d images did not survive the round trip\n", failures, cases);
