@@ -161,8 +161,11 @@ demo: deps
 	mkdir -p out
 	$(BIN) scenes/default.xml -o out/demo.exr --preview out/demo.png
 
+# (the plain build's test targets run in build-check/: below)
+ifneq ($(SAN)$(DCHECKS),00)
 test-c: $(TESTBIN)
 	$(TESTBIN)
+endif
 
 # LD_PRELOAD shim that fails the Nth write or rename (tests/test_faults.py);
 # under SAN=1 without its malloc (ASan's own must stay: faultinject.c)
@@ -192,8 +195,8 @@ test-cluster:
 # Tests run with the RR_DCHECK invariant checks on (src/core/common.h): the plain
 # build stays the one users run, without them.
 ifeq ($(SAN)$(DCHECKS),00)
-test:
-	$(MAKE) DCHECKS=1 test
+test test-c test-fuzz:
+	$(MAKE) DCHECKS=1 $@
 else
 # Everything is built first, a job a core, then pytest runs every test (the
 # C unit tests and the fuzz corpora's replays among its items: pytest's
@@ -204,9 +207,10 @@ test:
 endif
 
 # Fuzz targets (tests/fuzz/): libFuzzer with ASan + UBSan, built with clang
-# in build-fuzz/. `make test` replays each target's committed corpus (a
-# regression run of seconds); `make fuzz FUZZ_SECONDS=N` fuzzes each target
-# for N seconds, keeping what it finds in build-fuzz/corpus/.
+# in build-fuzz/ by `make fuzz FUZZ_SECONDS=N`, which fuzzes each target for
+# N seconds, keeping what it finds in build-fuzz/corpus/. `make test` replays
+# each committed corpus through its own build instead (REPLAY_TARGETS above;
+# with ASan + UBSan under SAN=1, as .ci/run also does).
 FUZZ_SECONDS ?= 60
 FUZZ_DIR     := build-fuzz
 FUZZ_FLAGS   := -O1 -g -fno-omit-frame-pointer -fsanitize=address,undefined -fno-sanitize-recover=undefined
@@ -254,11 +258,13 @@ $(REPLAY_DIR)/replay_%: $(BUILD)/tests/fuzz/fuzz_%.o $(BUILD)/tests/fuzz/render_
 .SECONDARY: $(REPLAY_OBJS)
 
 test-build: $(BIN) $(TESTBIN) $(BUILD)/refrender-bench $(BUILD)/libfaultinject.so $(LIB_SO) $(REPLAY_TARGETS) scenes
+ifneq ($(SAN)$(DCHECKS),00)
 test-fuzz: $(REPLAY_TARGETS)
 	for t in $(FUZZ_TARGETS); do \
 	    $(REPLAY_DIR)/replay_$$t tests/fuzz/corpus/$$t 2>$(REPLAY_DIR)/replay_$$t.log \
 	        || { tail -40 $(REPLAY_DIR)/replay_$$t.log; exit 1; }; \
 	done
+endif
 
 fuzz: $(FUZZ_TARGETS:%=$(FUZZ_DIR)/fuzz_%)
 	failed=""; for t in $(FUZZ_TARGETS); do \

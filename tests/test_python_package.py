@@ -256,6 +256,40 @@ def test_an_interrupt_inside_the_thread_start_stops_the_render(tmp_path):
     assert "render threads alive: 0" in proc.stdout, proc.stdout + proc.stderr
 
 
+# A Ctrl-C after the C's last look at the interrupt flag (planted: SIGINT sent as the render call returns)
+LATE_CTRL_C = f"""
+import os, signal, sys; sys.path.insert(0, {str(ROOT / 'python')!r})
+import refrender
+from refrender import _library
+lib = _library.load()
+
+class Late:
+    def __getattr__(self, name):
+        return getattr(lib, name)
+
+    def refrender_render(self, *args):
+        status = lib.refrender_render(*args)
+        os.kill(os.getpid(), signal.SIGINT)
+        return status
+
+_library._lib = Late()
+try:
+    refrender.render({str(SCENE)!r}, res=(8, 8), spp=1, tspp=1, quiet=True)
+    print("returned an image")
+except KeyboardInterrupt:
+    print("KeyboardInterrupt")
+"""
+
+
+def test_a_ctrl_c_as_the_render_ends_is_still_keyboard_interrupt():
+    """A SIGINT that reaches the process after the render stopped watching its flag (while it returns)
+    raises KeyboardInterrupt as Ctrl-C did before render() took SIGINT for the render's time; it is not
+    swallowed with the image returned."""
+    proc = subprocess.run([sys.executable, "-c", LATE_CTRL_C], capture_output=True, text=True, env=lib_env(),
+                          timeout=60)
+    assert proc.stdout.strip() == "KeyboardInterrupt", proc.stdout + proc.stderr
+
+
 def test_compare_returns_the_rows_compare_py_writes(tmp_path):
     """refrender.compare is compare.py --json without the file: the same rows, value for value (two renders
     of other seeds, the whole image and a crop), and its file outputs are refused."""

@@ -191,6 +191,10 @@ def _run(lib, words):
             if out.value:
                 lib.refrender_result_free(out)
             raise
+    if interrupt.value and status[0] == 0:  # Ctrl-C after the render's last look at the flag: still Ctrl-C
+        if out.value:
+            lib.refrender_result_free(out)
+        return 130, ctypes.c_void_p(), "interrupted"
     return status[0], out, message.value.decode(errors="replace")
 
 

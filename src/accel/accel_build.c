@@ -49,8 +49,8 @@ static double sphere_spread(const scene_object *o) { return o->sphere_radius; }
 /* How Embree holds each object kind as user geometry, by object_kind (what
  * the kind is: scene_object_row). A Gaussian model's row is empty: its
  * BVH is built with each shutter (build_gaussian_object). Every kind has
- * its row, empty or not (asserted): a kind added without one does not
- * build. */
+ * its row, empty or not (asserted): a kind added last without one does
+ * not build (scene.h, object_kind). */
 typedef struct {
     RTCBoundsFunction bounds;
     RTCIntersectFunctionN intersect;

@@ -33,7 +33,7 @@ static void print_progress(void *user, double fraction, uint64_t rays, double se
 
 typedef struct {
     const render_options *o;
-    const scene *sc; /* the frame's (accel_scene): its shutter is the render's */
+    const accel *acc; /* the frame's: accel_scene(acc)'s shutter is the render's */
     render_settings rs;
     attr_list attrs;
     uint32_t total_batches;
@@ -46,7 +46,8 @@ static int write_checkpoint(void *user, const image *img, rr_error *err)
     attrs_set(&run->attrs, ATTR_RENDER_SECONDS, "%.3f", img->seconds);
     attrs_set(&run->attrs, ATTR_RAYS, "%llu", (unsigned long long)img->rays);
     attrs_set(&run->attrs, ATTR_CLAMPED, "%llu", (unsigned long long)img->clamped);
-    output_counter_attrs(&run->attrs, &img->counters, img->rays, run->sc->shut.close - run->sc->shut.open);
+    const shutter *sh = &accel_scene(run->acc)->shut;
+    output_counter_attrs(&run->attrs, &img->counters, img->rays, sh->close - sh->open);
     return output_write_state(run->o->checkpoint, img, run->rs.batch_begin,
                               run->rs.batch_begin + run->rs.batches, &run->attrs, err);
 }
@@ -90,16 +91,14 @@ static int check_resumable_counts(const render_run *run, image *img, rr_error *e
 
 /* The integrator's counters the state holds (write_checkpoint), summed
  * again from their header values (to their 6 digits), so that the resumed
- * render's are the whole render's. Only an integrator asked for by name
- * (--time-integration) declares counters: the rows the scene chooses
- * (surfels, Gaussians) have none. */
+ * render's are the whole render's; the row is the one the render will use
+ * (integrator_for, the one rule that picks it). */
 static void resume_counters(const render_run *run, const attr_list *saved, image *img)
 {
-    const integrator_ops *row = run->rs.integrator;
-    if (!row)
-        return;
+    integrator_context ctx = {.sc = accel_scene(run->acc), .acc = run->acc, .rs = &run->rs};
+    const integrator_ops *row = integrator_for(&ctx);
     img->counters.spec = row->counters, img->counters.n = row->ncounters;
-    double shutter = run->sc->shut.close - run->sc->shut.open;
+    double shutter = ctx.sc->shut.close - ctx.sc->shut.open;
     for (int i = 0; i < row->ncounters; i++) {
         const char *value = attrs_get(saved, row->counters[i].attribute);
         double held = value ? strtod(value, NULL) : 0.0;
@@ -149,12 +148,13 @@ static uint32_t max_batches_of(const render_options *o)
     return o->max_batches ? (uint32_t)o->max_batches : (uint32_t)(eight < FILM_MAX_BATCHES ? eight : FILM_MAX_BATCHES);
 }
 
-static void setup_run(render_run *run, const scene *s, const render_options *o, const char *cmdline)
+static void setup_run(render_run *run, const accel *acc, const render_options *o, const char *cmdline)
 {
+    const scene *s = accel_scene(acc);
     uint32_t total = (uint32_t)o->batches;
     uint32_t begin = o->passes ? (uint32_t)((uint64_t)o->pass * total / o->passes) : 0;
     uint32_t end = o->passes ? (uint32_t)((uint64_t)(o->pass + 1) * total / o->passes) : total;
-    run->o = o, run->sc = s;
+    run->o = o, run->acc = acc;
     run->total_batches = total;
     run->last_progress = 0;
     run->rs = (render_settings){
@@ -287,7 +287,7 @@ static int render_one(const accel *acc, long long frame, const render_options *o
 {
     const scene *s = accel_scene(acc);
     render_run run;
-    setup_run(&run, s, o, cmdline);
+    setup_run(&run, acc, o, cmdline);
     warn_about_settings(o, &run.rs);
     warn_about_scales(o, s);
     image img;

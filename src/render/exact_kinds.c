@@ -163,7 +163,8 @@ static int sphere_cross_at(const scene_object *o, const cand_info *g, const obje
 
 /* A Gaussian model's row is empty: the exact integrator's check refuses
  * exact time for it (exact_integrate.c, exact_check). Every kind has its
- * row, empty or not (asserted): a kind added without one does not build. */
+ * row, empty or not (asserted): a kind added last without one does not
+ * build (scene.h, object_kind). */
 static const exact_kind_ops exact_rows[] = {
     [OBJECT_POINTS] = {splat_describe, splat_eval, splat_cross, 0},
     [OBJECT_SPHERE] = {sphere_describe, sphere_eval, sphere_cross_at, 1},

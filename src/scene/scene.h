@@ -30,7 +30,9 @@ static inline material material_default(void)
 
 /* OBJECT_KIND_COUNT, last, is how many kinds there are: every table
  * indexed by kind has that many rows, which each table asserts at compile
- * time, so that a kind added without its rows does not build. */
+ * time, so that a kind added last without its rows does not build (one
+ * inserted before another would leave a zero row the length cannot show:
+ * add kinds last). */
 typedef enum { OBJECT_POINTS, OBJECT_SPHERE, OBJECT_GAUSSIANS, OBJECT_KIND_COUNT } object_kind;
 
 typedef struct {

@@ -46,7 +46,22 @@ static uint8_t *read_input(const char *path, size_t *size)
 
 static int by_name(const struct dirent **a, const struct dirent **b) { return strcmp((*a)->d_name, (*b)->d_name); }
 
-static int regular_file(const struct dirent *e) { return e->d_type == DT_REG || e->d_type == DT_UNKNOWN; }
+static const char *corpus_dir; /* scandir's filter takes no argument */
+
+/* A regular file, or a link to one (stat follows it): a file system that
+ * leaves d_type unknown (XFS without ftype, some NFS) is asked by stat,
+ * which also keeps "." and ".." out. */
+static int regular_file(const struct dirent *e)
+{
+    if (e->d_type == DT_REG)
+        return 1;
+    if (e->d_type != DT_UNKNOWN && e->d_type != DT_LNK)
+        return 0;
+    char path[4096];
+    struct stat st;
+    snprintf(path, sizeof path, "%s/%s", corpus_dir, e->d_name);
+    return !stat(path, &st) && S_ISREG(st.st_mode);
+}
 
 int main(int argc, char **argv)
 {
@@ -55,6 +70,7 @@ int main(int argc, char **argv)
         return 2;
     }
     struct dirent **names;
+    corpus_dir = argv[1];
     int n = scandir(argv[1], &names, regular_file, by_name);
     if (n < 0) {
         perror(argv[1]);
