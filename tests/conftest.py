@@ -118,3 +118,10 @@ def coverage_centroid(alpha):
 def focal_pixels(height, fov_degrees):
     """Pixels per unit of image-plane distance at depth 1 (square pixels)."""
     return (height / 2) / np.tan(np.radians(fov_degrees) / 2)
+
+
+def c_tests_by_file():
+    """{tests/test_*.c file name: its TEST() names, read from the source} (the C harness's
+    registry is checked against them: test_harness.py; make test runs them: test_unit_tests.py)."""
+    import re
+    return {p.name: re.findall(r"^TEST\((\w+)\)", p.read_text(), re.M) for p in sorted(ROOT.glob("tests/test_*.c"))}

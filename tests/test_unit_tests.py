@@ -7,20 +7,16 @@ before pytest, 17 s of a single core. A file's tests run together
 processes), their output shown when one fails; `make test-c` and `make
 test-fuzz` still run them directly."""
 import os
-import re
 import subprocess
 from pathlib import Path
 
 import pytest
 
-ROOT = Path(__file__).resolve().parent.parent
+from conftest import ROOT, c_tests_by_file
+
 UNIT_TESTS = os.environ.get("UNIT_TESTS")
 REPLAY_DIR = os.environ.get("FUZZ_REPLAY_DIR")
-
-
-def c_test_files():
-    """{file name: its TEST() names} (test_harness.py checks every one is registered)."""
-    return {p.name: re.findall(r"^TEST\((\w+)\)", p.read_text(), re.M) for p in sorted(ROOT.glob("tests/test_*.c"))}
+C_TESTS = c_tests_by_file()  # (test_harness.py checks every one is registered)
 
 
 def fuzz_targets():
@@ -28,9 +24,9 @@ def fuzz_targets():
 
 
 @pytest.mark.skipif(not UNIT_TESTS, reason="UNIT_TESTS not set (make test sets it)")
-@pytest.mark.parametrize("file", c_test_files())
+@pytest.mark.parametrize("file", C_TESTS)
 def test_c(file):
-    names = c_test_files()[file]
+    names = C_TESTS[file]
     proc = subprocess.run([UNIT_TESTS, "--only", *names], capture_output=True, text=True)
     ran = [line.split()[1].rstrip(":") for line in proc.stdout.splitlines()
            if line.startswith(("ok ", "FAIL ", "SKIP "))]  # (a check's own FAIL lines are indented)
